@@ -1,0 +1,77 @@
+// Modbus TCP framing: the MBAP header and a stream splitter that turns arbitrary chunks of
+// a byte stream into complete frames.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "codec/bytes.hpp"
+#include "codec/error.hpp"
+#include "codec/limits.hpp"
+#include "codec/pdu.hpp"
+
+namespace mbstorm::codec {
+
+struct MbapHeader {
+    std::uint16_t transaction_id = 0;
+    std::uint16_t protocol_id = 0;
+    std::uint16_t length = 0;  // bytes that follow: unit id + PDU
+    std::uint8_t unit_id = 0;
+};
+
+// One complete TCP ADU: header plus views of the PDU and of the whole ADU.
+struct TcpFrame {
+    MbapHeader header;
+    Bytes pdu;
+    Bytes adu;
+};
+
+// Reads the 7-byte header (needs at least 7 bytes; no validation).
+MbapHeader read_mbap_header(const std::uint8_t* p) noexcept;
+
+// Validates a header: BadProtocolId, LengthZero, LengthOne, LengthTooLong or Ok.
+CodecError check_mbap_header(const MbapHeader& h) noexcept;
+
+// Decodes exactly one ADU (the whole of `adu`), LengthMismatch if sizes disagree.
+CodecError decode_tcp_frame(Bytes adu, TcpFrame& out) noexcept;
+
+// Writes header + PDU into `out`. The PDU may already sit at out[7..] (no copy then).
+EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id, Bytes pdu,
+                              MutableBytes out) noexcept;
+
+// Splits a TCP byte stream into frames. Feed it chunks as they arrive; call next() until it
+// says NeedMore. Frames wholly inside the current chunk are returned as views into it
+// (no copy); a frame split across chunks is assembled in a 260-byte internal buffer. Views
+// stay valid until the next call to feed() or next().
+//
+// A header with protocol id != 0 is still a frame (its length is trustworthy enough to skip
+// it): it is returned with status BadProtocolId so that servers can discard it and go on.
+// Length 0, 1 or > 254 cannot be resynchronised: the splitter reports it and stays failed
+// until reset().
+class MbapSplitter {
+public:
+    enum class Status : std::uint8_t {
+        Frame,          // `out` holds a complete, valid frame
+        NeedMore,       // the fed bytes are used up
+        BadProtocolId,  // `out` holds a complete frame whose protocol id != 0 (discard it)
+        Fatal,          // framing lost (see error()); call reset() before reuse
+    };
+
+    void feed(Bytes chunk) noexcept;
+    Status next(TcpFrame& out) noexcept;
+    CodecError error() const noexcept { return error_; }
+    // Bytes of a partial frame held in the internal buffer.
+    std::size_t buffered() const noexcept { return partial_size_; }
+    // Bytes of the current chunk not yet consumed.
+    std::size_t pending() const noexcept { return chunk_.size(); }
+    void reset() noexcept;
+
+private:
+    Bytes chunk_;
+    std::array<std::uint8_t, limits::kMaxTcpAdu> partial_{};
+    std::size_t partial_size_ = 0;
+    CodecError error_ = CodecError::Ok;
+};
+
+}  // namespace mbstorm::codec
