@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Builds and runs every test: release tests, ASan+UBSan tests, each libFuzzer harness for a
+# bounded time from its seed corpus, and the benchmarks in smoke mode (no timing assertions).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+fuzz_seconds=${MBSTORM_FUZZ_SECONDS:-30}
+jobs=${MBSTORM_JOBS:-$(nproc)}
+step() { printf '\n=== %s (%ss elapsed)\n' "$*" "$SECONDS"; }
+
+step "release build + tests"
+cmake --preset release >/dev/null
+cmake --build --preset release -j "$jobs"
+ctest --preset release -j "$jobs"
+
+step "asan+ubsan build + tests"
+cmake --preset asan >/dev/null
+cmake --build --preset asan -j "$jobs"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --preset asan -j "$jobs"
+
+step "fuzz harnesses (${fuzz_seconds}s each)"
+bash scripts/run-fuzz.sh "$fuzz_seconds"
+
+step "benchmark smoke run"
+bash scripts/bench-smoke.sh
+
+step "all tests passed"

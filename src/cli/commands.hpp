@@ -1,0 +1,25 @@
+// Each subcommand registers itself on the CLI11 app and sets the action to run when chosen.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace mbstorm::cli {
+
+// Exit codes shared by every subcommand.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailed = 1;  // thresholds breached, findings present
+inline constexpr int kExitUsage = 2;   // bad input, bad flags, unreachable target
+
+using Action = std::function<int()>;
+
+void add_decode_command(CLI::App& app, Action& action);
+void add_encode_command(CLI::App& app, Action& action);
+void add_serve_command(CLI::App& app, Action& action);
+void add_run_command(CLI::App& app, Action& action);
+
+// Entry point used by main(): parses argv and runs the chosen subcommand.
+int run_cli(int argc, char** argv);
+
+}  // namespace mbstorm::cli

@@ -1,0 +1,49 @@
+// One client connection of a worker: socket state, its outstanding transactions, the MBAP
+// splitter for its byte stream, and a double send buffer (one half being sent by the kernel,
+// the other collecting the requests of the current loop iteration).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "codec/mbap.hpp"
+#include "load/transaction_table.hpp"
+
+namespace mbstorm::load {
+
+struct Connection {
+    enum class State : std::uint8_t { Waiting, Connecting, Open };
+
+    Connection(std::uint32_t depth, std::uint32_t send_half_bytes, std::uint16_t first_id)
+        : table(depth, first_id),
+          send_buffer(std::make_unique<std::uint8_t[]>(2ull * send_half_bytes)),
+          send_half(send_half_bytes) {}
+
+    std::uint8_t* queue_data() noexcept { return send_buffer.get() + queue_half * send_half; }
+    std::uint8_t* inflight_data() noexcept {
+        return send_buffer.get() + (queue_half ^ 1u) * send_half;
+    }
+
+    State state = State::Waiting;
+    int fd = -1;
+    std::uint32_t generation = 0;  // bumped on close: completions of older sockets are ignored
+    TransactionTable table;
+    codec::MbapSplitter splitter;
+
+    std::unique_ptr<std::uint8_t[]> send_buffer;
+    std::uint32_t send_half;
+    std::uint32_t queued = 0;     // bytes waiting in the queue half
+    std::uint32_t queue_half = 0;
+    std::uint32_t inflight_len = 0;
+    std::uint32_t inflight_done = 0;
+    bool send_in_flight = false;  // one send at a time per connection, whatever its generation
+    bool recv_armed = false;
+    bool dirty = false;     // in the worker's flush list
+    bool in_ready = false;  // open loop: in the worker's ready queue
+    bool ever_opened = false;
+
+    std::int64_t backoff_ns = 0;
+    std::int64_t connect_started_ns = 0;
+};
+
+}  // namespace mbstorm::load

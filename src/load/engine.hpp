@@ -1,0 +1,69 @@
+// The load engine behind `mbstorm run`: one io_uring ring per thread, each thread owning its
+// connections, generator, pacer and histograms (no locks, no allocation on the hot path).
+// run_load() blocks until the run ends (duration, transaction count, stop flag or a fatal
+// error) and always returns whatever was measured.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "codec/pdu.hpp"
+#include "load/plan.hpp"
+#include "load/request_info.hpp"
+#include "stats/run_result.hpp"
+
+namespace mbstorm::load {
+
+// Once-per-interval view for the live progress line (called on run_load()'s thread).
+struct ProgressSnapshot {
+    std::uint64_t interval_index = 0;  // seconds since the end of warm-up
+    double elapsed_seconds = 0;        // since the run started (warm-up included)
+    double transactions_per_second = 0;
+    std::uint64_t p50_ns = 0;
+    std::uint64_t p99_ns = 0;
+    std::uint64_t max_ns = 0;
+    std::uint64_t errors = 0;  // in this interval
+    std::uint64_t total_transactions = 0;
+    std::uint32_t open_connections = 0;
+};
+using ProgressCallback = std::function<void(const ProgressSnapshot&)>;
+
+// Optional content check of successful responses (e.g. read-back of known register values).
+// Returns false on a mismatch, which is counted as Outcome::ValueMismatch. Called on worker
+// threads, concurrently: it must be thread-safe and must not allocate.
+struct ResponseVerifier {
+    bool (*check)(void* context, const RequestInfo& request, const codec::Response& response) =
+        nullptr;
+    void* context = nullptr;
+};
+
+struct EngineOptions {
+    ProgressCallback on_progress;
+    const std::atomic<bool>* stop = nullptr;  // set it (e.g. on Ctrl-C) to end the run early
+    ResponseVerifier verifier;
+    std::string tool_version = "mbstorm";
+    std::int64_t progress_interval_ns = 1'000'000'000;
+};
+
+struct LoadResult {
+    bool ok = false;    // false: could not start or a fatal error ended the run (see error)
+    std::string error;  // e.g. "cannot connect to 10.0.0.9:502: Connection refused"
+    std::vector<std::string> warnings;
+    stats::RunResult run;
+    // Accounting: run.counters.transactions_sent == (sum of per-transaction outcomes, i.e.
+    // every outcome except UnknownId and DuplicateId) + pending_at_end.
+    std::uint64_t pending_at_end = 0;  // sent but neither answered nor timed out at the end
+    std::uint64_t late_responses = 0;  // answers that arrived after their transaction timed out
+    std::uint64_t framing_errors = 0;  // unrecoverable MBAP framing (connection was reset)
+    std::uint64_t bad_protocol_frames = 0;  // frames with protocol id != 0 (discarded)
+};
+
+LoadResult run_load(const Plan& plan, const EngineOptions& options = {});
+
+// Transactions that ended with a per-transaction outcome (not counting stray responses).
+std::uint64_t transactions_accounted(const stats::OutcomeCounters& counters) noexcept;
+
+}  // namespace mbstorm::load

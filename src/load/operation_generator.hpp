@@ -1,0 +1,84 @@
+// Produces the next request of a thread: picks an operation by weight, draws its address from
+// the operation's distribution, generates write values, and encodes the whole ADU straight into
+// the caller's buffer. One generator per thread (own PRNG); no allocation after construction.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "codec/bytes.hpp"
+#include "codec/limits.hpp"
+#include "load/plan.hpp"
+#include "load/request_info.hpp"
+#include "load/rng.hpp"
+#include "load/zipf.hpp"
+
+namespace mbstorm::load {
+
+// Largest ADU (MBAP header included) an operation can produce.
+std::size_t max_request_size(const Operation& op) noexcept;
+std::size_t max_request_size(const std::vector<Operation>& operations) noexcept;
+
+class AddressPicker {
+public:
+    AddressPicker() = default;
+    explicit AddressPicker(const Operation& op) noexcept;
+    std::uint16_t next(Rng& rng) noexcept;
+
+private:
+    AddressMode mode_ = AddressMode::Sequential;
+    std::uint16_t first_ = 0;
+    std::uint32_t positions_ = 1;  // usable start addresses: first_ .. first_ + positions_ - 1
+    std::uint32_t stride_ = 1;     // sequential: the block size, so blocks tile the range
+    std::uint32_t cursor_ = 0;     // sequential: offset of the next start
+    ZipfSampler zipf_;
+};
+
+class ValuePicker {
+public:
+    ValuePicker() = default;
+    explicit ValuePicker(const ValueSpec& spec) : spec_(&spec), counter_(spec.value) {}
+    std::uint16_t next(Rng& rng) noexcept;
+    // Coils: on/off from the next value (Constant/Pattern: value != 0; Counter/Random: low bit).
+    bool next_bit(Rng& rng) noexcept;
+
+private:
+    const ValueSpec* spec_ = nullptr;
+    std::uint16_t counter_ = 0;
+    std::size_t pattern_index_ = 0;
+};
+
+class OperationGenerator {
+public:
+    // `operations` must outlive the generator and be valid (validate_plan()).
+    OperationGenerator(const std::vector<Operation>& operations, std::uint64_t seed);
+
+    // Encodes the next request ADU with `transaction_id` into `out`. Returns the ADU size, or 0
+    // when `out` is too small or the codec refused (never happens for a validated plan).
+    std::size_t next(std::uint16_t transaction_id, codec::MutableBytes out,
+                     RequestInfo& info) noexcept;
+
+    // Picks an operation index by weight (exposed for tests).
+    std::uint16_t pick_operation() noexcept;
+
+    Rng& rng() noexcept { return rng_; }
+
+private:
+    struct OpState {
+        AddressPicker address;
+        ValuePicker values;
+    };
+
+    std::size_t encode(std::uint16_t op_index, std::uint16_t transaction_id,
+                       codec::MutableBytes out, RequestInfo& info) noexcept;
+
+    const std::vector<Operation>& operations_;
+    std::vector<std::uint64_t> cumulative_weight_;
+    std::vector<OpState> state_;
+    Rng rng_;
+    std::array<std::uint8_t, codec::limits::kMaxPdu> payload_{};
+};
+
+}  // namespace mbstorm::load

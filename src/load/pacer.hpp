@@ -1,0 +1,64 @@
+// Open-loop schedule of one thread: the intended send time of every transaction at the
+// thread's share of the total rate, evenly spaced or as a Poisson process. Latency is measured
+// from the intended time (as wrk2 does), so a stalled target or a slow engine cannot hide its
+// queueing delay (coordinated omission). LagTracker counts the sends that left late.
+#pragma once
+
+#include <cstdint>
+
+#include "load/plan.hpp"
+#include "load/rng.hpp"
+
+namespace mbstorm::load {
+
+class Pacer {
+public:
+    Pacer() = default;
+    // rate: transactions per second for this thread (> 0).
+    Pacer(double rate, Arrival arrival, std::uint64_t seed, std::int64_t start_ns) noexcept;
+
+    // Intended send time of the next transaction.
+    std::int64_t next_intended_ns() const noexcept { return next_ns_; }
+    // True when the next transaction is due at `now_ns`.
+    bool due(std::int64_t now_ns) const noexcept { return next_ns_ <= now_ns; }
+    // Consumes the next transaction and schedules the one after it.
+    void advance() noexcept;
+    std::uint64_t scheduled() const noexcept { return count_; }
+
+    // Changes the rate from `now_ns` on (stages). Keeps the schedule continuous.
+    void set_rate(double rate, std::int64_t now_ns) noexcept;
+    double rate() const noexcept { return rate_; }
+
+private:
+    double rate_ = 1;
+    double period_ns_ = 1e9;
+    Arrival arrival_ = Arrival::Even;
+    Rng rng_;
+    std::int64_t origin_ns_ = 0;  // even: time of transaction 0 of the current rate
+    std::uint64_t count_ = 0;     // transactions consumed in total
+    std::uint64_t since_origin_ = 0;
+    std::int64_t next_ns_ = 0;
+};
+
+class LagTracker {
+public:
+    explicit LagTracker(std::int64_t threshold_ns = 1'000'000) noexcept : threshold_(threshold_ns) {}
+    void record(std::int64_t intended_ns, std::int64_t actual_ns) noexcept {
+        const std::int64_t lag = actual_ns - intended_ns;
+        if (lag <= threshold_) return;
+        ++late_sends_;
+        total_lag_ns_ += static_cast<std::uint64_t>(lag);
+        if (static_cast<std::uint64_t>(lag) > max_lag_ns_) max_lag_ns_ = static_cast<std::uint64_t>(lag);
+    }
+    std::uint64_t late_sends() const noexcept { return late_sends_; }
+    std::uint64_t max_lag_ns() const noexcept { return max_lag_ns_; }
+    std::uint64_t total_lag_ns() const noexcept { return total_lag_ns_; }
+
+private:
+    std::int64_t threshold_;
+    std::uint64_t late_sends_ = 0;
+    std::uint64_t max_lag_ns_ = 0;
+    std::uint64_t total_lag_ns_ = 0;
+};
+
+}  // namespace mbstorm::load

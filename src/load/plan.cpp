@@ -1,0 +1,212 @@
+#include "load/plan.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+
+namespace mbstorm::load {
+namespace {
+
+namespace lim = codec::limits;
+
+struct QuantityRange {
+    std::uint16_t min = 0;
+    std::uint16_t max = 0;  // 0: the function takes no quantity
+};
+
+QuantityRange quantity_range(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x01:
+        case 0x02: return {1, lim::kMaxReadBits};
+        case 0x03:
+        case 0x04: return {1, lim::kMaxReadRegisters};
+        case 0x0F: return {1, lim::kMaxWriteCoils};
+        case 0x10: return {1, lim::kMaxWriteRegisters};
+        case 0x17: return {1, lim::kMaxRwReadRegisters};
+        case 0x05:
+        case 0x06:
+        case 0x16: return {1, 1};
+        default: return {};
+    }
+}
+
+bool uses_address(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06:
+        case 0x0F: case 0x10: case 0x16: case 0x17: case 0x18: return true;
+        default: return false;
+    }
+}
+
+std::string seconds_text(Duration d) {
+    return fmt::format("{}s", std::chrono::duration<double>(d).count());
+}
+
+void check_operation(const Operation& op, std::size_t index, std::vector<std::string>& errors) {
+    const std::string where =
+        op.name.empty() ? fmt::format("operations[{}]", index)
+                        : fmt::format("operations[{}] ({})", index, op.name);
+    auto fail = [&](std::string what) { errors.push_back(fmt::format("{}: {}", where, what)); };
+
+    if (!is_generatable_function(op.function)) {
+        fail(fmt::format("function code 0x{:02X} cannot be generated (valid: 01-08, 0B, 0C, 0F, "
+                         "10, 11, 16, 17, 18, 2B)",
+                         op.function));
+        return;
+    }
+    if (op.weight == 0) fail("weight 0 is out of range (valid 1..4294967295)");
+
+    const QuantityRange q = quantity_range(op.function);
+    if (q.max != 0 && (op.quantity < q.min || op.quantity > q.max)) {
+        fail(fmt::format("quantity {} is out of range for {} (valid {}..{})", op.quantity,
+                         codec::function_name(op.function), q.min, q.max));
+    }
+    if (op.function == 0x17 &&
+        (op.write_quantity < 1 || op.write_quantity > lim::kMaxRwWriteRegisters)) {
+        fail(fmt::format("write_quantity {} is out of range (valid 1..{})", op.write_quantity,
+                         lim::kMaxRwWriteRegisters));
+    }
+    if (op.function == 0x08 && op.sub_function != 0) {
+        fail(fmt::format("sub_function {} cannot be generated (valid: 0, return query data)",
+                         op.sub_function));
+    }
+    if (op.function == 0x2B && (op.device_id_code < 1 || op.device_id_code > 4)) {
+        fail(fmt::format("device_id_code {} is out of range (valid 1..4)", op.device_id_code));
+    }
+    if (uses_address(op.function)) {
+        const std::uint32_t span =
+            op.function == 0x17 ? std::max(op.quantity, op.write_quantity) : std::max<std::uint16_t>(op.quantity, 1);
+        const std::uint32_t last_needed = op.first_address + span - 1;
+        if (last_needed > 0xFFFF) {
+            fail(fmt::format("address {} + quantity {} runs past 65535", op.first_address, span));
+        } else if (op.last_address && *op.last_address < last_needed) {
+            fail(fmt::format("address range [{}, {}] cannot hold {} items (last must be >= {})",
+                             op.first_address, *op.last_address, span, last_needed));
+        }
+    }
+    if (op.address_mode == AddressMode::Zipf &&
+        !(op.zipf_exponent > 0 && op.zipf_exponent <= kMaxZipfExponent)) {
+        fail(fmt::format("zipf exponent {} is out of range (valid > 0 and <= {})",
+                         op.zipf_exponent, kMaxZipfExponent));
+    }
+    if (codec::is_write_function(op.function) && op.values.mode == ValueMode::Pattern &&
+        op.values.pattern.empty()) {
+        fail("value pattern is empty (give at least one value)");
+    }
+}
+
+}  // namespace
+
+bool is_generatable_function(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06: case 0x07: case 0x08:
+        case 0x0B: case 0x0C: case 0x0F: case 0x10: case 0x11: case 0x16: case 0x17: case 0x18:
+        case 0x2B: return true;
+        default: return false;
+    }
+}
+
+std::uint16_t last_start_address(const Operation& op) noexcept {
+    if (!op.last_address) return op.first_address;
+    const std::uint32_t span =
+        op.function == 0x17 ? std::max(op.quantity, op.write_quantity) : std::max<std::uint16_t>(op.quantity, 1);
+    const std::uint32_t last = *op.last_address;
+    if (last + 1 < op.first_address + span) return op.first_address;
+    return static_cast<std::uint16_t>(last + 1 - span);
+}
+
+std::uint32_t effective_threads(const Plan& plan) noexcept {
+    std::uint32_t threads = plan.threads;
+    if (threads == 0) threads = std::max(1U, std::thread::hardware_concurrency());
+    return std::max(1U, std::min(threads, plan.connections));
+}
+
+std::vector<std::string> validate_plan(const Plan& plan) {
+    std::vector<std::string> errors;
+    auto fail = [&](std::string what) { errors.push_back(std::move(what)); };
+
+    if (plan.host.empty()) fail("target: host is empty");
+    if (plan.port == 0) fail("target: port 0 is out of range (valid 1..65535)");
+
+    if (plan.operations.empty()) fail("operations: none given (give at least one)");
+    for (std::size_t i = 0; i < plan.operations.size(); ++i) {
+        check_operation(plan.operations[i], i, errors);
+    }
+
+    if (plan.connections < 1 || plan.connections > kMaxConnections) {
+        fail(fmt::format("connections: {} is out of range (valid 1..{})", plan.connections,
+                         kMaxConnections));
+    }
+    if (plan.depth < 1 || plan.depth > kMaxDepth) {
+        fail(fmt::format("depth: {} is out of range (valid 1..{})", plan.depth, kMaxDepth));
+    }
+    if (plan.threads > kMaxThreads) {
+        fail(fmt::format("threads: {} is out of range (valid 0..{}, 0 = one per core)",
+                         plan.threads, kMaxThreads));
+    }
+    if (plan.model == LoadModel::OpenLoop && !(plan.rate > 0 && plan.rate <= kMaxRate)) {
+        fail(fmt::format("rate: {} is out of range for an open-loop run (valid > 0 and <= {:g} "
+                         "transactions/s)",
+                         plan.rate, kMaxRate));
+    }
+    if (!(plan.connect_rate > 0 && plan.connect_rate <= 1e7)) {
+        fail(fmt::format("connect_rate: {} is out of range (valid > 0 and <= 10000000 "
+                         "connections/s)",
+                         plan.connect_rate));
+    }
+    if (plan.connect_timeout <= Duration::zero() || plan.connect_timeout > std::chrono::hours(1)) {
+        fail(fmt::format("connect_timeout: {} is out of range (valid > 0s and <= 3600s)",
+                         seconds_text(plan.connect_timeout)));
+    }
+    if (plan.transaction_timeout < std::chrono::milliseconds(1) ||
+        plan.transaction_timeout > std::chrono::hours(1)) {
+        fail(fmt::format("transaction_timeout: {} is out of range (valid 0.001s..3600s)",
+                         seconds_text(plan.transaction_timeout)));
+    }
+    if (plan.reconnect_backoff_min < Duration::zero() ||
+        plan.reconnect_backoff_max < plan.reconnect_backoff_min) {
+        fail(fmt::format("reconnect backoff: min {} / max {} invalid (need 0 <= min <= max)",
+                         seconds_text(plan.reconnect_backoff_min),
+                         seconds_text(plan.reconnect_backoff_max)));
+    }
+    if (plan.duration < Duration::zero()) {
+        fail(fmt::format("duration: {} is negative (valid >= 0s)", seconds_text(plan.duration)));
+    }
+    if (plan.duration == Duration::zero() && plan.transactions == 0 && plan.stages.empty()) {
+        fail("duration: the run never ends (give a duration > 0s or a transaction count >= 1)");
+    }
+    if (plan.warmup < Duration::zero()) {
+        fail(fmt::format("warmup: {} is negative (valid >= 0s)", seconds_text(plan.warmup)));
+    } else if (plan.duration > Duration::zero() && plan.warmup >= plan.duration) {
+        fail(fmt::format("warmup: {} leaves nothing to measure (valid 0s..{} exclusive, the "
+                         "duration)",
+                         seconds_text(plan.warmup), seconds_text(plan.duration)));
+    }
+    if (plan.late_threshold < Duration::zero()) {
+        fail("late_threshold: negative (valid >= 0s)");
+    }
+    for (std::size_t i = 0; i < plan.stages.size(); ++i) {
+        const Stage& s = plan.stages[i];
+        if (s.duration <= Duration::zero()) {
+            fail(fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
+                             seconds_text(s.duration)));
+        }
+        if (plan.model == LoadModel::OpenLoop) {
+            if (!s.target_rate || !(*s.target_rate >= 0 && *s.target_rate <= kMaxRate)) {
+                fail(fmt::format("stages[{}]: an open-loop stage needs target_rate in 0..{:g}", i,
+                                 kMaxRate));
+            }
+        } else if (!s.target_connections || *s.target_connections > kMaxConnections) {
+            fail(fmt::format("stages[{}]: a closed-loop stage needs target_connections in 0..{}",
+                             i, kMaxConnections));
+        }
+    }
+    return errors;
+}
+
+}  // namespace mbstorm::load

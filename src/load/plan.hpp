@@ -1,0 +1,114 @@
+// A load plan: everything `mbstorm run` needs to know, as plain data. The scenario layer fills
+// it from YAML, the CLI from flags; validate_plan() is the single check both rely on.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mbstorm::load {
+
+using Duration = std::chrono::nanoseconds;
+
+enum class AddressMode : std::uint8_t { Sequential, Uniform, Zipf };
+enum class ValueMode : std::uint8_t { Constant, Counter, Random, Pattern };
+enum class LoadModel : std::uint8_t { ClosedLoop, OpenLoop };
+enum class Arrival : std::uint8_t { Even, Poisson };
+enum class Ramp : std::uint8_t { Constant, Linear };
+
+// How write operations choose the values they write.
+struct ValueSpec {
+    ValueMode mode = ValueMode::Constant;
+    std::uint16_t value = 0;  // Constant: the value; Counter: the first value
+    std::uint16_t step = 1;   // Counter: added after every value (wraps at 65536)
+    std::vector<std::uint16_t> pattern;  // Pattern: cycled in order
+};
+
+// One entry of the weighted operation mix.
+struct Operation {
+    std::string name;           // shown in errors and reports; defaults to the function name
+    std::uint8_t function = 0x03;
+    std::uint8_t unit_id = 1;
+    // Every request stays inside [first_address, last_address]. When last_address is unset
+    // the operation always starts at first_address.
+    std::uint16_t first_address = 0;
+    std::optional<std::uint16_t> last_address;
+    std::uint16_t quantity = 1;  // registers or coils (FC17: registers read)
+    AddressMode address_mode = AddressMode::Sequential;
+    double zipf_exponent = 1.0;  // AddressMode::Zipf: P(rank k) ~ 1 / k^exponent
+    ValueSpec values;            // write functions only
+    std::uint32_t weight = 1;
+    // Function-specific extras.
+    std::uint16_t write_quantity = 1;  // FC17: registers written (at the same start address)
+    std::uint16_t and_mask = 0x0000;   // FC16: the OR mask comes from `values`
+    std::uint16_t sub_function = 0;    // FC08 (only 0x0000, return query data, is generated)
+    std::uint8_t device_id_code = 1;   // FC2B/0E
+};
+
+// A stage of a staged run (ramps). Validated now; the engine honours them later.
+struct Stage {
+    Duration duration{};
+    std::optional<double> target_rate;              // open loop
+    std::optional<std::uint32_t> target_connections;  // closed loop
+    Ramp ramp = Ramp::Constant;
+};
+
+struct Plan {
+    // Target.
+    std::string host = "127.0.0.1";  // numeric IPv4/IPv6 or a host name
+    std::uint16_t port = 502;
+
+    std::vector<Operation> operations;
+
+    // Load model.
+    LoadModel model = LoadModel::ClosedLoop;
+    std::uint32_t depth = 1;   // closed loop: outstanding per connection; open loop: the cap
+    double rate = 0;           // open loop: total transactions per second over all threads
+    Arrival arrival = Arrival::Even;
+
+    // Connections and threads.
+    std::uint32_t connections = 1;
+    std::uint32_t threads = 0;        // 0: one per core (never more than connections)
+    double connect_rate = 10000;      // connections opened per second over all threads
+    Duration connect_timeout = std::chrono::seconds(3);
+    Duration transaction_timeout = std::chrono::seconds(1);
+    Duration reconnect_backoff_min = std::chrono::milliseconds(100);
+    Duration reconnect_backoff_max = std::chrono::seconds(5);
+
+    // Length of the run: by time, by transaction count, or both (whichever ends first).
+    Duration duration = std::chrono::seconds(10);  // 0: no time limit (needs `transactions`)
+    std::uint64_t transactions = 0;                // 0: no count limit
+    Duration warmup{};  // excluded from the results
+
+    std::vector<Stage> stages;
+
+    // Open loop: a send later than its intended time by more than this counts as a late send.
+    Duration late_threshold = std::chrono::milliseconds(1);
+
+    bool allow_writes = false;  // see write_safety.hpp
+    std::uint64_t seed = 1;
+};
+
+// Valid ranges, one place.
+inline constexpr std::uint32_t kMaxConnections = 100000;
+inline constexpr std::uint32_t kMaxDepth = 32768;  // half the transaction id space
+inline constexpr std::uint32_t kMaxThreads = 1024;
+inline constexpr double kMaxRate = 1e9;
+inline constexpr double kMaxZipfExponent = 10.0;
+
+// Every problem with a plan, each naming the field and the valid range ("connections: 0 is
+// out of range (valid 1..100000)"). Empty when the plan is usable.
+std::vector<std::string> validate_plan(const Plan& plan);
+
+// True for the function codes the load generator can produce.
+bool is_generatable_function(std::uint8_t fc) noexcept;
+
+// The operation's last usable start address (the block must end at or before last_address).
+std::uint16_t last_start_address(const Operation& op) noexcept;
+
+// Threads the engine will actually run: plan.threads or the core count, capped at connections.
+std::uint32_t effective_threads(const Plan& plan) noexcept;
+
+}  // namespace mbstorm::load

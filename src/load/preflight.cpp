@@ -1,0 +1,58 @@
+#include "load/preflight.hpp"
+
+#include <arpa/inet.h>
+#include <fmt/format.h>
+
+#include <cstdio>
+
+namespace mbstorm::load {
+
+bool read_port_range(PortRange& out, const char* path) {
+    std::FILE* f = std::fopen(path, "r");
+    if (f == nullptr) return false;
+    unsigned low = 0, high = 0;
+    const bool ok = std::fscanf(f, "%u %u", &low, &high) == 2;
+    std::fclose(f);
+    if (ok) out = PortRange{low, high};
+    return ok;
+}
+
+std::string endpoint_text(const std::string& host, std::uint16_t port) {
+    const bool v6_literal = host.find(':') != std::string::npos && host.front() != '[';
+    return v6_literal ? fmt::format("[{}]:{}", host, port) : fmt::format("{}:{}", host, port);
+}
+
+std::string numeric_address(const net::Endpoint& endpoint) {
+    char text[INET6_ADDRSTRLEN] = {};
+    if (endpoint.family() == AF_INET) {
+        const auto* sin = reinterpret_cast<const sockaddr_in*>(&endpoint.addr);
+        inet_ntop(AF_INET, &sin->sin_addr, text, sizeof(text));
+    } else if (endpoint.family() == AF_INET6) {
+        const auto* sin6 = reinterpret_cast<const sockaddr_in6*>(&endpoint.addr);
+        inet_ntop(AF_INET6, &sin6->sin6_addr, text, sizeof(text));
+    }
+    return text;
+}
+
+std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads) {
+    // Each thread also holds a ring (and a few fds), the process its stdio and friends.
+    const std::uint64_t wanted = std::uint64_t{connections} + 8ull * threads + 64;
+    std::string why;
+    const std::uint64_t limit = net::raise_nofile_limit(wanted, &why);
+    if (limit < wanted) {
+        return fmt::format(
+            "connections: {} cannot be opened: the open-files limit allows about {} ({}); ",
+            connections, limit > 8ull * threads + 64 ? limit - 8ull * threads - 64 : 0, why);
+    }
+    PortRange range;
+    if (read_port_range(range) && connections > range.size()) {
+        return fmt::format(
+            "connections: {} exceed the ephemeral port range {}-{} ({} ports towards one target "
+            "address, /proc/sys/net/ipv4/ip_local_port_range); widen it with `sysctl -w "
+            "net.ipv4.ip_local_port_range=\"1024 65535\"` or use at most {} connections",
+            connections, range.low, range.high, range.size(), range.size());
+    }
+    return {};
+}
+
+}  // namespace mbstorm::load

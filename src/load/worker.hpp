@@ -1,0 +1,121 @@
+// One engine thread: its ring, buffer ring, connections, generator, pacer and results.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "codec/pdu.hpp"
+#include "load/connection.hpp"
+#include "load/engine.hpp"
+#include "load/operation_generator.hpp"
+#include "load/pacer.hpp"
+#include "load/plan.hpp"
+#include "net/buf_ring.hpp"
+#include "net/ring.hpp"
+#include "net/socket.hpp"
+#include "stats/interval_recorder.hpp"
+#include "stats/run_result.hpp"
+
+namespace mbstorm::load {
+
+struct WorkerSetup {
+    const Plan* plan = nullptr;
+    net::Endpoint endpoint;
+    std::string target;  // for messages
+    std::uint32_t index = 0;
+    std::uint32_t connections = 1;
+    std::uint64_t quota = 0;  // transactions this thread sends; 0: unlimited
+    double rate = 0;          // open loop: this thread's share
+    double connect_rate = 1;  // this thread's share
+    std::int64_t start_ns = 0;
+    std::int64_t measure_start_ns = 0;  // end of warm-up
+    std::int64_t end_ns = INT64_MAX;
+    const std::atomic<bool>* stop = nullptr;
+    std::atomic<bool>* abort = nullptr;  // set by any worker on a fatal error
+    std::atomic<bool>* any_connected = nullptr;
+    ResponseVerifier verifier;
+    stats::IntervalTimeline* timeline = nullptr;
+};
+
+class Worker {
+public:
+    explicit Worker(WorkerSetup setup);
+    void run() noexcept;
+
+    // Results, valid after run() returned.
+    std::vector<stats::OperationResult> operations;
+    stats::OutcomeCounters stray;  // UnknownId / DuplicateId and traffic totals
+    stats::ScheduleLag schedule_lag;
+    stats::ConnectionStats connection_stats;
+    std::uint64_t pending_at_end = 0;
+    std::uint64_t late_responses = 0;
+    std::uint64_t framing_errors = 0;
+    std::uint64_t bad_protocol_frames = 0;
+    std::int64_t finished_ns = 0;
+    std::string fatal_error;
+    std::atomic<std::uint32_t> open_connections{0};
+
+private:
+    enum Op : std::uint8_t { kConnect = 1, kConnectTimeout, kRecv, kSend };
+
+    bool setup_io() noexcept;
+    void loop() noexcept;
+    void teardown() noexcept;
+
+    void start_due_connects(std::int64_t now) noexcept;
+    void start_connect(std::uint32_t index, std::int64_t now) noexcept;
+    void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
+    void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
+    void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
+    void arm_recv(std::uint32_t index) noexcept;
+    void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    bool on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept;
+    void on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
+
+    bool may_send() const noexcept { return !stopping_ && (quota_ == 0 || sent_ < quota_); }
+    bool enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept;
+    void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
+    void issue_open_loop(std::int64_t now) noexcept;
+    void push_ready(std::uint32_t index) noexcept;
+    void flush(std::int64_t now) noexcept;
+    void sweep_timeouts(std::int64_t now) noexcept;
+    void record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
+                std::int64_t now) noexcept;
+    std::uint32_t outstanding_total() const noexcept;
+
+    WorkerSetup setup_;
+    const Plan& plan_;
+    bool open_loop_;
+    std::uint64_t quota_;
+    std::uint64_t sent_ = 0;
+    bool stopping_ = false;
+
+    net::Ring ring_;
+    net::BufRing buf_ring_;  // declared after ring_: unregistered before the ring goes
+    bool multishot_ = true;
+
+    std::vector<Connection> connections_;
+    OperationGenerator generator_;
+    Pacer pacer_;
+    bool pacer_started_ = false;
+    LagTracker lag_;
+    stats::IntervalRecorder interval_;
+
+    std::vector<std::uint32_t> dirty_;  // connections with queued bytes
+    std::vector<std::uint32_t> ready_;  // open loop: ring of connections with spare depth
+    std::size_t ready_head_ = 0, ready_size_ = 0;
+    std::vector<std::pair<std::int64_t, std::uint32_t>> connect_heap_;  // (due, index), min-heap
+    std::int64_t next_connect_allowed_ns_ = 0;
+    std::int64_t connect_interval_ns_ = 0;
+    std::int64_t next_sweep_ns_ = 0;
+    std::int64_t sweep_interval_ns_ = 0;
+    __kernel_timespec connect_timeout_ts_{};
+    codec::Response response_scratch_;
+};
+
+}  // namespace mbstorm::load

@@ -1,0 +1,125 @@
+#include "net/features.hpp"
+
+#include <liburing.h>
+#include <sys/socket.h>
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include "net/buf_ring.hpp"
+#include "net/ring.hpp"
+#include "net/socket.hpp"
+
+namespace mbstorm::net {
+
+namespace {
+
+bool ring_accepts_flags(unsigned flags) {
+    io_uring ring{};
+    io_uring_params params{};
+    params.flags = flags;
+    if (io_uring_queue_init_params(8, &ring, &params) != 0) return false;
+    io_uring_queue_exit(&ring);
+    return true;
+}
+
+// Waits at most one second for a CQE so that a misbehaving kernel cannot hang the probe.
+bool wait_one(io_uring* ring, io_uring_cqe** cqe) {
+    __kernel_timespec ts{};
+    ts.tv_sec = 1;
+    return io_uring_wait_cqe_timeout(ring, cqe, &ts) == 0;
+}
+
+bool probe_multishot_recv(io_uring* ring, std::uint16_t group) {
+    int sv[2];
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0) return false;
+    UniqueFd a(sv[0]), b(sv[1]);
+    const char byte = 'x';
+    if (::write(b.get(), &byte, 1) != 1) return false;
+    io_uring_sqe* sqe = io_uring_get_sqe(ring);
+    io_uring_prep_recv_multishot(sqe, a.get(), nullptr, 0, 0);
+    sqe->flags |= IOSQE_BUFFER_SELECT;
+    sqe->buf_group = group;
+    io_uring_submit(ring);
+    io_uring_cqe* cqe = nullptr;
+    if (!wait_one(ring, &cqe)) return false;
+    bool ok = cqe->res == 1 && (cqe->flags & IORING_CQE_F_MORE);
+    io_uring_cqe_seen(ring, cqe);
+    return ok;
+}
+
+bool probe_multishot_accept(io_uring* ring) {
+    Endpoint ep;
+    if (!parse_endpoint("127.0.0.1:0", ep)) return false;
+    UniqueFd listener(listen_socket(ep, ListenOptions{16, false, true}));
+    if (!listener.valid()) return false;
+    ep.set_port(local_port(listener.get()));
+    io_uring_sqe* sqe = io_uring_get_sqe(ring);
+    io_uring_prep_multishot_accept(sqe, listener.get(), nullptr, nullptr, SOCK_CLOEXEC);
+    io_uring_submit(ring);
+    UniqueFd client(connect_blocking(ep));
+    if (!client.valid()) return false;
+    io_uring_cqe* cqe = nullptr;
+    if (!wait_one(ring, &cqe)) return false;
+    bool ok = cqe->res >= 0 && (cqe->flags & IORING_CQE_F_MORE);
+    if (cqe->res >= 0) ::close(cqe->res);
+    io_uring_cqe_seen(ring, cqe);
+    return ok;
+}
+
+}  // namespace
+
+Features probe_features() noexcept {
+    Features f;
+    try {
+        utsname u{};
+        if (uname(&u) == 0) f.kernel = u.release;
+    } catch (...) {
+    }
+    Ring ring;
+    RingOptions plain;
+    plain.entries = 16;
+    plain.single_issuer = plain.defer_taskrun = plain.coop_taskrun = false;
+    if (ring.init(plain) != 0) return f;
+    f.ring = true;
+    f.single_issuer = ring_accepts_flags(IORING_SETUP_SINGLE_ISSUER);
+    f.defer_taskrun = ring_accepts_flags(IORING_SETUP_SINGLE_ISSUER | IORING_SETUP_DEFER_TASKRUN);
+    f.coop_taskrun = ring_accepts_flags(IORING_SETUP_COOP_TASKRUN | IORING_SETUP_TASKRUN_FLAG);
+    if (io_uring_probe* p = io_uring_get_probe_ring(ring.get())) {
+        f.send_zc = io_uring_opcode_supported(p, IORING_OP_SEND_ZC);
+        io_uring_free_probe(p);
+    }
+    {
+        BufRing br;
+        f.buf_ring = br.init(ring.get(), 7, 8, 64) == 0;
+        if (f.buf_ring) f.multishot_recv = probe_multishot_recv(ring.get(), 7);
+    }
+    {
+        // A fresh ring: the recv probe above leaves a completion behind when its sockets close.
+        Ring accept_ring;
+        if (accept_ring.init(plain) == 0)
+            f.multishot_accept = probe_multishot_accept(accept_ring.get());
+    }
+    return f;
+}
+
+const Features& features() noexcept {
+    static const Features cached = probe_features();
+    return cached;
+}
+
+std::string describe(const Features& f) {
+    auto yn = [](bool b) { return b ? "yes" : "no"; };
+    std::string s = "io_uring on " + (f.kernel.empty() ? std::string("?") : f.kernel) + ": ";
+    if (!f.ring) return s + "unavailable";
+    s += std::string("multishot_accept=") + yn(f.multishot_accept) +
+         " multishot_recv=" + yn(f.multishot_recv) + " buf_ring=" + yn(f.buf_ring) +
+         " send_zc=" + yn(f.send_zc) + " single_issuer=" + yn(f.single_issuer) +
+         " defer_taskrun=" + yn(f.defer_taskrun) + " coop_taskrun=" + yn(f.coop_taskrun);
+    return s;
+}
+
+void print_features(const Features& f, std::FILE* out) {
+    std::fprintf(out, "%s\n", describe(f).c_str());
+}
+
+}  // namespace mbstorm::net

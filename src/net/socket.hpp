@@ -1,0 +1,85 @@
+// Socket helpers: endpoints ("host:port", "[::1]:5020"), listeners, non-blocking connects,
+// socket options and the open-files limit. Functions return -errno on failure.
+#pragma once
+
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace mbstorm::net {
+
+struct Endpoint {
+    sockaddr_storage addr{};
+    socklen_t len = 0;
+
+    int family() const noexcept { return addr.ss_family; }
+    std::uint16_t port() const noexcept;
+    void set_port(std::uint16_t port) noexcept;
+    const sockaddr* sa() const noexcept { return reinterpret_cast<const sockaddr*>(&addr); }
+    std::string to_string() const;  // "127.0.0.1:5020" or "[::1]:5020"
+};
+
+// Accepts "host:port", "[v6addr]:port", "v6addr" is NOT accepted without brackets when a port
+// follows. Host may be a name (resolved with getaddrinfo, first result). When the text has no
+// port, `default_port` is used. Returns false and fills `error` on failure.
+bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error = nullptr,
+                    std::uint16_t default_port = 502);
+
+// RAII file descriptor.
+class UniqueFd {
+  public:
+    UniqueFd() = default;
+    explicit UniqueFd(int fd) noexcept : fd_(fd) {}
+    ~UniqueFd() { reset(); }
+    UniqueFd(UniqueFd&& o) noexcept : fd_(o.release()) {}
+    UniqueFd& operator=(UniqueFd&& o) noexcept {
+        if (this != &o) reset(o.release());
+        return *this;
+    }
+    UniqueFd(const UniqueFd&) = delete;
+    UniqueFd& operator=(const UniqueFd&) = delete;
+
+    int get() const noexcept { return fd_; }
+    bool valid() const noexcept { return fd_ >= 0; }
+    int release() noexcept {
+        int f = fd_;
+        fd_ = -1;
+        return f;
+    }
+    void reset(int fd = -1) noexcept;
+
+  private:
+    int fd_ = -1;
+};
+
+struct ListenOptions {
+    int backlog = 4096;
+    bool reuse_port = true;  // SO_REUSEPORT: one listener per thread on the same port
+    bool nonblocking = true;
+};
+
+// socket + SO_REUSEADDR (+SO_REUSEPORT) + bind + listen. fd or -errno.
+int listen_socket(const Endpoint& ep, const ListenOptions& options = {}) noexcept;
+
+// Non-blocking socket + connect; EINPROGRESS counts as success. fd or -errno.
+int connect_nonblocking(const Endpoint& ep) noexcept;
+
+// Blocking connect (tests, tools). fd or -errno.
+int connect_blocking(const Endpoint& ep) noexcept;
+
+int set_nodelay(int fd, bool on = true) noexcept;
+int set_nonblocking(int fd, bool on = true) noexcept;
+// Port a bound socket actually got (for port 0). 0 on error.
+std::uint16_t local_port(int fd) noexcept;
+// Pending connect result (SO_ERROR): 0 or the positive errno.
+int socket_error(int fd) noexcept;
+
+// Raises RLIMIT_NOFILE soft limit towards `wanted` (up to the hard limit). Returns the
+// resulting soft limit. When it stays below `wanted`, `message` explains what to do
+// (ulimit -n / limits.conf / CAP_SYS_RESOURCE).
+std::uint64_t raise_nofile_limit(std::uint64_t wanted, std::string* message = nullptr) noexcept;
+
+}  // namespace mbstorm::net

@@ -1,0 +1,207 @@
+#include "report/console.hpp"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <array>
+#include <utility>
+
+namespace mbstorm::report {
+namespace {
+
+using stats::Histogram;
+using stats::OutcomeCounters;
+
+constexpr std::array<std::pair<double, const char*>, 7> kPercentiles = {{{50.0, "p50"},
+                                                                        {75.0, "p75"},
+                                                                        {90.0, "p90"},
+                                                                        {99.0, "p99"},
+                                                                        {99.9, "p99.9"},
+                                                                        {99.99, "p99.99"},
+                                                                        {99.999, "p99.999"}}};
+
+// fmt pads by code points, so "µs" (two bytes, one column) lines up.
+void append_latency_table(std::string& out, const Histogram& h) {
+    if (h.empty()) {
+        out += "  (no latency samples)\n";
+        return;
+    }
+    for (const auto& [p, label] : kPercentiles) {
+        out += fmt::format("  {:<9}{:>10}\n", label, format_latency(h.value_at_percentile(p)));
+    }
+    out += fmt::format("  {:<9}{:>10}\n", "max", format_latency(h.max()));
+    out += fmt::format("  {:<9}{:>10}   stddev {}   min {}\n", "mean", format_latency(h.mean()),
+                       format_latency(h.stddev()), format_latency(h.min()));
+    if (h.saturated_count() != 0) {
+        out += fmt::format("  note: {} samples above {} were clamped to it\n",
+                           format_count(h.saturated_count()),
+                           format_latency(h.highest_trackable()));
+    }
+}
+
+void append_error_lines(std::string& out, const OutcomeCounters& c, const char* indent) {
+    for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
+        const auto outcome = static_cast<stats::Outcome>(i);
+        if (c.count(outcome) == 0) continue;
+        out += fmt::format("{}{:<22}{:>14}\n", indent, stats::outcome_name(outcome),
+                           format_count(c.count(outcome)));
+        if (outcome == stats::Outcome::Exception) {
+            for (std::size_t code = 0; code < c.exceptions.size(); ++code) {
+                if (c.exceptions[code] == 0) continue;
+                out += fmt::format("{}  code {:<15}{:>14}\n", indent,
+                                   format_hex_byte(static_cast<std::uint8_t>(code)),
+                                   format_count(c.exceptions[code]));
+            }
+        }
+    }
+}
+
+double percent(std::uint64_t part, std::uint64_t whole) {
+    return whole == 0 ? 0.0 : 100.0 * static_cast<double>(part) / static_cast<double>(whole);
+}
+
+void append_row_header(std::string& out, const char* first) {
+    out += fmt::format("  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", first, "count",
+                       "tx/s", "errors", "p50", "p90", "p99", "p99.9", "max");
+}
+
+void append_row(std::string& out, const std::string& name, const Histogram& h,
+                const OutcomeCounters& c, double seconds) {
+    const double rate = seconds > 0.0 ? static_cast<double>(c.completed()) / seconds : 0.0;
+    out += fmt::format("  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n",
+                       name.size() > 32 ? name.substr(0, 32) : name, format_count(c.completed()),
+                       format_rate(rate), format_count(c.errors()),
+                       format_latency(h.value_at_percentile(50)),
+                       format_latency(h.value_at_percentile(90)),
+                       format_latency(h.value_at_percentile(99)),
+                       format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
+}
+
+std::string operation_label(const stats::OperationResult& op) {
+    return fmt::format("{} ({:02X})", op.name, op.function_code);
+}
+
+}  // namespace
+
+std::string format_console_report(const stats::RunResult& r) {
+    const auto& m = r.metadata;
+    const double seconds = static_cast<double>(m.measured_duration_ns) / 1e9;
+    std::string out;
+
+    out += fmt::format("{} — {} loop against {}\n", m.tool_version.empty() ? "mbstorm" : m.tool_version,
+                       stats::load_model_name(m.model), m.target);
+    out += fmt::format("  threads {}, connections {}, depth {}", m.threads, m.connections, m.depth);
+    if (m.model == stats::LoadModel::Open) out += fmt::format(", rate {}/s", format_rate(m.rate_per_second));
+    out += fmt::format(", duration {} (warm-up {})\n", format_duration(m.measured_duration_ns),
+                       format_duration(m.warmup_ns));
+    if (const auto start = format_utc(m.start_time); !start.empty()) {
+        out += fmt::format("  started {}\n", start);
+    }
+    if (m.coordinated_omission_corrected) out += "  latencies corrected for coordinated omission\n";
+    for (const auto& note : m.notes) out += fmt::format("  note: {}\n", note);
+
+    const auto& c = r.counters;
+    out += fmt::format("\nThroughput  {} tx/s  ({} transactions in {:.2f}s, {} sent)\n",
+                       format_rate(r.throughput()), format_count(c.completed()), seconds,
+                       format_count(c.transactions_sent));
+    out += fmt::format("Traffic     sent {}, received {}\n", format_bytes(c.bytes_sent),
+                       format_bytes(c.bytes_received));
+    out += fmt::format("Connections opened {}, failed {}, reconnects {}, closed by peer {}\n",
+                       format_count(r.connections.opened), format_count(r.connections.failed),
+                       format_count(r.connections.reconnects),
+                       format_count(r.connections.closed_by_peer));
+    if (m.model == stats::LoadModel::Open) {
+        const auto& lag = r.schedule_lag;
+        if (lag.late_sends == 0) {
+            out += "Schedule    kept (no late sends)\n";
+        } else {
+            out += fmt::format("Schedule    engine fell behind: {} late sends, max lag {}, mean lag {}\n",
+                               format_count(lag.late_sends), format_latency(lag.max_lag_ns),
+                               format_latency(static_cast<double>(lag.total_lag_ns) /
+                                              static_cast<double>(lag.late_sends)));
+        }
+    }
+
+    out += fmt::format("\nLatency ({} samples)\n", format_count(r.latency.total_count()));
+    append_latency_table(out, r.latency);
+
+    out += fmt::format("\nErrors      {} of {} ({:.3f}%)\n", format_count(c.errors()),
+                       format_count(c.completed()), percent(c.errors(), c.completed()));
+    append_error_lines(out, c, "  ");
+
+    if (!r.operations.empty()) {
+        out += "\nPer operation\n";
+        append_row_header(out, "operation (fc)");
+        for (const auto& op : r.operations) {
+            append_row(out, operation_label(op), op.latency, op.counters, seconds);
+        }
+    }
+
+    if (!r.stages.empty()) {
+        out += "\nPer stage\n";
+        append_row_header(out, "stage");
+        for (const auto& st : r.stages) {
+            const double stage_seconds =
+                static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
+            append_row(out, fmt::format("{}. {}", st.index, st.name), st.latency, st.counters,
+                       stage_seconds);
+            for (const auto& op : st.operations) {
+                append_row(out, "   " + operation_label(op), op.latency, op.counters, stage_seconds);
+            }
+        }
+    }
+
+    if (!r.thresholds.empty()) {
+        out += fmt::format("\nThresholds  {}\n", r.thresholds_passed() ? "all passed" : "FAILED");
+        for (const auto& t : r.thresholds) {
+            out += fmt::format("  {}  {:<36} observed {}\n", t.passed ? "PASS" : "FAIL", t.expression,
+                               t.observed_text.empty() ? fmt::format("{}", t.observed)
+                                                       : t.observed_text);
+        }
+    }
+    return out;
+}
+
+std::string format_progress_line(const ProgressSample& s) {
+    std::string line = fmt::format("[{:>7.1f}s]", s.elapsed_seconds);
+    if (s.last_interval != nullptr) {
+        const auto& i = *s.last_interval;
+        line += fmt::format("  {:>6} tx/s  p50 {:>7}  p99 {:>7}  max {:>7}",
+                            format_rate(i.transactions_per_second()), format_latency(i.p50_ns),
+                            format_latency(i.p99_ns), format_latency(i.max_ns));
+    } else {
+        line += fmt::format("  {:>6} tx/s  p50 {:>7}  p99 {:>7}  max {:>7}", "-", "-", "-", "-");
+    }
+    line += fmt::format("  errors {}  conns {}", format_count(s.total_errors), s.open_connections);
+    return line;
+}
+
+ProgressPrinter::ProgressPrinter(std::FILE* out)
+    : ProgressPrinter(out, out != nullptr && ::isatty(::fileno(out)) == 1) {}
+
+ProgressPrinter::ProgressPrinter(std::FILE* out, bool is_tty) : out_(out), is_tty_(is_tty) {}
+
+void ProgressPrinter::update(const ProgressSample& sample) {
+    if (out_ == nullptr) return;
+    const std::string line = format_progress_line(sample);
+    if (is_tty_) {
+        // Pad with spaces so a shorter line fully covers the previous one.
+        const std::size_t pad = last_width_ > line.size() ? last_width_ - line.size() : 0;
+        std::fprintf(out_, "\r%s%*s", line.c_str(), static_cast<int>(pad), "");
+        last_width_ = line.size();
+        line_open_ = true;
+    } else {
+        std::fprintf(out_, "%s\n", line.c_str());
+    }
+    std::fflush(out_);
+}
+
+void ProgressPrinter::finish() {
+    if (out_ == nullptr || !line_open_) return;
+    std::fputc('\n', out_);
+    std::fflush(out_);
+    line_open_ = false;
+    last_width_ = 0;
+}
+
+}  // namespace mbstorm::report

@@ -1,0 +1,163 @@
+#include "report/json.hpp"
+
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
+#include "report/units.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+using nlohmann::json;
+
+// Keys are the percentile as written by humans: "50", "99.9", "99.999", "100".
+constexpr std::array<std::pair<double, const char*>, 8> kPercentiles = {{{50.0, "50"},
+                                                                        {75.0, "75"},
+                                                                        {90.0, "90"},
+                                                                        {99.0, "99"},
+                                                                        {99.9, "99.9"},
+                                                                        {99.99, "99.99"},
+                                                                        {99.999, "99.999"},
+                                                                        {100.0, "100"}}};
+
+double seconds(std::uint64_t ns) { return static_cast<double>(ns) / 1e9; }
+
+json latency_json(const stats::Histogram& h) {
+    json percentiles = json::object();
+    for (const auto& [p, key] : kPercentiles) percentiles[key] = h.value_at_percentile(p);
+    return {{"count", h.total_count()},     {"min_ns", h.min()},
+            {"max_ns", h.max()},            {"mean_ns", h.mean()},
+            {"stddev_ns", h.stddev()},      {"saturated", h.saturated_count()},
+            {"percentiles_ns", percentiles}};
+}
+
+json outcomes_json(const stats::OutcomeCounters& c) {
+    json outcomes = json::object();
+    for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
+        outcomes[std::string(stats::outcome_name(static_cast<stats::Outcome>(i)))] = c.outcomes[i];
+    }
+    return outcomes;
+}
+
+json exceptions_json(const stats::OutcomeCounters& c) {
+    json exceptions = json::object();
+    for (std::size_t code = 0; code < c.exceptions.size(); ++code) {
+        if (c.exceptions[code] != 0) {
+            exceptions[format_hex_byte(static_cast<std::uint8_t>(code))] = c.exceptions[code];
+        }
+    }
+    return exceptions;
+}
+
+json totals_json(const stats::OutcomeCounters& c, std::uint64_t duration_ns) {
+    const double s = seconds(duration_ns);
+    const std::uint64_t completed = c.completed();
+    return {{"transactions", completed},
+            {"transactions_sent", c.transactions_sent},
+            {"ok", c.ok()},
+            {"errors", c.errors()},
+            {"error_rate", completed == 0 ? 0.0 : static_cast<double>(c.errors()) / completed},
+            {"throughput_per_s", s > 0.0 ? static_cast<double>(completed) / s : 0.0},
+            {"bytes_sent", c.bytes_sent},
+            {"bytes_received", c.bytes_received}};
+}
+
+json operation_json(const stats::OperationResult& op, std::uint64_t duration_ns) {
+    return {{"name", op.name},
+            {"function_code", op.function_code},
+            {"totals", totals_json(op.counters, duration_ns)},
+            {"latency", latency_json(op.latency)},
+            {"outcomes", outcomes_json(op.counters)},
+            {"exceptions", exceptions_json(op.counters)}};
+}
+
+}  // namespace
+
+std::string format_json(const stats::RunResult& r, int indent) {
+    const auto& m = r.metadata;
+    json run = {{"target", m.target},
+                {"threads", m.threads},
+                {"connections", m.connections},
+                {"depth", m.depth},
+                {"model", stats::load_model_name(m.model)},
+                {"rate_per_second", m.rate_per_second},
+                {"requested_duration_s", seconds(m.requested_duration_ns)},
+                {"measured_duration_s", seconds(m.measured_duration_ns)},
+                {"warmup_s", seconds(m.warmup_ns)},
+                {"start_time", format_utc(m.start_time)},
+                {"coordinated_omission_corrected", m.coordinated_omission_corrected},
+                {"notes", m.notes}};
+
+    json operations = json::array();
+    for (const auto& op : r.operations) operations.push_back(operation_json(op, m.measured_duration_ns));
+
+    json stages = json::array();
+    for (const auto& st : r.stages) {
+        const std::uint64_t span = st.end_offset_ns - st.start_offset_ns;
+        json stage_ops = json::array();
+        for (const auto& op : st.operations) stage_ops.push_back(operation_json(op, span));
+        stages.push_back({{"index", st.index},
+                          {"name", st.name},
+                          {"start_offset_s", seconds(st.start_offset_ns)},
+                          {"end_offset_s", seconds(st.end_offset_ns)},
+                          {"totals", totals_json(st.counters, span)},
+                          {"latency", latency_json(st.latency)},
+                          {"outcomes", outcomes_json(st.counters)},
+                          {"exceptions", exceptions_json(st.counters)},
+                          {"operations", stage_ops}});
+    }
+
+    json intervals = json::array();
+    for (const auto& i : r.timeline) {
+        intervals.push_back({{"index", i.index},
+                             {"start_offset_s", seconds(i.start_offset_ns)},
+                             {"transactions", i.transactions},
+                             {"errors", i.errors},
+                             {"throughput_per_s", i.transactions_per_second()},
+                             {"p50_ns", i.p50_ns},
+                             {"p90_ns", i.p90_ns},
+                             {"p99_ns", i.p99_ns},
+                             {"p99_9_ns", i.p999_ns},
+                             {"max_ns", i.max_ns},
+                             {"mean_ns", i.mean_ns}});
+    }
+
+    json thresholds = json::array();
+    for (const auto& t : r.thresholds) {
+        thresholds.push_back({{"expression", t.expression},
+                              {"observed", t.observed},
+                              {"observed_text", t.observed_text},
+                              {"passed", t.passed}});
+    }
+
+    const auto& lag = r.schedule_lag;
+    json doc = {
+        {"schema_version", kJsonSchemaVersion},
+        {"tool", m.tool_version},
+        {"run", run},
+        {"totals", totals_json(r.counters, m.measured_duration_ns)},
+        {"latency", latency_json(r.latency)},
+        {"outcomes", outcomes_json(r.counters)},
+        {"exceptions", exceptions_json(r.counters)},
+        {"operations", operations},
+        {"stages", stages},
+        {"timeline", {{"interval_s", seconds(r.timeline_interval_ns)}, {"intervals", intervals}}},
+        {"schedule_lag",
+         {{"late_sends", lag.late_sends},
+          {"max_lag_ns", lag.max_lag_ns},
+          {"mean_lag_ns", lag.late_sends == 0 ? 0.0
+                                              : static_cast<double>(lag.total_lag_ns) /
+                                                    static_cast<double>(lag.late_sends)}}},
+        {"connections",
+         {{"opened", r.connections.opened},
+          {"failed", r.connections.failed},
+          {"reconnects", r.connections.reconnects},
+          {"closed_by_peer", r.connections.closed_by_peer}}},
+        {"thresholds", thresholds},
+        {"thresholds_passed", r.thresholds_passed()}};
+    // Replace invalid UTF-8 in user-supplied names instead of throwing.
+    return doc.dump(indent, ' ', false, json::error_handler_t::replace);
+}
+
+}  // namespace mbstorm::report

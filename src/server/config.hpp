@@ -1,0 +1,59 @@
+// Settings of the io_uring Modbus TCP reference slave. Everything optional is off by default.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "slave/faults.hpp"
+
+namespace mbstorm::slave {
+class DataModel;
+}
+
+namespace mbstorm::server {
+
+enum class FullPolicy : std::uint8_t {
+    EvictOldestIdle,  // close the least recently active connection to admit the new one
+    Refuse,           // close the new connection at once
+};
+
+enum class ForeignUnitPolicy : std::uint8_t {
+    NoAnswer,          // like a device on a bus that is not addressed
+    GatewayException,  // exception 0B, as a gateway whose target does not answer
+};
+
+struct ServerConfig {
+    std::string listen = "127.0.0.1:5020";  // port 0: ephemeral (see Server::port())
+    unsigned threads = 0;                   // 0: one per core
+
+    std::uint32_t max_connections = 16384;  // across all threads; 0: unlimited
+    FullPolicy full_policy = FullPolicy::EvictOldestIdle;
+    std::uint64_t idle_timeout_ms = 0;  // 0: never close idle connections
+
+    // Backpressure: stop reading a connection while this much output waits to be sent.
+    std::size_t max_pending_output = 64 * 1024;
+
+    // Device emulation (NumberMaxOfServerTransaction): requests beyond this many unanswered
+    // ones on a connection get exception 06. 0: no cap.
+    unsigned max_outstanding = 0;
+    // Answer only this unit id; others per `foreign_unit`.
+    std::optional<std::uint8_t> only_unit;
+    ForeignUnitPolicy foreign_unit = ForeignUnitPolicy::NoAnswer;
+
+    slave::FaultConfig faults;
+
+    // The shared data model; nullptr: the server owns a default one.
+    slave::DataModel* model = nullptr;
+
+    // I/O tuning (and switches to force the fallbacks in tests).
+    bool use_buf_ring = true;        // provided buffer ring for input, else per-connection buffers
+    bool use_multishot_recv = true;  // needs use_buf_ring
+    bool use_multishot_accept = true;
+    unsigned ring_entries = 4096;
+    unsigned buf_ring_count = 2048;  // per thread, power of two
+    unsigned buf_size = 4096;
+};
+
+}  // namespace mbstorm::server

@@ -1,0 +1,47 @@
+// One accepted connection's state. Kept small and fixed: input lives in the thread's shared
+// buffer ring (a partial frame in the splitter's 260 bytes), output blocks are pooled and
+// held only while there is output.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+
+#include "codec/mbap.hpp"
+#include "server/out_queue.hpp"
+
+namespace mbstorm::server {
+
+inline constexpr std::uint32_t kNoConn = std::numeric_limits<std::uint32_t>::max();
+inline constexpr std::uint64_t kNoHold = std::numeric_limits<std::uint64_t>::max();
+
+struct Connection {
+    enum class State : std::uint8_t { Free, Open, Closing };
+
+    int fd = -1;
+    std::uint32_t generation = 0;
+    State state = State::Free;
+    bool recv_armed = false;     // a recv (multishot or single) is in the kernel
+    bool send_inflight = false;  // a send is in the kernel (its block must stay put)
+    bool paused = false;         // backpressure: not reading until output drains
+    bool dirty = false;          // has new output, queued for the end-of-batch flush
+    bool in_hold_list = false;
+
+    // LRU list of open connections (least recently active at the head), for idle timeouts
+    // and "evict the oldest idle connection".
+    std::uint32_t lru_prev = kNoConn;
+    std::uint32_t lru_next = kNoConn;
+    std::int64_t last_active_ns = 0;
+
+    // Output from stream position hold_pos on waits until hold_until_ns (delay/stall faults).
+    std::uint64_t hold_pos = kNoHold;
+    std::int64_t hold_until_ns = 0;
+    // Responses queued since the output queue was last empty (outstanding-transaction cap).
+    std::uint32_t unanswered = 0;
+
+    OutQueue out;
+    std::unique_ptr<std::uint8_t[]> plain_buf;  // only without a buffer ring
+    codec::MbapSplitter splitter;
+};
+
+}  // namespace mbstorm::server

@@ -1,0 +1,74 @@
+#include "server/out_queue.hpp"
+
+namespace mbstorm::server {
+
+BlockPool::~BlockPool() {
+    for (OutBlock* b : all_) delete b;
+}
+
+OutBlock* BlockPool::get() {
+    if (free_) {
+        OutBlock* b = free_;
+        free_ = b->next;
+        b->next = nullptr;
+        b->begin = b->end = 0;
+        return b;
+    }
+    all_.reserve(all_.size() + 1);
+    auto* b = new OutBlock;
+    all_.push_back(b);
+    return b;
+}
+
+void BlockPool::put(OutBlock* b) noexcept {
+    b->next = free_;
+    free_ = b;
+}
+
+std::uint8_t* OutQueue::reserve(BlockPool& pool, std::size_t max_size) {
+    if (!tail_ || OutBlock::kCapacity - tail_->end < max_size) {
+        OutBlock* b = pool.get();
+        if (tail_)
+            tail_->next = b;
+        else
+            head_ = b;
+        tail_ = b;
+    }
+    return tail_->data + tail_->end;
+}
+
+const std::uint8_t* OutQueue::sendable(std::uint64_t limit, std::size_t& size) const noexcept {
+    size = 0;
+    if (!head_ || limit <= sent_) return nullptr;
+    std::uint64_t n = head_->end - head_->begin;
+    if (limit - sent_ < n) n = limit - sent_;
+    size = static_cast<std::size_t>(n);
+    return size ? head_->data + head_->begin : nullptr;
+}
+
+void OutQueue::consume(BlockPool& pool, std::size_t n) noexcept {
+    sent_ += n;
+    head_->begin += static_cast<std::uint32_t>(n);
+    while (head_ && head_->begin == head_->end) {
+        OutBlock* done = head_;
+        if (done == tail_) {
+            // Fully drained: give the block back so that idle connections own no output memory.
+            head_ = tail_ = nullptr;
+        } else {
+            head_ = done->next;
+        }
+        pool.put(done);
+    }
+}
+
+void OutQueue::clear(BlockPool& pool) noexcept {
+    while (head_) {
+        OutBlock* next = head_->next;
+        pool.put(head_);
+        head_ = next;
+    }
+    tail_ = nullptr;
+    sent_ = written_;
+}
+
+}  // namespace mbstorm::server

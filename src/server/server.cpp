@@ -1,0 +1,106 @@
+#include "server/server.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include "net/clock.hpp"
+#include "net/features.hpp"
+#include "net/socket.hpp"
+#include "server/worker.hpp"
+#include "slave/data_model.hpp"
+
+namespace mbstorm::server {
+
+Server::Server(ServerConfig config) : config_(std::move(config)) {}
+
+Server::~Server() {
+    stop();
+}
+
+bool Server::start(std::string* error) {
+    auto fail = [&](std::string text) {
+        if (error) *error = std::move(text);
+        stop();
+        return false;
+    };
+    if (running_) return true;
+    if (!net::features().ring) return fail("io_uring is not available (kernel or seccomp)");
+    if (std::string v = slave::validate(config_.faults); !v.empty()) return fail(v);
+    net::Endpoint ep;
+    std::string parse_error;
+    if (!net::parse_endpoint(config_.listen, ep, &parse_error, 5020)) return fail(parse_error);
+    unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
+    if (n == 0) n = 1;
+    if (config_.max_connections) {
+        std::string msg;
+        net::raise_nofile_limit(config_.max_connections + 64 + n * 8, &msg);
+        // Not fatal: the server still runs, and accepts fail cleanly beyond the limit.
+        (void)msg;
+    }
+    if (config_.model) {
+        model_ = config_.model;
+    } else {
+        owned_model_ = std::make_unique<slave::DataModel>();
+        model_ = owned_model_.get();
+    }
+    const std::uint64_t stall_origin = static_cast<std::uint64_t>(net::now_ns());
+    for (unsigned i = 0; i < n; ++i) {
+        int fd = net::listen_socket(ep);
+        if (fd < 0) return fail("cannot listen on " + ep.to_string() + ": " + strerror(-fd));
+        if (i == 0) {
+            port_ = net::local_port(fd);
+            ep.set_port(port_);  // the other threads join the same (possibly ephemeral) port
+            host_ = ep.to_string();
+        }
+        workers_.push_back(
+            std::make_unique<Worker>(config_, *model_, fd, i, open_connections_, stall_origin));
+    }
+    for (auto& w : workers_) threads_.emplace_back([wp = w.get()] { wp->run(); });
+    running_ = true;
+    for (auto& w : workers_) {
+        while (w->init_status() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        if (w->init_status() < 0)
+            return fail(std::string("cannot set up io_uring: ") + strerror(-w->init_status()));
+    }
+    return true;
+}
+
+void Server::stop() noexcept {
+    for (auto& w : workers_) w->request_stop();
+    for (auto& t : threads_)
+        if (t.joinable()) t.join();
+    threads_.clear();
+    running_ = false;
+}
+
+std::string Server::endpoint() const {
+    return host_;
+}
+
+ServerStats Server::stats() const noexcept {
+    ServerStats total;
+    for (const auto& w : workers_) total += w->counters().snapshot();
+    return total;
+}
+
+std::size_t Server::bytes_per_connection() noexcept {
+    return Worker::connection_bytes();
+}
+
+std::string Server::describe_io() const {
+    const net::Features& f = net::features();
+    const bool br = config_.use_buf_ring && f.buf_ring;
+    std::string s = "io_uring, " + std::to_string(workers_.size()) + " thread(s): ";
+    s += (br && config_.use_multishot_recv && f.multishot_recv) ? "multishot recv" : "recv";
+    s += br ? " + buffer ring (" + std::to_string(config_.buf_ring_count) + " x " +
+                  std::to_string(config_.buf_size) + " B per thread)"
+            : " into per-connection buffers";
+    s += (config_.use_multishot_accept && f.multishot_accept) ? ", multishot accept" : ", accept";
+    s += ", " + std::to_string(bytes_per_connection()) + " B per idle connection";
+    return s;
+}
+
+}  // namespace mbstorm::server

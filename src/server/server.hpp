@@ -1,0 +1,57 @@
+// The io_uring Modbus TCP reference slave: N worker threads, each with its own ring and its
+// own SO_REUSEPORT listener on the same port. Start it in-process (tests, `mbstorm run`) or
+// from `mbstorm serve`.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "server/config.hpp"
+#include "server/stats.hpp"
+
+namespace mbstorm::server {
+
+class Worker;
+
+class Server {
+  public:
+    explicit Server(ServerConfig config);
+    ~Server();  // stops and joins
+    Server(const Server&) = delete;
+    Server& operator=(const Server&) = delete;
+
+    // Binds, starts the threads and returns once every ring is serving. False with `error`.
+    bool start(std::string* error = nullptr);
+    // Asks every thread to stop, waits for them. Idempotent.
+    void stop() noexcept;
+    bool running() const noexcept { return running_; }
+
+    std::uint16_t port() const noexcept { return port_; }
+    std::string endpoint() const;  // "127.0.0.1:40123"
+    unsigned threads() const noexcept { return static_cast<unsigned>(workers_.size()); }
+    const ServerConfig& config() const noexcept { return config_; }
+    slave::DataModel& model() noexcept { return *model_; }
+
+    ServerStats stats() const noexcept;
+    // One line about the I/O path, e.g. "io_uring: multishot recv + buffer ring (2048 x 4096)".
+    std::string describe_io() const;
+    // Fixed bytes per open connection (excluding the kernel socket).
+    static std::size_t bytes_per_connection() noexcept;
+
+  private:
+    ServerConfig config_;
+    std::unique_ptr<slave::DataModel> owned_model_;
+    slave::DataModel* model_ = nullptr;
+    std::vector<std::unique_ptr<Worker>> workers_;
+    std::vector<std::thread> threads_;
+    std::atomic<std::uint32_t> open_connections_{0};
+    std::uint16_t port_ = 0;
+    std::string host_;
+    bool running_ = false;
+};
+
+}  // namespace mbstorm::server

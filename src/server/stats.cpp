@@ -1,0 +1,111 @@
+#include "server/stats.hpp"
+
+#include <fmt/format.h>
+
+namespace mbstorm::server {
+
+std::uint64_t ServerStats::exceptions_total() const noexcept {
+    std::uint64_t sum = 0;
+    for (auto v : exceptions) sum += v;
+    return sum;
+}
+
+ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
+    transactions += o.transactions;
+    requests += o.requests;
+    for (std::size_t i = 0; i < exceptions.size(); ++i) exceptions[i] += o.exceptions[i];
+    bytes_in += o.bytes_in;
+    bytes_out += o.bytes_out;
+    connections_current += o.connections_current;
+    connections_total += o.connections_total;
+    discarded_frames += o.discarded_frames;
+    bad_framing_closes += o.bad_framing_closes;
+    idle_closes += o.idle_closes;
+    evictions += o.evictions;
+    refusals += o.refusals;
+    busy_rejects += o.busy_rejects;
+    foreign_unit += o.foreign_unit;
+    fault_drops += o.fault_drops;
+    fault_no_answer += o.fault_no_answer;
+    fault_delayed += o.fault_delayed;
+    backpressure_pauses += o.backpressure_pauses;
+    pending_output += o.pending_output;
+    if (o.pending_output_peak > pending_output_peak) pending_output_peak = o.pending_output_peak;
+    output_blocks += o.output_blocks;
+    return *this;
+}
+
+ServerStats ServerCounters::snapshot() const noexcept {
+    auto v = [this](Id id) { return values_[id].load(std::memory_order_relaxed); };
+    ServerStats s;
+    s.transactions = v(Transactions);
+    s.requests = v(Requests);
+    for (std::size_t i = 0; i < exceptions_.size(); ++i)
+        s.exceptions[i] = exceptions_[i].load(std::memory_order_relaxed);
+    s.bytes_in = v(BytesIn);
+    s.bytes_out = v(BytesOut);
+    s.connections_current = v(ConnectionsCurrent);
+    s.connections_total = v(ConnectionsTotal);
+    s.discarded_frames = v(DiscardedFrames);
+    s.bad_framing_closes = v(BadFramingCloses);
+    s.idle_closes = v(IdleCloses);
+    s.evictions = v(Evictions);
+    s.refusals = v(Refusals);
+    s.busy_rejects = v(BusyRejects);
+    s.foreign_unit = v(ForeignUnit);
+    s.fault_drops = v(FaultDrops);
+    s.fault_no_answer = v(FaultNoAnswer);
+    s.fault_delayed = v(FaultDelayed);
+    s.backpressure_pauses = v(BackpressurePauses);
+    s.pending_output = v(PendingOutput);
+    s.pending_output_peak = v(PendingOutputPeak);
+    s.output_blocks = v(OutputBlocks);
+    return s;
+}
+
+namespace {
+
+std::string exceptions_text(const ServerStats& s) {
+    std::string out;
+    for (std::size_t code = 1; code < s.exceptions.size(); ++code) {
+        if (s.exceptions[code] == 0) continue;
+        out += fmt::format("{}{:02X}:{}", out.empty() ? "" : " ", code, s.exceptions[code]);
+    }
+    return out.empty() ? "none" : out;
+}
+
+}  // namespace
+
+std::string format_stats_line(const ServerStats& now, const ServerStats& before, double elapsed_s,
+                              double interval_s) {
+    const double dt = interval_s > 0 ? interval_s : 1.0;
+    return fmt::format(
+        "[{:7.1f}s] tps {:.0f} conns {} (total {}) in {:.2f} MB/s out {:.2f} MB/s exc {} "
+        "discarded {} bad-framing {} idle {} evicted {} refused {} pending {} B",
+        elapsed_s, static_cast<double>(now.transactions - before.transactions) / dt,
+        now.connections_current, now.connections_total,
+        static_cast<double>(now.bytes_in - before.bytes_in) / dt / 1e6,
+        static_cast<double>(now.bytes_out - before.bytes_out) / dt / 1e6,
+        now.exceptions_total() - before.exceptions_total(), now.discarded_frames,
+        now.bad_framing_closes, now.idle_closes, now.evictions, now.refusals, now.pending_output);
+}
+
+std::string format_summary(const ServerStats& t, double elapsed_s) {
+    const double secs = elapsed_s > 0 ? elapsed_s : 1.0;
+    return fmt::format(
+        "summary: {:.1f}s, {} transactions ({:.0f}/s), {} requests\n"
+        "  connections: {} total, {} open, {} idle-closed, {} evicted, {} refused\n"
+        "  bytes: {} in, {} out\n"
+        "  exceptions: {} ({})\n"
+        "  framing: {} discarded (protocol id != 0), {} closed for bad length\n"
+        "  emulation: {} busy (06), {} other-unit requests\n"
+        "  faults: {} delayed, {} dropped connections, {} unanswered\n"
+        "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
+        elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
+        t.connections_total, t.connections_current, t.idle_closes, t.evictions, t.refusals,
+        t.bytes_in, t.bytes_out, t.exceptions_total(), exceptions_text(t), t.discarded_frames,
+        t.bad_framing_closes, t.busy_rejects, t.foreign_unit, t.fault_delayed, t.fault_drops,
+        t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak, t.output_blocks);
+}
+
+}  // namespace mbstorm::server

@@ -1,0 +1,576 @@
+#include "server/worker.hpp"
+
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+
+#include "codec/bytes.hpp"
+#include "codec/limits.hpp"
+#include "net/clock.hpp"
+#include "net/features.hpp"
+#include "net/socket.hpp"
+#include "net/user_data.hpp"
+#include "slave/handler.hpp"
+
+namespace mbstorm::server {
+
+namespace {
+
+constexpr std::uint16_t kBufGroup = 1;
+constexpr std::int64_t kStopDrainNs = 2 * net::kNsPerSec;
+
+}  // namespace
+
+Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_fd, unsigned index,
+               std::atomic<std::uint32_t>& open_connections, std::uint64_t stall_origin_ns)
+    : config_(config),
+      model_(model),
+      listen_fd_(listen_fd),
+      index_(index),
+      open_connections_(open_connections),
+      faults_(config.faults, index, stall_origin_ns) {
+    stop_fd_ = eventfd(0, EFD_CLOEXEC);
+}
+
+Worker::~Worker() {
+    if (stop_fd_ >= 0) ::close(stop_fd_);
+    if (listen_fd_ >= 0) ::close(listen_fd_);
+}
+
+void Worker::request_stop() noexcept {
+    std::uint64_t one = 1;
+    if (stop_fd_ >= 0) {
+        [[maybe_unused]] auto n = ::write(stop_fd_, &one, sizeof one);
+    }
+}
+
+int Worker::setup() noexcept {
+    if (stop_fd_ < 0) return -EMFILE;
+    const net::Features& f = net::features();
+    net::RingOptions ro;
+    ro.entries = config_.ring_entries;
+    if (int rc = ring_.init(ro); rc != 0) return rc;
+    use_buf_ring_ =
+        config_.use_buf_ring && f.buf_ring &&
+        buf_ring_.init(ring_.get(), kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
+    multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && f.multishot_recv;
+    multishot_accept_ = config_.use_multishot_accept && f.multishot_accept;
+    try {
+        std::size_t expect = config_.max_connections ? config_.max_connections : 1024;
+        expect = std::min<std::size_t>(expect, 65536);
+        free_slots_.reserve(expect);
+        dirty_.reserve(expect);
+        rearm_.reserve(expect);
+        held_.reserve(expect);
+    } catch (...) {
+        return -ENOMEM;
+    }
+    arm_accept();
+    arm_stop();
+    ring_.submit();
+    return 0;
+}
+
+void Worker::run() noexcept {
+    int rc = setup();
+    init_status_.store(rc == 0 ? 1 : rc, std::memory_order_release);
+    if (rc != 0) return;
+    loop();
+    shutdown_all();
+}
+
+void Worker::arm_accept() noexcept {
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    if (multishot_accept_)
+        io_uring_prep_multishot_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+    else
+        io_uring_prep_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAccept, 0, 0));
+}
+
+void Worker::arm_stop() noexcept {
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    io_uring_prep_read(sqe, stop_fd_, &stop_value_, sizeof stop_value_, 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpStop, 0, 0));
+}
+
+void Worker::arm_recv(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    if (multishot_recv_) {
+        io_uring_prep_recv_multishot(sqe, c.fd, nullptr, 0, 0);
+    } else if (use_buf_ring_) {
+        io_uring_prep_recv(sqe, c.fd, nullptr, config_.buf_size, 0);
+    } else {
+        io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
+    }
+    if (use_buf_ring_) {
+        sqe->flags |= IOSQE_BUFFER_SELECT;
+        sqe->buf_group = kBufGroup;
+    }
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpRecv, index, c.generation));
+    c.recv_armed = true;
+}
+
+void Worker::cancel_recv(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    io_uring_prep_cancel64(sqe, net::encode_user_data(OpRecv, index, c.generation), 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, index, c.generation));
+}
+
+void Worker::loop() noexcept {
+    while (!stopping_) {
+        std::int64_t deadline = next_deadline();
+        std::int64_t wait = deadline < 0 ? -1 : std::max<std::int64_t>(deadline - now_, 0);
+        int rc = ring_.submit_and_wait(1, wait);
+        if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) break;
+        now_ = net::now_ns();
+        ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
+        for (std::uint32_t index : rearm_) {
+            Connection& c = conns_[index];
+            if (c.state == Connection::State::Open && !c.recv_armed && !c.paused) arm_recv(index);
+        }
+        rearm_.clear();
+        run_timers();
+        // One send per connection for everything that arrived in this batch.
+        for (std::uint32_t index : dirty_) {
+            conns_[index].dirty = false;
+            flush(index);
+        }
+        dirty_.clear();
+    }
+}
+
+void Worker::shutdown_all() noexcept {
+    // Close the listener and every connection, then let the kernel finish what is in flight
+    // (sends read our blocks) before the ring and the pool go away.
+    ::shutdown(listen_fd_, SHUT_RDWR);
+    for (std::uint32_t i = 0; i < conns_.size(); ++i) close_connection(i);
+    if (io_uring_sqe* sqe = ring_.sqe()) {
+        io_uring_prep_cancel64(sqe, 0, IORING_ASYNC_CANCEL_ANY);
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, 0, 0));
+    }
+    std::int64_t until = net::now_ns() + kStopDrainNs;
+    auto busy = [this] {
+        for (const Connection& c : conns_)
+            if (c.state == Connection::State::Closing) return true;
+        return false;
+    };
+    while (busy() && net::now_ns() < until) {
+        ring_.submit_and_wait(1, 50 * net::kNsPerMs);
+        ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
+    }
+}
+
+void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
+    switch (net::decode_user_data(cqe.user_data).op) {
+        case OpAccept:
+            on_accept(cqe);
+            break;
+        case OpRecv:
+            on_recv(cqe);
+            break;
+        case OpSend:
+            on_send(cqe);
+            break;
+        case OpStop:
+            stopping_ = true;
+            break;
+        default:
+            break;
+    }
+}
+
+void Worker::on_accept(const io_uring_cqe& cqe) noexcept {
+    if (cqe.res >= 0) {
+        if (stopping_)
+            ::close(cqe.res);
+        else
+            admit(cqe.res);
+    }
+    bool more = (cqe.flags & IORING_CQE_F_MORE) != 0;
+    if (!more && !stopping_ && cqe.res != -EBADF && cqe.res != -EINVAL) arm_accept();
+}
+
+void Worker::admit(int fd) noexcept {
+    const std::uint32_t limit = config_.max_connections;
+    if (limit != 0 && open_connections_.load(std::memory_order_relaxed) >= limit) {
+        if (config_.full_policy == FullPolicy::EvictOldestIdle && lru_head_ != kNoConn) {
+            counters_.add(ServerCounters::Evictions);
+            close_connection(lru_head_);
+        } else {
+            counters_.add(ServerCounters::Refusals);
+            ::close(fd);
+            return;
+        }
+    }
+    std::uint32_t index;
+    try {
+        if (!free_slots_.empty()) {
+            index = free_slots_.back();
+            free_slots_.pop_back();
+        } else {
+            conns_.emplace_back();
+            index = static_cast<std::uint32_t>(conns_.size() - 1);
+        }
+        Connection& c = conns_[index];
+        if (!use_buf_ring_ && !c.plain_buf) c.plain_buf.reset(new std::uint8_t[config_.buf_size]);
+    } catch (...) {
+        counters_.add(ServerCounters::Refusals);
+        ::close(fd);
+        return;
+    }
+    Connection& c = conns_[index];
+    net::set_nodelay(fd);
+    c.fd = fd;
+    c.state = Connection::State::Open;
+    c.recv_armed = c.send_inflight = c.paused = c.dirty = false;
+    c.hold_pos = kNoHold;
+    c.unanswered = 0;
+    c.splitter.reset();
+    c.last_active_ns = now_ ? now_ : net::now_ns();
+    lru_push_back(index);
+    ++open_here_;
+    open_connections_.fetch_add(1, std::memory_order_relaxed);
+    counters_.add(ServerCounters::ConnectionsCurrent);
+    counters_.add(ServerCounters::ConnectionsTotal);
+    arm_recv(index);
+}
+
+void Worker::close_connection(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.state != Connection::State::Open) return;
+    c.state = Connection::State::Closing;
+    lru_unlink(index);
+    // shutdown() ends a pending recv/send at once; the ops still hold the socket, so the
+    // descriptor can be closed now and the slot released when they have completed.
+    ::shutdown(c.fd, SHUT_RDWR);
+    if (c.recv_armed) cancel_recv(index);
+    ::close(c.fd);
+    c.fd = -1;
+    --open_here_;
+    open_connections_.fetch_sub(1, std::memory_order_relaxed);
+    counters_.sub(ServerCounters::ConnectionsCurrent);
+    maybe_release(index);
+}
+
+void Worker::maybe_release(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.state != Connection::State::Closing || c.recv_armed || c.send_inflight) return;
+    counters_.sub(ServerCounters::PendingOutput, c.out.bytes());
+    c.out.clear(pool_);
+    c.splitter.reset();
+    c.hold_pos = kNoHold;
+    c.state = Connection::State::Free;
+    c.generation = net::next_generation(c.generation);
+    free_slots_.push_back(index);  // capacity reserved; grows only past the expected maximum
+}
+
+void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
+    const net::UserData ud = net::decode_user_data(cqe.user_data);
+    if (ud.index >= conns_.size()) return;
+    Connection& c = conns_[ud.index];
+    const bool has_buffer = use_buf_ring_ && net::BufRing::has_buffer(cqe.flags);
+    const std::uint16_t bid = has_buffer ? net::BufRing::buffer_id(cqe.flags) : 0;
+    if (c.generation != ud.generation || c.state == Connection::State::Free) {
+        if (has_buffer) buf_ring_.recycle(bid);
+        return;
+    }
+    if (!(cqe.flags & IORING_CQE_F_MORE)) c.recv_armed = false;
+
+    if (c.state == Connection::State::Open) {
+        if (cqe.res > 0) {
+            const std::uint8_t* data = has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
+            counters_.add(ServerCounters::BytesIn, static_cast<std::uint64_t>(cqe.res));
+            touch(ud.index);
+            consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
+        } else if (cqe.res == 0) {
+            close_connection(ud.index);  // peer closed
+        } else if (cqe.res != -ENOBUFS && cqe.res != -ECANCELED && cqe.res != -EINTR) {
+            close_connection(ud.index);
+        }
+    }
+    if (has_buffer) buf_ring_.recycle(bid);
+
+    if (c.state == Connection::State::Open) {
+        if (!c.paused && c.out.bytes() > config_.max_pending_output) {
+            // Backpressure: a client that does not read stops being read.
+            c.paused = true;
+            counters_.add(ServerCounters::BackpressurePauses);
+            if (c.recv_armed) cancel_recv(ud.index);
+        }
+        if (!c.recv_armed && !c.paused) {
+            if (cqe.res == -ENOBUFS)
+                rearm_.push_back(ud.index);  // after this batch has returned its buffers
+            else
+                arm_recv(ud.index);
+        }
+    }
+    maybe_release(ud.index);
+}
+
+void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
+                           std::size_t size) noexcept {
+    Connection& c = conns_[index];
+    c.splitter.feed(codec::Bytes(data, size));
+    codec::TcpFrame frame;
+    for (;;) {
+        switch (c.splitter.next(frame)) {
+            case codec::MbapSplitter::Status::NeedMore:
+                counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
+                return;
+            case codec::MbapSplitter::Status::BadProtocolId:
+                counters_.add(ServerCounters::DiscardedFrames);
+                break;
+            case codec::MbapSplitter::Status::Fatal:
+                counters_.add(ServerCounters::BadFramingCloses);
+                close_connection(index);
+                return;
+            case codec::MbapSplitter::Status::Frame:
+                if (!on_frame(index, frame)) return;
+                break;
+        }
+    }
+}
+
+bool Worker::on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcept {
+    Connection& c = conns_[index];
+    counters_.add(ServerCounters::Requests);
+    if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
+        counters_.add(ServerCounters::ForeignUnit);
+        if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
+            queue_exception(c, frame, 0x0B);
+        mark_dirty(index);
+        return true;
+    }
+    if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
+        counters_.add(ServerCounters::BusyRejects);
+        queue_exception(c, frame, 0x06);
+        mark_dirty(index);
+        return true;
+    }
+
+    slave::FaultDecision decision;
+    std::int64_t release_ns = 0;
+    if (faults_.enabled()) {
+        decision = faults_.decide();
+        if (decision.action == slave::FaultDecision::Action::Drop) {
+            counters_.add(ServerCounters::FaultDrops);
+            close_connection(index);
+            return false;
+        }
+        if (decision.action == slave::FaultDecision::Action::NoAnswer) {
+            counters_.add(ServerCounters::FaultNoAnswer);
+            return true;
+        }
+        const std::uint64_t due = static_cast<std::uint64_t>(now_) + decision.delay_ns;
+        release_ns = static_cast<std::int64_t>(faults_.held_until(due));
+        if (release_ns > now_) {
+            counters_.add(ServerCounters::FaultDelayed);
+            hold_from_here(index, release_ns);
+        }
+        if (decision.action == slave::FaultDecision::Action::Exception) {
+            queue_exception(c, frame, static_cast<std::uint8_t>(decision.exception));
+            mark_dirty(index);
+            return true;
+        }
+    }
+
+    std::uint8_t* p;
+    try {
+        p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu);
+    } catch (...) {
+        close_connection(index);
+        return false;
+    }
+    const slave::HandleResult r = slave::handle_request(
+        frame.pdu, model_, codec::MutableBytes(p + codec::limits::kMbapHeader, slave::kMinOutput));
+    if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
+    codec::store_be16(p, frame.header.transaction_id);
+    codec::store_be16(p + 2, 0);
+    codec::store_be16(p + 4, static_cast<std::uint16_t>(r.size + 1));
+    p[6] = frame.header.unit_id;
+    const std::size_t n = codec::limits::kMbapHeader + r.size;
+    c.out.commit(n);
+    counters_.add(ServerCounters::PendingOutput, n);
+    counters_.add(ServerCounters::Transactions);
+    if (r.outcome == slave::Outcome::Exception)
+        counters_.add_exception(static_cast<std::uint8_t>(r.exception));
+    ++c.unanswered;
+    mark_dirty(index);
+    return true;
+}
+
+void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
+                             std::uint8_t code) noexcept {
+    std::uint8_t* p;
+    try {
+        p = c.out.reserve(pool_, 9);
+    } catch (...) {
+        return;
+    }
+    codec::store_be16(p, frame.header.transaction_id);
+    codec::store_be16(p + 2, 0);
+    codec::store_be16(p + 4, 3);
+    p[6] = frame.header.unit_id;
+    p[7] = static_cast<std::uint8_t>((frame.pdu.empty() ? 0 : frame.pdu[0]) | 0x80);
+    p[8] = code;
+    c.out.commit(9);
+    counters_.add(ServerCounters::PendingOutput, 9);
+    counters_.add(ServerCounters::Transactions);
+    counters_.add_exception(code);
+}
+
+void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept {
+    Connection& c = conns_[index];
+    // One hold per connection: later delayed responses extend it, so order is kept (an
+    // earlier response may then wait a little longer than its own delay).
+    if (c.hold_pos == kNoHold) {
+        c.hold_pos = c.out.written_position();
+        c.hold_until_ns = until_ns;
+    } else {
+        c.hold_until_ns = std::max(c.hold_until_ns, until_ns);
+    }
+    if (!c.in_hold_list) {
+        c.in_hold_list = true;
+        held_.push_back(index);
+    }
+}
+
+void Worker::mark_dirty(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (!c.dirty) {
+        c.dirty = true;
+        dirty_.push_back(index);
+    }
+}
+
+void Worker::flush(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.state != Connection::State::Open || c.send_inflight) return;
+    std::size_t size = 0;
+    const std::uint8_t* p = c.out.sendable(c.hold_pos, size);
+    if (!p) return;
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    io_uring_prep_send(sqe, c.fd, p, size, MSG_NOSIGNAL);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpSend, index, c.generation));
+    c.send_inflight = true;
+}
+
+void Worker::on_send(const io_uring_cqe& cqe) noexcept {
+    const net::UserData ud = net::decode_user_data(cqe.user_data);
+    if (ud.index >= conns_.size()) return;
+    Connection& c = conns_[ud.index];
+    if (c.generation != ud.generation || !c.send_inflight) return;
+    c.send_inflight = false;
+    if (c.state != Connection::State::Open) {
+        maybe_release(ud.index);
+        return;
+    }
+    if (cqe.res < 0) {
+        close_connection(ud.index);
+        return;
+    }
+    const auto n = static_cast<std::size_t>(cqe.res);
+    counters_.add(ServerCounters::BytesOut, n);
+    counters_.sub(ServerCounters::PendingOutput, n);
+    c.out.consume(pool_, n);
+    if (c.out.empty()) c.unanswered = 0;
+    if (c.paused && c.out.bytes() <= config_.max_pending_output / 2) {
+        c.paused = false;
+        if (!c.recv_armed) arm_recv(ud.index);
+    }
+    flush(ud.index);
+}
+
+void Worker::run_timers() noexcept {
+    if (!held_.empty()) {
+        std::size_t keep = 0;
+        for (std::size_t i = 0; i < held_.size(); ++i) {
+            const std::uint32_t index = held_[i];
+            Connection& c = conns_[index];
+            if (c.state != Connection::State::Open || c.hold_pos == kNoHold) {
+                c.in_hold_list = false;
+                c.hold_pos = kNoHold;
+                continue;
+            }
+            if (c.hold_until_ns <= now_) {
+                c.hold_pos = kNoHold;
+                c.in_hold_list = false;
+                mark_dirty(index);
+                continue;
+            }
+            held_[keep++] = index;
+        }
+        held_.resize(keep);
+    }
+    if (config_.idle_timeout_ms != 0) {
+        const std::int64_t timeout =
+            static_cast<std::int64_t>(config_.idle_timeout_ms) * net::kNsPerMs;
+        while (lru_head_ != kNoConn && now_ - conns_[lru_head_].last_active_ns >= timeout) {
+            counters_.add(ServerCounters::IdleCloses);
+            close_connection(lru_head_);
+        }
+    }
+    counters_.set_max(ServerCounters::OutputBlocks, pool_.allocated());
+}
+
+std::int64_t Worker::next_deadline() const noexcept {
+    std::int64_t deadline = -1;
+    for (std::uint32_t index : held_) {
+        const Connection& c = conns_[index];
+        if (c.hold_pos != kNoHold && (deadline < 0 || c.hold_until_ns < deadline))
+            deadline = c.hold_until_ns;
+    }
+    if (config_.idle_timeout_ms != 0 && lru_head_ != kNoConn) {
+        const std::int64_t idle =
+            conns_[lru_head_].last_active_ns +
+            static_cast<std::int64_t>(config_.idle_timeout_ms) * net::kNsPerMs;
+        if (deadline < 0 || idle < deadline) deadline = idle;
+    }
+    return deadline;
+}
+
+void Worker::lru_unlink(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.lru_prev != kNoConn)
+        conns_[c.lru_prev].lru_next = c.lru_next;
+    else if (lru_head_ == index)
+        lru_head_ = c.lru_next;
+    if (c.lru_next != kNoConn)
+        conns_[c.lru_next].lru_prev = c.lru_prev;
+    else if (lru_tail_ == index)
+        lru_tail_ = c.lru_prev;
+    c.lru_prev = c.lru_next = kNoConn;
+}
+
+void Worker::lru_push_back(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    c.lru_prev = lru_tail_;
+    c.lru_next = kNoConn;
+    if (lru_tail_ != kNoConn)
+        conns_[lru_tail_].lru_next = index;
+    else
+        lru_head_ = index;
+    lru_tail_ = index;
+}
+
+void Worker::touch(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    c.last_active_ns = now_;
+    if (lru_tail_ != index) {
+        lru_unlink(index);
+        lru_push_back(index);
+    }
+}
+
+}  // namespace mbstorm::server

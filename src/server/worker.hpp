@@ -1,0 +1,105 @@
+// One server thread: one io_uring, one listener (SO_REUSEPORT), its connections, its buffer
+// ring and output pool. Everything here runs on the worker's own thread except
+// request_stop() and counters().
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "net/buf_ring.hpp"
+#include "net/ring.hpp"
+#include "server/config.hpp"
+#include "server/connection.hpp"
+#include "server/stats.hpp"
+#include "slave/faults.hpp"
+
+namespace mbstorm::slave {
+class DataModel;
+}
+
+namespace mbstorm::server {
+
+class Worker {
+  public:
+    Worker(const ServerConfig& config, slave::DataModel& model, int listen_fd, unsigned index,
+           std::atomic<std::uint32_t>& open_connections, std::uint64_t stall_origin_ns);
+    ~Worker();
+    Worker(const Worker&) = delete;
+    Worker& operator=(const Worker&) = delete;
+
+    // Thread body. Sets init_status() to 1 once serving or to -errno when setup failed.
+    void run() noexcept;
+    int init_status() const noexcept { return init_status_.load(std::memory_order_acquire); }
+    void request_stop() noexcept;  // any thread
+    const ServerCounters& counters() const noexcept { return counters_; }
+    // Bytes of fixed per-connection state (for the memory report).
+    static std::size_t connection_bytes() noexcept { return sizeof(Connection); }
+    std::size_t buf_ring_bytes() const noexcept { return buf_ring_.memory_bytes(); }
+
+  private:
+    enum Op : std::uint8_t { OpAccept = 1, OpRecv, OpSend, OpStop, OpCancel };
+
+    int setup() noexcept;
+    void loop() noexcept;
+    void shutdown_all() noexcept;
+    void on_cqe(const io_uring_cqe& cqe) noexcept;
+    void on_accept(const io_uring_cqe& cqe) noexcept;
+    void on_recv(const io_uring_cqe& cqe) noexcept;
+    void on_send(const io_uring_cqe& cqe) noexcept;
+
+    void arm_accept() noexcept;
+    void arm_stop() noexcept;
+    void arm_recv(std::uint32_t index) noexcept;
+    void cancel_recv(std::uint32_t index) noexcept;
+    void admit(int fd) noexcept;
+    void close_connection(std::uint32_t index) noexcept;
+    void maybe_release(std::uint32_t index) noexcept;
+
+    void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
+    // False when the connection was closed (fault drop).
+    bool on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcept;
+    void queue_exception(Connection& c, const codec::TcpFrame& frame, std::uint8_t code) noexcept;
+    void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
+    void mark_dirty(std::uint32_t index) noexcept;
+    void flush(std::uint32_t index) noexcept;
+    void run_timers() noexcept;
+    std::int64_t next_deadline() const noexcept;
+
+    void lru_unlink(std::uint32_t index) noexcept;
+    void lru_push_back(std::uint32_t index) noexcept;
+    void touch(std::uint32_t index) noexcept;
+
+    ServerConfig config_;
+    slave::DataModel& model_;
+    int listen_fd_;
+    unsigned index_;
+    std::atomic<std::uint32_t>& open_connections_;
+    slave::FaultInjector faults_;
+
+    net::Ring ring_;
+    net::BufRing buf_ring_;  // after ring_: destroyed first
+    bool use_buf_ring_ = false;
+    bool multishot_recv_ = false;
+    bool multishot_accept_ = false;
+    int stop_fd_ = -1;
+    std::uint64_t stop_value_ = 0;
+    bool stopping_ = false;
+    std::int64_t now_ = 0;
+
+    std::deque<Connection> conns_;  // stable addresses; grows, never shrinks
+    std::vector<std::uint32_t> free_slots_;
+    std::vector<std::uint32_t> dirty_;
+    std::vector<std::uint32_t> rearm_;
+    std::vector<std::uint32_t> held_;
+    std::uint32_t lru_head_ = kNoConn;
+    std::uint32_t lru_tail_ = kNoConn;
+    std::uint32_t open_here_ = 0;
+    BlockPool pool_;
+
+    ServerCounters counters_;
+    std::atomic<int> init_status_{0};
+};
+
+}  // namespace mbstorm::server

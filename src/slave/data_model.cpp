@@ -1,0 +1,313 @@
+#include "slave/data_model.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+#include "codec/bytes.hpp"
+#include "codec/limits.hpp"
+
+namespace mbstorm::slave {
+
+const char* table_name(Table t) noexcept {
+    switch (t) {
+        case Table::Coils:
+            return "coils";
+        case Table::DiscreteInputs:
+            return "discrete_inputs";
+        case Table::InputRegisters:
+            return "input_registers";
+        case Table::HoldingRegisters:
+            return "holding_registers";
+    }
+    return "?";
+}
+
+std::uint32_t TableSizes::of(Table t) const noexcept {
+    switch (t) {
+        case Table::Coils:
+            return coils;
+        case Table::DiscreteInputs:
+            return discrete_inputs;
+        case Table::InputRegisters:
+            return input_registers;
+        case Table::HoldingRegisters:
+            return holding_registers;
+    }
+    return 0;
+}
+
+namespace {
+std::uint32_t checked_size(std::uint32_t size) {
+    if (size > kFullTable) throw std::invalid_argument("table size above 65536");
+    return size;
+}
+}  // namespace
+
+// ---- BitTable ----
+
+// std::atomic value-initialises in C++20, so the tables start all zero.
+BitTable::BitTable(std::uint32_t size)
+    : bits_(new std::atomic<std::uint8_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
+
+void BitTable::read_packed(std::uint16_t address, std::uint16_t quantity,
+                           std::uint8_t* out) const noexcept {
+    const std::atomic<std::uint8_t>* src = bits_.get() + address;
+    std::uint32_t i = 0;
+    for (; i + 8 <= quantity; i += 8) {
+        unsigned byte = 0;
+        for (unsigned b = 0; b < 8; ++b) {
+            byte |= unsigned{src[i + b].load(std::memory_order_relaxed)} << b;
+        }
+        *out++ = static_cast<std::uint8_t>(byte);
+    }
+    if (i < quantity) {
+        unsigned byte = 0;
+        for (unsigned b = 0; i + b < quantity; ++b) {
+            byte |= unsigned{src[i + b].load(std::memory_order_relaxed)} << b;
+        }
+        *out = static_cast<std::uint8_t>(byte);
+    }
+}
+
+void BitTable::write_packed(std::uint16_t address, std::uint16_t quantity,
+                            const std::uint8_t* in) noexcept {
+    std::atomic<std::uint8_t>* dst = bits_.get() + address;
+    for (std::uint32_t i = 0; i < quantity; ++i) {
+        dst[i].store((in[i >> 3] >> (i & 7)) & 1u, std::memory_order_relaxed);
+    }
+}
+
+// ---- RegisterTable ----
+
+RegisterTable::RegisterTable(std::uint32_t size)
+    : regs_(new std::atomic<std::uint16_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
+
+std::uint16_t RegisterTable::mask_write(std::uint16_t address, std::uint16_t and_mask,
+                                        std::uint16_t or_mask) noexcept {
+    std::atomic<std::uint16_t>& reg = regs_[address];
+    std::uint16_t current = reg.load(std::memory_order_relaxed);
+    std::uint16_t next;
+    do {
+        next = static_cast<std::uint16_t>((current & and_mask) | (or_mask & ~and_mask));
+    } while (!reg.compare_exchange_weak(current, next, std::memory_order_relaxed));
+    return next;
+}
+
+void RegisterTable::read_be(std::uint16_t address, std::uint16_t quantity,
+                            std::uint8_t* out) noexcept {
+    if (!read_counters_.empty()) bump_read_counters(address, quantity);
+    const std::atomic<std::uint16_t>* src = regs_.get() + address;
+    for (std::uint32_t i = 0; i < quantity; ++i) {
+        codec::store_be16(out + 2 * i, src[i].load(std::memory_order_relaxed));
+    }
+}
+
+void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
+                             const std::uint8_t* in) noexcept {
+    std::atomic<std::uint16_t>* dst = regs_.get() + address;
+    for (std::uint32_t i = 0; i < quantity; ++i) {
+        dst[i].store(codec::load_be16(in + 2 * i), std::memory_order_relaxed);
+    }
+}
+
+void RegisterTable::add_read_counter(std::uint16_t address, std::uint16_t step) {
+    if (address >= size_) throw std::out_of_range("read counter address outside the table");
+    auto pos =
+        std::lower_bound(read_counters_.begin(), read_counters_.end(), address,
+                         [](const ReadCounter& c, std::uint16_t a) { return c.address < a; });
+    if (pos != read_counters_.end() && pos->address == address) {
+        pos->step = step;
+    } else {
+        read_counters_.insert(pos, ReadCounter{address, step});
+    }
+}
+
+void RegisterTable::bump_read_counters(std::uint16_t address, std::uint16_t quantity) noexcept {
+    const std::uint32_t end = std::uint32_t{address} + quantity;
+    auto it = std::lower_bound(read_counters_.begin(), read_counters_.end(), address,
+                               [](const ReadCounter& c, std::uint16_t a) { return c.address < a; });
+    for (; it != read_counters_.end() && it->address < end; ++it) {
+        regs_[it->address].fetch_add(it->step, std::memory_order_relaxed);
+    }
+}
+
+// ---- FileStore ----
+
+FileStore::FileStore(std::uint16_t file_count, std::uint16_t records)
+    : data_(new std::atomic<std::uint16_t>[std::max<std::size_t>(
+          1, std::size_t{file_count} * records)]()),
+      file_count_(file_count),
+      records_(records) {}
+
+void FileStore::read_be(std::uint16_t file, std::uint16_t record, std::uint16_t length,
+                        std::uint8_t* out) const noexcept {
+    const std::atomic<std::uint16_t>* src = data_.get() + index(file, record);
+    for (std::uint32_t i = 0; i < length; ++i) {
+        codec::store_be16(out + 2 * i, src[i].load(std::memory_order_relaxed));
+    }
+}
+
+void FileStore::write_be(std::uint16_t file, std::uint16_t record, std::uint16_t length,
+                         const std::uint8_t* in) noexcept {
+    std::atomic<std::uint16_t>* dst = data_.get() + index(file, record);
+    for (std::uint32_t i = 0; i < length; ++i) {
+        dst[i].store(codec::load_be16(in + 2 * i), std::memory_order_relaxed);
+    }
+}
+
+// ---- Diagnostics ----
+
+void Diagnostics::end_message(std::uint64_t seq, std::uint8_t receive_event,
+                              std::uint8_t send_event) noexcept {
+    log_[seq % kLogPairs].store(
+        static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
+        std::memory_order_relaxed);
+}
+
+std::uint16_t Diagnostics::comm_event_count() const noexcept {
+    return static_cast<std::uint16_t>(message_count() - exception_count() -
+                                      since_clear(fetches_, base_fetches_));
+}
+
+void Diagnostics::clear_counters() noexcept {
+    auto reset = [](const std::atomic<std::uint64_t>& raw, std::atomic<std::uint64_t>& base) {
+        base.store(raw.load(std::memory_order_relaxed), std::memory_order_relaxed);
+    };
+    reset(messages_, base_messages_);
+    reset(exceptions_, base_exceptions_);
+    reset(fetches_, base_fetches_);
+    reset(no_responses_, base_no_responses_);
+    reset(comm_errors_, base_comm_errors_);
+    reset(busy_, base_busy_);
+}
+
+void Diagnostics::clear_event_log() noexcept {
+    base_log_.store(messages_.load(std::memory_order_relaxed), std::memory_order_relaxed);
+}
+
+std::size_t Diagnostics::read_event_log(std::uint64_t current_seq,
+                                        std::uint8_t* out) const noexcept {
+    const std::uint64_t base = base_log_.load(std::memory_order_relaxed);
+    std::size_t n = 0;
+    // Entries strictly before the current request, newest first: its send event, then receive.
+    for (std::uint64_t seq = current_seq; seq > base && n + 2 <= 2 * kLogPairs; --seq) {
+        const std::uint16_t pair = log_[(seq - 1) % kLogPairs].load(std::memory_order_relaxed);
+        const auto send = static_cast<std::uint8_t>(pair);
+        // A send event of 0 means "none" (broadcast): send events always have bit 6 set.
+        if (send != 0) out[n++] = send;
+        out[n++] = static_cast<std::uint8_t>(pair >> 8);
+        if (current_seq - seq + 1 >= kLogPairs) break;
+    }
+    return n;
+}
+
+// ---- DeviceIdentity ----
+
+DeviceIdentity::DeviceIdentity() {
+    objects_[kVendorName] = "mbstorm";
+    objects_[kProductCode] = "MBSTORM-SLAVE";
+    objects_[kMajorMinorRevision] = "0.1";
+    objects_[kVendorUrl] = "https://github.com/mbstorm/mbstorm";
+    objects_[kProductName] = "mbstorm reference slave";
+    objects_[kModelName] = "reference";
+    objects_[kUserApplicationName] = "mbstorm serve";
+}
+
+bool DeviceIdentity::set(std::uint8_t id, std::string value) {
+    if ((id > kUserApplicationName && id < 0x80) || value.size() > kMaxObjectLength) return false;
+    objects_[id] = std::move(value);
+    return true;
+}
+
+std::uint8_t DeviceIdentity::conformity_level() const noexcept {
+    for (unsigned id = 0x80; id <= 0xFF; ++id) {
+        if (!objects_[id].empty()) return 0x83;
+    }
+    for (unsigned id = kVendorUrl; id <= kUserApplicationName; ++id) {
+        if (!objects_[id].empty()) return 0x82;
+    }
+    return 0x81;
+}
+
+// ---- DataModel ----
+
+DataModel::DataModel(const ModelConfig& config)
+    : coils_(config.sizes.coils),
+      discrete_inputs_(config.sizes.discrete_inputs),
+      input_registers_(config.sizes.input_registers),
+      holding_registers_(config.sizes.holding_registers),
+      files_(config.file_count, config.file_records),
+      exception_status_(config.exception_status),
+      server_id_(config.server_id),
+      run_indicator_on_(config.run_indicator_on),
+      identity_(config.identity),
+      track_diagnostics_(config.track_diagnostics) {
+    // FC11 response: byte count, id bytes, run indicator must fit in one PDU.
+    if (server_id_.size() > codec::limits::kMaxPdu - 3) {
+        throw std::invalid_argument("server id longer than 250 bytes");
+    }
+}
+
+std::uint32_t DataModel::table_size(Table t) const noexcept {
+    switch (t) {
+        case Table::Coils:
+            return coils_.size();
+        case Table::DiscreteInputs:
+            return discrete_inputs_.size();
+        case Table::InputRegisters:
+            return input_registers_.size();
+        case Table::HoldingRegisters:
+            return holding_registers_.size();
+    }
+    return 0;
+}
+
+bool DataModel::fifo_set(std::uint16_t pointer, std::span<const std::uint16_t> values) noexcept {
+    if (values.size() > codec::limits::kMaxFifoCount ||
+        !holding_registers_.contains(pointer, 1 + static_cast<std::uint32_t>(values.size()))) {
+        return false;
+    }
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        holding_registers_.set(static_cast<std::uint16_t>(pointer + 1 + i), values[i]);
+    }
+    holding_registers_.set(pointer, static_cast<std::uint16_t>(values.size()));
+    return true;
+}
+
+bool DataModel::fifo_push(std::uint16_t pointer, std::uint16_t value) noexcept {
+    if (!holding_registers_.contains(pointer, 1)) return false;
+    const std::uint16_t count = holding_registers_.get(pointer);
+    if (count >= codec::limits::kMaxFifoCount ||
+        !holding_registers_.contains(pointer, std::uint32_t{count} + 2)) {
+        return false;
+    }
+    holding_registers_.set(static_cast<std::uint16_t>(pointer + 1 + count), value);
+    holding_registers_.set(pointer, static_cast<std::uint16_t>(count + 1));
+    return true;
+}
+
+// ---- UnitModels ----
+
+UnitModels UnitModels::shared(const ModelConfig& config) {
+    UnitModels units;
+    units.shared_ = true;
+    units.owned_.push_back(std::make_unique<DataModel>(config));
+    units.by_unit_.fill(units.owned_.front().get());
+    return units;
+}
+
+UnitModels UnitModels::per_unit(const ModelConfig& config, std::span<const std::uint8_t> ids) {
+    UnitModels units;
+    std::vector<std::uint8_t> sorted(ids.begin(), ids.end());
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    for (std::uint8_t id : sorted) {
+        units.owned_.push_back(std::make_unique<DataModel>(config));
+        units.by_unit_[id] = units.owned_.back().get();
+    }
+    units.units_ = std::move(sorted);
+    return units;
+}
+
+}  // namespace mbstorm::slave

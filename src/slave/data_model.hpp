@@ -1,0 +1,345 @@
+// The reference slave's data: four Modbus tables, FIFO queues, file records, diagnostics and
+// device identification, safe to share between server threads.
+//
+// Concurrency contract
+// - Every register and every bit is its own atomic (relaxed order). A single-register or
+//   single-coil write is atomic: a concurrent reader sees the old or the new value, never a mix.
+// - A multi-register write (FC0F, FC10, FC17, FC15) stores each element atomically, in
+//   ascending address order, but the block as a whole is NOT atomic: a concurrent reader may see
+//   a prefix of the new values and a suffix of the old ones.
+// - FC16 (mask write) is a compare-and-swap loop, so concurrent mask writes never lose updates.
+// - Configuration (table sizes, identity, server id, read counters) is fixed before serving
+//   starts; changing it while handlers run is not supported.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace mbstorm::slave {
+
+enum class Table : std::uint8_t { Coils, DiscreteInputs, InputRegisters, HoldingRegisters };
+
+// "coils", "discrete_inputs", "input_registers", "holding_registers".
+const char* table_name(Table t) noexcept;
+
+inline constexpr std::uint32_t kFullTable = 65536;
+
+struct TableSizes {
+    std::uint32_t coils = kFullTable;
+    std::uint32_t discrete_inputs = kFullTable;
+    std::uint32_t input_registers = kFullTable;
+    std::uint32_t holding_registers = kFullTable;
+
+    std::uint32_t of(Table t) const noexcept;
+};
+
+// One bit table (coils or discrete inputs): one atomic byte (0 or 1) per bit.
+class BitTable {
+  public:
+    explicit BitTable(std::uint32_t size);
+
+    std::uint32_t size() const noexcept { return size_; }
+    // True when [address, address + quantity) lies inside the table.
+    bool contains(std::uint16_t address, std::uint32_t quantity) const noexcept {
+        return std::uint32_t{address} + quantity <= size_;
+    }
+    bool get(std::uint16_t address) const noexcept {
+        return bits_[address].load(std::memory_order_relaxed) != 0;
+    }
+    void set(std::uint16_t address, bool on) noexcept {
+        bits_[address].store(on ? 1 : 0, std::memory_order_relaxed);
+    }
+    // Packs `quantity` bits, LSB of out[0] first, unused high bits of the last byte zero.
+    // Precondition: contains(address, quantity).
+    void read_packed(std::uint16_t address, std::uint16_t quantity,
+                     std::uint8_t* out) const noexcept;
+    // Unpacks `quantity` bits in the same layout. Precondition: contains(address, quantity).
+    void write_packed(std::uint16_t address, std::uint16_t quantity,
+                      const std::uint8_t* in) noexcept;
+
+  private:
+    std::unique_ptr<std::atomic<std::uint8_t>[]> bits_;
+    std::uint32_t size_;
+};
+
+// One register table (input or holding registers): one atomic 16-bit word per register.
+class RegisterTable {
+  public:
+    explicit RegisterTable(std::uint32_t size);
+
+    std::uint32_t size() const noexcept { return size_; }
+    bool contains(std::uint16_t address, std::uint32_t quantity) const noexcept {
+        return std::uint32_t{address} + quantity <= size_;
+    }
+    std::uint16_t get(std::uint16_t address) const noexcept {
+        return regs_[address].load(std::memory_order_relaxed);
+    }
+    void set(std::uint16_t address, std::uint16_t value) noexcept {
+        regs_[address].store(value, std::memory_order_relaxed);
+    }
+    // Atomically applies (current AND and_mask) OR (or_mask AND NOT and_mask); returns the result.
+    std::uint16_t mask_write(std::uint16_t address, std::uint16_t and_mask,
+                             std::uint16_t or_mask) noexcept;
+    std::uint16_t add(std::uint16_t address, std::uint16_t delta) noexcept {
+        return static_cast<std::uint16_t>(
+            regs_[address].fetch_add(delta, std::memory_order_relaxed) + delta);
+    }
+
+    // Copies registers to `out` big-endian, first bumping any read counter in range.
+    // Precondition: contains(address, quantity).
+    void read_be(std::uint16_t address, std::uint16_t quantity, std::uint8_t* out) noexcept;
+    // Stores big-endian values from `in`. Precondition: contains(address, quantity).
+    void write_be(std::uint16_t address, std::uint16_t quantity, const std::uint8_t* in) noexcept;
+
+    // Configuration: the register at `address` grows by `step` before every read that covers
+    // it (so consecutive reads see increasing values). Not thread-safe against readers.
+    void add_read_counter(std::uint16_t address, std::uint16_t step);
+    bool has_read_counters() const noexcept { return !read_counters_.empty(); }
+
+  private:
+    struct ReadCounter {
+        std::uint16_t address;
+        std::uint16_t step;
+    };
+    void bump_read_counters(std::uint16_t address, std::uint16_t quantity) noexcept;
+
+    std::unique_ptr<std::atomic<std::uint16_t>[]> regs_;
+    std::uint32_t size_;
+    std::vector<ReadCounter> read_counters_;  // sorted by address
+};
+
+// File records for FC20/21: files 1..file_count, each `records` 16-bit records numbered from 0.
+class FileStore {
+  public:
+    FileStore(std::uint16_t file_count, std::uint16_t records);
+
+    std::uint16_t file_count() const noexcept { return file_count_; }
+    std::uint16_t records() const noexcept { return records_; }
+    // True when file exists and [record, record + length) lies inside it.
+    bool contains(std::uint16_t file, std::uint16_t record, std::uint32_t length) const noexcept {
+        return file >= 1 && file <= file_count_ && std::uint32_t{record} + length <= records_;
+    }
+    std::uint16_t get(std::uint16_t file, std::uint16_t record) const noexcept {
+        return data_[index(file, record)].load(std::memory_order_relaxed);
+    }
+    void set(std::uint16_t file, std::uint16_t record, std::uint16_t value) noexcept {
+        data_[index(file, record)].store(value, std::memory_order_relaxed);
+    }
+    // Preconditions: contains(file, record, length).
+    void read_be(std::uint16_t file, std::uint16_t record, std::uint16_t length,
+                 std::uint8_t* out) const noexcept;
+    void write_be(std::uint16_t file, std::uint16_t record, std::uint16_t length,
+                  const std::uint8_t* in) noexcept;
+
+  private:
+    std::size_t index(std::uint16_t file, std::uint16_t record) const noexcept {
+        return static_cast<std::size_t>(file - 1) * records_ + record;
+    }
+    std::unique_ptr<std::atomic<std::uint16_t>[]> data_;
+    std::uint16_t file_count_;
+    std::uint16_t records_;
+};
+
+// Serial-line diagnostics (FC08 counters, FC0B comm event counter, FC0C event log), kept
+// cheaply: the handler does one atomic increment per request; every reported counter is a
+// raw monotonic count minus the value it had at the last clear.
+//
+// Definitions over TCP (there is no shared bus, so "bus" and "server" counts coincide):
+//   bus/server message count   every request handled for this model (including the current one)
+//   bus exception error count  exception responses sent (by the handler, or noted by the server)
+//   comm event counter (FC0B)  messages - exceptions - FC0B/FC0C requests (fetches change nothing)
+//   server no response count   requests answered with silence (broadcasts, noted drops)
+//   bus communication errors   framing errors the server notes; busy count: 06s the server notes
+//   NAK and character overrun  always 0
+// The event log holds the last 32 requests as (receive event, send event) pairs; under
+// concurrency an entry still being written by another thread may show its previous content.
+class Diagnostics {
+  public:
+    // The handler's per-request bookkeeping. Returns the request's sequence number.
+    std::uint64_t begin_message() noexcept {
+        return messages_.fetch_add(1, std::memory_order_relaxed);
+    }
+    void end_message(std::uint64_t seq, std::uint8_t receive_event,
+                     std::uint8_t send_event) noexcept;
+    void note_exception() noexcept { exceptions_.fetch_add(1, std::memory_order_relaxed); }
+    void note_fetch() noexcept { fetches_.fetch_add(1, std::memory_order_relaxed); }
+    void note_no_response() noexcept { no_responses_.fetch_add(1, std::memory_order_relaxed); }
+    void note_comm_error() noexcept { comm_errors_.fetch_add(1, std::memory_order_relaxed); }
+    void note_busy() noexcept { busy_.fetch_add(1, std::memory_order_relaxed); }
+
+    std::uint16_t message_count() const noexcept { return since_clear(messages_, base_messages_); }
+    std::uint16_t exception_count() const noexcept {
+        return since_clear(exceptions_, base_exceptions_);
+    }
+    std::uint16_t no_response_count() const noexcept {
+        return since_clear(no_responses_, base_no_responses_);
+    }
+    std::uint16_t comm_error_count() const noexcept {
+        return since_clear(comm_errors_, base_comm_errors_);
+    }
+    std::uint16_t busy_count() const noexcept { return since_clear(busy_, base_busy_); }
+    std::uint16_t comm_event_count() const noexcept;
+
+    // FC08/0A (and FC08/01): every counter back to 0.
+    void clear_counters() noexcept;
+    // FC08/01 with 0xFF00: the event log restarts empty.
+    void clear_event_log() noexcept;
+
+    // Writes up to 64 event bytes, most recent first, excluding request `current_seq` itself.
+    std::size_t read_event_log(std::uint64_t current_seq, std::uint8_t* out) const noexcept;
+
+    static constexpr std::size_t kLogPairs = 32;
+
+  private:
+    static std::uint16_t since_clear(const std::atomic<std::uint64_t>& raw,
+                                     const std::atomic<std::uint64_t>& base) noexcept {
+        return static_cast<std::uint16_t>(raw.load(std::memory_order_relaxed) -
+                                          base.load(std::memory_order_relaxed));
+    }
+
+    std::atomic<std::uint64_t> messages_{0}, exceptions_{0}, fetches_{0}, no_responses_{0},
+        comm_errors_{0}, busy_{0};
+    std::atomic<std::uint64_t> base_messages_{0}, base_exceptions_{0}, base_fetches_{0},
+        base_no_responses_{0}, base_comm_errors_{0}, base_busy_{0}, base_log_{0};
+    std::array<std::atomic<std::uint16_t>, kLogPairs> log_{};  // receive << 8 | send
+};
+
+// Device identification objects for FC2B/0E. Ids 0x00-0x02 are basic (always present),
+// 0x03-0x06 regular, 0x80-0xFF extended; regular and extended objects are present when
+// non-empty. Values longer than kMaxObjectLength cannot be served and are rejected by set().
+class DeviceIdentity {
+  public:
+    static constexpr std::size_t kMaxObjectLength = 244;  // 253 - 7 header - 2 (id, length)
+    enum : std::uint8_t {
+        kVendorName = 0x00,
+        kProductCode = 0x01,
+        kMajorMinorRevision = 0x02,
+        kVendorUrl = 0x03,
+        kProductName = 0x04,
+        kModelName = 0x05,
+        kUserApplicationName = 0x06,
+    };
+
+    DeviceIdentity();  // mbstorm defaults for the seven standard objects
+
+    // False (and nothing changes) for ids 0x07-0x7F or values over kMaxObjectLength.
+    bool set(std::uint8_t id, std::string value);
+    const std::string& get(std::uint8_t id) const noexcept { return objects_[id]; }
+    bool present(std::uint8_t id) const noexcept { return id <= 0x02 || !objects_[id].empty(); }
+    // 0x81 basic, 0x82 regular, 0x83 extended (all with individual access).
+    std::uint8_t conformity_level() const noexcept;
+
+  private:
+    std::array<std::string, 256> objects_;
+};
+
+struct ModelConfig {
+    TableSizes sizes;
+    std::uint16_t file_count = 4;
+    std::uint16_t file_records = 10000;  // spec maximum record number is 9999
+    std::uint8_t exception_status = 0;   // FC07
+    std::vector<std::uint8_t> server_id = {'m', 'b', 's', 't', 'o', 'r', 'm'};  // FC11
+    bool run_indicator_on = true;                                               // FC11
+    DeviceIdentity identity;
+    bool track_diagnostics = true;  // false: no per-request atomic increments, counters stay 0
+};
+
+// FC18 FIFO layout (our convention, the spec leaves it to the device): at pointer address P
+// the holding register P holds the FIFO count (0..31) and registers P+1..P+count hold the
+// queued values, oldest first. Reading does not consume. A count above 31 answers 03; a queue
+// running past the end of the table answers 02. fifo_push/fifo_set help tests and scenarios.
+class DataModel {
+  public:
+    explicit DataModel(const ModelConfig& config = {});
+    DataModel(const DataModel&) = delete;
+    DataModel& operator=(const DataModel&) = delete;
+
+    BitTable& coils() noexcept { return coils_; }
+    BitTable& discrete_inputs() noexcept { return discrete_inputs_; }
+    RegisterTable& input_registers() noexcept { return input_registers_; }
+    RegisterTable& holding_registers() noexcept { return holding_registers_; }
+    const BitTable& coils() const noexcept { return coils_; }
+    const BitTable& discrete_inputs() const noexcept { return discrete_inputs_; }
+    const RegisterTable& input_registers() const noexcept { return input_registers_; }
+    const RegisterTable& holding_registers() const noexcept { return holding_registers_; }
+    FileStore& files() noexcept { return files_; }
+    Diagnostics& diagnostics() noexcept { return diagnostics_; }
+
+    std::uint32_t table_size(Table t) const noexcept;
+
+    std::uint8_t exception_status() const noexcept {
+        return exception_status_.load(std::memory_order_relaxed);
+    }
+    void set_exception_status(std::uint8_t v) noexcept {
+        exception_status_.store(v, std::memory_order_relaxed);
+    }
+    std::span<const std::uint8_t> server_id() const noexcept { return server_id_; }
+    bool run_indicator_on() const noexcept { return run_indicator_on_; }
+    const DeviceIdentity& identity() const noexcept { return identity_; }
+    bool track_diagnostics() const noexcept { return track_diagnostics_; }
+
+    // Writes a whole FIFO at `pointer` (count + values). False if it would not fit.
+    bool fifo_set(std::uint16_t pointer, std::span<const std::uint16_t> values) noexcept;
+    // Appends one value; false when the queue is full (31) or would leave the table.
+    bool fifo_push(std::uint16_t pointer, std::uint16_t value) noexcept;
+
+  private:
+    BitTable coils_;
+    BitTable discrete_inputs_;
+    RegisterTable input_registers_;
+    RegisterTable holding_registers_;
+    FileStore files_;
+    Diagnostics diagnostics_;
+    std::atomic<std::uint8_t> exception_status_;
+    std::vector<std::uint8_t> server_id_;
+    bool run_indicator_on_;
+    DeviceIdentity identity_;
+    bool track_diagnostics_;
+};
+
+// What to answer for a unit id that has no model (per-unit mode only).
+enum class UnknownUnitPolicy : std::uint8_t {
+    GatewayTargetFailed,     // exception 0x0B, like a gateway whose target is silent (default)
+    GatewayPathUnavailable,  // exception 0x0A
+    Ignore,                  // no response at all
+};
+
+// Maps unit id -> model. In shared mode every unit id (0 included) gets the same model. Over
+// TCP unit 0 is an ordinary address unless `broadcast_unit_zero` is set, in which case a
+// unit-0 request is executed on every model and never answered (serial-line semantics).
+class UnitModels {
+  public:
+    static UnitModels shared(const ModelConfig& config = {});
+    // One model per listed unit id (duplicates ignored).
+    static UnitModels per_unit(const ModelConfig& config, std::span<const std::uint8_t> units);
+
+    UnitModels(UnitModels&&) noexcept = default;
+    UnitModels& operator=(UnitModels&&) noexcept = default;
+
+    // nullptr when `unit` has no model.
+    DataModel* find(std::uint8_t unit) const noexcept { return by_unit_[unit]; }
+    bool is_shared() const noexcept { return shared_; }
+    // Each distinct model once, in ascending unit order.
+    std::size_t model_count() const noexcept { return owned_.size(); }
+    DataModel& model_at(std::size_t i) const noexcept { return *owned_[i]; }
+    // The unit ids served (shared mode: empty, meaning all).
+    const std::vector<std::uint8_t>& units() const noexcept { return units_; }
+
+    UnknownUnitPolicy unknown_unit_policy = UnknownUnitPolicy::GatewayTargetFailed;
+    bool broadcast_unit_zero = false;
+
+  private:
+    UnitModels() = default;
+    std::array<DataModel*, 256> by_unit_{};
+    std::vector<std::unique_ptr<DataModel>> owned_;
+    std::vector<std::uint8_t> units_;
+    bool shared_ = false;
+};
+
+}  // namespace mbstorm::slave

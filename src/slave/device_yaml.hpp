@@ -1,0 +1,72 @@
+// Device description from YAML: table sizes, shared or per-unit models, initial data, counters,
+// simulated inputs, identification and fault settings. Every key is documented in
+// scenarios/devices/README.md. Not on the hot path: errors are thrown as DeviceYamlError whose
+// message starts with "<source>:<line>:<column>: ".
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "slave/data_model.hpp"
+#include "slave/faults.hpp"
+#include "slave/simulator.hpp"
+
+namespace YAML {
+class Node;
+}
+
+namespace mbstorm::slave {
+
+class DeviceYamlError : public std::runtime_error {
+  public:
+    DeviceYamlError(const std::string& message, int line, int column)
+        : std::runtime_error(message), line_(line), column_(column) {}
+    int line() const noexcept { return line_; }      // 1-based, 0 when unknown
+    int column() const noexcept { return column_; }  // 1-based, 0 when unknown
+
+  private:
+    int line_;
+    int column_;
+};
+
+// Initial contents: `words` (registers, or 0/1 for bit tables) stored from `address` on.
+struct InitRange {
+    Table table = Table::HoldingRegisters;
+    std::uint16_t address = 0;
+    std::vector<std::uint16_t> words;
+    std::vector<std::uint8_t> units;  // empty: every model
+};
+
+// A register that grows by `step` before each read that covers it.
+struct ReadCounterSpec {
+    Table table = Table::InputRegisters;  // input or holding registers
+    std::uint16_t address = 0;
+    std::uint16_t step = 1;
+    std::uint16_t start = 0;
+    std::vector<std::uint8_t> units;
+};
+
+struct DeviceDescription {
+    ModelConfig model;
+    bool shared = true;               // one model for every unit id
+    std::vector<std::uint8_t> units;  // per-unit mode: the unit ids served
+    UnknownUnitPolicy unknown_unit = UnknownUnitPolicy::GatewayTargetFailed;
+    bool broadcast_unit_zero = false;
+    std::vector<InitRange> init;
+    std::vector<ReadCounterSpec> read_counters;
+    std::vector<SimulatedInput> simulated;  // includes interval counters (Waveform::Counter)
+    FaultConfig faults;
+};
+
+DeviceDescription parse_device_yaml(std::string_view text, std::string_view source = "<device>");
+DeviceDescription load_device_file(const std::string& path);
+// For documents that embed a device description (e.g. a scenario's `slave:` section).
+DeviceDescription parse_device_node(const YAML::Node& node, std::string_view source);
+
+// Builds the models and applies initial data and read counters.
+UnitModels build_units(const DeviceDescription& device);
+
+}  // namespace mbstorm::slave

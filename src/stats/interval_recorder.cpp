@@ -1,0 +1,133 @@
+#include "stats/interval_recorder.hpp"
+
+#include <algorithm>
+
+namespace mbstorm::stats {
+
+IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_ns,
+                                   const Histogram& latency, std::uint64_t transactions,
+                                   std::uint64_t errors) noexcept {
+    IntervalSummary s;
+    s.index = index;
+    s.start_offset_ns = index * interval_ns;
+    s.duration_ns = interval_ns;
+    s.transactions = transactions;
+    s.errors = errors;
+    s.latency_count = latency.total_count();
+    if (!latency.empty()) {
+        s.p50_ns = latency.value_at_percentile(50.0);
+        s.p90_ns = latency.value_at_percentile(90.0);
+        s.p99_ns = latency.value_at_percentile(99.0);
+        s.p999_ns = latency.value_at_percentile(99.9);
+        s.max_ns = latency.max();
+        s.mean_ns = latency.mean();
+    }
+    return s;
+}
+
+IntervalRecorder::IntervalRecorder(std::uint64_t interval_ns, std::uint64_t highest_trackable_ns)
+    : interval_ns_(std::max<std::uint64_t>(1, interval_ns)),
+      next_boundary_ns_(interval_ns_),
+      histogram_(highest_trackable_ns) {}
+
+void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
+                                 std::uint32_t contributor) noexcept {
+    timeline.contribute(contributor, current_index_, histogram_, transactions_, errors_);
+    clear();
+    current_index_ = now_offset_ns / interval_ns_;
+    next_boundary_ns_ = (current_index_ + 1) * interval_ns_;
+}
+
+void IntervalRecorder::flush(IntervalTimeline& timeline, std::uint32_t contributor) noexcept {
+    timeline.contribute(contributor, current_index_, histogram_, transactions_, errors_);
+    clear();
+}
+
+void IntervalRecorder::clear() noexcept {
+    histogram_.reset();
+    transactions_ = 0;
+    errors_ = 0;
+}
+
+IntervalTimeline::IntervalTimeline(std::uint64_t interval_ns, std::uint32_t contributors,
+                                   std::size_t max_intervals, std::uint64_t highest_trackable_ns)
+    : interval_ns_(std::max<std::uint64_t>(1, interval_ns)),
+      max_intervals_(max_intervals),
+      done_before_(std::max<std::uint32_t>(1, contributors), 0) {
+    pending_.reserve(kPendingSlots);
+    for (std::size_t i = 0; i < kPendingSlots; ++i) {
+        pending_.push_back(Pending{Histogram(highest_trackable_ns), 0, 0});
+    }
+    summaries_.reserve(max_intervals_);
+}
+
+void IntervalTimeline::summarize_next() noexcept {
+    Pending& slot = pending_[next_to_summarize_ % kPendingSlots];
+    if (summaries_.size() < max_intervals_) {
+        summaries_.push_back(summarize_interval(next_to_summarize_, interval_ns_, slot.latency,
+                                                slot.transactions, slot.errors));
+    } else {
+        ++dropped_;
+    }
+    slot.latency.reset();
+    slot.transactions = 0;
+    slot.errors = 0;
+    ++next_to_summarize_;
+}
+
+void IntervalTimeline::contribute(std::uint32_t contributor, std::uint64_t index,
+                                  const Histogram& latency, std::uint64_t transactions,
+                                  std::uint64_t errors) noexcept {
+    std::lock_guard lock(mutex_);
+    if (index < next_to_summarize_) {
+        // Already summarized (this worker lagged behind the pending window): keep the
+        // counts exact; its latencies can no longer change that interval's percentiles.
+        ++late_;
+        if (index < summaries_.size()) {
+            summaries_[index].transactions += transactions;
+            summaries_[index].errors += errors;
+        }
+    } else {
+        while (index >= next_to_summarize_ + kPendingSlots) summarize_next();
+        Pending& slot = pending_[index % kPendingSlots];
+        slot.latency.add(latency);
+        slot.transactions += transactions;
+        slot.errors += errors;
+    }
+    if (contributor < done_before_.size()) {
+        done_before_[contributor] = std::max(done_before_[contributor], index + 1);
+    }
+    const std::uint64_t all_done =
+        *std::min_element(done_before_.begin(), done_before_.end());
+    while (next_to_summarize_ < all_done) summarize_next();
+}
+
+void IntervalTimeline::finish() noexcept {
+    std::lock_guard lock(mutex_);
+    std::uint64_t end = next_to_summarize_;
+    for (auto done : done_before_) end = std::max(end, done);
+    while (next_to_summarize_ < end) summarize_next();
+}
+
+std::optional<IntervalSummary> IntervalTimeline::latest() const {
+    std::lock_guard lock(mutex_);
+    if (summaries_.empty()) return std::nullopt;
+    return summaries_.back();
+}
+
+std::vector<IntervalSummary> IntervalTimeline::summaries() const {
+    std::lock_guard lock(mutex_);
+    return summaries_;
+}
+
+std::uint64_t IntervalTimeline::dropped_intervals() const {
+    std::lock_guard lock(mutex_);
+    return dropped_;
+}
+
+std::uint64_t IntervalTimeline::late_contributions() const {
+    std::lock_guard lock(mutex_);
+    return late_;
+}
+
+}  // namespace mbstorm::stats

@@ -1,0 +1,132 @@
+// Per-interval (e.g. 1 s) timeline of throughput, errors and latency percentiles.
+//
+// Two halves:
+//  * IntervalRecorder — owned by one worker thread, no locking. The hot path records into
+//    its current histogram; tick() hands the finished interval over when a boundary passes.
+//  * IntervalTimeline — shared by all workers. It merges the contributions of one interval
+//    from every worker into a pending histogram (a small ring of them) and, once every
+//    worker has moved past that interval, reduces it to an IntervalSummary. Summaries live
+//    in a vector reserved up front and capped, so memory is bounded however long the run.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+#include "stats/histogram.hpp"
+
+namespace mbstorm::stats {
+
+struct IntervalSummary {
+    std::uint64_t index = 0;            // interval number since the run start
+    std::uint64_t start_offset_ns = 0;  // index * interval length
+    std::uint64_t duration_ns = 0;      // interval length
+    std::uint64_t transactions = 0;     // completed transactions (ok + errors)
+    std::uint64_t errors = 0;
+    std::uint64_t latency_count = 0;  // latencies recorded (may differ from transactions)
+    std::uint64_t p50_ns = 0;
+    std::uint64_t p90_ns = 0;
+    std::uint64_t p99_ns = 0;
+    std::uint64_t p999_ns = 0;
+    std::uint64_t max_ns = 0;
+    double mean_ns = 0.0;
+
+    double transactions_per_second() const noexcept {
+        return duration_ns == 0 ? 0.0 : static_cast<double>(transactions) * 1e9 / duration_ns;
+    }
+};
+
+// Reduces one interval's histogram and counts to a summary.
+IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_ns,
+                                   const Histogram& latency, std::uint64_t transactions,
+                                   std::uint64_t errors) noexcept;
+
+class IntervalTimeline;
+
+class IntervalRecorder {
+public:
+    // interval_ns > 0. Offsets are ns since the run start (the same origin for all workers).
+    explicit IntervalRecorder(std::uint64_t interval_ns,
+                              std::uint64_t highest_trackable_ns = Histogram::kOneHourNs);
+
+    // Hot path. Call tick() first whenever time may have crossed a boundary.
+    void record_latency(std::uint64_t latency_ns) noexcept { histogram_.record(latency_ns); }
+    void record_transaction(bool error) noexcept {
+        ++transactions_;
+        errors_ += error ? 1 : 0;
+    }
+
+    // Cheap when no boundary passed (one compare). Otherwise contributes the current
+    // interval to timeline as worker `contributor` and starts the interval holding now.
+    void tick(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
+              std::uint32_t contributor) noexcept {
+        if (now_offset_ns >= next_boundary_ns_) roll_over(now_offset_ns, timeline, contributor);
+    }
+    // End of run: contributes whatever is in the current interval.
+    void flush(IntervalTimeline& timeline, std::uint32_t contributor) noexcept;
+
+    std::uint64_t current_index() const noexcept { return current_index_; }
+    const Histogram& histogram() const noexcept { return histogram_; }
+    std::uint64_t transactions() const noexcept { return transactions_; }
+    std::uint64_t errors() const noexcept { return errors_; }
+    void clear() noexcept;
+
+private:
+    void roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
+                   std::uint32_t contributor) noexcept;
+
+    std::uint64_t interval_ns_;
+    std::uint64_t current_index_ = 0;
+    std::uint64_t next_boundary_ns_;
+    Histogram histogram_;
+    std::uint64_t transactions_ = 0;
+    std::uint64_t errors_ = 0;
+};
+
+class IntervalTimeline {
+public:
+    // contributors: number of IntervalRecorders (worker threads) feeding this timeline.
+    // max_intervals: cap on stored summaries (reserve run_duration / interval + a few);
+    // intervals beyond it are counted in dropped_intervals().
+    IntervalTimeline(std::uint64_t interval_ns, std::uint32_t contributors,
+                     std::size_t max_intervals,
+                     std::uint64_t highest_trackable_ns = Histogram::kOneHourNs);
+
+    // Thread-safe. Merges one interval of one worker; the worker is then done with every
+    // interval <= index. A contribution for an already summarized interval only adds its
+    // counts (counted in late_contributions()).
+    void contribute(std::uint32_t contributor, std::uint64_t index, const Histogram& latency,
+                    std::uint64_t transactions, std::uint64_t errors) noexcept;
+    // Summarizes every pending interval (call after all workers flushed).
+    void finish() noexcept;
+
+    // Most recent summarized interval (for the live progress line).
+    std::optional<IntervalSummary> latest() const;
+    std::vector<IntervalSummary> summaries() const;
+    std::uint64_t interval_ns() const noexcept { return interval_ns_; }
+    std::uint64_t dropped_intervals() const;
+    std::uint64_t late_contributions() const;
+
+private:
+    static constexpr std::size_t kPendingSlots = 4;
+    struct Pending {
+        Histogram latency;
+        std::uint64_t transactions = 0;
+        std::uint64_t errors = 0;
+    };
+    void summarize_next() noexcept;  // requires mutex_ held
+
+    mutable std::mutex mutex_;
+    std::uint64_t interval_ns_;
+    std::size_t max_intervals_;
+    std::vector<std::uint64_t> done_before_;  // per contributor: all intervals < this are in
+    std::vector<Pending> pending_;            // ring indexed by interval % kPendingSlots
+    std::uint64_t next_to_summarize_ = 0;
+    std::vector<IntervalSummary> summaries_;
+    std::uint64_t dropped_ = 0;
+    std::uint64_t late_ = 0;
+};
+
+}  // namespace mbstorm::stats

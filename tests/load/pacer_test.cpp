@@ -1,0 +1,77 @@
+#include "load/pacer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+namespace mbstorm::load {
+namespace {
+
+TEST(Pacer, EvenScheduleIsExactlySpaced) {
+    Pacer pacer(1000.0, Arrival::Even, 1, 5'000'000);  // 1 ms apart
+    for (int k = 0; k < 10000; ++k) {
+        ASSERT_EQ(pacer.next_intended_ns(), 5'000'000 + k * 1'000'000LL);
+        pacer.advance();
+    }
+    EXPECT_EQ(pacer.scheduled(), 10000u);
+}
+
+TEST(Pacer, EvenScheduleDoesNotDriftWithFractionalPeriods) {
+    Pacer pacer(3.0, Arrival::Even, 1, 0);  // 333333333.33 ns apart
+    for (int k = 0; k < 300000; ++k) pacer.advance();
+    EXPECT_NEAR(static_cast<double>(pacer.next_intended_ns()), 100000e9, 1.0);
+}
+
+TEST(Pacer, DueFollowsTheClock) {
+    Pacer pacer(100.0, Arrival::Even, 1, 1000);
+    EXPECT_FALSE(pacer.due(999));
+    EXPECT_TRUE(pacer.due(1000));
+    pacer.advance();
+    EXPECT_FALSE(pacer.due(1000 + 9'999'999));
+    EXPECT_TRUE(pacer.due(1000 + 10'000'000));
+}
+
+TEST(Pacer, PoissonHasTheMeanRateAndExponentialGaps) {
+    Pacer pacer(50000.0, Arrival::Poisson, 9, 0);  // mean gap 20 us
+    constexpr int kCount = 200000;
+    std::int64_t previous = 0;
+    double sum = 0, sum_sq = 0;
+    for (int k = 0; k < kCount; ++k) {
+        const double gap = static_cast<double>(pacer.next_intended_ns() - previous);
+        ASSERT_GE(gap, 0);
+        sum += gap;
+        sum_sq += gap * gap;
+        previous = pacer.next_intended_ns();
+        pacer.advance();
+    }
+    const double mean = sum / kCount;
+    const double stddev = std::sqrt(sum_sq / kCount - mean * mean);
+    EXPECT_NEAR(mean, 20000.0, 20000.0 * 0.01);
+    // An exponential distribution's standard deviation equals its mean.
+    EXPECT_NEAR(stddev, 20000.0, 20000.0 * 0.03);
+}
+
+TEST(Pacer, SetRateKeepsTheScheduleContinuous) {
+    Pacer pacer(1000.0, Arrival::Even, 1, 0);
+    for (int k = 0; k < 10; ++k) pacer.advance();
+    pacer.set_rate(2000.0, 10'000'000);
+    EXPECT_EQ(pacer.next_intended_ns(), 10'000'000);
+    pacer.advance();
+    EXPECT_EQ(pacer.next_intended_ns(), 10'500'000);
+}
+
+TEST(LagTracker, CountsOnlySendsLaterThanTheThreshold) {
+    LagTracker lag(1'000'000);
+    lag.record(0, 500'000);
+    lag.record(0, 1'000'000);
+    EXPECT_EQ(lag.late_sends(), 0u);
+    lag.record(10, 3'000'010);
+    lag.record(0, 2'000'000);
+    EXPECT_EQ(lag.late_sends(), 2u);
+    EXPECT_EQ(lag.max_lag_ns(), 3'000'000u);
+    EXPECT_EQ(lag.total_lag_ns(), 5'000'000u);
+}
+
+}  // namespace
+}  // namespace mbstorm::load

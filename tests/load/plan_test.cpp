@@ -1,0 +1,144 @@
+#include "load/plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace mbstorm::load {
+namespace {
+
+Plan valid_plan() {
+    Plan plan;
+    Operation op;
+    op.name = "read";
+    op.function = 0x03;
+    op.first_address = 0;
+    op.last_address = 99;
+    op.quantity = 10;
+    plan.operations.push_back(op);
+    return plan;
+}
+
+bool any_contains(const std::vector<std::string>& errors, const std::string& needle) {
+    for (const auto& e : errors) {
+        if (e.find(needle) != std::string::npos) return true;
+    }
+    return false;
+}
+
+TEST(PlanValidation, DefaultPlanWithOneOperationIsValid) {
+    EXPECT_TRUE(validate_plan(valid_plan()).empty());
+}
+
+TEST(PlanValidation, ConnectionsOutOfRangeNamesTheRange) {
+    Plan plan = valid_plan();
+    plan.connections = 0;
+    auto errors = validate_plan(plan);
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_NE(errors[0].find("connections"), std::string::npos);
+    EXPECT_NE(errors[0].find("valid 1..100000"), std::string::npos);
+    plan.connections = 100001;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..100000"));
+    plan.connections = 100000;
+    EXPECT_TRUE(validate_plan(plan).empty());
+}
+
+TEST(PlanValidation, DepthAndThreads) {
+    Plan plan = valid_plan();
+    plan.depth = 0;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "depth: 0 is out of range (valid 1..32768)"));
+    plan.depth = 32768;
+    EXPECT_TRUE(validate_plan(plan).empty());
+    plan.threads = 5000;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "threads"));
+}
+
+TEST(PlanValidation, OpenLoopNeedsARate) {
+    Plan plan = valid_plan();
+    plan.model = LoadModel::OpenLoop;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "rate"));
+    plan.rate = 1000;
+    EXPECT_TRUE(validate_plan(plan).empty());
+}
+
+TEST(PlanValidation, QuantityLimitsComeFromTheSpec) {
+    Plan plan = valid_plan();
+    plan.operations[0].quantity = 126;  // FC03 allows 1..125
+    plan.operations[0].last_address = 1000;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..125"));
+    plan.operations[0].function = 0x01;  // FC01 allows 1..2000
+    EXPECT_TRUE(validate_plan(plan).empty());
+    plan.operations[0].quantity = 2001;
+    plan.operations[0].last_address = 65535;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..2000"));
+    plan.operations[0].function = 0x10;
+    plan.operations[0].quantity = 124;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..123"));
+}
+
+TEST(PlanValidation, AddressRangeMustHoldTheBlock) {
+    Plan plan = valid_plan();
+    plan.operations[0].first_address = 95;  // 95..104 does not fit in [95, 99]
+    EXPECT_TRUE(any_contains(validate_plan(plan), "cannot hold 10 items"));
+    plan.operations[0].first_address = 65530;
+    plan.operations[0].last_address.reset();
+    EXPECT_TRUE(any_contains(validate_plan(plan), "runs past 65535"));
+}
+
+TEST(PlanValidation, UnsupportedFunctionZeroWeightBadZipfEmptyPattern) {
+    Plan plan = valid_plan();
+    plan.operations[0].function = 0x42;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "cannot be generated"));
+    plan = valid_plan();
+    plan.operations[0].weight = 0;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "weight"));
+    plan = valid_plan();
+    plan.operations[0].address_mode = AddressMode::Zipf;
+    plan.operations[0].zipf_exponent = 0;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "zipf exponent"));
+    plan = valid_plan();
+    plan.operations[0].function = 0x10;
+    plan.operations[0].values.mode = ValueMode::Pattern;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "pattern is empty"));
+}
+
+TEST(PlanValidation, DurationWarmupAndEmptyMix) {
+    Plan plan = valid_plan();
+    plan.duration = Duration::zero();
+    EXPECT_TRUE(any_contains(validate_plan(plan), "never ends"));
+    plan.transactions = 100;
+    EXPECT_TRUE(validate_plan(plan).empty());
+    plan = valid_plan();
+    plan.warmup = plan.duration;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "warmup"));
+    plan = valid_plan();
+    plan.operations.clear();
+    EXPECT_TRUE(any_contains(validate_plan(plan), "operations: none given"));
+}
+
+TEST(PlanValidation, StagesNeedTheirTarget) {
+    Plan plan = valid_plan();
+    plan.model = LoadModel::OpenLoop;
+    plan.rate = 100;
+    plan.stages.push_back(Stage{std::chrono::seconds(1), std::nullopt, 10, Ramp::Linear});
+    EXPECT_TRUE(any_contains(validate_plan(plan), "target_rate"));
+    plan.stages[0].target_rate = 500;
+    EXPECT_TRUE(validate_plan(plan).empty());
+}
+
+TEST(PlanValidation, LastStartAddressAndThreads) {
+    Operation op;
+    op.first_address = 10;
+    op.last_address = 19;
+    op.quantity = 4;
+    EXPECT_EQ(last_start_address(op), 16);
+    op.last_address.reset();
+    EXPECT_EQ(last_start_address(op), 10);
+    Plan plan = valid_plan();
+    plan.threads = 8;
+    plan.connections = 3;
+    EXPECT_EQ(effective_threads(plan), 3u);
+}
+
+}  // namespace
+}  // namespace mbstorm::load

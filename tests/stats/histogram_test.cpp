@@ -1,0 +1,311 @@
+#include "stats/histogram.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace mbstorm::stats {
+namespace {
+
+constexpr std::uint64_t kUs = 1'000;
+constexpr std::uint64_t kMs = 1'000'000;
+constexpr std::uint64_t kS = 1'000'000'000;
+
+// Nearest-rank percentile of the raw samples: the reference the histogram must match.
+std::uint64_t exact_percentile(const std::vector<std::uint64_t>& sorted, double p) {
+    const double exact = p / 100.0 * static_cast<double>(sorted.size());
+    const double nearest = std::round(exact);
+    double rank = std::fabs(exact - nearest) <= 1e-9 * std::max(1.0, exact) ? nearest
+                                                                             : std::ceil(exact);
+    rank = std::clamp(rank, 1.0, static_cast<double>(sorted.size()));
+    return sorted[static_cast<std::size_t>(rank) - 1];
+}
+
+void expect_matches_samples(std::vector<std::uint64_t> samples, const char* what) {
+    SCOPED_TRACE(what);
+    Histogram h;
+    for (auto v : samples) h.record(v);
+    std::sort(samples.begin(), samples.end());
+    ASSERT_EQ(h.total_count(), samples.size());
+    EXPECT_EQ(h.min(), samples.front());
+    EXPECT_EQ(h.max(), samples.back());
+    for (double p : {0.0, 1.0, 10.0, 25.0, 50.0, 75.0, 90.0, 95.0, 99.0, 99.9, 99.99, 99.999,
+                     100.0}) {
+        const std::uint64_t exact = exact_percentile(samples, p);
+        const std::uint64_t got = h.value_at_percentile(p);
+        // HdrHistogram semantics: the highest value equivalent to the exact sample...
+        EXPECT_EQ(got, Histogram::highest_equivalent(exact)) << "p" << p;
+        // ...which is within 3 significant digits of it.
+        ASSERT_GE(got, exact) << "p" << p;
+        EXPECT_LE(static_cast<double>(got - exact), 0.001 * static_cast<double>(exact))
+            << "p" << p << " exact " << exact << " got " << got;
+    }
+    long double sum = 0;
+    for (auto v : samples) sum += static_cast<long double>(v);
+    const double mean = static_cast<double>(sum / samples.size());
+    EXPECT_NEAR(h.mean(), mean, 0.001 * mean);
+}
+
+TEST(Histogram, LayoutCoversOneHourWithThreeDigits) {
+    Histogram h;
+    EXPECT_EQ(h.highest_trackable(), Histogram::kOneHourNs);
+    EXPECT_EQ(Histogram::kSubBucketCount, 2048u);
+    EXPECT_EQ(h.bucket_count(), 32u);
+    EXPECT_EQ(h.counts_length(), 33u * 1024u);
+    EXPECT_LT(Histogram::counts_index(Histogram::kOneHourNs), h.counts_length());
+    // Values below the sub-bucket count are exact.
+    for (std::uint64_t v = 0; v < 2048; ++v) {
+        ASSERT_EQ(Histogram::lowest_equivalent(v), v);
+        ASSERT_EQ(Histogram::highest_equivalent(v), v);
+    }
+}
+
+TEST(Histogram, EquivalentRangesAreWithinOneThousandth) {
+    std::mt19937_64 rng(7);
+    for (int i = 0; i < 200000; ++i) {
+        const std::uint64_t v = 1000 + rng() % Histogram::kOneHourNs;
+        const std::uint64_t lo = Histogram::lowest_equivalent(v);
+        const std::uint64_t hi = Histogram::highest_equivalent(v);
+        ASSERT_LE(lo, v);
+        ASSERT_GE(hi, v);
+        ASSERT_LT(static_cast<double>(hi - lo + 1), static_cast<double>(v) / 1000.0 + 1.0);
+        ASSERT_EQ(Histogram::value_at_index(Histogram::counts_index(v)), lo);
+    }
+}
+
+TEST(Histogram, UniformDistribution) {
+    std::mt19937_64 rng(1);
+    std::uniform_int_distribution<std::uint64_t> dist(kUs, kS);
+    std::vector<std::uint64_t> samples(200000);
+    for (auto& v : samples) v = dist(rng);
+    expect_matches_samples(samples, "uniform 1us..1s");
+}
+
+TEST(Histogram, ExponentialDistribution) {
+    std::mt19937_64 rng(2);
+    std::exponential_distribution<double> dist(1.0 / kMs);
+    std::vector<std::uint64_t> samples(200000);
+    for (auto& v : samples) v = kUs + static_cast<std::uint64_t>(dist(rng));
+    expect_matches_samples(samples, "exponential mean 1ms");
+}
+
+TEST(Histogram, BimodalDistribution) {
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> fast(200.0 * kUs, 20.0 * kUs);
+    std::normal_distribution<double> slow(50.0 * kMs, 5.0 * kMs);
+    std::vector<std::uint64_t> samples(200000);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+        const double v = (i % 100 < 97) ? fast(rng) : slow(rng);
+        samples[i] = static_cast<std::uint64_t>(std::max(v, 1000.0));
+    }
+    expect_matches_samples(samples, "bimodal 200us / 50ms");
+}
+
+TEST(Histogram, ValuesAtBucketEdges) {
+    std::vector<std::uint64_t> samples;
+    for (int shift = 0; shift < 31; ++shift) {
+        for (std::uint64_t sub : {1024u, 1025u, 2047u, 2048u}) {
+            const std::uint64_t edge = sub << shift;
+            for (std::uint64_t v : {edge - 1, edge, edge + 1}) {
+                if (v >= kUs && v <= Histogram::kOneHourNs) samples.push_back(v);
+            }
+        }
+    }
+    // Repeat with multiplicities so percentiles land on different edges.
+    std::vector<std::uint64_t> weighted;
+    for (std::size_t i = 0; i < samples.size(); ++i) weighted.insert(weighted.end(), 1 + i % 7, samples[i]);
+    expect_matches_samples(weighted, "bucket edges");
+}
+
+TEST(Histogram, ExtremesOneMicrosecondAndOneHour) {
+    std::vector<std::uint64_t> samples;
+    samples.insert(samples.end(), 1000, kUs);
+    samples.insert(samples.end(), 10, Histogram::kOneHourNs);
+    expect_matches_samples(samples, "1us and 1h");
+    Histogram h;
+    h.record(kUs);
+    h.record(Histogram::kOneHourNs);
+    EXPECT_EQ(h.value_at_percentile(0), kUs);  // 1000 < 2048: exact
+    EXPECT_EQ(h.saturated_count(), 0u);
+    EXPECT_EQ(h.max(), Histogram::kOneHourNs);
+}
+
+TEST(Histogram, ClampsAndCountsSaturatedValues) {
+    Histogram h(kS);
+    h.record(5 * kS);
+    h.record(kMs);
+    EXPECT_EQ(h.total_count(), 2u);
+    EXPECT_EQ(h.saturated_count(), 1u);
+    EXPECT_EQ(h.max(), kS);
+    EXPECT_EQ(h.value_at_percentile(100), Histogram::highest_equivalent(kS));
+}
+
+TEST(Histogram, EmptyHistogram) {
+    Histogram h;
+    EXPECT_TRUE(h.empty());
+    EXPECT_EQ(h.min(), 0u);
+    EXPECT_EQ(h.max(), 0u);
+    EXPECT_EQ(h.value_at_percentile(99), 0u);
+    EXPECT_EQ(h.mean(), 0.0);
+    EXPECT_EQ(h.stddev(), 0.0);
+    EXPECT_TRUE(percentile_distribution(h).empty());
+}
+
+TEST(Histogram, MeanAndStddevOfConstantAndTwoPoints) {
+    Histogram h;
+    for (int i = 0; i < 100; ++i) h.record(1500);
+    EXPECT_DOUBLE_EQ(h.mean(), 1500.0);
+    EXPECT_DOUBLE_EQ(h.stddev(), 0.0);
+    h.reset();
+    h.record(1000);
+    h.record(2000);
+    EXPECT_DOUBLE_EQ(h.mean(), 1500.0);
+    EXPECT_DOUBLE_EQ(h.stddev(), 500.0);
+}
+
+void expect_same_counts(const Histogram& a, const Histogram& b) {
+    ASSERT_EQ(a.counts_length(), b.counts_length());
+    for (std::size_t i = 0; i < a.counts_length(); ++i) {
+        ASSERT_EQ(a.count_at_index(i), b.count_at_index(i)) << "index " << i;
+    }
+    EXPECT_EQ(a.total_count(), b.total_count());
+    EXPECT_EQ(a.min(), b.min());
+    EXPECT_EQ(a.max(), b.max());
+}
+
+TEST(Histogram, MergeEqualsRecordingEverythingInOne) {
+    std::mt19937_64 rng(4);
+    std::uniform_int_distribution<std::uint64_t> dist(kUs, 10 * kS);
+    Histogram all, part1, part2, part3;
+    for (int i = 0; i < 100000; ++i) {
+        const auto v = dist(rng);
+        all.record(v);
+        (i % 3 == 0 ? part1 : i % 3 == 1 ? part2 : part3).record(v);
+    }
+    Histogram merged;
+    merged.add(part1);
+    merged.add(part2);
+    merged.add(part3);
+    expect_same_counts(merged, all);
+    EXPECT_EQ(merged.value_at_percentile(99.9), all.value_at_percentile(99.9));
+}
+
+TEST(Histogram, MergeAcrossDifferentRanges) {
+    Histogram small(kS);
+    small.record(kMs);
+    small.record(2 * kS);  // saturated in small
+    Histogram big;
+    big.record(10 * kS);
+    big.record(3 * kUs);
+
+    Histogram into_big;
+    into_big.add(small);
+    EXPECT_EQ(into_big.total_count(), 2u);
+    EXPECT_EQ(into_big.saturated_count(), 1u);
+    EXPECT_EQ(into_big.max(), kS);
+
+    Histogram into_small(kS);
+    into_small.add(big);
+    EXPECT_EQ(into_small.total_count(), 2u);
+    EXPECT_EQ(into_small.saturated_count(), 1u);  // 10 s clamped to 1 s
+    EXPECT_EQ(into_small.min(), 3 * kUs);
+    EXPECT_EQ(into_small.max(), kS);
+}
+
+TEST(Histogram, ResetClearsEverything) {
+    Histogram h;
+    for (std::uint64_t v = kUs; v < kS; v *= 3) h.record(v);
+    h.record(2 * Histogram::kOneHourNs);
+    h.reset();
+    EXPECT_EQ(h.total_count(), 0u);
+    EXPECT_EQ(h.saturated_count(), 0u);
+    for (std::size_t i = 0; i < h.counts_length(); ++i) ASSERT_EQ(h.count_at_index(i), 0u);
+    h.record(7 * kUs);
+    EXPECT_EQ(h.min(), 7 * kUs);
+    EXPECT_EQ(h.max(), 7 * kUs);
+}
+
+TEST(Histogram, CopyIsDeep) {
+    Histogram a;
+    a.record(5 * kMs);
+    Histogram b = a;
+    b.record(6 * kMs);
+    EXPECT_EQ(a.total_count(), 1u);
+    EXPECT_EQ(b.total_count(), 2u);
+    Histogram c(kS);
+    c = b;
+    EXPECT_EQ(c.highest_trackable(), b.highest_trackable());
+    expect_same_counts(c, b);
+}
+
+Histogram naive_corrected(std::uint64_t value, std::uint64_t interval) {
+    Histogram h;
+    h.record(value);
+    if (interval == 0) return h;
+    for (std::uint64_t missing = value - interval; value > interval && missing >= interval;
+         missing -= interval) {
+        h.record(missing);
+    }
+    return h;
+}
+
+TEST(Histogram, CoordinatedOmissionCorrectionMatchesHdrLoop) {
+    for (auto [value, interval] : std::vector<std::pair<std::uint64_t, std::uint64_t>>{
+             {10 * kMs, kMs},        // few back-filled samples: the plain loop
+             {kMs, 2 * kMs},         // below the interval: nothing back-filled
+             {3 * kMs, kMs},         // exactly divisible
+             {kS + 17, 997},         // ~1M back-filled samples: the per-bucket path
+             {40 * kMs, 1234}}) {
+        SCOPED_TRACE(testing::Message() << value << "/" << interval);
+        Histogram fast;
+        fast.record_corrected(value, interval);
+        expect_same_counts(fast, naive_corrected(value, interval));
+    }
+    Histogram plain;
+    plain.record_corrected(5 * kMs, 0);
+    EXPECT_EQ(plain.total_count(), 1u);
+}
+
+TEST(PercentileIterator, FollowsHdrHistogramTicks) {
+    Histogram h;
+    for (std::uint64_t v = 1; v <= 10000; ++v) h.record(v * kUs);
+    const auto points = percentile_distribution(h, 5);
+    ASSERT_GT(points.size(), 10u);
+    EXPECT_EQ(points.front().percentile, 0.0);
+    EXPECT_EQ(points.front().value, kUs);
+    // 5 ticks per half distance: 0, 10, 20, 30, 40, 50, then 55, 60, ...
+    EXPECT_DOUBLE_EQ(points[1].percentile, 10.0);
+    EXPECT_DOUBLE_EQ(points[5].percentile, 50.0);
+    EXPECT_DOUBLE_EQ(points[6].percentile, 55.0);
+    EXPECT_DOUBLE_EQ(points[10].percentile, 75.0);
+    EXPECT_DOUBLE_EQ(points[11].percentile, 77.5);
+    for (std::size_t i = 1; i < points.size(); ++i) {
+        ASSERT_GE(points[i].percentile, points[i - 1].percentile);
+        ASSERT_GE(points[i].value, points[i - 1].value);
+        ASSERT_GE(points[i].total_count, points[i - 1].total_count);
+    }
+    for (std::size_t i = 0; i + 1 < points.size(); ++i) {
+        ASSERT_EQ(points[i].value, h.value_at_percentile(points[i].percentile))
+            << "percentile " << points[i].percentile;
+    }
+    EXPECT_EQ(points.back().percentile, 100.0);
+    EXPECT_EQ(points.back().total_count, 10000u);
+    EXPECT_EQ(points.back().value, Histogram::highest_equivalent(10000 * kUs));
+}
+
+TEST(PercentileIterator, SingleValue) {
+    Histogram h;
+    h.record(1234);
+    const auto points = percentile_distribution(h);
+    ASSERT_EQ(points.size(), 2u);
+    EXPECT_EQ(points[0].percentile, 0.0);
+    EXPECT_EQ(points[1].percentile, 100.0);
+    EXPECT_EQ(points[0].value, 1234u);
+    EXPECT_EQ(points[1].value, 1234u);
+}
+
+}  // namespace
+}  // namespace mbstorm::stats

@@ -1,0 +1,121 @@
+#include "stats/interval_recorder.hpp"
+
+#include <gtest/gtest.h>
+
+#include <thread>
+#include <vector>
+
+namespace mbstorm::stats {
+namespace {
+
+constexpr std::uint64_t kSecond = 1'000'000'000;
+constexpr std::uint64_t kMs = 1'000'000;
+
+TEST(IntervalTimeline, SingleWorkerProducesOneSummaryPerInterval) {
+    IntervalTimeline timeline(kSecond, 1, 100);
+    IntervalRecorder rec(kSecond);
+    // Interval 0: 3 transactions, one error; interval 1 empty; interval 2: one slow one.
+    for (std::uint64_t t : {100 * kMs, 200 * kMs, 300 * kMs}) {
+        rec.tick(t, timeline, 0);
+        rec.record_latency(t);
+        rec.record_transaction(t == 300 * kMs);
+    }
+    rec.tick(2 * kSecond + 5, timeline, 0);
+    EXPECT_EQ(rec.current_index(), 2u);
+    rec.record_latency(50 * kMs);
+    rec.record_transaction(false);
+    rec.flush(timeline, 0);
+    timeline.finish();
+
+    const auto s = timeline.summaries();
+    ASSERT_EQ(s.size(), 3u);
+    EXPECT_EQ(s[0].index, 0u);
+    EXPECT_EQ(s[0].transactions, 3u);
+    EXPECT_EQ(s[0].errors, 1u);
+    EXPECT_EQ(s[0].max_ns, 300 * kMs);
+    EXPECT_EQ(s[0].p50_ns, Histogram::highest_equivalent(200 * kMs));
+    EXPECT_DOUBLE_EQ(s[0].transactions_per_second(), 3.0);
+    EXPECT_EQ(s[1].transactions, 0u);  // gap filled, timeline stays continuous
+    EXPECT_EQ(s[1].start_offset_ns, kSecond);
+    EXPECT_EQ(s[2].transactions, 1u);
+    EXPECT_EQ(s[2].max_ns, 50 * kMs);
+    ASSERT_TRUE(timeline.latest().has_value());
+    EXPECT_EQ(timeline.latest()->index, 2u);
+}
+
+TEST(IntervalTimeline, WaitsForEveryWorkerBeforeSummarizing) {
+    IntervalTimeline timeline(kSecond, 2, 100);
+    IntervalRecorder a(kSecond), b(kSecond);
+    a.record_latency(kMs);
+    a.record_transaction(false);
+    a.tick(kSecond, timeline, 0);  // worker 0 done with interval 0
+    EXPECT_FALSE(timeline.latest().has_value());
+    b.record_latency(9 * kMs);
+    b.record_transaction(true);
+    b.tick(kSecond + 1, timeline, 1);  // now both are done
+    const auto latest = timeline.latest();
+    ASSERT_TRUE(latest.has_value());
+    EXPECT_EQ(latest->transactions, 2u);
+    EXPECT_EQ(latest->errors, 1u);
+    EXPECT_EQ(latest->max_ns, 9 * kMs);
+    EXPECT_EQ(latest->latency_count, 2u);
+}
+
+TEST(IntervalTimeline, LaggingWorkerDoesNotHoldMemoryForever) {
+    IntervalTimeline timeline(kSecond, 2, 100);
+    IntervalRecorder fast(kSecond), slow(kSecond);
+    for (std::uint64_t s = 1; s <= 10; ++s) {
+        fast.record_transaction(false);
+        fast.tick(s * kSecond, timeline, 0);
+    }
+    // The pending window is small, so old intervals were summarized without the slow worker.
+    EXPECT_GE(timeline.summaries().size(), 6u);
+    slow.record_transaction(false);
+    slow.tick(10 * kSecond, timeline, 1);  // contributes interval 0, long summarized
+    EXPECT_EQ(timeline.late_contributions(), 1u);
+    timeline.finish();
+    const auto s = timeline.summaries();
+    ASSERT_EQ(s.size(), 10u);
+    EXPECT_EQ(s[0].transactions, 2u);  // the late counts were still added
+}
+
+TEST(IntervalTimeline, CapsStoredIntervals) {
+    IntervalTimeline timeline(kSecond, 1, 5);
+    IntervalRecorder rec(kSecond);
+    for (std::uint64_t s = 1; s <= 8; ++s) rec.tick(s * kSecond, timeline, 0);
+    timeline.finish();
+    EXPECT_EQ(timeline.summaries().size(), 5u);
+    EXPECT_EQ(timeline.dropped_intervals(), 3u);
+}
+
+TEST(IntervalTimeline, ConcurrentWorkersLoseNoCounts) {
+    constexpr std::uint32_t kWorkers = 4;
+    constexpr std::uint64_t kIntervals = 20;
+    constexpr std::uint64_t kPerInterval = 1000;
+    IntervalTimeline timeline(kSecond, kWorkers, kIntervals + 2);
+    std::vector<std::thread> threads;
+    for (std::uint32_t w = 0; w < kWorkers; ++w) {
+        threads.emplace_back([&, w] {
+            IntervalRecorder rec(kSecond);
+            for (std::uint64_t i = 0; i < kIntervals * kPerInterval; ++i) {
+                // Simulated clock: kPerInterval transactions per second.
+                rec.tick(i * (kSecond / kPerInterval), timeline, w);
+                rec.record_latency(1000 + i % 5000);
+                rec.record_transaction(i % 100 == 0);
+            }
+            rec.flush(timeline, w);
+        });
+    }
+    for (auto& t : threads) t.join();
+    timeline.finish();
+    std::uint64_t total = 0, errors = 0;
+    for (const auto& s : timeline.summaries()) {
+        total += s.transactions;
+        errors += s.errors;
+    }
+    EXPECT_EQ(total, kWorkers * kIntervals * kPerInterval);
+    EXPECT_EQ(errors, kWorkers * kIntervals * kPerInterval / 100);
+}
+
+}  // namespace
+}  // namespace mbstorm::stats
