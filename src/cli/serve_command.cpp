@@ -1,16 +1,132 @@
-// `mbstorm serve`: placeholder until the server layer lands.
+// `mbstorm serve`: the io_uring reference slave, with device description and fault injection.
 #include <fmt/format.h>
 
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
 #include "cli/commands.hpp"
+#include "cli/duration_option.hpp"
+#include "server/run.hpp"
+#include "server/server.hpp"
+#include "slave/device_yaml.hpp"
 
 namespace mbstorm::cli {
-void add_serve_command(CLI::App& app, Action& action) {
-    auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave");
-    cmd->callback([&action] {
-        action = [] {
-            fmt::print(stderr, "mbstorm serve: not built yet\n");
-            return kExitUsage;
-        };
-    });
+namespace {
+
+struct ServeOptions {
+    server::ServerConfig config;
+    std::string device_file;
+    std::string full_policy = "evict";
+    std::string foreign_unit = "none";
+    int only_unit = -1;
+    std::uint64_t idle_timeout_ns = 0;
+    std::string delay_kind;  // fixed | uniform | exponential
+    std::uint64_t delay_ns = 0, delay_max_ns = 0;
+    std::uint64_t stall_ns = 0, stall_every_ns = 0;
+    double exception_rate = 0, drop_rate = 0, no_answer_rate = 0;
+    int exception_code = 4;
+    std::uint64_t seed = 0;
+    bool stats = false;
+    std::uint64_t duration_ns = 0;
+};
+
+int fail(const std::string& msg) {
+    fmt::print(stderr, "mbstorm serve: {}\n", msg);
+    return kExitUsage;
 }
+
+int run_serve(ServeOptions& o) {
+    auto& c = o.config;
+    std::optional<slave::DeviceDescription> device;
+    std::unique_ptr<slave::UnitModels> units;
+    if (!o.device_file.empty()) {
+        try {
+            device = slave::load_device_file(o.device_file);
+        } catch (const std::exception& e) {
+            return fail(e.what());
+        }
+        c.faults = device->faults;
+        units = std::make_unique<slave::UnitModels>(slave::build_units(*device));
+        c.model = &units->model_at(0);
+    }
+    // Flags override the device file's fault settings.
+    auto& f = c.faults;
+    if (!o.delay_kind.empty()) {
+        using K = slave::DelayConfig::Kind;
+        if (o.delay_kind == "fixed") f.delay = {K::Fixed, o.delay_ns, 0, 0, 0};
+        else if (o.delay_kind == "uniform") f.delay = {K::Uniform, 0, o.delay_ns, o.delay_max_ns, 0};
+        else if (o.delay_kind == "exponential") f.delay = {K::Exponential, 0, 0, 0, o.delay_ns};
+    } else if (o.delay_ns) {
+        f.delay = {slave::DelayConfig::Kind::Fixed, o.delay_ns, 0, 0, 0};
+    }
+    if (o.stall_ns || o.stall_every_ns) f.stall = {o.stall_ns, o.stall_every_ns};
+    if (o.exception_rate) f.exception_rate = o.exception_rate;
+    f.exception_code = static_cast<codec::ExceptionCode>(o.exception_code);
+    if (o.drop_rate) f.drop_rate = o.drop_rate;
+    if (o.no_answer_rate) f.no_answer_rate = o.no_answer_rate;
+    if (o.seed) f.seed = o.seed;
+    if (auto problem = slave::validate(f); !problem.empty()) return fail(problem);
+
+    c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse : server::FullPolicy::EvictOldestIdle;
+    c.idle_timeout_ms = o.idle_timeout_ns / 1'000'000;
+    if (o.only_unit >= 0) {
+        c.only_unit = static_cast<std::uint8_t>(o.only_unit);
+        c.foreign_unit = o.foreign_unit == "exception" ? server::ForeignUnitPolicy::GatewayException
+                                                        : server::ForeignUnitPolicy::NoAnswer;
+    }
+
+    server::block_stop_signals();
+    server::Server srv(c);
+    std::string error;
+    if (!srv.start(&error)) return fail(error);
+    fmt::print("mbstorm serve: listening on {} ({} thread{}, {}); Ctrl-C stops\n", srv.endpoint(),
+               srv.threads(), srv.threads() == 1 ? "" : "s", srv.describe_io());
+    if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
+    std::fflush(stdout);
+    server::RunOptions run;
+    run.print_stats = o.stats;
+    run.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
+    return server::run_until_signal(srv, run);
+}
+
+}  // namespace
+
+void add_serve_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<ServeOptions>();
+    auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
+    cmd->add_option("--listen,-l", o->config.listen, "address to listen on, host:port or [v6]:port")
+        ->capture_default_str();
+    cmd->add_option("--threads,-t", o->config.threads, "worker threads, each with its own ring (0: one per core)")
+        ->check(CLI::Range(0u, 1024u));
+    cmd->add_option("--device", o->device_file, "YAML device description: tables, initial data, simulated inputs, faults");
+    cmd->add_flag("--stats", o->stats, "print a line of statistics every second");
+    add_duration_option(cmd, "--duration", o->duration_ns, "stop by itself after this long (default: until Ctrl-C)");
+    cmd->add_option("--max-connections", o->config.max_connections, "connection limit (0: none)")
+        ->capture_default_str();
+    cmd->add_option("--full-policy", o->full_policy, "at the limit: evict the oldest idle connection, or refuse the new one")
+        ->check(CLI::IsMember({"evict", "refuse"}))
+        ->capture_default_str();
+    add_duration_option(cmd, "--idle-timeout", o->idle_timeout_ns, "close connections idle this long (default: never)");
+    cmd->add_option("--max-outstanding", o->config.max_outstanding,
+                    "answer requests beyond this many unanswered ones per connection with exception 06 (0: no cap)")
+        ->check(CLI::Range(0u, 65535u));
+    cmd->add_option("--only-unit", o->only_unit, "answer only this unit id")->check(CLI::Range(0, 255));
+    cmd->add_option("--foreign-unit", o->foreign_unit, "other unit ids: no answer, or exception 0B like a gateway")
+        ->check(CLI::IsMember({"none", "exception"}));
+    cmd->add_option("--delay-kind", o->delay_kind, "response delay distribution")
+        ->check(CLI::IsMember({"fixed", "uniform", "exponential"}));
+    add_duration_option(cmd, "--delay", o->delay_ns, "response delay (fixed value, uniform minimum, or exponential mean)");
+    add_duration_option(cmd, "--delay-max", o->delay_max_ns, "uniform delay maximum");
+    add_duration_option(cmd, "--stall", o->stall_ns, "hold all responses this long ...");
+    add_duration_option(cmd, "--stall-every", o->stall_every_ns, "... once every this long");
+    add_rate_option(cmd, "--exception-rate", o->exception_rate, "answer this share of requests with an exception");
+    cmd->add_option("--exception-code", o->exception_code, "code of injected exceptions")->check(CLI::Range(1, 255));
+    add_rate_option(cmd, "--drop-rate", o->drop_rate, "close the connection instead of answering, for this share");
+    add_rate_option(cmd, "--no-answer-rate", o->no_answer_rate, "leave this share of requests unanswered");
+    cmd->add_option("--seed", o->seed, "seed for fault injection draws");
+    cmd->callback([o, &action] { action = [o] { return run_serve(*o); }; });
+}
+
 }  // namespace mbstorm::cli

@@ -86,13 +86,14 @@ private:
     void sweep_timeouts(std::int64_t now) noexcept;
     void record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
                 std::int64_t now) noexcept;
-    std::uint32_t outstanding_total() const noexcept;
 
     WorkerSetup setup_;
     const Plan& plan_;
     bool open_loop_;
     std::uint64_t quota_;
     std::uint64_t sent_ = 0;
+    std::uint64_t outstanding_ = 0;  // over all connections
+    std::int64_t inflight_ops_ = 0;  // ring operations not yet completed (for teardown)
     bool stopping_ = false;
 
     net::Ring ring_;

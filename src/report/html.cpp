@@ -59,7 +59,7 @@ struct Chart {
 };
 
 constexpr double kWidth = 900, kHeight = 360;
-constexpr double kLeft = 78, kRight = 20, kTop = 34, kBottom = 52;
+constexpr double kLeft = 78, kRight = 40, kTop = 34, kBottom = 52;
 
 // A "nice" step (1, 2, 2.5, 5 x 10^n) giving about `target` intervals up to max.
 double nice_step(double max, int target) {
@@ -361,14 +361,14 @@ void latency_header(std::string& t, const char* first) {
 
 std::string latency_table(const stats::RunResult& r) {
     const double seconds = static_cast<double>(r.metadata.measured_duration_ns) / 1e9;
-    std::string t = "<table>\n";
+    std::string t = "<div class=\"scroll\"><table>\n";
     latency_header(t, "operation");
     latency_row(t, "all operations", r.latency, r.counters.completed(), seconds);
     for (const auto& op : r.operations) {
         latency_row(t, fmt::format("{} ({})", op.name, format_hex_byte(op.function_code)), op.latency,
                     op.counters.completed(), seconds);
     }
-    t += "</table>\n";
+    t += "</table></div>\n";
     return t;
 }
 
@@ -377,8 +377,8 @@ std::string errors_table(const stats::RunResult& r) {
     std::string t = "<table>\n<tr><th class=\"l\">error</th><th>all</th>";
     for (const auto& op : r.operations) t += fmt::format("<th>{}</th>", escape(op.name));
     t += "</tr>\n";
-    auto emit = [&](const std::string& label, auto count_of) {
-        t += fmt::format("<tr><td class=\"l\">{}</td><td>{}</td>", escape(label),
+    auto emit = [&](const std::string& label, bool indented, auto count_of) {
+        t += fmt::format("<tr><td class=\"l{}\">{}</td><td>{}</td>", indented ? " sub" : "", escape(label),
                          format_count(count_of(r.counters)));
         for (const auto& op : r.operations) t += fmt::format("<td>{}</td>", format_count(count_of(op.counters)));
         t += "</tr>\n";
@@ -386,12 +386,12 @@ std::string errors_table(const stats::RunResult& r) {
     for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
         const auto outcome = static_cast<stats::Outcome>(i);
         if (r.counters.count(outcome) == 0) continue;
-        emit(std::string(stats::outcome_name(outcome)),
+        emit(std::string(stats::outcome_name(outcome)), false,
              [outcome](const OutcomeCounters& c) { return c.count(outcome); });
         if (outcome != stats::Outcome::Exception) continue;
         for (std::size_t code = 0; code < 256; ++code) {
             if (r.counters.exceptions[code] == 0) continue;
-            emit("  exception " + format_hex_byte(static_cast<std::uint8_t>(code)),
+            emit("exception " + format_hex_byte(static_cast<std::uint8_t>(code)), true,
                  [code](const OutcomeCounters& c) { return c.exceptions[code]; });
         }
     }
@@ -400,7 +400,7 @@ std::string errors_table(const stats::RunResult& r) {
 }
 
 std::string stages_table(const stats::RunResult& r) {
-    std::string t = "<table>\n";
+    std::string t = "<div class=\"scroll\"><table>\n";
     latency_header(t, "stage");
     for (const auto& st : r.stages) {
         const double seconds = static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
@@ -413,7 +413,7 @@ std::string stages_table(const stats::RunResult& r) {
             latency_row(t, "    " + op.name, op.latency, op.counters.completed(), seconds);
         }
     }
-    t += "</table>\n";
+    t += "</table></div>\n";
     return t;
 }
 
@@ -437,11 +437,13 @@ h1 { font-size: 1.6em; margin: 0 0 4px; }
 h2 { font-size: 1.15em; margin: 32px 0 10px; border-bottom: 1px solid #d9dce1; padding-bottom: 4px; }
 .sub { color: #5a6270; margin: 0 0 16px; }
 section.card { background: #fff; border: 1px solid #e1e4e8; border-radius: 6px; padding: 12px 16px; }
-table { border-collapse: collapse; width: 100%; font-size: 0.9em; background: #fff;
+table { border-collapse: collapse; width: 100%; font-size: 0.86em; background: #fff;
         font-variant-numeric: tabular-nums; }
-th, td { padding: 5px 8px; border-bottom: 1px solid #eceef1; text-align: right; white-space: nowrap; }
+th, td { padding: 5px 6px; border-bottom: 1px solid #eceef1; text-align: right; white-space: nowrap; }
 th { background: #f0f2f5; font-weight: 600; }
 .l { text-align: left; }
+td.sub { padding-left: 24px; }
+.scroll { overflow-x: auto; }
 table.kv td.l { width: 32%; color: #5a6270; }
 table.kv td { text-align: left; white-space: normal; }
 .ok { color: #1a7f37; font-weight: 600; }

@@ -7,11 +7,14 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 namespace mbstorm::slave {
 
 namespace {
+
+using OptNode = std::optional<YAML::Node>;
 
 // Carries the source name so every error can say where it happened.
 class Parser {
@@ -307,22 +310,22 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
     if (!list.IsSequence()) p.fail(list, "init must be a list");
     for (const auto& e : list) {
         InitRange r;
-        YAML::Node table, address, values, value, count, random, type;
+        OptNode table, address, values, value, count, random, type;
         p.each_key(e, "init entry", [&](const std::string& key, const YAML::Node& v) {
             if (key == "table")
-                table = v;
+                table.emplace(v);
             else if (key == "address")
-                address = v;
+                address.emplace(v);
             else if (key == "values")
-                values = v;
+                values.emplace(v);
             else if (key == "value")
-                value = v;
+                value.emplace(v);
             else if (key == "count")
-                count = v;
+                count.emplace(v);
             else if (key == "random")
-                random = v;
+                random.emplace(v);
             else if (key == "type")
-                type = v;
+                type.emplace(v);
             else if (key == "units")
                 r.units = parse_entry_units(p, v, layout);
             else
@@ -331,26 +334,26 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
         });
         if (!table) p.fail(e, "init entry needs 'table'");
         if (!address) p.fail(e, "init entry needs 'address'");
-        r.table = parse_table(p, table);
-        r.address = static_cast<std::uint16_t>(p.integer(address, "address", 0, 65535));
-        const ValueType vt = type ? parse_type(p, type) : ValueType::UInt16;
-        if (type && is_bit_table(r.table)) p.fail(type, "bit tables take no 'type'");
+        r.table = parse_table(p, *table);
+        r.address = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        const ValueType vt = type ? parse_type(p, *type) : ValueType::UInt16;
+        if (type && is_bit_table(r.table)) p.fail(*type, "bit tables take no 'type'");
         const int sources = (values ? 1 : 0) + (value ? 1 : 0) + (random ? 1 : 0);
         if (sources != 1) p.fail(e, "init entry needs exactly one of 'values', 'value', 'random'");
-        if (count && values) p.fail(count, "'count' goes with 'value' or 'random', not 'values'");
-        const auto n = count ? p.integer(count, "count", 1, 65536) : 1;
+        if (count && values) p.fail(*count, "'count' goes with 'value' or 'random', not 'values'");
+        const auto n = count ? p.integer(*count, "count", 1, 65536) : 1;
         if (values) {
-            if (!values.IsSequence()) p.fail(values, "'values' must be a list");
-            for (const auto& v : values) push_value(p, v, r.table, vt, r.words);
+            if (!values->IsSequence()) p.fail(*values, "'values' must be a list");
+            for (const auto& v : *values) push_value(p, v, r.table, vt, r.words);
         } else if (value) {
             std::vector<std::uint16_t> one;
-            push_value(p, value, r.table, vt, one);
+            push_value(p, *value, r.table, vt, one);
             for (std::int64_t i = 0; i < n; ++i)
                 r.words.insert(r.words.end(), one.begin(), one.end());
         } else {
             double lo = 0, hi = is_bit_table(r.table) ? 1 : 65535;
             std::uint64_t seed = 1;
-            p.each_key(random, "random", [&](const std::string& key, const YAML::Node& v) {
+            p.each_key(*random, "random", [&](const std::string& key, const YAML::Node& v) {
                 if (key == "min")
                     lo = p.number(v, "random.min");
                 else if (key == "max")
@@ -361,7 +364,7 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
                     return false;
                 return true;
             });
-            if (lo > hi) p.fail(random, "random.min must not exceed random.max");
+            if (lo > hi) p.fail(*random, "random.min must not exceed random.max");
             SimulatedInput gen;
             gen.wave = Waveform::Random;
             gen.type = is_bit_table(r.table) ? ValueType::UInt16 : vt;
@@ -386,23 +389,23 @@ void parse_counters(const Parser& p, const YAML::Node& list, const Layout& layou
                     DeviceDescription& d) {
     if (!list.IsSequence()) p.fail(list, "counters must be a list");
     for (const auto& e : list) {
-        YAML::Node table, address, mode, step, start, interval, type;
+        OptNode table, address, mode, step, start, interval, type;
         std::vector<std::uint8_t> units;
         p.each_key(e, "counter", [&](const std::string& key, const YAML::Node& v) {
             if (key == "table")
-                table = v;
+                table.emplace(v);
             else if (key == "address")
-                address = v;
+                address.emplace(v);
             else if (key == "mode")
-                mode = v;
+                mode.emplace(v);
             else if (key == "step")
-                step = v;
+                step.emplace(v);
             else if (key == "start")
-                start = v;
+                start.emplace(v);
             else if (key == "interval_ms")
-                interval = v;
+                interval.emplace(v);
             else if (key == "type")
-                type = v;
+                type.emplace(v);
             else if (key == "units")
                 units = parse_entry_units(p, v, layout);
             else
@@ -410,20 +413,21 @@ void parse_counters(const Parser& p, const YAML::Node& list, const Layout& layou
             return true;
         });
         if (!address) p.fail(e, "counter needs 'address'");
-        const Table t = table ? parse_table(p, table) : Table::InputRegisters;
-        if (is_bit_table(t)) p.fail(table, "counters live in input_registers or holding_registers");
-        const auto addr = static_cast<std::uint16_t>(p.integer(address, "address", 0, 65535));
-        const std::string m = mode ? p.scalar(mode, "mode") : std::string("read");
+        const Table t = table ? parse_table(p, *table) : Table::InputRegisters;
+        if (is_bit_table(t))
+            p.fail(*table, "counters live in input_registers or holding_registers");
+        const auto addr = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        const std::string m = mode ? p.scalar(*mode, "mode") : std::string("read");
         if (m == "read") {
-            if (interval) p.fail(interval, "'interval_ms' needs mode: interval");
-            if (type) p.fail(type, "read counters are plain 16-bit registers (no 'type')");
+            if (interval) p.fail(*interval, "'interval_ms' needs mode: interval");
+            if (type) p.fail(*type, "read counters are plain 16-bit registers (no 'type')");
             check_fits(p, e, layout, t, addr, 1);
             ReadCounterSpec c;
             c.table = t;
             c.address = addr;
-            c.step = static_cast<std::uint16_t>(step ? p.integer(step, "step", -65535, 65535) : 1);
+            c.step = static_cast<std::uint16_t>(step ? p.integer(*step, "step", -65535, 65535) : 1);
             c.start =
-                static_cast<std::uint16_t>(start ? p.integer(start, "start", -32768, 65535) : 0);
+                static_cast<std::uint16_t>(start ? p.integer(*start, "start", -32768, 65535) : 0);
             c.units = std::move(units);
             d.read_counters.push_back(std::move(c));
         } else if (m == "interval") {
@@ -432,16 +436,16 @@ void parse_counters(const Parser& p, const YAML::Node& list, const Layout& layou
             s.table = t;
             s.address = addr;
             s.wave = Waveform::Counter;
-            s.type = type ? parse_type(p, type) : ValueType::UInt16;
-            s.period_ns = p.millis(interval, "interval_ms");
-            if (s.period_ns == 0) p.fail(interval, "interval_ms must be above 0");
-            s.step = step ? p.number(step, "step") : 1.0;
-            s.offset = start ? p.number(start, "start") : 0.0;
+            s.type = type ? parse_type(p, *type) : ValueType::UInt16;
+            s.period_ns = p.millis(*interval, "interval_ms");
+            if (s.period_ns == 0) p.fail(*interval, "interval_ms must be above 0");
+            s.step = step ? p.number(*step, "step") : 1.0;
+            s.offset = start ? p.number(*start, "start") : 0.0;
             s.units = std::move(units);
             check_fits(p, e, layout, t, addr, value_width(s.type));
             d.simulated.push_back(std::move(s));
         } else {
-            p.fail(mode, "counter mode must be 'read' or 'interval'");
+            p.fail(*mode, "counter mode must be 'read' or 'interval'");
         }
     }
 }
@@ -451,18 +455,18 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
     if (!list.IsSequence()) p.fail(list, "simulate must be a list");
     for (const auto& e : list) {
         SimulatedInput s;
-        YAML::Node table, address, wave, period, type;
+        OptNode table, address, wave, period, type;
         p.each_key(e, "simulated input", [&](const std::string& key, const YAML::Node& v) {
             if (key == "table")
-                table = v;
+                table.emplace(v);
             else if (key == "address")
-                address = v;
+                address.emplace(v);
             else if (key == "wave")
-                wave = v;
+                wave.emplace(v);
             else if (key == "period_ms")
-                period = v;
+                period.emplace(v);
             else if (key == "type")
-                type = v;
+                type.emplace(v);
             else if (key == "amplitude")
                 s.amplitude = p.number(v, key);
             else if (key == "offset")
@@ -487,9 +491,9 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
         if (!address) p.fail(e, "simulated input needs 'address'");
         if (!wave) p.fail(e, "simulated input needs 'wave'");
         if (!period) p.fail(e, "simulated input needs 'period_ms'");
-        s.table = parse_table(p, table);
-        s.address = static_cast<std::uint16_t>(p.integer(address, "address", 0, 65535));
-        const std::string w = p.scalar(wave, "wave");
+        s.table = parse_table(p, *table);
+        s.address = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        const std::string w = p.scalar(*wave, "wave");
         if (w == "ramp")
             s.wave = Waveform::Ramp;
         else if (w == "sine")
@@ -499,12 +503,12 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
         else if (w == "random")
             s.wave = Waveform::Random;
         else
-            p.fail(wave, "unknown wave '" + w + "' (ramp, sine, square or random)");
-        s.period_ns = p.millis(period, "period_ms");
-        if (s.period_ns == 0) p.fail(period, "period_ms must be above 0");
+            p.fail(*wave, "unknown wave '" + w + "' (ramp, sine, square or random)");
+        s.period_ns = p.millis(*period, "period_ms");
+        if (s.period_ns == 0) p.fail(*period, "period_ms must be above 0");
         if (type) {
-            if (is_bit_table(s.table)) p.fail(type, "bit tables take no 'type'");
-            s.type = parse_type(p, type);
+            if (is_bit_table(s.table)) p.fail(*type, "bit tables take no 'type'");
+            s.type = parse_type(p, *type);
         }
         if (s.wave == Waveform::Random && s.min > s.max) p.fail(e, "min must not exceed max");
         check_fits(p, e, layout, s.table, s.address, value_width(s.type));

@@ -27,8 +27,10 @@ public:
     static constexpr std::uint32_t kSubBucketCount = 2 * kSubBucketHalfCount;  // 2048
     static constexpr std::uint64_t kSubBucketMask = kSubBucketCount - 1;
 
+    // Tracks 0 .. 1 hour.
+    Histogram() : Histogram(kOneHourNs) {}
     // highest_trackable_ns is raised to at least 2 * kSubBucketCount.
-    explicit Histogram(std::uint64_t highest_trackable_ns = kOneHourNs);
+    explicit Histogram(std::uint64_t highest_trackable_ns);
     Histogram(const Histogram& other);
     Histogram& operator=(const Histogram& other);
     // A moved-from histogram may only be destroyed or assigned to.

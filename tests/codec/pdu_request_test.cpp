@@ -41,8 +41,7 @@ TEST_P(ReadRequestLimits, AddressRangeEndsAtFFFF) {
 
 TEST_P(ReadRequestLimits, BadQuantityOutranksBadAddress) {
     const auto [fc, max] = GetParam();
-    EXPECT_REQUEST_FAILS(pdu_addr_qty(fc, 0xFFFF, max + 1), CodecError::QuantityOutOfRange,
-                         kVal);
+    EXPECT_REQUEST_FAILS(pdu_addr_qty(fc, 0xFFFF, max + 1), CodecError::QuantityOutOfRange, kVal);
 }
 
 TEST_P(ReadRequestLimits, TruncatedAndTrailing) {
@@ -95,9 +94,15 @@ TEST(RequestDecode, WriteSingleCoilAcceptsOnlyOnAndOff) {
 
 TEST(RequestDecode, FixedSizeFunctionsRejectTruncatedAndTrailing) {
     const ByteVec valid[] = {
-        pdu_addr_qty(0x05, 1, 0xFF00), pdu_addr_qty(0x06, 1, 0x1234), ByteVec{0x07},
-        ByteVec{0x0B},                 ByteVec{0x0C},                 ByteVec{0x11},
-        hex("16 00 04 00 F2 00 25"),   hex("18 04 DE"),               hex("2B 0E 01 00"),
+        pdu_addr_qty(0x05, 1, 0xFF00),
+        pdu_addr_qty(0x06, 1, 0x1234),
+        ByteVec{0x07},
+        ByteVec{0x0B},
+        ByteVec{0x0C},
+        ByteVec{0x11},
+        hex("16 00 04 00 F2 00 25"),
+        hex("18 04 DE"),
+        hex("2B 0E 01 00"),
         hex("08 00 0A 00 00"),
     };
     for (const ByteVec& pdu : valid) {
@@ -127,7 +132,7 @@ struct WriteLimit {
 };
 
 class WriteMultipleLimits : public ::testing::TestWithParam<WriteLimit> {
-protected:
+  protected:
     static std::size_t bytes_for(const WriteLimit& w, std::uint16_t q) {
         return w.coils ? (q + 7u) / 8u : 2u * q;
     }
@@ -304,7 +309,8 @@ TEST(RequestDecode, OtherMeiTypesOweIllegalFunction) {
 
 ByteVec read_file_request(int subs, std::uint16_t length = 1) {
     ByteVec s;
-    for (int i = 0; i < subs; ++i) add_file_sub(s, 6, 4, static_cast<std::uint16_t>(i), length, false);
+    for (int i = 0; i < subs; ++i)
+        add_file_sub(s, 6, 4, static_cast<std::uint16_t>(i), length, false);
     return pdu_file(0x14, s);
 }
 
@@ -312,9 +318,9 @@ TEST(RequestDecode, ReadFileByteCountRange) {
     EXPECT_REQUEST_FAILS(hex("14 00"), CodecError::ByteCountMismatch, kVal);
     ByteVec six = hex("14 06 06 00 04 00 01 00");
     EXPECT_REQUEST_FAILS(six, CodecError::ByteCountMismatch, kVal);
-    expect_request_round_trip(read_file_request(1));         // 0x07
-    expect_request_round_trip(read_file_request(35));        // 0xF5
-    ByteVec too_big = read_file_request(36);                  // 0xFC
+    expect_request_round_trip(read_file_request(1));   // 0x07
+    expect_request_round_trip(read_file_request(35));  // 0xF5
+    ByteVec too_big = read_file_request(36);           // 0xFC
     EXPECT_REQUEST_FAILS(too_big, CodecError::ByteCountMismatch, kVal);
     // Not a whole number of 7-byte sub-requests.
     ByteVec ragged = read_file_request(1);
@@ -376,8 +382,7 @@ TEST(RequestDecode, WriteFileByteCountRange) {
     s.clear();
     add_file_sub(s, 6, 4, 7, 123, true);  // 0xFD
     EXPECT_REQUEST_FAILS(pdu_file(0x15, s), CodecError::ByteCountMismatch, kVal);
-    EXPECT_REQUEST_FAILS(hex("15 08 06 00 04 00 07 00 00 00"), CodecError::ByteCountMismatch,
-                         kVal);
+    EXPECT_REQUEST_FAILS(hex("15 08 06 00 04 00 07 00 00 00"), CodecError::ByteCountMismatch, kVal);
     EXPECT_REQUEST_FAILS(hex("15 00"), CodecError::ByteCountMismatch, kVal);
 }
 

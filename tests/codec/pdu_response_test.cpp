@@ -23,7 +23,9 @@ void expect_truncations_fail(const ByteVec& pdu) {
     EXPECT_EQ(decode_rsp(longer), CodecError::TrailingBytes) << to_hex(view(pdu));
 }
 
-TEST(ResponseDecode, Empty) { EXPECT_EQ(decode_rsp(ByteVec{}), CodecError::Empty); }
+TEST(ResponseDecode, Empty) {
+    EXPECT_EQ(decode_rsp(ByteVec{}), CodecError::Empty);
+}
 
 TEST(ResponseDecode, ReadBitsByteCountRange) {
     for (std::uint8_t fc : {0x01, 0x02}) {
@@ -205,8 +207,7 @@ TEST(ResponseDecode, FifoCountLimit) {
 
 TEST(ResponseDecode, ReadDeviceIdentification) {
     // Basic stream: vendor, product code, revision.
-    const ByteVec pdu = hex(
-        "2B 0E 01 01 00 00 03 00 05 41 42 43 44 45 01 02 50 31 02 03 56 31 2E");
+    const ByteVec pdu = hex("2B 0E 01 01 00 00 03 00 05 41 42 43 44 45 01 02 50 31 02 03 56 31 2E");
     const Response r = expect_response_round_trip(pdu);
     EXPECT_EQ(r.device_id_code, 1);
     EXPECT_EQ(r.conformity_level, 1);

@@ -51,7 +51,9 @@ inline std::string to_hex(Bytes b) {
     return s;
 }
 
-inline Bytes view(const ByteVec& v) { return Bytes(v.data(), v.size()); }
+inline Bytes view(const ByteVec& v) {
+    return Bytes(v.data(), v.size());
+}
 
 inline void put16(ByteVec& v, std::uint16_t x) {
     v.push_back(static_cast<std::uint8_t>(x >> 8));
@@ -142,13 +144,13 @@ inline CodecError decode_rsp(const ByteVec& pdu) {
 }
 
 // Expects decode_request to fail with `error` and owe `exception`.
-#define EXPECT_REQUEST_FAILS(pdu, err, exc)                                    \
-    do {                                                                       \
-        const auto st_ = ::mbstorm::codec::test::decode_req(pdu);              \
-        EXPECT_EQ(st_.error, err) << ::mbstorm::codec::test::to_hex(           \
-                                         ::mbstorm::codec::test::view(pdu)); \
-        EXPECT_EQ(st_.exception, exc) << ::mbstorm::codec::test::to_hex(       \
-                                             ::mbstorm::codec::test::view(pdu)); \
+#define EXPECT_REQUEST_FAILS(pdu, err, exc)                                       \
+    do {                                                                          \
+        const auto st_ = ::mbstorm::codec::test::decode_req(pdu);                 \
+        EXPECT_EQ(st_.error, err) << ::mbstorm::codec::test::to_hex(              \
+            ::mbstorm::codec::test::view(pdu));                                   \
+        EXPECT_EQ(st_.exception, exc)                                             \
+            << ::mbstorm::codec::test::to_hex(::mbstorm::codec::test::view(pdu)); \
     } while (0)
 
 }  // namespace mbstorm::codec::test

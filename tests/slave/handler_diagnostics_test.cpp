@@ -68,7 +68,8 @@ TEST(HandlerDiagnostics, RestartCommunicationsClearsCountersAndOptionallyTheLog)
     EXPECT_EQ(call(m, Pdu(0x08).u16(0x01).u16(0xFF00)).result.outcome, Outcome::Response);
     log = call(m, Pdu(0x0C));
     EXPECT_EQ(log.bytes[1], 6);
-    EXPECT_TRUE(call(m, Pdu(0x08).u16(0x01).u16(0x1234)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x08).u16(0x01).u16(0x1234)).is_exception(ExceptionCode::IllegalDataValue));
 }
 
 TEST(HandlerDiagnostics, UnsupportedSubFunctionsAre01AndBadDataIs03) {
@@ -76,7 +77,8 @@ TEST(HandlerDiagnostics, UnsupportedSubFunctionsAre01AndBadDataIs03) {
     EXPECT_TRUE(call(m, Pdu(0x08).u16(0x13).u16(0)).is_exception(ExceptionCode::IllegalFunction));
     EXPECT_TRUE(call(m, Pdu(0x08).u16(0x15).u16(0)).is_exception(ExceptionCode::IllegalFunction));
     // Serial-line only sub-functions.
-    EXPECT_TRUE(call(m, Pdu(0x08).u16(0x03).u16(0x0A00)).is_exception(ExceptionCode::IllegalFunction));
+    EXPECT_TRUE(
+        call(m, Pdu(0x08).u16(0x03).u16(0x0A00)).is_exception(ExceptionCode::IllegalFunction));
     EXPECT_TRUE(call(m, Pdu(0x08).u16(0x04).u16(0)).is_exception(ExceptionCode::IllegalFunction));
     EXPECT_TRUE(call(m, Pdu(0x08).u16(0x0B).u16(1)).is_exception(ExceptionCode::IllegalDataValue));
     EXPECT_TRUE(call(m, Pdu(0x08).u16(0x0B)).is_exception(ExceptionCode::IllegalDataValue));
@@ -106,9 +108,9 @@ TEST(HandlerDiagnostics, EventLogNewestFirst) {
     const Reply r = call(m, Pdu(0x0C));
     ASSERT_EQ(r.decode_error, codec::CodecError::Ok);
     ASSERT_EQ(r.bytes.size(), 8u + 4u);
-    EXPECT_EQ(r.bytes[1], 10);                                // byte count
-    EXPECT_EQ(codec::load_be16(r.bytes.data() + 4), 1);       // event count (one success)
-    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 3);       // message count incl. this one
+    EXPECT_EQ(r.bytes[1], 10);                           // byte count
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 4), 1);  // event count (one success)
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 3);  // message count incl. this one
     EXPECT_EQ(r.bytes[8], 0x41);
     EXPECT_EQ(r.bytes[9], 0x80);
     EXPECT_EQ(r.bytes[10], 0x40);

@@ -11,8 +11,8 @@ using codec::ExceptionCode;
 
 TEST(HandlerExceptions, UnsupportedFunctionsAnswer01WithTheExceptionBit) {
     DataModel m(small_config());
-    for (unsigned fc : {0x00u, 0x09u, 0x0Au, 0x0Du, 0x0Eu, 0x12u, 0x13u, 0x19u, 0x28u, 0x2Au,
-                        0x2Cu, 0x41u, 0x64u, 0x7Fu}) {
+    for (unsigned fc : {0x00u, 0x09u, 0x0Au, 0x0Du, 0x0Eu, 0x12u, 0x13u, 0x19u, 0x28u, 0x2Au, 0x2Cu,
+                        0x41u, 0x64u, 0x7Fu}) {
         const Reply r = call(m, Pdu(static_cast<std::uint8_t>(fc)).u16(0).u16(1));
         ASSERT_TRUE(r.is_exception(ExceptionCode::IllegalFunction)) << fc;
         EXPECT_EQ(r.bytes[0], fc | 0x80) << fc;
@@ -43,7 +43,8 @@ TEST(HandlerExceptions, ReadQuantityOutOfRangeIs03) {
     }
     for (std::uint8_t fc : {0x01, 0x02}) {
         EXPECT_TRUE(call(m, Pdu(fc).u16(0).u16(0)).is_exception(ExceptionCode::IllegalDataValue));
-        EXPECT_TRUE(call(m, Pdu(fc).u16(0).u16(2001)).is_exception(ExceptionCode::IllegalDataValue));
+        EXPECT_TRUE(
+            call(m, Pdu(fc).u16(0).u16(2001)).is_exception(ExceptionCode::IllegalDataValue));
     }
 }
 
@@ -51,12 +52,17 @@ TEST(HandlerExceptions, BadQuantityAndBadAddressTogetherGive03) {
     DataModel m(small_config(100));
     // Outside the table (02) and quantity out of range (03): 03 wins.
     EXPECT_TRUE(call(m, Pdu(0x03).u16(5000).u16(0)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x03).u16(0xFFFF).u16(126)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x01).u16(0xFFF0).u16(2001)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x03).u16(0xFFFF).u16(126)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x01).u16(0xFFF0).u16(2001)).is_exception(ExceptionCode::IllegalDataValue));
     // FC0F/10: byte count mismatch with an address outside the table.
-    EXPECT_TRUE(call(m, Pdu(0x0F).u16(5000).u16(9).u8(1).u8(0xFF)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x10).u16(5000).u16(2).u8(2).u16(1)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x10).u16(5000).u16(124).u8(248)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x0F).u16(5000).u16(9).u8(1).u8(0xFF))
+                    .is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x10).u16(5000).u16(2).u8(2).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x10).u16(5000).u16(124).u8(248))
+                    .is_exception(ExceptionCode::IllegalDataValue));
 }
 
 TEST(HandlerExceptions, AddressPastTheTableIs02) {
@@ -67,10 +73,13 @@ TEST(HandlerExceptions, AddressPastTheTableIs02) {
     EXPECT_TRUE(call(m, Pdu(0x04).u16(100).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
     EXPECT_TRUE(call(m, Pdu(0x01).u16(93).u16(8)).is_exception(ExceptionCode::IllegalDataAddress));
     EXPECT_TRUE(call(m, Pdu(0x02).u16(100).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x05).u16(100).u16(0xFF00)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(
+        call(m, Pdu(0x05).u16(100).u16(0xFF00)).is_exception(ExceptionCode::IllegalDataAddress));
     EXPECT_TRUE(call(m, Pdu(0x06).u16(100).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x0F).u16(95).u16(8).u8(1).u8(0xFF)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x10).u16(99).u16(2).u8(4).words({1, 2})).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x0F).u16(95).u16(8).u8(1).u8(0xFF))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x10).u16(99).u16(2).u8(4).words({1, 2}))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
     // Nothing was written by the refused requests.
     EXPECT_FALSE(m.coils().get(95));
     EXPECT_EQ(m.holding_registers().get(99), 0);
@@ -78,27 +87,33 @@ TEST(HandlerExceptions, AddressPastTheTableIs02) {
 
 TEST(HandlerExceptions, RangeWrappingPast0xFFFFIs02) {
     DataModel m;  // full tables: only the 16-bit wrap can fail
-    EXPECT_TRUE(call(m, Pdu(0x03).u16(0xFFFF).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(
+        call(m, Pdu(0x03).u16(0xFFFF).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
     EXPECT_EQ(call(m, Pdu(0x03).u16(0xFFFF).u16(1)).result.outcome, Outcome::Response);
-    EXPECT_TRUE(call(m, Pdu(0x01).u16(0xFFFF).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(
+        call(m, Pdu(0x01).u16(0xFFFF).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
 }
 
 TEST(HandlerExceptions, WriteQuantityLimitsAre03) {
     DataModel m;
-    EXPECT_TRUE(call(m, Pdu(0x0F).u16(0).u16(0).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x0F).u16(0).u16(0).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
     Pdu coils(0x0F);
     coils.u16(0).u16(1969).u8(247);
     for (int i = 0; i < 247; ++i) coils.u8(0);
     EXPECT_TRUE(call(m, coils).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x10).u16(0).u16(0).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x10).u16(0).u16(0).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
 }
 
 TEST(HandlerExceptions, TruncatedAndOverlongPdusAre03) {
     DataModel m(small_config());
     EXPECT_TRUE(call(m, Pdu(0x03).u16(0)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x03).u16(0).u16(1).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x03).u16(0).u16(1).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
     EXPECT_TRUE(call(m, Pdu(0x06).u16(0)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x10).u16(0).u16(2).u8(4).u16(1)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x10).u16(0).u16(2).u8(4).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataValue));
     EXPECT_TRUE(call(m, Pdu(0x16).u16(0).u16(0)).is_exception(ExceptionCode::IllegalDataValue));
 }
 

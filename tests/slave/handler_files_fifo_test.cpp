@@ -22,7 +22,7 @@ TEST(HandlerFileRecords, WriteThenReadBack) {
     // FC14: file 4 rec 7 len 3 ... and file 3 rec 9 len 2 (two sub-requests).
     const Reply r = call(m, Pdu(0x14).u8(14).u8(6).u16(4).u16(7).u16(3).u8(6).u16(3).u16(9).u16(2));
     ASSERT_EQ(r.result.outcome, Outcome::Response);
-    const std::vector<std::uint8_t> want = {0x14, 0x0C, 0x07, 0x06, 0x06, 0xAF, 0x04, 0xBE,
+    const std::vector<std::uint8_t> want = {0x14, 0x0E, 0x07, 0x06, 0x06, 0xAF, 0x04, 0xBE,
                                             0x10, 0x0D, 0x05, 0x06, 0x0D, 0xFE, 0x00, 0x20};
     EXPECT_EQ(r.bytes, want);
     EXPECT_EQ(r.decode_error, codec::CodecError::Ok);
@@ -31,13 +31,18 @@ TEST(HandlerFileRecords, WriteThenReadBack) {
 TEST(HandlerFileRecords, UnknownFileOrRecordRangeIs02) {
     DataModel m(small_config());
     // File 5 does not exist (4 files), file 0 never does.
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(5).u16(0).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(0).u16(0).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(5).u16(0).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(0).u16(0).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
     // Record 9999 is the last one.
-    EXPECT_EQ(call(m, Pdu(0x14).u8(7).u8(6).u16(1).u16(9999).u16(1)).result.outcome, Outcome::Response);
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(1).u16(9999).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_EQ(call(m, Pdu(0x14).u8(7).u8(6).u16(1).u16(9999).u16(1)).result.outcome,
+              Outcome::Response);
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(1).u16(9999).u16(2))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
     // Reference type other than 6.
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(5).u16(1).u16(0).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(5).u16(1).u16(0).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
 }
 
 TEST(HandlerFileRecords, SmallerConfiguredFilesLimitTheRecords) {
@@ -45,17 +50,22 @@ TEST(HandlerFileRecords, SmallerConfiguredFilesLimitTheRecords) {
     c.file_count = 2;
     c.file_records = 100;
     DataModel m(c);
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(3).u16(0).u16(1)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(2).u16(99).u16(2)).is_exception(ExceptionCode::IllegalDataAddress));
-    EXPECT_TRUE(call(m, Pdu(0x15).u8(9).u8(6).u16(2).u16(100).u16(1).u16(5)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(3).u16(0).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(7).u8(6).u16(2).u16(99).u16(2))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(call(m, Pdu(0x15).u8(9).u8(6).u16(2).u16(100).u16(1).u16(5))
+                    .is_exception(ExceptionCode::IllegalDataAddress));
 }
 
 TEST(HandlerFileRecords, ByteCountProblemsAre03AndOutrank02) {
     DataModel m(small_config());
     // Byte count below 7.
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(6).u8(6).u16(1).u16(0).u8(0)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(6).u8(6).u16(1).u16(0).u8(0))
+                    .is_exception(ExceptionCode::IllegalDataValue));
     // Byte count disagrees with the PDU.
-    EXPECT_TRUE(call(m, Pdu(0x14).u8(8).u8(6).u16(1).u16(0).u16(1)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(call(m, Pdu(0x14).u8(8).u8(6).u16(1).u16(0).u16(1))
+                    .is_exception(ExceptionCode::IllegalDataValue));
     // Response would not fit one PDU (2 x 125 registers), even though file 9 is also unknown.
     EXPECT_TRUE(call(m, Pdu(0x14).u8(14).u8(6).u16(9).u16(0).u16(125).u8(6).u16(1).u16(0).u16(125))
                     .is_exception(ExceptionCode::IllegalDataValue));
@@ -64,8 +74,9 @@ TEST(HandlerFileRecords, ByteCountProblemsAre03AndOutrank02) {
 TEST(HandlerFileRecords, ABadSubRequestWritesNothing) {
     DataModel m(small_config());
     // First sub-request fine, second names file 77: neither may be applied.
-    const Reply r = call(m, Pdu(0x15).u8(18).u8(6).u16(1).u16(0).u16(1).u16(0x1111)
-                                .u8(6).u16(77).u16(0).u16(1).u16(0x2222));
+    const Reply r = call(
+        m, Pdu(0x15).u8(18).u8(6).u16(1).u16(0).u16(1).u16(0x1111).u8(6).u16(77).u16(0).u16(1).u16(
+               0x2222));
     EXPECT_TRUE(r.is_exception(ExceptionCode::IllegalDataAddress));
     EXPECT_EQ(m.files().get(1, 0), 0);
 }
@@ -85,7 +96,8 @@ TEST(HandlerFifo, ReturnsCountThenValuesWithoutConsuming) {
 
 TEST(HandlerFifo, EmptyAndFullQueues) {
     DataModel m(small_config());
-    EXPECT_EQ(call(m, Pdu(0x18).u16(10)).bytes, (std::vector<std::uint8_t>{0x18, 0x00, 0x02, 0x00, 0x00}));
+    EXPECT_EQ(call(m, Pdu(0x18).u16(10)).bytes,
+              (std::vector<std::uint8_t>{0x18, 0x00, 0x02, 0x00, 0x00}));
     for (unsigned i = 0; i < 31; ++i) ASSERT_TRUE(m.fifo_push(50, static_cast<std::uint16_t>(i)));
     EXPECT_FALSE(m.fifo_push(50, 99));  // 31 is the limit
     const Reply r = call(m, Pdu(0x18).u16(50));

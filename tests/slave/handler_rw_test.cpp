@@ -11,7 +11,9 @@ using codec::ExceptionCode;
 
 TEST(HandlerRead, HoldingRegistersComeBackBigEndian) {
     DataModel m(small_config());
-    for (unsigned i = 0; i < 10; ++i) m.holding_registers().set(static_cast<std::uint16_t>(5 + i), static_cast<std::uint16_t>(0x1200 + i));
+    for (unsigned i = 0; i < 10; ++i)
+        m.holding_registers().set(static_cast<std::uint16_t>(5 + i),
+                                  static_cast<std::uint16_t>(0x1200 + i));
     const Reply r = call(m, Pdu(0x03).u16(5).u16(10));
     ASSERT_EQ(r.result.outcome, Outcome::Response);
     ASSERT_EQ(r.bytes.size(), 22u);
@@ -69,10 +71,13 @@ TEST(HandlerWrite, SingleCoilOnAndOff) {
 
 TEST(HandlerWrite, SingleCoilRejectsOtherValuesWith03) {
     DataModel m(small_config());
-    EXPECT_TRUE(call(m, Pdu(0x05).u16(7).u16(0x0001)).is_exception(ExceptionCode::IllegalDataValue));
-    EXPECT_TRUE(call(m, Pdu(0x05).u16(7).u16(0xFFFF)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x05).u16(7).u16(0x0001)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x05).u16(7).u16(0xFFFF)).is_exception(ExceptionCode::IllegalDataValue));
     // Bad value outranks a bad address (03 before 02).
-    EXPECT_TRUE(call(m, Pdu(0x05).u16(5000).u16(0x1234)).is_exception(ExceptionCode::IllegalDataValue));
+    EXPECT_TRUE(
+        call(m, Pdu(0x05).u16(5000).u16(0x1234)).is_exception(ExceptionCode::IllegalDataValue));
     EXPECT_FALSE(m.coils().get(7));
 }
 
@@ -89,7 +94,8 @@ TEST(HandlerWrite, MultipleCoilsIgnoreThePaddingBits) {
     const Reply r = call(m, Pdu(0x0F).u16(20).u16(10).u8(2).u8(0xCD).u8(0xFD));
     ASSERT_EQ(r.bytes, (std::vector<std::uint8_t>{0x0F, 0x00, 20, 0x00, 10}));
     const bool expected[10] = {1, 0, 1, 1, 0, 0, 1, 1, 1, 0};
-    for (unsigned i = 0; i < 10; ++i) EXPECT_EQ(m.coils().get(static_cast<std::uint16_t>(20 + i)), expected[i]) << i;
+    for (unsigned i = 0; i < 10; ++i)
+        EXPECT_EQ(m.coils().get(static_cast<std::uint16_t>(20 + i)), expected[i]) << i;
     EXPECT_FALSE(m.coils().get(30));
 }
 
@@ -133,12 +139,15 @@ TEST(HandlerMaskWrite, FormulaHoldsForEveryMaskCombination) {
 
 TEST(HandlerMaskWrite, AddressOutsideTableIs02) {
     DataModel m(small_config(10));
-    EXPECT_TRUE(call(m, Pdu(0x16).u16(10).u16(0).u16(0)).is_exception(ExceptionCode::IllegalDataAddress));
+    EXPECT_TRUE(
+        call(m, Pdu(0x16).u16(10).u16(0).u16(0)).is_exception(ExceptionCode::IllegalDataAddress));
 }
 
 TEST(HandlerReadWrite, WriteHappensBeforeRead) {
     DataModel m(small_config());
-    for (unsigned i = 0; i < 10; ++i) m.holding_registers().set(static_cast<std::uint16_t>(i), static_cast<std::uint16_t>(100 + i));
+    for (unsigned i = 0; i < 10; ++i)
+        m.holding_registers().set(static_cast<std::uint16_t>(i),
+                                  static_cast<std::uint16_t>(100 + i));
     // Read 0..5, write 3..4: the read must show the new values at 3 and 4.
     const Reply r = call(m, Pdu(0x17).u16(0).u16(6).u16(3).u16(2).u8(4).words({0xAAAA, 0xBBBB}));
     ASSERT_EQ(r.result.outcome, Outcome::Response);

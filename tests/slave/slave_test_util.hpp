@@ -13,7 +13,7 @@ namespace mbstorm::slave::test {
 
 // Request bytes built field by field, so malformed PDUs are as easy to write as good ones.
 class Pdu {
-public:
+  public:
     explicit Pdu(std::uint8_t function) { bytes_.push_back(function); }
     Pdu& u8(unsigned v) {
         bytes_.push_back(static_cast<std::uint8_t>(v));
@@ -31,7 +31,7 @@ public:
     const std::vector<std::uint8_t>& bytes() const { return bytes_; }
     operator const std::vector<std::uint8_t>&() const { return bytes_; }
 
-private:
+  private:
     std::vector<std::uint8_t> bytes_;
 };
 
@@ -62,7 +62,8 @@ inline Reply call(DataModel& model, const std::vector<std::uint8_t>& request) {
     return finish(handle_request(request, model, out), out);
 }
 
-inline Reply call(const UnitModels& units, std::uint8_t unit, const std::vector<std::uint8_t>& request) {
+inline Reply call(const UnitModels& units, std::uint8_t unit,
+                  const std::vector<std::uint8_t>& request) {
     std::uint8_t out[kMinOutput];
     return finish(handle_request(unit, request, units, out), out);
 }

@@ -1,0 +1,20 @@
+// CLI11 options that take durations ("2ms", "30s") and rates ("1%", "0.01").
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace mbstorm::cli {
+
+// Adds an option whose value is a duration, stored in nanoseconds; a bad value is a usage
+// error naming the accepted forms.
+CLI::Option* add_duration_option(CLI::App* cmd, const std::string& name, std::uint64_t& ns,
+                                 const std::string& description);
+
+// Adds an option taking a fraction as "1%" or "0.01", stored as 0.01; must be within [0, 1].
+CLI::Option* add_rate_option(CLI::App* cmd, const std::string& name, double& fraction,
+                             const std::string& description);
+
+}  // namespace mbstorm::cli

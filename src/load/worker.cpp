@@ -1,0 +1,558 @@
+#include "load/worker.hpp"
+
+#include <fmt/format.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <functional>
+#include <system_error>
+
+#include "load/response_check.hpp"
+#include "load/rng.hpp"
+#include "net/clock.hpp"
+#include "net/features.hpp"
+#include "net/user_data.hpp"
+
+namespace mbstorm::load {
+namespace {
+
+constexpr std::int64_t kMaxSleepNs = 20 * net::kNsPerMs;
+constexpr std::uint16_t kBufferGroup = 0;
+
+bool has_response(stats::Outcome o) noexcept {
+    return o != stats::Outcome::Timeout && o != stats::Outcome::ConnectionClosed &&
+           o != stats::Outcome::ConnectFailed;
+}
+
+using HeapEntry = std::pair<std::int64_t, std::uint32_t>;
+constexpr auto kHeapOrder = std::greater<HeapEntry>{};  // min-heap on the due time
+
+}  // namespace
+
+Worker::Worker(WorkerSetup setup)
+    : setup_(std::move(setup)),
+      plan_(*setup_.plan),
+      open_loop_(plan_.model == LoadModel::OpenLoop),
+      quota_(setup_.quota),
+      generator_(plan_.operations, derive_seed(plan_.seed, setup_.index)),
+      lag_(plan_.late_threshold.count()),
+      interval_(setup_.timeline->interval_ns()) {
+    operations.reserve(plan_.operations.size());
+    for (const Operation& op : plan_.operations) {
+        stats::OperationResult r;
+        r.name = op.name.empty() ? std::string(codec::function_name(op.function)) : op.name;
+        r.function_code = op.function;
+        operations.push_back(std::move(r));
+    }
+    const auto half =
+        static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
+    connections_.reserve(setup_.connections);
+    for (std::uint32_t i = 0; i < setup_.connections; ++i) {
+        connections_.emplace_back(plan_.depth, half, std::uint16_t{0});
+        connections_.back().backoff_ns = plan_.reconnect_backoff_min.count();
+    }
+    dirty_.reserve(setup_.connections);
+    ready_.assign(setup_.connections, 0);
+    connect_heap_.reserve(setup_.connections);
+    connect_interval_ns_ = static_cast<std::int64_t>(1e9 / std::max(setup_.connect_rate, 1e-3));
+    sweep_interval_ns_ = std::clamp<std::int64_t>(plan_.transaction_timeout.count() / 10,
+                                                  net::kNsPerMs, 100 * net::kNsPerMs);
+    std::int64_t sec = 0;
+    long long nsec = 0;
+    net::ns_to_timespec(plan_.connect_timeout.count(), sec, nsec);
+    connect_timeout_ts_.tv_sec = sec;
+    connect_timeout_ts_.tv_nsec = nsec;
+}
+
+void Worker::run() noexcept {
+    if (setup_io()) {
+        for (std::uint32_t i = 0; i < setup_.connections; ++i) {
+            connect_heap_.emplace_back(setup_.start_ns, i);
+        }
+        std::make_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+        next_connect_allowed_ns_ = setup_.start_ns;
+        next_sweep_ns_ = setup_.start_ns + sweep_interval_ns_;
+        loop();
+        teardown();
+    } else {
+        setup_.abort->store(true);
+    }
+    schedule_lag.late_sends = lag_.late_sends();
+    schedule_lag.max_lag_ns = lag_.max_lag_ns();
+    schedule_lag.total_lag_ns = lag_.total_lag_ns();
+    if (finished_ns == 0) finished_ns = net::now_ns();
+}
+
+bool Worker::setup_io() noexcept {
+    const net::Features& features = net::features();
+    if (!features.ring) {
+        fatal_error = "io_uring is not available in this process (kernel too old or blocked by "
+                      "seccomp/sysctl kernel.io_uring_disabled)";
+        return false;
+    }
+    if (!features.buf_ring) {
+        fatal_error = fmt::format("the kernel ({}) lacks io_uring provided buffer rings (5.19+)",
+                                  features.kernel);
+        return false;
+    }
+    multishot_ = features.multishot_recv;
+    net::RingOptions options;
+    options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
+    if (const int rc = ring_.init(options); rc < 0) {
+        fatal_error = fmt::format("io_uring setup failed: {}", std::system_category().message(-rc));
+        return false;
+    }
+    const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
+    if (const int rc = buf_ring_.init(ring_.get(), kBufferGroup, count, 16384); rc < 0) {
+        fatal_error = fmt::format("io_uring buffer ring setup failed: {}",
+                                  std::system_category().message(-rc));
+        return false;
+    }
+    return true;
+}
+
+void Worker::loop() noexcept {
+    std::int64_t now = net::now_ns();
+    for (;;) {
+        if ((setup_.stop && setup_.stop->load(std::memory_order_relaxed)) ||
+            setup_.abort->load(std::memory_order_relaxed) || now >= setup_.end_ns) {
+            break;
+        }
+        if (quota_ != 0 && sent_ >= quota_ && outstanding_ == 0) break;
+
+        if (!connect_heap_.empty()) start_due_connects(now);
+        if (open_loop_) issue_open_loop(now);
+        if (now >= next_sweep_ns_) {
+            sweep_timeouts(now);
+            next_sweep_ns_ = now + sweep_interval_ns_;
+        }
+        flush(now);
+
+        std::int64_t wake = std::min({setup_.end_ns, next_sweep_ns_, now + kMaxSleepNs});
+        if (!connect_heap_.empty()) {
+            wake = std::min(wake, std::max(connect_heap_.front().first, next_connect_allowed_ns_));
+        }
+        if (open_loop_ && pacer_started_ && ready_size_ > 0 && may_send()) {
+            wake = std::min(wake, pacer_.next_intended_ns());
+        }
+        if (now < setup_.measure_start_ns) wake = std::min(wake, setup_.measure_start_ns);
+        // A 1 us floor keeps the wait from becoming a pure poll; ready CQEs return at once.
+        const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
+        const int rc = ring_.submit_and_wait(1, wait);
+        if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) {
+            fatal_error = fmt::format("io_uring wait failed: {}", std::system_category().message(-rc));
+            setup_.abort->store(true);
+            break;
+        }
+        now = net::now_ns();
+        if (now >= setup_.measure_start_ns) {
+            interval_.tick(static_cast<std::uint64_t>(now - setup_.measure_start_ns),
+                           *setup_.timeline, setup_.index);
+        }
+        ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
+    }
+    finished_ns = now;
+}
+
+void Worker::teardown() noexcept {
+    stopping_ = true;
+    for (Connection& c : connections_) {
+        c.table.abort_all([&](const Transaction& t) {
+            if (t.sent_ns >= setup_.measure_start_ns) ++pending_at_end;
+        });
+        // A new generation makes every later completion stale: they only release resources.
+        c.generation = net::next_generation(c.generation);
+        c.recv_armed = false;
+        if (c.fd >= 0) ::shutdown(c.fd, SHUT_RDWR);
+        if (c.state == Connection::State::Open) open_connections.fetch_sub(1);
+        c.state = Connection::State::Waiting;
+    }
+    outstanding_ = 0;
+    if (finished_ns >= setup_.measure_start_ns) interval_.flush(*setup_.timeline, setup_.index);
+    // Let the shut-down sockets' pending operations complete before closing and unmapping.
+    const std::int64_t deadline = net::now_ns() + 200 * net::kNsPerMs;
+    while (inflight_ops_ > 0) {
+        const std::int64_t now = net::now_ns();
+        if (now >= deadline) break;
+        ring_.submit_and_wait(1, std::min<std::int64_t>(deadline - now, 10 * net::kNsPerMs));
+        ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
+    }
+    for (Connection& c : connections_) {
+        if (c.fd >= 0) ::close(c.fd);
+        c.fd = -1;
+    }
+}
+
+void Worker::start_due_connects(std::int64_t now) noexcept {
+    // Never bank more than a few ms of unused connect budget: no reconnect storms later.
+    next_connect_allowed_ns_ = std::max(next_connect_allowed_ns_, now - 5 * net::kNsPerMs);
+    while (!connect_heap_.empty() && connect_heap_.front().first <= now &&
+           next_connect_allowed_ns_ <= now && !stopping_) {
+        std::pop_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+        const std::uint32_t index = connect_heap_.back().second;
+        connect_heap_.pop_back();
+        next_connect_allowed_ns_ += connect_interval_ns_;
+        start_connect(index, now);
+        if (setup_.abort->load(std::memory_order_relaxed)) return;
+    }
+}
+
+void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    const int fd = ::socket(setup_.endpoint.family(), SOCK_STREAM | SOCK_CLOEXEC, IPPROTO_TCP);
+    if (fd < 0) {
+        on_connect(index, -errno, now);
+        return;
+    }
+    net::set_nodelay(fd);
+    c.fd = fd;
+    c.state = Connection::State::Connecting;
+    c.generation = net::next_generation(c.generation);
+    c.connect_started_ns = now;
+    // The connect and its linked timeout must reach the kernel in the same submission.
+    if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
+    io_uring_sqe* sqe = ring_.sqe();
+    io_uring_prep_connect(sqe, fd, setup_.endpoint.sa(), setup_.endpoint.len);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(kConnect, index, c.generation));
+    sqe->flags |= IOSQE_IO_LINK;
+    io_uring_sqe* timeout = ring_.sqe();
+    io_uring_prep_link_timeout(timeout, &connect_timeout_ts_, 0);
+    io_uring_sqe_set_data64(timeout, net::encode_user_data(kConnectTimeout, index, c.generation));
+    inflight_ops_ += 2;
+}
+
+void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    if (result == 0) {
+        c.state = Connection::State::Open;
+        c.backoff_ns = plan_.reconnect_backoff_min.count();
+        ++connection_stats.opened;
+        if (c.ever_opened) ++connection_stats.reconnects;
+        c.ever_opened = true;
+        setup_.any_connected->store(true, std::memory_order_relaxed);
+        open_connections.fetch_add(1, std::memory_order_relaxed);
+        c.splitter.reset();
+        arm_recv(index);
+        if (open_loop_) {
+            if (!pacer_started_) {
+                pacer_ = Pacer(setup_.rate, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index),
+                               now);
+                pacer_started_ = true;
+            }
+            push_ready(index);
+        } else {
+            fill_closed_loop(index, now);
+        }
+        return;
+    }
+    ++connection_stats.failed;
+    if (c.fd >= 0) ::close(c.fd);
+    c.fd = -1;
+    c.state = Connection::State::Waiting;
+    c.generation = net::next_generation(c.generation);
+    if (!setup_.any_connected->load(std::memory_order_relaxed)) {
+        // Nothing ever connected: the target is wrong or down. Say so now, not after retries.
+        const std::string reason =
+            result == -ECANCELED
+                ? fmt::format("no answer within the connect timeout ({}s)",
+                              std::chrono::duration<double>(plan_.connect_timeout).count())
+                : std::system_category().message(-result);
+        fatal_error = fmt::format("cannot connect to {}: {}", setup_.target, reason);
+        setup_.abort->store(true);
+        return;
+    }
+    schedule_reconnect(index, now);
+}
+
+void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept {
+    if (stopping_) return;
+    Connection& c = connections_[index];
+    connect_heap_.emplace_back(now + c.backoff_ns, index);
+    std::push_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+    const std::int64_t doubled = std::max<std::int64_t>(c.backoff_ns * 2, net::kNsPerMs);
+    c.backoff_ns = std::min(doubled, plan_.reconnect_backoff_max.count());
+}
+
+void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept {
+    Connection& c = connections_[index];
+    if (c.state == Connection::State::Open) open_connections.fetch_sub(1, std::memory_order_relaxed);
+    c.table.abort_all([&](const Transaction& t) {
+        --outstanding_;
+        record(t, why, 0, now);
+    });
+    if (c.fd >= 0) {
+        ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
+        ::close(c.fd);
+        c.fd = -1;
+    }
+    c.generation = net::next_generation(c.generation);
+    c.state = Connection::State::Waiting;
+    c.queued = 0;
+    c.recv_armed = false;
+    c.splitter.reset();
+    schedule_reconnect(index, now);
+}
+
+void Worker::arm_recv(std::uint32_t index) noexcept {
+    Connection& c = connections_[index];
+    io_uring_sqe* sqe = ring_.sqe();
+    if (multishot_) {
+        io_uring_prep_recv_multishot(sqe, c.fd, nullptr, 0, 0);
+    } else {
+        io_uring_prep_recv(sqe, c.fd, nullptr, buf_ring_.buffer_size(), 0);
+    }
+    sqe->flags |= IOSQE_BUFFER_SELECT;
+    sqe->buf_group = buf_ring_.group_id();
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(kRecv, index, c.generation));
+    c.recv_armed = true;
+    ++inflight_ops_;
+}
+
+void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
+    const net::UserData ud = net::decode_user_data(cqe.user_data);
+    if (ud.index >= connections_.size()) return;
+    switch (ud.op) {
+        case kConnectTimeout: --inflight_ops_; return;
+        case kConnect:
+            --inflight_ops_;
+            if (ud.generation == connections_[ud.index].generation && !stopping_) {
+                on_connect(ud.index, cqe.res, now);
+            }
+            return;
+        case kRecv: on_recv(ud.index, cqe, now); return;
+        case kSend: on_send(ud.index, cqe, now); return;
+        default: return;
+    }
+}
+
+void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    const net::UserData ud = net::decode_user_data(cqe.user_data);
+    const bool more = (cqe.flags & IORING_CQE_F_MORE) != 0;
+    const bool has_buffer = net::BufRing::has_buffer(cqe.flags);
+    const std::uint16_t buffer_id = net::BufRing::buffer_id(cqe.flags);
+    if (!more) --inflight_ops_;
+    if (ud.generation != c.generation || stopping_) {
+        if (has_buffer) buf_ring_.recycle(buffer_id);
+        return;
+    }
+    if (!more) c.recv_armed = false;
+
+    if (cqe.res > 0 && has_buffer) {
+        stray.bytes_received += static_cast<std::uint64_t>(cqe.res);
+        c.splitter.feed(codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
+        codec::TcpFrame frame;
+        bool fatal = false;
+        for (bool done = false; !done;) {
+            switch (c.splitter.next(frame)) {
+                case codec::MbapSplitter::Status::Frame: on_frame(c, frame, now); break;
+                case codec::MbapSplitter::Status::BadProtocolId: ++bad_protocol_frames; break;
+                case codec::MbapSplitter::Status::NeedMore: done = true; break;
+                case codec::MbapSplitter::Status::Fatal:
+                    fatal = true;
+                    done = true;
+                    break;
+            }
+        }
+        buf_ring_.recycle(buffer_id);
+        if (fatal) {
+            // The stream cannot be resynchronised: count it and start a fresh connection.
+            ++framing_errors;
+            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::Malformed);
+            close_connection(index, now, stats::Outcome::ConnectionClosed);
+            return;
+        }
+        if (!c.recv_armed) arm_recv(index);
+        if (open_loop_) {
+            push_ready(index);
+        } else {
+            fill_closed_loop(index, now);
+        }
+        return;
+    }
+    if (has_buffer) buf_ring_.recycle(buffer_id);
+    if (cqe.res == -ENOBUFS) {  // the buffer ring ran dry for a moment: listen again
+        arm_recv(index);
+        return;
+    }
+    if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
+    ++connection_stats.closed_by_peer;
+    close_connection(index, now, stats::Outcome::ConnectionClosed);
+}
+
+bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
+    Transaction* t = nullptr;
+    switch (c.table.complete(frame.header.transaction_id, t)) {
+        case MatchResult::Matched: break;
+        case MatchResult::Unknown:
+            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::UnknownId);
+            return false;
+        case MatchResult::Duplicate:
+            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::DuplicateId);
+            return false;
+        case MatchResult::Late: ++late_responses; return false;
+    }
+    --outstanding_;
+    stats::Outcome outcome = check_response(t->request, frame, response_scratch_);
+    if (outcome == stats::Outcome::Ok && setup_.verifier.check != nullptr &&
+        !setup_.verifier.check(setup_.verifier.context, t->request, response_scratch_)) {
+        outcome = stats::Outcome::ValueMismatch;
+    }
+    record(*t, outcome, static_cast<std::uint8_t>(response_scratch_.exception), now);
+    return true;
+}
+
+void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    --inflight_ops_;
+    const net::UserData ud = net::decode_user_data(cqe.user_data);
+    if (ud.generation != c.generation || stopping_) {
+        // The socket it went to is gone; its buffer half is free again.
+        c.send_in_flight = false;
+        if (c.state == Connection::State::Open && c.queued > 0 && !c.dirty) {
+            c.dirty = true;
+            dirty_.push_back(index);
+        }
+        return;
+    }
+    if (cqe.res < 0) {
+        c.send_in_flight = false;
+        close_connection(index, now, stats::Outcome::ConnectionClosed);
+        return;
+    }
+    stray.bytes_sent += static_cast<std::uint64_t>(cqe.res);
+    c.inflight_done += static_cast<std::uint32_t>(cqe.res);
+    if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
+        io_uring_sqe* sqe = ring_.sqe();
+        io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
+                           c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        ++inflight_ops_;
+        return;
+    }
+    c.send_in_flight = false;
+    if (c.queued > 0 && !c.dirty) {
+        c.dirty = true;
+        dirty_.push_back(index);
+    }
+}
+
+bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept {
+    Connection& c = connections_[index];
+    const std::uint32_t room = c.send_half - c.queued;
+    Transaction* t = c.table.begin(now, intended);
+    if (t == nullptr) return false;
+    const std::size_t size =
+        generator_.next(t->transaction_id(), codec::MutableBytes(c.queue_data() + c.queued, room),
+                        t->request);
+    if (size == 0) {
+        c.table.cancel(t);
+        return false;
+    }
+    c.queued += static_cast<std::uint32_t>(size);
+    ++sent_;
+    ++outstanding_;
+    if (now >= setup_.measure_start_ns) ++operations[t->request.op_index].counters.transactions_sent;
+    if (!c.dirty) {
+        c.dirty = true;
+        dirty_.push_back(index);
+    }
+    return true;
+}
+
+void Worker::fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    while (c.state == Connection::State::Open && c.table.outstanding() < plan_.depth && may_send()) {
+        if (!enqueue(index, now, now)) break;
+    }
+}
+
+void Worker::push_ready(std::uint32_t index) noexcept {
+    Connection& c = connections_[index];
+    if (c.in_ready || c.state != Connection::State::Open || c.table.outstanding() >= plan_.depth) {
+        return;
+    }
+    ready_[(ready_head_ + ready_size_) % ready_.size()] = index;
+    ++ready_size_;
+    c.in_ready = true;
+}
+
+void Worker::issue_open_loop(std::int64_t now) noexcept {
+    if (!pacer_started_) return;
+    while (pacer_.due(now) && may_send() && ready_size_ > 0) {
+        const std::uint32_t index = ready_[ready_head_];
+        ready_head_ = (ready_head_ + 1) % ready_.size();
+        --ready_size_;
+        Connection& c = connections_[index];
+        c.in_ready = false;
+        if (c.state != Connection::State::Open || c.table.outstanding() >= plan_.depth) continue;
+        const std::int64_t intended = pacer_.next_intended_ns();
+        if (!enqueue(index, now, intended)) continue;
+        if (now >= setup_.measure_start_ns) lag_.record(intended, now);
+        pacer_.advance();
+        push_ready(index);
+    }
+}
+
+void Worker::flush(std::int64_t) noexcept {
+    for (const std::uint32_t index : dirty_) {
+        Connection& c = connections_[index];
+        c.dirty = false;
+        if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) continue;
+        io_uring_sqe* sqe = ring_.sqe();
+        if (sqe == nullptr) continue;
+        io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        ++inflight_ops_;
+        c.inflight_len = c.queued;
+        c.inflight_done = 0;
+        c.send_in_flight = true;
+        c.queue_half ^= 1u;
+        c.queued = 0;
+    }
+    dirty_.clear();
+}
+
+void Worker::sweep_timeouts(std::int64_t now) noexcept {
+    const std::int64_t deadline = now - plan_.transaction_timeout.count();
+    for (std::uint32_t index = 0; index < connections_.size(); ++index) {
+        Connection& c = connections_[index];
+        if (c.state != Connection::State::Open || c.table.outstanding() == 0) continue;
+        const std::uint32_t expired = c.table.expire(deadline, [&](const Transaction& t) {
+            --outstanding_;
+            record(t, stats::Outcome::Timeout, 0, now);
+        });
+        if (expired == 0) continue;
+        if (open_loop_) {
+            push_ready(index);
+        } else {
+            fill_closed_loop(index, now);
+        }
+    }
+}
+
+void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
+                    std::int64_t now) noexcept {
+    if (t.sent_ns < setup_.measure_start_ns) return;  // warm-up
+    stats::OperationResult& op = operations[t.request.op_index];
+    if (outcome == stats::Outcome::Exception) {
+        op.counters.record_exception(exception_code);
+    } else {
+        op.counters.record(outcome);
+    }
+    if (has_response(outcome)) {
+        // Open loop: from the intended send time, so queueing delay is never hidden.
+        const std::int64_t from = open_loop_ ? t.intended_ns : t.sent_ns;
+        const auto latency = static_cast<std::uint64_t>(std::max<std::int64_t>(now - from, 0));
+        op.latency.record(latency);
+        interval_.record_latency(latency);
+    }
+    interval_.record_transaction(outcome != stats::Outcome::Ok);
+}
+
+}  // namespace mbstorm::load

@@ -1,0 +1,126 @@
+// Counts every operator new in this test binary to show that a steady run allocates nothing.
+// The reference slave runs in a forked child so that only the engine's allocations count.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <new>
+#include <string>
+
+#include "load/engine.hpp"
+#include "server/server.hpp"
+
+namespace {
+std::atomic<std::uint64_t> g_allocations{0};
+}
+
+void* operator new(std::size_t size) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+    if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+    return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+    return operator new(size, tag);
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace mbstorm::load {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Runs the slave in a child process; the child exits when the parent closes `stop_pipe`.
+struct ChildServer {
+    pid_t pid = -1;
+    int stop_fd = -1;
+    std::uint16_t port = 0;
+
+    bool start() {
+        int port_pipe[2], stop_pipe[2];
+        if (::pipe(port_pipe) != 0 || ::pipe(stop_pipe) != 0) return false;
+        pid = ::fork();
+        if (pid == 0) {
+            ::close(port_pipe[0]);
+            ::close(stop_pipe[1]);
+            server::ServerConfig config;
+            config.listen = "127.0.0.1:0";
+            config.threads = 1;
+            server::Server s(config);
+            std::uint16_t p = s.start() ? s.port() : 0;
+            if (::write(port_pipe[1], &p, sizeof(p)) != sizeof(p)) ::_exit(1);
+            char c;
+            // Returns when the parent closes its end (or dies); bounded by the parent's test.
+            [[maybe_unused]] auto n = ::read(stop_pipe[0], &c, 1);
+            s.stop();
+            ::_exit(0);
+        }
+        ::close(port_pipe[1]);
+        ::close(stop_pipe[0]);
+        stop_fd = stop_pipe[1];
+        const bool ok = ::read(port_pipe[0], &port, sizeof(port)) == sizeof(port) && port != 0;
+        ::close(port_pipe[0]);
+        return ok;
+    }
+    ~ChildServer() {
+        if (stop_fd >= 0) ::close(stop_fd);
+        if (pid > 0) ::waitpid(pid, nullptr, 0);
+    }
+};
+
+void run_steady_state_check(LoadModel model) {
+    ChildServer child;
+    ASSERT_TRUE(child.start());
+
+    Plan plan;
+    plan.port = child.port;
+    Operation op;
+    op.function = 0x03;
+    op.first_address = 0;
+    op.last_address = 999;
+    op.quantity = 4;
+    op.address_mode = AddressMode::Uniform;
+    plan.operations = {op};
+    plan.connections = 4;
+    plan.depth = 8;
+    plan.threads = 2;
+    plan.model = model;
+    plan.rate = 20000;
+    plan.duration = 3500ms;
+
+    // Allocation counts at the first and third progress report (about 1 s and 3 s in).
+    std::uint64_t at_first = 0, at_third = 0;
+    int reports = 0;
+    EngineOptions options;
+    options.on_progress = [&](const ProgressSnapshot&) {
+        ++reports;
+        if (reports == 1) at_first = g_allocations.load();
+        if (reports == 3) at_third = g_allocations.load();
+    };
+    const LoadResult r = run_load(plan, options);
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_GE(reports, 3);
+    EXPECT_GT(r.run.counters.ok(), 10000u);
+    EXPECT_EQ(at_third - at_first, 0u) << "allocations during the steady part of the run";
+}
+
+TEST(EngineAllocations, ClosedLoopSteadyStateAllocatesNothing) {
+    run_steady_state_check(LoadModel::ClosedLoop);
+}
+
+TEST(EngineAllocations, OpenLoopSteadyStateAllocatesNothing) {
+    run_steady_state_check(LoadModel::OpenLoop);
+}
+
+}  // namespace
+}  // namespace mbstorm::load

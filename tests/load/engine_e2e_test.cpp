@@ -1,0 +1,306 @@
+// End-to-end: the load engine against the in-process reference slave (loopback only, every run
+// bounded in time and count). Assertions are on behaviour; bounds are generous for a busy
+// 2-core machine.
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "load/engine.hpp"
+#include "server/server.hpp"
+#include "slave/data_model.hpp"
+
+namespace mbstorm::load {
+namespace {
+
+using namespace std::chrono_literals;
+using stats::Outcome;
+
+std::unique_ptr<server::Server> start_server(const slave::FaultConfig& faults = {},
+                                             unsigned threads = 1) {
+    server::ServerConfig config;
+    config.listen = "127.0.0.1:0";
+    config.threads = threads;
+    config.faults = faults;
+    auto s = std::make_unique<server::Server>(config);
+    std::string error;
+    EXPECT_TRUE(s->start(&error)) << error;
+    return s;
+}
+
+Operation read_holding(std::uint16_t first, std::uint16_t last, std::uint16_t quantity,
+                       AddressMode mode = AddressMode::Sequential) {
+    Operation op;
+    op.name = "read";
+    op.function = 0x03;
+    op.first_address = first;
+    op.last_address = last;
+    op.quantity = quantity;
+    op.address_mode = mode;
+    return op;
+}
+
+Plan base_plan(std::uint16_t port) {
+    Plan plan;
+    plan.host = "127.0.0.1";
+    plan.port = port;
+    plan.operations = {read_holding(0, 999, 1)};
+    plan.threads = 1;
+    plan.duration = 2s;
+    return plan;
+}
+
+std::uint64_t p50_us(const LoadResult& r) { return r.run.latency.value_at_percentile(50) / 1000; }
+
+void expect_accounted(const LoadResult& r) {
+    EXPECT_EQ(r.run.counters.transactions_sent,
+              transactions_accounted(r.run.counters) + r.pending_at_end);
+}
+
+TEST(EngineE2E, ClosedLoopAgainstTheSlaveIsCleanAndAccounted) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 4;
+    plan.depth = 8;
+    plan.duration = 1s;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_GT(r.run.counters.ok(), 1000u);
+    EXPECT_EQ(r.run.counters.errors(), 0u);
+    EXPECT_EQ(r.run.connections.opened, 4u);
+    expect_accounted(r);
+    EXPECT_GT(r.run.metadata.measured_duration_ns, 900'000'000u);
+    EXPECT_FALSE(r.run.timeline.empty());
+}
+
+TEST(EngineE2E, FixedTwoMillisecondDelayShowsInTheMedianInBothModels) {
+    slave::FaultConfig faults;
+    faults.delay.kind = slave::DelayConfig::Kind::Fixed;
+    faults.delay.fixed_ns = 2'000'000;
+    auto server = start_server(faults);
+
+    Plan closed = base_plan(server->port());
+    closed.connections = 4;
+    closed.depth = 2;
+    closed.duration = 1500ms;
+    closed.warmup = 300ms;
+    const LoadResult c = run_load(closed);
+    ASSERT_TRUE(c.ok) << c.error;
+    EXPECT_GE(p50_us(c), 2000u);
+    EXPECT_LE(p50_us(c), 3000u);
+
+    Plan open = closed;
+    open.model = LoadModel::OpenLoop;
+    open.rate = 1000;
+    open.depth = 16;
+    const LoadResult o = run_load(open);
+    ASSERT_TRUE(o.ok) << o.error;
+    EXPECT_GE(p50_us(o), 2000u);
+    EXPECT_LE(p50_us(o), 3000u);
+    // 1.2 s measured at 1000/s.
+    EXPECT_NEAR(static_cast<double>(o.run.counters.ok()), 1200.0, 200.0);
+}
+
+TEST(EngineE2E, OpenLoopSeesAPeriodicStallThatClosedLoopHides) {
+    // 200 ms stall every second. The open loop keeps sending on schedule, so every request due
+    // during a stall waits for its end: about 20% of them, p99 near 200 ms. The closed loop
+    // waits with its one request and sends nothing during the stall, so only a handful of
+    // samples see it (coordinated omission).
+    slave::FaultConfig faults;
+    faults.stall.duration_ns = 200'000'000;
+    faults.stall.period_ns = 1'000'000'000;
+    auto server = start_server(faults);
+
+    Plan open = base_plan(server->port());
+    open.model = LoadModel::OpenLoop;
+    open.rate = 2000;
+    open.connections = 8;
+    open.depth = 128;
+    open.duration = 3s;
+    open.transaction_timeout = 2s;
+    const LoadResult o = run_load(open);
+    ASSERT_TRUE(o.ok) << o.error;
+    EXPECT_EQ(o.run.counters.errors(), 0u);
+    EXPECT_GE(o.run.latency.value_at_percentile(99), 100'000'000u);
+
+    Plan closed = base_plan(server->port());
+    closed.connections = 1;
+    closed.depth = 1;
+    closed.duration = 3s;
+    closed.transaction_timeout = 2s;
+    const LoadResult c = run_load(closed);
+    ASSERT_TRUE(c.ok) << c.error;
+    EXPECT_GE(c.run.latency.max(), 100'000'000u);  // it did hit a stall...
+    EXPECT_LT(c.run.latency.value_at_percentile(99), 50'000'000u);  // ...but p99 hides it
+}
+
+TEST(EngineE2E, InjectedExceptionsAndSilenceAreCountedAndEveryTransactionAccounted) {
+    slave::FaultConfig faults;
+    faults.exception_rate = 0.01;
+    faults.no_answer_rate = 0.01;
+    faults.exception_code = codec::ExceptionCode::ServerDeviceBusy;
+    auto server = start_server(faults);
+
+    Plan plan = base_plan(server->port());
+    plan.connections = 8;
+    plan.depth = 8;
+    plan.duration = 60s;  // upper bound; the count ends the run
+    plan.transactions = 40000;
+    plan.transaction_timeout = 200ms;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    const auto& k = r.run.counters;
+    EXPECT_EQ(k.transactions_sent, 40000u);
+    EXPECT_EQ(r.pending_at_end, 0u);  // a count-bounded run waits for answers or timeouts
+    expect_accounted(r);
+    EXPECT_NEAR(static_cast<double>(k.count(Outcome::Exception)), 400.0, 120.0);
+    EXPECT_EQ(k.exceptions[0x06], k.count(Outcome::Exception));
+    EXPECT_NEAR(static_cast<double>(k.count(Outcome::Timeout)), 400.0, 120.0);
+    EXPECT_EQ(k.count(Outcome::UnknownId), 0u);
+    EXPECT_EQ(k.count(Outcome::Malformed), 0u);
+    EXPECT_EQ(k.ok() + k.count(Outcome::Exception) + k.count(Outcome::Timeout), 40000u);
+}
+
+std::uint16_t register_value(std::uint32_t address) {
+    return static_cast<std::uint16_t>(address * 7919u + 13u);
+}
+
+bool check_register_values(void*, const RequestInfo& request, const codec::Response& response) {
+    if (response.payload.size() != 2u * request.quantity) return false;
+    for (std::uint16_t i = 0; i < request.quantity; ++i) {
+        const std::uint16_t got = codec::load_be16(response.payload.data() + 2 * i);
+        if (got != register_value(request.address + i)) return false;
+    }
+    return true;
+}
+
+TEST(EngineE2E, TwoHundredThousandPipelinedOnOneConnectionEachAnswerMatchesItsRequest) {
+    auto server = start_server();
+    for (std::uint32_t a = 0; a < 65536; ++a) {
+        server->model().holding_registers().set(static_cast<std::uint16_t>(a), register_value(a));
+    }
+    Plan plan = base_plan(server->port());
+    plan.operations = {read_holding(0, 59999, 3, AddressMode::Uniform)};
+    plan.connections = 1;
+    plan.depth = 64;
+    plan.duration = 120s;
+    plan.transactions = 200000;
+    plan.transaction_timeout = 5s;
+    EngineOptions options;
+    options.verifier.check = &check_register_values;
+    const LoadResult r = run_load(plan, options);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.counters.transactions_sent, 200000u);
+    EXPECT_EQ(r.run.counters.ok(), 200000u);  // ids wrapped three times, nothing misrouted
+    EXPECT_EQ(r.run.counters.errors(), 0u);
+    EXPECT_EQ(r.run.connections.opened, 1u);
+}
+
+TEST(EngineE2E, UnreachableTargetFailsFastNamingAddressAndReason) {
+    // A port nobody listens on: bind one, then close it.
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)), 0);
+    socklen_t len = sizeof(addr);
+    ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+    ::close(fd);
+    Plan plan = base_plan(ntohs(addr.sin_port));
+    plan.connect_timeout = 3s;
+    plan.duration = 10s;
+    const auto t0 = std::chrono::steady_clock::now();
+    const LoadResult r = run_load(plan);
+    const auto took = std::chrono::steady_clock::now() - t0;
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("127.0.0.1:" + std::to_string(ntohs(addr.sin_port))), std::string::npos)
+        << r.error;
+    EXPECT_NE(r.error.find("refused"), std::string::npos) << r.error;
+    EXPECT_LT(took, 2s);
+}
+
+TEST(EngineE2E, WritesToANonLoopbackTargetAreRefusedBeforeConnecting) {
+    Plan plan = base_plan(502);
+    plan.host = "192.0.2.7";  // TEST-NET-1: must never be contacted
+    Operation write;
+    write.name = "setpoint";
+    write.function = 0x06;
+    plan.operations.push_back(write);
+    const auto t0 = std::chrono::steady_clock::now();
+    const LoadResult r = run_load(plan);
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("setpoint"), std::string::npos) << r.error;
+    EXPECT_NE(r.error.find("allow_writes"), std::string::npos) << r.error;
+    EXPECT_EQ(r.run.connections.opened + r.run.connections.failed, 0u);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+}
+
+TEST(EngineE2E, StopFlagEndsTheRunAndStillProducesResults) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 2;
+    plan.depth = 4;
+    plan.duration = 60s;
+    std::atomic<bool> stop{false};
+    EngineOptions options;
+    options.stop = &stop;
+    std::thread stopper([&] {
+        std::this_thread::sleep_for(400ms);
+        stop = true;
+    });
+    const auto t0 = std::chrono::steady_clock::now();
+    const LoadResult r = run_load(plan, options);
+    stopper.join();
+    EXPECT_TRUE(r.ok) << r.error;
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);
+    EXPECT_GT(r.run.counters.ok(), 100u);
+    expect_accounted(r);
+}
+
+TEST(EngineE2E, ProgressIsReportedEverySecond) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 2;
+    plan.duration = 2500ms;
+    int calls = 0;
+    std::uint64_t last_total = 0;
+    EngineOptions options;
+    options.on_progress = [&](const ProgressSnapshot& s) {
+        ++calls;
+        EXPECT_GT(s.transactions_per_second, 0.0);
+        EXPECT_EQ(s.open_connections, 2u);
+        EXPECT_GT(s.p50_ns, 0u);
+        EXPECT_GE(s.total_transactions, last_total);
+        last_total = s.total_transactions;
+    };
+    const LoadResult r = run_load(plan, options);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_GE(calls, 1);
+    EXPECT_LE(calls, 3);
+}
+
+TEST(EngineE2E, ServerDroppingConnectionsLeadsToReconnects) {
+    slave::FaultConfig faults;
+    faults.drop_rate = 0.001;
+    auto server = start_server(faults);
+    Plan plan = base_plan(server->port());
+    plan.connections = 4;
+    plan.depth = 4;
+    plan.duration = 1500ms;
+    plan.reconnect_backoff_min = 5ms;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_GT(r.run.connections.reconnects, 0u);
+    EXPECT_GT(r.run.counters.count(Outcome::ConnectionClosed), 0u);
+    EXPECT_GT(r.run.counters.ok(), 1000u);
+    expect_accounted(r);
+}
+
+}  // namespace
+}  // namespace mbstorm::load

@@ -1,0 +1,162 @@
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cstring>
+
+#include "net/buf_ring.hpp"
+#include "net/clock.hpp"
+#include "net/features.hpp"
+#include "net/ring.hpp"
+#include "net/socket.hpp"
+#include "net/user_data.hpp"
+
+using namespace mbstorm::net;
+
+TEST(UserData, RoundTrips) {
+    auto v = encode_user_data(3, 123456, 0xABCDEF);
+    auto d = decode_user_data(v);
+    EXPECT_EQ(d.op, 3);
+    EXPECT_EQ(d.index, 123456u);
+    EXPECT_EQ(d.generation, 0xABCDEFu);
+    EXPECT_EQ(decode_user_data(encode_user_data(255, 0xFFFFFFFF, 0x1FFFFFF)).generation, 0xFFFFFFu);
+    EXPECT_EQ(next_generation(kGenerationMask), 0u);
+}
+
+TEST(Endpoint, ParsesIpv4Ipv6AndDefaults) {
+    Endpoint ep;
+    ASSERT_TRUE(parse_endpoint("127.0.0.1:5020", ep));
+    EXPECT_EQ(ep.family(), AF_INET);
+    EXPECT_EQ(ep.port(), 5020);
+    EXPECT_EQ(ep.to_string(), "127.0.0.1:5020");
+    ASSERT_TRUE(parse_endpoint("[::1]:5020", ep));
+    EXPECT_EQ(ep.family(), AF_INET6);
+    EXPECT_EQ(ep.to_string(), "[::1]:5020");
+    ASSERT_TRUE(parse_endpoint("::1", ep, nullptr, 502));
+    EXPECT_EQ(ep.port(), 502);
+    ASSERT_TRUE(parse_endpoint("10.0.0.1", ep, nullptr, 1502));
+    EXPECT_EQ(ep.port(), 1502);
+    ASSERT_TRUE(parse_endpoint("localhost:7", ep));
+    EXPECT_EQ(ep.port(), 7);
+}
+
+TEST(Endpoint, RejectsBadText) {
+    Endpoint ep;
+    std::string err;
+    EXPECT_FALSE(parse_endpoint("127.0.0.1:99999", ep, &err));
+    EXPECT_FALSE(err.empty());
+    EXPECT_FALSE(parse_endpoint("[::1:5020", ep, &err));
+    EXPECT_FALSE(parse_endpoint("[::1]x", ep, &err));
+    EXPECT_FALSE(parse_endpoint("127.0.0.1:", ep, &err));
+    EXPECT_FALSE(parse_endpoint("no.such.host.invalid:1", ep, &err));
+}
+
+TEST(Socket, ListenEphemeralAndConnect) {
+    Endpoint ep;
+    ASSERT_TRUE(parse_endpoint("127.0.0.1:0", ep));
+    UniqueFd l(listen_socket(ep));
+    ASSERT_TRUE(l.valid());
+    std::uint16_t port = local_port(l.get());
+    ASSERT_NE(port, 0);
+    ep.set_port(port);
+    // SO_REUSEPORT: a second listener on the same port works.
+    UniqueFd l2(listen_socket(ep));
+    EXPECT_TRUE(l2.valid());
+    UniqueFd c(connect_nonblocking(ep));
+    ASSERT_TRUE(c.valid());
+    EXPECT_EQ(set_nodelay(c.get()), 0);
+    UniqueFd b(connect_blocking(ep));
+    EXPECT_TRUE(b.valid());
+}
+
+TEST(Socket, Ipv6Loopback) {
+    Endpoint ep;
+    ASSERT_TRUE(parse_endpoint("[::1]:0", ep));
+    UniqueFd l(listen_socket(ep));
+    if (!l.valid()) GTEST_SKIP() << "no IPv6 loopback";
+    ep.set_port(local_port(l.get()));
+    UniqueFd c(connect_blocking(ep));
+    EXPECT_TRUE(c.valid());
+}
+
+TEST(Socket, NofileLimitReportsWhenItCannotRaise) {
+    std::string msg;
+    auto got = raise_nofile_limit(64, &msg);
+    EXPECT_GE(got, 64u);
+    EXPECT_TRUE(msg.empty());
+    auto big = raise_nofile_limit(1ull << 40, &msg);
+    EXPECT_LT(big, 1ull << 40);
+    EXPECT_NE(msg.find("ulimit -n"), std::string::npos);
+}
+
+TEST(Clock, IsMonotonic) {
+    auto a = now_ns();
+    auto b = now_ns();
+    EXPECT_LE(a, b);
+    EXPECT_GT(a, 0);
+}
+
+TEST(Features, ProbeDescribes) {
+    const Features& f = features();
+    std::string d = describe(f);
+    EXPECT_NE(d.find("io_uring"), std::string::npos);
+    if (f.ring) {
+        EXPECT_NE(d.find("multishot_recv="), std::string::npos);
+    }
+}
+
+TEST(Ring, InitFallsBackAndRunsANop) {
+    Ring ring;
+    ASSERT_EQ(ring.init(), 0);
+    io_uring_sqe* sqe = ring.sqe();
+    ASSERT_NE(sqe, nullptr);
+    io_uring_prep_nop(sqe);
+    io_uring_sqe_set_data64(sqe, 42);
+    ASSERT_GE(ring.submit_and_wait(1, kNsPerSec), 0);
+    std::uint64_t seen = 0;
+    EXPECT_EQ(ring.drain([&](const io_uring_cqe& c) { seen = c.user_data; }), 1u);
+    EXPECT_EQ(seen, 42u);
+    RingOptions plain;
+    plain.single_issuer = plain.defer_taskrun = plain.coop_taskrun = false;
+    Ring r2;
+    EXPECT_EQ(r2.init(plain), 0);
+    Ring moved = std::move(r2);
+    EXPECT_TRUE(moved.valid());
+    EXPECT_FALSE(r2.valid());
+}
+
+TEST(Ring, TimeoutReturnsEtime) {
+    Ring ring;
+    ASSERT_EQ(ring.init(), 0);
+    EXPECT_EQ(ring.submit_and_wait(1, 10 * kNsPerMs), -ETIME);
+}
+
+TEST(BufRing, RecvSelectsAndRecycles) {
+    if (!features().buf_ring) GTEST_SKIP() << "no buffer rings";
+    Ring ring;
+    ASSERT_EQ(ring.init(), 0);
+    BufRing br;
+    EXPECT_EQ(br.init(ring.get(), 1, 3, 64), -EINVAL);  // not a power of two
+    ASSERT_EQ(br.init(ring.get(), 1, 4, 64), 0);
+    int sv[2];
+    ASSERT_EQ(socketpair(AF_UNIX, SOCK_STREAM, 0, sv), 0);
+    UniqueFd a(sv[0]), b(sv[1]);
+    for (int round = 0; round < 10; ++round) {  // more rounds than buffers: recycling works
+        char msg[8];
+        std::snprintf(msg, sizeof msg, "r%d", round);
+        ASSERT_GT(::write(b.get(), msg, std::strlen(msg)), 0);
+        io_uring_sqe* sqe = ring.sqe();
+        io_uring_prep_recv(sqe, a.get(), nullptr, 64, 0);
+        sqe->flags |= IOSQE_BUFFER_SELECT;
+        sqe->buf_group = 1;
+        ASSERT_GE(ring.submit_and_wait(1, kNsPerSec), 0);
+        ring.drain([&](const io_uring_cqe& c) {
+            ASSERT_EQ(c.res, static_cast<int>(std::strlen(msg)));
+            ASSERT_TRUE(BufRing::has_buffer(c.flags));
+            auto id = BufRing::buffer_id(c.flags);
+            EXPECT_EQ(std::memcmp(br.buffer(id), msg, std::strlen(msg)), 0);
+            br.recycle(id);
+        });
+    }
+    EXPECT_EQ(br.memory_bytes(), 4 * 64 + 4 * sizeof(io_uring_buf));
+}

@@ -1,0 +1,127 @@
+#include "report/console.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <string>
+
+#include "report/units.hpp"
+#include "sample_result.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+bool contains(const std::string& text, const std::string& what) {
+    return text.find(what) != std::string::npos;
+}
+
+TEST(Units, LatencyHasThreeSignificantDigits) {
+    EXPECT_EQ(format_latency(std::uint64_t{850}), "850ns");
+    EXPECT_EQ(format_latency(std::uint64_t{1234}), "1.23µs");
+    EXPECT_EQ(format_latency(std::uint64_t{812'400}), "812µs");
+    EXPECT_EQ(format_latency(std::uint64_t{999'999}), "1.00ms");
+    EXPECT_EQ(format_latency(std::uint64_t{12'340'000}), "12.3ms");
+    EXPECT_EQ(format_latency(std::uint64_t{2'500'000'000}), "2.50s");
+    EXPECT_EQ(format_latency(std::uint64_t{3'600'000'000'000}), "3600s");
+}
+
+TEST(Units, CountsRatesBytesDurations) {
+    EXPECT_EQ(format_count(0), "0");
+    EXPECT_EQ(format_count(100), "100");
+    EXPECT_EQ(format_count(1000), "1,000");
+    EXPECT_EQ(format_count(1234567), "1,234,567");
+    EXPECT_EQ(format_rate(850), "850");
+    EXPECT_EQ(format_rate(48'213), "48.2k");
+    EXPECT_EQ(format_rate(1'234'000), "1.23M");
+    EXPECT_EQ(format_bytes(512), "512 B");
+    EXPECT_EQ(format_bytes(1536), "1.50 KiB");
+    EXPECT_EQ(format_duration(10'000'000'000), "10.0s");
+    EXPECT_EQ(format_duration(125'000'000'000), "2m05s");
+    EXPECT_EQ(format_hex_byte(0x0B), "0x0B");
+    EXPECT_EQ(format_utc(std::chrono::system_clock::time_point(std::chrono::seconds(1714564800))),
+              "2024-05-01T12:00:00Z");
+}
+
+TEST(ConsoleReport, ContainsPercentileTableErrorsOperationsStagesThresholds) {
+    const auto result = testing::make_sample_result();
+    const std::string text = format_console_report(result);
+    for (const char* label : {"p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max"}) {
+        EXPECT_TRUE(contains(text, std::string("\n  ") + label + " ")) << label;
+    }
+    EXPECT_TRUE(contains(text, "127.0.0.1:15020"));
+    EXPECT_TRUE(contains(text, "Throughput"));
+    EXPECT_TRUE(contains(text, "tx/s"));
+    EXPECT_TRUE(contains(text, "timeout"));
+    EXPECT_TRUE(contains(text, "code 0x02"));
+    EXPECT_TRUE(contains(text, "Per operation"));
+    EXPECT_TRUE(contains(text, "read_holding_registers (03)"));
+    EXPECT_TRUE(contains(text, "write_single_register (06)"));
+    EXPECT_TRUE(contains(text, "Per stage"));
+    EXPECT_TRUE(contains(text, "3. spike"));
+    EXPECT_TRUE(contains(text, "FAIL  error_rate < 0.1%"));
+    EXPECT_TRUE(contains(text, "engine fell behind: 37 late sends"));
+    EXPECT_TRUE(contains(text, "note: embedded slave on 127.0.0.1:15020"));
+    // The p99 row shows the histogram's value in its chosen unit.
+    EXPECT_TRUE(contains(text, format_latency(result.latency.value_at_percentile(99))));
+}
+
+TEST(ConsoleReport, EmptyRunDoesNotPretend) {
+    stats::RunResult empty;
+    const std::string text = format_console_report(empty);
+    EXPECT_TRUE(contains(text, "(no latency samples)"));
+    EXPECT_FALSE(contains(text, "Per stage"));
+    EXPECT_FALSE(contains(text, "Thresholds"));
+}
+
+TEST(Progress, LineShowsRatePercentilesErrorsConnections) {
+    stats::IntervalSummary last;
+    last.duration_ns = 1'000'000'000;
+    last.transactions = 48'200;
+    last.p50_ns = 210'000;
+    last.p99_ns = 1'200'000;
+    last.max_ns = 3'400'000;
+    ProgressSample sample{12.0, &last, 500'000, 3, 64};
+    const std::string line = format_progress_line(sample);
+    EXPECT_TRUE(contains(line, "12.0s")) << line;
+    EXPECT_TRUE(contains(line, "48.2k tx/s")) << line;
+    EXPECT_TRUE(contains(line, "p50  210µs")) << line;
+    EXPECT_TRUE(contains(line, "p99  1.20ms")) << line;
+    EXPECT_TRUE(contains(line, "max  3.40ms")) << line;
+    EXPECT_TRUE(contains(line, "errors 3")) << line;
+    EXPECT_TRUE(contains(line, "conns 64")) << line;
+    EXPECT_EQ(line.find('\n'), std::string::npos);
+
+    sample.last_interval = nullptr;
+    EXPECT_TRUE(contains(format_progress_line(sample), "p50       -"));
+}
+
+std::string printed(bool tty) {
+    char* buffer = nullptr;
+    std::size_t size = 0;
+    std::FILE* f = open_memstream(&buffer, &size);
+    {
+        ProgressPrinter printer(f, tty);
+        ProgressSample sample{1.0, nullptr, 0, 0, 1};
+        printer.update(sample);
+        sample.elapsed_seconds = 2.0;
+        printer.update(sample);
+        printer.finish();
+    }
+    std::fclose(f);
+    std::string out(buffer, size);
+    std::free(buffer);
+    return out;
+}
+
+TEST(Progress, PrinterRewritesInPlaceOnTtyAndPrintsLinesOtherwise) {
+    const std::string tty = printed(true);
+    EXPECT_EQ(std::count(tty.begin(), tty.end(), '\r'), 2);
+    EXPECT_EQ(std::count(tty.begin(), tty.end(), '\n'), 1);
+    EXPECT_EQ(tty.back(), '\n');
+    const std::string plain = printed(false);
+    EXPECT_EQ(std::count(plain.begin(), plain.end(), '\r'), 0);
+    EXPECT_EQ(std::count(plain.begin(), plain.end(), '\n'), 2);
+}
+
+}  // namespace
+}  // namespace mbstorm::report

@@ -1,0 +1,94 @@
+#include "report/json.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+
+#include "sample_result.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+using nlohmann::json;
+
+// Resolves "a.b[].c": "[]" steps into the first array element.
+const json* resolve(const json& root, const std::string& path) {
+    const json* node = &root;
+    std::stringstream parts(path);
+    std::string part;
+    while (std::getline(parts, part, '.')) {
+        bool into_array = false;
+        if (part.size() > 2 && part.compare(part.size() - 2, 2, "[]") == 0) {
+            part.resize(part.size() - 2);
+            into_array = true;
+        }
+        if (!node->is_object() || !node->contains(part)) return nullptr;
+        node = &(*node)[part];
+        if (into_array) {
+            if (!node->is_array() || node->empty()) return nullptr;
+            node = &(*node)[0];
+        }
+    }
+    return node;
+}
+
+TEST(Json, EveryDocumentedFieldIsPresent) {
+    const json doc = json::parse(format_json(testing::make_sample_result()));
+    std::ifstream schema(MBSTORM_SOURCE_DIR "/docs/json-schema.md");
+    ASSERT_TRUE(schema.good());
+    const std::regex row(R"(^\| `([^`]+)` \|)");
+    std::string line;
+    int checked = 0;
+    while (std::getline(schema, line)) {
+        std::smatch m;
+        if (!std::regex_search(line, m, row)) continue;
+        EXPECT_NE(resolve(doc, m[1]), nullptr) << "documented but missing: " << m[1];
+        ++checked;
+    }
+    EXPECT_GT(checked, 50);
+}
+
+TEST(Json, ValuesMatchTheRunResult) {
+    const auto r = testing::make_sample_result();
+    const json doc = json::parse(format_json(r));
+    EXPECT_EQ(doc["schema_version"], kJsonSchemaVersion);
+    EXPECT_EQ(doc["run"]["target"], "127.0.0.1:15020");
+    EXPECT_EQ(doc["run"]["model"], "open");
+    EXPECT_EQ(doc["run"]["start_time"], "2024-05-01T12:00:00Z");
+    EXPECT_EQ(doc["totals"]["transactions"], r.counters.completed());
+    EXPECT_EQ(doc["totals"]["errors"], r.counters.errors());
+    EXPECT_DOUBLE_EQ(doc["totals"]["throughput_per_s"].get<double>(), r.throughput());
+    EXPECT_EQ(doc["latency"]["count"], r.latency.total_count());
+    EXPECT_EQ(doc["latency"]["percentiles_ns"]["99.9"], r.latency.value_at_percentile(99.9));
+    EXPECT_EQ(doc["latency"]["percentiles_ns"]["100"], r.latency.value_at_percentile(100));
+    EXPECT_EQ(doc["latency"]["max_ns"], r.latency.max());
+    EXPECT_EQ(doc["outcomes"]["timeout"], r.counters.count(stats::Outcome::Timeout));
+    EXPECT_EQ(doc["exceptions"]["0x02"], r.counters.exceptions[0x02]);
+    EXPECT_FALSE(doc["exceptions"].contains("0x03"));
+    ASSERT_EQ(doc["operations"].size(), 2u);
+    EXPECT_EQ(doc["operations"][1]["name"], "write_single_register");
+    EXPECT_EQ(doc["operations"][1]["function_code"], 6);
+    ASSERT_EQ(doc["stages"].size(), 3u);
+    EXPECT_EQ(doc["stages"][2]["name"], "spike");
+    EXPECT_EQ(doc["timeline"]["intervals"].size(), r.timeline.size());
+    EXPECT_EQ(doc["thresholds_passed"], false);
+    EXPECT_EQ(doc["schedule_lag"]["late_sends"], 37);
+}
+
+TEST(Json, EmptyRunAndCompactForm) {
+    stats::RunResult empty;
+    empty.operations.push_back({"bad \xff name", 3, stats::Histogram(), {}});  // invalid UTF-8
+    const std::string text = format_json(empty, -1);
+    EXPECT_EQ(text.find('\n'), std::string::npos);
+    const json doc = json::parse(text);
+    EXPECT_EQ(doc["latency"]["count"], 0);
+    EXPECT_TRUE(doc["stages"].is_array());
+    EXPECT_TRUE(doc["stages"].empty());
+    EXPECT_EQ(doc["thresholds_passed"], true);
+}
+
+}  // namespace
+}  // namespace mbstorm::report

@@ -1,0 +1,427 @@
+#include <gtest/gtest.h>
+#include <poll.h>
+
+#include <memory>
+#include <vector>
+
+#include "net/socket.hpp"
+#include "server/server.hpp"
+#include "server/stats.hpp"
+#include "slave/data_model.hpp"
+#include "test_client.hpp"
+
+using namespace mbstorm;
+using test::Client;
+using test::read_holding;
+
+namespace {
+
+std::unique_ptr<server::Server> start(server::ServerConfig config) {
+    auto s = std::make_unique<server::Server>(std::move(config));
+    std::string error;
+    EXPECT_TRUE(s->start(&error)) << error;
+    return s;
+}
+
+std::vector<std::uint8_t> burst(int count, std::uint16_t first_tid, std::uint8_t unit = 1) {
+    std::vector<std::uint8_t> out;
+    for (int i = 0; i < count; ++i) {
+        auto r = read_holding(static_cast<std::uint16_t>(first_tid + i), unit, 0, 10);
+        out.insert(out.end(), r.begin(), r.end());
+    }
+    return out;
+}
+
+// Checks `count` FC03 x10 responses in order with transaction ids from first_tid.
+void expect_responses(Client& c, int count, std::uint16_t first_tid, std::uint8_t unit = 1) {
+    const std::size_t size = test::read_holding_response_size(10);
+    auto bytes = c.recv_n(size * count);
+    ASSERT_EQ(bytes.size(), size * count);
+    for (int i = 0; i < count; ++i) {
+        const std::uint8_t* r = bytes.data() + i * size;
+        const std::uint16_t tid = static_cast<std::uint16_t>(first_tid + i);
+        ASSERT_EQ(r[0], tid >> 8) << i;
+        ASSERT_EQ(r[1], tid & 0xFF) << i;
+        ASSERT_EQ(r[2], 0);
+        ASSERT_EQ(r[3], 0);
+        ASSERT_EQ(r[5], 23);  // unit + fc + count + 20
+        ASSERT_EQ(r[6], unit);
+        ASSERT_EQ(r[7], 3);
+        ASSERT_EQ(r[8], 20);
+    }
+}
+
+}  // namespace
+
+TEST(Server, AnswersOneRequest) {
+    auto srv = start(test::test_config());
+    srv->model().holding_registers().set(0, 0x1234);
+    Client c(*srv);
+    ASSERT_TRUE(c.ok());
+    ASSERT_TRUE(c.send_all(read_holding(7, 9, 0, 10)));
+    auto r = c.recv_n(29);
+    ASSERT_EQ(r.size(), 29u);
+    EXPECT_EQ(r[1], 7);
+    EXPECT_EQ(r[6], 9);
+    EXPECT_EQ(r[9], 0x12);
+    EXPECT_EQ(r[10], 0x34);
+    EXPECT_EQ(srv->stats().transactions, 1u);
+}
+
+TEST(Server, PipelinedBurstOfThousandInOneSend) {
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(1000, 100)));
+    expect_responses(c, 1000, 100);
+    auto s = srv->stats();
+    EXPECT_EQ(s.transactions, 1000u);
+    EXPECT_EQ(s.bytes_in, 12000u);
+    EXPECT_EQ(s.bytes_out, 29000u);
+}
+
+TEST(Server, ByteByByteFragments) {
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    Client other(*srv);
+    auto bytes = burst(5, 1);
+    for (std::size_t i = 0; i < bytes.size(); ++i) {
+        ASSERT_TRUE(c.send_all(&bytes[i], 1));
+        if (i == 3) {
+            // A connection holding half a frame never delays another.
+            ASSERT_TRUE(other.send_all(read_holding(77, 1, 0, 10)));
+            expect_responses(other, 1, 77);
+        }
+    }
+    expect_responses(c, 5, 1);
+}
+
+TEST(Server, BadProtocolIdIsDiscardedAndConnectionStays) {
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    auto bad = read_holding(1, 1, 0, 10);
+    bad[3] = 1;  // protocol id 1
+    ASSERT_TRUE(c.send_all(bad));
+    ASSERT_TRUE(c.send_all(read_holding(2, 1, 0, 10)));
+    expect_responses(c, 1, 2);
+    EXPECT_EQ(srv->stats().discarded_frames, 1u);
+}
+
+class BadLength : public ::testing::TestWithParam<int> {};
+
+TEST_P(BadLength, ClosesOnlyThatConnection) {
+    auto srv = start(test::test_config());
+    Client bad(*srv);
+    Client good(*srv);
+    ASSERT_TRUE(good.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(good, 1, 1);
+    const int length = GetParam();
+    std::vector<std::uint8_t> frame = {
+        0, 1, 0, 0, static_cast<std::uint8_t>(length >> 8), static_cast<std::uint8_t>(length),
+        1, 3};
+    frame.resize(300, 0);
+    ASSERT_TRUE(bad.send_all(frame));
+    EXPECT_TRUE(bad.closed_by_peer());
+    ASSERT_TRUE(good.send_all(read_holding(2, 1, 0, 10)));
+    expect_responses(good, 1, 2);
+    EXPECT_TRUE(test::eventually([&] { return srv->stats().bad_framing_closes == 1; }));
+    EXPECT_EQ(srv->stats().connections_current, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Lengths, BadLength, ::testing::Values(0, 1, 255, 0xFFFF));
+
+TEST(Server, ThousandConcurrentConnections) {
+    std::string msg;
+    if (net::raise_nofile_limit(2200, &msg) < 2200) GTEST_SKIP() << msg;
+    auto config = test::test_config();
+    config.threads = 2;
+    auto srv = start(config);
+    std::vector<Client> clients;
+    clients.reserve(1000);
+    for (int i = 0; i < 1000; ++i) {
+        clients.emplace_back(*srv);
+        ASSERT_TRUE(clients.back().ok()) << i;
+    }
+    for (int i = 0; i < 1000; ++i)
+        ASSERT_TRUE(clients[i].send_all(read_holding(static_cast<std::uint16_t>(i), 1, 0, 10)));
+    for (int i = 0; i < 1000; ++i) expect_responses(clients[i], 1, static_cast<std::uint16_t>(i));
+    EXPECT_TRUE(test::eventually([&] { return srv->stats().connections_current == 1000; }));
+    EXPECT_EQ(srv->stats().connections_total, 1000u);
+}
+
+TEST(Server, BackpressureBoundsPendingOutput) {
+    auto config = test::test_config();
+    auto srv = start(config);
+    Client c(*srv, "127.0.0.1", 4096);
+    net::set_nonblocking(c.fd());
+    // Up to 100k requests without reading: the server must stop reading, not queue forever.
+    auto chunk = burst(1000, 0);
+    std::size_t sent_requests = 0;
+    for (int round = 0; round < 100; ++round) {
+        std::size_t off = 0;
+        int stuck_polls = 0;
+        while (off < chunk.size()) {
+            ssize_t r = ::send(c.fd(), chunk.data() + off, chunk.size() - off, MSG_NOSIGNAL);
+            if (r > 0) {
+                off += static_cast<std::size_t>(r);
+                continue;
+            }
+            pollfd p{c.fd(), POLLOUT, 0};
+            if (::poll(&p, 1, 300) == 0 && ++stuck_polls >= 3) break;
+        }
+        sent_requests += off / 12;
+        if (off < chunk.size()) {
+            // Finish the partial frame so the count of answers is exact.
+            std::size_t tail = (12 - off % 12) % 12;
+            net::set_nonblocking(c.fd(), false);
+            if (tail) {
+                ASSERT_TRUE(c.send_all(chunk.data() + off, tail));
+                ++sent_requests;
+            }
+            break;
+        }
+    }
+    auto s = srv->stats();
+    EXPECT_GT(s.backpressure_pauses, 0u);
+    // Cap plus at most one receive buffer's worth of answers (4096/12 x 29 bytes).
+    EXPECT_LE(s.pending_output_peak, config.max_pending_output + 16 * 1024);
+    EXPECT_LE(s.pending_output, config.max_pending_output + 16 * 1024);
+    net::set_nonblocking(c.fd(), false);
+    // Reading drains everything: every request is answered.
+    std::vector<std::uint8_t> buf(29 * 1000);
+    std::size_t remaining = sent_requests * 29;
+    while (remaining > 0) {
+        std::size_t n = std::min(remaining, buf.size());
+        ASSERT_TRUE(c.recv_exact(buf.data(), n)) << remaining;
+        remaining -= n;
+    }
+    EXPECT_TRUE(test::eventually([&] { return srv->stats().transactions == sent_requests; }));
+}
+
+TEST(Server, IdleTimeoutCloses) {
+    auto config = test::test_config();
+    config.idle_timeout_ms = 200;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(c, 1, 1);
+    EXPECT_TRUE(c.closed_by_peer());
+    EXPECT_EQ(srv->stats().idle_closes, 1u);
+}
+
+TEST(Server, MaxConnectionsEvictsOldestIdle) {
+    auto config = test::test_config();
+    config.max_connections = 2;
+    auto srv = start(config);
+    Client a(*srv), b(*srv);
+    ASSERT_TRUE(test::eventually([&] { return srv->stats().connections_current == 2; }));
+    ASSERT_TRUE(a.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(a, 1, 1);  // a is now the most recently active; b is the oldest idle
+    Client c(*srv);
+    EXPECT_TRUE(b.closed_by_peer());
+    ASSERT_TRUE(c.send_all(read_holding(3, 1, 0, 10)));
+    expect_responses(c, 1, 3);
+    ASSERT_TRUE(a.send_all(read_holding(4, 1, 0, 10)));
+    expect_responses(a, 1, 4);
+    EXPECT_EQ(srv->stats().evictions, 1u);
+}
+
+TEST(Server, MaxConnectionsRefuses) {
+    auto config = test::test_config();
+    config.max_connections = 2;
+    config.full_policy = server::FullPolicy::Refuse;
+    auto srv = start(config);
+    Client a(*srv), b(*srv);
+    ASSERT_TRUE(test::eventually([&] { return srv->stats().connections_current == 2; }));
+    Client c(*srv);
+    EXPECT_TRUE(c.closed_by_peer());
+    ASSERT_TRUE(a.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(a, 1, 1);
+    EXPECT_EQ(srv->stats().refusals, 1u);
+}
+
+TEST(Server, OutstandingCapAnswersBusy) {
+    auto config = test::test_config();
+    config.max_outstanding = 4;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(10, 0)));  // one send: one batch on loopback
+    expect_responses(c, 4, 0);
+    for (int i = 4; i < 10; ++i) {
+        auto r = c.recv_n(9);
+        ASSERT_EQ(r.size(), 9u);
+        EXPECT_EQ(r[1], i);
+        EXPECT_EQ(r[7], 0x83);
+        EXPECT_EQ(r[8], 0x06);
+    }
+    EXPECT_EQ(srv->stats().busy_rejects, 6u);
+    // Once answered, the next batch is served again.
+    ASSERT_TRUE(c.send_all(burst(2, 50)));
+    expect_responses(c, 2, 50);
+}
+
+TEST(Server, UnitFilterNoAnswer) {
+    auto config = test::test_config();
+    config.only_unit = 5;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(read_holding(1, 6, 0, 10)));
+    ASSERT_TRUE(c.send_all(read_holding(2, 5, 0, 10)));
+    expect_responses(c, 1, 2, 5);
+    EXPECT_TRUE(c.silent_for(200));
+    EXPECT_EQ(srv->stats().foreign_unit, 1u);
+}
+
+TEST(Server, UnitFilterGatewayException) {
+    auto config = test::test_config();
+    config.only_unit = 5;
+    config.foreign_unit = server::ForeignUnitPolicy::GatewayException;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(read_holding(1, 6, 0, 10)));
+    auto r = c.recv_n(9);
+    ASSERT_EQ(r.size(), 9u);
+    EXPECT_EQ(r[6], 6);
+    EXPECT_EQ(r[7], 0x83);
+    EXPECT_EQ(r[8], 0x0B);
+}
+
+TEST(Server, FaultExceptions) {
+    auto config = test::test_config();
+    config.faults.exception_rate = 1.0;
+    config.faults.exception_code = codec::ExceptionCode::ServerDeviceBusy;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(3, 0)));
+    for (int i = 0; i < 3; ++i) {
+        auto r = c.recv_n(9);
+        ASSERT_EQ(r.size(), 9u);
+        EXPECT_EQ(r[1], i);
+        EXPECT_EQ(r[7], 0x83);
+        EXPECT_EQ(r[8], 0x06);
+    }
+    EXPECT_EQ(srv->stats().exceptions[6], 3u);
+}
+
+TEST(Server, FaultDropClosesConnection) {
+    auto config = test::test_config();
+    config.faults.drop_rate = 1.0;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(read_holding(1, 1, 0, 10)));
+    EXPECT_TRUE(c.closed_by_peer());
+    EXPECT_EQ(srv->stats().fault_drops, 1u);
+}
+
+TEST(Server, FaultNoAnswer) {
+    auto config = test::test_config();
+    config.faults.no_answer_rate = 1.0;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(3, 0)));
+    EXPECT_TRUE(c.silent_for(300));
+    EXPECT_EQ(srv->stats().fault_no_answer, 3u);
+}
+
+TEST(Server, FaultDelayHoldsAndKeepsOrder) {
+    auto config = test::test_config();
+    config.faults.delay.kind = slave::DelayConfig::Kind::Uniform;
+    config.faults.delay.min_ns = 50'000'000;
+    config.faults.delay.max_ns = 250'000'000;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(20, 0)));
+    EXPECT_TRUE(c.silent_for(30));  // nothing before the smallest delay
+    expect_responses(c, 20, 0);
+    EXPECT_EQ(srv->stats().fault_delayed, 20u);
+}
+
+TEST(Server, FaultStallHoldsEverything) {
+    auto config = test::test_config();
+    config.faults.stall.period_ns = 100'000'000;
+    config.faults.stall.duration_ns = 99'000'000;  // stalled 99% of the time
+    auto srv = start(config);
+    Client c(*srv);
+    // The first stall starts one period after the server started.
+    for (int i = 0; i < 5; ++i) {
+        ::usleep(30'000);
+        ASSERT_TRUE(c.send_all(burst(5, 0)));
+        expect_responses(c, 5, 0);
+    }
+    EXPECT_GT(srv->stats().fault_delayed, 0u);
+}
+
+TEST(Server, GracefulStopClosesClients) {
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(c, 1, 1);
+    srv->stop();
+    EXPECT_TRUE(c.closed_by_peer());
+    auto s = srv->stats();
+    EXPECT_EQ(s.transactions, 1u);
+    EXPECT_EQ(s.connections_current, 0u);
+    auto text = server::format_summary(s, 1.0);
+    EXPECT_NE(text.find("1 transactions"), std::string::npos);
+}
+
+TEST(Server, FallbackWithoutBufferRing) {
+    auto config = test::test_config();
+    config.use_buf_ring = false;
+    config.use_multishot_accept = false;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(1000, 0)));
+    expect_responses(c, 1000, 0);
+}
+
+TEST(Server, SingleShotRecvWithBufferRing) {
+    auto config = test::test_config();
+    config.use_multishot_recv = false;
+    auto srv = start(config);
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(burst(1000, 0)));
+    expect_responses(c, 1000, 0);
+}
+
+TEST(Server, TinyBufferRingSurvivesExhaustion) {
+    auto config = test::test_config();
+    config.buf_ring_count = 2;
+    config.buf_size = 64;
+    auto srv = start(config);
+    std::vector<Client> clients;
+    for (int i = 0; i < 8; ++i) clients.emplace_back(*srv);
+    for (auto& c : clients) ASSERT_TRUE(c.send_all(burst(200, 0)));
+    for (auto& c : clients) expect_responses(c, 200, 0);
+}
+
+TEST(Server, Ipv6Loopback) {
+    net::Endpoint ep;
+    net::parse_endpoint("[::1]:0", ep);
+    net::UniqueFd probe(net::listen_socket(ep));
+    if (!probe.valid()) GTEST_SKIP() << "no IPv6 loopback";
+    auto config = test::test_config();
+    config.listen = "[::1]:0";
+    auto srv = start(config);
+    EXPECT_EQ(srv->endpoint().front(), '[');
+    Client c(*srv, "::1");
+    ASSERT_TRUE(c.ok());
+    ASSERT_TRUE(c.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(c, 1, 1);
+}
+
+TEST(Server, MultipleThreadsShareThePort) {
+    auto config = test::test_config();
+    config.threads = 2;
+    auto srv = start(config);
+    EXPECT_EQ(srv->threads(), 2u);
+    std::vector<Client> clients;
+    for (int i = 0; i < 40; ++i) clients.emplace_back(*srv);
+    for (auto& c : clients) ASSERT_TRUE(c.send_all(burst(10, 0)));
+    for (auto& c : clients) expect_responses(c, 10, 0);
+    EXPECT_EQ(srv->stats().transactions, 400u);
+}
+
+TEST(Server, ReportsSmallIdleConnectionFootprint) {
+    // Per idle connection: fixed state only (the splitter's 260-byte frame buffer dominates).
+    EXPECT_LE(server::Server::bytes_per_connection(), 512u);
+}
