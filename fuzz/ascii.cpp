@@ -40,7 +40,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::vector<std::uint8_t> out(ascii_frame_size(f.pdu.size()));
         const EncodeResult r = encode_ascii_frame(f.address, f.pdu, out);
         check(r.ok() && r.size == size);
-        for (std::size_t i = 0; i < size; ++i) check(out[i] == static_cast<std::uint8_t>(upper(text[i])));
+        for (std::size_t i = 0; i < size; ++i)
+            check(out[i] == static_cast<std::uint8_t>(upper(text[i])));
         // One byte less of buffer must be refused, not overrun.
         if (need > 0) {
             std::vector<std::uint8_t> small(need - 1);

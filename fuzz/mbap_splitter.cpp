@@ -33,9 +33,12 @@ RefResult reference_split(const std::uint8_t* s, std::size_t n) {
     std::size_t off = 0;
     while (n - off >= limits::kMbapHeader) {
         const MbapHeader h = read_mbap_header(s + off);
-        if (h.length == 0) r.fatal = CodecError::LengthZero;
-        else if (h.length == 1) r.fatal = CodecError::LengthOne;
-        else if (h.length > 254) r.fatal = CodecError::LengthTooLong;
+        if (h.length == 0)
+            r.fatal = CodecError::LengthZero;
+        else if (h.length == 1)
+            r.fatal = CodecError::LengthOne;
+        else if (h.length > 254)
+            r.fatal = CodecError::LengthTooLong;
         if (r.fatal != CodecError::Ok) return r;
         const std::size_t total = h.length + 6u;
         if (n - off < total) break;

@@ -54,8 +54,8 @@ void check_inference(RtuLength (*infer)(Bytes), const std::vector<std::uint8_t>&
     }
     const RtuLength& last = at[n];
     if (last.status == RtuLength::Status::Known && last.size <= data.size()) {
-        const std::vector<std::uint8_t> frame(data.begin(),
-                                              data.begin() + static_cast<std::ptrdiff_t>(last.size));
+        const std::vector<std::uint8_t> frame(
+            data.begin(), data.begin() + static_cast<std::ptrdiff_t>(last.size));
         RtuFrame f;
         const CodecError e = decode_rtu_frame(Bytes(frame.data(), frame.size()), f);
         check(e == CodecError::Ok || e == CodecError::BadCrc);

@@ -1,16 +1,229 @@
-// `mbstorm run`: placeholder until the runr layer lands.
+// `mbstorm run`: a load test. With no --target it starts the built-in reference slave on an
+// ephemeral loopback port so that it works out of the box.
 #include <fmt/format.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
 
 #include "cli/commands.hpp"
+#include "cli/duration_option.hpp"
+#include "cli/run_output.hpp"
+#include "codec/function_code.hpp"
+#include "codec/values.hpp"
+#include "load/engine.hpp"
+#include "load/plan.hpp"
+#include "server/server.hpp"
 
 namespace mbstorm::cli {
-void add_run_command(CLI::App& app, Action& action) {
-    auto* cmd = app.add_subcommand("run", "Run a load test");
-    cmd->callback([&action] {
-        action = [] {
-            fmt::print(stderr, "mbstorm run: not built yet\n");
-            return kExitUsage;
-        };
-    });
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_stop_signal(int) {
+    g_stop.store(true, std::memory_order_relaxed);
+    // A second Ctrl-C ends the process at once.
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
 }
+
+struct RunOptions {
+    load::Plan plan;
+    std::string target;
+    std::string function = "3";
+    std::string address = "0";
+    std::string addr_mode = "sequential";
+    std::string model = "closed";
+    std::string arrival = "even";
+    int value = 0;
+    std::uint64_t duration_ns = 10'000'000'000ULL;
+    std::uint64_t warmup_ns = 0, timeout_ns = 1'000'000'000ULL, connect_timeout_ns = 3'000'000'000ULL;
+    unsigned slave_threads = 0;
+    bool quiet = false;
+    OutputFiles outputs;
+};
+
+int fail(const std::string& msg) {
+    fmt::print(stderr, "mbstorm run: {}\n", msg);
+    return kExitUsage;
+}
+
+// Fills the single-operation plan from flags; returns an error message or "".
+std::string build_plan(RunOptions& o) {
+    auto& p = o.plan;
+    load::Operation op;
+    if (!codec::function_from_name(o.function, op.function)) {
+        try {
+            std::size_t used = 0;
+            int fc = std::stoi(o.function, &used, 0);
+            if (used != o.function.size() || fc < 1 || fc > 127) throw std::invalid_argument("fc");
+            op.function = static_cast<std::uint8_t>(fc);
+        } catch (...) {
+            return fmt::format("--fc '{}' is neither a function code (1..127) nor a name like "
+                               "read_holding_registers", o.function);
+        }
+    }
+    // --addr takes "N", "FIRST-LAST", or reference numbers "40001-40100".
+    auto parse_one = [](const std::string& text, std::uint16_t& out) {
+        codec::Reference ref;
+        if (text.size() >= 5 && codec::parse_reference(text, ref)) {
+            out = ref.offset;
+            return true;
+        }
+        try {
+            std::size_t used = 0;
+            long v = std::stol(text, &used, 0);
+            if (used != text.size() || v < 0 || v > 65535) return false;
+            out = static_cast<std::uint16_t>(v);
+            return true;
+        } catch (...) {
+            return false;
+        }
+    };
+    auto dash = o.address.find('-');
+    std::uint16_t first = 0, last = 0;
+    if (!parse_one(o.address.substr(0, dash), first) ||
+        (dash != std::string::npos && !parse_one(o.address.substr(dash + 1), last)))
+        return fmt::format("--addr '{}' is not an address 0..65535, a range FIRST-LAST or reference "
+                           "numbers like 40001-40100", o.address);
+    op.first_address = first;
+    if (dash != std::string::npos) op.last_address = last;
+    if (o.addr_mode == "uniform") op.address_mode = load::AddressMode::Uniform;
+    else if (o.addr_mode == "zipf") op.address_mode = load::AddressMode::Zipf;
+    op.quantity = o.plan.operations.empty() ? op.quantity : o.plan.operations[0].quantity;
+    op.values.value = static_cast<std::uint16_t>(o.value);
+    op.name = std::string(codec::function_name(op.function));
+    if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
+    op.quantity = o.plan.operations.empty() ? 10 : o.plan.operations[0].quantity;
+    p.operations.assign(1, op);
+
+    p.model = o.model == "open" || p.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
+    if (p.model == load::LoadModel::OpenLoop && p.rate <= 0)
+        return "--model open needs --rate (transactions per second, e.g. --rate 50000)";
+    p.arrival = o.arrival == "poisson" ? load::Arrival::Poisson : load::Arrival::Even;
+    p.duration = std::chrono::nanoseconds(o.duration_ns);
+    p.warmup = std::chrono::nanoseconds(o.warmup_ns);
+    p.transaction_timeout = std::chrono::nanoseconds(o.timeout_ns);
+    p.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
+    if (o.duration_ns == 0 && p.transactions == 0) return "-d 0 needs --transactions N to end the run";
+    return {};
+}
+
+int run_load_test(RunOptions& o) {
+    if (o.plan.operations.empty()) o.plan.operations.push_back({});
+    if (auto err = build_plan(o); !err.empty()) return fail(err);
+    auto& plan = o.plan;
+
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    std::unique_ptr<server::Server> embedded;
+    if (o.target.empty()) {
+        // Split the cores between the engine and the slave unless told otherwise.
+        server::ServerConfig sc;
+        sc.listen = "127.0.0.1:0";
+        sc.threads = o.slave_threads ? o.slave_threads : std::max(1u, cores / 2);
+        if (plan.threads == 0) plan.threads = std::max(1u, cores - sc.threads);
+        sc.max_connections = 0;
+        embedded = std::make_unique<server::Server>(sc);
+        std::string error;
+        if (!embedded->start(&error)) return fail("cannot start the embedded reference slave: " + error);
+        plan.host = "127.0.0.1";
+        plan.port = embedded->port();
+        fmt::print("mbstorm run: no --target given: load-testing the embedded reference slave on {} "
+                   "({} thread{})\n", embedded->endpoint(), embedded->threads(),
+                   embedded->threads() == 1 ? "" : "s");
+    } else {
+        auto colon = o.target.rfind(':');
+        if (colon == std::string::npos || colon + 1 == o.target.size())
+            return fail(fmt::format("--target '{}' needs a port: HOST:PORT or [IPv6]:PORT", o.target));
+        std::string host = o.target.substr(0, colon);
+        if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+        try {
+            std::size_t used = 0;
+            long port = std::stol(o.target.substr(colon + 1), &used);
+            if (used != o.target.size() - colon - 1 || port < 1 || port > 65535) throw std::out_of_range("port");
+            plan.port = static_cast<std::uint16_t>(port);
+        } catch (...) {
+            return fail(fmt::format("--target '{}': port must be 1..65535", o.target));
+        }
+        plan.host = host;
+    }
+
+    if (auto problems = load::validate_plan(plan); !problems.empty()) return fail(problems.front());
+
+    const auto threads = load::effective_threads(plan);
+    fmt::print("mbstorm run: {} connection{} x depth {} on {} thread{}, {} {}, {}\n", plan.connections,
+               plan.connections == 1 ? "" : "s", plan.depth, threads, threads == 1 ? "" : "s",
+               plan.operations[0].name,
+               plan.model == load::LoadModel::OpenLoop ? fmt::format("open loop at {:.0f} tx/s", plan.rate)
+                                                       : std::string("closed loop"),
+               plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
+                                     : fmt::format("for {} transactions", plan.transactions));
+    std::fflush(stdout);
+
+    g_stop = false;
+    signal(SIGINT, on_stop_signal);
+    signal(SIGTERM, on_stop_signal);
+    LiveProgress progress(stderr, o.quiet);
+    load::EngineOptions eo;
+    eo.stop = &g_stop;
+    eo.tool_version = "mbstorm 0.1.0";
+    eo.on_progress = [&progress](const load::ProgressSnapshot& s) { progress.update(s); };
+    load::LoadResult result = load::run_load(plan, eo);
+    progress.finish();
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    if (embedded) {
+        result.run.metadata.notes.push_back(fmt::format("target: embedded reference slave on {}", embedded->endpoint()));
+        embedded->stop();
+    }
+    if (g_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
+    return report_run(result, o.outputs);
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<RunOptions>();
+    o->plan.operations.push_back({});
+    o->plan.operations[0].quantity = 10;
+    o->plan.connections = 16;
+    o->plan.depth = 16;
+    auto& p = o->plan;
+    auto* cmd = app.add_subcommand("run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
+    cmd->add_option("--target", o->target, "server to test, HOST:PORT or [IPv6]:PORT (default: start the embedded slave)");
+    cmd->add_option("-c,--connections", p.connections, "connections")->check(CLI::Range(1u, load::kMaxConnections))->capture_default_str();
+    cmd->add_option("--depth", p.depth, "outstanding transactions per connection (pipelining)")
+        ->check(CLI::Range(1u, load::kMaxDepth))->capture_default_str();
+    cmd->add_option("--threads", p.threads, "engine threads, one ring each (0: the cores left over)")->check(CLI::Range(0u, load::kMaxThreads));
+    cmd->add_option("--slave-threads", o->slave_threads, "threads of the embedded slave (0: half the cores)")->check(CLI::Range(0u, 1024u));
+    add_duration_option(cmd, "-d,--duration", o->duration_ns, "how long to measure (default 10s; 0 with --transactions)");
+    cmd->add_option("-n,--transactions", p.transactions, "stop after this many transactions");
+    add_duration_option(cmd, "--warmup", o->warmup_ns, "run this long first without recording");
+    cmd->add_option("--model", o->model, "closed loop (keep --depth outstanding) or open loop (--rate)")
+        ->check(CLI::IsMember({"closed", "open"}));
+    cmd->add_option("-R,--rate", p.rate, "open loop: total transactions per second; latency is measured from each "
+                    "transaction's intended send time (coordinated-omission corrected)")->check(CLI::Range(0.0, load::kMaxRate));
+    cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")->check(CLI::IsMember({"even", "poisson"}));
+    cmd->add_option("--fc", o->function, "function code or name (default 3, read_holding_registers)");
+    cmd->add_option("--addr", o->address, "start address, range FIRST-LAST, or reference numbers 40001-40100");
+    cmd->add_option("--count", p.operations[0].quantity, "quantity per request")->check(CLI::Range(1, 2000))->capture_default_str();
+    cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
+    cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
+        ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
+    cmd->add_option("--zipf", p.operations[0].zipf_exponent, "zipf exponent")->check(CLI::Range(0.0, load::kMaxZipfExponent));
+    cmd->add_option("--value", o->value, "value written by write operations")->check(CLI::Range(0, 65535));
+    add_duration_option(cmd, "--timeout", o->timeout_ns, "per-transaction timeout (default 1s)");
+    add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns, "connect timeout (default 3s)");
+    cmd->add_option("--connect-rate", p.connect_rate, "new connections per second")->check(CLI::Range(1.0, 1e7));
+    cmd->add_flag("--allow-writes", p.allow_writes, "allow write function codes to a target outside loopback");
+    cmd->add_option("--seed", p.seed, "seed for address and value generators");
+    cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
+    add_output_options(cmd, o->outputs);
+    cmd->callback([o, &action] { action = [o] { return run_load_test(*o); }; });
+}
+
 }  // namespace mbstorm::cli

@@ -23,7 +23,9 @@ inline constexpr std::array<std::uint8_t, 256> kDigitValue = make_digit_table();
 }  // namespace detail
 
 // 0..15 for '0'-'9', 'A'-'F', 'a'-'f'; kNotHex otherwise.
-constexpr std::uint8_t digit_value(std::uint8_t c) noexcept { return detail::kDigitValue[c]; }
+constexpr std::uint8_t digit_value(std::uint8_t c) noexcept {
+    return detail::kDigitValue[c];
+}
 
 inline constexpr char kUpperDigits[] = "0123456789ABCDEF";
 

@@ -76,7 +76,9 @@ EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id
     return {total, CodecError::Ok};
 }
 
-void MbapSplitter::feed(Bytes chunk) noexcept { chunk_ = chunk; }
+void MbapSplitter::feed(Bytes chunk) noexcept {
+    chunk_ = chunk;
+}
 
 void MbapSplitter::reset() noexcept {
     chunk_ = {};
@@ -147,12 +149,11 @@ MbapSplitter::Status MbapSplitter::next(TcpFrame& out) noexcept {
     // Fast path: healthy, nothing buffered, and a whole valid frame sits in the chunk.
     const std::uint8_t* p = chunk_.data();
     const std::size_t avail = chunk_.size();
-    if (avail >= limits::kMbapHeader && partial_size_ == 0 && error_ == CodecError::Ok)
-        [[likely]] {
+    if (avail >= limits::kMbapHeader && partial_size_ == 0 && error_ == CodecError::Ok) [[likely]] {
         const std::uint16_t length = load_be16(p + 4);
         const std::size_t total = length + 6u;
-        if (length - 2u <= limits::kMaxMbapLength - 2u && load_be16(p + 2) == 0 &&
-            avail >= total) [[likely]] {
+        if (length - 2u <= limits::kMaxMbapLength - 2u && load_be16(p + 2) == 0 && avail >= total)
+            [[likely]] {
             fill_frame(p, length, out);
             chunk_ = Bytes(p + total, avail - total);
             return Status::Frame;

@@ -43,8 +43,12 @@ constexpr RtuLength known(std::size_t size) noexcept {
     if (size > limits::kMaxRtuAdu) return {RtuLength::Status::TooLong, size};
     return {RtuLength::Status::Known, size};
 }
-constexpr RtuLength need(std::size_t size) noexcept { return {RtuLength::Status::NeedMore, size}; }
-constexpr RtuLength unknown() noexcept { return {RtuLength::Status::Unknown, 0}; }
+constexpr RtuLength need(std::size_t size) noexcept {
+    return {RtuLength::Status::NeedMore, size};
+}
+constexpr RtuLength unknown() noexcept {
+    return {RtuLength::Status::Unknown, 0};
+}
 
 // Frame = fixed part up to and including an 8-bit byte count at `count_at`, then that many
 // bytes, then the CRC.
@@ -126,21 +130,37 @@ CodecError decode_rtu_frame(Bytes adu, RtuFrame& out) noexcept {
 RtuLength rtu_request_length(Bytes head) noexcept {
     if (head.size() < 2) return need(2);
     switch (head[1]) {
-        case 0x01: case 0x02: case 0x03: case 0x04:  // address(2) quantity(2)
-        case 0x05: case 0x06:                        // address(2) value(2)
-        case 0x08:                                   // sub-function(2) data(2)
+        // Two 16-bit fields: address + quantity, address + value, or sub-function + data.
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x05:
+        case 0x06:
+        case 0x08:
             return known(8);
-        case 0x07: case 0x0B: case 0x0C: case 0x11:  // function code only
+        // Function code only.
+        case 0x07:
+        case 0x0B:
+        case 0x0C:
+        case 0x11:
             return known(4);
-        case 0x0F: case 0x10:  // address(2) quantity(2) byte count
+        // Address, quantity, then a byte count.
+        case 0x0F:
+        case 0x10:
             return with_byte_count(head, 6);
-        case 0x14: case 0x15:  // byte count
+        // A byte count right after the function code.
+        case 0x14:
+        case 0x15:
             return with_byte_count(head, 2);
-        case 0x16:  // address(2) and mask(2) or mask(2)
+        // Address, AND mask, OR mask.
+        case 0x16:
             return known(10);
-        case 0x17:  // read address/quantity, write address/quantity, byte count
+        // Read address/quantity, write address/quantity, then a byte count.
+        case 0x17:
             return with_byte_count(head, 10);
-        case 0x18:  // FIFO pointer address(2)
+        // FIFO pointer address.
+        case 0x18:
             return known(6);
         case 0x2B:
             if (head.size() < 3) return need(3);
@@ -156,19 +176,35 @@ RtuLength rtu_response_length(Bytes head) noexcept {
     const std::uint8_t fc = head[1];
     if (fc & kExceptionBit) return known(5);  // address, fc|0x80, code, CRC
     switch (fc) {
-        case 0x01: case 0x02: case 0x03: case 0x04:  // byte count
-        case 0x0C: case 0x11: case 0x14: case 0x15: case 0x17:
+        // A byte count right after the function code.
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x0C:
+        case 0x11:
+        case 0x14:
+        case 0x15:
+        case 0x17:
             return with_byte_count(head, 2);
-        case 0x05: case 0x06: case 0x08: case 0x0B: case 0x0F: case 0x10:
-            return known(8);  // two 16-bit fields echoed or reported
-        case 0x07:            // exception status byte
+        // Two 16-bit fields echoed or reported.
+        case 0x05:
+        case 0x06:
+        case 0x08:
+        case 0x0B:
+        case 0x0F:
+        case 0x10:
+            return known(8);
+        // Exception status byte.
+        case 0x07:
             return known(5);
+        // Address, AND mask, OR mask echoed.
         case 0x16:
             return known(10);
-        case 0x18: {  // 16-bit byte count (FIFO count + values)
+        // 16-bit byte count (FIFO count + values).
+        case 0x18:
             if (head.size() < 4) return need(4);
             return known(4 + load_be16(head.data() + 2) + 2u);
-        }
         case 0x2B:
             if (head.size() < 3) return need(3);
             if (head[2] == kMeiReadDeviceId) return device_id_response_length(head);

@@ -136,23 +136,19 @@ Registers4 registers_from_f64(double value, WordOrder order) noexcept {
     return to_words<4>(std::bit_cast<std::uint64_t>(value), order);
 }
 
-std::uint32_t u32_from_registers(std::span<const std::uint16_t, 2> regs,
-                                 WordOrder order) noexcept {
+std::uint32_t u32_from_registers(std::span<const std::uint16_t, 2> regs, WordOrder order) noexcept {
     return from_words<std::uint32_t>(regs, order);
 }
-std::int32_t i32_from_registers(std::span<const std::uint16_t, 2> regs,
-                                WordOrder order) noexcept {
+std::int32_t i32_from_registers(std::span<const std::uint16_t, 2> regs, WordOrder order) noexcept {
     return static_cast<std::int32_t>(from_words<std::uint32_t>(regs, order));
 }
 float f32_from_registers(std::span<const std::uint16_t, 2> regs, WordOrder order) noexcept {
     return std::bit_cast<float>(from_words<std::uint32_t>(regs, order));
 }
-std::uint64_t u64_from_registers(std::span<const std::uint16_t, 4> regs,
-                                 WordOrder order) noexcept {
+std::uint64_t u64_from_registers(std::span<const std::uint16_t, 4> regs, WordOrder order) noexcept {
     return from_words<std::uint64_t>(regs, order);
 }
-std::int64_t i64_from_registers(std::span<const std::uint16_t, 4> regs,
-                                WordOrder order) noexcept {
+std::int64_t i64_from_registers(std::span<const std::uint16_t, 4> regs, WordOrder order) noexcept {
     return static_cast<std::int64_t>(from_words<std::uint64_t>(regs, order));
 }
 double f64_from_registers(std::span<const std::uint16_t, 4> regs, WordOrder order) noexcept {

@@ -93,7 +93,7 @@ std::string format_reference(Reference ref, bool six_digits = false);
 // ---- Hex text ("01 03 00 00 00 0A C5 CD", "0103000A", "01:03", "0x01,0x03").
 
 struct HexParseResult {
-    std::size_t size = 0;      // bytes written
+    std::size_t size = 0;  // bytes written
     CodecError error = CodecError::Ok;
     std::size_t position = 0;  // character index of the error
     constexpr bool ok() const noexcept { return error == CodecError::Ok; }

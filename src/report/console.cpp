@@ -13,12 +13,12 @@ using stats::Histogram;
 using stats::OutcomeCounters;
 
 constexpr std::array<std::pair<double, const char*>, 7> kPercentiles = {{{50.0, "p50"},
-                                                                        {75.0, "p75"},
-                                                                        {90.0, "p90"},
-                                                                        {99.0, "p99"},
-                                                                        {99.9, "p99.9"},
-                                                                        {99.99, "p99.99"},
-                                                                        {99.999, "p99.999"}}};
+                                                                         {75.0, "p75"},
+                                                                         {90.0, "p90"},
+                                                                         {99.0, "p99"},
+                                                                         {99.9, "p99.9"},
+                                                                         {99.99, "p99.99"},
+                                                                         {99.999, "p99.999"}}};
 
 // fmt pads by code points, so "µs" (two bytes, one column) lines up.
 void append_latency_table(std::string& out, const Histogram& h) {
@@ -33,9 +33,9 @@ void append_latency_table(std::string& out, const Histogram& h) {
     out += fmt::format("  {:<9}{:>10}   stddev {}   min {}\n", "mean", format_latency(h.mean()),
                        format_latency(h.stddev()), format_latency(h.min()));
     if (h.saturated_count() != 0) {
-        out += fmt::format("  note: {} samples above {} were clamped to it\n",
-                           format_count(h.saturated_count()),
-                           format_latency(h.highest_trackable()));
+        out +=
+            fmt::format("  note: {} samples above {} were clamped to it\n",
+                        format_count(h.saturated_count()), format_latency(h.highest_trackable()));
     }
 }
 
@@ -68,13 +68,12 @@ void append_row_header(std::string& out, const char* first) {
 void append_row(std::string& out, const std::string& name, const Histogram& h,
                 const OutcomeCounters& c, double seconds) {
     const double rate = seconds > 0.0 ? static_cast<double>(c.completed()) / seconds : 0.0;
-    out += fmt::format("  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n",
-                       name.size() > 32 ? name.substr(0, 32) : name, format_count(c.completed()),
-                       format_rate(rate), format_count(c.errors()),
-                       format_latency(h.value_at_percentile(50)),
-                       format_latency(h.value_at_percentile(90)),
-                       format_latency(h.value_at_percentile(99)),
-                       format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
+    out += fmt::format(
+        "  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n",
+        name.size() > 32 ? name.substr(0, 32) : name, format_count(c.completed()),
+        format_rate(rate), format_count(c.errors()), format_latency(h.value_at_percentile(50)),
+        format_latency(h.value_at_percentile(90)), format_latency(h.value_at_percentile(99)),
+        format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
 }
 
 std::string operation_label(const stats::OperationResult& op) {
@@ -88,10 +87,12 @@ std::string format_console_report(const stats::RunResult& r) {
     const double seconds = static_cast<double>(m.measured_duration_ns) / 1e9;
     std::string out;
 
-    out += fmt::format("{} — {} loop against {}\n", m.tool_version.empty() ? "mbstorm" : m.tool_version,
+    out += fmt::format("{} — {} loop against {}\n",
+                       m.tool_version.empty() ? "mbstorm" : m.tool_version,
                        stats::load_model_name(m.model), m.target);
     out += fmt::format("  threads {}, connections {}, depth {}", m.threads, m.connections, m.depth);
-    if (m.model == stats::LoadModel::Open) out += fmt::format(", rate {}/s", format_rate(m.rate_per_second));
+    if (m.model == stats::LoadModel::Open)
+        out += fmt::format(", rate {}/s", format_rate(m.rate_per_second));
     out += fmt::format(", duration {} (warm-up {})\n", format_duration(m.measured_duration_ns),
                        format_duration(m.warmup_ns));
     if (const auto start = format_utc(m.start_time); !start.empty()) {
@@ -115,10 +116,11 @@ std::string format_console_report(const stats::RunResult& r) {
         if (lag.late_sends == 0) {
             out += "Schedule    kept (no late sends)\n";
         } else {
-            out += fmt::format("Schedule    engine fell behind: {} late sends, max lag {}, mean lag {}\n",
-                               format_count(lag.late_sends), format_latency(lag.max_lag_ns),
-                               format_latency(static_cast<double>(lag.total_lag_ns) /
-                                              static_cast<double>(lag.late_sends)));
+            out += fmt::format(
+                "Schedule    engine fell behind: {} late sends, max lag {}, mean lag {}\n",
+                format_count(lag.late_sends), format_latency(lag.max_lag_ns),
+                format_latency(static_cast<double>(lag.total_lag_ns) /
+                               static_cast<double>(lag.late_sends)));
         }
     }
 
@@ -146,7 +148,8 @@ std::string format_console_report(const stats::RunResult& r) {
             append_row(out, fmt::format("{}. {}", st.index, st.name), st.latency, st.counters,
                        stage_seconds);
             for (const auto& op : st.operations) {
-                append_row(out, "   " + operation_label(op), op.latency, op.counters, stage_seconds);
+                append_row(out, "   " + operation_label(op), op.latency, op.counters,
+                           stage_seconds);
             }
         }
     }
@@ -154,9 +157,9 @@ std::string format_console_report(const stats::RunResult& r) {
     if (!r.thresholds.empty()) {
         out += fmt::format("\nThresholds  {}\n", r.thresholds_passed() ? "all passed" : "FAILED");
         for (const auto& t : r.thresholds) {
-            out += fmt::format("  {}  {:<36} observed {}\n", t.passed ? "PASS" : "FAIL", t.expression,
-                               t.observed_text.empty() ? fmt::format("{}", t.observed)
-                                                       : t.observed_text);
+            out += fmt::format(
+                "  {}  {:<36} observed {}\n", t.passed ? "PASS" : "FAIL", t.expression,
+                t.observed_text.empty() ? fmt::format("{}", t.observed) : t.observed_text);
         }
     }
     return out;

@@ -29,7 +29,7 @@ std::string format_progress_line(const ProgressSample& sample);
 // Writes progress lines: on a TTY one line rewritten in place with '\r', otherwise one
 // plain line per update (so logs stay readable).
 class ProgressPrinter {
-public:
+  public:
     explicit ProgressPrinter(std::FILE* out);
     ProgressPrinter(std::FILE* out, bool is_tty);
     void update(const ProgressSample& sample);
@@ -37,7 +37,7 @@ public:
     void finish();
     bool is_tty() const noexcept { return is_tty_; }
 
-private:
+  private:
     std::FILE* out_;
     bool is_tty_;
     std::size_t last_width_ = 0;

@@ -25,12 +25,23 @@ std::string escape(std::string_view text) {
     out.reserve(text.size());
     for (char c : text) {
         switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\'': out += "&#39;"; break;
-            default: out += c;
+            case '&':
+                out += "&amp;";
+                break;
+            case '<':
+                out += "&lt;";
+                break;
+            case '>':
+                out += "&gt;";
+                break;
+            case '"':
+                out += "&quot;";
+                break;
+            case '\'':
+                out += "&#39;";
+                break;
+            default:
+                out += c;
         }
     }
     return out;
@@ -111,22 +122,22 @@ std::string render_chart(const Chart& c) {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 {} {}\" width=\"{}\" "
         "height=\"{}\" role=\"img\" aria-label=\"{}\">\n",
         kWidth, kHeight, kWidth, kHeight, escape(c.title));
-    s += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n", kWidth,
-                     kHeight);
+    s += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n",
+                     kWidth, kHeight);
     s += fmt::format("<text x=\"{}\" y=\"20\" class=\"title\">{}</text>\n", kLeft, escape(c.title));
 
     s += "<g class=\"grid\">\n";
     for (const auto& t : c.y_ticks) {
         const double y = py(t.at);
-        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", kLeft, y,
-                         kLeft + plot_w, y);
+        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", kLeft,
+                         y, kLeft + plot_w, y);
         s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"ylab\">{}</text>\n", kLeft - 6,
                          y + 4, escape(t.label));
     }
     for (const auto& t : c.x_ticks) {
         const double x = px(t.at);
-        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", x, kTop, x,
-                         kTop + plot_h);
+        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", x,
+                         kTop, x, kTop + plot_h);
         s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"xlab\">{}</text>\n", x,
                          kTop + plot_h + 16, escape(t.label));
     }
@@ -162,7 +173,8 @@ std::string render_chart(const Chart& c) {
     s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"axis\">{}</text>\n",
                      kLeft + plot_w / 2, kHeight - 10, escape(c.x_label));
     s += fmt::format(
-        "<text x=\"16\" y=\"{:.1f}\" class=\"axis\" transform=\"rotate(-90 16 {:.1f})\">{}</text>\n",
+        "<text x=\"16\" y=\"{:.1f}\" class=\"axis\" transform=\"rotate(-90 16 "
+        "{:.1f})\">{}</text>\n",
         kTop + plot_h / 2, kTop + plot_h / 2, escape(c.y_label));
     s += "</svg>\n";
 
@@ -192,7 +204,8 @@ std::string percentile_chart(const stats::RunResult& r) {
     std::vector<Line> lines;
     lines.push_back({"all operations", kOverallColor, &r.latency});
     for (std::size_t i = 0; i < r.operations.size(); ++i) {
-        lines.push_back({r.operations[i].name, kPalette[i % kPalette.size()], &r.operations[i].latency});
+        lines.push_back(
+            {r.operations[i].name, kPalette[i % kPalette.size()], &r.operations[i].latency});
     }
 
     Chart c;
@@ -217,7 +230,8 @@ std::string percentile_chart(const stats::RunResult& r) {
     }
     c.x_min = 0.0;
     c.x_max = std::min(std::ceil(max_x - 1e-9), 7.0);
-    for (int d = 0; d <= static_cast<int>(c.x_max); ++d) c.x_ticks.push_back({static_cast<double>(d), percentile_tick_label(d)});
+    for (int d = 0; d <= static_cast<int>(c.x_max); ++d)
+        c.x_ticks.push_back({static_cast<double>(d), percentile_tick_label(d)});
     c.y_max = linear_ticks(max_ns / unit.divisor, c.y_ticks);
     c.y_label = fmt::format("latency ({})", unit.name);
     return render_chart(c);
@@ -270,7 +284,8 @@ std::string latency_over_time_chart(const stats::RunResult& r) {
     for (const auto& i : r.timeline) max_ns = std::max(max_ns, static_cast<double>(i.max_ns));
     const LatencyUnit unit = latency_unit(max_ns);
     c.y_label = fmt::format("latency ({})", unit.name);
-    Series p50{"p50", kPalette[0], {}}, p99{"p99", kPalette[3], {}}, max{"max", kPalette[1], {}, 1.2};
+    Series p50{"p50", kPalette[0], {}}, p99{"p99", kPalette[3], {}},
+        max{"max", kPalette[1], {}, 1.2};
     for (const auto& i : r.timeline) {
         if (i.latency_count == 0) continue;
         const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
@@ -308,10 +323,12 @@ std::string run_table(const stats::RunResult& r) {
     kv("Load model", m.model == stats::LoadModel::Open
                          ? fmt::format("open loop, {} req/s", format_rate(m.rate_per_second))
                          : std::string("closed loop"));
-    kv("Threads / connections / depth", fmt::format("{} / {} / {}", m.threads, m.connections, m.depth));
-    kv("Duration", fmt::format("{} measured (requested {}), warm-up {}",
-                               format_duration(m.measured_duration_ns),
-                               format_duration(m.requested_duration_ns), format_duration(m.warmup_ns)));
+    kv("Threads / connections / depth",
+       fmt::format("{} / {} / {}", m.threads, m.connections, m.depth));
+    kv("Duration",
+       fmt::format("{} measured (requested {}), warm-up {}",
+                   format_duration(m.measured_duration_ns),
+                   format_duration(m.requested_duration_ns), format_duration(m.warmup_ns)));
     if (const auto start = format_utc(m.start_time); !start.empty()) kv("Started", start);
     if (m.coordinated_omission_corrected) kv("Latency", "corrected for coordinated omission");
     for (const auto& note : m.notes) kv("Note", note);
@@ -330,32 +347,35 @@ std::string summary_table(const stats::RunResult& r) {
                              c.completed() == 0 ? 0.0 : 100.0 * c.errors() / c.completed()));
     kv("Traffic", fmt::format("sent {}, received {}", format_bytes(c.bytes_sent),
                               format_bytes(c.bytes_received)));
-    kv("Connections", fmt::format("opened {}, failed {}, reconnects {}, closed by peer {}",
-                                  r.connections.opened, r.connections.failed,
-                                  r.connections.reconnects, r.connections.closed_by_peer));
+    kv("Connections",
+       fmt::format("opened {}, failed {}, reconnects {}, closed by peer {}", r.connections.opened,
+                   r.connections.failed, r.connections.reconnects, r.connections.closed_by_peer));
     if (r.metadata.model == stats::LoadModel::Open) {
         const auto& lag = r.schedule_lag;
-        kv("Schedule", lag.late_sends == 0
-                           ? std::string("kept (no late sends)")
-                           : fmt::format("fell behind: {} late sends, max lag {}",
-                                         format_count(lag.late_sends), format_latency(lag.max_lag_ns)));
+        kv("Schedule", lag.late_sends == 0 ? std::string("kept (no late sends)")
+                                           : fmt::format("fell behind: {} late sends, max lag {}",
+                                                         format_count(lag.late_sends),
+                                                         format_latency(lag.max_lag_ns)));
     }
     t += "</table>\n";
     return t;
 }
 
-void latency_row(std::string& t, const std::string& name, const Histogram& h, std::uint64_t completed,
-                 double seconds) {
+void latency_row(std::string& t, const std::string& name, const Histogram& h,
+                 std::uint64_t completed, double seconds) {
     const double rate = seconds > 0.0 ? static_cast<double>(completed) / seconds : 0.0;
-    auto p = [&](double q) { return h.empty() ? std::string("-") : format_latency(h.value_at_percentile(q)); };
+    auto p = [&](double q) {
+        return h.empty() ? std::string("-") : format_latency(h.value_at_percentile(q));
+    };
     row(t, {escape(name), format_count(completed), format_rate(rate), p(50), p(75), p(90), p(99),
             p(99.9), p(99.99), p(99.999), h.empty() ? "-" : format_latency(h.max()),
             h.empty() ? "-" : format_latency(h.mean())});
 }
 
 void latency_header(std::string& t, const char* first) {
-    row(t, {first, "count", "tx/s", "p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max",
-            "mean"},
+    row(t,
+        {first, "count", "tx/s", "p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max",
+         "mean"},
         true);
 }
 
@@ -365,8 +385,8 @@ std::string latency_table(const stats::RunResult& r) {
     latency_header(t, "operation");
     latency_row(t, "all operations", r.latency, r.counters.completed(), seconds);
     for (const auto& op : r.operations) {
-        latency_row(t, fmt::format("{} ({})", op.name, format_hex_byte(op.function_code)), op.latency,
-                    op.counters.completed(), seconds);
+        latency_row(t, fmt::format("{} ({})", op.name, format_hex_byte(op.function_code)),
+                    op.latency, op.counters.completed(), seconds);
     }
     t += "</table></div>\n";
     return t;
@@ -378,9 +398,10 @@ std::string errors_table(const stats::RunResult& r) {
     for (const auto& op : r.operations) t += fmt::format("<th>{}</th>", escape(op.name));
     t += "</tr>\n";
     auto emit = [&](const std::string& label, bool indented, auto count_of) {
-        t += fmt::format("<tr><td class=\"l{}\">{}</td><td>{}</td>", indented ? " sub" : "", escape(label),
-                         format_count(count_of(r.counters)));
-        for (const auto& op : r.operations) t += fmt::format("<td>{}</td>", format_count(count_of(op.counters)));
+        t += fmt::format("<tr><td class=\"l{}\">{}</td><td>{}</td>", indented ? " sub" : "",
+                         escape(label), format_count(count_of(r.counters)));
+        for (const auto& op : r.operations)
+            t += fmt::format("<td>{}</td>", format_count(count_of(op.counters)));
         t += "</tr>\n";
     };
     for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
@@ -471,9 +492,10 @@ std::string format_html(const stats::RunResult& r) {
     out += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
     out += fmt::format("<title>mbstorm report — {}</title>\n", escape(m.target));
     out += fmt::format("<style>{}</style>\n</head>\n<body>\n<main>\n", kStyle);
-    out += fmt::format("<h1>mbstorm load report</h1>\n<p class=\"sub\">{} · {} · {}</p>\n",
-                       escape(m.target), escape(m.tool_version.empty() ? "mbstorm" : m.tool_version),
-                       escape(format_utc(m.start_time)));
+    out +=
+        fmt::format("<h1>mbstorm load report</h1>\n<p class=\"sub\">{} · {} · {}</p>\n",
+                    escape(m.target), escape(m.tool_version.empty() ? "mbstorm" : m.tool_version),
+                    escape(format_utc(m.start_time)));
 
     out += "<h2>Run</h2>\n" + run_table(r);
     out += "<h2>Summary</h2>\n" + summary_table(r);

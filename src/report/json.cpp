@@ -13,22 +13,27 @@ using nlohmann::json;
 
 // Keys are the percentile as written by humans: "50", "99.9", "99.999", "100".
 constexpr std::array<std::pair<double, const char*>, 8> kPercentiles = {{{50.0, "50"},
-                                                                        {75.0, "75"},
-                                                                        {90.0, "90"},
-                                                                        {99.0, "99"},
-                                                                        {99.9, "99.9"},
-                                                                        {99.99, "99.99"},
-                                                                        {99.999, "99.999"},
-                                                                        {100.0, "100"}}};
+                                                                         {75.0, "75"},
+                                                                         {90.0, "90"},
+                                                                         {99.0, "99"},
+                                                                         {99.9, "99.9"},
+                                                                         {99.99, "99.99"},
+                                                                         {99.999, "99.999"},
+                                                                         {100.0, "100"}}};
 
-double seconds(std::uint64_t ns) { return static_cast<double>(ns) / 1e9; }
+double seconds(std::uint64_t ns) {
+    return static_cast<double>(ns) / 1e9;
+}
 
 json latency_json(const stats::Histogram& h) {
     json percentiles = json::object();
     for (const auto& [p, key] : kPercentiles) percentiles[key] = h.value_at_percentile(p);
-    return {{"count", h.total_count()},     {"min_ns", h.min()},
-            {"max_ns", h.max()},            {"mean_ns", h.mean()},
-            {"stddev_ns", h.stddev()},      {"saturated", h.saturated_count()},
+    return {{"count", h.total_count()},
+            {"min_ns", h.min()},
+            {"max_ns", h.max()},
+            {"mean_ns", h.mean()},
+            {"stddev_ns", h.stddev()},
+            {"saturated", h.saturated_count()},
             {"percentiles_ns", percentiles}};
 }
 
@@ -90,7 +95,8 @@ std::string format_json(const stats::RunResult& r, int indent) {
                 {"notes", m.notes}};
 
     json operations = json::array();
-    for (const auto& op : r.operations) operations.push_back(operation_json(op, m.measured_duration_ns));
+    for (const auto& op : r.operations)
+        operations.push_back(operation_json(op, m.measured_duration_ns));
 
     json stages = json::array();
     for (const auto& st : r.stages) {

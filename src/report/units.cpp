@@ -26,7 +26,9 @@ std::string format_latency(double ns) {
     return three_digits(ns / 1e9, "s");
 }
 
-std::string format_latency(std::uint64_t ns) { return format_latency(static_cast<double>(ns)); }
+std::string format_latency(std::uint64_t ns) {
+    return format_latency(static_cast<double>(ns));
+}
 
 std::string format_rate(double per_second) {
     if (!(per_second >= 0.0)) return "-";
@@ -70,6 +72,8 @@ std::string format_utc(std::chrono::system_clock::time_point t) {
     return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", tm);
 }
 
-std::string format_hex_byte(std::uint8_t b) { return fmt::format("0x{:02X}", b); }
+std::string format_hex_byte(std::uint8_t b) {
+    return fmt::format("0x{:02X}", b);
+}
 
 }  // namespace mbstorm::report

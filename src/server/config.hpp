@@ -34,6 +34,8 @@ struct ServerConfig {
 
     // Backpressure: stop reading a connection while this much output waits to be sent.
     std::size_t max_pending_output = 64 * 1024;
+    // SO_SNDBUF for accepted sockets; 0: the kernel's autotuning (which may hold megabytes).
+    int socket_send_buffer = 0;
 
     // Device emulation (NumberMaxOfServerTransaction): requests beyond this many unanswered
     // ones on a connection get exception 06. 0: no cap.

@@ -13,6 +13,7 @@
 namespace mbstorm::server {
 
 inline constexpr std::uint32_t kNoConn = std::numeric_limits<std::uint32_t>::max();
+inline constexpr std::uint16_t kNoBuffer = 0xFFFF;
 inline constexpr std::uint64_t kNoHold = std::numeric_limits<std::uint64_t>::max();
 
 struct Connection {
@@ -38,6 +39,10 @@ struct Connection {
     std::int64_t hold_until_ns = 0;
     // Responses queued since the output queue was last empty (outstanding-transaction cap).
     std::uint32_t unanswered = 0;
+    // Buffer-ring buffers received while paused, in arrival order (linked through the
+    // worker's per-buffer table): a multishot recv may deliver a burst before its cancel lands.
+    std::uint16_t stash_head = kNoBuffer;
+    std::uint16_t stash_tail = kNoBuffer;
 
     OutQueue out;
     std::unique_ptr<std::uint8_t[]> plain_buf;  // only without a buffer ring

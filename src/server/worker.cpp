@@ -65,6 +65,10 @@ int Worker::setup() noexcept {
         dirty_.reserve(expect);
         rearm_.reserve(expect);
         held_.reserve(expect);
+        if (use_buf_ring_) {
+            stash_next_.assign(config_.buf_ring_count, kNoBuffer);
+            stash_size_.assign(config_.buf_ring_count, 0);
+        }
     } catch (...) {
         return -ENOMEM;
     }
@@ -230,6 +234,9 @@ void Worker::admit(int fd) noexcept {
     }
     Connection& c = conns_[index];
     net::set_nodelay(fd);
+    if (config_.socket_send_buffer > 0)
+        setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &config_.socket_send_buffer,
+                   sizeof config_.socket_send_buffer);
     c.fd = fd;
     c.state = Connection::State::Open;
     c.recv_armed = c.send_inflight = c.paused = c.dirty = false;
@@ -254,6 +261,7 @@ void Worker::close_connection(std::uint32_t index) noexcept {
     // descriptor can be closed now and the slot released when they have completed.
     ::shutdown(c.fd, SHUT_RDWR);
     if (c.recv_armed) cancel_recv(index);
+    drop_stash(index);
     ::close(c.fd);
     c.fd = -1;
     --open_here_;
@@ -286,35 +294,78 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
     }
     if (!(cqe.flags & IORING_CQE_F_MORE)) c.recv_armed = false;
 
+    bool keep_buffer = false;
     if (c.state == Connection::State::Open) {
         if (cqe.res > 0) {
-            const std::uint8_t* data = has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
             counters_.add(ServerCounters::BytesIn, static_cast<std::uint64_t>(cqe.res));
             touch(ud.index);
-            consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
+            if (has_buffer && (c.paused || c.stash_head != kNoBuffer)) {
+                stash(ud.index, bid, static_cast<std::uint32_t>(cqe.res));
+                keep_buffer = true;
+            } else {
+                const std::uint8_t* data =
+                    has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
+                consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
+            }
         } else if (cqe.res == 0) {
             close_connection(ud.index);  // peer closed
         } else if (cqe.res != -ENOBUFS && cqe.res != -ECANCELED && cqe.res != -EINTR) {
             close_connection(ud.index);
         }
     }
-    if (has_buffer) buf_ring_.recycle(bid);
+    if (has_buffer && !keep_buffer) buf_ring_.recycle(bid);
 
-    if (c.state == Connection::State::Open) {
-        if (!c.paused && c.out.bytes() > config_.max_pending_output) {
-            // Backpressure: a client that does not read stops being read.
-            c.paused = true;
-            counters_.add(ServerCounters::BackpressurePauses);
-            if (c.recv_armed) cancel_recv(ud.index);
-        }
-        if (!c.recv_armed && !c.paused) {
-            if (cqe.res == -ENOBUFS)
-                rearm_.push_back(ud.index);  // after this batch has returned its buffers
-            else
-                arm_recv(ud.index);
-        }
+    if (c.state == Connection::State::Open && !check_backpressure(ud.index) && !c.recv_armed) {
+        if (cqe.res == -ENOBUFS)
+            rearm_.push_back(ud.index);  // after this batch has returned its buffers
+        else
+            arm_recv(ud.index);
     }
     maybe_release(ud.index);
+}
+
+bool Worker::check_backpressure(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.paused) return true;
+    if (c.out.bytes() <= config_.max_pending_output) return false;
+    // A client that does not read stops being read.
+    c.paused = true;
+    counters_.add(ServerCounters::BackpressurePauses);
+    if (c.recv_armed && multishot_recv_) cancel_recv(index);
+    return true;
+}
+
+void Worker::stash(std::uint32_t index, std::uint16_t bid, std::uint32_t size) noexcept {
+    Connection& c = conns_[index];
+    stash_next_[bid] = kNoBuffer;
+    stash_size_[bid] = size;
+    if (c.stash_tail == kNoBuffer)
+        c.stash_head = bid;
+    else
+        stash_next_[c.stash_tail] = bid;
+    c.stash_tail = bid;
+}
+
+void Worker::drain_stash(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    while (c.stash_head != kNoBuffer && c.state == Connection::State::Open && !c.paused) {
+        const std::uint16_t bid = c.stash_head;
+        c.stash_head = stash_next_[bid];
+        if (c.stash_head == kNoBuffer) c.stash_tail = kNoBuffer;
+        consume_input(index, buf_ring_.buffer(bid), stash_size_[bid]);
+        buf_ring_.recycle(bid);
+        if (c.state == Connection::State::Open) check_backpressure(index);
+    }
+}
+
+void Worker::drop_stash(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    while (c.stash_head != kNoBuffer) {
+        const std::uint16_t bid = c.stash_head;
+        c.stash_head = stash_next_[bid];
+        buf_ring_.recycle(bid);
+    }
+    c.stash_tail = kNoBuffer;
 }
 
 void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
@@ -487,7 +538,9 @@ void Worker::on_send(const io_uring_cqe& cqe) noexcept {
     if (c.out.empty()) c.unanswered = 0;
     if (c.paused && c.out.bytes() <= config_.max_pending_output / 2) {
         c.paused = false;
-        if (!c.recv_armed) arm_recv(ud.index);
+        drain_stash(ud.index);
+        if (c.state != Connection::State::Open) return;
+        if (!c.paused && !c.recv_armed) arm_recv(ud.index);
     }
     flush(ud.index);
 }

@@ -57,6 +57,11 @@ class Worker {
     void close_connection(std::uint32_t index) noexcept;
     void maybe_release(std::uint32_t index) noexcept;
 
+    void stash(std::uint32_t index, std::uint16_t bid, std::uint32_t size) noexcept;
+    void drain_stash(std::uint32_t index) noexcept;
+    void drop_stash(std::uint32_t index) noexcept;
+    // Pauses reading when the output queue is over the cap. True when paused.
+    bool check_backpressure(std::uint32_t index) noexcept;
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
     // False when the connection was closed (fault drop).
     bool on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcept;
@@ -97,6 +102,8 @@ class Worker {
     std::uint32_t lru_tail_ = kNoConn;
     std::uint32_t open_here_ = 0;
     BlockPool pool_;
+    std::vector<std::uint16_t> stash_next_;  // per buffer id
+    std::vector<std::uint32_t> stash_size_;  // per buffer id
 
     ServerCounters counters_;
     std::atomic<int> init_status_{0};

@@ -29,14 +29,23 @@ inline constexpr std::size_t kOutcomeCount = 11;
 
 // snake_case name used in JSON and console output, e.g. "connection_closed".
 constexpr std::string_view outcome_name(Outcome outcome) noexcept {
-    constexpr std::array<std::string_view, kOutcomeCount> kNames = {
-        "ok",        "exception",    "timeout",         "connection_closed",
-        "connect_failed", "malformed", "unknown_id",   "duplicate_id",
-        "wrong_unit_id", "wrong_function", "value_mismatch"};
+    constexpr std::array<std::string_view, kOutcomeCount> kNames = {"ok",
+                                                                    "exception",
+                                                                    "timeout",
+                                                                    "connection_closed",
+                                                                    "connect_failed",
+                                                                    "malformed",
+                                                                    "unknown_id",
+                                                                    "duplicate_id",
+                                                                    "wrong_unit_id",
+                                                                    "wrong_function",
+                                                                    "value_mismatch"};
     const auto i = static_cast<std::size_t>(outcome);
     return i < kOutcomeCount ? kNames[i] : std::string_view{"unknown"};
 }
-constexpr bool is_error(Outcome outcome) noexcept { return outcome != Outcome::Ok; }
+constexpr bool is_error(Outcome outcome) noexcept {
+    return outcome != Outcome::Ok;
+}
 
 struct OutcomeCounters {
     std::array<std::uint64_t, kOutcomeCount> outcomes{};  // indexed by Outcome

@@ -21,14 +21,22 @@ bool parse_duration_ns(std::string_view text, std::uint64_t& out_ns,
     std::string_view unit = text.substr(digits);
     while (!unit.empty() && unit.front() == ' ') unit.remove_prefix(1);
     double scale;
-    if (unit.empty()) scale = static_cast<double>(default_unit_ns);
-    else if (unit == "ns") scale = 1;
-    else if (unit == "us" || unit == "\xC2\xB5s") scale = 1e3;
-    else if (unit == "ms") scale = 1e6;
-    else if (unit == "s") scale = 1e9;
-    else if (unit == "m" || unit == "min") scale = 60e9;
-    else if (unit == "h") scale = 3600e9;
-    else return false;
+    if (unit.empty())
+        scale = static_cast<double>(default_unit_ns);
+    else if (unit == "ns")
+        scale = 1;
+    else if (unit == "us" || unit == "\xC2\xB5s")
+        scale = 1e3;
+    else if (unit == "ms")
+        scale = 1e6;
+    else if (unit == "s")
+        scale = 1e9;
+    else if (unit == "m" || unit == "min")
+        scale = 60e9;
+    else if (unit == "h")
+        scale = 3600e9;
+    else
+        return false;
     double ns = number * scale;
     if (ns > 1.8e19) return false;
     out_ns = static_cast<std::uint64_t>(std::llround(ns));

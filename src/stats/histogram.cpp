@@ -25,8 +25,8 @@ std::uint64_t rank_for_percentile(double percentile, std::uint64_t total) noexce
     const double p = std::clamp(percentile, 0.0, 100.0);
     const double exact = p / 100.0 * static_cast<double>(total);
     const double nearest = std::round(exact);
-    double rank = std::fabs(exact - nearest) <= 1e-9 * std::max(1.0, exact) ? nearest
-                                                                             : std::ceil(exact);
+    double rank =
+        std::fabs(exact - nearest) <= 1e-9 * std::max(1.0, exact) ? nearest : std::ceil(exact);
     rank = std::clamp(rank, 1.0, static_cast<double>(total));
     return static_cast<std::uint64_t>(rank);
 }
@@ -34,8 +34,8 @@ std::uint64_t rank_for_percentile(double percentile, std::uint64_t total) noexce
 }  // namespace
 
 Histogram::Histogram(std::uint64_t highest_trackable_ns)
-    : highest_trackable_(
-          std::clamp<std::uint64_t>(highest_trackable_ns, 2 * kSubBucketCount, kMaxHighestTrackable)),
+    : highest_trackable_(std::clamp<std::uint64_t>(highest_trackable_ns, 2 * kSubBucketCount,
+                                                   kMaxHighestTrackable)),
       bucket_count_(buckets_to_cover(highest_trackable_)),
       counts_length_(static_cast<std::size_t>(bucket_count_ + 1) * kSubBucketHalfCount),
       counts_(new std::uint64_t[counts_length_]()) {}
@@ -168,8 +168,7 @@ double Histogram::stddev() const noexcept {
     long double deviation_total = 0.0L;
     for (std::size_t i = 0; i < counts_length_; ++i) {
         if (counts_[i] == 0) continue;
-        const long double dev =
-            static_cast<long double>(median_equivalent(value_at_index(i))) - mu;
+        const long double dev = static_cast<long double>(median_equivalent(value_at_index(i))) - mu;
         deviation_total += dev * dev * static_cast<long double>(counts_[i]);
     }
     return static_cast<double>(std::sqrt(deviation_total / static_cast<long double>(total_count_)));
@@ -188,7 +187,8 @@ std::uint64_t Histogram::value_at_percentile(double percentile) const noexcept {
 
 PercentileIterator::PercentileIterator(const Histogram& histogram,
                                        std::uint32_t ticks_per_half_distance)
-    : histogram_(histogram), ticks_per_half_distance_(std::max<std::uint32_t>(1, ticks_per_half_distance)) {}
+    : histogram_(histogram),
+      ticks_per_half_distance_(std::max<std::uint32_t>(1, ticks_per_half_distance)) {}
 
 bool PercentileIterator::next(PercentilePoint& out) noexcept {
     const std::uint64_t total = histogram_.total_count();

@@ -19,7 +19,7 @@
 namespace mbstorm::stats {
 
 class Histogram {
-public:
+  public:
     static constexpr std::uint64_t kOneHourNs = 3'600'000'000'000ULL;
     static constexpr int kSignificantDigits = 3;
     static constexpr int kSubBucketHalfCountMagnitude = 10;
@@ -101,7 +101,7 @@ public:
                (sub_bucket - kSubBucketHalfCount);
     }
 
-private:
+  private:
     std::uint64_t highest_trackable_;
     std::uint32_t bucket_count_;
     std::size_t counts_length_;
@@ -123,11 +123,12 @@ struct PercentilePoint {
 // the distance to 100%, then one last point at exactly 100%. Yields nothing when empty.
 // The histogram must outlive the iterator and stay unchanged while iterating.
 class PercentileIterator {
-public:
-    explicit PercentileIterator(const Histogram& histogram, std::uint32_t ticks_per_half_distance = 5);
+  public:
+    explicit PercentileIterator(const Histogram& histogram,
+                                std::uint32_t ticks_per_half_distance = 5);
     bool next(PercentilePoint& out) noexcept;
 
-private:
+  private:
     const Histogram& histogram_;
     std::uint32_t ticks_per_half_distance_;
     std::size_t index_ = 0;

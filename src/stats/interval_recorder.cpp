@@ -97,8 +97,7 @@ void IntervalTimeline::contribute(std::uint32_t contributor, std::uint64_t index
     if (contributor < done_before_.size()) {
         done_before_[contributor] = std::max(done_before_[contributor], index + 1);
     }
-    const std::uint64_t all_done =
-        *std::min_element(done_before_.begin(), done_before_.end());
+    const std::uint64_t all_done = *std::min_element(done_before_.begin(), done_before_.end());
     while (next_to_summarize_ < all_done) summarize_next();
 }
 

@@ -46,7 +46,7 @@ IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_n
 class IntervalTimeline;
 
 class IntervalRecorder {
-public:
+  public:
     // interval_ns > 0. Offsets are ns since the run start (the same origin for all workers).
     explicit IntervalRecorder(std::uint64_t interval_ns,
                               std::uint64_t highest_trackable_ns = Histogram::kOneHourNs);
@@ -73,7 +73,7 @@ public:
     std::uint64_t errors() const noexcept { return errors_; }
     void clear() noexcept;
 
-private:
+  private:
     void roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
                    std::uint32_t contributor) noexcept;
 
@@ -86,7 +86,7 @@ private:
 };
 
 class IntervalTimeline {
-public:
+  public:
     // contributors: number of IntervalRecorders (worker threads) feeding this timeline.
     // max_intervals: cap on stored summaries (reserve run_duration / interval + a few);
     // intervals beyond it are counted in dropped_intervals().
@@ -109,7 +109,7 @@ public:
     std::uint64_t dropped_intervals() const;
     std::uint64_t late_contributions() const;
 
-private:
+  private:
     static constexpr std::size_t kPendingSlots = 4;
     struct Pending {
         Histogram latency;

@@ -30,13 +30,13 @@ struct RunMetadata {
     std::uint32_t connections = 0;  // total across threads
     std::uint32_t depth = 0;        // requests in flight per connection (closed loop)
     LoadModel model = LoadModel::Closed;
-    double rate_per_second = 0.0;          // open loop target rate (0 for closed)
+    double rate_per_second = 0.0;             // open loop target rate (0 for closed)
     std::uint64_t requested_duration_ns = 0;  // what the user asked for
     std::uint64_t measured_duration_ns = 0;   // what was measured (throughput divides by this)
     std::uint64_t warmup_ns = 0;
     std::chrono::system_clock::time_point start_time{};  // wall clock at run start
-    bool coordinated_omission_corrected = false;  // closed loop histograms back-filled
-    std::vector<std::string> notes;  // e.g. "embedded slave on 127.0.0.1:15020"
+    bool coordinated_omission_corrected = false;         // closed loop histograms back-filled
+    std::vector<std::string> notes;                      // e.g. "embedded slave on 127.0.0.1:15020"
 };
 
 struct OperationResult {

@@ -22,6 +22,8 @@ inline ByteVec hex_bytes(std::string_view text) {
     return out;
 }
 
-inline ByteVec to_vec(Bytes b) { return ByteVec(b.begin(), b.end()); }
+inline ByteVec to_vec(Bytes b) {
+    return ByteVec(b.begin(), b.end());
+}
 
 }  // namespace mbstorm::codec::framing_test

@@ -64,8 +64,7 @@ TEST(MbapDecode, HeaderErrors) {
     TcpFrame f;
     EXPECT_EQ(decode_tcp_frame(hex_bytes("00 01 00 00 00 00 01"), f), CodecError::LengthZero);
     EXPECT_EQ(decode_tcp_frame(hex_bytes("00 01 00 00 00 01 01"), f), CodecError::LengthOne);
-    EXPECT_EQ(decode_tcp_frame(hex_bytes("00 01 00 00 00 FF 01 03"), f),
-              CodecError::LengthTooLong);
+    EXPECT_EQ(decode_tcp_frame(hex_bytes("00 01 00 00 00 FF 01 03"), f), CodecError::LengthTooLong);
     // A bad protocol id still yields the frame, so a server can skip it.
     const ByteVec a = hex_bytes("00 01 00 01 00 02 01 07");
     ASSERT_EQ(decode_tcp_frame(a, f), CodecError::BadProtocolId);

@@ -227,12 +227,14 @@ TEST(SeedTcp, HeadersAndFramesDecode) {
         EXPECT_EQ(f.header.unit_id, a[6]);
         EXPECT_EQ(to_vec(f.pdu), ByteVec(a.begin() + 7, a.end()));
         std::array<std::uint8_t, limits::kMaxTcpAdu> out{};
-        const EncodeResult r = encode_tcp_frame(f.header.transaction_id, f.header.unit_id, f.pdu, out);
+        const EncodeResult r =
+            encode_tcp_frame(f.header.transaction_id, f.header.unit_id, f.pdu, out);
         ASSERT_TRUE(r.ok());
         EXPECT_EQ(to_vec(Bytes(out.data(), r.size)), a);
     }
     TcpFrame f;
-    ASSERT_EQ(decode_tcp_frame(hex_bytes("97 76 00 00 00 06 04 04 00 7D 00 7D"), f), CodecError::Ok);
+    ASSERT_EQ(decode_tcp_frame(hex_bytes("97 76 00 00 00 06 04 04 00 7D 00 7D"), f),
+              CodecError::Ok);
     EXPECT_EQ(f.header.transaction_id, 0x9776);
 }
 
@@ -268,8 +270,8 @@ TEST(SeedTcp, MaximumSizeReplyAndItsFloats) {
     ASSERT_EQ(regs.size(), 125u);
     const float want[] = {9.5419f, 1.16f, 1.16f, 1.18f, 1.19f, -3.7f};
     for (std::size_t i = 0; i < std::size(want); ++i) {
-        const float got = f32_from_registers(std::span<const std::uint16_t, 2>(&regs[2 * i], 2),
-                                             WordOrder::CDAB);
+        const float got =
+            f32_from_registers(std::span<const std::uint16_t, 2>(&regs[2 * i], 2), WordOrder::CDAB);
         EXPECT_NEAR(got, want[i], 1e-4) << i;
     }
 }
@@ -284,8 +286,8 @@ TEST(SeedTcp, PipelinedSeedStreamSplitsAtEverySplitPoint) {
     for (std::size_t cut = 0; cut <= stream.size(); ++cut) {
         MbapSplitter sp;
         std::vector<ByteVec> got;
-        for (const Bytes chunk : {Bytes(stream.data(), cut),
-                                  Bytes(stream.data() + cut, stream.size() - cut)}) {
+        for (const Bytes chunk :
+             {Bytes(stream.data(), cut), Bytes(stream.data() + cut, stream.size() - cut)}) {
             sp.feed(chunk);
             TcpFrame f;
             MbapSplitter::Status st;

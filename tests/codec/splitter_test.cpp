@@ -225,10 +225,8 @@ struct BadLength {
     CodecError error;
 };
 constexpr BadLength kBadLengths[] = {
-    {0, CodecError::LengthZero},
-    {1, CodecError::LengthOne},
-    {255, CodecError::LengthTooLong},
-    {256, CodecError::LengthTooLong},
+    {0, CodecError::LengthZero},         {1, CodecError::LengthOne},
+    {255, CodecError::LengthTooLong},    {256, CodecError::LengthTooLong},
     {0xFFFF, CodecError::LengthTooLong},
 };
 
@@ -246,7 +244,8 @@ TEST(MbapSplitter, BadLengthAtEveryFrameBoundaryAndEverySplitIsFatalAfterSevenBy
                 for (int i = 0; i < 20; ++i) stream.push_back(0x03);
                 for (std::size_t cut = 0; cut <= stream.size(); ++cut) {
                     const Outcome o = run(stream, {cut});
-                    ASSERT_TRUE(o.fatal) << "len " << bad.length << " pos " << pos << " cut " << cut;
+                    ASSERT_TRUE(o.fatal)
+                        << "len " << bad.length << " pos " << pos << " cut " << cut;
                     EXPECT_EQ(o.error, bad.error);
                     expect_frames(o, before, "frames before a bad header");
                     // Reported in the call that made the 7th header byte available.

@@ -24,7 +24,7 @@ constexpr WordOrder kOrders[] = {WordOrder::ABCD, WordOrder::CDAB, WordOrder::BA
 
 TEST(Bits, PacksLsbFirstWithZeroPadding) {
     const std::array<bool, 10> bits = {true, false, true, true, false, false, true, true,  // CD
-                                       true, false};                                    // 01
+                                       true, false};                                       // 01
     std::array<std::uint8_t, 4> out;
     out.fill(0xEE);
     const EncodeResult r = pack_bits(bits, out);
@@ -64,8 +64,8 @@ TEST(Bits, UnpackAndPaddingCheck) {
     const ByteVec packed = {0xCD, 0x01};
     std::array<bool, 10> bits{};
     ASSERT_TRUE(unpack_bits(packed, bits));
-    const std::array<bool, 10> want = {true, false, true, true, false,
-                                       false, true, true, true, false};
+    const std::array<bool, 10> want = {true,  false, true, true, false,
+                                       false, true,  true, true, false};
     EXPECT_EQ(bits, want);
     EXPECT_TRUE(bit_at(packed, 8));
     EXPECT_FALSE(bit_at(packed, 9));
@@ -122,9 +122,12 @@ TEST(WordOrder, KnownFloats) {
     EXPECT_EQ(f32_from_registers(Registers2{0x0000, 0xC120}, WordOrder::CDAB), -10.0f);
     // 1.0 = 0x3FF0000000000000; pi = 0x400921FB54442D18.
     EXPECT_EQ(registers_from_f64(1.0, WordOrder::ABCD), (Registers4{0x3FF0, 0, 0, 0}));
-    EXPECT_EQ(registers_from_f64(M_PI, WordOrder::ABCD), (Registers4{0x4009, 0x21FB, 0x5444, 0x2D18}));
-    EXPECT_EQ(registers_from_f64(M_PI, WordOrder::DCBA), (Registers4{0x182D, 0x4454, 0xFB21, 0x0940}));
-    EXPECT_EQ(f64_from_registers(Registers4{0x2D18, 0x5444, 0x21FB, 0x4009}, WordOrder::CDAB), M_PI);
+    EXPECT_EQ(registers_from_f64(M_PI, WordOrder::ABCD),
+              (Registers4{0x4009, 0x21FB, 0x5444, 0x2D18}));
+    EXPECT_EQ(registers_from_f64(M_PI, WordOrder::DCBA),
+              (Registers4{0x182D, 0x4454, 0xFB21, 0x0940}));
+    EXPECT_EQ(f64_from_registers(Registers4{0x2D18, 0x5444, 0x21FB, 0x4009}, WordOrder::CDAB),
+              M_PI);
 }
 
 TEST(WordOrder, KnownIntegers) {
@@ -132,7 +135,8 @@ TEST(WordOrder, KnownIntegers) {
     EXPECT_EQ(registers_from_i32(-2, WordOrder::CDAB), (Registers2{0xFFFE, 0xFFFF}));
     EXPECT_EQ(i32_from_registers(Registers2{0x8000, 0x0000}, WordOrder::ABCD),
               std::numeric_limits<std::int32_t>::min());
-    EXPECT_EQ(registers_from_i64(-1, WordOrder::BADC), (Registers4{0xFFFF, 0xFFFF, 0xFFFF, 0xFFFF}));
+    EXPECT_EQ(registers_from_i64(-1, WordOrder::BADC),
+              (Registers4{0xFFFF, 0xFFFF, 0xFFFF, 0xFFFF}));
     EXPECT_EQ(i64_from_registers(Registers4{0xFEFF, 0xFFFF, 0xFFFF, 0xFFFF}, WordOrder::DCBA), -2);
     EXPECT_EQ(u32_from_registers(Registers2{0x0001, 0x0000}, WordOrder::CDAB), 1u);
 }
@@ -196,8 +200,8 @@ TEST(Table, Names) {
     EXPECT_EQ(table_name(Table::DiscreteInputs), "discrete_inputs");
     EXPECT_EQ(table_name(Table::InputRegisters), "input_registers");
     EXPECT_EQ(table_name(Table::HoldingRegisters), "holding_registers");
-    for (Table t : {Table::Coils, Table::DiscreteInputs, Table::InputRegisters,
-                    Table::HoldingRegisters}) {
+    for (Table t :
+         {Table::Coils, Table::DiscreteInputs, Table::InputRegisters, Table::HoldingRegisters}) {
         Table back = Table::Coils;
         ASSERT_TRUE(table_from_name(table_name(t), back));
         EXPECT_EQ(back, t);
@@ -231,9 +235,9 @@ TEST(Reference, ParsesEveryTable) {
 
 TEST(Reference, RejectsInvalid) {
     Reference r;
-    for (const char* s : {"", "4", "4000", "40000", "400000", "465537", "499999", "20001",
-                          "50001", "90001", "4000a", "4 001", "-40001", "+40001", "0000001",
-                          "4000001", "x0001", "40001 "}) {
+    for (const char* s :
+         {"", "4", "4000", "40000", "400000", "465537", "499999", "20001", "50001", "90001",
+          "4000a", "4 001", "-40001", "+40001", "0000001", "4000001", "x0001", "40001 "}) {
         EXPECT_FALSE(parse_reference(s, r)) << s;
     }
 }
@@ -252,8 +256,8 @@ TEST(Reference, Formats) {
 }
 
 TEST(Reference, FormatThenParseRoundTripsEveryOffset) {
-    for (Table t : {Table::Coils, Table::DiscreteInputs, Table::InputRegisters,
-                    Table::HoldingRegisters}) {
+    for (Table t :
+         {Table::Coils, Table::DiscreteInputs, Table::InputRegisters, Table::HoldingRegisters}) {
         for (std::uint32_t off = 0; off <= 0xFFFF; ++off) {
             const Reference want{t, static_cast<std::uint16_t>(off)};
             for (bool six : {false, true}) {

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <regex>
 #include <string>
 
 #include "report/units.hpp"
@@ -83,16 +85,16 @@ TEST(Progress, LineShowsRatePercentilesErrorsConnections) {
     ProgressSample sample{12.0, &last, 500'000, 3, 64};
     const std::string line = format_progress_line(sample);
     EXPECT_TRUE(contains(line, "12.0s")) << line;
-    EXPECT_TRUE(contains(line, "48.2k tx/s")) << line;
-    EXPECT_TRUE(contains(line, "p50  210µs")) << line;
-    EXPECT_TRUE(contains(line, "p99  1.20ms")) << line;
-    EXPECT_TRUE(contains(line, "max  3.40ms")) << line;
+    EXPECT_TRUE(std::regex_search(line, std::regex(" 48.2k tx/s"))) << line;
+    EXPECT_TRUE(std::regex_search(line, std::regex("p50 +210µs"))) << line;
+    EXPECT_TRUE(std::regex_search(line, std::regex("p99 +1.20ms"))) << line;
+    EXPECT_TRUE(std::regex_search(line, std::regex("max +3.40ms"))) << line;
     EXPECT_TRUE(contains(line, "errors 3")) << line;
     EXPECT_TRUE(contains(line, "conns 64")) << line;
     EXPECT_EQ(line.find('\n'), std::string::npos);
 
     sample.last_interval = nullptr;
-    EXPECT_TRUE(contains(format_progress_line(sample), "p50       -"));
+    EXPECT_TRUE(std::regex_search(format_progress_line(sample), std::regex("p50 +- ")));
 }
 
 std::string printed(bool tty) {

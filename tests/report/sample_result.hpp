@@ -44,7 +44,7 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
 
     std::mt19937_64 rng(42);
     std::lognormal_distribution<double> base(std::log(180e3), 0.35);  // ~180 µs
-    std::exponential_distribution<double> tail(1.0 / 4e6);           // ms-scale tail
+    std::exponential_distribution<double> tail(1.0 / 4e6);            // ms-scale tail
     stats::IntervalTimeline timeline(kS, 1, seconds + 1);
     stats::IntervalRecorder recorder(kS);
     constexpr std::uint64_t kPerSecond = 2000;
@@ -57,7 +57,8 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
         stats::StageResult* stage = nullptr;
         if (with_stages) stage = &r.stages[std::min<std::uint64_t>(second / stage_len, 2)];
         // Throughput ramps in the first stage.
-        if (second < stage_len && (i % kPerSecond) > kPerSecond * (second + 1) / stage_len) continue;
+        if (second < stage_len && (i % kPerSecond) > kPerSecond * (second + 1) / stage_len)
+            continue;
         double latency = base(rng);
         if (i % 97 == 0) latency += tail(rng);
         if (spike) latency *= 3.0;
@@ -65,22 +66,32 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
 
         stats::Outcome outcome = stats::Outcome::Ok;
         std::uint8_t exception = 0;
-        if (i % 1009 == 0) outcome = stats::Outcome::Timeout;
-        else if (i % 733 == 0) { outcome = stats::Outcome::Exception; exception = 0x02; }
-        else if (spike && i % 211 == 0) { outcome = stats::Outcome::Exception; exception = 0x06; }
-        else if (i % 4999 == 0) outcome = stats::Outcome::WrongUnitId;
+        if (i % 1009 == 0)
+            outcome = stats::Outcome::Timeout;
+        else if (i % 733 == 0) {
+            outcome = stats::Outcome::Exception;
+            exception = 0x02;
+        } else if (spike && i % 211 == 0) {
+            outcome = stats::Outcome::Exception;
+            exception = 0x06;
+        } else if (i % 4999 == 0)
+            outcome = stats::Outcome::WrongUnitId;
 
         for (stats::OutcomeCounters* c : {&r.counters, &op.counters}) {
             c->transactions_sent += 1;
             c->bytes_sent += 12;
             c->bytes_received += outcome == stats::Outcome::Timeout ? 0 : 13;
-            if (outcome == stats::Outcome::Exception) c->record_exception(exception);
-            else c->record(outcome);
+            if (outcome == stats::Outcome::Exception)
+                c->record_exception(exception);
+            else
+                c->record(outcome);
         }
         if (stage != nullptr) {
             stage->counters.transactions_sent += 1;
-            if (outcome == stats::Outcome::Exception) stage->counters.record_exception(exception);
-            else stage->counters.record(outcome);
+            if (outcome == stats::Outcome::Exception)
+                stage->counters.record_exception(exception);
+            else
+                stage->counters.record(outcome);
         }
         recorder.record_transaction(outcome != stats::Outcome::Ok);
         if (outcome == stats::Outcome::Timeout) continue;  // no latency for timeouts

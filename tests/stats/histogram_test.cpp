@@ -18,8 +18,8 @@ constexpr std::uint64_t kS = 1'000'000'000;
 std::uint64_t exact_percentile(const std::vector<std::uint64_t>& sorted, double p) {
     const double exact = p / 100.0 * static_cast<double>(sorted.size());
     const double nearest = std::round(exact);
-    double rank = std::fabs(exact - nearest) <= 1e-9 * std::max(1.0, exact) ? nearest
-                                                                             : std::ceil(exact);
+    double rank =
+        std::fabs(exact - nearest) <= 1e-9 * std::max(1.0, exact) ? nearest : std::ceil(exact);
     rank = std::clamp(rank, 1.0, static_cast<double>(sorted.size()));
     return sorted[static_cast<std::size_t>(rank) - 1];
 }
@@ -32,8 +32,8 @@ void expect_matches_samples(std::vector<std::uint64_t> samples, const char* what
     ASSERT_EQ(h.total_count(), samples.size());
     EXPECT_EQ(h.min(), samples.front());
     EXPECT_EQ(h.max(), samples.back());
-    for (double p : {0.0, 1.0, 10.0, 25.0, 50.0, 75.0, 90.0, 95.0, 99.0, 99.9, 99.99, 99.999,
-                     100.0}) {
+    for (double p :
+         {0.0, 1.0, 10.0, 25.0, 50.0, 75.0, 90.0, 95.0, 99.0, 99.9, 99.99, 99.999, 100.0}) {
         const std::uint64_t exact = exact_percentile(samples, p);
         const std::uint64_t got = h.value_at_percentile(p);
         // HdrHistogram semantics: the highest value equivalent to the exact sample...
@@ -116,7 +116,8 @@ TEST(Histogram, ValuesAtBucketEdges) {
     }
     // Repeat with multiplicities so percentiles land on different edges.
     std::vector<std::uint64_t> weighted;
-    for (std::size_t i = 0; i < samples.size(); ++i) weighted.insert(weighted.end(), 1 + i % 7, samples[i]);
+    for (std::size_t i = 0; i < samples.size(); ++i)
+        weighted.insert(weighted.end(), 1 + i % 7, samples[i]);
     expect_matches_samples(weighted, "bucket edges");
 }
 
@@ -254,10 +255,10 @@ Histogram naive_corrected(std::uint64_t value, std::uint64_t interval) {
 
 TEST(Histogram, CoordinatedOmissionCorrectionMatchesHdrLoop) {
     for (auto [value, interval] : std::vector<std::pair<std::uint64_t, std::uint64_t>>{
-             {10 * kMs, kMs},        // few back-filled samples: the plain loop
-             {kMs, 2 * kMs},         // below the interval: nothing back-filled
-             {3 * kMs, kMs},         // exactly divisible
-             {kS + 17, 997},         // ~1M back-filled samples: the per-bucket path
+             {10 * kMs, kMs},  // few back-filled samples: the plain loop
+             {kMs, 2 * kMs},   // below the interval: nothing back-filled
+             {3 * kMs, kMs},   // exactly divisible
+             {kS + 17, 997},   // ~1M back-filled samples: the per-bucket path
              {40 * kMs, 1234}}) {
         SCOPED_TRACE(testing::Message() << value << "/" << interval);
         Histogram fast;

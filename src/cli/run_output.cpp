@@ -1,0 +1,65 @@
+#include "cli/run_output.hpp"
+
+#include <fmt/format.h>
+
+#include "cli/commands.hpp"
+#include "report/files.hpp"
+#include "report/hgrm.hpp"
+#include "report/html.hpp"
+#include "report/json.hpp"
+
+namespace mbstorm::cli {
+
+void add_output_options(CLI::App* cmd, OutputFiles& files) {
+    cmd->add_option("--json", files.json, "write a machine-readable summary (schema: docs/json-schema.md)");
+    cmd->add_option("--hdr", files.hdr, "write the latency distribution in HdrHistogram's .hgrm format");
+    cmd->add_option("--html", files.html, "write a self-contained HTML report with plots");
+}
+
+void LiveProgress::update(const load::ProgressSnapshot& s) {
+    if (quiet_) return;
+    last_.index = s.interval_index;
+    last_.transactions = static_cast<std::uint64_t>(s.transactions_per_second);
+    last_.duration_ns = 1'000'000'000ULL;
+    last_.errors = s.errors;
+    last_.p50_ns = s.p50_ns;
+    last_.p99_ns = s.p99_ns;
+    last_.max_ns = s.max_ns;
+    report::ProgressSample sample;
+    sample.elapsed_seconds = s.elapsed_seconds;
+    sample.last_interval = &last_;
+    sample.total_transactions = s.total_transactions;
+    sample.total_errors = s.errors;
+    sample.open_connections = s.open_connections;
+    printer_.update(sample);
+}
+
+int report_run(load::LoadResult& result, const OutputFiles& files) {
+    for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
+    if (!result.ok && result.run.counters.transactions_sent == 0) {
+        fmt::print(stderr, "mbstorm run: {}\n", result.error);
+        return kExitUsage;
+    }
+    if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
+    // Everything measured is reported, even after an early end.
+    fmt::print("{}", report::format_console_report(result.run));
+    if (result.pending_at_end)
+        fmt::print("  {} transaction(s) still pending when the run ended\n", result.pending_at_end);
+    int code = kExitOk;
+    auto write = [&code](const std::string& path, const std::string& content, const char* what) {
+        if (path.empty()) return;
+        std::string error;
+        if (!report::write_text_file(path, content, error)) {
+            fmt::print(stderr, "mbstorm run: cannot write {} {}: {}\n", what, path, error);
+            code = kExitUsage;
+        } else {
+            fmt::print("wrote {} {}\n", what, path);
+        }
+    };
+    write(files.json, report::format_json(result.run), "JSON summary");
+    write(files.hdr, report::format_hgrm(result.run.latency), ".hgrm distribution");
+    write(files.html, report::format_html(result.run), "HTML report");
+    return code;
+}
+
+}  // namespace mbstorm::cli

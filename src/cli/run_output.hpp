@@ -1,0 +1,37 @@
+// What `mbstorm run` prints while it runs and writes when it ends.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <string>
+
+#include "load/engine.hpp"
+#include "report/console.hpp"
+
+namespace mbstorm::cli {
+
+struct OutputFiles {
+    std::string json, hdr, html;
+};
+
+void add_output_options(CLI::App* cmd, OutputFiles& files);
+
+// Live progress on stderr: one updating line on a terminal, plain lines otherwise.
+class LiveProgress {
+public:
+    LiveProgress(std::FILE* out, bool quiet) : printer_(out), quiet_(quiet) {}
+    void update(const load::ProgressSnapshot& s);
+    void finish() { if (!quiet_) printer_.finish(); }
+
+private:
+    report::ProgressPrinter printer_;
+    bool quiet_;
+    stats::IntervalSummary last_{};
+};
+
+// Prints the final report and writes the requested files. Returns the exit code: 2 when the
+// run could not start, 0 otherwise (thresholds are the scenario layer's business).
+int report_run(load::LoadResult& result, const OutputFiles& files);
+
+}  // namespace mbstorm::cli

@@ -1,0 +1,81 @@
+// Steady state allocates nothing: counts every operator new in this test binary while a
+// pipelined load runs against an in-process server.
+#include <gtest/gtest.h>
+
+// The replacement operators below pair malloc with free on purpose.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "server/server.hpp"
+#include "test_client.hpp"
+
+namespace {
+std::atomic<std::uint64_t> g_allocations{0};
+}
+
+void* operator new(std::size_t n) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+    return operator new(n);
+}
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+    return std::malloc(n ? n : 1);
+}
+void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept {
+    return operator new(n, t);
+}
+void operator delete(void* p) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p) noexcept {
+    std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    std::free(p);
+}
+
+using namespace mbstorm;
+
+TEST(ZeroAlloc, SteadyStatePipelinedLoadAllocatesNothing) {
+    auto config = test::test_config();
+    server::Server srv(config);
+    ASSERT_TRUE(srv.start());
+    constexpr int kDepth = 64;
+    constexpr int kConns = 4;
+    std::vector<test::Client> clients;
+    for (int i = 0; i < kConns; ++i) clients.emplace_back(srv);
+    std::vector<std::uint8_t> requests;
+    for (int i = 0; i < kDepth; ++i) {
+        auto r = test::read_holding(static_cast<std::uint16_t>(i), 1, 0, 10);
+        requests.insert(requests.end(), r.begin(), r.end());
+    }
+    std::vector<std::uint8_t> responses(kDepth * test::read_holding_response_size(10));
+    auto round = [&]() {
+        bool ok = true;
+        for (auto& c : clients) ok &= c.send_all(requests.data(), requests.size());
+        for (auto& c : clients) ok &= c.recv_exact(responses.data(), responses.size());
+        return ok;
+    };
+    for (int i = 0; i < 200; ++i) ASSERT_TRUE(round());  // warm-up: pools reach their size
+    const std::uint64_t before = g_allocations.load();
+    bool ok = true;
+    for (int i = 0; i < 2000 && ok; ++i) ok = round();
+    const std::uint64_t after = g_allocations.load();
+    ASSERT_TRUE(ok);
+    EXPECT_EQ(after - before, 0u) << "allocations during " << 2000 * kDepth * kConns
+                                  << " transactions";
+    EXPECT_GE(srv.stats().transactions, 2200u * kDepth * kConns);
+}
