@@ -18,7 +18,9 @@ namespace {
 
 std::atomic<bool> g_stop{false};
 
-void on_signal(int) { g_stop = true; }
+void on_signal(int) {
+    g_stop = true;
+}
 
 [[noreturn]] void usage(const char* error = nullptr) {
     if (error) std::fprintf(stderr, "load_driver: %s\n", error);
@@ -54,29 +56,44 @@ int main(int argc, char** argv) {
             return std::chrono::duration_cast<load::Duration>(
                 std::chrono::duration<double>(std::strtod(v, nullptr)));
         };
-        if (a == "-c" || a == "--connections") plan.connections = std::strtoul(value(), nullptr, 10);
-        else if (a == "--depth") plan.depth = std::strtoul(value(), nullptr, 10);
-        else if (a == "-d" || a == "--duration") plan.duration = seconds(value());
-        else if (a == "-n" || a == "--transactions") plan.transactions = std::strtoull(value(), nullptr, 10);
-        else if (a == "--threads" || a == "-t") plan.threads = std::strtoul(value(), nullptr, 10);
+        if (a == "-c" || a == "--connections")
+            plan.connections = std::strtoul(value(), nullptr, 10);
+        else if (a == "--depth")
+            plan.depth = std::strtoul(value(), nullptr, 10);
+        else if (a == "-d" || a == "--duration")
+            plan.duration = seconds(value());
+        else if (a == "-n" || a == "--transactions")
+            plan.transactions = std::strtoull(value(), nullptr, 10);
+        else if (a == "--threads" || a == "-t")
+            plan.threads = std::strtoul(value(), nullptr, 10);
         else if (a == "--rate") {
             plan.rate = std::strtod(value(), nullptr);
             plan.model = load::LoadModel::OpenLoop;
-        } else if (a == "--poisson") plan.arrival = load::Arrival::Poisson;
-        else if (a == "--fc") op.function = static_cast<std::uint8_t>(std::strtoul(value(), nullptr, 0));
-        else if (a == "--quantity") op.quantity = static_cast<std::uint16_t>(std::strtoul(value(), nullptr, 10));
-        else if (a == "--range") range = std::strtoul(value(), nullptr, 10);
-        else if (a == "--warmup") plan.warmup = seconds(value());
-        else if (a == "--quiet" || a == "-q") quiet = true;
-        else if (a == "-h" || a == "--help") usage();
-        else if (!a.empty() && a[0] != '-' && target.empty()) target = a;
-        else usage(fmt::format("unknown argument {}", a).c_str());
+        } else if (a == "--poisson")
+            plan.arrival = load::Arrival::Poisson;
+        else if (a == "--fc")
+            op.function = static_cast<std::uint8_t>(std::strtoul(value(), nullptr, 0));
+        else if (a == "--quantity")
+            op.quantity = static_cast<std::uint16_t>(std::strtoul(value(), nullptr, 10));
+        else if (a == "--range")
+            range = std::strtoul(value(), nullptr, 10);
+        else if (a == "--warmup")
+            plan.warmup = seconds(value());
+        else if (a == "--quiet" || a == "-q")
+            quiet = true;
+        else if (a == "-h" || a == "--help")
+            usage();
+        else if (!a.empty() && a[0] != '-' && target.empty())
+            target = a;
+        else
+            usage(fmt::format("unknown argument {}", a).c_str());
     }
     if (target.empty()) usage("no target given");
     const auto colon = target.rfind(':');
     if (colon == std::string::npos) usage("target must be HOST:PORT");
     plan.host = target.substr(0, colon);
-    if (plan.host.size() > 2 && plan.host.front() == '[') plan.host = plan.host.substr(1, plan.host.size() - 2);
+    if (plan.host.size() > 2 && plan.host.front() == '[')
+        plan.host = plan.host.substr(1, plan.host.size() - 2);
     plan.port = static_cast<std::uint16_t>(std::strtoul(target.c_str() + colon + 1, nullptr, 10));
     op.first_address = 0;
     op.last_address = static_cast<std::uint16_t>(std::min<std::uint32_t>(range, 65536) - 1);
@@ -89,7 +106,9 @@ int main(int argc, char** argv) {
     options.stop = &g_stop;
     if (!quiet) {
         options.on_progress = [](const load::ProgressSnapshot& s) {
-            std::fprintf(stderr, "[%3llus] %10.0f tx/s  p50 %8.1f us  p99 %8.1f us  max %8.1f us  errors %llu  conns %u\n",
+            std::fprintf(stderr,
+                         "[%3llus] %10.0f tx/s  p50 %8.1f us  p99 %8.1f us  max %8.1f us  errors "
+                         "%llu  conns %u\n",
                          static_cast<unsigned long long>(s.interval_index + 1),
                          s.transactions_per_second, s.p50_ns / 1e3, s.p99_ns / 1e3, s.max_ns / 1e3,
                          static_cast<unsigned long long>(s.errors), s.open_connections);
@@ -99,10 +118,11 @@ int main(int argc, char** argv) {
     if (!r.ok) std::fprintf(stderr, "load_driver: %s\n", r.error.c_str());
     const auto& h = r.run.latency;
     const auto& k = r.run.counters;
-    fmt::print("target {} model {} threads {} connections {} depth {}{}\n", r.run.metadata.target,
-               stats::load_model_name(r.run.metadata.model), r.run.metadata.threads,
-               plan.connections, plan.depth,
-               plan.model == load::LoadModel::OpenLoop ? fmt::format(" rate {:.0f}/s", plan.rate) : "");
+    fmt::print(
+        "target {} model {} threads {} connections {} depth {}{}\n", r.run.metadata.target,
+        stats::load_model_name(r.run.metadata.model), r.run.metadata.threads, plan.connections,
+        plan.depth,
+        plan.model == load::LoadModel::OpenLoop ? fmt::format(" rate {:.0f}/s", plan.rate) : "");
     fmt::print("transactions {} ok {} errors {} in {:.3f}s: {:.0f} tx/s\n", k.transactions_sent,
                k.ok(), k.errors(), r.run.metadata.measured_duration_ns / 1e9, r.run.throughput());
     fmt::print("latency us: p50 {:.1f}  p90 {:.1f}  p99 {:.1f}  p99.9 {:.1f}  max {:.1f}\n",
@@ -110,7 +130,8 @@ int main(int argc, char** argv) {
                h.value_at_percentile(99) / 1e3, h.value_at_percentile(99.9) / 1e3, h.max() / 1e3);
     for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
         if (i == 0 || k.outcomes[i] == 0) continue;
-        fmt::print("  {}: {}\n", stats::outcome_name(static_cast<stats::Outcome>(i)), k.outcomes[i]);
+        fmt::print("  {}: {}\n", stats::outcome_name(static_cast<stats::Outcome>(i)),
+                   k.outcomes[i]);
     }
     if (plan.model == load::LoadModel::OpenLoop) {
         fmt::print("late sends {} (max lag {:.1f} us)\n", r.run.schedule_lag.late_sends,
