@@ -40,6 +40,7 @@ struct RunOptions {
     std::string model = "closed";
     std::string arrival = "even";
     int value = 0;
+    int count = 0;
     std::uint64_t duration_ns = 10'000'000'000ULL;
     std::uint64_t warmup_ns = 0, timeout_ns = 1'000'000'000ULL, connect_timeout_ns = 3'000'000'000ULL;
     unsigned slave_threads = 0;
@@ -55,7 +56,8 @@ int fail(const std::string& msg) {
 // Fills the single-operation plan from flags; returns an error message or "".
 std::string build_plan(RunOptions& o) {
     auto& p = o.plan;
-    load::Operation op;
+    // Starts from the operation the flags filled (--unit, --zipf).
+    load::Operation op = p.operations.at(0);
     if (!codec::function_from_name(o.function, op.function)) {
         try {
             std::size_t used = 0;
@@ -94,11 +96,12 @@ std::string build_plan(RunOptions& o) {
     if (dash != std::string::npos) op.last_address = last;
     if (o.addr_mode == "uniform") op.address_mode = load::AddressMode::Uniform;
     else if (o.addr_mode == "zipf") op.address_mode = load::AddressMode::Zipf;
-    op.quantity = o.plan.operations.empty() ? op.quantity : o.plan.operations[0].quantity;
     op.values.value = static_cast<std::uint16_t>(o.value);
     op.name = std::string(codec::function_name(op.function));
     if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
-    op.quantity = o.plan.operations.empty() ? 10 : o.plan.operations[0].quantity;
+    // No --count: 10 for reads, 1 where the function has a fixed quantity of one.
+    op.quantity = o.count;
+    if (op.quantity == 0) op.quantity = (op.function == 5 || op.function == 6 || op.function == 0x16) ? 1 : 10;
     p.operations.assign(1, op);
 
     p.model = o.model == "open" || p.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
@@ -189,7 +192,6 @@ int run_load_test(RunOptions& o) {
 void add_run_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<RunOptions>();
     o->plan.operations.push_back({});
-    o->plan.operations[0].quantity = 10;
     o->plan.connections = 16;
     o->plan.depth = 16;
     auto& p = o->plan;
@@ -210,7 +212,7 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function, "function code or name (default 3, read_holding_registers)");
     cmd->add_option("--addr", o->address, "start address, range FIRST-LAST, or reference numbers 40001-40100");
-    cmd->add_option("--count", p.operations[0].quantity, "quantity per request")->check(CLI::Range(1, 2000))->capture_default_str();
+    cmd->add_option("--count", o->count, "quantity per request (default 10; 1 for FC05/06/16)")->check(CLI::Range(1, 2000));
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));

@@ -1,0 +1,403 @@
+#include "scenario/operation_yaml.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+
+namespace mbstorm::scenario {
+namespace {
+
+namespace lim = codec::limits;
+
+constexpr const char* kGeneratable =
+    "read_coils (1), read_discrete_inputs (2), read_holding_registers (3), "
+    "read_input_registers (4), write_single_coil (5), write_single_register (6), "
+    "read_exception_status (7), diagnostics (8), get_comm_event_counter (0x0B), "
+    "get_comm_event_log (0x0C), write_multiple_coils (0x0F), write_multiple_registers (0x10), "
+    "report_server_id (0x11), mask_write_register (0x16), read_write_multiple_registers (0x17), "
+    "read_fifo_queue (0x18), encapsulated_interface (0x2B)";
+
+std::uint8_t parse_function(const YamlReader& r, const YAML::Node& n) {
+    const std::string text = r.scalar(n, "function");
+    std::uint8_t fc = 0;
+    if (!codec::function_from_name(text, fc)) {
+        std::int64_t number = 0;
+        if (!YamlReader::parse_integer(text, number) || number < 1 || number > 127) {
+            r.fail(n, fmt::format("function '{}' is unknown (give a number or a name: {})", text,
+                                  kGeneratable));
+        }
+        fc = static_cast<std::uint8_t>(number);
+    }
+    if (!load::is_generatable_function(fc)) {
+        r.fail(n,
+               fmt::format("function 0x{:02X} cannot be generated (valid: {})", fc, kGeneratable));
+    }
+    return fc;
+}
+
+char table_digit(codec::Table t) {
+    switch (t) {
+        case codec::Table::Coils:
+            return '0';
+        case codec::Table::DiscreteInputs:
+            return '1';
+        case codec::Table::InputRegisters:
+            return '3';
+        case codec::Table::HoldingRegisters:
+            return '4';
+    }
+    return '?';
+}
+
+// One side of an address: a 0-based address (decimal or hex), or a Modicon reference number
+// (5 or 6 digits whose leading digit names the function's table: "40001" = holding register 0).
+struct AddressPart {
+    std::uint16_t address = 0;
+    bool reference = false;
+};
+
+bool parse_address_part(std::string_view text, std::optional<codec::Table> table,
+                        AddressPart& out) {
+    const bool all_digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+        return c >= '0' && c <= '9';
+    });
+    if (table && all_digits && (text.size() == 5 || text.size() == 6) &&
+        text.front() == table_digit(*table)) {
+        codec::Reference ref;
+        if (codec::parse_reference(text, ref) && ref.table == *table) {
+            out = {ref.offset, true};
+            return true;
+        }
+    }
+    std::int64_t v = 0;
+    if (!YamlReader::parse_integer(text, v) || v < 0 || v > 65535) return false;
+    out = {static_cast<std::uint16_t>(v), false};
+    return true;
+}
+
+void parse_address(const YamlReader& r, const YAML::Node& n, load::Operation& op) {
+    const std::string text = r.scalar(n, "address");
+    const auto table = function_table(op.function);
+    const std::string help =
+        table ? fmt::format(
+                    "give a 0-based address 0..65535, a range FIRST-LAST like 0-99, or "
+                    "{} reference numbers like {}0001-{}0100",
+                    codec::table_name(*table), table_digit(*table), table_digit(*table))
+              : std::string("give a 0-based address 0..65535 or a range FIRST-LAST");
+    const auto dash = text.find('-', 1);
+    AddressPart first, last;
+    if (!parse_address_part(text.substr(0, dash), table, first) ||
+        (dash != std::string::npos && !parse_address_part(text.substr(dash + 1), table, last))) {
+        r.fail(n, fmt::format("address '{}' is not an address ({})", text, help));
+    }
+    op.first_address = first.address;
+    op.last_address.reset();
+    if (dash == std::string::npos) return;
+    if (first.reference != last.reference) {
+        r.fail(n, fmt::format("address '{}' mixes a reference number and a 0-based address ({})",
+                              text, help));
+    }
+    if (last.address < first.address) {
+        r.fail(n, fmt::format("address range '{}' ends before it starts (FIRST must be <= LAST)",
+                              text));
+    }
+    op.last_address = last.address;
+}
+
+load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
+    load::ValueSpec spec;
+    if (n.IsScalar()) {
+        const std::string s = n.Scalar();
+        if (s == "random")
+            spec.mode = load::ValueMode::Random;
+        else if (s == "counter")
+            spec.mode = load::ValueMode::Counter;
+        else {
+            std::int64_t v = 0;
+            if (!YamlReader::parse_integer(s, v) || v < 0 || v > 65535) {
+                r.fail(n, fmt::format("values: '{}' is not a value 0..65535, random, counter or a "
+                                      "mapping {{mode: constant|counter|random|pattern, ...}}",
+                                      s));
+            }
+            spec.value = static_cast<std::uint16_t>(v);
+        }
+        return spec;
+    }
+    YAML::Node mode_node;
+    r.each_key(
+        n, "values", {"mode", "value", "start", "step", "pattern"},
+        [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
+            if (key == "mode") {
+                mode_node = v;
+                const std::string m =
+                    r.choice(v, "values.mode", {"constant", "counter", "random", "pattern"});
+                spec.mode = m == "constant"  ? load::ValueMode::Constant
+                            : m == "counter" ? load::ValueMode::Counter
+                            : m == "random"  ? load::ValueMode::Random
+                                             : load::ValueMode::Pattern;
+            } else if (key == "value" || key == "start") {
+                spec.value = static_cast<std::uint16_t>(r.integer(v, "values." + key, 0, 65535));
+            } else if (key == "step") {
+                spec.step = static_cast<std::uint16_t>(r.integer(v, "values.step", 0, 65535));
+            } else {
+                if (!v.IsSequence() || v.size() == 0) {
+                    r.fail(v, "values.pattern must be a list of at least one value 0..65535");
+                }
+                for (const auto& item : v) {
+                    spec.pattern.push_back(static_cast<std::uint16_t>(
+                        r.integer(item, "values.pattern entry", 0, 65535)));
+                }
+            }
+        });
+    if (!mode_node) {
+        // The keys given say which mode is meant.
+        if (!spec.pattern.empty())
+            spec.mode = load::ValueMode::Pattern;
+        else if (n["start"] || n["step"])
+            spec.mode = load::ValueMode::Counter;
+    }
+    if (spec.mode == load::ValueMode::Pattern && spec.pattern.empty()) {
+        r.fail(n, "values: mode pattern needs `pattern: [v1, v2, ...]` (at least one value)");
+    }
+    if (!spec.pattern.empty() && spec.mode != load::ValueMode::Pattern) {
+        r.fail(n, "values: `pattern` is only used with mode: pattern");
+    }
+    return spec;
+}
+
+Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::Operation& op) {
+    if (!can_expect(op.function)) {
+        r.fail(n, fmt::format("expect: {} returns no values to check (valid for functions 1, 2, 3, "
+                              "4 and 0x17)",
+                              codec::function_name(op.function)));
+    }
+    const bool bits = op.function == 0x01 || op.function == 0x02;
+    const std::int64_t hi = bits ? 1 : 65535;
+    Expectation e;
+    e.active = true;
+    e.first_address = op.first_address;
+    YAML::Node values_node;
+    r.each_key(n, "expect", {"value", "min", "max", "values"},
+               [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
+                   const std::string what = "expect." + key;
+                   if (key == "value")
+                       e.value = static_cast<std::uint16_t>(r.integer(v, what, 0, hi));
+                   else if (key == "min")
+                       e.min = static_cast<std::uint16_t>(r.integer(v, what, 0, hi));
+                   else if (key == "max")
+                       e.max = static_cast<std::uint16_t>(r.integer(v, what, 0, hi));
+                   else {
+                       values_node = v;
+                       if (!v.IsSequence() || v.size() == 0) {
+                           r.fail(v, fmt::format("{} must be a list of values 0..{}", what, hi));
+                       }
+                       for (const auto& item : v) {
+                           e.values.push_back(static_cast<std::uint16_t>(
+                               r.integer(item, "expect.values entry", 0, hi)));
+                       }
+                   }
+               });
+    if (!e.value && !e.min && !e.max && e.values.empty()) {
+        r.fail(n, "expect: give at least one of value, min, max, values");
+    }
+    if (e.min && e.max && *e.min > *e.max) {
+        r.fail(n, fmt::format("expect: min {} is greater than max {}", *e.min, *e.max));
+    }
+    if (values_node) {
+        const std::uint32_t span = op.quantity;
+        const std::uint32_t last = op.last_address ? *op.last_address : op.first_address + span - 1;
+        const std::uint32_t needed = last - op.first_address + 1;
+        if (e.values.size() < needed) {
+            r.fail(values_node, fmt::format("expect.values has {} entries but the operation reads "
+                                            "addresses {}..{} ({} needed, one per address)",
+                                            e.values.size(), op.first_address, last, needed));
+        }
+    }
+    return e;
+}
+
+}  // namespace
+
+std::optional<codec::Table> function_table(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x01:
+        case 0x05:
+        case 0x0F:
+            return codec::Table::Coils;
+        case 0x02:
+            return codec::Table::DiscreteInputs;
+        case 0x04:
+            return codec::Table::InputRegisters;
+        case 0x03:
+        case 0x06:
+        case 0x10:
+        case 0x16:
+        case 0x17:
+        case 0x18:
+            return codec::Table::HoldingRegisters;
+        default:
+            return std::nullopt;
+    }
+}
+
+QuantityLimits quantity_limits(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x01:
+        case 0x02:
+            return {1, lim::kMaxReadBits};
+        case 0x03:
+        case 0x04:
+            return {1, lim::kMaxReadRegisters};
+        case 0x0F:
+            return {1, lim::kMaxWriteCoils};
+        case 0x10:
+            return {1, lim::kMaxWriteRegisters};
+        case 0x17:
+            return {1, lim::kMaxRwReadRegisters};
+        case 0x05:
+        case 0x06:
+        case 0x16:
+            return {1, 1};
+        default:
+            return {};
+    }
+}
+
+bool takes_values(std::uint8_t fc) noexcept {
+    switch (fc) {
+        case 0x05:
+        case 0x06:
+        case 0x0F:
+        case 0x10:
+        case 0x16:
+        case 0x17:
+            return true;
+        default:
+            return false;
+    }
+}
+
+ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std::size_t index) {
+    ParsedOperation out;
+    load::Operation& op = out.operation;
+    const std::string what = fmt::format("operations[{}]", index);
+    if (!node.IsMap()) r.fail(node, what + " must be a mapping (function, address, quantity, ...)");
+    // The function decides what the other keys mean, so read it first.
+    if (const YAML::Node fn = node["function"]) {
+        op.function = parse_function(r, fn);
+    } else {
+        r.fail(node, what +
+                         ": `function` is required (a number like 3 or a name like "
+                         "read_holding_registers)");
+    }
+    const QuantityLimits q = quantity_limits(op.function);
+    op.quantity = q.max == 1 ? 1 : 10;
+    const std::string fname(codec::function_name(op.function));
+
+    YAML::Node address_node, quantity_node, expect_node, thresholds_node, zipf_node;
+    r.each_key(
+        node, what,
+        {"name", "function", "unit", "address", "quantity", "distribution", "zipf_exponent",
+         "values", "weight", "write_quantity", "and_mask", "device_id_code", "expect",
+         "thresholds"},
+        [&](const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
+            auto only_for = [&](bool ok, const char* valid) {
+                if (!ok) {
+                    r.fail(key_node,
+                           fmt::format("{} does not apply to {} (only to {})", key, fname, valid));
+                }
+            };
+            if (key == "name") {
+                op.name = r.scalar(v, "name");
+                if (op.name.empty()) r.fail(v, "name must not be empty");
+                out.named = true;
+            } else if (key == "function") {
+                // read above
+            } else if (key == "unit") {
+                op.unit_id = static_cast<std::uint8_t>(r.integer(v, "unit", 0, 255));
+            } else if (key == "address") {
+                only_for(function_table(op.function).has_value(),
+                         "functions with an address: 1-6, 0x0F, 0x10, 0x16, 0x17, 0x18");
+                address_node = v;
+            } else if (key == "quantity") {
+                only_for(q.max != 0, "functions with a quantity: 1-6, 0x0F, 0x10, 0x16, 0x17");
+                quantity_node = v;
+                op.quantity = static_cast<std::uint16_t>(
+                    r.integer(v, fmt::format("quantity for {}", fname), q.min, q.max));
+            } else if (key == "distribution") {
+                const std::string d =
+                    r.choice(v, "distribution", {"sequential", "uniform", "zipf"});
+                op.address_mode = d == "uniform" ? load::AddressMode::Uniform
+                                  : d == "zipf"  ? load::AddressMode::Zipf
+                                                 : load::AddressMode::Sequential;
+            } else if (key == "zipf_exponent") {
+                zipf_node = v;
+                op.zipf_exponent = r.number(v, "zipf_exponent", 0, load::kMaxZipfExponent);
+                if (op.zipf_exponent <= 0) {
+                    r.fail(v,
+                           fmt::format("zipf_exponent: 0 is out of range (valid > 0 and <= {:g})",
+                                       load::kMaxZipfExponent));
+                }
+            } else if (key == "values") {
+                only_for(takes_values(op.function), "writes: 5, 6, 0x0F, 0x10, 0x16, 0x17");
+                op.values = parse_values(r, v);
+            } else if (key == "weight") {
+                op.weight = static_cast<std::uint32_t>(r.integer(v, "weight", 1, 4294967295LL));
+            } else if (key == "write_quantity") {
+                only_for(op.function == 0x17, "read_write_multiple_registers (0x17)");
+                op.write_quantity = static_cast<std::uint16_t>(
+                    r.integer(v, "write_quantity", 1, lim::kMaxRwWriteRegisters));
+            } else if (key == "and_mask") {
+                only_for(op.function == 0x16, "mask_write_register (0x16)");
+                op.and_mask = static_cast<std::uint16_t>(r.integer(v, "and_mask", 0, 65535));
+            } else if (key == "device_id_code") {
+                only_for(op.function == 0x2B, "encapsulated_interface (0x2B)");
+                op.device_id_code = static_cast<std::uint8_t>(
+                    r.integer(v, "device_id_code", lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
+            } else if (key == "expect") {
+                expect_node = v;
+            } else if (key == "thresholds") {
+                thresholds_node = v;
+            }
+        });
+    if (zipf_node && op.address_mode != load::AddressMode::Zipf) {
+        r.fail(zipf_node, "zipf_exponent is only used with distribution: zipf");
+    }
+    if (address_node) parse_address(r, address_node, op);
+    if (function_table(op.function)) {
+        // The whole block must fit the address space and the range.
+        const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
+                                                       : std::max<std::uint16_t>(op.quantity, 1);
+        const YAML::Node& at = address_node ? address_node : (quantity_node ? quantity_node : node);
+        if (op.first_address + span - 1 > 0xFFFF) {
+            r.fail(at, fmt::format("address {} + quantity {} runs past 65535 (the first address "
+                                   "must be <= {})",
+                                   op.first_address, span, 0x10000 - span));
+        }
+        if (op.last_address && *op.last_address - op.first_address + 1U < span) {
+            r.fail(at, fmt::format("address range {}-{} holds {} items but each request needs {} "
+                                   "(widen the range or lower the quantity)",
+                                   op.first_address, *op.last_address,
+                                   *op.last_address - op.first_address + 1, span));
+        }
+    }
+    if (op.name.empty()) op.name = fname;
+    if (expect_node) out.expect = parse_expect(r, expect_node, op);
+    if (thresholds_node) {
+        if (!thresholds_node.IsSequence()) {
+            r.fail(thresholds_node, "thresholds must be a list of expressions like \"p99 < 5ms\"");
+        }
+        for (const auto& t : thresholds_node) {
+            ThresholdSpec spec;
+            std::string error;
+            if (!parse_threshold(r.scalar(t, "threshold"), spec, error)) r.fail(t, error);
+            out.thresholds.push_back(std::move(spec));
+        }
+    }
+    return out;
+}
+
+}  // namespace mbstorm::scenario

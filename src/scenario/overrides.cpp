@@ -1,0 +1,128 @@
+// Command-line overrides and the whole-scenario checks run after them.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "scenario/scenario.hpp"
+#include "scenario/yaml_reader.hpp"
+
+namespace mbstorm::scenario {
+
+std::vector<std::string> validate_scenario(const Scenario& s) {
+    std::vector<std::string> problems;
+    load::Plan check = s.plan;
+    if (s.target.empty()) {
+        check.host = "127.0.0.1";
+        check.port = 1;  // the embedded slave's port is not known yet
+    } else {
+        std::string error;
+        if (!parse_target(s.target, check.host, check.port, error)) {
+            problems.push_back("target: " + error);
+        }
+    }
+    if (!s.stages.empty()) {
+        // Stages are run by the scenario layer (see runner.cpp); the engine sees one step at a
+        // time, so check the plan with a positive rate standing in for the stage rates.
+        check.stages.clear();
+        check.duration = s.total_duration();
+        if (check.model == load::LoadModel::OpenLoop && check.rate <= 0) check.rate = 1;
+        if (check.transactions != 0) {
+            problems.push_back("transactions: not supported with stages (stages end by time)");
+        }
+        for (std::size_t i = 0; i < s.stages.size(); ++i) {
+            const StageSpec& st = s.stages[i];
+            if (st.duration <= load::Duration::zero()) {
+                problems.push_back(
+                    fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
+                                duration_text(st.duration)));
+            }
+            if (st.rate && check.model == load::LoadModel::ClosedLoop) {
+                problems.push_back(fmt::format("stages[{}]: rate needs an open-loop scenario", i));
+            }
+        }
+    }
+    for (auto& p : load::validate_plan(check)) problems.push_back(std::move(p));
+    if (s.expectations.size() != s.plan.operations.size() && !s.expectations.empty()) {
+        problems.push_back("internal: expectations do not match the operations");
+    }
+    for (const auto& t : s.thresholds) {
+        if (t.operation.empty()) continue;
+        const bool known =
+            std::any_of(s.plan.operations.begin(), s.plan.operations.end(),
+                        [&](const load::Operation& op) { return op.name == t.operation; });
+        if (!known) {
+            problems.push_back(
+                fmt::format("threshold '{}': no operation is named '{}'", t.text, t.operation));
+        }
+    }
+    return problems;
+}
+
+std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
+    load::Plan& p = s.plan;
+    std::vector<std::string> problems;
+    if (o.target) {
+        std::string host, error;
+        std::uint16_t port = 0;
+        if (!parse_target(*o.target, host, port, error)) {
+            problems.push_back("--target " + error);
+            return problems;
+        }
+        s.target = *o.target;
+    }
+    if (o.duration) {
+        if (s.stages.empty()) {
+            p.duration = *o.duration;
+        } else if (o.duration->count() <= 0) {
+            problems.push_back("--duration 0 cannot scale the stages (valid > 0s)");
+        } else {
+            // Keep the shape of the schedule, compressed or stretched to the new length.
+            const double factor = static_cast<double>(o.duration->count()) /
+                                  static_cast<double>(s.total_duration().count());
+            for (auto& st : s.stages) {
+                st.duration = load::Duration(std::max<std::int64_t>(
+                    1'000'000, std::llround(static_cast<double>(st.duration.count()) * factor)));
+            }
+            p.duration = s.total_duration();
+        }
+        // A warm-up longer than the new run would leave nothing to measure.
+        if (!o.warmup && p.warmup >= p.duration) p.warmup = load::Duration::zero();
+    }
+    if (o.warmup) p.warmup = *o.warmup;
+    if (o.connections) {
+        p.connections = *o.connections;
+        for (auto& st : s.stages) st.connections.reset();
+    }
+    if (o.depth) p.depth = *o.depth;
+    if (o.threads) p.threads = *o.threads;
+    if (o.rate) {
+        p.rate = *o.rate;
+        p.model = *o.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
+        s.model = p.model;
+        for (auto& st : s.stages) st.rate.reset();
+    }
+    if (o.transactions) p.transactions = *o.transactions;
+    if (o.transaction_timeout) p.transaction_timeout = *o.transaction_timeout;
+    if (o.connect_timeout) p.connect_timeout = *o.connect_timeout;
+    if (o.connect_rate) p.connect_rate = *o.connect_rate;
+    if (o.seed) p.seed = *o.seed;
+    if (o.slave_threads) s.slave_threads = *o.slave_threads;
+    if (o.allow_writes) p.allow_writes = true;
+    for (auto& problem : validate_scenario(s)) problems.push_back(std::move(problem));
+    return problems;
+}
+
+Scenario scenario_from_plan(const load::Plan& plan, const std::string& target) {
+    Scenario s;
+    s.source = "<command line>";
+    s.name = "command-line";
+    s.target = target;
+    s.plan = plan;
+    s.plan.stages.clear();
+    s.model = plan.model;
+    s.expectations.assign(plan.operations.size(), Expectation{});
+    return s;
+}
+
+}  // namespace mbstorm::scenario

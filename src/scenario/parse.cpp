@@ -1,0 +1,379 @@
+// Top level of a scenario file; operations are in operation_yaml.cpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "scenario/operation_yaml.hpp"
+#include "scenario/scenario.hpp"
+#include "scenario/yaml_reader.hpp"
+
+namespace mbstorm::scenario {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr load::Duration kMaxRunTime = std::chrono::hours(24 * 366);
+
+std::string stem_of(std::string_view source) {
+    std::string s(source);
+    if (const auto slash = s.find_last_of('/'); slash != std::string::npos) s.erase(0, slash + 1);
+    if (const auto dot = s.find_last_of('.'); dot != std::string::npos && dot > 0) s.erase(dot);
+    return s;
+}
+
+StageSpec parse_stage(const YamlReader& r, const YAML::Node& n, std::size_t index) {
+    StageSpec st;
+    st.name = fmt::format("stage {}", index + 1);
+    const std::string what = fmt::format("stages[{}]", index);
+    bool has_duration = false;
+    r.each_key(n, what, {"name", "duration", "rate", "connections", "ramp"},
+               [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
+                   if (key == "name")
+                       st.name = r.scalar(v, "name");
+                   else if (key == "duration") {
+                       st.duration = r.duration(v, "stage duration", 0s, kMaxRunTime, true);
+                       has_duration = true;
+                   } else if (key == "rate") {
+                       st.rate = r.number(v, "stage rate (transactions/s)", 0, load::kMaxRate);
+                   } else if (key == "connections") {
+                       st.connections = static_cast<std::uint32_t>(
+                           r.integer(v, "stage connections", 0, load::kMaxConnections));
+                   } else {
+                       st.ramp = r.choice(v, "ramp", {"linear", "constant"}) == "constant"
+                                     ? load::Ramp::Constant
+                                     : load::Ramp::Linear;
+                   }
+               });
+    if (!has_duration) r.fail(n, what + ": `duration` is required (valid > 0s, e.g. 30s)");
+    return st;
+}
+
+void check_target(const YamlReader& r, const YAML::Node& n, const std::string& text) {
+    std::string host, error;
+    std::uint16_t port = 0;
+    if (!parse_target(text, host, port, error)) r.fail(n, "target: " + error);
+}
+
+}  // namespace
+
+load::Duration Scenario::total_duration() const noexcept {
+    if (stages.empty()) return plan.duration;
+    load::Duration total{};
+    for (const auto& s : stages) total += s.duration;
+    return total;
+}
+
+bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
+                  std::string& error) {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos || colon + 1 == text.size() ||
+        (text.front() != '[' && text.find(':') != colon)) {
+        error =
+            fmt::format("'{}' needs a port: HOST:PORT or [IPv6]:PORT (e.g. 127.0.0.1:502)", text);
+        return false;
+    }
+    host = text.substr(0, colon);
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+        host = host.substr(1, host.size() - 2);
+    }
+    std::int64_t p = 0;
+    if (!YamlReader::parse_integer(text.substr(colon + 1), p) || p < 1 || p > 65535) {
+        error = fmt::format("'{}': the port must be 1..65535", text);
+        return false;
+    }
+    if (host.empty()) {
+        error = fmt::format("'{}': the host is empty", text);
+        return false;
+    }
+    port = static_cast<std::uint16_t>(p);
+    return true;
+}
+
+Scenario parse_scenario(std::string_view text, std::string_view source) {
+    const YamlReader r{std::string(source)};
+    YAML::Node root;
+    try {
+        root = YAML::Load(std::string(text));
+    } catch (const YAML::Exception& e) {
+        r.fail(e.mark, "YAML syntax: " + e.msg);
+    }
+    if (!root || root.IsNull()) {
+        r.fail(YAML::Mark::null_mark(), "the scenario is empty (give at least `operations:`)");
+    }
+    if (!root.IsMap())
+        r.fail(root, "a scenario must be a mapping of keys (target, operations, ...)");
+
+    Scenario s;
+    s.source = std::string(source);
+    s.name = stem_of(source);
+    load::Plan& p = s.plan;
+    p.connections = kDefaultConnections;
+    p.depth = kDefaultDepth;
+    p.operations.clear();
+
+    YAML::Node target_node, slave_node, duration_node, warmup_node, stages_node, ops_node,
+        thresholds_node, model_node, rate_node, transactions_node, backoff_node;
+    try {
+        r.each_key(
+            root, "the scenario", {"name",           "description",
+                                   "target",         "slave",
+                                   "slave_threads",  "threads",
+                                   "connections",    "depth",
+                                   "model",          "rate",
+                                   "arrival",        "duration",
+                                   "transactions",   "warmup",
+                                   "timeout",        "connect_timeout",
+                                   "connect_rate",   "reconnect_backoff",
+                                   "late_threshold", "allow_writes",
+                                   "seed",           "stage_step",
+                                   "stages",         "operations",
+                                   "thresholds"},
+            [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
+                if (key == "name")
+                    s.name = r.scalar(v, "name");
+                else if (key == "description")
+                    s.description = r.scalar(v, "description");
+                else if (key == "target") {
+                    target_node = v;
+                    s.target = r.scalar(v, "target");
+                    check_target(r, v, s.target);
+                } else if (key == "slave")
+                    slave_node = v;
+                else if (key == "slave_threads")
+                    s.slave_threads = static_cast<unsigned>(r.integer(v, "slave_threads", 0, 1024));
+                else if (key == "threads")
+                    p.threads = static_cast<std::uint32_t>(
+                        r.integer(v, "threads (0 = one per core)", 0, load::kMaxThreads));
+                else if (key == "connections")
+                    p.connections = static_cast<std::uint32_t>(
+                        r.integer(v, "connections", 1, load::kMaxConnections));
+                else if (key == "depth")
+                    p.depth = static_cast<std::uint32_t>(r.integer(v, "depth", 1, load::kMaxDepth));
+                else if (key == "model") {
+                    model_node = v;
+                    s.model = r.choice(v, "model", {"closed", "open"}) == "open"
+                                  ? load::LoadModel::OpenLoop
+                                  : load::LoadModel::ClosedLoop;
+                } else if (key == "rate") {
+                    rate_node = v;
+                    p.rate = r.number(v, "rate (transactions/s)", 0, load::kMaxRate);
+                } else if (key == "arrival")
+                    p.arrival = r.choice(v, "arrival", {"even", "poisson"}) == "poisson"
+                                    ? load::Arrival::Poisson
+                                    : load::Arrival::Even;
+                else if (key == "duration") {
+                    duration_node = v;
+                    p.duration = r.duration(v, "duration", 0s, kMaxRunTime);
+                } else if (key == "transactions") {
+                    transactions_node = v;
+                    p.transactions = static_cast<std::uint64_t>(
+                        r.integer(v, "transactions", 0, std::int64_t{1} << 62));
+                } else if (key == "warmup") {
+                    warmup_node = v;
+                    p.warmup = r.duration(v, "warmup", 0s, kMaxRunTime);
+                } else if (key == "timeout")
+                    p.transaction_timeout = r.duration(v, "timeout", 1ms, 1h);
+                else if (key == "connect_timeout")
+                    p.connect_timeout = r.duration(v, "connect_timeout", 0s, 1h, true);
+                else if (key == "connect_rate")
+                    p.connect_rate = r.number(v, "connect_rate (connections/s)", 1, 1e7);
+                else if (key == "reconnect_backoff") {
+                    backoff_node = v;
+                    r.each_key(
+                        v, "reconnect_backoff", {"min", "max"},
+                        [&](const std::string& k, const YAML::Node&, const YAML::Node& d) {
+                            (k == "min" ? p.reconnect_backoff_min : p.reconnect_backoff_max) =
+                                r.duration(d, "reconnect_backoff." + k, 0s, 1h);
+                        });
+                } else if (key == "late_threshold")
+                    p.late_threshold = r.duration(v, "late_threshold", 0s, 1h);
+                else if (key == "allow_writes")
+                    p.allow_writes = r.boolean(v, "allow_writes");
+                else if (key == "seed")
+                    p.seed =
+                        static_cast<std::uint64_t>(r.integer(v, "seed", 0, std::int64_t{1} << 62));
+                else if (key == "stage_step")
+                    s.stage_step = r.duration(v, "stage_step", 10ms, 1h);
+                else if (key == "stages")
+                    stages_node = v;
+                else if (key == "operations")
+                    ops_node = v;
+                else if (key == "thresholds")
+                    thresholds_node = v;
+            });
+
+        // Operations.
+        if (!ops_node) r.fail(root, "`operations` is required: a list of at least one operation");
+        if (!ops_node.IsSequence() || ops_node.size() == 0) {
+            r.fail(ops_node, "operations must be a list of at least one operation");
+        }
+        std::set<std::string> names;
+        std::vector<ParsedOperation> parsed;
+        for (std::size_t i = 0; i < ops_node.size(); ++i) {
+            parsed.push_back(parse_operation(r, ops_node[i], i));
+        }
+        // Explicit names must be unique; default names get a suffix when they collide.
+        for (std::size_t i = 0; i < parsed.size(); ++i) {
+            if (parsed[i].named && !names.insert(parsed[i].operation.name).second) {
+                r.fail(ops_node[i]["name"], fmt::format("operation name '{}' is used twice (names "
+                                                        "must be unique)",
+                                                        parsed[i].operation.name));
+            }
+        }
+        for (std::size_t i = 0; i < parsed.size(); ++i) {
+            auto& op = parsed[i].operation;
+            if (!parsed[i].named) {
+                std::string name = op.name;
+                for (int k = 2; names.count(name) != 0; ++k)
+                    name = fmt::format("{}_{}", op.name, k);
+                op.name = name;
+                names.insert(name);
+            }
+            for (auto& t : parsed[i].thresholds) t.operation = op.name;
+            p.operations.push_back(op);
+            s.expectations.push_back(parsed[i].expect);
+            s.thresholds.insert(s.thresholds.end(), parsed[i].thresholds.begin(),
+                                parsed[i].thresholds.end());
+        }
+
+        // Overall thresholds: "p99 < 5ms", or {operation: NAME, check: "p99 < 5ms"}.
+        if (thresholds_node) {
+            if (!thresholds_node.IsSequence()) {
+                r.fail(thresholds_node,
+                       "thresholds must be a list of expressions like \"p99 < 5ms\"");
+            }
+            for (const auto& t : thresholds_node) {
+                ThresholdSpec spec;
+                std::string error;
+                YAML::Node expr = t;
+                std::string op_name;
+                if (t.IsMap()) {
+                    expr = YAML::Node();
+                    YAML::Node op_node;
+                    r.each_key(t, "threshold", {"operation", "check"},
+                               [&](const std::string& k, const YAML::Node&, const YAML::Node& v) {
+                                   if (k == "operation") {
+                                       op_node = v;
+                                       op_name = r.scalar(v, "operation");
+                                   } else {
+                                       expr = v;
+                                   }
+                               });
+                    if (!expr) r.fail(t, "threshold: `check` is required (e.g. check: p99 < 5ms)");
+                    if (op_node && names.count(op_name) == 0) {
+                        r.fail(op_node,
+                               fmt::format("threshold: no operation is named '{}' (names: {})",
+                                           op_name, fmt::join(names, ", ")));
+                    }
+                }
+                if (!parse_threshold(r.scalar(expr, "threshold"), spec, error)) r.fail(expr, error);
+                spec.operation = op_name;
+                s.thresholds.push_back(std::move(spec));
+            }
+        }
+
+        // Stages.
+        if (stages_node) {
+            if (!stages_node.IsSequence() || stages_node.size() == 0) {
+                r.fail(stages_node, "stages must be a list of at least one stage");
+            }
+            if (duration_node) {
+                r.fail(duration_node,
+                       "duration: not used with stages (the run lasts the sum of the "
+                       "stage durations); remove it");
+            }
+            if (transactions_node) {
+                r.fail(transactions_node,
+                       "transactions: not supported with stages (stages end by "
+                       "time); remove it");
+            }
+            for (std::size_t i = 0; i < stages_node.size(); ++i) {
+                s.stages.push_back(parse_stage(r, stages_node[i], i));
+            }
+            p.duration = s.total_duration();
+        }
+
+        // The model: open loop when asked for, or when a rate is given anywhere.
+        bool stage_rate = false;
+        for (std::size_t i = 0; i < s.stages.size(); ++i) {
+            if (!s.stages[i].rate) continue;
+            stage_rate = true;
+            if (s.model == load::LoadModel::ClosedLoop) {
+                r.fail(stages_node[i]["rate"],
+                       "stage rate needs an open-loop scenario (model: open "
+                       "or no model key)");
+            }
+        }
+        p.model = s.model.value_or(p.rate > 0 || stage_rate ? load::LoadModel::OpenLoop
+                                                            : load::LoadModel::ClosedLoop);
+        if (p.model == load::LoadModel::OpenLoop && p.rate <= 0 && !stage_rate) {
+            r.fail(rate_node ? rate_node : model_node,
+                   fmt::format("rate: an open-loop run needs a rate > 0 (valid > 0..{:g} "
+                               "transactions/s)",
+                               load::kMaxRate));
+        }
+        if (rate_node && p.model == load::LoadModel::ClosedLoop && p.rate > 0) {
+            r.fail(rate_node,
+                   "rate: not used in a closed-loop run (model: closed); remove it or "
+                   "use model: open");
+        }
+
+        // Length of the run.
+        if (s.stages.empty() && p.duration == load::Duration::zero() && p.transactions == 0) {
+            r.fail(duration_node,
+                   "duration: 0s never ends the run (valid > 0s, or 0s with transactions >= 1)");
+        }
+        if (warmup_node && p.duration > load::Duration::zero() && p.warmup >= p.duration &&
+            s.stages.empty()) {
+            r.fail(warmup_node, fmt::format("warmup: {} leaves nothing to measure (valid 0s up to, "
+                                            "not including, the duration {})",
+                                            duration_text(p.warmup), duration_text(p.duration)));
+        }
+        if (backoff_node && p.reconnect_backoff_max < p.reconnect_backoff_min) {
+            r.fail(backoff_node,
+                   fmt::format("reconnect_backoff: max {} is below min {} (need min <= "
+                               "max)",
+                               duration_text(p.reconnect_backoff_max),
+                               duration_text(p.reconnect_backoff_min)));
+        }
+
+        // The embedded slave.
+        if (slave_node) {
+            if (target_node) {
+                r.fail(slave_node,
+                       "slave: only used with the embedded slave; remove `target` or "
+                       "`slave`");
+            }
+            try {
+                s.slave = slave::parse_device_node(slave_node, source);
+            } catch (const slave::DeviceYamlError& e) {
+                throw ScenarioError(e.what(), e.line(), e.column());
+            }
+            YAML::Emitter out;
+            out << slave_node;
+            s.slave_yaml = out.c_str();
+        }
+    } catch (const YAML::Exception& e) {  // e.g. a conversion yaml-cpp refused
+        r.fail(e.mark, e.msg);
+    }
+
+    // Anything the engine would still refuse (a backstop: the checks above come first).
+    if (auto problems = validate_scenario(s); !problems.empty()) {
+        r.fail(root, problems.front());
+    }
+    return s;
+}
+
+Scenario load_scenario_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw ScenarioError(path + ": cannot open the scenario file", 0, 0);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return parse_scenario(text.str(), path);
+}
+
+}  // namespace mbstorm::scenario

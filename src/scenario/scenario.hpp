@@ -1,0 +1,111 @@
+// A scenario: a load test described once in YAML (scenarios/README.md documents every key).
+// Parsing resolves it to plain data: the engine's load::Plan, the staged schedule, the
+// thresholds, the read-back checks and the embedded slave's settings. Every problem found in
+// a file is a ScenarioError whose message starts with "<file>:<line>:<column>: ".
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "load/plan.hpp"
+#include "scenario/expect.hpp"
+#include "scenario/threshold.hpp"
+#include "slave/device_yaml.hpp"
+
+namespace mbstorm::scenario {
+
+class ScenarioError : public std::runtime_error {
+  public:
+    ScenarioError(const std::string& message, int line, int column)
+        : std::runtime_error(message), line_(line), column_(column) {}
+    int line() const noexcept { return line_; }      // 1-based, 0 when unknown
+    int column() const noexcept { return column_; }  // 1-based, 0 when unknown
+
+  private:
+    int line_;
+    int column_;
+};
+
+// One stage of a staged run. `rate` / `connections` are the values reached at the end of the
+// stage; a linear stage ramps to them from the previous stage's end (the first stage from the
+// top-level values), a constant stage holds them for its whole duration.
+struct StageSpec {
+    std::string name;  // default "stage N"
+    load::Duration duration{};
+    std::optional<double> rate;                // open loop: transactions per second
+    std::optional<std::uint32_t> connections;  // open or closed loop
+    load::Ramp ramp = load::Ramp::Linear;
+};
+
+inline constexpr load::Duration kDefaultStageStep = std::chrono::seconds(1);
+inline constexpr std::uint32_t kDefaultConnections = 16;
+inline constexpr std::uint32_t kDefaultDepth = 16;
+
+struct Scenario {
+    std::string source;  // file name (for messages)
+    std::string name;    // default: the file name without directory and extension
+    std::string description;
+
+    // Empty: run against the embedded reference slave (configured by `slave`).
+    std::string target;
+    load::Plan plan;  // host/port filled once the target is known (see runner)
+    // Model asked for explicitly (`model:`); otherwise open loop when a rate is given.
+    std::optional<load::LoadModel> model;
+
+    std::vector<StageSpec> stages;
+    load::Duration stage_step = kDefaultStageStep;
+
+    std::vector<ThresholdSpec> thresholds;  // overall and per operation
+    std::vector<Expectation> expectations;  // one per operation (may be inactive)
+
+    // The embedded slave (used only when `target` is empty).
+    slave::DeviceDescription slave;
+    std::string slave_yaml;      // the `slave:` section as written, for --print-scenario
+    unsigned slave_threads = 0;  // 0: half the cores
+
+    // Sum of the stage durations, or plan.duration when there are no stages.
+    load::Duration total_duration() const noexcept;
+};
+
+// Parses scenario text. Throws ScenarioError (unknown keys, wrong types, out-of-range values,
+// each with the position and the valid range). The result passes validate_scenario().
+Scenario parse_scenario(std::string_view text, std::string_view source = "<scenario>");
+Scenario load_scenario_file(const std::string& path);
+
+// Values given on the command line; each set one replaces the file's value.
+struct Overrides {
+    std::optional<std::string> target;
+    std::optional<load::Duration> duration;  // with stages: the stages are scaled to fit
+    std::optional<load::Duration> warmup;
+    std::optional<std::uint32_t> connections;
+    std::optional<std::uint32_t> depth;
+    std::optional<std::uint32_t> threads;
+    std::optional<double> rate;  // also switches an unstaged closed-loop scenario to open loop
+    std::optional<std::uint64_t> transactions;
+    std::optional<load::Duration> transaction_timeout;
+    std::optional<load::Duration> connect_timeout;
+    std::optional<double> connect_rate;
+    std::optional<std::uint64_t> seed;
+    std::optional<unsigned> slave_threads;
+    bool allow_writes = false;
+};
+
+// Applies the overrides and re-checks the result: returns the problems (empty when usable).
+std::vector<std::string> apply_overrides(Scenario& scenario, const Overrides& overrides);
+
+// Whole-scenario checks that span keys (the plan, stages against the model). Empty when usable.
+std::vector<std::string> validate_scenario(const Scenario& scenario);
+
+// Builds the scenario a flag-only `mbstorm run` amounts to (for --print-scenario).
+Scenario scenario_from_plan(const load::Plan& plan, const std::string& target);
+
+// Parses "host:port" / "[v6]:port" into host and port; false with a message.
+bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
+                  std::string& error);
+
+}  // namespace mbstorm::scenario
