@@ -90,7 +90,8 @@ int main(int argc, char** argv) {
                     if (fd < 0) break;
                     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
                     if (static_cast<std::size_t>(fd) >= conns.size()) conns.resize(fd + 1);
-                    conns[fd] = Conn{fd};
+                    conns[fd] = Conn();
+                    conns[fd].fd = fd;
                     epoll_event cev{};
                     cev.events = EPOLLIN;
                     cev.data.u64 = static_cast<std::uint64_t>(fd);

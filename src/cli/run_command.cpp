@@ -13,6 +13,7 @@
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/run_output.hpp"
+#include "cli/run_scenario.hpp"
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
 #include "load/engine.hpp"
@@ -46,6 +47,9 @@ struct RunOptions {
     unsigned slave_threads = 0;
     bool quiet = false;
     OutputFiles outputs;
+    std::string scenario_file;  // `mbstorm run FILE`: see run_scenario.cpp
+    bool print_scenario = false;
+    std::string junit;
 };
 
 int fail(const std::string& msg) {
@@ -119,6 +123,8 @@ std::string build_plan(RunOptions& o) {
 int run_load_test(RunOptions& o) {
     if (o.plan.operations.empty()) o.plan.operations.push_back({});
     if (auto err = build_plan(o); !err.empty()) return fail(err);
+    if (o.print_scenario) return print_flag_scenario(o.plan, o.target);
+    if (!o.junit.empty()) return fail("--junit needs a scenario FILE (thresholds are set there)");
     auto& plan = o.plan;
 
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
@@ -187,6 +193,40 @@ int run_load_test(RunOptions& o) {
     return report_run(result, o.outputs);
 }
 
+// Flags given next to a scenario FILE override its values; the single-operation flags have no
+// meaning there (the file lists the operations).
+int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
+    for (const char* flag : {"--fc", "--addr", "--count", "--unit", "--addr-mode", "--zipf", "--value",
+                             "--model", "--arrival"}) {
+        if (cmd.count(flag) != 0)
+            return fail(fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
+    }
+    ScenarioRunRequest r;
+    r.file = o.scenario_file;
+    r.print = o.print_scenario;
+    r.junit = o.junit;
+    r.quiet = o.quiet;
+    r.outputs = o.outputs;
+    auto& ov = r.overrides;
+    const auto& p = o.plan;
+    auto given = [&cmd](const char* flag) { return cmd.count(flag) != 0; };
+    if (given("--target")) ov.target = o.target;
+    if (given("--duration")) ov.duration = std::chrono::nanoseconds(o.duration_ns);
+    if (given("--warmup")) ov.warmup = std::chrono::nanoseconds(o.warmup_ns);
+    if (given("--connections")) ov.connections = p.connections;
+    if (given("--depth")) ov.depth = p.depth;
+    if (given("--threads")) ov.threads = p.threads;
+    if (given("--rate")) ov.rate = p.rate;
+    if (given("--transactions")) ov.transactions = p.transactions;
+    if (given("--timeout")) ov.transaction_timeout = std::chrono::nanoseconds(o.timeout_ns);
+    if (given("--connect-timeout")) ov.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
+    if (given("--connect-rate")) ov.connect_rate = p.connect_rate;
+    if (given("--seed")) ov.seed = p.seed;
+    if (given("--slave-threads")) ov.slave_threads = o.slave_threads;
+    ov.allow_writes = p.allow_writes;
+    return run_scenario_file(r);
+}
+
 }  // namespace
 
 void add_run_command(CLI::App& app, Action& action) {
@@ -225,7 +265,13 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--seed", p.seed, "seed for address and value generators");
     cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
     add_output_options(cmd, o->outputs);
-    cmd->callback([o, &action] { action = [o] { return run_load_test(*o); }; });
+    cmd->add_option("file", o->scenario_file, "scenario file (YAML, see scenarios/README.md); flags override its values")
+        ->check(CLI::ExistingFile);
+    cmd->add_flag("--print-scenario", o->print_scenario, "print the fully resolved scenario (defaults included) as YAML and exit");
+    cmd->add_option("--junit", o->junit, "write the scenario's thresholds as JUnit XML test cases");
+    cmd->callback([o, cmd, &action] {
+        action = [o, cmd] { return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd); };
+    });
 }
 
 }  // namespace mbstorm::cli

@@ -32,7 +32,7 @@ struct Connection {
 
     std::unique_ptr<std::uint8_t[]> send_buffer;
     std::uint32_t send_half;
-    std::uint32_t queued = 0;     // bytes waiting in the queue half
+    std::uint32_t queued = 0;  // bytes waiting in the queue half
     std::uint32_t queue_half = 0;
     std::uint32_t inflight_len = 0;
     std::uint32_t inflight_done = 0;

@@ -41,7 +41,8 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.counters.add(w->stray);
         run.schedule_lag.late_sends += w->schedule_lag.late_sends;
         run.schedule_lag.total_lag_ns += w->schedule_lag.total_lag_ns;
-        run.schedule_lag.max_lag_ns = std::max(run.schedule_lag.max_lag_ns, w->schedule_lag.max_lag_ns);
+        run.schedule_lag.max_lag_ns =
+            std::max(run.schedule_lag.max_lag_ns, w->schedule_lag.max_lag_ns);
         run.connections.opened += w->connection_stats.opened;
         run.connections.failed += w->connection_stats.failed;
         run.connections.reconnects += w->connection_stats.reconnects;
@@ -89,7 +90,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         plan.duration.count() > 0
             ? static_cast<std::size_t>(plan.duration.count() / interval_ns) + 16
             : 86400;
-    stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads, max_intervals);
+    stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads,
+                                     max_intervals);
 
     std::atomic<bool> abort{false};
     std::atomic<bool> any_connected{false};
@@ -144,7 +146,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         const auto latest = timeline.latest();
         if (!latest || latest->index == reported) continue;
         // Only whole intervals: the last, partial one of a run would show a false rate.
-        const auto interval_end = static_cast<std::int64_t>((latest->index + 1) * latest->duration_ns);
+        const auto interval_end =
+            static_cast<std::int64_t>((latest->index + 1) * latest->duration_ns);
         if (measure_start_ns + interval_end > std::min(net::now_ns(), end_ns)) continue;
         reported = latest->index;
         total_transactions += latest->transactions;
@@ -177,7 +180,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     meta.threads = threads;
     meta.connections = plan.connections;
     meta.depth = plan.depth;
-    meta.model = plan.model == LoadModel::OpenLoop ? stats::LoadModel::Open : stats::LoadModel::Closed;
+    meta.model =
+        plan.model == LoadModel::OpenLoop ? stats::LoadModel::Open : stats::LoadModel::Closed;
     meta.rate_per_second = plan.model == LoadModel::OpenLoop ? plan.rate : 0.0;
     meta.requested_duration_ns = static_cast<std::uint64_t>(plan.duration.count());
     meta.measured_duration_ns = static_cast<std::uint64_t>(finished_ns - measure_start_ns);

@@ -35,8 +35,8 @@ using ProgressCallback = std::function<void(const ProgressSnapshot&)>;
 // Returns false on a mismatch, which is counted as Outcome::ValueMismatch. Called on worker
 // threads, concurrently: it must be thread-safe and must not allocate.
 struct ResponseVerifier {
-    bool (*check)(void* context, const RequestInfo& request, const codec::Response& response) =
-        nullptr;
+    bool (*check)(void* context, const RequestInfo& request,
+                  const codec::Response& response) = nullptr;
     void* context = nullptr;
 };
 

@@ -12,21 +12,41 @@ constexpr std::size_t kHeader = codec::limits::kMbapHeader;
 
 std::size_t max_pdu_size(const Operation& op) noexcept {
     switch (op.function) {
-        case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06: case 0x08: return 5;
-        case 0x07: case 0x0B: case 0x0C: case 0x11: return 1;
-        case 0x0F: return 6 + (op.quantity + 7u) / 8u;
-        case 0x10: return 6 + 2u * op.quantity;
-        case 0x16: return 7;
-        case 0x17: return 10 + 2u * op.write_quantity;
-        case 0x18: return 3;
-        case 0x2B: return 4;
-        default: return codec::limits::kMaxPdu;
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x05:
+        case 0x06:
+        case 0x08:
+            return 5;
+        case 0x07:
+        case 0x0B:
+        case 0x0C:
+        case 0x11:
+            return 1;
+        case 0x0F:
+            return 6 + (op.quantity + 7u) / 8u;
+        case 0x10:
+            return 6 + 2u * op.quantity;
+        case 0x16:
+            return 7;
+        case 0x17:
+            return 10 + 2u * op.write_quantity;
+        case 0x18:
+            return 3;
+        case 0x2B:
+            return 4;
+        default:
+            return codec::limits::kMaxPdu;
     }
 }
 
 }  // namespace
 
-std::size_t max_request_size(const Operation& op) noexcept { return kHeader + max_pdu_size(op); }
+std::size_t max_request_size(const Operation& op) noexcept {
+    return kHeader + max_pdu_size(op);
+}
 
 std::size_t max_request_size(const std::vector<Operation>& operations) noexcept {
     std::size_t size = kHeader + 1;
@@ -37,8 +57,8 @@ std::size_t max_request_size(const std::vector<Operation>& operations) noexcept 
 AddressPicker::AddressPicker(const Operation& op) noexcept
     : mode_(op.address_mode), first_(op.first_address) {
     positions_ = static_cast<std::uint32_t>(last_start_address(op)) - op.first_address + 1;
-    const std::uint32_t span =
-        op.function == 0x17 ? std::max(op.quantity, op.write_quantity) : std::max<std::uint16_t>(op.quantity, 1);
+    const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
+                                                   : std::max<std::uint16_t>(op.quantity, 1);
     stride_ = span;
     if (mode_ == AddressMode::Zipf) zipf_ = ZipfSampler(positions_, op.zipf_exponent);
 }
@@ -53,8 +73,12 @@ std::uint16_t AddressPicker::next(Rng& rng) noexcept {
             cursor_ += stride_;
             if (cursor_ >= positions_) cursor_ = 0;
             break;
-        case AddressMode::Uniform: offset = rng.below(positions_); break;
-        case AddressMode::Zipf: offset = zipf_.sample(rng) - 1; break;
+        case AddressMode::Uniform:
+            offset = rng.below(positions_);
+            break;
+        case AddressMode::Zipf:
+            offset = zipf_.sample(rng) - 1;
+            break;
     }
     return static_cast<std::uint16_t>(first_ + offset);
 }
@@ -62,13 +86,15 @@ std::uint16_t AddressPicker::next(Rng& rng) noexcept {
 std::uint16_t ValuePicker::next(Rng& rng) noexcept {
     if (spec_ == nullptr) return 0;
     switch (spec_->mode) {
-        case ValueMode::Constant: return spec_->value;
+        case ValueMode::Constant:
+            return spec_->value;
         case ValueMode::Counter: {
             const std::uint16_t v = counter_;
             counter_ = static_cast<std::uint16_t>(counter_ + spec_->step);
             return v;
         }
-        case ValueMode::Random: return static_cast<std::uint16_t>(rng.next() >> 48);
+        case ValueMode::Random:
+            return static_cast<std::uint16_t>(rng.next() >> 48);
         case ValueMode::Pattern: {
             if (spec_->pattern.empty()) return 0;
             const std::uint16_t v = spec_->pattern[pattern_index_];
@@ -83,11 +109,10 @@ bool ValuePicker::next_bit(Rng& rng) noexcept {
     const std::uint16_t v = next(rng);
     if (spec_ == nullptr) return false;
     return (spec_->mode == ValueMode::Constant || spec_->mode == ValueMode::Pattern) ? v != 0
-                                                                                      : (v & 1) != 0;
+                                                                                     : (v & 1) != 0;
 }
 
-OperationGenerator::OperationGenerator(const std::vector<Operation>& operations,
-                                       std::uint64_t seed)
+OperationGenerator::OperationGenerator(const std::vector<Operation>& operations, std::uint64_t seed)
     : operations_(operations), rng_(seed) {
     cumulative_weight_.reserve(operations.size());
     state_.reserve(operations.size());
@@ -103,8 +128,8 @@ std::uint16_t OperationGenerator::pick_operation() noexcept {
     if (cumulative_weight_.size() <= 1) return 0;
     const std::uint64_t total = cumulative_weight_.back();
     // 64x64->128 multiply-shift: uniform in [0, total) for any 64-bit total.
-    const auto r = static_cast<std::uint64_t>(
-        (static_cast<unsigned __int128>(rng_.next()) * total) >> 64);
+    const auto r =
+        static_cast<std::uint64_t>((static_cast<unsigned __int128>(rng_.next()) * total) >> 64);
     const auto it = std::upper_bound(cumulative_weight_.begin(), cumulative_weight_.end(), r);
     return static_cast<std::uint16_t>(it - cumulative_weight_.begin());
 }
@@ -129,7 +154,10 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
     codec::MutableBytes pdu_out = out.subspan(kHeader);
     codec::EncodeResult pdu{};
     switch (op.function) {
-        case 0x01: case 0x02: case 0x03: case 0x04:
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
             info.address = st.address.next(rng_);
             info.quantity = op.quantity;
             pdu = codec::encode_read_request(op.function, info.address, info.quantity, pdu_out);
@@ -158,7 +186,8 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
                     const std::size_t bytes = (op.quantity + 7u) / 8u;
                     std::fill_n(payload_.begin(), bytes, std::uint8_t{0});
                     for (std::uint16_t i = 0; i < op.quantity; ++i) {
-                        if (st.values.next_bit(rng_)) payload_[i / 8] |= std::uint8_t(1u << (i % 8));
+                        if (st.values.next_bit(rng_))
+                            payload_[i / 8] |= std::uint8_t(1u << (i % 8));
                     }
                     req.payload = codec::Bytes(payload_.data(), bytes);
                     break;
@@ -186,13 +215,16 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
                     }
                     req.payload = codec::Bytes(payload_.data(), 2u * op.write_quantity);
                     break;
-                case 0x18: req.address = info.address = st.address.next(rng_); break;
+                case 0x18:
+                    req.address = info.address = st.address.next(rng_);
+                    break;
                 case 0x2B:
                     req.mei_type = codec::kMeiReadDeviceId;
                     req.device_id_code = op.device_id_code;
                     req.object_id = 0;
                     break;
-                default: break;  // 07, 0B, 0C, 11: function code only
+                default:
+                    break;  // 07, 0B, 0C, 11: function code only
             }
             pdu = codec::encode_request(req, pdu_out);
             break;

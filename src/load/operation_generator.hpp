@@ -22,12 +22,12 @@ std::size_t max_request_size(const Operation& op) noexcept;
 std::size_t max_request_size(const std::vector<Operation>& operations) noexcept;
 
 class AddressPicker {
-public:
+  public:
     AddressPicker() = default;
     explicit AddressPicker(const Operation& op) noexcept;
     std::uint16_t next(Rng& rng) noexcept;
 
-private:
+  private:
     AddressMode mode_ = AddressMode::Sequential;
     std::uint16_t first_ = 0;
     std::uint32_t positions_ = 1;  // usable start addresses: first_ .. first_ + positions_ - 1
@@ -37,21 +37,21 @@ private:
 };
 
 class ValuePicker {
-public:
+  public:
     ValuePicker() = default;
     explicit ValuePicker(const ValueSpec& spec) : spec_(&spec), counter_(spec.value) {}
     std::uint16_t next(Rng& rng) noexcept;
     // Coils: on/off from the next value (Constant/Pattern: value != 0; Counter/Random: low bit).
     bool next_bit(Rng& rng) noexcept;
 
-private:
+  private:
     const ValueSpec* spec_ = nullptr;
     std::uint16_t counter_ = 0;
     std::size_t pattern_index_ = 0;
 };
 
 class OperationGenerator {
-public:
+  public:
     // `operations` must outlive the generator and be valid (validate_plan()).
     OperationGenerator(const std::vector<Operation>& operations, std::uint64_t seed);
 
@@ -65,7 +65,7 @@ public:
 
     Rng& rng() noexcept { return rng_; }
 
-private:
+  private:
     struct OpState {
         AddressPicker address;
         ValuePicker values;

@@ -17,7 +17,8 @@ void Pacer::set_rate(double rate, std::int64_t now_ns) noexcept {
     if (arrival_ == Arrival::Even) {
         next_ns_ = now_ns;
     } else {
-        next_ns_ = now_ns + static_cast<std::int64_t>(-std::log(rng_.unit_open_zero()) * period_ns_);
+        next_ns_ =
+            now_ns + static_cast<std::int64_t>(-std::log(rng_.unit_open_zero()) * period_ns_);
     }
 }
 

@@ -12,7 +12,7 @@
 namespace mbstorm::load {
 
 class Pacer {
-public:
+  public:
     Pacer() = default;
     // rate: transactions per second for this thread (> 0).
     Pacer(double rate, Arrival arrival, std::uint64_t seed, std::int64_t start_ns) noexcept;
@@ -29,7 +29,7 @@ public:
     void set_rate(double rate, std::int64_t now_ns) noexcept;
     double rate() const noexcept { return rate_; }
 
-private:
+  private:
     double rate_ = 1;
     double period_ns_ = 1e9;
     Arrival arrival_ = Arrival::Even;
@@ -41,20 +41,22 @@ private:
 };
 
 class LagTracker {
-public:
-    explicit LagTracker(std::int64_t threshold_ns = 1'000'000) noexcept : threshold_(threshold_ns) {}
+  public:
+    explicit LagTracker(std::int64_t threshold_ns = 1'000'000) noexcept
+        : threshold_(threshold_ns) {}
     void record(std::int64_t intended_ns, std::int64_t actual_ns) noexcept {
         const std::int64_t lag = actual_ns - intended_ns;
         if (lag <= threshold_) return;
         ++late_sends_;
         total_lag_ns_ += static_cast<std::uint64_t>(lag);
-        if (static_cast<std::uint64_t>(lag) > max_lag_ns_) max_lag_ns_ = static_cast<std::uint64_t>(lag);
+        if (static_cast<std::uint64_t>(lag) > max_lag_ns_)
+            max_lag_ns_ = static_cast<std::uint64_t>(lag);
     }
     std::uint64_t late_sends() const noexcept { return late_sends_; }
     std::uint64_t max_lag_ns() const noexcept { return max_lag_ns_; }
     std::uint64_t total_lag_ns() const noexcept { return total_lag_ns_; }
 
-private:
+  private:
     std::int64_t threshold_;
     std::uint64_t late_sends_ = 0;
     std::uint64_t max_lag_ns_ = 0;

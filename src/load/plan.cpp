@@ -22,24 +22,42 @@ struct QuantityRange {
 QuantityRange quantity_range(std::uint8_t fc) noexcept {
     switch (fc) {
         case 0x01:
-        case 0x02: return {1, lim::kMaxReadBits};
+        case 0x02:
+            return {1, lim::kMaxReadBits};
         case 0x03:
-        case 0x04: return {1, lim::kMaxReadRegisters};
-        case 0x0F: return {1, lim::kMaxWriteCoils};
-        case 0x10: return {1, lim::kMaxWriteRegisters};
-        case 0x17: return {1, lim::kMaxRwReadRegisters};
+        case 0x04:
+            return {1, lim::kMaxReadRegisters};
+        case 0x0F:
+            return {1, lim::kMaxWriteCoils};
+        case 0x10:
+            return {1, lim::kMaxWriteRegisters};
+        case 0x17:
+            return {1, lim::kMaxRwReadRegisters};
         case 0x05:
         case 0x06:
-        case 0x16: return {1, 1};
-        default: return {};
+        case 0x16:
+            return {1, 1};
+        default:
+            return {};
     }
 }
 
 bool uses_address(std::uint8_t fc) noexcept {
     switch (fc) {
-        case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06:
-        case 0x0F: case 0x10: case 0x16: case 0x17: case 0x18: return true;
-        default: return false;
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x05:
+        case 0x06:
+        case 0x0F:
+        case 0x10:
+        case 0x16:
+        case 0x17:
+        case 0x18:
+            return true;
+        default:
+            return false;
     }
 }
 
@@ -48,15 +66,15 @@ std::string seconds_text(Duration d) {
 }
 
 void check_operation(const Operation& op, std::size_t index, std::vector<std::string>& errors) {
-    const std::string where =
-        op.name.empty() ? fmt::format("operations[{}]", index)
-                        : fmt::format("operations[{}] ({})", index, op.name);
+    const std::string where = op.name.empty() ? fmt::format("operations[{}]", index)
+                                              : fmt::format("operations[{}] ({})", index, op.name);
     auto fail = [&](std::string what) { errors.push_back(fmt::format("{}: {}", where, what)); };
 
     if (!is_generatable_function(op.function)) {
-        fail(fmt::format("function code 0x{:02X} cannot be generated (valid: 01-08, 0B, 0C, 0F, "
-                         "10, 11, 16, 17, 18, 2B)",
-                         op.function));
+        fail(
+            fmt::format("function code 0x{:02X} cannot be generated (valid: 01-08, 0B, 0C, 0F, "
+                        "10, 11, 16, 17, 18, 2B)",
+                        op.function));
         return;
     }
     if (op.weight == 0) fail("weight 0 is out of range (valid 1..4294967295)");
@@ -79,8 +97,8 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
         fail(fmt::format("device_id_code {} is out of range (valid 1..4)", op.device_id_code));
     }
     if (uses_address(op.function)) {
-        const std::uint32_t span =
-            op.function == 0x17 ? std::max(op.quantity, op.write_quantity) : std::max<std::uint16_t>(op.quantity, 1);
+        const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
+                                                       : std::max<std::uint16_t>(op.quantity, 1);
         const std::uint32_t last_needed = op.first_address + span - 1;
         if (last_needed > 0xFFFF) {
             fail(fmt::format("address {} + quantity {} runs past 65535", op.first_address, span));
@@ -91,8 +109,8 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
     }
     if (op.address_mode == AddressMode::Zipf &&
         !(op.zipf_exponent > 0 && op.zipf_exponent <= kMaxZipfExponent)) {
-        fail(fmt::format("zipf exponent {} is out of range (valid > 0 and <= {})",
-                         op.zipf_exponent, kMaxZipfExponent));
+        fail(fmt::format("zipf exponent {} is out of range (valid > 0 and <= {})", op.zipf_exponent,
+                         kMaxZipfExponent));
     }
     if (codec::is_write_function(op.function) && op.values.mode == ValueMode::Pattern &&
         op.values.pattern.empty()) {
@@ -104,17 +122,33 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
 
 bool is_generatable_function(std::uint8_t fc) noexcept {
     switch (fc) {
-        case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06: case 0x07: case 0x08:
-        case 0x0B: case 0x0C: case 0x0F: case 0x10: case 0x11: case 0x16: case 0x17: case 0x18:
-        case 0x2B: return true;
-        default: return false;
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x05:
+        case 0x06:
+        case 0x07:
+        case 0x08:
+        case 0x0B:
+        case 0x0C:
+        case 0x0F:
+        case 0x10:
+        case 0x11:
+        case 0x16:
+        case 0x17:
+        case 0x18:
+        case 0x2B:
+            return true;
+        default:
+            return false;
     }
 }
 
 std::uint16_t last_start_address(const Operation& op) noexcept {
     if (!op.last_address) return op.first_address;
-    const std::uint32_t span =
-        op.function == 0x17 ? std::max(op.quantity, op.write_quantity) : std::max<std::uint16_t>(op.quantity, 1);
+    const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
+                                                   : std::max<std::uint16_t>(op.quantity, 1);
     const std::uint32_t last = *op.last_address;
     if (last + 1 < op.first_address + span) return op.first_address;
     return static_cast<std::uint16_t>(last + 1 - span);
@@ -150,14 +184,16 @@ std::vector<std::string> validate_plan(const Plan& plan) {
                          plan.threads, kMaxThreads));
     }
     if (plan.model == LoadModel::OpenLoop && !(plan.rate > 0 && plan.rate <= kMaxRate)) {
-        fail(fmt::format("rate: {} is out of range for an open-loop run (valid > 0 and <= {:g} "
-                         "transactions/s)",
-                         plan.rate, kMaxRate));
+        fail(
+            fmt::format("rate: {} is out of range for an open-loop run (valid > 0 and <= {:g} "
+                        "transactions/s)",
+                        plan.rate, kMaxRate));
     }
     if (!(plan.connect_rate > 0 && plan.connect_rate <= 1e7)) {
-        fail(fmt::format("connect_rate: {} is out of range (valid > 0 and <= 10000000 "
-                         "connections/s)",
-                         plan.connect_rate));
+        fail(
+            fmt::format("connect_rate: {} is out of range (valid > 0 and <= 10000000 "
+                        "connections/s)",
+                        plan.connect_rate));
     }
     if (plan.connect_timeout <= Duration::zero() || plan.connect_timeout > std::chrono::hours(1)) {
         fail(fmt::format("connect_timeout: {} is out of range (valid > 0s and <= 3600s)",
@@ -183,9 +219,10 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     if (plan.warmup < Duration::zero()) {
         fail(fmt::format("warmup: {} is negative (valid >= 0s)", seconds_text(plan.warmup)));
     } else if (plan.duration > Duration::zero() && plan.warmup >= plan.duration) {
-        fail(fmt::format("warmup: {} leaves nothing to measure (valid 0s..{} exclusive, the "
-                         "duration)",
-                         seconds_text(plan.warmup), seconds_text(plan.duration)));
+        fail(
+            fmt::format("warmup: {} leaves nothing to measure (valid 0s..{} exclusive, the "
+                        "duration)",
+                        seconds_text(plan.warmup), seconds_text(plan.duration)));
     }
     if (plan.late_threshold < Duration::zero()) {
         fail("late_threshold: negative (valid >= 0s)");
@@ -202,8 +239,8 @@ std::vector<std::string> validate_plan(const Plan& plan) {
                                  kMaxRate));
             }
         } else if (!s.target_connections || *s.target_connections > kMaxConnections) {
-            fail(fmt::format("stages[{}]: a closed-loop stage needs target_connections in 0..{}",
-                             i, kMaxConnections));
+            fail(fmt::format("stages[{}]: a closed-loop stage needs target_connections in 0..{}", i,
+                             kMaxConnections));
         }
     }
     return errors;

@@ -21,14 +21,14 @@ enum class Ramp : std::uint8_t { Constant, Linear };
 // How write operations choose the values they write.
 struct ValueSpec {
     ValueMode mode = ValueMode::Constant;
-    std::uint16_t value = 0;  // Constant: the value; Counter: the first value
-    std::uint16_t step = 1;   // Counter: added after every value (wraps at 65536)
+    std::uint16_t value = 0;             // Constant: the value; Counter: the first value
+    std::uint16_t step = 1;              // Counter: added after every value (wraps at 65536)
     std::vector<std::uint16_t> pattern;  // Pattern: cycled in order
 };
 
 // One entry of the weighted operation mix.
 struct Operation {
-    std::string name;           // shown in errors and reports; defaults to the function name
+    std::string name;  // shown in errors and reports; defaults to the function name
     std::uint8_t function = 0x03;
     std::uint8_t unit_id = 1;
     // Every request stays inside [first_address, last_address]. When last_address is unset
@@ -50,7 +50,7 @@ struct Operation {
 // A stage of a staged run (ramps). Validated now; the engine honours them later.
 struct Stage {
     Duration duration{};
-    std::optional<double> target_rate;              // open loop
+    std::optional<double> target_rate;                // open loop
     std::optional<std::uint32_t> target_connections;  // closed loop
     Ramp ramp = Ramp::Constant;
 };
@@ -64,14 +64,14 @@ struct Plan {
 
     // Load model.
     LoadModel model = LoadModel::ClosedLoop;
-    std::uint32_t depth = 1;   // closed loop: outstanding per connection; open loop: the cap
-    double rate = 0;           // open loop: total transactions per second over all threads
+    std::uint32_t depth = 1;  // closed loop: outstanding per connection; open loop: the cap
+    double rate = 0;          // open loop: total transactions per second over all threads
     Arrival arrival = Arrival::Even;
 
     // Connections and threads.
     std::uint32_t connections = 1;
-    std::uint32_t threads = 0;        // 0: one per core (never more than connections)
-    double connect_rate = 10000;      // connections opened per second over all threads
+    std::uint32_t threads = 0;    // 0: one per core (never more than connections)
+    double connect_rate = 10000;  // connections opened per second over all threads
     Duration connect_timeout = std::chrono::seconds(3);
     Duration transaction_timeout = std::chrono::seconds(1);
     Duration reconnect_backoff_min = std::chrono::milliseconds(100);
@@ -80,7 +80,7 @@ struct Plan {
     // Length of the run: by time, by transaction count, or both (whichever ends first).
     Duration duration = std::chrono::seconds(10);  // 0: no time limit (needs `transactions`)
     std::uint64_t transactions = 0;                // 0: no count limit
-    Duration warmup{};  // excluded from the results
+    Duration warmup{};                             // excluded from the results
 
     std::vector<Stage> stages;
 

@@ -44,7 +44,8 @@ stats::Outcome check_response(const RequestInfo& request, const codec::TcpFrame&
         case 0x08:
             if (rsp.sub_function != request.sub_function) return Outcome::ValueMismatch;
             break;
-        default: break;
+        default:
+            break;
     }
     return Outcome::Ok;
 }

@@ -7,7 +7,7 @@
 namespace mbstorm::load {
 
 class Rng {
-public:
+  public:
     explicit Rng(std::uint64_t seed = 1) noexcept { reseed(seed); }
 
     void reseed(std::uint64_t seed) noexcept {
@@ -35,7 +35,8 @@ public:
 
     // Uniform in [0, bound) without modulo bias worth caring about (Lemire's multiply-shift).
     std::uint32_t below(std::uint32_t bound) noexcept {
-        return static_cast<std::uint32_t>(((next() >> 32) * static_cast<std::uint64_t>(bound)) >> 32);
+        return static_cast<std::uint32_t>(((next() >> 32) * static_cast<std::uint64_t>(bound)) >>
+                                          32);
     }
 
     // Uniform double in [0, 1).
@@ -44,7 +45,7 @@ public:
     // Uniform double in (0, 1]: safe to take the logarithm of.
     double unit_open_zero() noexcept { return static_cast<double>((next() >> 11) + 1) * 0x1.0p-53; }
 
-private:
+  private:
     static constexpr std::uint64_t rotl(std::uint64_t x, int k) noexcept {
         return (x << k) | (x >> (64 - k));
     }

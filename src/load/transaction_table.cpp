@@ -51,10 +51,13 @@ MatchResult TransactionTable::complete(std::uint16_t transaction_id, Transaction
             --outstanding_;
             out = &t;
             return MatchResult::Matched;
-        case Transaction::State::Answered: return MatchResult::Duplicate;
+        case Transaction::State::Answered:
+            return MatchResult::Duplicate;
         case Transaction::State::TimedOut:
-        case Transaction::State::Aborted: return MatchResult::Late;
-        case Transaction::State::Free: break;
+        case Transaction::State::Aborted:
+            return MatchResult::Late;
+        case Transaction::State::Free:
+            break;
     }
     return MatchResult::Unknown;
 }

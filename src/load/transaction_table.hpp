@@ -17,7 +17,7 @@
 namespace mbstorm::load {
 
 struct Transaction {
-    std::uint64_t sequence = 0;  // transaction id = low 16 bits
+    std::uint64_t sequence = 0;    // transaction id = low 16 bits
     std::int64_t sent_ns = 0;      // when the request was queued for sending
     std::int64_t intended_ns = 0;  // open loop: when the schedule wanted it sent (else sent_ns)
     RequestInfo request;
@@ -35,7 +35,7 @@ enum class MatchResult : std::uint8_t {
 };
 
 class TransactionTable {
-public:
+  public:
     explicit TransactionTable(std::uint32_t depth, std::uint16_t first_id = 0);
 
     std::uint32_t capacity() const noexcept { return mask_ + 1; }
@@ -94,7 +94,7 @@ public:
         return aborted;
     }
 
-private:
+  private:
     std::unique_ptr<Transaction[]> slots_;
     std::uint32_t mask_ = 0;
     std::uint32_t outstanding_ = 0;

@@ -49,8 +49,7 @@ Worker::Worker(WorkerSetup setup)
         r.function_code = op.function;
         operations.push_back(std::move(r));
     }
-    const auto half =
-        static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
+    const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
     connections_.reserve(setup_.connections);
     for (std::uint32_t i = 0; i < setup_.connections; ++i) {
         connections_.emplace_back(plan_.depth, half, std::uint16_t{0});
@@ -91,8 +90,9 @@ void Worker::run() noexcept {
 bool Worker::setup_io() noexcept {
     const net::Features& features = net::features();
     if (!features.ring) {
-        fatal_error = "io_uring is not available in this process (kernel too old or blocked by "
-                      "seccomp/sysctl kernel.io_uring_disabled)";
+        fatal_error =
+            "io_uring is not available in this process (kernel too old or blocked by "
+            "seccomp/sysctl kernel.io_uring_disabled)";
         return false;
     }
     if (!features.buf_ring) {
@@ -145,7 +145,8 @@ void Worker::loop() noexcept {
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
         const int rc = ring_.submit_and_wait(1, wait);
         if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) {
-            fatal_error = fmt::format("io_uring wait failed: {}", std::system_category().message(-rc));
+            fatal_error =
+                fmt::format("io_uring wait failed: {}", std::system_category().message(-rc));
             setup_.abort->store(true);
             break;
         }
@@ -240,8 +241,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         arm_recv(index);
         if (open_loop_) {
             if (!pacer_started_) {
-                pacer_ = Pacer(setup_.rate, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index),
-                               now);
+                pacer_ = Pacer(setup_.rate, plan_.arrival,
+                               derive_seed(plan_.seed, 1000 + setup_.index), now);
                 pacer_started_ = true;
             }
             push_ready(index);
@@ -280,7 +281,8 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
 
 void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept {
     Connection& c = connections_[index];
-    if (c.state == Connection::State::Open) open_connections.fetch_sub(1, std::memory_order_relaxed);
+    if (c.state == Connection::State::Open)
+        open_connections.fetch_sub(1, std::memory_order_relaxed);
     c.table.abort_all([&](const Transaction& t) {
         --outstanding_;
         record(t, why, 0, now);
@@ -317,16 +319,23 @@ void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= connections_.size()) return;
     switch (ud.op) {
-        case kConnectTimeout: --inflight_ops_; return;
+        case kConnectTimeout:
+            --inflight_ops_;
+            return;
         case kConnect:
             --inflight_ops_;
             if (ud.generation == connections_[ud.index].generation && !stopping_) {
                 on_connect(ud.index, cqe.res, now);
             }
             return;
-        case kRecv: on_recv(ud.index, cqe, now); return;
-        case kSend: on_send(ud.index, cqe, now); return;
-        default: return;
+        case kRecv:
+            on_recv(ud.index, cqe, now);
+            return;
+        case kSend:
+            on_send(ud.index, cqe, now);
+            return;
+        default:
+            return;
     }
 }
 
@@ -345,14 +354,21 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
 
     if (cqe.res > 0 && has_buffer) {
         stray.bytes_received += static_cast<std::uint64_t>(cqe.res);
-        c.splitter.feed(codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
+        c.splitter.feed(
+            codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
         codec::TcpFrame frame;
         bool fatal = false;
         for (bool done = false; !done;) {
             switch (c.splitter.next(frame)) {
-                case codec::MbapSplitter::Status::Frame: on_frame(c, frame, now); break;
-                case codec::MbapSplitter::Status::BadProtocolId: ++bad_protocol_frames; break;
-                case codec::MbapSplitter::Status::NeedMore: done = true; break;
+                case codec::MbapSplitter::Status::Frame:
+                    on_frame(c, frame, now);
+                    break;
+                case codec::MbapSplitter::Status::BadProtocolId:
+                    ++bad_protocol_frames;
+                    break;
+                case codec::MbapSplitter::Status::NeedMore:
+                    done = true;
+                    break;
                 case codec::MbapSplitter::Status::Fatal:
                     fatal = true;
                     done = true;
@@ -388,14 +404,17 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
 bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
     Transaction* t = nullptr;
     switch (c.table.complete(frame.header.transaction_id, t)) {
-        case MatchResult::Matched: break;
+        case MatchResult::Matched:
+            break;
         case MatchResult::Unknown:
             if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::UnknownId);
             return false;
         case MatchResult::Duplicate:
             if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::DuplicateId);
             return false;
-        case MatchResult::Late: ++late_responses; return false;
+        case MatchResult::Late:
+            ++late_responses;
+            return false;
     }
     --outstanding_;
     stats::Outcome outcome = check_response(t->request, frame, response_scratch_);
@@ -447,9 +466,8 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
     const std::uint32_t room = c.send_half - c.queued;
     Transaction* t = c.table.begin(now, intended);
     if (t == nullptr) return false;
-    const std::size_t size =
-        generator_.next(t->transaction_id(), codec::MutableBytes(c.queue_data() + c.queued, room),
-                        t->request);
+    const std::size_t size = generator_.next(
+        t->transaction_id(), codec::MutableBytes(c.queue_data() + c.queued, room), t->request);
     if (size == 0) {
         c.table.cancel(t);
         return false;
@@ -457,7 +475,8 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
     c.queued += static_cast<std::uint32_t>(size);
     ++sent_;
     ++outstanding_;
-    if (now >= setup_.measure_start_ns) ++operations[t->request.op_index].counters.transactions_sent;
+    if (now >= setup_.measure_start_ns)
+        ++operations[t->request.op_index].counters.transactions_sent;
     if (!c.dirty) {
         c.dirty = true;
         dirty_.push_back(index);
@@ -467,7 +486,8 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
 
 void Worker::fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept {
     Connection& c = connections_[index];
-    while (c.state == Connection::State::Open && c.table.outstanding() < plan_.depth && may_send()) {
+    while (c.state == Connection::State::Open && c.table.outstanding() < plan_.depth &&
+           may_send()) {
         if (!enqueue(index, now, now)) break;
     }
 }

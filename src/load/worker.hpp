@@ -42,7 +42,7 @@ struct WorkerSetup {
 };
 
 class Worker {
-public:
+  public:
     explicit Worker(WorkerSetup setup);
     void run() noexcept;
 
@@ -59,7 +59,7 @@ public:
     std::string fatal_error;
     std::atomic<std::uint32_t> open_connections{0};
 
-private:
+  private:
     enum Op : std::uint8_t { kConnect = 1, kConnectTimeout, kRecv, kSend };
 
     bool setup_io() noexcept;

@@ -28,7 +28,8 @@ bool is_loopback_address(std::string_view address) noexcept {
         static constexpr std::uint8_t kLoopback6[16] = {0, 0, 0, 0, 0, 0, 0, 0,
                                                         0, 0, 0, 0, 0, 0, 0, 1};
         if (std::memcmp(v6.s6_addr, kLoopback6, 16) == 0) return true;
-        static constexpr std::uint8_t kMappedPrefix[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF};
+        static constexpr std::uint8_t kMappedPrefix[12] = {0, 0, 0, 0, 0,    0,
+                                                           0, 0, 0, 0, 0xFF, 0xFF};
         return std::memcmp(v6.s6_addr, kMappedPrefix, 12) == 0 && v6.s6_addr[12] == 127;
     }
     return false;
@@ -44,8 +45,7 @@ WriteSafetyVerdict check_write_safety(const std::vector<Operation>& operations,
             op.name.empty() ? fmt::format("0x{:02X} {}", op.function, fname)
                             : fmt::format("{} (0x{:02X} {})", op.name, op.function, fname));
     }
-    if (verdict.write_operations.empty() || allow_writes ||
-        is_loopback_address(resolved_address)) {
+    if (verdict.write_operations.empty() || allow_writes || is_loopback_address(resolved_address)) {
         return verdict;
     }
     verdict.allowed = false;

@@ -12,7 +12,8 @@ double log1p_over_x(double x) noexcept {
     return std::abs(x) > 1e-8 ? std::log1p(x) / x : 1 - x * (0.5 - x * (1.0 / 3 - 0.25 * x));
 }
 double expm1_over_x(double x) noexcept {
-    return std::abs(x) > 1e-8 ? std::expm1(x) / x : 1 + x * 0.5 * (1 + x * (1.0 / 3) * (1 + 0.25 * x));
+    return std::abs(x) > 1e-8 ? std::expm1(x) / x
+                              : 1 + x * 0.5 * (1 + x * (1.0 / 3) * (1 + 0.25 * x));
 }
 
 }  // namespace
@@ -24,7 +25,9 @@ ZipfSampler::ZipfSampler(std::uint32_t n, double exponent) noexcept
     squeeze_ = 2.0 - big_h_inverse(big_h(2.5) - h(2.0));
 }
 
-double ZipfSampler::h(double x) const noexcept { return std::exp(-exponent_ * std::log(x)); }
+double ZipfSampler::h(double x) const noexcept {
+    return std::exp(-exponent_ * std::log(x));
+}
 
 double ZipfSampler::big_h(double x) const noexcept {
     const double log_x = std::log(x);

@@ -9,7 +9,7 @@
 namespace mbstorm::load {
 
 class ZipfSampler {
-public:
+  public:
     ZipfSampler() = default;
     ZipfSampler(std::uint32_t n, double exponent) noexcept;
 
@@ -18,9 +18,9 @@ public:
 
     std::uint32_t size() const noexcept { return n_; }
 
-private:
-    double h(double x) const noexcept;             // the density 1/x^s
-    double big_h(double x) const noexcept;         // an antiderivative of h
+  private:
+    double h(double x) const noexcept;      // the density 1/x^s
+    double big_h(double x) const noexcept;  // an antiderivative of h
     double big_h_inverse(double x) const noexcept;
 
     std::uint32_t n_ = 1;

@@ -59,18 +59,34 @@ struct AddressPart {
     bool reference = false;
 };
 
-bool parse_address_part(std::string_view text, std::optional<codec::Table> table,
-                        AddressPart& out) {
+// False with `error` set when the text is a reference number that does not fit; false with
+// `error` empty when it is not an address at all.
+bool parse_address_part(std::string_view text, std::optional<codec::Table> table, AddressPart& out,
+                        std::string& error) {
     const bool all_digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
         return c >= '0' && c <= '9';
     });
-    if (table && all_digits && (text.size() == 5 || text.size() == 6) &&
-        text.front() == table_digit(*table)) {
+    const bool reference_like = all_digits && (text.size() == 5 || text.size() == 6) &&
+                                std::string_view("0134").find(text.front()) != std::string::npos;
+    if (table && reference_like) {
         codec::Reference ref;
-        if (codec::parse_reference(text, ref) && ref.table == *table) {
-            out = {ref.offset, true};
-            return true;
+        if (!codec::parse_reference(text, ref)) {
+            error = fmt::format(
+                "'{}' is not a valid reference number ({}xxxx with xxxx 0001..9999, "
+                "or {}xxxxx with 00001..65536)",
+                text, text.front(), text.front());
+            return false;
         }
+        if (ref.table != *table) {
+            error = fmt::format(
+                "'{}' is a {} reference ({}xxxx) but this function uses {} ({}xxxx); "
+                "write a 0-based address of 10000 or more in hex (e.g. 0x{:X})",
+                text, codec::table_name(ref.table), table_digit(ref.table),
+                codec::table_name(*table), table_digit(*table), std::stoul(std::string(text)));
+            return false;
+        }
+        out = {ref.offset, true};
+        return true;
     }
     std::int64_t v = 0;
     if (!YamlReader::parse_integer(text, v) || v < 0 || v > 65535) return false;
@@ -89,8 +105,11 @@ void parse_address(const YamlReader& r, const YAML::Node& n, load::Operation& op
               : std::string("give a 0-based address 0..65535 or a range FIRST-LAST");
     const auto dash = text.find('-', 1);
     AddressPart first, last;
-    if (!parse_address_part(text.substr(0, dash), table, first) ||
-        (dash != std::string::npos && !parse_address_part(text.substr(dash + 1), table, last))) {
+    std::string error;
+    if (!parse_address_part(std::string_view(text).substr(0, dash), table, first, error) ||
+        (dash != std::string::npos &&
+         !parse_address_part(std::string_view(text).substr(dash + 1), table, last, error))) {
+        if (!error.empty()) r.fail(n, fmt::format("address: {}", error));
         r.fail(n, fmt::format("address '{}' is not an address ({})", text, help));
     }
     op.first_address = first.address;

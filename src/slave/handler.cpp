@@ -14,32 +14,30 @@ using codec::ExceptionCode;
 using codec::FunctionCode;
 namespace limits = codec::limits;
 
+// The hot paths are inlined into one function so the result stays in registers: returning the
+// small HandleResult through several calls made GCC assemble it on the stack byte by byte and
+// stall store forwarding (about half the time of an FC03 x10 request).
+#define MBSTORM_HOT [[gnu::always_inline]] inline
+
 constexpr std::uint8_t kReceiveEvent = 0x80;
 constexpr std::uint8_t kReceiveBroadcastEvent = 0xC0;
 constexpr std::uint8_t kSendEvent = 0x40;
 
-HandleResult answer(std::uint8_t function, std::size_t size, bool wrote = false) noexcept {
-    HandleResult r;
-    r.size = static_cast<std::uint16_t>(size);
-    r.outcome = Outcome::Response;
-    r.function = function;
-    r.wrote = wrote;
-    return r;
+MBSTORM_HOT HandleResult answer(std::uint8_t function, std::size_t size, bool wrote = false) noexcept {
+    // One aggregate initialisation: built in a register, not field by field on the stack
+    // (byte stores followed by a wide load stall store forwarding on the hot path).
+    return HandleResult{static_cast<std::uint32_t>(size), Outcome::Response, ExceptionCode::None,
+                        function, wrote};
 }
 
-HandleResult fail(std::uint8_t function, ExceptionCode code, std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult fail(std::uint8_t function, ExceptionCode code, std::uint8_t* out) noexcept {
     out[0] = static_cast<std::uint8_t>(function | codec::kExceptionBit);
     out[1] = static_cast<std::uint8_t>(code);
-    HandleResult r;
-    r.size = 2;
-    r.outcome = Outcome::Exception;
-    r.exception = code;
-    r.function = function;
-    return r;
+    return HandleResult{2, Outcome::Exception, code, function, false};
 }
 
 // Echoes the first `n` request bytes (the request is never longer than a PDU).
-HandleResult echo(codec::Bytes request, std::size_t n, std::uint8_t* out, bool wrote) noexcept {
+MBSTORM_HOT HandleResult echo(codec::Bytes request, std::size_t n, std::uint8_t* out, bool wrote) noexcept {
     std::memcpy(out, request.data(), n);
     return answer(request[0], n, wrote);
 }
@@ -64,7 +62,7 @@ std::uint8_t send_event(const HandleResult& r) noexcept {
 
 // ---- bit and register tables ----
 
-HandleResult read_bits(const codec::Request& req, const BitTable& table,
+MBSTORM_HOT HandleResult read_bits(const codec::Request& req, const BitTable& table,
                        std::uint8_t* out) noexcept {
     if (!table.contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -76,7 +74,7 @@ HandleResult read_bits(const codec::Request& req, const BitTable& table,
     return answer(req.function, 2 + bytes);
 }
 
-HandleResult read_registers(const codec::Request& req, RegisterTable& table,
+MBSTORM_HOT HandleResult read_registers(const codec::Request& req, RegisterTable& table,
                             std::uint8_t* out) noexcept {
     if (!table.contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -87,7 +85,7 @@ HandleResult read_registers(const codec::Request& req, RegisterTable& table,
     return answer(req.function, 2 + 2 * std::size_t{req.quantity});
 }
 
-HandleResult write_single_coil(const codec::Request& req, codec::Bytes request, DataModel& m,
+MBSTORM_HOT HandleResult write_single_coil(const codec::Request& req, codec::Bytes request, DataModel& m,
                                std::uint8_t* out) noexcept {
     // The codec already answered 03 for values other than 0x0000 / 0xFF00.
     if (!m.coils().contains(req.address, 1)) {
@@ -97,7 +95,7 @@ HandleResult write_single_coil(const codec::Request& req, codec::Bytes request, 
     return echo(request, 5, out, true);
 }
 
-HandleResult write_single_register(const codec::Request& req, codec::Bytes request, DataModel& m,
+MBSTORM_HOT HandleResult write_single_register(const codec::Request& req, codec::Bytes request, DataModel& m,
                                    std::uint8_t* out) noexcept {
     if (!m.holding_registers().contains(req.address, 1)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -106,7 +104,7 @@ HandleResult write_single_register(const codec::Request& req, codec::Bytes reque
     return echo(request, 5, out, true);
 }
 
-HandleResult write_multiple_coils(const codec::Request& req, codec::Bytes request, DataModel& m,
+MBSTORM_HOT HandleResult write_multiple_coils(const codec::Request& req, codec::Bytes request, DataModel& m,
                                   std::uint8_t* out) noexcept {
     if (!m.coils().contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -115,7 +113,7 @@ HandleResult write_multiple_coils(const codec::Request& req, codec::Bytes reques
     return echo(request, 5, out, true);  // function, address, quantity
 }
 
-HandleResult write_multiple_registers(const codec::Request& req, codec::Bytes request, DataModel& m,
+MBSTORM_HOT HandleResult write_multiple_registers(const codec::Request& req, codec::Bytes request, DataModel& m,
                                       std::uint8_t* out) noexcept {
     if (!m.holding_registers().contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -370,7 +368,7 @@ HandleResult read_device_id(const codec::Request& req, DataModel& m, std::uint8_
     return answer(req.function, pos);
 }
 
-HandleResult dispatch(codec::Bytes request, DataModel& m, std::uint64_t seq,
+MBSTORM_HOT HandleResult dispatch(codec::Bytes request, DataModel& m, std::uint64_t seq,
                       std::uint8_t* out) noexcept {
     codec::Request req;
     const codec::RequestStatus status = codec::decode_request(request, req);

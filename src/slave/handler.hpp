@@ -30,7 +30,7 @@ enum class Outcome : std::uint8_t {
 };
 
 struct HandleResult {
-    std::uint16_t size = 0;  // bytes written to the output buffer
+    std::uint32_t size = 0;  // bytes written (32 bits: keeps the struct in one register)
     Outcome outcome = Outcome::NoResponse;
     codec::ExceptionCode exception = codec::ExceptionCode::None;
     std::uint8_t function = 0;  // the request's function code byte (0 for an empty PDU)

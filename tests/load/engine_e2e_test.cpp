@@ -56,7 +56,9 @@ Plan base_plan(std::uint16_t port) {
     return plan;
 }
 
-std::uint64_t p50_us(const LoadResult& r) { return r.run.latency.value_at_percentile(50) / 1000; }
+std::uint64_t p50_us(const LoadResult& r) {
+    return r.run.latency.value_at_percentile(50) / 1000;
+}
 
 void expect_accounted(const LoadResult& r) {
     EXPECT_EQ(r.run.counters.transactions_sent,
@@ -136,7 +138,7 @@ TEST(EngineE2E, OpenLoopSeesAPeriodicStallThatClosedLoopHides) {
     closed.transaction_timeout = 2s;
     const LoadResult c = run_load(closed);
     ASSERT_TRUE(c.ok) << c.error;
-    EXPECT_GE(c.run.latency.max(), 100'000'000u);  // it did hit a stall...
+    EXPECT_GE(c.run.latency.max(), 100'000'000u);                   // it did hit a stall...
     EXPECT_LT(c.run.latency.value_at_percentile(99), 50'000'000u);  // ...but p99 hides it
 }
 

@@ -26,10 +26,11 @@ Operation read_op(std::uint16_t first, std::uint16_t last, std::uint16_t quantit
 }
 
 // Decodes a generated ADU back into a request, checking the MBAP header on the way.
-codec::Request decode(const std::array<std::uint8_t, 260>& buf, std::size_t size,
-                      std::uint16_t tid, std::uint8_t unit) {
+codec::Request decode(const std::array<std::uint8_t, 260>& buf, std::size_t size, std::uint16_t tid,
+                      std::uint8_t unit) {
     codec::TcpFrame frame;
-    EXPECT_EQ(codec::decode_tcp_frame(codec::Bytes(buf.data(), size), frame), codec::CodecError::Ok);
+    EXPECT_EQ(codec::decode_tcp_frame(codec::Bytes(buf.data(), size), frame),
+              codec::CodecError::Ok);
     EXPECT_EQ(frame.header.transaction_id, tid);
     EXPECT_EQ(frame.header.unit_id, unit);
     codec::Request req;
@@ -174,7 +175,8 @@ TEST(Generator, WriteValuesCounterAndPattern) {
 
     std::vector<Operation> coils{coil};
     OperationGenerator coil_gen(coils, 1);
-    for (std::uint16_t expected : {std::uint16_t{0xFF00}, std::uint16_t{0x0000}, std::uint16_t{0xFF00}}) {
+    for (std::uint16_t expected :
+         {std::uint16_t{0xFF00}, std::uint16_t{0x0000}, std::uint16_t{0xFF00}}) {
         n = coil_gen.next(3, buf, info);
         req = decode(buf, n, 3, 1);
         EXPECT_EQ(req.function, 0x05);

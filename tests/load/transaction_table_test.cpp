@@ -30,8 +30,8 @@ TEST(TransactionTable, IdsWrapPast65535AndStillMatch) {
         ASSERT_EQ(table.complete(t->transaction_id(), matched), MatchResult::Matched);
         EXPECT_EQ(matched->request.address, 1000 + i);
     }
-    EXPECT_EQ(ids, (std::vector<std::uint16_t>{65530, 65531, 65532, 65533, 65534, 65535, 0, 1, 2,
-                                               3, 4, 5}));
+    EXPECT_EQ(ids, (std::vector<std::uint16_t>{65530, 65531, 65532, 65533, 65534, 65535, 0, 1, 2, 3,
+                                               4, 5}));
     EXPECT_EQ(table.outstanding(), 0u);
 }
 

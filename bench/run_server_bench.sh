@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Server throughput table: FC03 x10 requests, depth 1/16/256 over 1/64/1000 connections,
+# against mbstorm's io_uring slave (1 thread), the epoll limit_server, a libmodbus server and
+# pymodbus. Server pinned to core 0, client (pipeline_client) to core 1.
+#
+#   bench/run_server_bench.sh [build-dir] [seconds-per-cell]
+# Prints a markdown table of transactions/s (and the ratios the project targets).
+set -u
+here=$(cd "$(dirname "$0")" && pwd)
+build=${1:-$here/../build/release}
+secs=${2:-2}
+client="$build/bench/pipeline_client"
+limit="$build/bench/limit_server"
+libmodbus="$build/bench/libmodbus_server"
+mbstorm="$build/tests/mbstorm_test_server"
+pymodbus="$here/peers/pymodbus_server.py"
+for f in "$client" "$limit" "$mbstorm"; do
+  [ -x "$f" ] || { echo "missing $f (build the bench/ and tests/tools targets)" >&2; exit 1; }
+done
+ulimit -n 20000 2>/dev/null || true
+
+server_pid=""
+stop_server() {
+  if [ -n "$server_pid" ]; then kill "$server_pid" 2>/dev/null; wait "$server_pid" 2>/dev/null; fi
+  server_pid=""
+}
+trap stop_server EXIT
+
+# start_server <name>: sets $port
+start_server() {
+  local out; out=$(mktemp)
+  case "$1" in
+    mbstorm)   taskset -c 0 "$mbstorm" --threads 1 --seconds 3600 >"$out" 2>/dev/null & ;;
+    limit)     taskset -c 0 "$limit" --seconds 3600 >"$out" 2>/dev/null & ;;
+    libmodbus) taskset -c 0 "$libmodbus" --seconds 3600 >"$out" 2>/dev/null & ;;
+    pymodbus)  taskset -c 0 /usr/bin/python3 "$pymodbus" --seconds 3600 >"$out" 2>/dev/null & ;;
+  esac
+  server_pid=$!
+  port=""
+  for _ in $(seq 100); do
+    port=$(awk '/^PORT/{print $2}' "$out"); [ -n "$port" ] && break; sleep 0.1
+  done
+  rm -f "$out"
+  [ -n "$port" ]
+}
+
+declare -A tps
+servers="mbstorm limit libmodbus pymodbus"
+[ -x "$libmodbus" ] || servers=${servers/libmodbus/}
+cells="1:1 1:16 1:256 16:16 64:1 64:16 64:256 1000:1 1000:16 1000:256"
+for s in $servers; do
+  for cell in $cells; do
+    c=${cell%%:*}; d=${cell##*:}
+    if ! start_server "$s"; then tps[$s,$c,$d]="n/a"; stop_server; continue; fi
+    line=$(timeout $((secs + 30)) taskset -c 1 "$client" --port "$port" --connections "$c" \
+             --depth "$d" --seconds "$secs" --warmup 0.5 2>/dev/null | grep '^RESULT')
+    v=$(sed -n 's/.*tps=\([0-9]*\).*/\1/p' <<<"$line")
+    tps[$s,$c,$d]=${v:-n/a}
+    echo "# $s conns=$c depth=$d: ${line:-failed}" >&2
+    stop_server
+  done
+done
+
+printf '\n| connections x depth |'
+for s in $servers; do printf ' %s |' "$s"; done
+printf '\n|---|'; for s in $servers; do printf -- '---:|'; done; printf '\n'
+for cell in $cells; do
+  c=${cell%%:*}; d=${cell##*:}
+  printf '| %s x %s |' "$c" "$d"
+  for s in $servers; do printf ' %s |' "${tps[$s,$c,$d]}"; done
+  printf '\n'
+done
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN{ if (b+0 > 0 && a+0 > 0) printf "%.2f", a/b; else print "n/a" }'; }
+echo
+echo "mbstorm / limit_server at 16x16: $(ratio "${tps[mbstorm,16,16]}" "${tps[limit,16,16]}") (target >= 0.8)"
+echo "mbstorm / libmodbus at 16x16:   $(ratio "${tps[mbstorm,16,16]}" "${tps[libmodbus,16,16]:-0}") (target >= 10)"
+echo "mbstorm / libmodbus at 64x1:    $(ratio "${tps[mbstorm,64,1]}" "${tps[libmodbus,64,1]:-0}") (target >= 2)"

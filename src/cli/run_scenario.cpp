@@ -1,0 +1,107 @@
+#include "cli/run_scenario.hpp"
+
+#include <fmt/format.h>
+#include <signal.h>
+
+#include <atomic>
+#include <cstdio>
+
+#include "cli/commands.hpp"
+#include "report/files.hpp"
+#include "scenario/junit.hpp"
+#include "scenario/print.hpp"
+#include "scenario/runner.hpp"
+
+namespace mbstorm::cli {
+namespace {
+
+std::atomic<bool> g_scenario_stop{false};
+
+extern "C" void on_scenario_stop_signal(int) {
+    g_scenario_stop.store(true, std::memory_order_relaxed);
+    // A second Ctrl-C ends the process at once.
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+}
+
+int usage_error(const std::string& message) {
+    fmt::print(stderr, "mbstorm run: {}\n", message);
+    return kExitUsage;
+}
+
+}  // namespace
+
+int print_flag_scenario(const load::Plan& plan, const std::string& target) {
+    fmt::print("{}", scenario::format_scenario(scenario::scenario_from_plan(plan, target)));
+    return kExitOk;
+}
+
+int run_scenario_file(const ScenarioRunRequest& request) {
+    scenario::Scenario s;
+    try {
+        s = scenario::load_scenario_file(request.file);
+    } catch (const scenario::ScenarioError& e) {
+        return usage_error(e.what());
+    }
+    if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
+        for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
+        return kExitUsage;
+    }
+    if (request.print) {
+        fmt::print("{}", scenario::format_scenario(s));
+        return kExitOk;
+    }
+
+    const auto& plan = s.plan;
+    fmt::print(
+        "mbstorm run: scenario '{}' ({}): {} operation{}, {} connection{} x depth {}, {}, "
+        "{}{}\n",
+        s.name, request.file, plan.operations.size(), plan.operations.size() == 1 ? "" : "s",
+        plan.connections, plan.connections == 1 ? "" : "s", plan.depth,
+        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
+        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
+        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
+    std::fflush(stdout);
+
+    g_scenario_stop = false;
+    signal(SIGINT, on_scenario_stop_signal);
+    signal(SIGTERM, on_scenario_stop_signal);
+    LiveProgress progress(stderr, request.quiet);
+    scenario::RunHooks hooks;
+    hooks.stop = &g_scenario_stop;
+    hooks.tool_version = "mbstorm 0.1.0";
+    hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
+    hooks.on_message = [](const std::string& m) {
+        fmt::print("mbstorm run: {}\n", m);
+        std::fflush(stdout);
+    };
+    load::LoadResult result = scenario::run_scenario(s, hooks);
+    progress.finish();
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    if (g_scenario_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
+
+    int code = report_run(result, request.outputs);
+    if (!request.junit.empty()) {
+        std::string error;
+        const std::string xml =
+            scenario::format_junit(result.run, s.name, result.ok ? "" : result.error);
+        if (!report::write_text_file(request.junit, xml, error)) {
+            fmt::print(stderr, "mbstorm run: cannot write JUnit XML {}: {}\n", request.junit,
+                       error);
+            code = kExitUsage;
+        } else {
+            fmt::print("wrote JUnit XML {}\n", request.junit);
+        }
+    }
+    if (code == kExitOk && !result.run.thresholds_passed()) {
+        std::size_t failed = 0;
+        for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;
+        fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
+                   result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
+        code = kExitFailed;
+    }
+    return code;
+}
+
+}  // namespace mbstorm::cli

@@ -1,0 +1,27 @@
+// `mbstorm run FILE`: the scenario path of the run command (the logic is in src/scenario/).
+#pragma once
+
+#include <string>
+
+#include "cli/run_output.hpp"
+#include "load/plan.hpp"
+#include "scenario/scenario.hpp"
+
+namespace mbstorm::cli {
+
+struct ScenarioRunRequest {
+    std::string file;
+    bool print = false;  // --print-scenario: print the resolved scenario and exit
+    std::string junit;   // --junit FILE
+    scenario::Overrides overrides;
+    bool quiet = false;
+    OutputFiles outputs;
+};
+
+// Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.
+int run_scenario_file(const ScenarioRunRequest& request);
+
+// --print-scenario for a flag-only run: the plan the flags describe, as a scenario file.
+int print_flag_scenario(const load::Plan& plan, const std::string& target);
+
+}  // namespace mbstorm::cli

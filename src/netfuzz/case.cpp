@@ -1,0 +1,38 @@
+#include "netfuzz/case.hpp"
+
+#include <array>
+
+namespace mbstorm::netfuzz {
+namespace {
+
+constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::Count)> kNames = {
+    "valid-limits", "invalid-values", "unknown-function", "unit-id",   "transaction-id",
+    "protocol-id",  "mbap-length",    "trailing-bytes",   "truncated", "split",
+    "coalesced",    "drip",           "half-close",       "flood",     "stateful-same",
+    "stateful-cross", "recorded-mutation", "naive-random"};
+
+}  // namespace
+
+std::string_view class_name(MutationClass c) noexcept {
+    const auto i = static_cast<std::size_t>(c);
+    return i < kNames.size() ? kNames[i] : "unknown";
+}
+
+bool class_from_name(std::string_view name, MutationClass& out) noexcept {
+    for (std::size_t i = 0; i < kNames.size(); ++i) {
+        if (kNames[i] == name) {
+            out = static_cast<MutationClass>(i);
+            return true;
+        }
+    }
+    return false;
+}
+
+std::uint8_t Case::connections() const noexcept {
+    std::uint8_t n = 0;
+    for (const Step& s : steps)
+        if (s.conn + 1 > n) n = static_cast<std::uint8_t>(s.conn + 1);
+    return n;
+}
+
+}  // namespace mbstorm::netfuzz

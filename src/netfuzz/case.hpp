@@ -1,0 +1,65 @@
+// One fuzz case: a short script of sends on one or more connections, plus the labels that
+// findings are deduplicated by. Expectations are NOT stored: the oracle derives them from the
+// bytes sent (the codec says what a conforming server must answer), so a case replays from
+// its bytes alone.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+namespace mbstorm::netfuzz {
+
+// How a case was made. Findings are deduplicated by (oracle, function code, class).
+enum class MutationClass : std::uint8_t {
+    ValidLimits,       // well-formed requests with values at the limits
+    InvalidValues,     // out-of-spec values: quantity 0/max+1, bad byte counts, bad coil values
+    UnknownFunction,   // function codes the spec does not define (0-255)
+    UnitId,            // unit ids 0, 0xF7, 0xFF, random
+    TransactionId,     // special transaction ids (0, 0x7FFF, 0x8000, 0xFFFF, duplicates)
+    ProtocolId,        // protocol id != 0 (must be discarded)
+    MbapLength,        // length 0, 1, > 254, too short, too long
+    TrailingBytes,     // PDU with extra bytes inside a consistent length
+    Truncated,         // frame cut short, then the connection is half-closed
+    Split,             // one frame split across two sends at every offset
+    Coalesced,         // many frames in one send
+    Drip,              // one byte per send with gaps
+    HalfClose,         // partial frame then shutdown(SHUT_WR)
+    Flood,             // a bounded burst of connections
+    StatefulSame,      // write then read back on the same connection
+    StatefulCross,     // write on one connection, read back on another
+    RecordedMutation,  // bit flips and field splices of recorded valid traffic
+    NaiveRandom,       // baseline: random PDU bytes in a valid MBAP frame
+    Count
+};
+
+std::string_view class_name(MutationClass c) noexcept;
+bool class_from_name(std::string_view name, MutationClass& out) noexcept;
+
+enum class Op : std::uint8_t {
+    Send,           // write `bytes` on `conn` after `delay_us`
+    ShutdownWrite,  // half-close `conn`
+    Await,          // wait until every request sent on `conn` so far is answered
+    Flood,          // open `count` extra connections at once, one probe each, close them
+};
+
+struct Step {
+    Op op = Op::Send;
+    std::uint8_t conn = 0;
+    std::uint32_t delay_us = 0;
+    std::uint16_t count = 0;  // Flood only
+    std::vector<std::uint8_t> bytes;
+};
+
+struct Case {
+    MutationClass cls = MutationClass::ValidLimits;
+    std::uint8_t function = 0;  // the function code it is about (dedup key)
+    std::vector<Step> steps;
+
+    // True when the case is a single send on one connection of complete, well-framed ADUs:
+    // it can then share a pipelined connection with other cases.
+    bool pipelinable = false;
+    std::uint8_t connections() const noexcept;
+};
+
+}  // namespace mbstorm::netfuzz

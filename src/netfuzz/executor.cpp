@@ -1,0 +1,502 @@
+#include "netfuzz/executor.hpp"
+
+#include <fmt/format.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+
+#include "codec/limits.hpp"
+#include "net/clock.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+namespace lim = codec::limits;
+constexpr std::uint8_t kFreshConn = 255;
+
+constexpr std::array<std::string_view, 10> kTraceNames = {
+    "connect", "connect-failed", "send", "recv", "shutdown-write",
+    "peer-closed", "reset", "timeout", "flood", "fresh-probe"};
+
+struct Pending {
+    std::size_t offset = 0, size = 0;  // in Conn::sent
+    std::uint16_t tid = 0;
+    Expect expect = Expect::Answer;
+    bool probe = false;
+    std::int64_t sent_ns = 0, answered_ns = 0;
+    std::size_t rsp_offset = 0, rsp_size = 0;  // in Conn::received
+};
+
+struct Conn {
+    net::UniqueFd fd;
+    bool opened = false, closed = false, reset = false, shut = false, desync = false;
+    bool framing_lost = false;
+    std::vector<std::uint8_t> sent, received;
+    std::size_t parsed = 0, rparsed = 0;
+    std::vector<Pending> pending;
+    std::vector<std::pair<std::size_t, std::size_t>> unmatched;  // responses nobody asked for
+};
+
+class Runner {
+  public:
+    Runner(const net::Endpoint& target, const TargetProfile& profile, const ExecOptions& options)
+        : target_(target), profile_(profile), options_(options), start_(net::now_ns()) {}
+
+    Execution run(const Case& c);
+
+  private:
+    void event(std::uint8_t conn, TraceKind kind, std::vector<std::uint8_t> bytes = {},
+               std::string note = {}) {
+        out_.trace.push_back(
+            TraceEvent{(net::now_ns() - start_) / 1000, conn, kind, std::move(bytes), std::move(note)});
+    }
+    bool ensure_open(std::uint8_t index);
+    void send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes);
+    void parse_sent(Conn& c);
+    void read_conn(std::uint8_t index);
+    void parse_received(Conn& c);
+    // Pumps input until `done()` or the deadline. Returns false on timeout.
+    template <typename Done>
+    bool pump(std::int64_t deadline, Done done);
+    bool answered(const Conn& c) const;
+    void flood(std::uint16_t count);
+    void judge(const Case& c);
+
+    const net::Endpoint& target_;
+    const TargetProfile& profile_;
+    ExecOptions options_;
+    std::int64_t start_;
+    std::vector<Conn> conns_;
+    Execution out_;
+    bool any_connect_ = false;
+    bool flooded_ = false;
+};
+
+bool Runner::ensure_open(std::uint8_t index) {
+    Conn& c = conns_[index];
+    if (c.opened) return c.fd.valid();
+    c.opened = true;
+    const int fd = connect_with_timeout(target_, options_.timeout_ms);
+    if (fd < 0) {
+        event(index, TraceKind::ConnectFailed, {}, std::strerror(-fd));
+        if (!any_connect_) out_.down_before = true;
+        c.closed = true;
+        return false;
+    }
+    any_connect_ = true;
+    c.fd.reset(fd);
+    event(index, TraceKind::Connect);
+    return true;
+}
+
+void Runner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes) {
+    Conn& c = conns_[index];
+    if (!ensure_open(index) || c.closed || c.shut) return;
+    std::size_t done = 0;
+    const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    while (done < bytes.size()) {
+        const ssize_t n = ::send(c.fd.get(), bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+        if (n > 0) {
+            done += static_cast<std::size_t>(n);
+            continue;
+        }
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+            if (net::now_ns() > deadline) break;
+            // Drain input so that a server blocked on its own output can progress.
+            read_conn(index);
+            pollfd p{c.fd.get(), POLLOUT, 0};
+            ::poll(&p, 1, 10);
+            continue;
+        }
+        c.closed = true;
+        c.reset = errno == ECONNRESET || errno == EPIPE;
+        event(index, TraceKind::Reset, {}, std::strerror(errno));
+        break;
+    }
+    if (done == 0) return;
+    const std::int64_t now = net::now_ns();
+    event(index, TraceKind::Send, {bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(done)});
+    c.sent.insert(c.sent.end(), bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(done));
+    const std::size_t before = c.pending.size();
+    parse_sent(c);
+    for (std::size_t i = before; i < c.pending.size(); ++i) c.pending[i].sent_ns = now;
+}
+
+// Cuts what we sent into request frames; anything that cannot be framed desynchronises the
+// stream (the server's view of frame boundaries is then unknown, so no probe follows).
+void Runner::parse_sent(Conn& c) {
+    while (!c.desync && c.sent.size() - c.parsed >= lim::kMbapHeader) {
+        const std::uint8_t* p = c.sent.data() + c.parsed;
+        const codec::MbapHeader h = codec::read_mbap_header(p);
+        const auto err = codec::check_mbap_header(h);
+        if (err != codec::CodecError::Ok && err != codec::CodecError::BadProtocolId) {
+            c.desync = true;
+            return;
+        }
+        const std::size_t size = 6u + h.length;
+        if (c.sent.size() - c.parsed < size) return;
+        Pending pd;
+        pd.offset = c.parsed;
+        pd.size = size;
+        pd.tid = h.transaction_id;
+        pd.expect = h.protocol_id != 0 ? Expect::MustBeSilent
+                    : (h.unit_id != profile_.unit || size == lim::kMbapHeader) ? Expect::MayBeSilent
+                                                                               : Expect::Answer;
+        c.pending.push_back(pd);
+        c.parsed += size;
+    }
+}
+
+void Runner::read_conn(std::uint8_t index) {
+    Conn& c = conns_[index];
+    if (!c.fd.valid() || c.closed) return;
+    std::uint8_t buf[4096];
+    for (;;) {
+        const ssize_t n = ::recv(c.fd.get(), buf, sizeof buf, 0);
+        if (n > 0) {
+            event(index, TraceKind::Recv, {buf, buf + n});
+            c.received.insert(c.received.end(), buf, buf + n);
+            parse_received(c);
+            continue;
+        }
+        if (n == 0) {
+            c.closed = true;
+            event(index, TraceKind::PeerClosed);
+            return;
+        }
+        if (errno == EINTR) continue;
+        if (errno != EAGAIN && errno != EWOULDBLOCK) {
+            c.closed = true;
+            c.reset = true;
+            event(index, TraceKind::Reset, {}, std::strerror(errno));
+        }
+        return;
+    }
+}
+
+void Runner::parse_received(Conn& c) {
+    const std::int64_t now = net::now_ns();
+    while (!c.framing_lost && c.received.size() - c.rparsed >= lim::kMbapHeader) {
+        const codec::MbapHeader h = codec::read_mbap_header(c.received.data() + c.rparsed);
+        if (h.length < 2 || h.length > lim::kMaxMbapLength) {
+            c.framing_lost = true;
+            return;
+        }
+        const std::size_t size = 6u + h.length;
+        if (c.received.size() - c.rparsed < size) return;
+        bool matched = false;
+        for (Pending& pd : c.pending) {
+            if (pd.answered_ns == 0 && pd.tid == h.transaction_id) {
+                pd.answered_ns = now;
+                pd.rsp_offset = c.rparsed;
+                pd.rsp_size = size;
+                matched = true;
+                break;
+            }
+        }
+        if (!matched) c.unmatched.emplace_back(c.rparsed, size);
+        c.rparsed += size;
+    }
+}
+
+bool Runner::answered(const Conn& c) const {
+    if (c.closed || c.framing_lost || !c.unmatched.empty()) return true;
+    for (const Pending& pd : c.pending)
+        if (pd.expect == Expect::Answer && pd.answered_ns == 0) return false;
+    return true;
+}
+
+template <typename Done>
+bool Runner::pump(std::int64_t deadline, Done done) {
+    std::vector<pollfd> fds;
+    for (;;) {
+        if (done()) return true;
+        const std::int64_t now = net::now_ns();
+        if (now >= deadline) return false;
+        fds.clear();
+        for (const Conn& c : conns_)
+            if (c.fd.valid() && !c.closed) fds.push_back(pollfd{c.fd.get(), POLLIN, 0});
+        if (fds.empty()) return done();
+        const int wait_ms = static_cast<int>(std::max<std::int64_t>(1, (deadline - now) / net::kNsPerMs));
+        ::poll(fds.data(), fds.size(), std::min(wait_ms, 50));
+        for (std::size_t i = 0; i < conns_.size(); ++i)
+            if (conns_[i].fd.valid() && !conns_[i].closed) read_conn(static_cast<std::uint8_t>(i));
+    }
+}
+
+void Runner::flood(std::uint16_t count) {
+    flooded_ = true;
+    event(0, TraceKind::Flood, {}, fmt::format("{} connections", count));
+    std::vector<net::UniqueFd> fds;
+    for (std::uint16_t i = 0; i < count; ++i) {
+        const int fd = net::connect_nonblocking(target_);
+        if (fd >= 0) fds.emplace_back(fd);
+    }
+    std::vector<pollfd> ps;
+    for (auto& f : fds) ps.push_back(pollfd{f.get(), POLLOUT, 0});
+    const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    // Connected sockets get one probe each; answers are read and dropped (bounded wait).
+    std::size_t sent = 0;
+    while (sent < ps.size() && net::now_ns() < deadline) {
+        ::poll(ps.data(), ps.size(), 20);
+        for (std::size_t i = 0; i < ps.size(); ++i) {
+            if (ps[i].events == POLLOUT && (ps[i].revents & (POLLOUT | POLLERR | POLLHUP))) {
+                const auto f = probe_frame(profile_, static_cast<std::uint16_t>(i));
+                (void)::send(ps[i].fd, f.data(), f.size(), MSG_NOSIGNAL);
+                ps[i].events = POLLIN;
+                ++sent;
+            }
+        }
+    }
+}
+
+void Runner::judge(const Case& c) {
+    Verdict candidate;
+    auto consider = [&](Verdict v) {
+        if (v && (!candidate || v.oracle < candidate.oracle)) candidate = std::move(v);
+    };
+    std::vector<std::vector<RequestInfo>> infos(conns_.size());
+    std::vector<Shadow::Event> shadow;
+    bool need_fresh_probe = flooded_;
+    for (std::size_t i = 0; i < conns_.size(); ++i) {
+        Conn& cn = conns_[i];
+        if (!cn.opened) continue;
+        if (cn.closed || cn.shut || cn.desync) need_fresh_probe = true;
+        if (cn.framing_lost) {
+            consider(Verdict{Oracle::MalformedResponse,
+                             fmt::format("response framing lost on connection {}: MBAP length {}", i,
+                                         codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
+                             "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
+        }
+        for (const auto& [off, size] : cn.unmatched) {
+            std::string tids;
+            for (const Pending& pd : cn.pending) tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
+            consider(Verdict{Oracle::MalformedResponse,
+                             fmt::format("response with transaction id {:04X} matches no request",
+                                         codec::load_be16(cn.received.data() + off)),
+                             fmt::format("transaction ids {}", tids),
+                             hex(codec::Bytes(cn.received.data() + off, size))});
+        }
+        infos[i].resize(cn.pending.size());
+        for (std::size_t k = 0; k < cn.pending.size(); ++k) {
+            const Pending& pd = cn.pending[k];
+            RequestInfo& info = infos[i][k];
+            describe_request(codec::Bytes(cn.sent.data() + pd.offset, pd.size), profile_, info);
+            codec::Bytes rsp;
+            if (pd.answered_ns) {
+                rsp = codec::Bytes(cn.received.data() + pd.rsp_offset, pd.rsp_size);
+                consider(judge_response(info, rsp, profile_));
+                shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns, rsp.subspan(lim::kMbapHeader)});
+            } else {
+                shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
+            }
+            if (pd.expect != Expect::Answer || pd.answered_ns) continue;
+            // A server may drop what it has not answered when we half-close: only streams we
+            // left intact must answer everything.
+            if (cn.shut || cn.desync) continue;
+            const std::string what = pd.probe ? std::string("the in-stream liveness probe")
+                                              : fmt::format("request {}", hex(info.pdu, 16));
+            if (cn.closed) {
+                consider(Verdict{Oracle::UnexpectedClose,
+                                 fmt::format("connection {} {} with {} unanswered", i,
+                                             cn.reset ? "reset" : "closed", what),
+                                 "an answer, connection kept open", cn.reset ? "reset" : "FIN"});
+            } else {
+                consider(Verdict{Oracle::Hang,
+                                 fmt::format("no answer to {} within {} ms on open connection {}",
+                                             what, options_.timeout_ms, i),
+                                 "an answer", "silence"});
+            }
+            need_fresh_probe = true;
+        }
+    }
+    consider(Shadow::check(shadow));
+    if (need_fresh_probe) {
+        const ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
+        event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
+        if (r == ProbeResult::ConnectFailed) {
+            out_.target_down = true;
+            candidate = Verdict{Oracle::Crash, "target stopped accepting connections",
+                                "the target accepts a fresh connection", "connect failed"};
+        } else if (r != ProbeResult::Ok) {
+            // The server as a whole no longer answers (not just one connection).
+            candidate = Verdict{Oracle::Hang,
+                                fmt::format("whole server hangs: a fresh connection's probe got {}",
+                                            probe_result_name(r)),
+                                "an answer on a fresh connection", std::string(probe_result_name(r))};
+        } else if (candidate && candidate.oracle == Oracle::Hang) {
+            candidate.summary += " (other connections are still served)";
+        }
+    }
+    if (candidate)
+        candidate.summary = fmt::format("{} [{} FC {:02X}]", candidate.summary, class_name(c.cls), c.function);
+    out_.verdict = std::move(candidate);
+}
+
+Execution Runner::run(const Case& c) {
+    conns_.resize(std::max<std::size_t>(c.connections(), 1));
+    for (const Step& s : c.steps) {
+        if (s.delay_us) {
+            const std::int64_t until = net::now_ns() + s.delay_us * 1000ll;
+            pump(until, [] { return false; });
+        }
+        switch (s.op) {
+            case Op::Send:
+                send_bytes(s.conn, s.bytes);
+                break;
+            case Op::ShutdownWrite:
+                if (ensure_open(s.conn) && !conns_[s.conn].closed && !conns_[s.conn].shut) {
+                    ::shutdown(conns_[s.conn].fd.get(), SHUT_WR);
+                    conns_[s.conn].shut = true;
+                    event(s.conn, TraceKind::ShutdownWrite);
+                }
+                break;
+            case Op::Await: {
+                const Conn& cn = conns_[s.conn];
+                pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs, [&] { return answered(cn); });
+                break;
+            }
+            case Op::Flood:
+                flood(s.count);
+                break;
+        }
+        if (out_.down_before) return std::move(out_);
+    }
+    // Close out each connection: an in-stream probe after intact streams (so that silence
+    // to the case's frames is told apart from a stalled connection), a half-close after
+    // desynchronised ones.
+    bool any_settle = false;
+    for (std::size_t i = 0; i < conns_.size(); ++i) {
+        Conn& cn = conns_[i];
+        if (!cn.opened || !cn.fd.valid() || cn.closed) continue;
+        if (!cn.shut && !cn.desync && cn.parsed == cn.sent.size()) {
+            std::uint16_t tid = 0xFADE;
+            while (std::any_of(cn.pending.begin(), cn.pending.end(), [&](const Pending& p) { return p.tid == tid; }))
+                ++tid;
+            const std::size_t before = cn.pending.size();
+            send_bytes(static_cast<std::uint8_t>(i), probe_frame(profile_, tid));
+            if (cn.pending.size() > before) cn.pending.back().probe = true;
+        } else {
+            if (!cn.shut) {
+                ::shutdown(cn.fd.get(), SHUT_WR);
+                cn.shut = true;
+                event(static_cast<std::uint8_t>(i), TraceKind::ShutdownWrite);
+            }
+            any_settle = true;
+        }
+    }
+    const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    const bool ok = pump(deadline, [&] {
+        for (const Conn& cn : conns_) {
+            if (!cn.opened || !cn.fd.valid()) continue;
+            if ((cn.shut || cn.desync) ? !cn.closed : !answered(cn)) return false;
+        }
+        return true;
+    });
+    (void)any_settle;
+    if (!ok) event(0, TraceKind::Timeout);
+    judge(c);
+    return std::move(out_);
+}
+
+}  // namespace
+
+std::string_view trace_kind_name(TraceKind k) noexcept {
+    const auto i = static_cast<std::size_t>(k);
+    return i < kTraceNames.size() ? kTraceNames[i] : "unknown";
+}
+
+bool trace_kind_from_name(std::string_view name, TraceKind& out) noexcept {
+    for (std::size_t i = 0; i < kTraceNames.size(); ++i) {
+        if (kTraceNames[i] == name) {
+            out = static_cast<TraceKind>(i);
+            return true;
+        }
+    }
+    return false;
+}
+
+std::string_view probe_result_name(ProbeResult r) noexcept {
+    switch (r) {
+        case ProbeResult::Ok: return "answered";
+        case ProbeResult::ConnectFailed: return "connect failed";
+        case ProbeResult::NoAnswer: return "no answer";
+        case ProbeResult::Closed: return "closed";
+        case ProbeResult::BadAnswer: return "bad answer";
+    }
+    return "unknown";
+}
+
+int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept {
+    const int fd = net::connect_nonblocking(target);
+    if (fd < 0) return fd;
+    pollfd p{fd, POLLOUT, 0};
+    int rc;
+    do {
+        rc = ::poll(&p, 1, timeout_ms);
+    } while (rc < 0 && errno == EINTR);
+    int err = rc == 0 ? ETIMEDOUT : net::socket_error(fd);
+    if (rc < 0) err = errno;
+    if (err != 0) {
+        ::close(fd);
+        return -err;
+    }
+    net::set_nodelay(fd);
+    return fd;
+}
+
+std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_t tid) {
+    std::vector<std::uint8_t> f(lim::kMbapHeader + profile.probe_pdu.size());
+    codec::store_be16(f.data(), tid);
+    codec::store_be16(f.data() + 2, 0);
+    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(profile.probe_pdu.size() + 1));
+    f[6] = profile.unit;
+    std::copy(profile.probe_pdu.begin(), profile.probe_pdu.end(), f.begin() + lim::kMbapHeader);
+    return f;
+}
+
+ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile, int timeout_ms) {
+    const int raw = connect_with_timeout(target, timeout_ms);
+    if (raw < 0) return ProbeResult::ConnectFailed;
+    net::UniqueFd fd(raw);
+    const auto f = probe_frame(profile, 0x7E57);
+    if (::send(fd.get(), f.data(), f.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(f.size()))
+        return ProbeResult::Closed;
+    std::uint8_t buf[lim::kMaxTcpAdu];
+    std::size_t have = 0;
+    const std::int64_t deadline = net::now_ns() + timeout_ms * net::kNsPerMs;
+    for (;;) {
+        const std::int64_t left = deadline - net::now_ns();
+        if (left <= 0) return ProbeResult::NoAnswer;
+        pollfd p{fd.get(), POLLIN, 0};
+        if (::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs))) <= 0) continue;
+        const ssize_t n = ::recv(fd.get(), buf + have, sizeof buf - have, 0);
+        if (n == 0) return ProbeResult::Closed;
+        if (n < 0) {
+            if (errno == EAGAIN || errno == EINTR) continue;
+            return ProbeResult::Closed;
+        }
+        have += static_cast<std::size_t>(n);
+        if (have >= lim::kMbapHeader) {
+            const codec::MbapHeader h = codec::read_mbap_header(buf);
+            if (h.length < 2 || h.length > lim::kMaxMbapLength) return ProbeResult::BadAnswer;
+            if (have >= 6u + h.length) return ProbeResult::Ok;
+        }
+        if (have == sizeof buf) return ProbeResult::BadAnswer;
+    }
+}
+
+Execution execute_case(const Case& c, const net::Endpoint& target, const TargetProfile& profile,
+                       const ExecOptions& options) {
+    Runner r(target, profile, options);
+    return r.run(c);
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,68 @@
+// Runs one case on its own fresh connection(s) and judges it: the slow, exact path. Every
+// finding is confirmed here, replay uses it, and so does minimisation. Records the exact bytes
+// sent and received per connection with their timing.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "net/socket.hpp"
+#include "netfuzz/case.hpp"
+#include "netfuzz/oracle.hpp"
+
+namespace mbstorm::netfuzz {
+
+enum class TraceKind : std::uint8_t {
+    Connect,
+    ConnectFailed,
+    Send,
+    Recv,
+    ShutdownWrite,
+    PeerClosed,
+    Reset,
+    Timeout,
+    Flood,
+    FreshProbe,
+};
+std::string_view trace_kind_name(TraceKind k) noexcept;
+bool trace_kind_from_name(std::string_view name, TraceKind& out) noexcept;
+
+struct TraceEvent {
+    std::int64_t t_us = 0;  // since the case started
+    std::uint8_t conn = 0;  // 255: the fresh liveness-probe connection
+    TraceKind kind = TraceKind::Send;
+    std::vector<std::uint8_t> bytes;
+    std::string note;
+};
+
+struct ExecOptions {
+    int timeout_ms = 1000;  // answer timeout (hang oracle)
+    int settle_ms = 300;    // wait for the peer to close after our half-close
+};
+
+struct Execution {
+    Verdict verdict;
+    std::vector<TraceEvent> trace;
+    bool down_before = false;  // the very first connect failed: the target was already down
+    bool target_down = false;  // the fresh probe after the case could not connect
+};
+
+Execution execute_case(const Case& c, const net::Endpoint& target, const TargetProfile& profile,
+                       const ExecOptions& options);
+
+enum class ProbeResult : std::uint8_t { Ok, ConnectFailed, NoAnswer, Closed, BadAnswer };
+std::string_view probe_result_name(ProbeResult r) noexcept;
+
+// One liveness probe on a fresh connection: connect, send the profile's probe, await it.
+ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile,
+                         int timeout_ms);
+
+// Connects with a timeout; returns a connected non-blocking fd (TCP_NODELAY) or -errno.
+int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept;
+
+// Builds a probe ADU with the given transaction id.
+std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_t tid);
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,200 @@
+#include "netfuzz/finding.hpp"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace mbstorm::netfuzz {
+namespace {
+
+using nlohmann::json;
+
+std::string_view op_name(Op op) {
+    switch (op) {
+        case Op::Send: return "send";
+        case Op::ShutdownWrite: return "shutdown-write";
+        case Op::Await: return "await";
+        case Op::Flood: return "flood";
+    }
+    return "send";
+}
+
+bool op_from_name(const std::string& s, Op& out) {
+    for (Op op : {Op::Send, Op::ShutdownWrite, Op::Await, Op::Flood}) {
+        if (op_name(op) == s) {
+            out = op;
+            return true;
+        }
+    }
+    return false;
+}
+
+std::string bytes_list(const std::array<bool, 256>& flags) {
+    std::string s;
+    for (unsigned i = 0; i < 256; ++i)
+        if (flags[i]) s += fmt::format("{}{:02X}", s.empty() ? "" : " ", i);
+    return s;
+}
+
+void parse_list(const std::string& s, std::array<bool, 256>& flags) {
+    std::vector<std::uint8_t> v;
+    std::string compact;
+    for (char c : s)
+        if (c != ' ') compact += c;
+    if (from_hex(compact, v))
+        for (auto b : v) flags[b] = true;
+}
+
+}  // namespace
+
+std::string Finding::key() const {
+    return fmt::format("{}/fc{:02X}/{}", oracle_name(verdict.oracle), fuzz_case.function,
+                       class_name(fuzz_case.cls));
+}
+
+std::string to_hex(const std::vector<std::uint8_t>& bytes) {
+    std::string s;
+    s.reserve(bytes.size() * 2);
+    for (auto b : bytes) s += fmt::format("{:02x}", b);
+    return s;
+}
+
+bool from_hex(const std::string& text, std::vector<std::uint8_t>& out) {
+    out.clear();
+    std::string t;
+    for (char c : text)
+        if (!std::isspace(static_cast<unsigned char>(c))) t += c;
+    if (t.size() % 2) return false;
+    auto nib = [](char c) -> int {
+        if (c >= '0' && c <= '9') return c - '0';
+        if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+        if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+        return -1;
+    };
+    for (std::size_t i = 0; i < t.size(); i += 2) {
+        const int hi = nib(t[i]), lo = nib(t[i + 1]);
+        if (hi < 0 || lo < 0) return false;
+        out.push_back(static_cast<std::uint8_t>(hi << 4 | lo));
+    }
+    return true;
+}
+
+bool save_finding(const Finding& f, const std::string& dir, std::string& error) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        error = fmt::format("cannot create {}: {}", dir, ec.message());
+        return false;
+    }
+    json steps = json::array();
+    for (const Step& s : f.fuzz_case.steps) {
+        steps.push_back({{"op", op_name(s.op)}, {"conn", s.conn}, {"delay_us", s.delay_us},
+                         {"count", s.count}, {"hex", to_hex(s.bytes)}});
+    }
+    json trace = json::array();
+    for (const TraceEvent& e : f.trace) {
+        json ev = {{"t_us", e.t_us}, {"conn", e.conn}, {"event", trace_kind_name(e.kind)}};
+        if (!e.bytes.empty()) ev["hex"] = to_hex(e.bytes);
+        if (!e.note.empty()) ev["note"] = e.note;
+        trace.push_back(std::move(ev));
+    }
+    const json j = {
+        {"schema", 1},
+        {"id", f.id},
+        {"oracle", oracle_name(f.verdict.oracle)},
+        {"function", f.fuzz_case.function},
+        {"class", class_name(f.fuzz_case.cls)},
+        {"summary", f.verdict.summary},
+        {"expected", f.verdict.expected},
+        {"seen", f.verdict.seen},
+        {"target", f.target},
+        {"seed", f.seed},
+        {"case_number", f.case_number},
+        {"found_after_s", f.found_after_s},
+        {"minimized", f.minimized},
+        {"original_steps", f.original_steps},
+        {"timeout_ms", f.timeout_ms},
+        {"profile",
+         {{"unit", f.profile.unit},
+          {"probe", to_hex(f.profile.probe_pdu)},
+          {"unsupported", bytes_list(f.profile.unsupported)},
+          {"extended", bytes_list(f.profile.extended)}}},
+        {"case", {{"steps", steps}}},
+        {"trace", trace},
+    };
+    auto write = [&](const std::string& name, const std::string& text) {
+        std::ofstream o(dir + "/" + name, std::ios::trunc);
+        o << text;
+        if (!o) {
+            error = fmt::format("cannot write {}/{}", dir, name);
+            return false;
+        }
+        return true;
+    };
+    std::ostringstream traffic;
+    traffic << "# " << f.verdict.summary << "\n# expected: " << f.verdict.expected
+            << "\n# seen:     " << f.verdict.seen << "\n# time(us) conn event bytes\n";
+    for (const TraceEvent& e : f.trace) {
+        traffic << fmt::format("{:>9} {:>4} {:<14} {}{}\n", e.t_us,
+                               e.conn == 255 ? std::string("new") : std::to_string(e.conn),
+                               trace_kind_name(e.kind), hex(e.bytes, 300),
+                               e.note.empty() ? "" : "  (" + e.note + ")");
+    }
+    return write("finding.json", j.dump(2) + "\n") &&
+           write("summary.txt", f.verdict.summary + "\n") && write("traffic.txt", traffic.str());
+}
+
+bool load_finding(const std::string& path, Finding& out, std::string& error) {
+    std::string file = path;
+    if (std::filesystem::is_directory(path)) file = path + "/finding.json";
+    std::ifstream in(file);
+    if (!in) {
+        error = fmt::format("cannot read {}", file);
+        return false;
+    }
+    try {
+        const json j = json::parse(in);
+        out = Finding{};
+        out.folder = path;
+        out.id = j.value("id", 0u);
+        if (!oracle_from_name(j.at("oracle").get<std::string>(), out.verdict.oracle))
+            throw std::runtime_error("unknown oracle");
+        out.verdict.summary = j.value("summary", "");
+        out.verdict.expected = j.value("expected", "");
+        out.verdict.seen = j.value("seen", "");
+        out.fuzz_case.function = j.at("function").get<std::uint8_t>();
+        if (!class_from_name(j.at("class").get<std::string>(), out.fuzz_case.cls))
+            throw std::runtime_error("unknown class");
+        out.target = j.value("target", "");
+        out.seed = j.value("seed", std::uint64_t{0});
+        out.timeout_ms = j.value("timeout_ms", 1000);
+        const json& p = j.at("profile");
+        out.profile.unit = p.at("unit").get<std::uint8_t>();
+        if (!from_hex(p.at("probe").get<std::string>(), out.profile.probe_pdu) ||
+            out.profile.probe_pdu.empty())
+            throw std::runtime_error("bad probe");
+        parse_list(p.value("unsupported", ""), out.profile.unsupported);
+        parse_list(p.value("extended", ""), out.profile.extended);
+        for (const json& s : j.at("case").at("steps")) {
+            Step st;
+            if (!op_from_name(s.at("op").get<std::string>(), st.op))
+                throw std::runtime_error("unknown step op");
+            st.conn = s.value("conn", std::uint8_t{0});
+            st.delay_us = s.value("delay_us", 0u);
+            st.count = s.value("count", std::uint16_t{0});
+            if (!from_hex(s.value("hex", ""), st.bytes)) throw std::runtime_error("bad hex");
+            out.fuzz_case.steps.push_back(std::move(st));
+        }
+        if (out.fuzz_case.steps.size() > 64 || out.fuzz_case.connections() > 8)
+            throw std::runtime_error("case too large");
+    } catch (const std::exception& e) {
+        error = fmt::format("{}: not a finding: {}", file, e.what());
+        return false;
+    }
+    return true;
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,542 @@
+#include "netfuzz/generator.hpp"
+
+#include <algorithm>
+
+#include "codec/bytes.hpp"
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+#include "codec/pdu.hpp"
+#include "netfuzz/oracle.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+using Pdu = std::vector<std::uint8_t>;
+namespace lim = codec::limits;
+
+void put16(Pdu& p, std::uint16_t v) {
+    p.push_back(static_cast<std::uint8_t>(v >> 8));
+    p.push_back(static_cast<std::uint8_t>(v));
+}
+
+Pdu pdu5(std::uint8_t fc, std::uint16_t a, std::uint16_t b) {
+    Pdu p{fc};
+    put16(p, a);
+    put16(p, b);
+    return p;
+}
+
+// Addresses worth trying for a request of `quantity` items: both ends of the space, the
+// last start that fits, the first that wraps past 0xFFFF, and the sign boundary.
+std::vector<std::uint16_t> addresses_for(std::uint32_t quantity) {
+    std::vector<std::uint16_t> a = {0, 1, 0x7FFF, 0x8000, 0xFFFE, 0xFFFF};
+    if (quantity > 0 && quantity <= 0x10000) {
+        a.push_back(static_cast<std::uint16_t>(0x10000 - quantity));
+        a.push_back(static_cast<std::uint16_t>(0x10000 - quantity + 1));
+    }
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    return a;
+}
+
+void add_reads(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
+    const std::uint32_t qs[] = {0u, 1u, 2u, 7u, 8u, 9u, max - 1u, max, max + 1u, 0xFFFFu};
+    for (std::uint32_t q : qs)
+        for (std::uint16_t a : addresses_for(q))
+            out.push_back(pdu5(fc, a, static_cast<std::uint16_t>(q)));
+}
+
+// FC0F/FC10: quantity, and byte counts that agree or disagree with it.
+void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
+    const bool coils = fc == 0x0F;
+    const std::uint32_t qs[] = {0u, 1u, 2u, 8u, 9u, max - 1u, max, max + 1u, 0xFFFFu};
+    for (std::uint32_t q : qs) {
+        const std::uint32_t right = coils ? (q + 7) / 8 : 2 * q;
+        std::vector<std::uint32_t> counts = {right, right + 1, 0};
+        if (right > 0) counts.push_back(right - 1);
+        for (std::uint32_t bc : counts) {
+            const std::uint32_t room = lim::kMaxPdu - 6;
+            const std::uint32_t data = std::min(bc, room);
+            for (std::uint16_t a : {std::uint16_t{0}, std::uint16_t(0x10000 - std::max(q, 1u)),
+                                    std::uint16_t(0x10000 - std::max(q, 1u) + 1)}) {
+                Pdu p = pdu5(fc, a, static_cast<std::uint16_t>(q));
+                p.push_back(static_cast<std::uint8_t>(std::min(bc, 255u)));
+                for (std::uint32_t i = 0; i < data; ++i) p.push_back(static_cast<std::uint8_t>(0xA5 ^ i));
+                out.push_back(std::move(p));
+            }
+        }
+    }
+}
+
+void add_file_records(std::vector<Pdu>& out) {
+    struct Sub {
+        std::uint8_t ref;
+        std::uint16_t file, record, length;
+    };
+    const Sub subs[] = {{6, 1, 0, 1},      {6, 1, 9999, 1}, {6, 1, 10000, 1}, {6, 0, 0, 1},
+                        {6, 0xFFFF, 0, 1}, {5, 1, 0, 1},    {7, 1, 0, 1},     {6, 1, 0, 0},
+                        {6, 1, 9990, 20},  {6, 4, 0, 120},  {6, 5, 0, 1},     {0xFF, 1, 0, 1}};
+    for (std::uint8_t fc : {std::uint8_t{0x14}, std::uint8_t{0x15}}) {
+        for (const Sub& s : subs) {
+            for (int copies : {1, 2}) {
+                Pdu body;
+                for (int c = 0; c < copies; ++c) {
+                    body.push_back(s.ref);
+                    put16(body, s.file);
+                    put16(body, s.record);
+                    put16(body, s.length);
+                    if (fc == 0x15)
+                        for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u; ++i)
+                            body.push_back(static_cast<std::uint8_t>(i));
+                }
+                if (body.size() > lim::kMaxPdu - 2) body.resize(lim::kMaxPdu - 2);
+                for (int skew : {0, 1, -1}) {
+                    Pdu p{fc, static_cast<std::uint8_t>(body.size() + skew)};
+                    p.insert(p.end(), body.begin(), body.end());
+                    out.push_back(std::move(p));
+                }
+            }
+        }
+        out.push_back(Pdu{fc, 0});
+        out.push_back(Pdu{fc, 0xFF});
+    }
+}
+
+void add_read_write_multiple(std::vector<Pdu>& out) {
+    const std::uint32_t rqs[] = {0, 1, 125, 126};
+    const std::uint32_t wqs[] = {0, 1, 121, 122};
+    for (std::uint32_t rq : rqs) {
+        for (std::uint32_t wq : wqs) {
+            const std::uint16_t ra = 0x0100;
+            // Overlaps of the write range with the read range: same start, inside, touching
+            // the end, disjoint, and wrapping past 0xFFFF.
+            const std::uint16_t was[] = {ra, static_cast<std::uint16_t>(ra + 1),
+                                         static_cast<std::uint16_t>(ra + std::max(rq, 1u) - 1),
+                                         0x0400, 0xFFFF};
+            for (std::uint16_t wa : was) {
+                for (int skew : {0, 1, -1}) {
+                    const int bc = static_cast<int>(2 * wq) + skew;
+                    if (bc < 0) continue;
+                    Pdu p = pdu5(0x17, ra, static_cast<std::uint16_t>(rq));
+                    put16(p, wa);
+                    put16(p, static_cast<std::uint16_t>(wq));
+                    const int room = static_cast<int>(lim::kMaxPdu) - 10;
+                    p.push_back(static_cast<std::uint8_t>(std::min(bc, 255)));
+                    for (int i = 0; i < std::min(bc, room); ++i) p.push_back(static_cast<std::uint8_t>(i * 7));
+                    out.push_back(std::move(p));
+                }
+            }
+        }
+        // The read range itself at the top of the address space.
+        Pdu p = pdu5(0x17, static_cast<std::uint16_t>(0x10000 - std::max(rq, 1u) + 1),
+                     static_cast<std::uint16_t>(rq));
+        put16(p, 0);
+        put16(p, 1);
+        p.push_back(2);
+        put16(p, 0x1234);
+        out.push_back(std::move(p));
+    }
+}
+
+}  // namespace
+
+std::vector<std::vector<std::uint8_t>> structured_pdus() {
+    std::vector<Pdu> out;
+    add_reads(out, 0x01, lim::kMaxReadBits);
+    add_reads(out, 0x02, lim::kMaxReadBits);
+    add_reads(out, 0x03, lim::kMaxReadRegisters);
+    add_reads(out, 0x04, lim::kMaxReadRegisters);
+    for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
+        for (std::uint16_t v : {0x0000, 0xFF00, 0x0001, 0x00FF, 0xFFFF, 0xFF01, 0x8000})
+            out.push_back(pdu5(0x05, a, v));
+    for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
+        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF})
+            out.push_back(pdu5(0x06, a, v));
+    for (std::uint8_t fc : {0x07, 0x0B, 0x0C, 0x11}) {
+        out.push_back(Pdu{fc});
+        out.push_back(Pdu{fc, 0x00});
+    }
+    // FC08: every defined sub-function and some undefined ones, with right and wrong data
+    // sizes. 0x0001 (restart) and 0x0004 (listen-only) are left out: real devices may
+    // legitimately drop the connection or go silent.
+    for (std::uint16_t sub : {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E,
+                              0x000F, 0x0010, 0x0011, 0x0012, 0x0013, 0x0014, 0x0015, 0x00FF,
+                              0xFFFF}) {
+        for (int words : {0, 1, 2}) {
+            Pdu p{0x08};
+            put16(p, sub);
+            for (int i = 0; i < words; ++i) put16(p, sub == 0 ? 0xA55A : 0x0000);
+            out.push_back(std::move(p));
+        }
+    }
+    {
+        Pdu echo{0x08, 0x00, 0x00};
+        for (int i = 0; i < 250; ++i) echo.push_back(static_cast<std::uint8_t>(i));
+        out.push_back(echo);
+    }
+    add_multi_writes(out, 0x0F, lim::kMaxWriteCoils);
+    add_multi_writes(out, 0x10, lim::kMaxWriteRegisters);
+    add_file_records(out);
+    for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFFF}) {
+        for (std::uint16_t m : {0x0000, 0xFFFF, 0x00FF}) {
+            Pdu p = pdu5(0x16, a, m);
+            put16(p, static_cast<std::uint16_t>(~m));
+            out.push_back(std::move(p));
+        }
+    }
+    add_read_write_multiple(out);
+    for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFE0, 0xFFFE, 0xFFFF}) {
+        Pdu p{0x18};
+        put16(p, a);
+        out.push_back(std::move(p));
+    }
+    // FC2B: every MEI type worth trying; for 0E every read device id code and object ids at
+    // the edges of the basic, regular, reserved and extended ranges.
+    for (std::uint8_t code : {0, 1, 2, 3, 4, 5, 0xFF})
+        for (std::uint8_t obj : {0x00, 0x01, 0x02, 0x03, 0x06, 0x07, 0x7F, 0x80, 0xFF})
+            out.push_back(Pdu{0x2B, codec::kMeiReadDeviceId, code, obj});
+    for (std::uint8_t mei : {0x00, 0x0D, 0x0F, 0xFF}) out.push_back(Pdu{0x2B, mei, 0x01, 0x00});
+    out.push_back(Pdu{0x2B});
+    out.push_back(Pdu{0x2B, codec::kMeiReadDeviceId});
+    // Every function code 0-255: bare, and with a plausible read body.
+    for (unsigned fc = 0; fc < 256; ++fc) {
+        const auto b = static_cast<std::uint8_t>(fc);
+        if (!codec::is_supported_function(b)) out.push_back(Pdu{b});
+        out.push_back(pdu5(b, 0, 1));
+    }
+    return out;
+}
+
+Generator::Generator(const GeneratorOptions& options)
+    : options_(options), rng_(options.seed), seeds_(structured_pdus()) {
+    // Seed-dependent order, so that different seeds explore in different orders.
+    for (std::size_t i = seeds_.size(); i > 1; --i)
+        std::swap(seeds_[i - 1], seeds_[rng_.below(static_cast<std::uint32_t>(i))]);
+    tid_ = rng_.u16();
+    for (std::size_t i = 0; i < seeds_.size(); ++i) {
+        codec::Request r;
+        if (codec::decode_request(seeds_[i], r).ok()) {
+            valid_seeds_.push_back(i);
+            corpus_.push_back(seeds_[i]);
+        }
+    }
+}
+
+void Generator::deprioritise(std::uint8_t function, MutationClass cls) {
+    const std::size_t bit = function * static_cast<std::size_t>(MutationClass::Count) +
+                            static_cast<std::size_t>(cls);
+    deprioritised_[bit / 32] |= 1u << (bit % 32);
+}
+
+bool Generator::deprioritised(const Case& c) const noexcept {
+    const std::size_t bit = c.function * static_cast<std::size_t>(MutationClass::Count) +
+                            static_cast<std::size_t>(c.cls);
+    return (deprioritised_[bit / 32] >> (bit % 32)) & 1u;
+}
+
+void Generator::record_valid(const std::uint8_t* pdu, std::size_t size) {
+    if (corpus_.size() >= 4096 || size == 0 || size > lim::kMaxPdu) return;
+    corpus_.emplace_back(pdu, pdu + size);
+}
+
+std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
+                                           std::uint8_t unit) {
+    std::vector<std::uint8_t> f(lim::kMbapHeader + pdu.size());
+    codec::store_be16(f.data(), tid());
+    codec::store_be16(f.data() + 2, 0);
+    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(pdu.size() + 1));
+    f[6] = unit;
+    std::copy(pdu.begin(), pdu.end(), f.begin() + lim::kMbapHeader);
+    return f;
+}
+
+const std::vector<std::uint8_t>& Generator::next_seed() {
+    const auto& s = seeds_[seed_cursor_];
+    seed_cursor_ = (seed_cursor_ + 1) % seeds_.size();
+    return s;
+}
+
+const std::vector<std::uint8_t>& Generator::valid_seed() {
+    return seeds_[valid_seeds_[rng_.below(static_cast<std::uint32_t>(valid_seeds_.size()))]];
+}
+
+void Generator::next(Case& out) {
+    for (int attempt = 0; attempt < 8; ++attempt) {
+        out.steps.clear();
+        out.pipelinable = false;
+        if (options_.naive) {
+            naive(out);
+            return;
+        }
+        const std::uint32_t roll = rng_.below(1000);
+        if (roll < options_.isolated_per_mille) isolated(out);
+        else if (roll < options_.isolated_per_mille + 150) mutate_recorded(out);
+        else structured(out);
+        // A class that already crashed or hung the target gets 1 draw in 16.
+        if (!deprioritised(out) || rng_.chance(16)) break;
+    }
+    for (Step& s : out.steps)
+        if (s.op == Op::Send && out.cls != MutationClass::StatefulSame &&
+            out.cls != MutationClass::StatefulCross)
+            relocate_writes(s.bytes.data(), s.bytes.size());
+}
+
+void Generator::naive(Case& out) {
+    const std::uint32_t n = 1 + rng_.below(lim::kMaxPdu);
+    std::vector<std::uint8_t> pdu(n);
+    for (auto& b : pdu) b = rng_.byte();
+    out.cls = MutationClass::NaiveRandom;
+    out.function = pdu[0];
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pdu, options_.unit)});
+    out.pipelinable = true;
+}
+
+void Generator::structured(Case& out, MutationClass forced) {
+    const std::uint32_t roll = rng_.below(100);
+    const auto& pdu = next_seed();
+    out.function = pdu[0];
+    codec::Request r;
+    const auto status = codec::decode_request(pdu, r);
+    out.cls = status.ok() ? MutationClass::ValidLimits
+              : status.error == codec::CodecError::UnsupportedFunction
+                  ? MutationClass::UnknownFunction
+                  : MutationClass::InvalidValues;
+    out.pipelinable = true;
+    std::uint8_t unit = options_.unit;
+    if (forced == MutationClass::Count) {
+        if (roll < 5) forced = MutationClass::UnitId;
+        else if (roll < 10) forced = MutationClass::ProtocolId;
+        else if (roll < 15) forced = MutationClass::TrailingBytes;
+        else if (roll < 20) forced = MutationClass::Coalesced;
+    }
+    if (forced == MutationClass::UnitId) {
+        const std::uint8_t units[] = {0x00, 0xF7, 0xFF, 0x02};
+        unit = rng_.chance(4) ? rng_.byte() : rng_.pick(units);
+        out.cls = MutationClass::UnitId;
+    }
+    std::vector<std::uint8_t> f = frame(pdu, unit);
+    if (forced == MutationClass::ProtocolId) {
+        const std::uint16_t pids[] = {0x0001, 0x0100, 0x8000, 0xFFFF};
+        codec::store_be16(f.data() + 2, rng_.pick(pids));
+        out.cls = MutationClass::ProtocolId;
+    } else if (forced == MutationClass::TrailingBytes && f.size() < lim::kMaxTcpAdu) {
+        const std::uint32_t extra = 1 + rng_.below(static_cast<std::uint32_t>(
+                                            std::min<std::size_t>(4, lim::kMaxTcpAdu - f.size())));
+        for (std::uint32_t i = 0; i < extra; ++i) f.push_back(rng_.byte());
+        codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(f.size() - 6));
+        out.cls = MutationClass::TrailingBytes;
+    } else if (forced == MutationClass::Coalesced) {
+        const std::uint32_t n = 2 + rng_.below(15);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            auto more = frame(next_seed(), options_.unit);
+            f.insert(f.end(), more.begin(), more.end());
+        }
+        out.cls = MutationClass::Coalesced;
+    }
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+}
+
+void Generator::mutate_recorded(Case& out) {
+    std::vector<std::uint8_t> pdu =
+        corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
+    const auto& other = corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
+    const std::uint32_t kind = rng_.below(6);
+    const std::uint8_t interesting[] = {0x00, 0x01, 0x7F, 0x80, 0xFE, 0xFF};
+    switch (kind) {
+        case 0:  // bit flips
+            for (std::uint32_t i = 0, n = 1 + rng_.below(3); i < n; ++i)
+                pdu[rng_.below(static_cast<std::uint32_t>(pdu.size()))] ^=
+                    static_cast<std::uint8_t>(1u << rng_.below(8));
+            break;
+        case 1:  // an interesting byte value
+            pdu[rng_.below(static_cast<std::uint32_t>(pdu.size()))] = rng_.pick(interesting);
+            break;
+        case 2: {  // splice: head of one request, tail of another
+            const std::uint32_t cut = rng_.below(static_cast<std::uint32_t>(pdu.size()) + 1);
+            const std::uint32_t from = rng_.below(static_cast<std::uint32_t>(other.size()) + 1);
+            pdu.resize(cut);
+            pdu.insert(pdu.end(), other.begin() + from, other.end());
+            break;
+        }
+        case 3: {  // field splice: a 16-bit field copied at the same offset
+            if (pdu.size() >= 3 && other.size() >= 3) {
+                const std::uint32_t at = 1 + rng_.below(static_cast<std::uint32_t>(
+                                                 std::min(pdu.size(), other.size()) - 2));
+                pdu[at] = other[at];
+                pdu[at + 1] = other[at + 1];
+            }
+            break;
+        }
+        case 4:  // insert a byte
+            pdu.insert(pdu.begin() + 1 + rng_.below(static_cast<std::uint32_t>(pdu.size())),
+                       rng_.byte());
+            break;
+        default:  // drop a byte (never the function code)
+            if (pdu.size() > 1)
+                pdu.erase(pdu.begin() + 1 + rng_.below(static_cast<std::uint32_t>(pdu.size() - 1)));
+            break;
+    }
+    if (pdu.empty()) pdu.push_back(0x03);
+    if (pdu.size() > lim::kMaxPdu) pdu.resize(lim::kMaxPdu);
+    out.cls = MutationClass::RecordedMutation;
+    out.function = pdu[0];
+    out.pipelinable = true;
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pdu, options_.unit)});
+}
+
+void Generator::isolated(Case& out) {
+    const std::uint32_t roll = rng_.below(100);
+    if (roll < 20) {
+        stateful(out, false);
+        return;
+    }
+    if (roll < 35) {
+        stateful(out, true);
+        return;
+    }
+    if (roll < 45) {  // special transaction ids, twice the same on one connection
+        const std::uint16_t tids[] = {0x0000, 0x00FF, 0x0100, 0x7FFF, 0x8000, 0xFFFF};
+        const auto& pdu = valid_seed();
+        auto f = frame(pdu, options_.unit);
+        codec::store_be16(f.data(), rng_.pick(tids));
+        out.cls = MutationClass::TransactionId;
+        out.function = pdu[0];
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, f});
+        if (rng_.chance(2)) {
+            out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+            out.steps.push_back(Step{Op::Send, 0, 0, 0, f});
+        }
+        return;
+    }
+    const auto& pdu = valid_seed();
+    auto f = frame(pdu, options_.unit);
+    out.function = pdu[0];
+    if (roll < 67) {  // split at every offset, in turn, with small gaps
+        out.cls = MutationClass::Split;
+        const std::uint32_t at = 1 + split_cursor_++ % static_cast<std::uint32_t>(f.size() - 1);
+        const std::uint32_t gaps[] = {0, 50, 200, 1000};
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin(), f.begin() + at}});
+        out.steps.push_back(Step{Op::Send, 0, rng_.pick(gaps), 0, {f.begin() + at, f.end()}});
+        return;
+    }
+    if (roll < 75) {  // MBAP length field lies
+        out.cls = MutationClass::MbapLength;
+        const std::uint16_t actual = static_cast<std::uint16_t>(f.size() - 6);
+        const std::uint16_t lengths[] = {0,
+                                         1,
+                                         2,
+                                         255,
+                                         0xFFFF,
+                                         static_cast<std::uint16_t>(actual - 1),
+                                         static_cast<std::uint16_t>(actual + 1),
+                                         254};
+        codec::store_be16(f.data() + 4, rng_.pick(lengths));
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+        return;
+    }
+    if (roll < 82) {  // truncated frame: the header promises more, then half-close
+        out.cls = MutationClass::Truncated;
+        f.resize(lim::kMbapHeader + rng_.below(static_cast<std::uint32_t>(pdu.size())));
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+        out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
+        return;
+    }
+    if (roll < 90) {  // half-close after a partial frame (possibly inside the header)
+        out.cls = MutationClass::HalfClose;
+        f.resize(1 + rng_.below(static_cast<std::uint32_t>(f.size() - 1)));
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+        out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
+        return;
+    }
+    if (roll < 97) {  // slow drip, one byte per send
+        out.cls = MutationClass::Drip;
+        for (std::size_t i = 0; i < f.size(); ++i)
+            out.steps.push_back(Step{Op::Send, 0, i ? 200u : 0u, 0, {f[i]}});
+        return;
+    }
+    out.cls = MutationClass::Flood;
+    out.function = 0;
+    out.steps.push_back(Step{Op::Flood, 0, 0, static_cast<std::uint16_t>(8 + rng_.below(25)), {}});
+}
+
+void Generator::stateful(Case& out, bool cross) {
+    out.cls = cross ? MutationClass::StatefulCross : MutationClass::StatefulSame;
+    const std::uint16_t base = static_cast<std::uint16_t>(kStateBase + rng_.below(kStateSpan - 130));
+    const std::uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10, 0x10, 0x17, 0x16};
+    const std::uint8_t fc = rng_.pick(writes);
+    out.function = fc;
+    std::vector<std::uint8_t> w{fc};
+    std::uint16_t qty = 1;
+    bool coils = false;
+    switch (fc) {
+        case 0x05:
+            coils = true;
+            put16(w, base);
+            put16(w, rng_.chance(2) ? 0xFF00 : 0x0000);
+            break;
+        case 0x06:
+            put16(w, base);
+            put16(w, rng_.u16());
+            break;
+        case 0x0F: {
+            coils = true;
+            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteCoils));
+            put16(w, base);
+            put16(w, qty);
+            w.push_back(static_cast<std::uint8_t>((qty + 7) / 8));
+            for (int i = 0; i < (qty + 7) / 8; ++i) w.push_back(rng_.byte());
+            break;
+        }
+        case 0x10: {
+            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteRegisters));
+            put16(w, base);
+            put16(w, qty);
+            w.push_back(static_cast<std::uint8_t>(2 * qty));
+            for (int i = 0; i < qty; ++i) put16(w, rng_.u16());
+            break;
+        }
+        case 0x17: {
+            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwWriteRegisters));
+            // Read back an overlapping range in the same request, then again separately.
+            const std::uint16_t rq = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwReadRegisters));
+            put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
+            put16(w, std::min<std::uint16_t>(rq, static_cast<std::uint16_t>(kStateBase + kStateSpan - base - qty)));
+            put16(w, base);
+            put16(w, qty);
+            w.push_back(static_cast<std::uint8_t>(2 * qty));
+            for (int i = 0; i < qty; ++i) put16(w, rng_.u16());
+            break;
+        }
+        default:  // 0x16: mask write after a plain write, so the old value is known
+        {
+            std::vector<std::uint8_t> pre{0x06};
+            put16(pre, base);
+            put16(pre, rng_.u16());
+            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+            out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+            put16(w, base);
+            put16(w, rng_.u16());
+            put16(w, rng_.u16());
+            break;
+        }
+    }
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(w, options_.unit)});
+    out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+    const std::uint8_t reader = cross ? 1 : 0;
+    // Read back: the exact range, and a range straddling its start.
+    const std::uint16_t max = coils ? lim::kMaxReadBits : lim::kMaxReadRegisters;
+    const std::uint16_t n = std::min(qty, max);
+    out.steps.push_back(
+        Step{Op::Send, reader, 0, 0, frame(pdu5(coils ? 0x01 : 0x03, base, n), options_.unit)});
+    if (fc == 0x16) {
+        // The mask write's result depends on the old value (written above): read it too.
+        out.steps.back().bytes = frame(pdu5(0x03, base, 1), options_.unit);
+    }
+    const std::uint16_t before = static_cast<std::uint16_t>(base - std::min<std::uint16_t>(3, base - kStateBase));
+    out.steps.push_back(Step{Op::Send, reader, 0, 0,
+                             frame(pdu5(coils ? 0x01 : 0x03, before,
+                                        static_cast<std::uint16_t>(std::min<int>(n + 3, max))),
+                                   options_.unit)});
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,65 @@
+// The case generator: structure-aware (every function code, values at and around every limit,
+// MBAP and transport mutations, stateful write/read sequences, mutations of recorded valid
+// traffic) or, for comparison, naive (random PDU bytes in a valid MBAP frame).
+// Deterministic: the same seed and the same feedback give the same cases.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "netfuzz/case.hpp"
+#include "netfuzz/rng.hpp"
+
+namespace mbstorm::netfuzz {
+
+struct GeneratorOptions {
+    std::uint64_t seed = 1;
+    std::uint8_t unit = 1;
+    bool naive = false;
+    // Transport and stateful cases need their own connections and round trips; this is the
+    // share (per mille) of cases of those kinds.
+    unsigned isolated_per_mille = 60;
+};
+
+class Generator {
+  public:
+    explicit Generator(const GeneratorOptions& options);
+
+    void next(Case& out);
+    // A class that crashed or hung the target is drawn 16 times less often from now on.
+    void deprioritise(std::uint8_t function, MutationClass cls);
+    // Adds a request PDU the target answered normally to the mutation corpus.
+    void record_valid(const std::uint8_t* pdu, std::size_t size);
+
+    // The structured request PDUs (limits of every function code), for tests.
+    const std::vector<std::vector<std::uint8_t>>& seeds() const noexcept { return seeds_; }
+
+  private:
+    void structured(Case& out, MutationClass forced = MutationClass::Count);
+    void naive(Case& out);
+    void isolated(Case& out);
+    void mutate_recorded(Case& out);
+    void stateful(Case& out, bool cross);
+    std::vector<std::uint8_t> frame(const std::vector<std::uint8_t>& pdu, std::uint8_t unit);
+    const std::vector<std::uint8_t>& next_seed();
+    const std::vector<std::uint8_t>& valid_seed();
+    std::uint16_t tid() noexcept { return tid_++; }
+    bool deprioritised(const Case& c) const noexcept;
+
+    GeneratorOptions options_;
+    Rng rng_;
+    std::vector<std::vector<std::uint8_t>> seeds_;  // shuffled structured PDUs
+    std::vector<std::size_t> valid_seeds_;          // indexes of seeds the codec accepts
+    std::vector<std::vector<std::uint8_t>> corpus_;
+    std::size_t seed_cursor_ = 0;
+    std::uint32_t split_cursor_ = 0;
+    std::uint16_t tid_;
+    std::array<std::uint32_t, 256 * static_cast<std::size_t>(MutationClass::Count) / 32 + 1>
+        deprioritised_{};
+};
+
+// Builds every structured request PDU (not shuffled).
+std::vector<std::vector<std::uint8_t>> structured_pdus();
+
+}  // namespace mbstorm::netfuzz

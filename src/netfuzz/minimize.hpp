@@ -1,0 +1,19 @@
+// Delta debugging (ddmin) over a case's steps: the smallest sequence that still makes the
+// same oracle fire. A single send holding several frames is first cut into one step per
+// frame, so coalesced bursts shrink to the frame that matters.
+#pragma once
+
+#include <functional>
+
+#include "netfuzz/case.hpp"
+
+namespace mbstorm::netfuzz {
+
+// `reproduces` runs a candidate against the target. At most `budget` runs.
+Case minimize_case(const Case& original, const std::function<bool(const Case&)>& reproduces,
+                   unsigned budget);
+
+// One step per complete MBAP frame for sends that hold several (others unchanged).
+Case split_frames(const Case& c);
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,352 @@
+#include "netfuzz/oracle.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <optional>
+
+#include "codec/exception_code.hpp"
+#include "codec/function_code.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+using codec::ExceptionCode;
+using codec::load_be16;
+
+constexpr std::array<std::string_view, static_cast<std::size_t>(Oracle::Count)> kOracleNames = {
+    "none", "crash", "hang", "unexpected-close", "malformed-response", "spec-deviation"};
+
+std::string exception_text(std::uint8_t code) {
+    return fmt::format("exception {:02X} ({})", code,
+                       codec::exception_name(static_cast<ExceptionCode>(code)));
+}
+
+std::string request_text(const RequestInfo& rq) {
+    return fmt::format("FC {:02X} unit {} tid {:04X}: {}", rq.pdu.empty() ? 0 : rq.pdu[0],
+                       rq.header.unit_id, rq.header.transaction_id, hex(rq.pdu, 24));
+}
+
+Verdict make(Oracle o, std::string summary, std::string expected, std::string seen) {
+    return Verdict{o, std::move(summary), std::move(expected), std::move(seen)};
+}
+
+// Function codes whose sub-function (or object) support legitimately varies per device, so a
+// 01 answer is acceptable for any of their requests.
+bool sub_function_varies(std::uint8_t fc) noexcept {
+    return fc == 0x08 || fc == 0x2B || fc == 0x14 || fc == 0x15;
+}
+
+bool is_write(std::uint8_t fc) noexcept {
+    return fc == 0x05 || fc == 0x06 || fc == 0x0F || fc == 0x10 || fc == 0x16 || fc == 0x17;
+}
+
+}  // namespace
+
+std::string_view oracle_name(Oracle o) noexcept {
+    const auto i = static_cast<std::size_t>(o);
+    return i < kOracleNames.size() ? kOracleNames[i] : "unknown";
+}
+
+bool oracle_from_name(std::string_view name, Oracle& out) noexcept {
+    for (std::size_t i = 0; i < kOracleNames.size(); ++i) {
+        if (kOracleNames[i] == name) {
+            out = static_cast<Oracle>(i);
+            return true;
+        }
+    }
+    return false;
+}
+
+std::string hex(codec::Bytes bytes, std::size_t max) {
+    std::string s;
+    const std::size_t n = std::min(bytes.size(), max);
+    s.reserve(n * 3 + 4);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (i) s += ' ';
+        s += fmt::format("{:02X}", bytes[i]);
+    }
+    if (bytes.size() > max) s += " ...";
+    return s;
+}
+
+void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept {
+    info.header = codec::read_mbap_header(adu.data());
+    info.pdu = adu.subspan(codec::limits::kMbapHeader);
+    info.status = codec::decode_request(info.pdu, info.request);
+    if (info.header.protocol_id != 0) {
+        info.expect = Expect::MustBeSilent;
+    } else if (info.header.unit_id != profile.unit || info.pdu.empty()) {
+        // Other unit ids may be gateway targets that do not answer; an empty PDU has nothing
+        // to answer to.
+        info.expect = Expect::MayBeSilent;
+    } else {
+        info.expect = Expect::Answer;
+    }
+}
+
+Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProfile& profile) {
+    const codec::MbapHeader h = codec::read_mbap_header(rsp.data());
+    const codec::Bytes pdu = rsp.subspan(codec::limits::kMbapHeader);
+    const std::string seen = hex(rsp);
+    if (rq.expect == Expect::MustBeSilent) {
+        return make(Oracle::SpecDeviation,
+                    fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),
+                    "no answer: frames with protocol id != 0 are discarded", seen);
+    }
+    if (h.protocol_id != 0) {
+        return make(Oracle::MalformedResponse,
+                    fmt::format("response carries protocol id {:04X}", h.protocol_id),
+                    "protocol id 0000", seen);
+    }
+    if (h.unit_id != rq.header.unit_id) {
+        return make(Oracle::MalformedResponse,
+                    fmt::format("response unit id {} for a request to unit {}", h.unit_id,
+                                rq.header.unit_id),
+                    fmt::format("unit id {}", rq.header.unit_id), seen);
+    }
+    const std::uint8_t fc = rq.pdu.empty() ? 0 : rq.pdu[0];
+    if (pdu.empty() || (pdu[0] & 0x7F) != (fc & 0x7F)) {
+        return make(Oracle::MalformedResponse,
+                    fmt::format("response function {:02X} for request function {:02X}",
+                                pdu.empty() ? 0 : pdu[0], fc),
+                    fmt::format("function {:02X} or {:02X}", fc & 0x7F, (fc & 0x7F) | 0x80),
+                    seen);
+    }
+    const auto owed = rq.status.exception;
+    const std::string expected_text =
+        owed != ExceptionCode::None
+            ? exception_text(static_cast<std::uint8_t>(owed))
+            : fmt::format("a normal response to {}", request_text(rq));
+    if (pdu[0] & codec::kExceptionBit) {
+        if (pdu.size() != 2) {
+            return make(Oracle::MalformedResponse,
+                        fmt::format("exception response of {} bytes (MBAP length {})", pdu.size(),
+                                    h.length),
+                        "function|0x80 and one exception code byte", seen);
+        }
+        const std::uint8_t code = pdu[1];
+        const bool foreign_unit = rq.header.unit_id != profile.unit;
+        bool ok = code == 0x06 || (foreign_unit && (code == 0x0A || code == 0x0B));
+        if (owed != ExceptionCode::None) {
+            ok = ok || code == static_cast<std::uint8_t>(owed) || profile.unsupported[fc] ||
+                 (code == 0x01 && sub_function_varies(fc)) || profile.extended[fc];
+        } else {
+            // A valid request may meet an address the device lacks (02), a device failure
+            // (04/05) or an unsupported function (01). 03 is only a deviation for reads, where
+            // a valid quantity leaves nothing to object to.
+            ok = ok || code == 0x01 || code == 0x02 || code == 0x04 || code == 0x05 ||
+                 (code == 0x03 && fc > 0x04);
+        }
+        if (!ok) {
+            return make(Oracle::SpecDeviation,
+                        fmt::format("FC {:02X}: {} where {} is owed", fc, exception_text(code),
+                                    owed == ExceptionCode::None
+                                        ? std::string("a normal response")
+                                        : exception_text(static_cast<std::uint8_t>(owed))),
+                        expected_text, seen);
+        }
+        return {};
+    }
+    if (owed != ExceptionCode::None && !profile.extended[fc]) {
+        return make(Oracle::SpecDeviation,
+                    fmt::format("FC {:02X}: invalid request answered normally ({} owed: {})", fc,
+                                exception_text(static_cast<std::uint8_t>(owed)),
+                                codec::error_name(rq.status.error)),
+                    expected_text, seen);
+    }
+    if (profile.extended[fc]) return {};
+    codec::Response r;
+    if (const auto err = codec::decode_response(pdu, r); err != codec::CodecError::Ok) {
+        return make(Oracle::MalformedResponse,
+                    fmt::format("FC {:02X}: response does not decode: {}", fc,
+                                codec::error_description(err)),
+                    expected_text, seen);
+    }
+    const codec::Request& q = rq.request;
+    auto mismatch = [&](std::string what) {
+        return make(Oracle::MalformedResponse, fmt::format("FC {:02X}: {}", fc, what),
+                    expected_text, seen);
+    };
+    const int want = codec::expected_read_byte_count(q);
+    if (want >= 0 && static_cast<int>(r.payload.size()) != want)
+        return mismatch(fmt::format("{} data bytes for a request that needs {}", r.payload.size(),
+                                    want));
+    switch (fc) {
+        case 0x05:
+        case 0x06:
+            if (r.address != q.address || r.value != q.value)
+                return mismatch("echo differs from the request");
+            break;
+        case 0x0F:
+        case 0x10:
+            if (r.address != q.address || r.quantity != q.quantity)
+                return mismatch("echo of address/quantity differs from the request");
+            break;
+        case 0x16:
+            if (r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask)
+                return mismatch("echo differs from the request");
+            break;
+        case 0x08:
+            if (r.sub_function != q.sub_function) return mismatch("sub-function not echoed");
+            if (q.sub_function == 0x0000 &&
+                !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(),
+                            q.payload.end()))
+                return mismatch("return-query-data did not echo the data");
+            break;
+        case 0x2B:
+            if (r.mei_type != q.mei_type) return mismatch("MEI type not echoed");
+            break;
+        default:
+            break;
+    }
+    return {};
+}
+
+void relocate_writes(std::uint8_t* adu, std::size_t size) noexcept {
+    if (size < codec::limits::kMbapHeader + 5) return;
+    std::uint8_t* p = adu + codec::limits::kMbapHeader;
+    const std::uint8_t fc = p[0];
+    if (!is_write(fc)) return;
+    // Address field: 17 writes at offset 5, the others at offset 1.
+    const std::size_t at = fc == 0x17 ? 5 : 1;
+    if (codec::limits::kMbapHeader + at + 2 > size) return;
+    const std::uint16_t a = load_be16(p + at);
+    std::uint32_t qty = 1;
+    if ((fc == 0x0F || fc == 0x10) && size >= codec::limits::kMbapHeader + 5)
+        qty = load_be16(p + 3);
+    if (fc == 0x17 && size >= codec::limits::kMbapHeader + 9) qty = load_be16(p + 7);
+    const std::uint32_t end = std::uint32_t{a} + std::max<std::uint32_t>(qty, 1);
+    if (end > kStateBase && a < std::uint32_t{kStateBase} + kStateSpan) {
+        // Shift below the range (keeps the value's low bits, so limits near 0 survive).
+        codec::store_be16(p + at, static_cast<std::uint16_t>(a & 0x0FFF));
+    }
+}
+
+namespace {
+
+struct WriteRecord {
+    bool coils = false;
+    std::uint16_t address = 0;
+    std::vector<std::optional<std::uint16_t>> values;  // nullopt: unknown
+    std::int64_t sent = 0, acked = 0;                  // acked 0: no normal answer
+    const RequestInfo* self = nullptr;
+};
+
+bool in_state(std::uint32_t a) noexcept { return a >= kStateBase && a < kStateBase + kStateSpan; }
+
+// The values a write request stores (nullopt where they depend on unknown state).
+std::optional<WriteRecord> write_of(const RequestInfo& rq) {
+    if (rq.status.error != codec::CodecError::Ok || rq.header.protocol_id != 0) return {};
+    const codec::Request& q = rq.request;
+    WriteRecord w;
+    w.self = &rq;
+    switch (q.function) {
+        case 0x05:
+            w.coils = true;
+            w.address = q.address;
+            w.values = {static_cast<std::uint16_t>(q.value == 0xFF00)};
+            break;
+        case 0x06:
+            w.address = q.address;
+            w.values = {q.value};
+            break;
+        case 0x0F:
+            w.coils = true;
+            w.address = q.address;
+            for (std::uint16_t i = 0; i < q.quantity; ++i)
+                w.values.push_back(static_cast<std::uint16_t>((q.payload[i / 8] >> (i % 8)) & 1));
+            break;
+        case 0x10:
+            w.address = q.address;
+            for (std::uint16_t i = 0; i < q.quantity; ++i)
+                w.values.push_back(load_be16(q.payload.data() + 2 * i));
+            break;
+        case 0x17:
+            w.address = q.write_address;
+            for (std::uint16_t i = 0; i < q.write_quantity; ++i)
+                w.values.push_back(load_be16(q.payload.data() + 2 * i));
+            break;
+        case 0x16:
+            w.address = q.address;
+            w.values = {std::nullopt};  // depends on the old value
+            break;
+        default:
+            return {};
+    }
+    return w;
+}
+
+}  // namespace
+
+Verdict Shadow::check(std::vector<Event>& events) {
+    std::vector<WriteRecord> writes;
+    for (const Event& e : events) {
+        auto w = write_of(*e.request);
+        if (!w) continue;
+        const bool normal = e.answered_ns != 0 && !e.response_pdu.empty() &&
+                            !(e.response_pdu[0] & codec::kExceptionBit);
+        w->sent = e.sent_ns;
+        w->acked = normal ? e.answered_ns : 0;
+        if (!normal)
+            for (auto& v : w->values) v.reset();
+        writes.push_back(std::move(*w));
+    }
+    if (writes.empty()) return {};
+    for (const Event& e : events) {
+        const RequestInfo& rq = *e.request;
+        if (rq.status.error != codec::CodecError::Ok || e.answered_ns == 0 ||
+            e.response_pdu.size() < 2 || (e.response_pdu[0] & codec::kExceptionBit))
+            continue;
+        const std::uint8_t fc = rq.request.function;
+        if (fc != 0x01 && fc != 0x03 && fc != 0x17) continue;
+        const bool coils = fc == 0x01;
+        const std::uint16_t start = rq.request.address;
+        const codec::Bytes data = e.response_pdu.subspan(2);
+        for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {
+            const std::uint32_t a = start + i;
+            if (!in_state(a)) continue;
+            const WriteRecord* latest = nullptr;
+            std::size_t latest_index = 0;
+            bool ambiguous = false;
+            for (const WriteRecord& w : writes) {
+                if (w.coils != coils || a < w.address || a >= w.address + w.values.size())
+                    continue;
+                if (w.self == &rq) {  // FC17 writes before it reads
+                    latest = &w;
+                    latest_index = a - w.address;
+                    continue;
+                }
+                const bool before = w.acked != 0 && w.acked <= e.sent_ns;
+                const bool overlaps = w.sent < e.answered_ns && !before;
+                if (overlaps) ambiguous = true;
+                if (before && (!latest || (latest->self != &rq && w.acked > latest->acked))) {
+                    latest = &w;
+                    latest_index = a - w.address;
+                }
+            }
+            if (ambiguous || !latest || !latest->values[latest_index]) continue;
+            const std::uint16_t want = *latest->values[latest_index];
+            std::uint16_t got;
+            if (coils) {
+                if (i / 8 >= data.size()) continue;
+                got = (data[i / 8] >> (i % 8)) & 1;
+            } else {
+                if (2 * i + 1 >= data.size()) continue;
+                got = load_be16(data.data() + 2 * i);
+            }
+            if (got != want) {
+                return make(Oracle::SpecDeviation,
+                            fmt::format("read-after-write mismatch: {} {:04X} wrote {:04X}, read "
+                                        "back {:04X}",
+                                        coils ? "coil" : "holding register", a, want, got),
+                            fmt::format("{:04X} (written by FC {:02X}, acknowledged)", want,
+                                        latest->self->request.function),
+                            fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
+            }
+        }
+    }
+    return {};
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,97 @@
+// The oracles: what a conforming Modbus TCP server must answer to a given request, and a
+// verdict on what the target actually answered. Expectations come from the codec (one place
+// per fact): decode_request says whether a PDU is valid and, if not, the exception a server
+// owes (v1.1b3 precedence: 01, then 03, then 02).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "codec/mbap.hpp"
+#include "codec/pdu.hpp"
+
+namespace mbstorm::netfuzz {
+
+enum class Oracle : std::uint8_t {
+    None,
+    Crash,              // the target stopped accepting connections
+    Hang,               // no answer in time on an open connection
+    UnexpectedClose,    // close or reset while a well-formed request was unanswered
+    MalformedResponse,  // undecodable, or does not match the request
+    SpecDeviation,      // wrong exception, normal answer to an invalid request, ...
+    Count
+};
+
+std::string_view oracle_name(Oracle o) noexcept;  // "crash", "spec-deviation", ...
+bool oracle_from_name(std::string_view name, Oracle& out) noexcept;
+
+struct Verdict {
+    Oracle oracle = Oracle::None;
+    std::string summary;   // one line
+    std::string expected;  // what a conforming server does
+    std::string seen;      // what the target did
+    explicit operator bool() const noexcept { return oracle != Oracle::None; }
+};
+
+// What the fuzzer learned about the target before fuzzing.
+struct TargetProfile {
+    std::uint8_t unit = 1;                   // the unit id the target answers
+    std::vector<std::uint8_t> probe_pdu;     // a request the target answers normally
+    // Per function code: the target answers its canonical valid request with 01 (unsupported)
+    // or answers normally although the codec does not know it (a vendor extension).
+    std::array<bool, 256> unsupported{};
+    std::array<bool, 256> extended{};
+};
+
+// Addresses (holding registers and coils) that only stateful cases write; every other write
+// the fuzzer generates or mutates is moved out of this range (see relocate_writes), and
+// stateful cases run alone, so a read-back that differs is the target's fault.
+inline constexpr std::uint16_t kStateBase = 0x6000;
+inline constexpr std::uint16_t kStateSpan = 0x1000;
+
+// What the fuzzer expects for one request frame it sent.
+enum class Expect : std::uint8_t {
+    Answer,        // a response must come
+    MayBeSilent,   // e.g. a unit id the target may not serve
+    MustBeSilent,  // protocol id != 0: the frame is to be discarded
+};
+
+struct RequestInfo {
+    codec::MbapHeader header;
+    codec::Bytes pdu;
+    codec::Request request;
+    codec::RequestStatus status;  // status.exception != None: the exception owed
+    Expect expect = Expect::Answer;
+};
+
+// Fills `info` for one complete, well-framed request ADU.
+void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept;
+
+// Judges one response frame (already cut by its MBAP length) against its request.
+Verdict judge_response(const RequestInfo& rq, codec::Bytes response_adu,
+                       const TargetProfile& profile);
+
+// Rewrites the address fields of a write request ADU (05, 06, 0F, 10, 16, 17) so that it
+// stays out of the stateful range. Works on raw bytes (mutated frames included).
+void relocate_writes(std::uint8_t* adu, std::size_t size) noexcept;
+
+// Reads-after-writes checking for one case: remembers acknowledged writes in the stateful
+// range and compares later reads of the same addresses.
+class Shadow {
+  public:
+    struct Event {
+        const RequestInfo* request;
+        std::int64_t sent_ns;
+        std::int64_t answered_ns;  // 0: no answer
+        codec::Bytes response_pdu;
+    };
+    // Events in any order; returns the first mismatch.
+    static Verdict check(std::vector<Event>& events);
+};
+
+std::string hex(codec::Bytes bytes, std::size_t max = 64);
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,267 @@
+// Valid scenarios: every key lands in the plan, defaults are filled, overrides apply, and the
+// printed scenario reads back to the same scenario.
+#include <gtest/gtest.h>
+
+#include "scenario/print.hpp"
+#include "scenario/scenario.hpp"
+
+namespace mbstorm::scenario {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr const char* kFull = R"(
+name: full
+description: every key
+slave_threads: 1
+slave:
+  init:
+    - {table: holding_registers, address: 100, value: 7, count: 10}
+threads: 2
+connections: 4
+depth: 3
+model: open
+rate: 1500.5
+arrival: poisson
+warmup: 250ms
+timeout: 20ms
+connect_timeout: 2s
+connect_rate: 500
+reconnect_backoff: {min: 10ms, max: 2s}
+late_threshold: 2ms
+allow_writes: true
+seed: 42
+stage_step: 500ms
+stages:
+  - {name: up, duration: 2s, rate: 3000}
+  - {duration: 1s, connections: 8, ramp: constant}
+operations:
+  - name: r
+    function: read_holding_registers
+    unit: 7
+    address: 40101-40110
+    quantity: 10
+    distribution: zipf
+    zipf_exponent: 1.5
+    weight: 3
+    expect: {value: 7}
+    thresholds: [p99 < 5ms]
+  - function: 0x10
+    address: 0x100-0x1FF
+    quantity: 4
+    values: {mode: counter, start: 10, step: 3}
+  - function: write_single_coil
+    address: 00001-00010
+    values: {mode: pattern, pattern: [1, 0]}
+  - function: 0x17
+    address: 0-20
+    quantity: 5
+    write_quantity: 3
+    values: random
+  - function: mask_write_register
+    address: 9
+    and_mask: 0xF0F0
+    values: 0x0101
+  - function: encapsulated_interface
+    device_id_code: 2
+  - function: 3
+thresholds:
+  - error_rate < 0.1%
+  - throughput > 50k/s
+  - exceptions[02] == 0
+  - {operation: r, check: "p99.9 <= 20ms"}
+)";
+
+TEST(ScenarioParse, EveryKeyLandsInThePlan) {
+    const Scenario s = parse_scenario(kFull, "full.yaml");
+    const load::Plan& p = s.plan;
+    EXPECT_EQ(s.name, "full");
+    EXPECT_EQ(s.description, "every key");
+    EXPECT_TRUE(s.target.empty());
+    EXPECT_EQ(s.slave_threads, 1U);
+    ASSERT_EQ(s.slave.init.size(), 1U);
+    EXPECT_EQ(s.slave.init[0].address, 100);
+    EXPECT_EQ(p.threads, 2U);
+    EXPECT_EQ(p.connections, 4U);
+    EXPECT_EQ(p.depth, 3U);
+    EXPECT_EQ(p.model, load::LoadModel::OpenLoop);
+    EXPECT_DOUBLE_EQ(p.rate, 1500.5);
+    EXPECT_EQ(p.arrival, load::Arrival::Poisson);
+    EXPECT_EQ(p.warmup, 250ms);
+    EXPECT_EQ(p.transaction_timeout, 20ms);
+    EXPECT_EQ(p.connect_timeout, 2s);
+    EXPECT_DOUBLE_EQ(p.connect_rate, 500);
+    EXPECT_EQ(p.reconnect_backoff_min, 10ms);
+    EXPECT_EQ(p.reconnect_backoff_max, 2s);
+    EXPECT_EQ(p.late_threshold, 2ms);
+    EXPECT_TRUE(p.allow_writes);
+    EXPECT_EQ(p.seed, 42U);
+    EXPECT_EQ(s.stage_step, 500ms);
+    ASSERT_EQ(s.stages.size(), 2U);
+    EXPECT_EQ(s.stages[0].name, "up");
+    EXPECT_EQ(s.stages[0].ramp, load::Ramp::Linear);
+    EXPECT_EQ(s.stages[1].name, "stage 2");
+    EXPECT_EQ(s.stages[1].ramp, load::Ramp::Constant);
+    EXPECT_EQ(*s.stages[1].connections, 8U);
+    EXPECT_EQ(p.duration, 3s);  // the sum of the stages
+    EXPECT_EQ(s.total_duration(), 3s);
+
+    ASSERT_EQ(p.operations.size(), 7U);
+    const auto& r = p.operations[0];
+    EXPECT_EQ(r.name, "r");
+    EXPECT_EQ(r.function, 0x03);
+    EXPECT_EQ(r.unit_id, 7);
+    EXPECT_EQ(r.first_address, 100);  // 40101 = holding register 100
+    EXPECT_EQ(*r.last_address, 109);
+    EXPECT_EQ(r.address_mode, load::AddressMode::Zipf);
+    EXPECT_DOUBLE_EQ(r.zipf_exponent, 1.5);
+    EXPECT_EQ(r.weight, 3U);
+    ASSERT_TRUE(s.expectations[0].active);
+    EXPECT_EQ(*s.expectations[0].value, 7);
+
+    EXPECT_EQ(p.operations[1].name, "write_multiple_registers");
+    EXPECT_EQ(p.operations[1].first_address, 0x100);
+    EXPECT_EQ(*p.operations[1].last_address, 0x1FF);
+    EXPECT_EQ(p.operations[1].values.mode, load::ValueMode::Counter);
+    EXPECT_EQ(p.operations[1].values.value, 10);
+    EXPECT_EQ(p.operations[1].values.step, 3);
+    EXPECT_FALSE(s.expectations[1].active);
+
+    EXPECT_EQ(p.operations[2].function, 0x05);
+    EXPECT_EQ(p.operations[2].first_address, 0);  // coil reference 00001
+    EXPECT_EQ(p.operations[2].quantity, 1);       // FC05 default
+    EXPECT_EQ(p.operations[2].values.pattern, (std::vector<std::uint16_t>{1, 0}));
+
+    EXPECT_EQ(p.operations[3].write_quantity, 3);
+    EXPECT_EQ(p.operations[3].values.mode, load::ValueMode::Random);
+    EXPECT_EQ(p.operations[4].and_mask, 0xF0F0);
+    EXPECT_EQ(p.operations[4].values.value, 0x0101);
+    EXPECT_EQ(p.operations[5].device_id_code, 2);
+    EXPECT_EQ(p.operations[6].quantity, 10);  // FC03 default
+    EXPECT_EQ(p.operations[6].name, "read_holding_registers");
+
+    ASSERT_EQ(s.thresholds.size(), 5U);
+    EXPECT_EQ(s.thresholds[0].operation, "r");
+    EXPECT_EQ(s.thresholds[0].text, "p99 < 5ms");
+    EXPECT_EQ(s.thresholds[1].text, "error_rate < 0.1%");
+    EXPECT_DOUBLE_EQ(s.thresholds[2].limit, 50000);
+    EXPECT_EQ(s.thresholds[3].exception_code, 2);
+    EXPECT_EQ(s.thresholds[4].operation, "r");
+    EXPECT_DOUBLE_EQ(s.thresholds[4].percentile, 99.9);
+}
+
+TEST(ScenarioParse, DefaultsForAMinimalFile) {
+    const Scenario s = parse_scenario("operations:\n  - function: 4\n", "dir/min.yaml");
+    EXPECT_EQ(s.name, "min");
+    EXPECT_TRUE(s.target.empty());
+    EXPECT_EQ(s.plan.connections, kDefaultConnections);
+    EXPECT_EQ(s.plan.depth, kDefaultDepth);
+    EXPECT_EQ(s.plan.model, load::LoadModel::ClosedLoop);
+    EXPECT_EQ(s.plan.duration, 10s);
+    EXPECT_EQ(s.plan.transaction_timeout, 1s);
+    EXPECT_EQ(s.plan.operations[0].first_address, 0);
+    EXPECT_FALSE(s.plan.operations[0].last_address.has_value());
+    EXPECT_TRUE(s.thresholds.empty());
+    EXPECT_TRUE(s.stages.empty());
+}
+
+TEST(ScenarioParse, RateAloneMeansOpenLoopAndDefaultNamesStayUnique) {
+    const Scenario s = parse_scenario(
+        "rate: 100\ntarget: '[::1]:1502'\noperations:\n  - {function: 3}\n  - {function: 3}\n",
+        "x.yaml");
+    EXPECT_EQ(s.plan.model, load::LoadModel::OpenLoop);
+    EXPECT_EQ(s.target, "[::1]:1502");
+    EXPECT_EQ(s.plan.operations[0].name, "read_holding_registers");
+    EXPECT_EQ(s.plan.operations[1].name, "read_holding_registers_2");
+}
+
+TEST(ScenarioParse, ZeroDurationIsFineWithATransactionCount) {
+    const Scenario s =
+        parse_scenario("duration: 0\ntransactions: 500\noperations: [{function: 3}]\n", "t.yaml");
+    EXPECT_EQ(s.plan.transactions, 500U);
+    EXPECT_EQ(s.plan.duration, 0s);
+}
+
+TEST(ScenarioPrint, ReadsBackToTheSameScenario) {
+    const Scenario s = parse_scenario(kFull, "full.yaml");
+    const std::string printed = format_scenario(s);
+    const Scenario again = parse_scenario(printed, "printed.yaml");
+    EXPECT_EQ(format_scenario(again).substr(printed.find('\n')), printed.substr(printed.find('\n')))
+        << printed;
+    // Defaults are written out.
+    EXPECT_NE(printed.find("connect_timeout: 2s"), std::string::npos) << printed;
+    EXPECT_NE(printed.find("address: 100-109"), std::string::npos) << printed;
+    EXPECT_NE(printed.find("function: read_holding_registers"), std::string::npos);
+    EXPECT_NE(printed.find("init"), std::string::npos) << printed;
+}
+
+TEST(ScenarioPrint, MinimalFileShowsEveryDefault) {
+    const std::string printed =
+        format_scenario(parse_scenario("operations: [{function: 6}]\n", "m.yaml"));
+    for (const char* key :
+         {"threads: 0", "connections: 16", "depth: 16", "model: closed", "duration: 10s",
+          "transactions: 0", "warmup: 0s", "timeout: 1s", "connect_timeout: 3s",
+          "connect_rate: 10000", "allow_writes: false", "seed: 1", "quantity: 1", "unit: 1",
+          "distribution: sequential", "mode: constant", "weight: 1"}) {
+        EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
+    }
+}
+
+TEST(ScenarioOverrides, FlagsReplaceFileValues) {
+    Scenario s = parse_scenario(kFull, "full.yaml");
+    Overrides o;
+    o.target = "127.0.0.1:1502";
+    o.connections = 2;
+    o.depth = 1;
+    o.duration = 300ms;  // stages are scaled to fit
+    o.threads = 1;
+    ASSERT_TRUE(apply_overrides(s, o).empty());
+    EXPECT_EQ(s.target, "127.0.0.1:1502");
+    EXPECT_EQ(s.plan.connections, 2U);
+    EXPECT_FALSE(s.stages[1].connections.has_value());
+    EXPECT_EQ(s.plan.depth, 1U);
+    EXPECT_EQ(s.stages[0].duration, 200ms);
+    EXPECT_EQ(s.stages[1].duration, 100ms);
+    EXPECT_EQ(s.total_duration(), 300ms);
+    EXPECT_EQ(s.plan.warmup, 250ms);
+}
+
+TEST(ScenarioOverrides, RateSwitchesToOpenLoopAndBadValuesAreReported) {
+    Scenario s = parse_scenario("operations: [{function: 3}]\n", "o.yaml");
+    Overrides o;
+    o.rate = 500;
+    ASSERT_TRUE(apply_overrides(s, o).empty());
+    EXPECT_EQ(s.plan.model, load::LoadModel::OpenLoop);
+
+    Overrides bad_target;
+    bad_target.target = "nowhere";
+    auto problems = apply_overrides(s, bad_target);
+    ASSERT_EQ(problems.size(), 1U);
+    EXPECT_NE(problems[0].find("needs a port"), std::string::npos);
+
+    Overrides zero;
+    zero.duration = 0s;
+    problems = apply_overrides(s, zero);
+    ASSERT_FALSE(problems.empty());
+    EXPECT_NE(problems[0].find("duration"), std::string::npos) << problems[0];
+
+    Scenario staged =
+        parse_scenario("stages: [{duration: 5s}]\noperations: [{function: 3}]\n", "s.yaml");
+    problems = apply_overrides(staged, zero);
+    ASSERT_FALSE(problems.empty());
+    EXPECT_NE(problems[0].find("cannot scale the stages"), std::string::npos);
+}
+
+TEST(ScenarioFromPlan, PrintsAFlagOnlyRun) {
+    load::Plan plan;
+    plan.operations.push_back({});
+    plan.operations[0].name = "read_holding_registers";
+    plan.connections = 3;
+    const std::string printed = format_scenario(scenario_from_plan(plan, "127.0.0.1:502"));
+    EXPECT_NE(printed.find("target: 127.0.0.1:502"), std::string::npos) << printed;
+    EXPECT_NE(printed.find("connections: 3"), std::string::npos);
+    EXPECT_NO_THROW((void)parse_scenario(printed, "flags.yaml")) << printed;
+}
+
+}  // namespace
+}  // namespace mbstorm::scenario
