@@ -4,7 +4,9 @@
 # pymodbus. Server pinned to core 0, client (pipeline_client) to core 1.
 #
 #   bench/run_server_bench.sh [build-dir] [seconds-per-cell]
-# Prints a markdown table of transactions/s (and the ratios the project targets).
+# Prints markdown tables of transactions/s and of transactions per server CPU-second (the
+# client is single-threaded, so on a small machine it often saturates before a fast server
+# does; the server's own CPU time shows its efficiency), and the ratios the project targets.
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 build=${1:-$here/../build/release}
@@ -44,7 +46,11 @@ start_server() {
   [ -n "$port" ]
 }
 
-declare -A tps
+cpu_ticks() { awk '{print $14 + $15}' "/proc/$1/stat" 2>/dev/null || echo 0; }
+hz=$(getconf CLK_TCK)
+
+declare -A tps eff
+tmp_result=$(mktemp)
 servers="mbstorm limit libmodbus pymodbus"
 [ -x "$libmodbus" ] || servers=${servers/libmodbus/}
 cells="1:1 1:16 1:256 16:16 64:1 64:16 64:256 1000:1 1000:16 1000:256"
@@ -52,11 +58,21 @@ for s in $servers; do
   for cell in $cells; do
     c=${cell%%:*}; d=${cell##*:}
     if ! start_server "$s"; then tps[$s,$c,$d]="n/a"; stop_server; continue; fi
-    line=$(timeout $((secs + 30)) taskset -c 1 "$client" --port "$port" --connections "$c" \
-             --depth "$d" --seconds "$secs" --warmup 0.5 2>/dev/null | grep '^RESULT')
+    # The server's CPU time over the measured window (after the client's warm-up).
+    timeout $((secs + 30)) taskset -c 1 "$client" --port "$port" --connections "$c" \
+      --depth "$d" --seconds "$secs" --warmup 0.5 >"$tmp_result" 2>/dev/null &
+    cpid=$!
+    sleep 0.6
+    t0=$(cpu_ticks "$server_pid"); w0=$(date +%s.%N)
+    wait "$cpid"
+    t1=$(cpu_ticks "$server_pid"); w1=$(date +%s.%N)
+    line=$(grep '^RESULT' "$tmp_result")
     v=$(sed -n 's/.*tps=\([0-9]*\).*/\1/p' <<<"$line")
     tps[$s,$c,$d]=${v:-n/a}
-    echo "# $s conns=$c depth=$d: ${line:-failed}" >&2
+    cpu=$(awk -v a="$t0" -v b="$t1" -v hz="$hz" -v w0="$w0" -v w1="$w1" \
+          'BEGIN{ f=(b-a)/hz/(w1-w0); if (f < 0.01) f=0.01; printf "%.2f", f }')
+    eff[$s,$c,$d]=$(awk -v t="${v:-0}" -v f="$cpu" 'BEGIN{ if (t > 0) printf "%.0f", t/f; else print "n/a" }')
+    echo "# $s conns=$c depth=$d: ${line:-failed} server_cpu=$cpu" >&2
     stop_server
   done
 done
@@ -70,8 +86,19 @@ for cell in $cells; do
   for s in $servers; do printf ' %s |' "${tps[$s,$c,$d]}"; done
   printf '\n'
 done
+printf '\nTransactions per server CPU-second:\n\n| connections x depth |'
+for s in $servers; do printf ' %s |' "$s"; done
+printf '\n|---|'; for s in $servers; do printf -- '---:|'; done; printf '\n'
+for cell in $cells; do
+  c=${cell%%:*}; d=${cell##*:}
+  printf '| %s x %s |' "$c" "$d"
+  for s in $servers; do printf ' %s |' "${eff[$s,$c,$d]}"; done
+  printf '\n'
+done
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN{ if (b+0 > 0 && a+0 > 0) printf "%.2f", a/b; else print "n/a" }'; }
 echo
 echo "mbstorm / limit_server at 16x16: $(ratio "${tps[mbstorm,16,16]}" "${tps[limit,16,16]}") (target >= 0.8)"
 echo "mbstorm / libmodbus at 16x16:   $(ratio "${tps[mbstorm,16,16]}" "${tps[libmodbus,16,16]:-0}") (target >= 10)"
 echo "mbstorm / libmodbus at 64x1:    $(ratio "${tps[mbstorm,64,1]}" "${tps[libmodbus,64,1]:-0}") (target >= 2)"
+echo "per server CPU-second: vs limit 16x16 $(ratio "${eff[mbstorm,16,16]}" "${eff[limit,16,16]}"), vs libmodbus 16x16 $(ratio "${eff[mbstorm,16,16]}" "${eff[libmodbus,16,16]:-0}"), vs libmodbus 64x1 $(ratio "${eff[mbstorm,64,1]}" "${eff[libmodbus,64,1]:-0}")"
+rm -f "$tmp_result"

@@ -15,6 +15,8 @@ int run_cli(int argc, char** argv) {
     add_serve_command(app, action);
     add_decode_command(app, action);
     add_encode_command(app, action);
+    add_fuzz_command(app, action);
+    add_replay_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -18,6 +18,8 @@ void add_decode_command(CLI::App& app, Action& action);
 void add_encode_command(CLI::App& app, Action& action);
 void add_serve_command(CLI::App& app, Action& action);
 void add_run_command(CLI::App& app, Action& action);
+void add_fuzz_command(CLI::App& app, Action& action);
+void add_replay_command(CLI::App& app, Action& action);
 
 // Entry point used by main(): parses argv and runs the chosen subcommand.
 int run_cli(int argc, char** argv);

@@ -79,7 +79,7 @@ struct Plan {
 
     // Length of the run: by time, by transaction count, or both (whichever ends first).
     Duration duration = std::chrono::seconds(10);  // 0: no time limit (needs `transactions`)
-    std::uint64_t transactions = 0;                // 0: no count limit
+    std::uint64_t transactions = 0;                // 0: no count limit; counts warm-up sends too
     Duration warmup{};                             // excluded from the results
 
     std::vector<Stage> stages;

@@ -41,7 +41,7 @@ std::string check_connection_capacity(std::uint32_t connections, std::uint32_t t
     const std::uint64_t limit = net::raise_nofile_limit(wanted, &why);
     if (limit < wanted) {
         return fmt::format(
-            "connections: {} cannot be opened: the open-files limit allows about {} ({}); ",
+            "connections: {} cannot be opened: the open-files limit allows about {} ({})",
             connections, limit > 8ull * threads + 64 ? limit - 8ull * threads - 64 : 0, why);
     }
     PortRange range;

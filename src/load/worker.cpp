@@ -378,8 +378,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         buf_ring_.recycle(buffer_id);
         if (fatal) {
             // The stream cannot be resynchronised: count it and start a fresh connection.
-            ++framing_errors;
-            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::Malformed);
+            ++framing_errors;  // reported in LoadResult; the transactions end as closed
             close_connection(index, now, stats::Outcome::ConnectionClosed);
             return;
         }

@@ -142,7 +142,7 @@ TEST(BufRing, RecvSelectsAndRecycles) {
     ASSERT_EQ(socketpair(AF_UNIX, SOCK_STREAM, 0, sv), 0);
     UniqueFd a(sv[0]), b(sv[1]);
     for (int round = 0; round < 10; ++round) {  // more rounds than buffers: recycling works
-        char msg[8];
+        char msg[16];
         std::snprintf(msg, sizeof msg, "r%d", round);
         ASSERT_GT(::write(b.get(), msg, std::strlen(msg)), 0);
         io_uring_sqe* sqe = ring.sqe();

@@ -1,0 +1,143 @@
+// `mbstorm fuzz`: the structure-aware network fuzzer (src/netfuzz). Exit 1 with findings,
+// 0 when clean, 2 for usage errors or an unreachable target.
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "cli/commands.hpp"
+#include "cli/duration_option.hpp"
+#include "cli/fuzz_target.hpp"
+#include "netfuzz/campaign.hpp"
+#include "netfuzz/outputs.hpp"
+#include "report/files.hpp"
+
+namespace mbstorm::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void on_stop_signal(int) { g_stop.store(true); }
+
+struct FuzzOptions {
+    std::string target;
+    bool allow_remote = false;
+    int unit = 1;
+    std::uint64_t seed = 1;
+    double seconds = 0;
+    std::uint64_t cases = 0;
+    std::uint64_t timeout_ns = 1'000'000'000;
+    unsigned lanes = 4;
+    std::string out_dir = "mbstorm-findings";
+    std::string restart_cmd;
+    std::uint64_t restart_wait_ns = 15'000'000'000;
+    std::string json, junit, sarif;
+    bool no_minimize = false;
+    bool naive = false;
+    bool quiet = false;
+};
+
+int usage(const std::string& msg) {
+    fmt::print(stderr, "mbstorm fuzz: {}\n", msg);
+    return kExitUsage;
+}
+
+bool write_output(const std::string& path, const std::string& text) {
+    if (path == "-") {
+        std::fwrite(text.data(), 1, text.size(), stdout);
+        return true;
+    }
+    std::string error;
+    if (report::write_text_file(path, text, error)) return true;
+    fmt::print(stderr, "mbstorm fuzz: {}\n", error);
+    return false;
+}
+
+int run_fuzz(const FuzzOptions& o) {
+    netfuzz::CampaignOptions c;
+    std::string error;
+    if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
+    if (o.seconds <= 0 && o.cases == 0) return usage("bound the run with --seconds N or --cases N");
+    // The first line, always: this is not a read-only tool.
+    fmt::print("mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
+               "and malformed frames); only fuzz devices you may change\n",
+               c.target.to_string());
+    std::fflush(stdout);
+    c.target_text = c.target.to_string();
+    c.unit = static_cast<std::uint8_t>(o.unit);
+    c.seed = o.seed;
+    c.max_cases = o.cases;
+    c.max_seconds = o.seconds;
+    c.timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
+    c.lanes = o.lanes;
+    c.naive = o.naive;
+    c.minimize = !o.no_minimize;
+    c.restart_cmd = o.restart_cmd;
+    c.restart_wait_ms = static_cast<int>(o.restart_wait_ns / 1'000'000);
+    c.out_dir = o.out_dir;
+    c.stop = &g_stop;
+    std::signal(SIGINT, on_stop_signal);
+    std::signal(SIGTERM, on_stop_signal);
+
+    const bool quiet = o.quiet;
+    auto progress = [quiet](const netfuzz::Progress& p) {
+        if (quiet) return;
+        fmt::print("[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n", p.seconds, p.cases,
+                   p.cases_per_second, p.findings, p.target_up ? "up" : "DOWN (waiting)",
+                   p.restarts ? fmt::format(", {} restart(s)", p.restarts) : std::string());
+        std::fflush(stdout);
+    };
+    auto finding = [](const netfuzz::Finding& f) {
+        fmt::print("FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()), f.verdict.summary);
+        if (!f.folder.empty()) fmt::print("  saved to {}\n", f.folder);
+        std::fflush(stdout);
+    };
+    const netfuzz::CampaignResult r = netfuzz::run_campaign(c, progress, finding);
+    std::signal(SIGINT, SIG_DFL);
+    std::signal(SIGTERM, SIG_DFL);
+    if (!r.started) {
+        fmt::print(stderr, "mbstorm fuzz: {}: {}\n", c.target_text, r.error);
+        return kExitUsage;
+    }
+    const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};
+    fmt::print("{}", netfuzz::format_fuzz_summary(r, info));
+    bool ok = true;
+    if (!o.json.empty()) ok &= write_output(o.json, netfuzz::format_fuzz_json(r, info));
+    if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
+    if (!o.sarif.empty()) ok &= write_output(o.sarif, netfuzz::format_fuzz_sarif(r, info));
+    if (!ok) return kExitUsage;
+    return r.findings.empty() && !r.target_lost ? kExitOk : kExitFailed;
+}
+
+}  // namespace
+
+void add_fuzz_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<FuzzOptions>();
+    auto* cmd = app.add_subcommand("fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
+    cmd->add_option("--target", o->target, "HOST:PORT of the server to fuzz (required; loopback unless --allow-remote)")
+        ->required();
+    cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
+    cmd->add_option("--unit", o->unit, "unit id the target answers")->check(CLI::Range(0, 255))->capture_default_str();
+    cmd->add_option("--seed", o->seed, "seed: the same seed against the same target gives the same cases")
+        ->capture_default_str();
+    cmd->add_option("--seconds", o->seconds, "stop after this many seconds")->check(CLI::PositiveNumber);
+    cmd->add_option("--cases", o->cases, "stop after this many cases")->check(CLI::PositiveNumber);
+    add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout: longer is a hang (default 1s)");
+    cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")
+        ->check(CLI::Range(1u, 64u))
+        ->capture_default_str();
+    cmd->add_option("--out", o->out_dir, "folder for findings (one sub-folder each)")->capture_default_str();
+    cmd->add_option("--restart-cmd", o->restart_cmd, "shell command that restarts the target after a crash");
+    add_duration_option(cmd, "--restart-wait", o->restart_wait_ns, "how long to wait for a crashed target to return (default 15s)");
+    cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
+    cmd->add_option("--junit", o->junit, "write JUnit XML to this file");
+    cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file");
+    cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
+    cmd->add_flag("--naive", o->naive, "baseline: random PDU bytes instead of the structure-aware generator");
+    cmd->add_flag("--quiet,-q", o->quiet, "no progress lines");
+    cmd->callback([o, &action] { action = [o] { return run_fuzz(*o); }; });
+}
+
+}  // namespace mbstorm::cli

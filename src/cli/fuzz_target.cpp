@@ -1,0 +1,29 @@
+#include "cli/fuzz_target.hpp"
+
+#include <arpa/inet.h>
+
+#include <cstring>
+
+namespace mbstorm::cli {
+
+bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
+                         std::string& error) {
+    if (!net::parse_endpoint(text, out, &error, 502)) return false;
+    bool loopback = false;
+    if (out.family() == AF_INET) {
+        const auto* a = reinterpret_cast<const sockaddr_in*>(&out.addr);
+        loopback = (ntohl(a->sin_addr.s_addr) >> 24) == 127;
+    } else if (out.family() == AF_INET6) {
+        const auto* a = reinterpret_cast<const sockaddr_in6*>(&out.addr);
+        loopback = IN6_IS_ADDR_LOOPBACK(&a->sin6_addr);
+    }
+    if (!loopback && !allow_remote) {
+        error = "target " + out.to_string() +
+                " is not a loopback address; fuzzing writes to the device and may change its "
+                "outputs: pass --allow-remote if you mean it";
+        return false;
+    }
+    return true;
+}
+
+}  // namespace mbstorm::cli

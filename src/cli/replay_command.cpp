@@ -1,0 +1,77 @@
+// `mbstorm replay FINDING --target HOST:PORT`: re-sends a saved finding's case and says whether
+// the same oracle still fires. Exit 1: reproduces, 0: does not, 2: usage.
+#include <fmt/format.h>
+
+#include <memory>
+#include <string>
+
+#include "cli/commands.hpp"
+#include "cli/duration_option.hpp"
+#include "cli/fuzz_target.hpp"
+#include "netfuzz/campaign.hpp"
+#include "netfuzz/executor.hpp"
+#include "netfuzz/finding.hpp"
+
+namespace mbstorm::cli {
+namespace {
+
+struct ReplayOptions {
+    std::string finding;
+    std::string target;
+    bool allow_remote = false;
+    std::uint64_t timeout_ns = 0;  // 0: the finding's own timeout
+    unsigned runs = 1;
+};
+
+int run_replay(const ReplayOptions& o) {
+    net::Endpoint target;
+    std::string error;
+    if (!resolve_fuzz_target(o.target, o.allow_remote, target, error)) {
+        fmt::print(stderr, "mbstorm replay: {}\n", error);
+        return kExitUsage;
+    }
+    netfuzz::Finding f;
+    if (!netfuzz::load_finding(o.finding, f, error)) {
+        fmt::print(stderr, "mbstorm replay: {}\n", error);
+        return kExitUsage;
+    }
+    fmt::print("mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
+    fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
+    netfuzz::ExecOptions ex;
+    ex.timeout_ms = o.timeout_ns ? static_cast<int>(o.timeout_ns / 1'000'000) : f.timeout_ms;
+    unsigned reproduced = 0;
+    for (unsigned i = 0; i < std::max(1u, o.runs); ++i) {
+        netfuzz::Execution e = netfuzz::execute_case(f.fuzz_case, target, f.profile, ex);
+        if (e.down_before) {
+            // A crash from an earlier run: give the target time to come back.
+            if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
+                fmt::print(stderr, "mbstorm replay: {} does not accept connections\n", target.to_string());
+                return kExitUsage;
+            }
+            e = netfuzz::execute_case(f.fuzz_case, target, f.profile, ex);
+        }
+        const bool same = e.verdict.oracle == f.oracle();
+        reproduced += same;
+        fmt::print("run {}: {}{}\n", i + 1, same ? "REPRODUCES: " : "does not reproduce",
+                   e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")") : std::string());
+        if (same) fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
+        if (e.target_down) netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
+    }
+    fmt::print("{} of {} run(s) reproduced the finding\n", reproduced, std::max(1u, o.runs));
+    return reproduced ? kExitFailed : kExitOk;
+}
+
+}  // namespace
+
+void add_replay_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<ReplayOptions>();
+    auto* cmd = app.add_subcommand("replay", "Re-send a saved fuzz finding and say whether it still reproduces");
+    cmd->add_option("finding", o->finding, "finding folder (or its finding.json)")->required();
+    cmd->add_option("--target", o->target, "HOST:PORT to replay against (required)")->required();
+    cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
+    add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout (default: the finding's)");
+    cmd->add_option("--runs", o->runs, "replay this many times")->check(CLI::Range(1u, 1000u));
+    cmd->callback([o, &action] { action = [o] { return run_replay(*o); }; });
+}
+
+}  // namespace mbstorm::cli
