@@ -122,7 +122,7 @@ const Vector kVectors[] = {
      "17 0C 00 FE 0A CD 00 01 00 03 00 0D 00 FF"},
     {"fc18", "18 04 DE", "18 00 06 00 02 01 B8 12 84"},
     {"fc2b", "2B 0E 01 00", "2B 0E 01 01 00 00 03 00 05 41 42 43 44 45 01 02 50 31 02 03 56 31 2E"},
-    {"exception", "03 FF FF 00 02", "83 02"},
+    {"exception", "03 FF FF 00 02", "83 02"},  // request decode measures the rejection
 };
 
 void decode_request_bench(benchmark::State& state, const char* h) {
@@ -176,8 +176,10 @@ void encode_response_bench(benchmark::State& state, const char* h) {
         const std::string n = v.name;
         benchmark::RegisterBenchmark(("BM_DecodeRequest/" + n).c_str(), decode_request_bench,
                                      v.request);
-        benchmark::RegisterBenchmark(("BM_EncodeRequest/" + n).c_str(), encode_request_bench,
-                                     v.request);
+        if (n != "exception") {  // that request is the rejected one: nothing to encode
+            benchmark::RegisterBenchmark(("BM_EncodeRequest/" + n).c_str(), encode_request_bench,
+                                         v.request);
+        }
         benchmark::RegisterBenchmark(("BM_DecodeResponse/" + n).c_str(), decode_response_bench,
                                      v.response);
         benchmark::RegisterBenchmark(("BM_EncodeResponse/" + n).c_str(), encode_response_bench,

@@ -4,6 +4,7 @@
 # pymodbus. Server pinned to core 0, client (pipeline_client) to core 1.
 #
 #   bench/run_server_bench.sh [build-dir] [seconds-per-cell]
+#   SERVERS="mbstorm libmodbus" CELLS="16:16 64:1" bench/run_server_bench.sh ...   (a subset)
 # Prints markdown tables of transactions/s and of transactions per server CPU-second (the
 # client is single-threaded, so on a small machine it often saturates before a fast server
 # does; the server's own CPU time shows its efficiency), and the ratios the project targets.
@@ -51,9 +52,9 @@ hz=$(getconf CLK_TCK)
 
 declare -A tps eff
 tmp_result=$(mktemp)
-servers="mbstorm limit libmodbus pymodbus"
+servers=${SERVERS:-"mbstorm limit libmodbus pymodbus"}
 [ -x "$libmodbus" ] || servers=${servers/libmodbus/}
-cells="1:1 1:16 1:256 16:16 64:1 64:16 64:256 1000:1 1000:16 1000:256"
+cells=${CELLS:-"1:1 1:16 1:256 16:16 64:1 64:16 64:256 1000:1 1000:16 1000:256"}
 for s in $servers; do
   for cell in $cells; do
     c=${cell%%:*}; d=${cell##*:}

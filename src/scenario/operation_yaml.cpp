@@ -145,7 +145,7 @@ load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
         }
         return spec;
     }
-    YAML::Node mode_node;
+    NodeSlot mode_node;
     r.each_key(
         n, "values", {"mode", "value", "start", "step", "pattern"},
         [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
@@ -198,7 +198,7 @@ Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::O
     Expectation e;
     e.active = true;
     e.first_address = op.first_address;
-    YAML::Node values_node;
+    NodeSlot values_node;
     r.each_key(n, "expect", {"value", "min", "max", "values"},
                [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
                    const std::string what = "expect." + key;
@@ -316,7 +316,7 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
     op.quantity = q.max == 1 ? 1 : 10;
     const std::string fname(codec::function_name(op.function));
 
-    YAML::Node address_node, quantity_node, expect_node, thresholds_node, zipf_node;
+    NodeSlot address_node, quantity_node, expect_node, thresholds_node, zipf_node;
     r.each_key(
         node, what,
         {"name", "function", "unit", "address", "quantity", "distribution", "zipf_exponent",
@@ -390,7 +390,8 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
         // The whole block must fit the address space and the range.
         const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
                                                        : std::max<std::uint16_t>(op.quantity, 1);
-        const YAML::Node& at = address_node ? address_node : (quantity_node ? quantity_node : node);
+        const YAML::Node& at =
+            address_node ? address_node.node : (quantity_node ? quantity_node.node : node);
         if (op.first_address + span - 1 > 0xFFFF) {
             r.fail(at, fmt::format("address {} + quantity {} runs past 65535 (the first address "
                                    "must be <= {})",
@@ -406,10 +407,10 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
     if (op.name.empty()) op.name = fname;
     if (expect_node) out.expect = parse_expect(r, expect_node, op);
     if (thresholds_node) {
-        if (!thresholds_node.IsSequence()) {
+        if (!thresholds_node.node.IsSequence()) {
             r.fail(thresholds_node, "thresholds must be a list of expressions like \"p99 < 5ms\"");
         }
-        for (const auto& t : thresholds_node) {
+        for (const auto& t : thresholds_node.node) {
             ThresholdSpec spec;
             std::string error;
             if (!parse_threshold(r.scalar(t, "threshold"), spec, error)) r.fail(t, error);

@@ -115,7 +115,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
     p.depth = kDefaultDepth;
     p.operations.clear();
 
-    YAML::Node target_node, slave_node, duration_node, warmup_node, stages_node, ops_node,
+    NodeSlot target_node, slave_node, duration_node, warmup_node, stages_node, ops_node,
         thresholds_node, model_node, rate_node, transactions_node, backoff_node;
     try {
         r.each_key(
@@ -208,20 +208,21 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
 
         // Operations.
         if (!ops_node) r.fail(root, "`operations` is required: a list of at least one operation");
-        if (!ops_node.IsSequence() || ops_node.size() == 0) {
+        if (!ops_node.node.IsSequence() || ops_node.node.size() == 0) {
             r.fail(ops_node, "operations must be a list of at least one operation");
         }
         std::set<std::string> names;
         std::vector<ParsedOperation> parsed;
-        for (std::size_t i = 0; i < ops_node.size(); ++i) {
-            parsed.push_back(parse_operation(r, ops_node[i], i));
+        for (std::size_t i = 0; i < ops_node.node.size(); ++i) {
+            parsed.push_back(parse_operation(r, ops_node.node[i], i));
         }
         // Explicit names must be unique; default names get a suffix when they collide.
         for (std::size_t i = 0; i < parsed.size(); ++i) {
             if (parsed[i].named && !names.insert(parsed[i].operation.name).second) {
-                r.fail(ops_node[i]["name"], fmt::format("operation name '{}' is used twice (names "
-                                                        "must be unique)",
-                                                        parsed[i].operation.name));
+                r.fail(ops_node.node[i]["name"],
+                       fmt::format("operation name '{}' is used twice (names "
+                                   "must be unique)",
+                                   parsed[i].operation.name));
             }
         }
         for (std::size_t i = 0; i < parsed.size(); ++i) {
@@ -242,18 +243,19 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
 
         // Overall thresholds: "p99 < 5ms", or {operation: NAME, check: "p99 < 5ms"}.
         if (thresholds_node) {
-            if (!thresholds_node.IsSequence()) {
+            if (!thresholds_node.node.IsSequence()) {
                 r.fail(thresholds_node,
                        "thresholds must be a list of expressions like \"p99 < 5ms\"");
             }
-            for (const auto& t : thresholds_node) {
+            for (const auto& t : thresholds_node.node) {
                 ThresholdSpec spec;
                 std::string error;
-                YAML::Node expr = t;
+                NodeSlot expr;
                 std::string op_name;
-                if (t.IsMap()) {
-                    expr = YAML::Node();
-                    YAML::Node op_node;
+                if (!t.IsMap()) {
+                    expr = t;
+                } else {
+                    NodeSlot op_node;
                     r.each_key(t, "threshold", {"operation", "check"},
                                [&](const std::string& k, const YAML::Node&, const YAML::Node& v) {
                                    if (k == "operation") {
@@ -278,7 +280,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
 
         // Stages.
         if (stages_node) {
-            if (!stages_node.IsSequence() || stages_node.size() == 0) {
+            if (!stages_node.node.IsSequence() || stages_node.node.size() == 0) {
                 r.fail(stages_node, "stages must be a list of at least one stage");
             }
             if (duration_node) {
@@ -291,8 +293,8 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                        "transactions: not supported with stages (stages end by "
                        "time); remove it");
             }
-            for (std::size_t i = 0; i < stages_node.size(); ++i) {
-                s.stages.push_back(parse_stage(r, stages_node[i], i));
+            for (std::size_t i = 0; i < stages_node.node.size(); ++i) {
+                s.stages.push_back(parse_stage(r, stages_node.node[i], i));
             }
             p.duration = s.total_duration();
         }
@@ -303,7 +305,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
             if (!s.stages[i].rate) continue;
             stage_rate = true;
             if (s.model == load::LoadModel::ClosedLoop) {
-                r.fail(stages_node[i]["rate"],
+                r.fail(stages_node.node[i]["rate"],
                        "stage rate needs an open-loop scenario (model: open "
                        "or no model key)");
             }
@@ -354,7 +356,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                 throw ScenarioError(e.what(), e.line(), e.column());
             }
             YAML::Emitter out;
-            out << slave_node;
+            out << slave_node.node;
             s.slave_yaml = out.c_str();
         }
     } catch (const YAML::Exception& e) {  // e.g. a conversion yaml-cpp refused

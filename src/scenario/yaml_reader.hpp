@@ -14,6 +14,21 @@
 
 namespace mbstorm::scenario {
 
+// A node that may not have been given. (A default YAML::Node is a defined null node, and
+// assigning to a YAML::Node that already refers to a document node rewrites that node, so
+// optional keys are held here instead.)
+struct NodeSlot {
+    YAML::Node node;
+    bool set = false;
+    NodeSlot& operator=(const YAML::Node& n) {
+        node.reset(n);
+        set = true;
+        return *this;
+    }
+    explicit operator bool() const noexcept { return set; }
+    operator const YAML::Node&() const noexcept { return node; }  // NOLINT: implicit on purpose
+};
+
 class YamlReader {
   public:
     explicit YamlReader(std::string source) : source_(std::move(source)) {}

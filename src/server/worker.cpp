@@ -303,8 +303,7 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
                 stash(ud.index, bid, static_cast<std::uint32_t>(cqe.res));
                 keep_buffer = true;
             } else {
-                const std::uint8_t* data =
-                    has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
+                const std::uint8_t* data = has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
                 consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
             }
         } else if (cqe.res == 0) {

@@ -34,6 +34,7 @@ class Worker {
     int init_status() const noexcept { return init_status_.load(std::memory_order_acquire); }
     void request_stop() noexcept;  // any thread
     const ServerCounters& counters() const noexcept { return counters_; }
+    unsigned index() const noexcept { return index_; }
     // Bytes of fixed per-connection state (for the memory report).
     static std::size_t connection_bytes() noexcept { return sizeof(Connection); }
     std::size_t buf_ring_bytes() const noexcept { return buf_ring_.memory_bytes(); }

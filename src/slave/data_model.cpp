@@ -46,35 +46,65 @@ std::uint32_t checked_size(std::uint32_t size) {
 
 // ---- BitTable ----
 
+namespace {
+constexpr std::uint64_t low_bits(std::uint32_t n) noexcept {
+    return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1;
+}
+
+// `n` (1..64) bits of a packed LSB-first byte stream starting at bit `offset`; reads only the
+// bytes that hold those bits.
+std::uint64_t stream_bits(const std::uint8_t* in, std::uint32_t offset, std::uint32_t n) noexcept {
+    std::uint64_t value = 0;
+    for (std::uint32_t got = 0; got < n;) {
+        const std::uint32_t bit = offset + got;
+        const std::uint32_t take = std::min(8 - (bit & 7), n - got);
+        const std::uint64_t chunk = (in[bit >> 3] >> (bit & 7)) & low_bits(take);
+        value |= chunk << got;
+        got += take;
+    }
+    return value;
+}
+}  // namespace
+
 // std::atomic value-initialises in C++20, so the tables start all zero.
 BitTable::BitTable(std::uint32_t size)
-    : bits_(new std::atomic<std::uint8_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
+    : words_(new std::atomic<std::uint64_t>[checked_size(size) / 64 + 2]()), size_(size) {}
+
+std::uint64_t BitTable::load64(std::uint32_t pos) const noexcept {
+    const std::uint32_t word = pos >> 6;
+    const std::uint32_t shift = pos & 63;
+    std::uint64_t v = words_[word].load(std::memory_order_relaxed) >> shift;
+    if (shift != 0) v |= words_[word + 1].load(std::memory_order_relaxed) << (64 - shift);
+    return v;
+}
 
 void BitTable::read_packed(std::uint16_t address, std::uint16_t quantity,
                            std::uint8_t* out) const noexcept {
-    const std::atomic<std::uint8_t>* src = bits_.get() + address;
-    std::uint32_t i = 0;
-    for (; i + 8 <= quantity; i += 8) {
-        unsigned byte = 0;
-        for (unsigned b = 0; b < 8; ++b) {
-            byte |= unsigned{src[i + b].load(std::memory_order_relaxed)} << b;
-        }
-        *out++ = static_cast<std::uint8_t>(byte);
+    const std::uint32_t bytes = (std::uint32_t{quantity} + 7) / 8;
+    for (std::uint32_t first = 0; first < bytes; first += 8) {
+        const std::uint64_t v = load64(address + first * 8);
+        const std::uint32_t n = std::min<std::uint32_t>(8, bytes - first);
+        for (std::uint32_t b = 0; b < n; ++b)
+            out[first + b] = static_cast<std::uint8_t>(v >> (8 * b));
     }
-    if (i < quantity) {
-        unsigned byte = 0;
-        for (unsigned b = 0; i + b < quantity; ++b) {
-            byte |= unsigned{src[i + b].load(std::memory_order_relaxed)} << b;
-        }
-        *out = static_cast<std::uint8_t>(byte);
-    }
+    if ((quantity & 7) != 0) out[bytes - 1] &= static_cast<std::uint8_t>(low_bits(quantity & 7));
 }
 
 void BitTable::write_packed(std::uint16_t address, std::uint16_t quantity,
                             const std::uint8_t* in) noexcept {
-    std::atomic<std::uint8_t>* dst = bits_.get() + address;
-    for (std::uint32_t i = 0; i < quantity; ++i) {
-        dst[i].store((in[i >> 3] >> (i & 7)) & 1u, std::memory_order_relaxed);
+    std::uint32_t pos = address;
+    for (std::uint32_t done = 0; done < quantity;) {
+        const std::uint32_t shift = pos & 63;
+        const std::uint32_t n = std::min<std::uint32_t>(64 - shift, quantity - done);
+        const std::uint64_t mask = low_bits(n) << shift;
+        const std::uint64_t bits = stream_bits(in, done, n) << shift;
+        std::atomic<std::uint64_t>& word = words_[pos >> 6];
+        std::uint64_t old = word.load(std::memory_order_relaxed);
+        while (!word.compare_exchange_weak(old, (old & ~mask) | (bits & mask),
+                                           std::memory_order_relaxed)) {
+        }
+        pos += n;
+        done += n;
     }
 }
 

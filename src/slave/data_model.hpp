@@ -2,11 +2,11 @@
 // device identification, safe to share between server threads.
 //
 // Concurrency contract
-// - Every register and every bit is its own atomic (relaxed order). A single-register or
-//   single-coil write is atomic: a concurrent reader sees the old or the new value, never a mix.
-// - A multi-register write (FC0F, FC10, FC17, FC15) stores each element atomically, in
-//   ascending address order, but the block as a whole is NOT atomic: a concurrent reader may see
-//   a prefix of the new values and a suffix of the old ones.
+// - Every register is its own atomic, bits are packed in atomic 64-bit words (relaxed order). A
+//   single-register or single-coil write is atomic: a reader sees the old or the new value.
+// - A multi-register write (FC10, FC17, FC15) stores each register atomically, in ascending
+//   address order, but the block as a whole is NOT atomic: a concurrent reader may see a prefix
+//   of the new values and a suffix of the old ones. FC0F is atomic per 64-bit word of coils.
 // - FC16 (mask write) is a compare-and-swap loop, so concurrent mask writes never lose updates.
 // - Configuration (table sizes, identity, server id, read counters) is fixed before serving
 //   starts; changing it while handlers run is not supported.
@@ -39,7 +39,9 @@ struct TableSizes {
     std::uint32_t of(Table t) const noexcept;
 };
 
-// One bit table (coils or discrete inputs): one atomic byte (0 or 1) per bit.
+// One bit table (coils or discrete inputs), packed 64 bits per atomic word: a single-bit write
+// is one atomic read-modify-write, a multi-bit write is atomic within each 64-bit word, and a
+// read of up to 2000 bits touches at most 33 words.
 class BitTable {
   public:
     explicit BitTable(std::uint32_t size);
@@ -50,10 +52,16 @@ class BitTable {
         return std::uint32_t{address} + quantity <= size_;
     }
     bool get(std::uint16_t address) const noexcept {
-        return bits_[address].load(std::memory_order_relaxed) != 0;
+        return (words_[address >> 6].load(std::memory_order_relaxed) >> (address & 63)) & 1;
     }
+    // Precondition: address < size().
     void set(std::uint16_t address, bool on) noexcept {
-        bits_[address].store(on ? 1 : 0, std::memory_order_relaxed);
+        const std::uint64_t bit = std::uint64_t{1} << (address & 63);
+        if (on) {
+            words_[address >> 6].fetch_or(bit, std::memory_order_relaxed);
+        } else {
+            words_[address >> 6].fetch_and(~bit, std::memory_order_relaxed);
+        }
     }
     // Packs `quantity` bits, LSB of out[0] first, unused high bits of the last byte zero.
     // Precondition: contains(address, quantity).
@@ -64,7 +72,10 @@ class BitTable {
                       const std::uint8_t* in) noexcept;
 
   private:
-    std::unique_ptr<std::atomic<std::uint8_t>[]> bits_;
+    // 64 bits starting at bit `pos` (bits past the table read as 0).
+    std::uint64_t load64(std::uint32_t pos) const noexcept;
+
+    std::unique_ptr<std::atomic<std::uint64_t>[]> words_;  // one spare word for load64
     std::uint32_t size_;
 };
 

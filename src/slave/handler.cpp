@@ -23,21 +23,24 @@ constexpr std::uint8_t kReceiveEvent = 0x80;
 constexpr std::uint8_t kReceiveBroadcastEvent = 0xC0;
 constexpr std::uint8_t kSendEvent = 0x40;
 
-MBSTORM_HOT HandleResult answer(std::uint8_t function, std::size_t size, bool wrote = false) noexcept {
+MBSTORM_HOT HandleResult answer(std::uint8_t function, std::size_t size,
+                                bool wrote = false) noexcept {
     // One aggregate initialisation: built in a register, not field by field on the stack
     // (byte stores followed by a wide load stall store forwarding on the hot path).
     return HandleResult{static_cast<std::uint32_t>(size), Outcome::Response, ExceptionCode::None,
                         function, wrote};
 }
 
-MBSTORM_HOT HandleResult fail(std::uint8_t function, ExceptionCode code, std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult fail(std::uint8_t function, ExceptionCode code,
+                              std::uint8_t* out) noexcept {
     out[0] = static_cast<std::uint8_t>(function | codec::kExceptionBit);
     out[1] = static_cast<std::uint8_t>(code);
     return HandleResult{2, Outcome::Exception, code, function, false};
 }
 
 // Echoes the first `n` request bytes (the request is never longer than a PDU).
-MBSTORM_HOT HandleResult echo(codec::Bytes request, std::size_t n, std::uint8_t* out, bool wrote) noexcept {
+MBSTORM_HOT HandleResult echo(codec::Bytes request, std::size_t n, std::uint8_t* out,
+                              bool wrote) noexcept {
     std::memcpy(out, request.data(), n);
     return answer(request[0], n, wrote);
 }
@@ -63,7 +66,7 @@ std::uint8_t send_event(const HandleResult& r) noexcept {
 // ---- bit and register tables ----
 
 MBSTORM_HOT HandleResult read_bits(const codec::Request& req, const BitTable& table,
-                       std::uint8_t* out) noexcept {
+                                   std::uint8_t* out) noexcept {
     if (!table.contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
     }
@@ -75,7 +78,7 @@ MBSTORM_HOT HandleResult read_bits(const codec::Request& req, const BitTable& ta
 }
 
 MBSTORM_HOT HandleResult read_registers(const codec::Request& req, RegisterTable& table,
-                            std::uint8_t* out) noexcept {
+                                        std::uint8_t* out) noexcept {
     if (!table.contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
     }
@@ -85,8 +88,8 @@ MBSTORM_HOT HandleResult read_registers(const codec::Request& req, RegisterTable
     return answer(req.function, 2 + 2 * std::size_t{req.quantity});
 }
 
-MBSTORM_HOT HandleResult write_single_coil(const codec::Request& req, codec::Bytes request, DataModel& m,
-                               std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult write_single_coil(const codec::Request& req, codec::Bytes request,
+                                           DataModel& m, std::uint8_t* out) noexcept {
     // The codec already answered 03 for values other than 0x0000 / 0xFF00.
     if (!m.coils().contains(req.address, 1)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
@@ -95,8 +98,8 @@ MBSTORM_HOT HandleResult write_single_coil(const codec::Request& req, codec::Byt
     return echo(request, 5, out, true);
 }
 
-MBSTORM_HOT HandleResult write_single_register(const codec::Request& req, codec::Bytes request, DataModel& m,
-                                   std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult write_single_register(const codec::Request& req, codec::Bytes request,
+                                               DataModel& m, std::uint8_t* out) noexcept {
     if (!m.holding_registers().contains(req.address, 1)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
     }
@@ -104,8 +107,8 @@ MBSTORM_HOT HandleResult write_single_register(const codec::Request& req, codec:
     return echo(request, 5, out, true);
 }
 
-MBSTORM_HOT HandleResult write_multiple_coils(const codec::Request& req, codec::Bytes request, DataModel& m,
-                                  std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult write_multiple_coils(const codec::Request& req, codec::Bytes request,
+                                              DataModel& m, std::uint8_t* out) noexcept {
     if (!m.coils().contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
     }
@@ -113,8 +116,8 @@ MBSTORM_HOT HandleResult write_multiple_coils(const codec::Request& req, codec::
     return echo(request, 5, out, true);  // function, address, quantity
 }
 
-MBSTORM_HOT HandleResult write_multiple_registers(const codec::Request& req, codec::Bytes request, DataModel& m,
-                                      std::uint8_t* out) noexcept {
+MBSTORM_HOT HandleResult write_multiple_registers(const codec::Request& req, codec::Bytes request,
+                                                  DataModel& m, std::uint8_t* out) noexcept {
     if (!m.holding_registers().contains(req.address, req.quantity)) {
         return fail(req.function, ExceptionCode::IllegalDataAddress, out);
     }
@@ -369,7 +372,7 @@ HandleResult read_device_id(const codec::Request& req, DataModel& m, std::uint8_
 }
 
 MBSTORM_HOT HandleResult dispatch(codec::Bytes request, DataModel& m, std::uint64_t seq,
-                      std::uint8_t* out) noexcept {
+                                  std::uint8_t* out) noexcept {
     codec::Request req;
     const codec::RequestStatus status = codec::decode_request(request, req);
     const std::uint8_t function = request[0];

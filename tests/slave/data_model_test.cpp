@@ -1,0 +1,101 @@
+// Data model pieces on their own: packed bit tables against a reference, read counters, FIFOs.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "codec/bytes.hpp"
+#include "slave/data_model.hpp"
+
+namespace mbstorm::slave {
+namespace {
+
+TEST(BitTable, PackedReadsAndWritesMatchAReference) {
+    constexpr std::uint32_t kSize = 1000;
+    BitTable table(kSize);
+    std::vector<bool> ref(kSize, false);
+    std::mt19937 rng(3);
+    for (int round = 0; round < 2000; ++round) {
+        const auto quantity = static_cast<std::uint16_t>(1 + rng() % 300);
+        const auto address = static_cast<std::uint16_t>(rng() % (kSize - quantity + 1));
+        if (rng() % 2) {
+            std::vector<std::uint8_t> in((quantity + 7) / 8);
+            for (auto& b : in) b = static_cast<std::uint8_t>(rng());
+            table.write_packed(address, quantity, in.data());
+            for (std::uint32_t i = 0; i < quantity; ++i)
+                ref[address + i] = (in[i / 8] >> (i % 8)) & 1;
+        } else {
+            // One guard byte after the packed bytes: must stay untouched.
+            std::vector<std::uint8_t> out((quantity + 7) / 8 + 1, 0xA5);
+            table.read_packed(address, quantity, out.data());
+            ASSERT_EQ(out.back(), 0xA5);
+            for (std::uint32_t i = 0; i < out.size() * 8 - 8; ++i) {
+                const bool want = i < quantity && ref[address + i];
+                ASSERT_EQ(((out[i / 8] >> (i % 8)) & 1) != 0, want) << address << "+" << i;
+            }
+        }
+    }
+    for (std::uint16_t i = 0; i < kSize; ++i) ASSERT_EQ(table.get(i), ref[i]) << i;
+}
+
+TEST(BitTable, LastAddressOfAFullTable) {
+    BitTable table(kFullTable);
+    table.set(65535, true);
+    std::uint8_t out[2] = {0, 0};
+    table.read_packed(65535, 1, out);
+    EXPECT_EQ(out[0], 1);
+    const std::uint8_t in[1] = {0x00};
+    table.write_packed(65535, 1, in);
+    EXPECT_FALSE(table.get(65535));
+}
+
+TEST(BitTable, ConcurrentWritersOfOneWordLoseNoBits) {
+    BitTable table(64);
+    std::vector<std::thread> threads;
+    for (unsigned t = 0; t < 4; ++t) {
+        threads.emplace_back([&, t] {
+            // Thread t owns bits 16t..16t+15 of the same word; it toggles them many times and
+            // leaves them set.
+            std::uint8_t on[2] = {0xFF, 0xFF}, off[2] = {0, 0};
+            for (int i = 0; i < 5000; ++i) {
+                table.write_packed(static_cast<std::uint16_t>(16 * t), 16, off);
+                table.write_packed(static_cast<std::uint16_t>(16 * t), 16, on);
+                table.set(static_cast<std::uint16_t>(16 * t + 3), false);
+                table.set(static_cast<std::uint16_t>(16 * t + 3), true);
+            }
+        });
+    }
+    for (auto& t : threads) t.join();
+    for (std::uint16_t i = 0; i < 64; ++i) EXPECT_TRUE(table.get(i)) << i;
+}
+
+TEST(RegisterTable, ReadCountersBumpOnlyWhenCovered) {
+    RegisterTable table(100);
+    table.add_read_counter(10, 1);
+    table.add_read_counter(20, 5);
+    std::uint8_t out[200];
+    table.read_be(0, 10, out);  // covers neither
+    EXPECT_EQ(table.get(10), 0);
+    table.read_be(10, 11, out);  // covers both
+    EXPECT_EQ(codec::load_be16(out), 1);
+    EXPECT_EQ(codec::load_be16(out + 20), 5);
+    table.read_be(20, 1, out);
+    EXPECT_EQ(codec::load_be16(out), 10);
+    EXPECT_THROW(table.add_read_counter(100, 1), std::out_of_range);
+}
+
+TEST(DataModel, FifoHelpersRespectLimits) {
+    ModelConfig c;
+    c.sizes.holding_registers = 10;
+    DataModel m(c);
+    const std::uint16_t too_long[9] = {};
+    EXPECT_FALSE(m.fifo_set(1, too_long));  // needs 10 registers from address 1
+    EXPECT_TRUE(m.fifo_set(1, std::span(too_long, 8)));
+    EXPECT_EQ(m.holding_registers().get(1), 8);
+    EXPECT_FALSE(m.fifo_push(1, 5));  // would need register 10
+    EXPECT_FALSE(m.fifo_push(10, 5));
+}
+
+}  // namespace
+}  // namespace mbstorm::slave
