@@ -120,7 +120,7 @@ OperationGenerator::OperationGenerator(const std::vector<Operation>& operations,
     for (const Operation& op : operations) {
         total += op.weight;
         cumulative_weight_.push_back(total);
-        state_.push_back(OpState{AddressPicker(op), ValuePicker(op.values)});
+        state_.push_back(OpState{AddressPicker(op), ValuePicker(op.values), max_request_size(op)});
     }
 }
 
@@ -144,7 +144,7 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
                                        codec::MutableBytes out, RequestInfo& info) noexcept {
     const Operation& op = operations_[op_index];
     OpState& st = state_[op_index];
-    if (out.size() < max_request_size(op)) return 0;
+    if (out.size() < st.max_size) return 0;
 
     info = RequestInfo{};
     info.op_index = op_index;

@@ -69,6 +69,7 @@ class OperationGenerator {
     struct OpState {
         AddressPicker address;
         ValuePicker values;
+        std::size_t max_size = 0;  // max_request_size(op), precomputed for the hot path
     };
 
     std::size_t encode(std::uint16_t op_index, std::uint16_t transaction_id,

@@ -469,7 +469,7 @@ table.kv td.l { width: 32%; color: #5a6270; }
 table.kv td { text-align: left; white-space: normal; }
 .ok { color: #1a7f37; font-weight: 600; }
 .bad { color: #cf222e; font-weight: 600; }
-svg { display: block; max-width: 100%; height: auto; background: #fff; border: 1px solid #e1e4e8;
+svg { display: block; margin-top: 14px; max-width: 100%; height: auto; background: #fff; border: 1px solid #e1e4e8;
       border-radius: 6px; font-family: inherit; }
 svg .title { font-size: 14px; font-weight: 600; fill: #1d1d1f; }
 svg .grid line { stroke: #e6e8eb; stroke-width: 1; }
