@@ -19,7 +19,7 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-extern "C" void on_stop_signal(int) { g_stop.store(true); }
+void on_fuzz_stop_signal(int) { g_stop.store(true); }
 
 struct FuzzOptions {
     std::string target;
@@ -30,6 +30,7 @@ struct FuzzOptions {
     std::uint64_t cases = 0;
     std::uint64_t timeout_ns = 1'000'000'000;
     unsigned lanes = 4;
+    unsigned isolated_per_mille = 10;
     std::string out_dir = "mbstorm-findings";
     std::string restart_cmd;
     std::uint64_t restart_wait_ns = 15'000'000'000;
@@ -72,14 +73,15 @@ int run_fuzz(const FuzzOptions& o) {
     c.max_seconds = o.seconds;
     c.timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     c.lanes = o.lanes;
+    c.isolated_per_mille = o.isolated_per_mille;
     c.naive = o.naive;
     c.minimize = !o.no_minimize;
     c.restart_cmd = o.restart_cmd;
     c.restart_wait_ms = static_cast<int>(o.restart_wait_ns / 1'000'000);
     c.out_dir = o.out_dir;
     c.stop = &g_stop;
-    std::signal(SIGINT, on_stop_signal);
-    std::signal(SIGTERM, on_stop_signal);
+    std::signal(SIGINT, on_fuzz_stop_signal);
+    std::signal(SIGTERM, on_fuzz_stop_signal);
 
     const bool quiet = o.quiet;
     auto progress = [quiet](const netfuzz::Progress& p) {
@@ -127,6 +129,10 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout: longer is a hang (default 1s)");
     cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")
         ->check(CLI::Range(1u, 64u))
+        ->capture_default_str();
+    cmd->add_option("--transport-share", o->isolated_per_mille,
+                    "per mille of cases that need their own connection (transport, stateful)")
+        ->check(CLI::Range(0u, 1000u))
         ->capture_default_str();
     cmd->add_option("--out", o->out_dir, "folder for findings (one sub-folder each)")->capture_default_str();
     cmd->add_option("--restart-cmd", o->restart_cmd, "shell command that restarts the target after a crash");

@@ -133,7 +133,10 @@ bool Campaign::recover() {
 bool Campaign::isolate(const Case& c, bool& fired) {
     fired = false;
     ++r_.isolated_runs;
+    const std::int64_t t0 = net::now_ns();
     Execution ex = execute_case(c, o_.target, r_.profile, exec_);
+    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
+        fmt::print(stderr, "{} {} us\n", class_name(c.cls), (net::now_ns() - t0) / 1000);
     if (ex.down_before) {
         if (!recover()) return false;
         ex = execute_case(c, o_.target, r_.profile, exec_);
@@ -251,7 +254,10 @@ CampaignResult Campaign::run() {
             ++r_.cases_by_class[static_cast<std::size_t>(cases[i].cls)];
             (cases[i].pipelinable ? piped : alone).push_back(cases[i]);
         }
+        const std::int64_t t0 = net::now_ns();
         BatchResult br = batch.run(piped);
+        const std::int64_t t1 = net::now_ns();
+        r_.batch_seconds += static_cast<double>(t1 - t0) / 1e9;
         r_.batched_cases += piped.size();
         if (br.connect_failed || br.lane_lost) {
             batch.close_all();
@@ -277,6 +283,7 @@ CampaignResult Campaign::run() {
             bool fired = false;
             if (!isolate(alone[i], fired)) lost = true;
         }
+        r_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
         r_.cases += n;
         progress(false);
         if (lost) break;

@@ -26,7 +26,7 @@ struct CampaignOptions {
     int timeout_ms = 1000;
     unsigned lanes = 4;
     unsigned lane_depth = 48;        // cases per lane per round
-    unsigned isolated_per_mille = 60;
+    unsigned isolated_per_mille = 10;
     bool naive = false;              // baseline random-frame generator
     bool minimize = true;
     unsigned minimize_budget = 40;
@@ -58,6 +58,7 @@ struct CampaignResult {
     std::uint64_t restarts = 0;       // times the target went down and came back
     bool target_lost = false;         // it did not come back: the run ended early
     double seconds = 0;
+    double batch_seconds = 0, isolated_seconds = 0;  // where the time went
     std::string stop_reason;
     std::array<std::uint64_t, static_cast<std::size_t>(MutationClass::Count)> cases_by_class{};
 };

@@ -343,9 +343,12 @@ void Runner::judge(const Case& c) {
 Execution Runner::run(const Case& c) {
     conns_.resize(std::max<std::size_t>(c.connections(), 1));
     for (const Step& s : c.steps) {
-        if (s.delay_us) {
+        if (s.delay_us >= 2000) {
             const std::int64_t until = net::now_ns() + s.delay_us * 1000ll;
             pump(until, [] { return false; });
+        } else if (s.delay_us) {
+            // Short gaps: poll() rounds up to milliseconds, so sleep precisely instead.
+            ::usleep(s.delay_us);
         }
         switch (s.op) {
             case Op::Send:

@@ -450,8 +450,11 @@ void Generator::isolated(Case& out) {
     }
     if (roll < 97) {  // slow drip, one byte per send
         out.cls = MutationClass::Drip;
-        for (std::size_t i = 0; i < f.size(); ++i)
-            out.steps.push_back(Step{Op::Send, 0, i ? 200u : 0u, 0, {f[i]}});
+        // The header and the start of the PDU one byte at a time, then the rest.
+        const std::size_t dripped = std::min<std::size_t>(f.size(), 12);
+        for (std::size_t i = 0; i < dripped; ++i)
+            out.steps.push_back(Step{Op::Send, 0, i ? 100u : 0u, 0, {f[i]}});
+        if (dripped < f.size()) out.steps.push_back(Step{Op::Send, 0, 100u, 0, {f.begin() + 12, f.end()}});
         return;
     }
     out.cls = MutationClass::Flood;

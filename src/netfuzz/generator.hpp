@@ -19,7 +19,7 @@ struct GeneratorOptions {
     bool naive = false;
     // Transport and stateful cases need their own connections and round trips; this is the
     // share (per mille) of cases of those kinds.
-    unsigned isolated_per_mille = 60;
+    unsigned isolated_per_mille = 10;
 };
 
 class Generator {

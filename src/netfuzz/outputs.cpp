@@ -135,6 +135,8 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
                                 info.naive ? "naive" : "structured");
     s += fmt::format("  {} cases in {:.1f} s ({:.0f} cases/s); {} batched, {} isolated runs\n", r.cases, r.seconds,
                      r.seconds > 0 ? static_cast<double>(r.cases) / r.seconds : 0.0, r.batched_cases, r.isolated_runs);
+    s += fmt::format("  time: {:.1f} s pipelined, {:.1f} s isolated (transport, stateful, suspects)\n", r.batch_seconds,
+                     r.isolated_seconds);
     s += fmt::format("  target restarts: {}; duplicates suppressed: {}; unconfirmed suspects: {}\n", r.restarts,
                      r.duplicates, r.unconfirmed);
     s += fmt::format("  stopped: {}\n", r.stop_reason);

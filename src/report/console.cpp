@@ -48,8 +48,8 @@ void append_error_lines(std::string& out, const OutcomeCounters& c, const char* 
         if (outcome == stats::Outcome::Exception) {
             for (std::size_t code = 0; code < c.exceptions.size(); ++code) {
                 if (c.exceptions[code] == 0) continue;
-                out += fmt::format("{}  code {:<15}{:>14}\n", indent,
-                                   format_hex_byte(static_cast<std::uint8_t>(code)),
+                out += fmt::format("{}  {:<33}{:>14}\n", indent,
+                                   format_exception_code(static_cast<std::uint8_t>(code)),
                                    format_count(c.exceptions[code]));
             }
         }

@@ -412,7 +412,7 @@ std::string errors_table(const stats::RunResult& r) {
         if (outcome != stats::Outcome::Exception) continue;
         for (std::size_t code = 0; code < 256; ++code) {
             if (r.counters.exceptions[code] == 0) continue;
-            emit("exception " + format_hex_byte(static_cast<std::uint8_t>(code)), true,
+            emit("exception " + format_exception_code(static_cast<std::uint8_t>(code)), true,
                  [code](const OutcomeCounters& c) { return c.exceptions[code]; });
         }
     }

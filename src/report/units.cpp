@@ -1,5 +1,7 @@
 #include "report/units.hpp"
 
+#include "codec/exception_code.hpp"
+
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 
@@ -70,6 +72,11 @@ std::string format_utc(std::chrono::system_clock::time_point t) {
     std::tm tm{};
     gmtime_r(&seconds, &tm);
     return fmt::format("{:%Y-%m-%dT%H:%M:%SZ}", tm);
+}
+
+std::string format_exception_code(std::uint8_t code) {
+    if (!codec::is_known_exception(code)) return format_hex_byte(code);
+    return fmt::format("0x{:02X} {}", code, codec::exception_name(static_cast<codec::ExceptionCode>(code)));
 }
 
 std::string format_hex_byte(std::uint8_t b) {

@@ -23,5 +23,7 @@ std::string format_count(std::uint64_t n);
 std::string format_utc(std::chrono::system_clock::time_point t);
 // "0x02".
 std::string format_hex_byte(std::uint8_t b);
+// "0x02 ILLEGAL DATA ADDRESS" for the codes the specification names, else "0x2A".
+std::string format_exception_code(std::uint8_t code);
 
 }  // namespace mbstorm::report

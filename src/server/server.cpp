@@ -35,10 +35,8 @@ bool Server::start(std::string* error) {
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
     if (config_.max_connections) {
-        std::string msg;
-        net::raise_nofile_limit(config_.max_connections + 64 + n * 8, &msg);
-        // Not fatal: the server still runs, and accepts fail cleanly beyond the limit.
-        (void)msg;
+        // Not fatal: the server still runs, and accepts fail beyond the limit.
+        net::raise_nofile_limit(config_.max_connections + 64 + n * 8, &warning_);
     }
     if (config_.model) {
         model_ = config_.model;

@@ -37,6 +37,8 @@ class Server {
     slave::DataModel& model() noexcept { return *model_; }
 
     ServerStats stats() const noexcept;
+    // Non-fatal problems found by start(), e.g. an open-files limit below max_connections.
+    const std::string& warning() const noexcept { return warning_; }
     // One line about the I/O path, e.g. "io_uring: multishot recv + buffer ring (2048 x 4096)".
     std::string describe_io() const;
     // Fixed bytes per open connection (excluding the kernel socket).
@@ -51,6 +53,7 @@ class Server {
     std::atomic<std::uint32_t> open_connections_{0};
     std::uint16_t port_ = 0;
     std::string host_;
+    std::string warning_;
     bool running_ = false;
 };
 

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 
+#include <chrono>
 #include <memory>
 #include <vector>
 
@@ -335,9 +336,11 @@ TEST(Server, FaultDelayHoldsAndKeepsOrder) {
     config.faults.delay.max_ns = 250'000'000;
     auto srv = start(config);
     Client c(*srv);
+    const auto sent_at = std::chrono::steady_clock::now();
     ASSERT_TRUE(c.send_all(burst(20, 0)));
-    EXPECT_TRUE(c.silent_for(30));  // nothing before the smallest delay
     expect_responses(c, 20, 0);
+    // A lower bound only (the server holds every answer at least min_ns after reading it).
+    EXPECT_GE(std::chrono::steady_clock::now() - sent_at, std::chrono::milliseconds(50));
     EXPECT_EQ(srv->stats().fault_delayed, 20u);
 }
 
@@ -430,4 +433,31 @@ TEST(Server, MultipleThreadsShareThePort) {
 TEST(Server, ReportsSmallIdleConnectionFootprint) {
     // Per idle connection: fixed state only (the splitter's 260-byte frame buffer dominates).
     EXPECT_LE(server::Server::bytes_per_connection(), 512u);
+}
+
+TEST(Server, SurvivesRandomGarbage) {
+    auto srv = start(test::test_config());
+    std::uint64_t state = 0x9E3779B97F4A7C15ull;
+    auto next = [&] {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return state;
+    };
+    for (int round = 0; round < 50; ++round) {
+        Client c(*srv);
+        ASSERT_TRUE(c.ok());
+        std::vector<std::uint8_t> junk(1 + next() % 2000);
+        for (auto& b : junk) b = static_cast<std::uint8_t>(next());
+        if (round % 2 == 0) {  // a valid-looking header with a random PDU
+            junk.resize(std::max<std::size_t>(junk.size(), 8));
+            junk[2] = junk[3] = 0;
+            junk[4] = 0;
+            junk[5] = static_cast<std::uint8_t>(std::min<std::size_t>(junk.size() - 6, 254));
+        }
+        c.send_all(junk);
+    }
+    Client good(*srv);
+    ASSERT_TRUE(good.send_all(read_holding(1, 1, 0, 10)));
+    expect_responses(good, 1, 1);
 }

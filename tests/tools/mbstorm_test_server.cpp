@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     }
     std::fprintf(stderr, "%s\n%s\n", net::describe(net::features()).c_str(),
                  srv.describe_io().c_str());
+    if (!srv.warning().empty()) std::fprintf(stderr, "warning: %s\n", srv.warning().c_str());
     std::printf("PORT %u\n", srv.port());
     std::fflush(stdout);
     return server::run_until_signal(srv, run);
