@@ -238,7 +238,7 @@ DeviceIdentity::DeviceIdentity() {
     objects_[kVendorName] = "mbstorm";
     objects_[kProductCode] = "MBSTORM-SLAVE";
     objects_[kMajorMinorRevision] = "0.1";
-    objects_[kVendorUrl] = "https://github.com/mbstorm/mbstorm";
+    objects_[kVendorUrl] = "https://example.invalid/mbstorm";  // placeholder: configure your own
     objects_[kProductName] = "mbstorm reference slave";
     objects_[kModelName] = "reference";
     objects_[kUserApplicationName] = "mbstorm serve";

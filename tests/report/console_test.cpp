@@ -54,7 +54,7 @@ TEST(ConsoleReport, ContainsPercentileTableErrorsOperationsStagesThresholds) {
     EXPECT_TRUE(contains(text, "Throughput"));
     EXPECT_TRUE(contains(text, "tx/s"));
     EXPECT_TRUE(contains(text, "timeout"));
-    EXPECT_TRUE(contains(text, "code 0x02"));
+    EXPECT_TRUE(contains(text, "0x02 ILLEGAL DATA ADDRESS"));
     EXPECT_TRUE(contains(text, "Per operation"));
     EXPECT_TRUE(contains(text, "read_holding_registers (03)"));
     EXPECT_TRUE(contains(text, "write_single_register (06)"));
