@@ -49,7 +49,8 @@ int run_serve(ServeOptions& o) {
         }
         c.faults = device->faults;
         units = std::make_unique<slave::UnitModels>(slave::build_units(*device));
-        c.model = &units->model_at(0);
+        c.units = units.get();
+        c.simulated = device->simulated;
     }
     // Flags override the device file's fault settings.
     auto& f = c.faults;

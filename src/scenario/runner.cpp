@@ -84,9 +84,11 @@ std::vector<StageStep> plan_stage_steps(const Scenario& s) {
 
 void merge_step(stats::RunResult& total, const stats::RunResult& step, stats::StageResult* stage) {
     const std::uint64_t offset = total.metadata.measured_duration_ns;
+    // A one-operation mix would repeat every stage row; list operations per stage only for mixes.
+    const bool per_stage_operations = stage != nullptr && step.operations.size() > 1;
     for (std::size_t i = 0; i < step.operations.size(); ++i) {
         add_operation(total.operations, i, step.operations[i]);
-        if (stage != nullptr) add_operation(stage->operations, i, step.operations[i]);
+        if (per_stage_operations) add_operation(stage->operations, i, step.operations[i]);
     }
     total.latency.add(step.latency);
     total.counters.add(step.counters);
@@ -97,17 +99,23 @@ void merge_step(stats::RunResult& total, const stats::RunResult& step, stats::St
     total.timeline_interval_ns = step.timeline_interval_ns;
     for (std::size_t i = 0; i < step.timeline.size(); ++i) {
         stats::IntervalSummary iv = step.timeline[i];
-        const bool last = i + 1 == step.timeline.size();
-        // A sliver of an interval at the end of a step would plot as a false dip: fold it into
-        // the interval before (counts add; the percentiles stay those of the full interval).
-        if (last && i > 0 &&
-            step.metadata.measured_duration_ns < iv.start_offset_ns + iv.duration_ns / 2) {
-            stats::IntervalSummary& prev = total.timeline.back();
-            prev.transactions += iv.transactions;
-            prev.errors += iv.errors;
-            prev.latency_count += iv.latency_count;
-            prev.max_ns = std::max(prev.max_ns, iv.max_ns);
-            break;
+        if (i + 1 == step.timeline.size()) {
+            // The step's last interval covers only what was measured of it.
+            const std::uint64_t measured = step.metadata.measured_duration_ns;
+            const std::uint64_t covered =
+                measured > iv.start_offset_ns ? measured - iv.start_offset_ns : 0;
+            // A sliver at the end of a step would plot as a false dip: fold it into the interval
+            // before (counts add; the percentiles stay those of the full interval).
+            if (i > 0 && covered < iv.duration_ns / 2) {
+                stats::IntervalSummary& prev = total.timeline.back();
+                prev.transactions += iv.transactions;
+                prev.errors += iv.errors;
+                prev.latency_count += iv.latency_count;
+                prev.max_ns = std::max(prev.max_ns, iv.max_ns);
+                prev.duration_ns += covered;
+                break;
+            }
+            if (covered > 0) iv.duration_ns = std::min(iv.duration_ns, covered);
         }
         iv.index = total.timeline.size();
         iv.start_offset_ns += offset;

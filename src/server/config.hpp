@@ -5,11 +5,15 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "slave/faults.hpp"
 
+#include "slave/simulator.hpp"
+
 namespace mbstorm::slave {
 class DataModel;
+class UnitModels;
 }
 
 namespace mbstorm::server {
@@ -48,6 +52,13 @@ struct ServerConfig {
 
     // The shared data model; nullptr: the server owns a default one.
     slave::DataModel* model = nullptr;
+    // Per-unit (or shared) models from a device description; takes precedence over `model`.
+    // Requests are routed by unit id, and unknown units follow the models' policy.
+    const slave::UnitModels* units = nullptr;
+    // Simulated inputs (ramps, sines, counters) written into `units` every
+    // `simulate_interval_ms` by one background thread. Needs `units`.
+    std::vector<slave::SimulatedInput> simulated;
+    std::uint32_t simulate_interval_ms = 50;
 
     // I/O tuning (and switches to force the fallbacks in tests).
     bool use_buf_ring = true;        // provided buffer ring for input, else per-connection buffers

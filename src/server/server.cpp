@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <thread>
@@ -38,7 +39,9 @@ bool Server::start(std::string* error) {
         // Not fatal: the server still runs, and accepts fail beyond the limit.
         net::raise_nofile_limit(config_.max_connections + 64 + n * 8, &warning_);
     }
-    if (config_.model) {
+    if (config_.units) {
+        model_ = &config_.units->model_at(0);
+    } else if (config_.model) {
         model_ = config_.model;
     } else {
         owned_model_ = std::make_unique<slave::DataModel>();
@@ -58,6 +61,19 @@ bool Server::start(std::string* error) {
     }
     for (auto& w : workers_) threads_.emplace_back([wp = w.get()] { wp->run(); });
     running_ = true;
+    if (!config_.simulated.empty()) {
+        if (!config_.units) return fail("simulated inputs need the device's unit models");
+        simulator_ = std::make_unique<slave::Simulator>(config_.simulated, *config_.units);
+        simulator_stop_ = false;
+        simulator_thread_ = std::thread([this] {
+            const auto start = net::now_ns();
+            const auto interval = std::chrono::milliseconds(std::max<std::uint32_t>(1, config_.simulate_interval_ms));
+            while (!simulator_stop_.load(std::memory_order_relaxed)) {
+                simulator_->update(static_cast<std::uint64_t>(net::now_ns() - start));
+                std::this_thread::sleep_for(interval);
+            }
+        });
+    }
     for (auto& w : workers_) {
         while (w->init_status() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         if (w->init_status() < 0)
@@ -67,6 +83,8 @@ bool Server::start(std::string* error) {
 }
 
 void Server::stop() noexcept {
+    simulator_stop_ = true;
+    if (simulator_thread_.joinable()) simulator_thread_.join();
     for (auto& w : workers_) w->request_stop();
     for (auto& t : threads_)
         if (t.joinable()) t.join();

@@ -55,6 +55,10 @@ class Server {
     std::string host_;
     std::string warning_;
     bool running_ = false;
+    // Simulated inputs: one thread writes them every simulate_interval_ms until stop().
+    std::unique_ptr<slave::Simulator> simulator_;
+    std::thread simulator_thread_;
+    std::atomic<bool> simulator_stop_{false};
 };
 
 }  // namespace mbstorm::server

@@ -28,6 +28,7 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
                std::atomic<std::uint32_t>& open_connections, std::uint64_t stall_origin_ns)
     : config_(config),
       model_(model),
+      units_(config.units),
       listen_fd_(listen_fd),
       index_(index),
       open_connections_(open_connections),
@@ -441,8 +442,10 @@ bool Worker::on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcep
         close_connection(index);
         return false;
     }
-    const slave::HandleResult r = slave::handle_request(
-        frame.pdu, model_, codec::MutableBytes(p + codec::limits::kMbapHeader, slave::kMinOutput));
+    const codec::MutableBytes pdu_out(p + codec::limits::kMbapHeader, slave::kMinOutput);
+    const slave::HandleResult r =
+        units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
+               : slave::handle_request(frame.pdu, model_, pdu_out);
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
     codec::store_be16(p, frame.header.transaction_id);
     codec::store_be16(p + 2, 0);

@@ -79,6 +79,7 @@ class Worker {
 
     ServerConfig config_;
     slave::DataModel& model_;
+    const slave::UnitModels* units_;  // routes by unit id when set
     int listen_fd_;
     unsigned index_;
     std::atomic<std::uint32_t>& open_connections_;

@@ -66,6 +66,8 @@ TEST(MergeStep, ShiftsTimelinesAndAddsIntoTheStage) {
     op.latency.record(1000);
     op.counters.record(stats::Outcome::Ok);
     step.operations.push_back(op);
+    op.name = "w";
+    step.operations.push_back(op);
 
     stats::RunResult total;
     stats::StageResult stage;
@@ -77,9 +79,18 @@ TEST(MergeStep, ShiftsTimelinesAndAddsIntoTheStage) {
     EXPECT_EQ(total.timeline[1].index, 1U);
     EXPECT_EQ(total.counters.ok(), 2U);
     EXPECT_EQ(stage.latency.total_count(), 2U);
-    ASSERT_EQ(total.operations.size(), 1U);
-    EXPECT_EQ(total.operations[0].name, "r");
+    ASSERT_EQ(total.operations.size(), 2U);
+    EXPECT_EQ(total.operations[1].name, "w");
+    ASSERT_EQ(stage.operations.size(), 2U);
     EXPECT_EQ(stage.operations[0].counters.ok(), 2U);
+
+    // A one-operation mix has no per-stage operation rows (they would repeat the stage's).
+    stats::RunResult single_step = step;
+    single_step.operations.resize(1);
+    stats::StageResult single;
+    merge_step(total, single_step, &single);
+    EXPECT_TRUE(single.operations.empty());
+    EXPECT_EQ(single.counters.ok(), 1U);
 }
 
 TEST(RunScenario, StagedClosedLoopRunHasPerStageResults) {
@@ -114,6 +125,32 @@ thresholds:
     EXPECT_EQ(r.run.metadata.connections, 4U);
     ASSERT_EQ(r.run.thresholds.size(), 3U);
     EXPECT_TRUE(r.run.thresholds_passed());
+}
+
+TEST(MergeStep, ShortLastIntervalsAreTrimmedOrFolded) {
+    stats::RunResult step;
+    step.metadata.measured_duration_ns = 1'200'000'000;  // 1.2 s: a 0.2 s sliver at the end
+    stats::IntervalSummary full;
+    full.duration_ns = 1'000'000'000;
+    full.transactions = 100;
+    stats::IntervalSummary sliver = full;
+    sliver.index = 1;
+    sliver.start_offset_ns = 1'000'000'000;
+    sliver.transactions = 20;
+    step.timeline = {full, sliver};
+    stats::RunResult total;
+    merge_step(total, step, nullptr);
+    ASSERT_EQ(total.timeline.size(), 1U);
+    EXPECT_EQ(total.timeline[0].transactions, 120U);
+    EXPECT_EQ(total.timeline[0].duration_ns, 1'200'000'000U);
+
+    stats::RunResult short_step;  // a 0.3 s step: its only interval covers 0.3 s
+    short_step.metadata.measured_duration_ns = 300'000'000;
+    short_step.timeline = {full};
+    merge_step(total, short_step, nullptr);
+    ASSERT_EQ(total.timeline.size(), 2U);
+    EXPECT_EQ(total.timeline[1].duration_ns, 300'000'000U);
+    EXPECT_EQ(total.timeline[1].start_offset_ns, 1'200'000'000U);
 }
 
 TEST(RunScenario, ExpectCountsMismatchesAgainstTheEmbeddedSlave) {
