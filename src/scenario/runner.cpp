@@ -158,7 +158,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         if (plan.threads == 0) plan.threads = std::max(1U, cores - std::min(cores - 1, sc.threads));
         sc.max_connections = 0;
         sc.faults = s.slave.faults;
-        sc.model = &units->model_at(0);
+        sc.units = units.get();
+        sc.simulated = s.slave.simulated;
         embedded = std::make_unique<server::Server>(sc);
         std::string error;
         if (!embedded->start(&error)) {
