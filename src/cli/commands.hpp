@@ -5,6 +5,8 @@
 
 #include <functional>
 
+#include "cli/run_cli.hpp"
+
 namespace mbstorm::cli {
 
 // Exit codes shared by every subcommand.
@@ -20,8 +22,5 @@ void add_serve_command(CLI::App& app, Action& action);
 void add_run_command(CLI::App& app, Action& action);
 void add_fuzz_command(CLI::App& app, Action& action);
 void add_replay_command(CLI::App& app, Action& action);
-
-// Entry point used by main(): parses argv and runs the chosen subcommand.
-int run_cli(int argc, char** argv);
 
 }  // namespace mbstorm::cli

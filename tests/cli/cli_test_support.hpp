@@ -15,7 +15,9 @@ struct CommandResult {
 };
 
 inline CommandResult run_mbstorm(const std::string& args) {
-    std::string cmd = std::string(MBSTORM_BINARY) + " " + args + " 2>&1";
+    // Appended piecewise: g++ 12 warns falsely (-Warray-bounds) on `literal + string` chains.
+    std::string cmd = MBSTORM_BINARY;
+    cmd.append(" ").append(args).append(" 2>&1");
     CommandResult result;
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe) return result;
