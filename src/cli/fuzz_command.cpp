@@ -19,7 +19,9 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-void on_fuzz_stop_signal(int) { g_stop.store(true); }
+void on_fuzz_stop_signal(int) {
+    g_stop.store(true);
+}
 
 struct FuzzOptions {
     std::string target;
@@ -62,9 +64,10 @@ int run_fuzz(const FuzzOptions& o) {
     if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
     if (o.seconds <= 0 && o.cases == 0) return usage("bound the run with --seconds N or --cases N");
     // The first line, always: this is not a read-only tool.
-    fmt::print("mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
-               "and malformed frames); only fuzz devices you may change\n",
-               c.target.to_string());
+    fmt::print(
+        "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
+        "and malformed frames); only fuzz devices you may change\n",
+        c.target.to_string());
     std::fflush(stdout);
     c.target_text = c.target.to_string();
     c.unit = static_cast<std::uint8_t>(o.unit);
@@ -86,13 +89,14 @@ int run_fuzz(const FuzzOptions& o) {
     const bool quiet = o.quiet;
     auto progress = [quiet](const netfuzz::Progress& p) {
         if (quiet) return;
-        fmt::print("[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n", p.seconds, p.cases,
-                   p.cases_per_second, p.findings, p.target_up ? "up" : "DOWN (waiting)",
+        fmt::print("[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n", p.seconds,
+                   p.cases, p.cases_per_second, p.findings, p.target_up ? "up" : "DOWN (waiting)",
                    p.restarts ? fmt::format(", {} restart(s)", p.restarts) : std::string());
         std::fflush(stdout);
     };
     auto finding = [](const netfuzz::Finding& f) {
-        fmt::print("FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()), f.verdict.summary);
+        fmt::print("FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()),
+                   f.verdict.summary);
         if (!f.folder.empty()) fmt::print("  saved to {}\n", f.folder);
         std::fflush(stdout);
     };
@@ -117,16 +121,23 @@ int run_fuzz(const FuzzOptions& o) {
 
 void add_fuzz_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<FuzzOptions>();
-    auto* cmd = app.add_subcommand("fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
-    cmd->add_option("--target", o->target, "HOST:PORT of the server to fuzz (required; loopback unless --allow-remote)")
+    auto* cmd = app.add_subcommand(
+        "fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
+    cmd->add_option("--target", o->target,
+                    "HOST:PORT of the server to fuzz (required; loopback unless --allow-remote)")
         ->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
-    cmd->add_option("--unit", o->unit, "unit id the target answers")->check(CLI::Range(0, 255))->capture_default_str();
-    cmd->add_option("--seed", o->seed, "seed: the same seed against the same target gives the same cases")
+    cmd->add_option("--unit", o->unit, "unit id the target answers")
+        ->check(CLI::Range(0, 255))
         ->capture_default_str();
-    cmd->add_option("--seconds", o->seconds, "stop after this many seconds")->check(CLI::PositiveNumber);
+    cmd->add_option("--seed", o->seed,
+                    "seed: the same seed against the same target gives the same cases")
+        ->capture_default_str();
+    cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--cases", o->cases, "stop after this many cases")->check(CLI::PositiveNumber);
-    add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout: longer is a hang (default 1s)");
+    add_duration_option(cmd, "--timeout", o->timeout_ns,
+                        "answer timeout: longer is a hang (default 1s)");
     cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")
         ->check(CLI::Range(1u, 64u))
         ->capture_default_str();
@@ -134,14 +145,18 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "per mille of cases that need their own connection (transport, stateful)")
         ->check(CLI::Range(0u, 1000u))
         ->capture_default_str();
-    cmd->add_option("--out", o->out_dir, "folder for findings (one sub-folder each)")->capture_default_str();
-    cmd->add_option("--restart-cmd", o->restart_cmd, "shell command that restarts the target after a crash");
-    add_duration_option(cmd, "--restart-wait", o->restart_wait_ns, "how long to wait for a crashed target to return (default 15s)");
+    cmd->add_option("--out", o->out_dir, "folder for findings (one sub-folder each)")
+        ->capture_default_str();
+    cmd->add_option("--restart-cmd", o->restart_cmd,
+                    "shell command that restarts the target after a crash");
+    add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
+                        "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
     cmd->add_option("--junit", o->junit, "write JUnit XML to this file");
     cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file");
     cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
-    cmd->add_flag("--naive", o->naive, "baseline: random PDU bytes instead of the structure-aware generator");
+    cmd->add_flag("--naive", o->naive,
+                  "baseline: random PDU bytes instead of the structure-aware generator");
     cmd->add_flag("--quiet,-q", o->quiet, "no progress lines");
     cmd->callback([o, &action] { action = [o] { return run_fuzz(*o); }; });
 }

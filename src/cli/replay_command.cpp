@@ -45,7 +45,8 @@ int run_replay(const ReplayOptions& o) {
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.
             if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
-                fmt::print(stderr, "mbstorm replay: {} does not accept connections\n", target.to_string());
+                fmt::print(stderr, "mbstorm replay: {} does not accept connections\n",
+                           target.to_string());
                 return kExitUsage;
             }
             e = netfuzz::execute_case(f.fuzz_case, target, f.profile, ex);
@@ -53,8 +54,10 @@ int run_replay(const ReplayOptions& o) {
         const bool same = e.verdict.oracle == f.oracle();
         reproduced += same;
         fmt::print("run {}: {}{}\n", i + 1, same ? "REPRODUCES: " : "does not reproduce",
-                   e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")") : std::string());
-        if (same) fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
+                   e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")")
+                             : std::string());
+        if (same)
+            fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
         if (e.target_down) netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
     }
     fmt::print("{} of {} run(s) reproduced the finding\n", reproduced, std::max(1u, o.runs));
@@ -65,7 +68,8 @@ int run_replay(const ReplayOptions& o) {
 
 void add_replay_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<ReplayOptions>();
-    auto* cmd = app.add_subcommand("replay", "Re-send a saved fuzz finding and say whether it still reproduces");
+    auto* cmd = app.add_subcommand(
+        "replay", "Re-send a saved fuzz finding and say whether it still reproduces");
     cmd->add_option("finding", o->finding, "finding folder (or its finding.json)")->required();
     cmd->add_option("--target", o->target, "HOST:PORT to replay against (required)")->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");

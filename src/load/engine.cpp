@@ -194,6 +194,15 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     }
     result.run.timeline = timeline.summaries();
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
+    // The run rarely ends on an interval boundary: drop empty intervals past the end and give
+    // the last one its real length, so its throughput is not understated.
+    auto& series = result.run.timeline;
+    while (!series.empty() && series.back().transactions == 0 &&
+           series.back().start_offset_ns >= meta.measured_duration_ns)
+        series.pop_back();
+    if (!series.empty() && series.back().start_offset_ns < meta.measured_duration_ns &&
+        series.back().start_offset_ns + series.back().duration_ns > meta.measured_duration_ns)
+        series.back().duration_ns = meta.measured_duration_ns - series.back().start_offset_ns;
     if (!verdict.write_operations.empty()) {
         result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
                                               fmt::join(verdict.write_operations, ", ")));

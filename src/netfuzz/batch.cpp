@@ -64,7 +64,8 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
     for (std::size_t i = 0; i < cases.size(); ++i) {
         Lane& l = *lanes_[i % n_lanes];
         l.cases.push_back(i);
-        for (const Step& s : cases[i].steps) l.out.insert(l.out.end(), s.bytes.begin(), s.bytes.end());
+        for (const Step& s : cases[i].steps)
+            l.out.insert(l.out.end(), s.bytes.begin(), s.bytes.end());
     }
     for (Lane* lp : lanes_) {
         Lane& l = *lp;
@@ -85,8 +86,10 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                 Lane::Frame f{ci, {}, false, false};
                 describe_request(codec::Bytes(l.out.data() + off, size), profile_, f.info);
                 const std::uint16_t tid = f.info.header.transaction_id;
-                if (l.by_tid[tid] >= 0) suspect[ci] = true;  // cannot match: check it alone
-                else l.by_tid[tid] = static_cast<std::int32_t>(l.frames.size());
+                if (l.by_tid[tid] >= 0)
+                    suspect[ci] = true;  // cannot match: check it alone
+                else
+                    l.by_tid[tid] = static_cast<std::int32_t>(l.frames.size());
                 l.frames.push_back(f);
                 off += size;
             }
@@ -103,7 +106,8 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             o += size;
         }
         Lane::Frame ff{static_cast<std::size_t>(-1), {}, false, true};
-        describe_request(codec::Bytes(l.out.data() + l.out.size() - fence.size(), fence.size()), profile_, ff.info);
+        describe_request(codec::Bytes(l.out.data() + l.out.size() - fence.size(), fence.size()),
+                         profile_, ff.info);
         l.by_tid[fence_tid] = static_cast<std::int32_t>(l.frames.size());
         l.frames.push_back(ff);
         if (!l.fd.valid()) {
@@ -146,7 +150,8 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                     l.fence_answered = true;
                 } else {
                     const Verdict v = judge_response(f.info, codec::Bytes(p, size), profile_);
-                    if (v) suspect[f.case_index] = true;
+                    if (v)
+                        suspect[f.case_index] = true;
                     else if (f.info.status.ok() && !(p[7] & codec::kExceptionBit))
                         result.answered_valid.push_back(f.case_index);
                 }
@@ -165,7 +170,9 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         polled.clear();
         for (Lane* l : lanes_) {
             if (l->done) continue;
-            fds.push_back(pollfd{l->fd.get(), static_cast<short>(POLLIN | (l->out_pos < l->out.size() ? POLLOUT : 0)), 0});
+            fds.push_back(
+                pollfd{l->fd.get(),
+                       static_cast<short>(POLLIN | (l->out_pos < l->out.size() ? POLLOUT : 0)), 0});
             polled.push_back(l);
         }
         if (fds.empty()) break;
@@ -174,13 +181,16 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             for (Lane* l : polled) fail_lane(*l);  // timeout: the unanswered become suspects
             break;
         }
-        const int rc = ::poll(fds.data(), fds.size(), static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs)));
+        const int rc = ::poll(fds.data(), fds.size(),
+                              static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs)));
         if (rc <= 0) continue;
         for (std::size_t i = 0; i < fds.size(); ++i) {
             Lane& l = *polled[i];
             if (fds[i].revents & POLLOUT) {
-                const ssize_t n = ::send(l.fd.get(), l.out.data() + l.out_pos, l.out.size() - l.out_pos, MSG_NOSIGNAL);
-                if (n > 0) l.out_pos += static_cast<std::size_t>(n);
+                const ssize_t n = ::send(l.fd.get(), l.out.data() + l.out_pos,
+                                         l.out.size() - l.out_pos, MSG_NOSIGNAL);
+                if (n > 0)
+                    l.out_pos += static_cast<std::size_t>(n);
                 else if (n < 0 && errno != EAGAIN && errno != EINTR) {
                     fail_lane(l);
                     continue;
@@ -214,7 +224,8 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         }
         // Unanswered frames that owed an answer (after the fence, or on a failed lane).
         for (const Lane::Frame& f : l.frames)
-            if (!f.fence && !f.answered && f.info.expect == Expect::Answer) suspect[f.case_index] = true;
+            if (!f.fence && !f.answered && f.info.expect == Expect::Answer)
+                suspect[f.case_index] = true;
         if (l.failed) {
             // A crash or close may have been caused by an answered frame that the server
             // choked on afterwards: the last answered case is suspect too.

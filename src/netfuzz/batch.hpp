@@ -20,7 +20,7 @@ struct BatchOptions {
 };
 
 struct BatchResult {
-    std::vector<std::size_t> suspects;       // case indexes to re-run in isolation, ascending
+    std::vector<std::size_t> suspects;        // case indexes to re-run in isolation, ascending
     std::vector<std::size_t> answered_valid;  // valid requests answered normally (corpus)
     bool lane_lost = false;                   // a lane was closed, reset or timed out
     bool connect_failed = false;              // a lane could not (re)connect

@@ -66,8 +66,9 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
                 if (h.length < 2 || h.length > lim::kMaxMbapLength) return answers;
                 if (in.size() - pos < 6u + h.length) break;
                 if (h.transaction_id < answers.size())
-                    answers[h.transaction_id].assign(in.begin() + static_cast<std::ptrdiff_t>(pos + 7),
-                                                     in.begin() + static_cast<std::ptrdiff_t>(pos + 6 + h.length));
+                    answers[h.transaction_id].assign(
+                        in.begin() + static_cast<std::ptrdiff_t>(pos + 7),
+                        in.begin() + static_cast<std::ptrdiff_t>(pos + 6 + h.length));
                 pos += 6u + h.length;
             }
         }
@@ -120,9 +121,11 @@ class Campaign {
 bool Campaign::recover() {
     up_ = false;
     progress(true);
-    if (!wait_for_target(o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms, o_.timeout_ms)) {
+    if (!wait_for_target(o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms,
+                         o_.timeout_ms)) {
         r_.target_lost = true;
-        r_.stop_reason = fmt::format("the target did not come back within {} ms", o_.restart_wait_ms);
+        r_.stop_reason =
+            fmt::format("the target did not come back within {} ms", o_.restart_wait_ms);
         return false;
     }
     ++r_.restarts;
@@ -133,10 +136,7 @@ bool Campaign::recover() {
 bool Campaign::isolate(const Case& c, bool& fired) {
     fired = false;
     ++r_.isolated_runs;
-    const std::int64_t t0 = net::now_ns();
     Execution ex = execute_case(c, o_.target, r_.profile, exec_);
-    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
-        fmt::print(stderr, "{} {} us\n", class_name(c.cls), (net::now_ns() - t0) / 1000);
     if (ex.down_before) {
         if (!recover()) return false;
         ex = execute_case(c, o_.target, r_.profile, exec_);
@@ -155,28 +155,41 @@ bool Campaign::isolate(const Case& c, bool& fired) {
     return true;
 }
 
+// The function code of the first request frame a case sends (0 when there is none).
+std::uint8_t first_function(const Case& c) {
+    for (const Step& s : c.steps)
+        if (s.op == Op::Send && s.bytes.size() > lim::kMbapHeader) return s.bytes[lim::kMbapHeader];
+    return c.function;
+}
+
 void Campaign::record(const Case& c, Execution ex) {
-    const Key key{ex.verdict.oracle, c.function, c.cls};
-    const bool costly = key.oracle == Oracle::Crash || key.oracle == Oracle::Hang;
+    const Oracle want = ex.verdict.oracle;
+    const bool costly = want == Oracle::Crash || want == Oracle::Hang;
+    const Case frames = split_frames(c);
+    const bool multi_frame = frames.steps.size() > 1 && c.cls != MutationClass::Split &&
+                             c.cls != MutationClass::Drip && c.cls != MutationClass::StatefulSame &&
+                             c.cls != MutationClass::StatefulCross;
     if (costly) gen_->deprioritise(c.function, c.cls);
-    if (!seen_.insert(key).second) {
+    // Several frames: the finding belongs to whichever frame causes it. Already known when any
+    // of its frames has a known key; otherwise shrink first, then key by what is left.
+    if (multi_frame) {
+        for (const Step& s : frames.steps) {
+            if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader) continue;
+            if (seen_.count(Key{want, s.bytes[lim::kMbapHeader], c.cls})) {
+                ++r_.duplicates;
+                return;
+            }
+        }
+    } else if (seen_.count(Key{want, c.function, c.cls})) {
         ++r_.duplicates;
         return;
     }
     Finding f;
-    f.id = r_.findings.size() + 1;
     f.verdict = ex.verdict;
     f.fuzz_case = c;
     f.trace = std::move(ex.trace);
-    f.profile = r_.profile;
-    f.target = o_.target_text;
-    f.seed = o_.seed;
-    f.case_number = r_.cases;
-    f.found_after_s = elapsed();
-    f.timeout_ms = o_.timeout_ms;
     f.original_steps = c.steps.size();
-    if (o_.minimize && split_frames(c).steps.size() > 1) {
-        const Oracle want = key.oracle;
+    if (o_.minimize && frames.steps.size() > 1) {
         Execution last;
         bool lost = false;
         auto reproduces = [&](const Case& candidate) {
@@ -190,21 +203,37 @@ void Campaign::record(const Case& c, Execution ex) {
             return true;
         };
         // Crashes and hangs cost a restart or a timeout per try: a smaller budget.
-        Case small = minimize_case(c, reproduces, costly ? o_.minimize_budget / 4 : o_.minimize_budget);
-        if (small.steps.size() < split_frames(c).steps.size() && last.verdict) {
+        Case small =
+            minimize_case(c, reproduces, costly ? o_.minimize_budget / 3 : o_.minimize_budget);
+        if (small.steps.size() < frames.steps.size() && last.verdict) {
             f.fuzz_case = std::move(small);
             f.verdict = last.verdict;
             f.trace = std::move(last.trace);
             f.minimized = true;
         }
     }
+    if (multi_frame) f.fuzz_case.function = first_function(f.fuzz_case);
+    if (!seen_.insert(Key{want, f.fuzz_case.function, f.fuzz_case.cls}).second) {
+        ++r_.duplicates;
+        return;
+    }
+    if (costly) gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
+    f.id = r_.findings.size() + 1;
+    f.profile = r_.profile;
+    f.target = o_.target_text;
+    f.seed = o_.seed;
+    f.case_number = r_.cases;
+    f.found_after_s = elapsed();
+    f.timeout_ms = o_.timeout_ms;
     if (!o_.out_dir.empty()) {
-        const std::string dir = fmt::format("{}/{:03}-{}-fc{:02X}-{}", o_.out_dir, f.id,
-                                            oracle_name(f.oracle()), f.fuzz_case.function,
-                                            class_name(f.fuzz_case.cls));
+        const std::string dir =
+            fmt::format("{}/{:03}-{}-fc{:02X}-{}", o_.out_dir, f.id, oracle_name(f.oracle()),
+                        f.fuzz_case.function, class_name(f.fuzz_case.cls));
         std::string err;
-        if (save_finding(f, dir, err)) f.folder = dir;
-        else fmt::print(stderr, "mbstorm fuzz: {}\n", err);
+        if (save_finding(f, dir, err))
+            f.folder = dir;
+        else
+            fmt::print(stderr, "mbstorm fuzz: {}\n", err);
     }
     r_.findings.push_back(std::move(f));
     if (on_finding_) on_finding_(r_.findings.back());
@@ -261,15 +290,15 @@ CampaignResult Campaign::run() {
         r_.batched_cases += piped.size();
         if (br.connect_failed || br.lane_lost) {
             batch.close_all();
-            if (probe_target(o_.target, r_.profile, o_.timeout_ms) != ProbeResult::Ok && !recover()) {
+            if (probe_target(o_.target, r_.profile, o_.timeout_ms) != ProbeResult::Ok &&
+                !recover()) {
                 r_.cases += n;
                 break;
             }
         }
-        for (std::size_t i : br.answered_valid) {
-            const auto& b = piped[i].steps[0].bytes;
-            if (b.size() > lim::kMbapHeader) gen.record_valid(b.data() + lim::kMbapHeader, b.size() - lim::kMbapHeader);
-        }
+        // The mutation corpus is the valid traffic the generator itself recorded, not what the
+        // target answered: answers depend on state that concurrent lanes change in a timing-
+        // dependent order, and a seed must replay the same cases.
         bool lost = false;
         for (std::size_t i : br.suspects) {
             bool fired = false;
@@ -289,7 +318,7 @@ CampaignResult Campaign::run() {
         if (lost) break;
     }
     if (r_.stop_reason.empty()) {
-        r_.stop_reason = (o_.stop && o_.stop->load()) ? "interrupted"
+        r_.stop_reason = (o_.stop && o_.stop->load())                 ? "interrupted"
                          : (o_.max_cases && r_.cases >= o_.max_cases) ? "case limit reached"
                                                                       : "time limit reached";
     }
@@ -305,8 +334,9 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
     profile = TargetProfile{};
     profile.unit = unit;
     // Probe candidates, most common first.
-    const std::vector<Pdu> probes = {{0x03, 0, 0, 0, 1}, {0x04, 0, 0, 0, 1}, {0x01, 0, 0, 0, 1},
-                                     {0x02, 0, 0, 0, 1}, {0x11},             {0x08, 0, 0, 0x12, 0x34}};
+    const std::vector<Pdu> probes = {
+        {0x03, 0, 0, 0, 1},      {0x04, 0, 0, 0, 1}, {0x01, 0, 0, 0, 1}, {0x02, 0, 0, 0, 1}, {0x11},
+        {0x08, 0, 0, 0x12, 0x34}};
     std::vector<Pdu> frames;
     for (std::size_t i = 0; i < probes.size(); ++i)
         frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit));
@@ -323,18 +353,31 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
         }
     }
     if (profile.probe_pdu.empty()) {
-        error = fmt::format("the target does not answer unit {} (tried FC 03, 04, 01, 02, 11, 08)", unit);
+        error = fmt::format("the target does not answer unit {} (tried FC 03, 04, 01, 02, 11, 08)",
+                            unit);
         return false;
     }
     // Canonical valid requests of every function code the codec knows, and every other code
     // bare; the probe last as a fence.
-    const std::vector<Pdu> canonical = {
-        {0x01, 0, 0, 0, 1}, {0x02, 0, 0, 0, 1}, {0x03, 0, 0, 0, 1}, {0x04, 0, 0, 0, 1},
-        {0x05, 0x5F, 0xFF, 0xFF, 0x00}, {0x06, 0x5F, 0xFF, 0, 0}, {0x07}, {0x08, 0, 0, 0x12, 0x34},
-        {0x0B}, {0x0C}, {0x0F, 0x5F, 0xFF, 0, 1, 1, 0}, {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0}, {0x11},
-        {0x14, 7, 6, 0, 1, 0, 0, 0, 1}, {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
-        {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0}, {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
-        {0x18, 0x5F, 0xFF}, {0x2B, 0x0E, 0x01, 0x00}};
+    const std::vector<Pdu> canonical = {{0x01, 0, 0, 0, 1},
+                                        {0x02, 0, 0, 0, 1},
+                                        {0x03, 0, 0, 0, 1},
+                                        {0x04, 0, 0, 0, 1},
+                                        {0x05, 0x5F, 0xFF, 0xFF, 0x00},
+                                        {0x06, 0x5F, 0xFF, 0, 0},
+                                        {0x07},
+                                        {0x08, 0, 0, 0x12, 0x34},
+                                        {0x0B},
+                                        {0x0C},
+                                        {0x0F, 0x5F, 0xFF, 0, 1, 1, 0},
+                                        {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+                                        {0x11},
+                                        {0x14, 7, 6, 0, 1, 0, 0, 0, 1},
+                                        {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
+                                        {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0},
+                                        {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+                                        {0x18, 0x5F, 0xFF},
+                                        {0x2B, 0x0E, 0x01, 0x00}};
     std::vector<Pdu> pdus = canonical;
     for (unsigned fc = 0; fc < 256; ++fc)
         if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
@@ -363,7 +406,8 @@ bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
     }
     int backoff_ms = 20;
     while (net::now_ns() < deadline) {
-        if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok) return true;
+        if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok)
+            return true;
         std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
         backoff_ms = std::min(backoff_ms * 3 / 2, 1000);
     }

@@ -25,14 +25,14 @@ struct CampaignOptions {
     double max_seconds = 0;       // 0: no bound
     int timeout_ms = 1000;
     unsigned lanes = 4;
-    unsigned lane_depth = 48;        // cases per lane per round
+    unsigned lane_depth = 48;  // cases per lane per round
     unsigned isolated_per_mille = 10;
-    bool naive = false;              // baseline random-frame generator
+    bool naive = false;  // baseline random-frame generator
     bool minimize = true;
     unsigned minimize_budget = 40;
-    std::string restart_cmd;         // run (sh -c) when the target is down
-    int restart_wait_ms = 15000;     // how long to wait for it to come back
-    std::string out_dir;             // "" : findings are not saved
+    std::string restart_cmd;      // run (sh -c) when the target is down
+    int restart_wait_ms = 15000;  // how long to wait for it to come back
+    std::string out_dir;          // "" : findings are not saved
     double progress_interval_s = 1.0;
     std::atomic<bool>* stop = nullptr;  // set from a signal handler to end early
 };
@@ -47,16 +47,16 @@ struct Progress {
 };
 
 struct CampaignResult {
-    bool started = false;     // false: discovery failed (see error)
+    bool started = false;  // false: discovery failed (see error)
     std::string error;
     TargetProfile profile;
     std::vector<Finding> findings;
     std::uint64_t cases = 0;
     std::uint64_t batched_cases = 0, isolated_runs = 0;
-    std::uint64_t duplicates = 0;     // findings suppressed as already known
-    std::uint64_t unconfirmed = 0;    // suspects that did not reproduce alone
-    std::uint64_t restarts = 0;       // times the target went down and came back
-    bool target_lost = false;         // it did not come back: the run ended early
+    std::uint64_t duplicates = 0;   // findings suppressed as already known
+    std::uint64_t unconfirmed = 0;  // suspects that did not reproduce alone
+    std::uint64_t restarts = 0;     // times the target went down and came back
+    bool target_lost = false;       // it did not come back: the run ended early
     double seconds = 0;
     double batch_seconds = 0, isolated_seconds = 0;  // where the time went
     std::string stop_reason;

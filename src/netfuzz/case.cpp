@@ -6,10 +6,11 @@ namespace mbstorm::netfuzz {
 namespace {
 
 constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::Count)> kNames = {
-    "valid-limits", "invalid-values", "unknown-function", "unit-id",   "transaction-id",
-    "protocol-id",  "mbap-length",    "trailing-bytes",   "truncated", "split",
-    "coalesced",    "drip",           "half-close",       "flood",     "stateful-same",
-    "stateful-cross", "recorded-mutation", "naive-random"};
+    "valid-limits",      "invalid-values", "unknown-function", "unit-id",
+    "transaction-id",    "protocol-id",    "mbap-length",      "trailing-bytes",
+    "truncated",         "split",          "coalesced",        "drip",
+    "half-close",        "flood",          "stateful-same",    "stateful-cross",
+    "recorded-mutation", "naive-random"};
 
 }  // namespace
 

@@ -21,8 +21,8 @@ namespace lim = codec::limits;
 constexpr std::uint8_t kFreshConn = 255;
 
 constexpr std::array<std::string_view, 10> kTraceNames = {
-    "connect", "connect-failed", "send", "recv", "shutdown-write",
-    "peer-closed", "reset", "timeout", "flood", "fresh-probe"};
+    "connect",     "connect-failed", "send",    "recv",  "shutdown-write",
+    "peer-closed", "reset",          "timeout", "flood", "fresh-probe"};
 
 struct Pending {
     std::size_t offset = 0, size = 0;  // in Conn::sent
@@ -53,8 +53,8 @@ class Runner {
   private:
     void event(std::uint8_t conn, TraceKind kind, std::vector<std::uint8_t> bytes = {},
                std::string note = {}) {
-        out_.trace.push_back(
-            TraceEvent{(net::now_ns() - start_) / 1000, conn, kind, std::move(bytes), std::move(note)});
+        out_.trace.push_back(TraceEvent{(net::now_ns() - start_) / 1000, conn, kind,
+                                        std::move(bytes), std::move(note)});
     }
     bool ensure_open(std::uint8_t index);
     void send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes);
@@ -101,7 +101,8 @@ void Runner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& byt
     std::size_t done = 0;
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
     while (done < bytes.size()) {
-        const ssize_t n = ::send(c.fd.get(), bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+        const ssize_t n =
+            ::send(c.fd.get(), bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
         if (n > 0) {
             done += static_cast<std::size_t>(n);
             continue;
@@ -122,7 +123,8 @@ void Runner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& byt
     }
     if (done == 0) return;
     const std::int64_t now = net::now_ns();
-    event(index, TraceKind::Send, {bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(done)});
+    event(index, TraceKind::Send,
+          {bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(done)});
     c.sent.insert(c.sent.end(), bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(done));
     const std::size_t before = c.pending.size();
     parse_sent(c);
@@ -224,7 +226,8 @@ bool Runner::pump(std::int64_t deadline, Done done) {
         for (const Conn& c : conns_)
             if (c.fd.valid() && !c.closed) fds.push_back(pollfd{c.fd.get(), POLLIN, 0});
         if (fds.empty()) return done();
-        const int wait_ms = static_cast<int>(std::max<std::int64_t>(1, (deadline - now) / net::kNsPerMs));
+        const int wait_ms =
+            static_cast<int>(std::max<std::int64_t>(1, (deadline - now) / net::kNsPerMs));
         ::poll(fds.data(), fds.size(), std::min(wait_ms, 50));
         for (std::size_t i = 0; i < conns_.size(); ++i)
             if (conns_[i].fd.valid() && !conns_[i].closed) read_conn(static_cast<std::uint8_t>(i));
@@ -270,14 +273,16 @@ void Runner::judge(const Case& c) {
         if (!cn.opened) continue;
         if (cn.closed || cn.shut || cn.desync) need_fresh_probe = true;
         if (cn.framing_lost) {
-            consider(Verdict{Oracle::MalformedResponse,
-                             fmt::format("response framing lost on connection {}: MBAP length {}", i,
-                                         codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
-                             "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
+            consider(Verdict{
+                Oracle::MalformedResponse,
+                fmt::format("response framing lost on connection {}: MBAP length {}", i,
+                            codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
+                "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
         }
         for (const auto& [off, size] : cn.unmatched) {
             std::string tids;
-            for (const Pending& pd : cn.pending) tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
+            for (const Pending& pd : cn.pending)
+                tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
             consider(Verdict{Oracle::MalformedResponse,
                              fmt::format("response with transaction id {:04X} matches no request",
                                          codec::load_be16(cn.received.data() + off)),
@@ -293,7 +298,8 @@ void Runner::judge(const Case& c) {
             if (pd.answered_ns) {
                 rsp = codec::Bytes(cn.received.data() + pd.rsp_offset, pd.rsp_size);
                 consider(judge_response(info, rsp, profile_));
-                shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns, rsp.subspan(lim::kMbapHeader)});
+                shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
+                                               rsp.subspan(lim::kMbapHeader)});
             } else {
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
             }
@@ -301,6 +307,9 @@ void Runner::judge(const Case& c) {
             // A server may drop what it has not answered when we half-close: only streams we
             // left intact must answer everything.
             if (cn.shut || cn.desync) continue;
+            // Answers that matched nothing or lost framing: the missing answer is already
+            // explained by the malformed response.
+            if (!cn.unmatched.empty() || cn.framing_lost) continue;
             const std::string what = pd.probe ? std::string("the in-stream liveness probe")
                                               : fmt::format("request {}", hex(info.pdu, 16));
             if (cn.closed) {
@@ -319,24 +328,36 @@ void Runner::judge(const Case& c) {
     }
     consider(Shadow::check(shadow));
     if (need_fresh_probe) {
-        const ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
+        ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
-        if (r == ProbeResult::ConnectFailed) {
+        if (r == ProbeResult::Closed) {
+            // A process that is dying may still complete a connect from its backlog: look
+            // again a moment later before calling it.
+            ::usleep(50000);
+            r = probe_target(target_, profile_, options_.timeout_ms);
+            event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
+        }
+        if (r == ProbeResult::ConnectFailed || r == ProbeResult::Closed) {
             out_.target_down = true;
-            candidate = Verdict{Oracle::Crash, "target stopped accepting connections",
-                                "the target accepts a fresh connection", "connect failed"};
+            candidate = Verdict{Oracle::Crash,
+                                r == ProbeResult::Closed ? "target closes every new connection"
+                                                         : "target stopped accepting connections",
+                                "the target accepts and serves a fresh connection",
+                                std::string(probe_result_name(r))};
         } else if (r != ProbeResult::Ok) {
             // The server as a whole no longer answers (not just one connection).
-            candidate = Verdict{Oracle::Hang,
-                                fmt::format("whole server hangs: a fresh connection's probe got {}",
-                                            probe_result_name(r)),
-                                "an answer on a fresh connection", std::string(probe_result_name(r))};
+            candidate =
+                Verdict{Oracle::Hang,
+                        fmt::format("whole server hangs: a fresh connection's probe got {}",
+                                    probe_result_name(r)),
+                        "an answer on a fresh connection", std::string(probe_result_name(r))};
         } else if (candidate && candidate.oracle == Oracle::Hang) {
             candidate.summary += " (other connections are still served)";
         }
     }
     if (candidate)
-        candidate.summary = fmt::format("{} [{} FC {:02X}]", candidate.summary, class_name(c.cls), c.function);
+        candidate.summary =
+            fmt::format("{} [{} FC {:02X}]", candidate.summary, class_name(c.cls), c.function);
     out_.verdict = std::move(candidate);
 }
 
@@ -363,7 +384,8 @@ Execution Runner::run(const Case& c) {
                 break;
             case Op::Await: {
                 const Conn& cn = conns_[s.conn];
-                pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs, [&] { return answered(cn); });
+                pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs,
+                     [&] { return answered(cn); });
                 break;
             }
             case Op::Flood:
@@ -381,7 +403,8 @@ Execution Runner::run(const Case& c) {
         if (!cn.opened || !cn.fd.valid() || cn.closed) continue;
         if (!cn.shut && !cn.desync && cn.parsed == cn.sent.size()) {
             std::uint16_t tid = 0xFADE;
-            while (std::any_of(cn.pending.begin(), cn.pending.end(), [&](const Pending& p) { return p.tid == tid; }))
+            while (std::any_of(cn.pending.begin(), cn.pending.end(),
+                               [&](const Pending& p) { return p.tid == tid; }))
                 ++tid;
             const std::size_t before = cn.pending.size();
             send_bytes(static_cast<std::uint8_t>(i), probe_frame(profile_, tid));
@@ -428,11 +451,16 @@ bool trace_kind_from_name(std::string_view name, TraceKind& out) noexcept {
 
 std::string_view probe_result_name(ProbeResult r) noexcept {
     switch (r) {
-        case ProbeResult::Ok: return "answered";
-        case ProbeResult::ConnectFailed: return "connect failed";
-        case ProbeResult::NoAnswer: return "no answer";
-        case ProbeResult::Closed: return "closed";
-        case ProbeResult::BadAnswer: return "bad answer";
+        case ProbeResult::Ok:
+            return "answered";
+        case ProbeResult::ConnectFailed:
+            return "connect failed";
+        case ProbeResult::NoAnswer:
+            return "no answer";
+        case ProbeResult::Closed:
+            return "closed";
+        case ProbeResult::BadAnswer:
+            return "bad answer";
     }
     return "unknown";
 }
@@ -465,7 +493,8 @@ std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_
     return f;
 }
 
-ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile, int timeout_ms) {
+ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile,
+                         int timeout_ms) {
     const int raw = connect_with_timeout(target, timeout_ms);
     if (raw < 0) return ProbeResult::ConnectFailed;
     net::UniqueFd fd(raw);
@@ -479,7 +508,8 @@ ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profi
         const std::int64_t left = deadline - net::now_ns();
         if (left <= 0) return ProbeResult::NoAnswer;
         pollfd p{fd.get(), POLLIN, 0};
-        if (::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs))) <= 0) continue;
+        if (::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs))) <= 0)
+            continue;
         const ssize_t n = ::recv(fd.get(), buf + have, sizeof buf - have, 0);
         if (n == 0) return ProbeResult::Closed;
         if (n < 0) {

@@ -56,8 +56,7 @@ enum class ProbeResult : std::uint8_t { Ok, ConnectFailed, NoAnswer, Closed, Bad
 std::string_view probe_result_name(ProbeResult r) noexcept;
 
 // One liveness probe on a fresh connection: connect, send the profile's probe, await it.
-ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile,
-                         int timeout_ms);
+ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile, int timeout_ms);
 
 // Connects with a timeout; returns a connected non-blocking fd (TCP_NODELAY) or -errno.
 int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept;

@@ -14,10 +14,14 @@ using nlohmann::json;
 
 std::string_view op_name(Op op) {
     switch (op) {
-        case Op::Send: return "send";
-        case Op::ShutdownWrite: return "shutdown-write";
-        case Op::Await: return "await";
-        case Op::Flood: return "flood";
+        case Op::Send:
+            return "send";
+        case Op::ShutdownWrite:
+            return "shutdown-write";
+        case Op::Await:
+            return "await";
+        case Op::Flood:
+            return "flood";
     }
     return "send";
 }
@@ -91,8 +95,11 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
     }
     json steps = json::array();
     for (const Step& s : f.fuzz_case.steps) {
-        steps.push_back({{"op", op_name(s.op)}, {"conn", s.conn}, {"delay_us", s.delay_us},
-                         {"count", s.count}, {"hex", to_hex(s.bytes)}});
+        steps.push_back({{"op", op_name(s.op)},
+                         {"conn", s.conn},
+                         {"delay_us", s.delay_us},
+                         {"count", s.count},
+                         {"hex", to_hex(s.bytes)}});
     }
     json trace = json::array();
     for (const TraceEvent& e : f.trace) {

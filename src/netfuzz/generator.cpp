@@ -61,7 +61,8 @@ void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max)
                                     std::uint16_t(0x10000 - std::max(q, 1u) + 1)}) {
                 Pdu p = pdu5(fc, a, static_cast<std::uint16_t>(q));
                 p.push_back(static_cast<std::uint8_t>(std::min(bc, 255u)));
-                for (std::uint32_t i = 0; i < data; ++i) p.push_back(static_cast<std::uint8_t>(0xA5 ^ i));
+                for (std::uint32_t i = 0; i < data; ++i)
+                    p.push_back(static_cast<std::uint8_t>(0xA5 ^ i));
                 out.push_back(std::move(p));
             }
         }
@@ -86,7 +87,8 @@ void add_file_records(std::vector<Pdu>& out) {
                     put16(body, s.record);
                     put16(body, s.length);
                     if (fc == 0x15)
-                        for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u; ++i)
+                        for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u;
+                             ++i)
                             body.push_back(static_cast<std::uint8_t>(i));
                 }
                 if (body.size() > lim::kMaxPdu - 2) body.resize(lim::kMaxPdu - 2);
@@ -122,7 +124,8 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
                     put16(p, static_cast<std::uint16_t>(wq));
                     const int room = static_cast<int>(lim::kMaxPdu) - 10;
                     p.push_back(static_cast<std::uint8_t>(std::min(bc, 255)));
-                    for (int i = 0; i < std::min(bc, room); ++i) p.push_back(static_cast<std::uint8_t>(i * 7));
+                    for (int i = 0; i < std::min(bc, room); ++i)
+                        p.push_back(static_cast<std::uint8_t>(i * 7));
                     out.push_back(std::move(p));
                 }
             }
@@ -150,8 +153,7 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
         for (std::uint16_t v : {0x0000, 0xFF00, 0x0001, 0x00FF, 0xFFFF, 0xFF01, 0x8000})
             out.push_back(pdu5(0x05, a, v));
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
-        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF})
-            out.push_back(pdu5(0x06, a, v));
+        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF}) out.push_back(pdu5(0x06, a, v));
     for (std::uint8_t fc : {0x07, 0x0B, 0x0C, 0x11}) {
         out.push_back(Pdu{fc});
         out.push_back(Pdu{fc, 0x00});
@@ -159,9 +161,9 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
     // FC08: every defined sub-function and some undefined ones, with right and wrong data
     // sizes. 0x0001 (restart) and 0x0004 (listen-only) are left out: real devices may
     // legitimately drop the connection or go silent.
-    for (std::uint16_t sub : {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E,
-                              0x000F, 0x0010, 0x0011, 0x0012, 0x0013, 0x0014, 0x0015, 0x00FF,
-                              0xFFFF}) {
+    for (std::uint16_t sub :
+         {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x000F, 0x0010, 0x0011,
+          0x0012, 0x0013, 0x0014, 0x0015, 0x00FF, 0xFFFF}) {
         for (int words : {0, 1, 2}) {
             Pdu p{0x08};
             put16(p, sub);
@@ -223,8 +225,8 @@ Generator::Generator(const GeneratorOptions& options)
 }
 
 void Generator::deprioritise(std::uint8_t function, MutationClass cls) {
-    const std::size_t bit = function * static_cast<std::size_t>(MutationClass::Count) +
-                            static_cast<std::size_t>(cls);
+    const std::size_t bit =
+        function * static_cast<std::size_t>(MutationClass::Count) + static_cast<std::size_t>(cls);
     deprioritised_[bit / 32] |= 1u << (bit % 32);
 }
 
@@ -269,9 +271,12 @@ void Generator::next(Case& out) {
             return;
         }
         const std::uint32_t roll = rng_.below(1000);
-        if (roll < options_.isolated_per_mille) isolated(out);
-        else if (roll < options_.isolated_per_mille + 150) mutate_recorded(out);
-        else structured(out);
+        if (roll < options_.isolated_per_mille)
+            isolated(out);
+        else if (roll < options_.isolated_per_mille + 150)
+            mutate_recorded(out);
+        else
+            structured(out);
         // A class that already crashed or hung the target gets 1 draw in 16.
         if (!deprioritised(out) || rng_.chance(16)) break;
     }
@@ -304,10 +309,14 @@ void Generator::structured(Case& out, MutationClass forced) {
     out.pipelinable = true;
     std::uint8_t unit = options_.unit;
     if (forced == MutationClass::Count) {
-        if (roll < 5) forced = MutationClass::UnitId;
-        else if (roll < 10) forced = MutationClass::ProtocolId;
-        else if (roll < 15) forced = MutationClass::TrailingBytes;
-        else if (roll < 20) forced = MutationClass::Coalesced;
+        if (roll < 5)
+            forced = MutationClass::UnitId;
+        else if (roll < 10)
+            forced = MutationClass::ProtocolId;
+        else if (roll < 15)
+            forced = MutationClass::TrailingBytes;
+        else if (roll < 20)
+            forced = MutationClass::Coalesced;
     }
     if (forced == MutationClass::UnitId) {
         const std::uint8_t units[] = {0x00, 0xF7, 0xFF, 0x02};
@@ -337,8 +346,7 @@ void Generator::structured(Case& out, MutationClass forced) {
 }
 
 void Generator::mutate_recorded(Case& out) {
-    std::vector<std::uint8_t> pdu =
-        corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
+    std::vector<std::uint8_t> pdu = corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
     const auto& other = corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
     const std::uint32_t kind = rng_.below(6);
     const std::uint8_t interesting[] = {0x00, 0x01, 0x7F, 0x80, 0xFE, 0xFF};
@@ -360,8 +368,9 @@ void Generator::mutate_recorded(Case& out) {
         }
         case 3: {  // field splice: a 16-bit field copied at the same offset
             if (pdu.size() >= 3 && other.size() >= 3) {
-                const std::uint32_t at = 1 + rng_.below(static_cast<std::uint32_t>(
-                                                 std::min(pdu.size(), other.size()) - 2));
+                const std::uint32_t at =
+                    1 +
+                    rng_.below(static_cast<std::uint32_t>(std::min(pdu.size(), other.size()) - 2));
                 pdu[at] = other[at];
                 pdu[at + 1] = other[at + 1];
             }
@@ -454,7 +463,8 @@ void Generator::isolated(Case& out) {
         const std::size_t dripped = std::min<std::size_t>(f.size(), 12);
         for (std::size_t i = 0; i < dripped; ++i)
             out.steps.push_back(Step{Op::Send, 0, i ? 100u : 0u, 0, {f[i]}});
-        if (dripped < f.size()) out.steps.push_back(Step{Op::Send, 0, 100u, 0, {f.begin() + 12, f.end()}});
+        if (dripped < f.size())
+            out.steps.push_back(Step{Op::Send, 0, 100u, 0, {f.begin() + 12, f.end()}});
         return;
     }
     out.cls = MutationClass::Flood;
@@ -464,7 +474,8 @@ void Generator::isolated(Case& out) {
 
 void Generator::stateful(Case& out, bool cross) {
     out.cls = cross ? MutationClass::StatefulCross : MutationClass::StatefulSame;
-    const std::uint16_t base = static_cast<std::uint16_t>(kStateBase + rng_.below(kStateSpan - 130));
+    const std::uint16_t base =
+        static_cast<std::uint16_t>(kStateBase + rng_.below(kStateSpan - 130));
     const std::uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10, 0x10, 0x17, 0x16};
     const std::uint8_t fc = rng_.pick(writes);
     out.function = fc;
@@ -501,9 +512,11 @@ void Generator::stateful(Case& out, bool cross) {
         case 0x17: {
             qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwWriteRegisters));
             // Read back an overlapping range in the same request, then again separately.
-            const std::uint16_t rq = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwReadRegisters));
+            const std::uint16_t rq =
+                static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwReadRegisters));
             put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
-            put16(w, std::min<std::uint16_t>(rq, static_cast<std::uint16_t>(kStateBase + kStateSpan - base - qty)));
+            put16(w, std::min<std::uint16_t>(
+                         rq, static_cast<std::uint16_t>(kStateBase + kStateSpan - base - qty)));
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>(2 * qty));
@@ -535,7 +548,8 @@ void Generator::stateful(Case& out, bool cross) {
         // The mask write's result depends on the old value (written above): read it too.
         out.steps.back().bytes = frame(pdu5(0x03, base, 1), options_.unit);
     }
-    const std::uint16_t before = static_cast<std::uint16_t>(base - std::min<std::uint16_t>(3, base - kStateBase));
+    const std::uint16_t before =
+        static_cast<std::uint16_t>(base - std::min<std::uint16_t>(3, base - kStateBase));
     out.steps.push_back(Step{Op::Send, reader, 0, 0,
                              frame(pdu5(coils ? 0x01 : 0x03, before,
                                         static_cast<std::uint16_t>(std::min<int>(n + 3, max))),

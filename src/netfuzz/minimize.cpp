@@ -20,7 +20,10 @@ Case split_frames(const Case& c) {
         while (s.bytes.size() - off >= codec::limits::kMbapHeader) {
             const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
             if (size > s.bytes.size() - off || size <= 6u) break;
-            parts.push_back(Step{Op::Send, s.conn, parts.empty() ? s.delay_us : 0u, 0,
+            parts.push_back(Step{Op::Send,
+                                 s.conn,
+                                 parts.empty() ? s.delay_us : 0u,
+                                 0,
                                  {s.bytes.begin() + static_cast<std::ptrdiff_t>(off),
                                   s.bytes.begin() + static_cast<std::ptrdiff_t>(off + size)}});
             off += size;
@@ -51,7 +54,8 @@ Case minimize_case(const Case& original, const std::function<bool(const Case&)>&
         for (std::size_t start = 0; start < len && budget > 0; start += chunk) {
             Case candidate = best;
             candidate.steps.erase(candidate.steps.begin() + static_cast<std::ptrdiff_t>(start),
-                                  candidate.steps.begin() + static_cast<std::ptrdiff_t>(std::min(len, start + chunk)));
+                                  candidate.steps.begin() +
+                                      static_cast<std::ptrdiff_t>(std::min(len, start + chunk)));
             if (candidate.steps.empty()) continue;
             --budget;
             if (reproduces(candidate)) {

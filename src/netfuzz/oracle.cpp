@@ -110,14 +110,12 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         return make(Oracle::MalformedResponse,
                     fmt::format("response function {:02X} for request function {:02X}",
                                 pdu.empty() ? 0 : pdu[0], fc),
-                    fmt::format("function {:02X} or {:02X}", fc & 0x7F, (fc & 0x7F) | 0x80),
-                    seen);
+                    fmt::format("function {:02X} or {:02X}", fc & 0x7F, (fc & 0x7F) | 0x80), seen);
     }
     const auto owed = rq.status.exception;
     const std::string expected_text =
-        owed != ExceptionCode::None
-            ? exception_text(static_cast<std::uint8_t>(owed))
-            : fmt::format("a normal response to {}", request_text(rq));
+        owed != ExceptionCode::None ? exception_text(static_cast<std::uint8_t>(owed))
+                                    : fmt::format("a normal response to {}", request_text(rq));
     if (pdu[0] & codec::kExceptionBit) {
         if (pdu.size() != 2) {
             return make(Oracle::MalformedResponse,
@@ -170,8 +168,8 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     };
     const int want = codec::expected_read_byte_count(q);
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
-        return mismatch(fmt::format("{} data bytes for a request that needs {}", r.payload.size(),
-                                    want));
+        return mismatch(
+            fmt::format("{} data bytes for a request that needs {}", r.payload.size(), want));
     switch (fc) {
         case 0x05:
         case 0x06:
@@ -190,8 +188,7 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         case 0x08:
             if (r.sub_function != q.sub_function) return mismatch("sub-function not echoed");
             if (q.sub_function == 0x0000 &&
-                !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(),
-                            q.payload.end()))
+                !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
                 return mismatch("return-query-data did not echo the data");
             break;
         case 0x2B:
@@ -233,7 +230,9 @@ struct WriteRecord {
     const RequestInfo* self = nullptr;
 };
 
-bool in_state(std::uint32_t a) noexcept { return a >= kStateBase && a < kStateBase + kStateSpan; }
+bool in_state(std::uint32_t a) noexcept {
+    return a >= kStateBase && a < kStateBase + kStateSpan;
+}
 
 // The values a write request stores (nullopt where they depend on unknown state).
 std::optional<WriteRecord> write_of(const RequestInfo& rq) {
@@ -310,8 +309,7 @@ Verdict Shadow::check(std::vector<Event>& events) {
             std::size_t latest_index = 0;
             bool ambiguous = false;
             for (const WriteRecord& w : writes) {
-                if (w.coils != coils || a < w.address || a >= w.address + w.values.size())
-                    continue;
+                if (w.coils != coils || a < w.address || a >= w.address + w.values.size()) continue;
                 if (w.self == &rq) {  // FC17 writes before it reads
                     latest = &w;
                     latest_index = a - w.address;

@@ -38,8 +38,8 @@ struct Verdict {
 
 // What the fuzzer learned about the target before fuzzing.
 struct TargetProfile {
-    std::uint8_t unit = 1;                   // the unit id the target answers
-    std::vector<std::uint8_t> probe_pdu;     // a request the target answers normally
+    std::uint8_t unit = 1;                // the unit id the target answers
+    std::vector<std::uint8_t> probe_pdu;  // a request the target answers normally
     // Per function code: the target answers its canonical valid request with 01 (unsupported)
     // or answers normally although the codec does not know it (a vendor extension).
     std::array<bool, 256> unsupported{};

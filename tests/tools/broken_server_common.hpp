@@ -51,8 +51,8 @@ struct Faults {
     bool answer_any_protocol = false;  // answers frames with protocol id != 0
 };
 
-inline void handle_default(const std::uint8_t* adu, std::size_t size, std::vector<std::uint8_t>& reply,
-                           mbstorm::slave::DataModel& model) {
+inline void handle_default(const std::uint8_t* adu, std::size_t size,
+                           std::vector<std::uint8_t>& reply, mbstorm::slave::DataModel& model) {
     std::uint8_t out[mbstorm::slave::kMinOutput];
     const auto r = mbstorm::slave::handle_request(mbstorm::codec::Bytes(adu + 7, size - 7), model,
                                                   mbstorm::codec::MutableBytes(out, sizeof out));
@@ -64,7 +64,8 @@ inline void handle_default(const std::uint8_t* adu, std::size_t size, std::vecto
     reply.insert(reply.end(), out, out + r.size);
 }
 
-inline void exception_reply(const std::uint8_t* adu, std::uint8_t code, std::vector<std::uint8_t>& reply) {
+inline void exception_reply(const std::uint8_t* adu, std::uint8_t code,
+                            std::vector<std::uint8_t>& reply) {
     reply.assign(adu, adu + 7);
     reply[2] = reply[3] = 0;
     mbstorm::codec::store_be16(reply.data() + 4, 3);
@@ -126,7 +127,8 @@ inline int serve(int listen_fd, const Faults& f) {
     std::uint8_t buf[8192];
     for (;;) {
         fds.assign(1, pollfd{listen_fd, POLLIN, 0});
-        for (const Client& c : clients) fds.push_back(pollfd{c.fd, static_cast<short>(c.stopped ? 0 : POLLIN), 0});
+        for (const Client& c : clients)
+            fds.push_back(pollfd{c.fd, static_cast<short>(c.stopped ? 0 : POLLIN), 0});
         if (::poll(fds.data(), fds.size(), 1000) < 0 && errno != EINTR) return 1;
         if (fds[0].revents & POLLIN) {
             for (;;) {
@@ -153,8 +155,10 @@ inline int serve(int listen_fd, const Faults& f) {
                     open = consume(c, f, model);
                 }
             }
-            if (open) keep.push_back(std::move(c));
-            else ::close(c.fd);
+            if (open)
+                keep.push_back(std::move(c));
+            else
+                ::close(c.fd);
         }
         clients = std::move(keep);
     }
@@ -168,7 +172,8 @@ inline int listen_on(std::uint16_t port) {
     a.sin_family = AF_INET;
     a.sin_port = htons(port);
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd, 512) != 0) return -1;
+    if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd, 512) != 0)
+        return -1;
     return fd;
 }
 
@@ -190,9 +195,12 @@ inline int main_with(int argc, char** argv, const Faults& f) {
     bool respawn = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--port" && i + 1 < argc) port = std::atoi(argv[++i]);
-        else if (a == "--respawn") respawn = true;
-        else if (a == "--restart-delay-ms" && i + 1 < argc) restart_delay_ms = std::atoi(argv[++i]);
+        if (a == "--port" && i + 1 < argc)
+            port = std::atoi(argv[++i]);
+        else if (a == "--respawn")
+            respawn = true;
+        else if (a == "--restart-delay-ms" && i + 1 < argc)
+            restart_delay_ms = std::atoi(argv[++i]);
     }
     rlimit no_core{0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);  // planted crashes leave no core files

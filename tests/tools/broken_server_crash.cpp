@@ -3,8 +3,8 @@
 #include "broken_server_common.hpp"
 
 namespace {
-broken::Action crash_on_zero_coils(const std::uint8_t* adu, std::size_t size, std::vector<std::uint8_t>&,
-                                   mbstorm::slave::DataModel&) {
+broken::Action crash_on_zero_coils(const std::uint8_t* adu, std::size_t size,
+                                   std::vector<std::uint8_t>&, mbstorm::slave::DataModel&) {
     if (size >= 12 && adu[7] == 0x0F && adu[10] == 0 && adu[11] == 0) std::abort();
     return broken::Action::Default;
 }

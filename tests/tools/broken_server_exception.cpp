@@ -4,7 +4,8 @@
 #include "broken_server_common.hpp"
 
 namespace {
-broken::Action address_before_quantity(const std::uint8_t* adu, std::size_t size, std::vector<std::uint8_t>& reply,
+broken::Action address_before_quantity(const std::uint8_t* adu, std::size_t size,
+                                       std::vector<std::uint8_t>& reply,
                                        mbstorm::slave::DataModel&) {
     if (size == 12 && (adu[7] == 0x03 || adu[7] == 0x04)) {
         const std::uint32_t address = mbstorm::codec::load_be16(adu + 8);

@@ -4,8 +4,8 @@
 #include "broken_server_common.hpp"
 
 namespace {
-broken::Action hang_on_extended_object(const std::uint8_t* adu, std::size_t size, std::vector<std::uint8_t>&,
-                                       mbstorm::slave::DataModel&) {
+broken::Action hang_on_extended_object(const std::uint8_t* adu, std::size_t size,
+                                       std::vector<std::uint8_t>&, mbstorm::slave::DataModel&) {
     if (size >= 11 && adu[7] == 0x2B && adu[8] == 0x0E && adu[9] == 0x04 && adu[10] >= 0x80)
         return broken::Action::StopServing;
     return broken::Action::Default;

@@ -3,7 +3,8 @@
 #include "broken_server_common.hpp"
 
 namespace {
-broken::Action truncate_long_writes(const std::uint8_t* adu, std::size_t size, std::vector<std::uint8_t>& reply,
+broken::Action truncate_long_writes(const std::uint8_t* adu, std::size_t size,
+                                    std::vector<std::uint8_t>& reply,
                                     mbstorm::slave::DataModel& model) {
     if (size < 13 || adu[7] != 0x10) return broken::Action::Default;
     const std::uint16_t address = mbstorm::codec::load_be16(adu + 8);

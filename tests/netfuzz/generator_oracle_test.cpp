@@ -1,0 +1,192 @@
+// Unit tests of the generator, the oracles, minimisation and the finding format.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+
+#include "codec/pdu.hpp"
+#include "netfuzz/finding.hpp"
+#include "netfuzz/generator.hpp"
+#include "netfuzz/minimize.hpp"
+#include "netfuzz/oracle.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+std::vector<std::uint8_t> adu(std::uint16_t tid, const std::vector<std::uint8_t>& pdu,
+                              std::uint8_t unit = 1, std::uint16_t pid = 0) {
+    std::vector<std::uint8_t> f(7 + pdu.size());
+    codec::store_be16(f.data(), tid);
+    codec::store_be16(f.data() + 2, pid);
+    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(pdu.size() + 1));
+    f[6] = unit;
+    for (std::size_t i = 0; i < pdu.size(); ++i) f[7 + i] = pdu[i];
+    return f;
+}
+
+TargetProfile profile() {
+    TargetProfile p;
+    p.probe_pdu = {0x03, 0, 0, 0, 1};
+    return p;
+}
+
+TEST(Generator, SameSeedSameBytes) {
+    Generator a(GeneratorOptions{42, 1, false, 100}), b(GeneratorOptions{42, 1, false, 100});
+    Case x, y;
+    for (int i = 0; i < 5000; ++i) {
+        a.next(x);
+        b.next(y);
+        ASSERT_EQ(x.steps.size(), y.steps.size());
+        for (std::size_t k = 0; k < x.steps.size(); ++k)
+            ASSERT_EQ(x.steps[k].bytes, y.steps[k].bytes);
+    }
+}
+
+TEST(Generator, StructuredSeedsCoverEveryFunctionCodeAndLimit) {
+    const auto seeds = structured_pdus();
+    std::set<std::uint8_t> fcs;
+    bool fc0f_qty0 = false, fc03_qty126 = false, fc2b_code4_ext = false;
+    for (const auto& s : seeds) {
+        fcs.insert(s[0]);
+        if (s.size() >= 5 && s[0] == 0x0F && s[3] == 0 && s[4] == 0) fc0f_qty0 = true;
+        if (s.size() == 5 && s[0] == 0x03 && s[3] == 0 && s[4] == 126) fc03_qty126 = true;
+        if (s.size() == 4 && s[0] == 0x2B && s[2] == 4 && s[3] >= 0x80) fc2b_code4_ext = true;
+    }
+    EXPECT_EQ(fcs.size(), 256u);
+    EXPECT_TRUE(fc0f_qty0);
+    EXPECT_TRUE(fc03_qty126);
+    EXPECT_TRUE(fc2b_code4_ext);
+}
+
+TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
+    Generator g(GeneratorOptions{1, 1, false, 200});
+    std::set<MutationClass> classes;
+    Case c;
+    for (int i = 0; i < 40000; ++i) {
+        g.next(c);
+        classes.insert(c.cls);
+        if (c.cls == MutationClass::StatefulSame || c.cls == MutationClass::StatefulCross) continue;
+        for (const Step& s : c.steps) {
+            if (s.bytes.size() < 12 || c.cls == MutationClass::Coalesced) continue;
+            const std::uint8_t fc = s.bytes[7];
+            if (fc != 0x06 && fc != 0x05) continue;
+            const std::uint16_t a = codec::load_be16(s.bytes.data() + 8);
+            EXPECT_FALSE(a >= kStateBase && a < kStateBase + kStateSpan) << hex(s.bytes);
+        }
+    }
+    EXPECT_EQ(classes.size(), static_cast<std::size_t>(MutationClass::Count) - 1);  // all but naive
+}
+
+TEST(Oracle, WrongExceptionCodeIsASpecDeviation) {
+    // FC03 quantity 0 at 0xFFFF: 03 is owed (quantity before address, v1.1b3).
+    const auto req = adu(1, {0x03, 0xFF, 0xFF, 0x00, 0x00});
+    RequestInfo rq;
+    describe_request(req, profile(), rq);
+    EXPECT_EQ(rq.status.exception, codec::ExceptionCode::IllegalDataValue);
+    EXPECT_EQ(judge_response(rq, adu(1, {0x83, 0x02}), profile()).oracle, Oracle::SpecDeviation);
+    EXPECT_FALSE(judge_response(rq, adu(1, {0x83, 0x03}), profile()));
+    EXPECT_FALSE(judge_response(rq, adu(1, {0x83, 0x06}), profile()));  // busy is always allowed
+}
+
+TEST(Oracle, NormalAnswerChecks) {
+    const auto req = adu(7, {0x03, 0x00, 0x10, 0x00, 0x02});
+    RequestInfo rq;
+    describe_request(req, profile(), rq);
+    EXPECT_FALSE(judge_response(rq, adu(7, {0x03, 0x04, 1, 2, 3, 4}), profile()));
+    EXPECT_EQ(judge_response(rq, adu(7, {0x03, 0x02, 1, 2}), profile()).oracle,
+              Oracle::MalformedResponse);
+    EXPECT_EQ(judge_response(rq, adu(7, {0x04, 0x04, 1, 2, 3, 4}), profile()).oracle,
+              Oracle::MalformedResponse);
+    EXPECT_EQ(judge_response(rq, adu(7, {0x03, 0x04, 1, 2, 3, 4}, 9), profile()).oracle,
+              Oracle::MalformedResponse);
+    EXPECT_FALSE(judge_response(rq, adu(7, {0x83, 0x02}), profile()));  // a smaller table is fine
+    EXPECT_EQ(judge_response(rq, adu(7, {0x83, 0x03}), profile()).oracle, Oracle::SpecDeviation);
+}
+
+TEST(Oracle, AnswerToNonZeroProtocolIdIsADeviation) {
+    const auto req = adu(3, {0x03, 0, 0, 0, 1}, 1, 0x0001);
+    RequestInfo rq;
+    describe_request(req, profile(), rq);
+    EXPECT_EQ(rq.expect, Expect::MustBeSilent);
+    EXPECT_EQ(judge_response(rq, adu(3, {0x03, 0x02, 0, 0}), profile()).oracle,
+              Oracle::SpecDeviation);
+}
+
+TEST(Oracle, ShadowFindsReadAfterWriteMismatch) {
+    const auto w = adu(1, {0x06, 0x60, 0x10, 0x12, 0x34});
+    const auto r = adu(2, {0x03, 0x60, 0x10, 0x00, 0x01});
+    RequestInfo wi, ri;
+    describe_request(w, profile(), wi);
+    describe_request(r, profile(), ri);
+    const std::vector<std::uint8_t> wrsp = {0x06, 0x60, 0x10, 0x12, 0x34};
+    const std::vector<std::uint8_t> good = {0x03, 0x02, 0x12, 0x34}, bad = {0x03, 0x02, 0x00, 0x00};
+    std::vector<Shadow::Event> ev = {{&wi, 10, 20, wrsp}, {&ri, 30, 40, good}};
+    EXPECT_FALSE(Shadow::check(ev));
+    ev[1].response_pdu = bad;
+    EXPECT_EQ(Shadow::check(ev).oracle, Oracle::SpecDeviation);
+    // A read sent before the write was acknowledged proves nothing.
+    ev[1].sent_ns = 15;
+    EXPECT_FALSE(Shadow::check(ev));
+}
+
+TEST(Oracle, RelocateKeepsWritesOutOfTheStatefulRange) {
+    auto f = adu(1, {0x10, 0x60, 0x00, 0x00, 0x01, 0x02, 0x00, 0x00});
+    relocate_writes(f.data(), f.size());
+    const std::uint16_t a = codec::load_be16(f.data() + 8);
+    EXPECT_TRUE(a < kStateBase || a >= kStateBase + kStateSpan);
+}
+
+TEST(Minimize, ShrinksCoalescedFramesToTheCulprit) {
+    Case c;
+    c.cls = MutationClass::Coalesced;
+    std::vector<std::uint8_t> all;
+    for (std::uint16_t t = 0; t < 10; ++t) {
+        const auto f = adu(t, {static_cast<std::uint8_t>(t == 6 ? 0x0F : 0x03), 0, 0, 0, 1});
+        all.insert(all.end(), f.begin(), f.end());
+    }
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, all});
+    int runs = 0;
+    const Case small = minimize_case(
+        c,
+        [&](const Case& k) {
+            ++runs;
+            for (const Step& s : k.steps)
+                if (s.bytes.size() > 7 && s.bytes[7] == 0x0F) return true;
+            return false;
+        },
+        100);
+    ASSERT_EQ(small.steps.size(), 1u);
+    EXPECT_EQ(small.steps[0].bytes[7], 0x0F);
+    EXPECT_LT(runs, 40);
+}
+
+TEST(Finding, SaveLoadRoundTrip) {
+    Finding f;
+    f.verdict = Verdict{Oracle::Hang, "no answer", "an answer", "silence"};
+    f.fuzz_case.cls = MutationClass::Split;
+    f.fuzz_case.function = 0x03;
+    f.fuzz_case.steps = {Step{Op::Send, 0, 0, 0, {1, 2, 3}}, Step{Op::Send, 0, 200, 0, {4, 5}},
+                         Step{Op::ShutdownWrite, 1, 0, 0, {}}};
+    f.profile = profile();
+    f.profile.unsupported[0x14] = true;
+    f.trace = {TraceEvent{5, 0, TraceKind::Send, {1, 2, 3}, ""}};
+    const auto dir =
+        (std::filesystem::temp_directory_path() / "mbstorm-finding-roundtrip").string();
+    std::string err;
+    ASSERT_TRUE(save_finding(f, dir, err)) << err;
+    Finding g;
+    ASSERT_TRUE(load_finding(dir, g, err)) << err;
+    EXPECT_EQ(g.oracle(), Oracle::Hang);
+    EXPECT_EQ(g.fuzz_case.cls, MutationClass::Split);
+    ASSERT_EQ(g.fuzz_case.steps.size(), 3u);
+    EXPECT_EQ(g.fuzz_case.steps[1].bytes, (std::vector<std::uint8_t>{4, 5}));
+    EXPECT_EQ(g.fuzz_case.steps[1].delay_us, 200u);
+    EXPECT_EQ(g.fuzz_case.steps[2].op, Op::ShutdownWrite);
+    EXPECT_TRUE(g.profile.unsupported[0x14]);
+    EXPECT_FALSE(g.profile.unsupported[0x13]);
+    EXPECT_EQ(g.profile.probe_pdu, f.profile.probe_pdu);
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace mbstorm::netfuzz
