@@ -1,14 +1,8 @@
 // `mbstorm run`: a load test. With no --target it starts the built-in reference slave on an
 // ephemeral loopback port so that it works out of the box.
 #include <fmt/format.h>
-#include <signal.h>
-#include <unistd.h>
-
-#include <atomic>
 #include <cstdio>
-#include <memory>
 #include <string>
-#include <thread>
 
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
@@ -16,21 +10,11 @@
 #include "cli/run_scenario.hpp"
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
-#include "load/engine.hpp"
 #include "load/plan.hpp"
-#include "server/server.hpp"
+#include "scenario/scenario.hpp"
 
 namespace mbstorm::cli {
 namespace {
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void on_stop_signal(int) {
-    g_stop.store(true, std::memory_order_relaxed);
-    // A second Ctrl-C ends the process at once.
-    signal(SIGINT, SIG_DFL);
-    signal(SIGTERM, SIG_DFL);
-}
 
 struct RunOptions {
     load::Plan plan;
@@ -126,71 +110,26 @@ int run_load_test(RunOptions& o) {
     if (o.print_scenario) return print_flag_scenario(o.plan, o.target);
     if (!o.junit.empty()) return fail("--junit needs a scenario FILE (thresholds are set there)");
     auto& plan = o.plan;
-
-    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    std::unique_ptr<server::Server> embedded;
-    if (o.target.empty()) {
-        // Split the cores between the engine and the slave unless told otherwise.
-        server::ServerConfig sc;
-        sc.listen = "127.0.0.1:0";
-        sc.threads = o.slave_threads ? o.slave_threads : std::max(1u, cores / 2);
-        if (plan.threads == 0) plan.threads = std::max(1u, cores - sc.threads);
-        sc.max_connections = 0;
-        embedded = std::make_unique<server::Server>(sc);
-        std::string error;
-        if (!embedded->start(&error)) return fail("cannot start the embedded reference slave: " + error);
-        plan.host = "127.0.0.1";
-        plan.port = embedded->port();
-        fmt::print("mbstorm run: no --target given: load-testing the embedded reference slave on {} "
-                   "({} thread{})\n", embedded->endpoint(), embedded->threads(),
-                   embedded->threads() == 1 ? "" : "s");
-    } else {
-        auto colon = o.target.rfind(':');
-        if (colon == std::string::npos || colon + 1 == o.target.size())
-            return fail(fmt::format("--target '{}' needs a port: HOST:PORT or [IPv6]:PORT", o.target));
-        std::string host = o.target.substr(0, colon);
-        if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
-        try {
-            std::size_t used = 0;
-            long port = std::stol(o.target.substr(colon + 1), &used);
-            if (used != o.target.size() - colon - 1 || port < 1 || port > 65535) throw std::out_of_range("port");
-            plan.port = static_cast<std::uint16_t>(port);
-        } catch (...) {
-            return fail(fmt::format("--target '{}': port must be 1..65535", o.target));
-        }
-        plan.host = host;
-    }
-
     if (auto problems = load::validate_plan(plan); !problems.empty()) return fail(problems.front());
 
-    const auto threads = load::effective_threads(plan);
-    fmt::print("mbstorm run: {} connection{} x depth {} on {} thread{}, {} {}, {}\n", plan.connections,
-               plan.connections == 1 ? "" : "s", plan.depth, threads, threads == 1 ? "" : "s",
-               plan.operations[0].name,
+    // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
+    // there is no target, and reports the same way.
+    scenario::Scenario s = scenario::scenario_from_plan(plan, o.target);
+    s.name.clear();
+    s.slave_threads = o.slave_threads;
+    fmt::print("mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
+               o.target.empty() ? std::string("the embedded reference slave (no --target given)") : o.target,
+               plan.connections,
+               plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
                plan.model == load::LoadModel::OpenLoop ? fmt::format("open loop at {:.0f} tx/s", plan.rate)
                                                        : std::string("closed loop"),
                plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
                                      : fmt::format("for {} transactions", plan.transactions));
     std::fflush(stdout);
-
-    g_stop = false;
-    signal(SIGINT, on_stop_signal);
-    signal(SIGTERM, on_stop_signal);
-    LiveProgress progress(stderr, o.quiet);
-    load::EngineOptions eo;
-    eo.stop = &g_stop;
-    eo.tool_version = "mbstorm 0.1.0";
-    eo.on_progress = [&progress](const load::ProgressSnapshot& s) { progress.update(s); };
-    load::LoadResult result = load::run_load(plan, eo);
-    progress.finish();
-    signal(SIGINT, SIG_DFL);
-    signal(SIGTERM, SIG_DFL);
-    if (embedded) {
-        result.run.metadata.notes.push_back(fmt::format("target: embedded reference slave on {}", embedded->endpoint()));
-        embedded->stop();
-    }
-    if (g_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
-    return report_run(result, o.outputs);
+    ScenarioRunRequest request;
+    request.quiet = o.quiet;
+    request.outputs = o.outputs;
+    return run_resolved_scenario(s, request);
 }
 
 // Flags given next to a scenario FILE override its values; the single-operation flags have no

@@ -36,33 +36,7 @@ int print_flag_scenario(const load::Plan& plan, const std::string& target) {
     return kExitOk;
 }
 
-int run_scenario_file(const ScenarioRunRequest& request) {
-    scenario::Scenario s;
-    try {
-        s = scenario::load_scenario_file(request.file);
-    } catch (const scenario::ScenarioError& e) {
-        return usage_error(e.what());
-    }
-    if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
-        for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
-        return kExitUsage;
-    }
-    if (request.print) {
-        fmt::print("{}", scenario::format_scenario(s));
-        return kExitOk;
-    }
-
-    const auto& plan = s.plan;
-    fmt::print(
-        "mbstorm run: scenario '{}' ({}): {} operation{}, {} connection{} x depth {}, {}, "
-        "{}{}\n",
-        s.name, request.file, plan.operations.size(), plan.operations.size() == 1 ? "" : "s",
-        plan.connections, plan.connections == 1 ? "" : "s", plan.depth,
-        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
-        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
-        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
-    std::fflush(stdout);
-
+int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
     g_scenario_stop = false;
     signal(SIGINT, on_scenario_stop_signal);
     signal(SIGTERM, on_scenario_stop_signal);
@@ -102,6 +76,36 @@ int run_scenario_file(const ScenarioRunRequest& request) {
         code = kExitFailed;
     }
     return code;
+}
+
+int run_scenario_file(const ScenarioRunRequest& request) {
+    scenario::Scenario s;
+    try {
+        s = scenario::load_scenario_file(request.file);
+    } catch (const scenario::ScenarioError& e) {
+        return usage_error(e.what());
+    }
+    if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
+        for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
+        return kExitUsage;
+    }
+    if (request.print) {
+        fmt::print("{}", scenario::format_scenario(s));
+        return kExitOk;
+    }
+
+    const auto& plan = s.plan;
+    fmt::print(
+        "mbstorm run: scenario '{}' ({}): {} operation{}, {} connection{} x depth {}, {}, "
+        "{}{}\n",
+        s.name, request.file, plan.operations.size(), plan.operations.size() == 1 ? "" : "s",
+        plan.connections, plan.connections == 1 ? "" : "s", plan.depth,
+        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
+        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
+        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
+    std::fflush(stdout);
+
+    return run_resolved_scenario(s, request);
 }
 
 }  // namespace mbstorm::cli

@@ -21,6 +21,10 @@ struct ScenarioRunRequest {
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.
 int run_scenario_file(const ScenarioRunRequest& request);
 
+// Runs a scenario already loaded (or built from flags): live progress, reports, JUnit and
+// the exit code from the thresholds.
+int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request);
+
 // --print-scenario for a flag-only run: the plan the flags describe, as a scenario file.
 int print_flag_scenario(const load::Plan& plan, const std::string& target);
 
