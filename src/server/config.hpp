@@ -67,6 +67,8 @@ struct ServerConfig {
     unsigned ring_entries = 4096;
     unsigned buf_ring_count = 2048;  // per thread, power of two
     unsigned buf_size = 4096;
+    // Output blocks (16 KiB each) allocated per thread at start; more are added on demand.
+    unsigned prealloc_output_blocks = 32;
 };
 
 }  // namespace mbstorm::server

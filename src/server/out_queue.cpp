@@ -20,6 +20,15 @@ OutBlock* BlockPool::get() {
     return b;
 }
 
+void BlockPool::prewarm(std::size_t count) {
+    all_.reserve(all_.size() + count);
+    for (std::size_t i = 0; i < count; ++i) {
+        auto* b = new OutBlock;
+        all_.push_back(b);
+        put(b);
+    }
+}
+
 void BlockPool::put(OutBlock* b) noexcept {
     b->next = free_;
     free_ = b;

@@ -21,6 +21,9 @@ class BlockPool {
   public:
     BlockPool() = default;
     ~BlockPool();
+    // Allocates `count` blocks up front, so that a steady load within that many busy
+    // output blocks per thread never reaches the heap.
+    void prewarm(std::size_t count);
     BlockPool(const BlockPool&) = delete;
     BlockPool& operator=(const BlockPool&) = delete;
 

@@ -66,6 +66,7 @@ int Worker::setup() noexcept {
         dirty_.reserve(expect);
         rearm_.reserve(expect);
         held_.reserve(expect);
+        pool_.prewarm(config_.prealloc_output_blocks);
         if (use_buf_ring_) {
             stash_next_.assign(config_.buf_ring_count, kNoBuffer);
             stash_size_.assign(config_.buf_ring_count, 0);
