@@ -14,33 +14,8 @@ namespace {
 
 namespace lim = codec::limits;
 
-struct QuantityRange {
-    std::uint16_t min = 0;
-    std::uint16_t max = 0;  // 0: the function takes no quantity
-};
-
-QuantityRange quantity_range(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-            return {1, lim::kMaxReadBits};
-        case 0x03:
-        case 0x04:
-            return {1, lim::kMaxReadRegisters};
-        case 0x0F:
-            return {1, lim::kMaxWriteCoils};
-        case 0x10:
-            return {1, lim::kMaxWriteRegisters};
-        case 0x17:
-            return {1, lim::kMaxRwReadRegisters};
-        case 0x05:
-        case 0x06:
-        case 0x16:
-            return {1, 1};
-        default:
-            return {};
-    }
-}
+using lim::quantity_range;
+using lim::QuantityRange;
 
 bool uses_address(std::uint8_t fc) noexcept {
     switch (fc) {

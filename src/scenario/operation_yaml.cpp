@@ -262,28 +262,7 @@ std::optional<codec::Table> function_table(std::uint8_t fc) noexcept {
     }
 }
 
-QuantityLimits quantity_limits(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-            return {1, lim::kMaxReadBits};
-        case 0x03:
-        case 0x04:
-            return {1, lim::kMaxReadRegisters};
-        case 0x0F:
-            return {1, lim::kMaxWriteCoils};
-        case 0x10:
-            return {1, lim::kMaxWriteRegisters};
-        case 0x17:
-            return {1, lim::kMaxRwReadRegisters};
-        case 0x05:
-        case 0x06:
-        case 0x16:
-            return {1, 1};
-        default:
-            return {};
-    }
-}
+QuantityLimits quantity_limits(std::uint8_t fc) noexcept { return codec::limits::quantity_range(fc); }
 
 bool takes_values(std::uint8_t fc) noexcept {
     switch (fc) {

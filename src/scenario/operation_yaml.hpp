@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/limits.hpp"
 #include "codec/values.hpp"
 #include "load/plan.hpp"
 #include "scenario/expect.hpp"
@@ -27,11 +28,8 @@ ParsedOperation parse_operation(const YamlReader& reader, const YAML::Node& node
 
 // The table a function's addresses refer to; nullopt when it takes no address.
 std::optional<codec::Table> function_table(std::uint8_t function) noexcept;
-// Quantity range of the function (max 0: the function takes no quantity).
-struct QuantityLimits {
-    std::uint16_t min = 0;
-    std::uint16_t max = 0;
-};
+// Quantity range of the function (max 0: the function takes no quantity); the codec owns it.
+using QuantityLimits = codec::limits::QuantityRange;
 QuantityLimits quantity_limits(std::uint8_t function) noexcept;
 // Functions whose requests carry data the `values` generator fills.
 bool takes_values(std::uint8_t function) noexcept;
