@@ -41,6 +41,7 @@ struct Connection {
     bool dirty = false;     // in the worker's flush list
     bool in_ready = false;  // open loop: in the worker's ready queue
     bool ever_opened = false;
+    bool connect_queued = false;  // in the worker's connect heap
 
     std::int64_t backoff_ns = 0;
     std::int64_t connect_started_ns = 0;

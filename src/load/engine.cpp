@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "load/preflight.hpp"
+#include "load/stage_schedule.hpp"
 #include "load/worker.hpp"
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
@@ -47,6 +48,24 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.connections.failed += w->connection_stats.failed;
         run.connections.reconnects += w->connection_stats.reconnects;
         run.connections.closed_by_peer += w->connection_stats.closed_by_peer;
+        for (std::size_t i = 0; i < w->stages.size(); ++i) {
+            stats::StageResult& into = run.stages[i];
+            const stats::StageResult& from = w->stages[i];
+            into.latency.add(from.latency);
+            into.counters.add(from.counters);
+            if (into.operations.empty() && !from.operations.empty()) {
+                for (const auto& op : from.operations) {
+                    stats::OperationResult empty;
+                    empty.name = op.name;
+                    empty.function_code = op.function_code;
+                    into.operations.push_back(std::move(empty));
+                }
+            }
+            for (std::size_t op = 0; op < from.operations.size(); ++op) {
+                into.operations[op].latency.add(from.operations[op].latency);
+                into.operations[op].counters.add(from.operations[op].counters);
+            }
+        }
         result.pending_at_end += w->pending_at_end;
         result.late_responses += w->late_responses;
         result.framing_errors += w->framing_errors;
@@ -80,16 +99,18 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         return result;
     }
     const std::uint32_t threads = effective_threads(plan);
-    if (std::string why = check_connection_capacity(plan.connections, threads); !why.empty()) {
+    const StageSchedule schedule(plan);
+    const std::uint32_t capacity = schedule.peak_connections();
+    if (std::string why = check_connection_capacity(capacity, threads); !why.empty()) {
         result.error = std::move(why);
         return result;
     }
 
     const std::int64_t interval_ns = std::max<std::int64_t>(options.progress_interval_ns, 1000);
+    const std::int64_t run_ns =
+        schedule.empty() ? plan.duration.count() : plan.warmup.count() + schedule.total_ns();
     const std::size_t max_intervals =
-        plan.duration.count() > 0
-            ? static_cast<std::size_t>(plan.duration.count() / interval_ns) + 16
-            : 86400;
+        run_ns > 0 ? static_cast<std::size_t>(run_ns / interval_ns) + 16 : 86400;
     stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads,
                                      max_intervals);
 
@@ -98,8 +119,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const auto wall_start = std::chrono::system_clock::now();
     const std::int64_t start_ns = net::now_ns();
     const std::int64_t measure_start_ns = start_ns + plan.warmup.count();
-    const std::int64_t end_ns =
-        plan.duration.count() > 0 ? start_ns + plan.duration.count() : INT64_MAX;
+    const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
 
     std::vector<std::unique_ptr<Worker>> workers;
     workers.reserve(threads);
@@ -109,8 +129,9 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         setup.endpoint = endpoint;
         setup.target = endpoint.to_string();
         setup.index = i;
-        setup.connections = static_cast<std::uint32_t>(share(plan.connections, threads, i));
-        const double fraction = static_cast<double>(setup.connections) / plan.connections;
+        setup.threads = threads;
+        setup.connections = static_cast<std::uint32_t>(share(capacity, threads, i));
+        const double fraction = static_cast<double>(setup.connections) / capacity;
         setup.quota = plan.transactions == 0
                           ? 0
                           : std::max<std::uint64_t>(share(plan.transactions, threads, i), 1);
@@ -124,6 +145,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         setup.any_connected = &any_connected;
         setup.verifier = options.verifier;
         setup.timeline = &timeline;
+        setup.schedule = schedule.empty() ? nullptr : &schedule;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
 
@@ -140,8 +162,22 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     // Progress: report each interval once every worker has moved past it.
     std::uint64_t reported = UINT64_MAX;
     std::uint64_t total_transactions = 0;
+    std::vector<std::uint32_t> open_by_interval;  // open connections seen during each interval
+    open_by_interval.reserve(max_intervals);
+    auto open_now = [&workers] {
+        std::uint32_t open = 0;
+        for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);
+        return open;
+    };
     while (finished.load() < threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        if (const std::int64_t now = net::now_ns(); now >= measure_start_ns) {
+            const auto index = static_cast<std::size_t>((now - measure_start_ns) / interval_ns);
+            if (index < max_intervals) {
+                if (open_by_interval.size() <= index) open_by_interval.resize(index + 1, 0);
+                open_by_interval[index] = std::max(open_by_interval[index], open_now());
+            }
+        }
         if (!options.on_progress) continue;
         const auto latest = timeline.latest();
         if (!latest || latest->index == reported) continue;
@@ -160,12 +196,21 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         snap.max_ns = latest->max_ns;
         snap.errors = latest->errors;
         snap.total_transactions = total_transactions;
-        for (auto& w : workers) snap.open_connections += w->open_connections.load();
+        snap.open_connections = open_now();
         options.on_progress(snap);
     }
     for (auto& t : pool) t.join();
     timeline.finish();
 
+    if (!schedule.empty()) {
+        result.run.stages.resize(schedule.stages());
+        for (std::size_t i = 0; i < schedule.stages(); ++i) {
+            stats::StageResult& stage = result.run.stages[i];
+            stage.index = static_cast<std::uint32_t>(i + 1);
+            stage.name =
+                plan.stages[i].name.empty() ? fmt::format("stage {}", i + 1) : plan.stages[i].name;
+        }
+    }
     merge_results(plan, workers, result);
     std::int64_t finished_ns = measure_start_ns;
     for (auto& w : workers) {
@@ -178,12 +223,13 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     meta.tool_version = options.tool_version;
     meta.target = endpoint.to_string();
     meta.threads = threads;
-    meta.connections = plan.connections;
+    meta.connections = capacity;
     meta.depth = plan.depth;
     meta.model =
         plan.model == LoadModel::OpenLoop ? stats::LoadModel::Open : stats::LoadModel::Closed;
-    meta.rate_per_second = plan.model == LoadModel::OpenLoop ? plan.rate : 0.0;
-    meta.requested_duration_ns = static_cast<std::uint64_t>(plan.duration.count());
+    meta.rate_per_second = plan.model == LoadModel::OpenLoop ? schedule.peak_rate() : 0.0;
+    meta.requested_duration_ns =
+        static_cast<std::uint64_t>(schedule.empty() ? plan.duration.count() : schedule.total_ns());
     meta.measured_duration_ns = static_cast<std::uint64_t>(finished_ns - measure_start_ns);
     meta.warmup_ns = static_cast<std::uint64_t>(plan.warmup.count());
     meta.start_time = wall_start;
@@ -203,6 +249,27 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     if (!series.empty() && series.back().start_offset_ns < meta.measured_duration_ns &&
         series.back().start_offset_ns + series.back().duration_ns > meta.measured_duration_ns)
         series.back().duration_ns = meta.measured_duration_ns - series.back().start_offset_ns;
+    for (auto& iv : series) {
+        if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
+        if (plan.model != LoadModel::OpenLoop) continue;
+        const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
+        iv.target_rate = schedule.at(mid).rate;  // the plan's rate when there are no stages
+    }
+    for (std::size_t i = 0; i < result.run.stages.size(); ++i) {
+        // A run stopped early ends its stages where measuring ended.
+        auto clip = [&](std::int64_t t) {
+            return std::min(static_cast<std::uint64_t>(t), meta.measured_duration_ns);
+        };
+        result.run.stages[i].start_offset_ns = clip(schedule.stage_start_ns(i));
+        result.run.stages[i].end_offset_ns = clip(schedule.stage_end_ns(i));
+    }
+    // The last stage ends where measuring ended (a run stops a hair after its schedule).
+    if (!result.run.stages.empty()) result.run.stages.back().end_offset_ns = meta.measured_duration_ns;
+    if (!schedule.empty()) {
+        meta.notes.push_back(fmt::format(
+            "stages: {} stage{}, rate and connections changed live (connections stay open)",
+            schedule.stages(), schedule.stages() == 1 ? "" : "s"));
+    }
     if (!verdict.write_operations.empty()) {
         result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
                                               fmt::join(verdict.write_operations, ", ")));

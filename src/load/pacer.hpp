@@ -14,7 +14,8 @@ namespace mbstorm::load {
 class Pacer {
   public:
     Pacer() = default;
-    // rate: transactions per second for this thread (> 0).
+    // rate: transactions per second for this thread (<= 0: paused). The first send is due at
+    // `start_ns`.
     Pacer(double rate, Arrival arrival, std::uint64_t seed, std::int64_t start_ns) noexcept;
 
     // Intended send time of the next transaction.
@@ -25,11 +26,16 @@ class Pacer {
     void advance() noexcept;
     std::uint64_t scheduled() const noexcept { return count_; }
 
-    // Changes the rate from `now_ns` on (stages). Keeps the schedule continuous.
+    // Changes the rate from `now_ns` on (stages). The next send keeps its slot unless the new
+    // rate brings it closer (a send already overdue stays overdue: no backlog is forgiven).
+    // A rate <= 0 pauses the schedule until a positive rate is set.
     void set_rate(double rate, std::int64_t now_ns) noexcept;
+    bool paused() const noexcept { return rate_ <= 0; }
     double rate() const noexcept { return rate_; }
 
   private:
+    std::int64_t gap_ns() noexcept;  // one (even or exponential) gap at the current rate
+
     double rate_ = 1;
     double period_ns_ = 1e9;
     Arrival arrival_ = Arrival::Even;

@@ -129,10 +129,16 @@ std::uint16_t last_start_address(const Operation& op) noexcept {
     return static_cast<std::uint16_t>(last + 1 - span);
 }
 
+std::uint32_t peak_connections(const Plan& plan) noexcept {
+    std::uint32_t peak = plan.connections;
+    for (const Stage& s : plan.stages) peak = std::max(peak, s.target_connections.value_or(0));
+    return peak;
+}
+
 std::uint32_t effective_threads(const Plan& plan) noexcept {
     std::uint32_t threads = plan.threads;
     if (threads == 0) threads = std::max(1U, std::thread::hardware_concurrency());
-    return std::max(1U, std::min(threads, plan.connections));
+    return std::max(1U, std::min(threads, peak_connections(plan)));
 }
 
 std::vector<std::string> validate_plan(const Plan& plan) {
@@ -158,7 +164,16 @@ std::vector<std::string> validate_plan(const Plan& plan) {
         fail(fmt::format("threads: {} is out of range (valid 0..{}, 0 = one per core)",
                          plan.threads, kMaxThreads));
     }
-    if (plan.model == LoadModel::OpenLoop && !(plan.rate > 0 && plan.rate <= kMaxRate)) {
+    const bool any_stage_rate =
+        std::any_of(plan.stages.begin(), plan.stages.end(),
+                    [](const Stage& s) { return s.target_rate && *s.target_rate > 0; });
+    if (plan.model == LoadModel::OpenLoop && any_stage_rate) {
+        // Staged: the start rate may be 0 (a ramp up from nothing).
+        if (!(plan.rate >= 0 && plan.rate <= kMaxRate)) {
+            fail(fmt::format("rate: {} is out of range (valid 0..{:g} transactions/s)", plan.rate,
+                             kMaxRate));
+        }
+    } else if (plan.model == LoadModel::OpenLoop && !(plan.rate > 0 && plan.rate <= kMaxRate)) {
         fail(
             fmt::format("rate: {} is out of range for an open-loop run (valid > 0 and <= {:g} "
                         "transactions/s)",
@@ -193,7 +208,8 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     }
     if (plan.warmup < Duration::zero()) {
         fail(fmt::format("warmup: {} is negative (valid >= 0s)", seconds_text(plan.warmup)));
-    } else if (plan.duration > Duration::zero() && plan.warmup >= plan.duration) {
+    } else if (plan.stages.empty() && plan.duration > Duration::zero() &&
+               plan.warmup >= plan.duration) {
         fail(
             fmt::format("warmup: {} leaves nothing to measure (valid 0s..{} exclusive, the "
                         "duration)",
@@ -202,20 +218,24 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     if (plan.late_threshold < Duration::zero()) {
         fail("late_threshold: negative (valid >= 0s)");
     }
+    if (!plan.stages.empty() && plan.transactions != 0) {
+        fail("transactions: not supported with stages (stages end by time)");
+    }
     for (std::size_t i = 0; i < plan.stages.size(); ++i) {
         const Stage& s = plan.stages[i];
         if (s.duration <= Duration::zero()) {
             fail(fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
                              seconds_text(s.duration)));
         }
-        if (plan.model == LoadModel::OpenLoop) {
-            if (!s.target_rate || !(*s.target_rate >= 0 && *s.target_rate <= kMaxRate)) {
-                fail(fmt::format("stages[{}]: an open-loop stage needs target_rate in 0..{:g}", i,
-                                 kMaxRate));
-            }
-        } else if (!s.target_connections || *s.target_connections > kMaxConnections) {
-            fail(fmt::format("stages[{}]: a closed-loop stage needs target_connections in 0..{}", i,
-                             kMaxConnections));
+        if (s.target_rate && plan.model != LoadModel::OpenLoop) {
+            fail(fmt::format("stages[{}]: a target rate needs an open-loop run", i));
+        } else if (s.target_rate && !(*s.target_rate >= 0 && *s.target_rate <= kMaxRate)) {
+            fail(fmt::format("stages[{}]: target rate {} is out of range (valid 0..{:g})", i,
+                             *s.target_rate, kMaxRate));
+        }
+        if (s.target_connections && *s.target_connections > kMaxConnections) {
+            fail(fmt::format("stages[{}]: target connections {} is out of range (valid 0..{})", i,
+                             *s.target_connections, kMaxConnections));
         }
     }
     return errors;

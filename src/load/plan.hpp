@@ -47,12 +47,15 @@ struct Operation {
     std::uint8_t device_id_code = 1;   // FC2B/0E
 };
 
-// A stage of a staged run (ramps). Validated now; the engine honours them later.
+// A stage of a staged run (see stage_schedule.hpp). Unset targets keep the previous stage's
+// value; a linear stage ramps to its targets, a constant one holds them from its start. The
+// engine changes the rate and the connection count live: connections stay open across stages.
 struct Stage {
     Duration duration{};
-    std::optional<double> target_rate;                // open loop
-    std::optional<std::uint32_t> target_connections;  // closed loop
+    std::optional<double> target_rate;                // open loop only; 0 pauses sending
+    std::optional<std::uint32_t> target_connections;  // 0 closes every connection
     Ramp ramp = Ramp::Constant;
+    std::string name;  // for reports; default "stage N"
 };
 
 struct Plan {
@@ -78,6 +81,7 @@ struct Plan {
     Duration reconnect_backoff_max = std::chrono::seconds(5);
 
     // Length of the run: by time, by transaction count, or both (whichever ends first).
+    // With stages the run lasts warm-up + the sum of the stage durations instead.
     Duration duration = std::chrono::seconds(10);  // 0: no time limit (needs `transactions`)
     std::uint64_t transactions = 0;                // 0: no count limit; counts warm-up sends too
     Duration warmup{};                             // excluded from the results
@@ -108,7 +112,11 @@ bool is_generatable_function(std::uint8_t fc) noexcept;
 // The operation's last usable start address (the block must end at or before last_address).
 std::uint16_t last_start_address(const Operation& op) noexcept;
 
-// Threads the engine will actually run: plan.threads or the core count, capped at connections.
+// The most connections the plan ever asks for (stages included).
+std::uint32_t peak_connections(const Plan& plan) noexcept;
+
+// Threads the engine will actually run: plan.threads or the core count, capped at the peak
+// connection count.
 std::uint32_t effective_threads(const Plan& plan) noexcept;
 
 }  // namespace mbstorm::load

@@ -22,6 +22,8 @@ namespace mbstorm::load {
 namespace {
 
 constexpr std::int64_t kMaxSleepNs = 20 * net::kNsPerMs;
+// Ramps move the rate and the connection count this often: smooth enough, cheap enough.
+constexpr std::int64_t kStageUpdateNs = 10 * net::kNsPerMs;
 constexpr std::uint16_t kBufferGroup = 0;
 
 bool has_response(stats::Outcome o) noexcept {
@@ -49,6 +51,22 @@ Worker::Worker(WorkerSetup setup)
         r.function_code = op.function;
         operations.push_back(std::move(r));
     }
+    if (setup_.schedule != nullptr) {
+        stages.resize(setup_.schedule->stages());
+        // A one-operation mix would repeat every stage row: per-stage operations only for mixes.
+        if (operations.size() > 1) {
+            for (auto& stage : stages) {
+                for (const auto& op : operations) {
+                    stats::OperationResult r;
+                    r.name = op.name;
+                    r.function_code = op.function_code;
+                    stage.operations.push_back(std::move(r));
+                }
+            }
+        }
+    }
+    rate_ = setup_.rate;
+    active_ = setup_.connections;
     const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
     connections_.reserve(setup_.connections);
     for (std::uint32_t i = 0; i < setup_.connections; ++i) {
@@ -70,10 +88,14 @@ Worker::Worker(WorkerSetup setup)
 
 void Worker::run() noexcept {
     if (setup_io()) {
-        for (std::uint32_t i = 0; i < setup_.connections; ++i) {
-            connect_heap_.emplace_back(setup_.start_ns, i);
+        if (setup_.schedule != nullptr) {
+            // Warm-up runs at the first stage's start values.
+            const StageTargets t = setup_.schedule->at(-1);
+            active_ = share_of(t.connections);
+            rate_ = t.connections == 0 ? 0 : t.rate * active_ / t.connections;
+            next_stage_update_ns_ = setup_.measure_start_ns;
         }
-        std::make_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+        for (std::uint32_t i = 0; i < active_; ++i) queue_connect(i, setup_.start_ns);
         next_connect_allowed_ns_ = setup_.start_ns;
         next_sweep_ns_ = setup_.start_ns + sweep_interval_ns_;
         loop();
@@ -118,6 +140,7 @@ bool Worker::setup_io() noexcept {
 
 void Worker::loop() noexcept {
     std::int64_t now = net::now_ns();
+    update_stage(now);
     for (;;) {
         if ((setup_.stop && setup_.stop->load(std::memory_order_relaxed)) ||
             setup_.abort->load(std::memory_order_relaxed) || now >= setup_.end_ns) {
@@ -133,7 +156,8 @@ void Worker::loop() noexcept {
         }
         flush(now);
 
-        std::int64_t wake = std::min({setup_.end_ns, next_sweep_ns_, now + kMaxSleepNs});
+        std::int64_t wake =
+            std::min({setup_.end_ns, next_sweep_ns_, now + kMaxSleepNs, next_stage_update_ns_});
         if (!connect_heap_.empty()) {
             wake = std::min(wake, std::max(connect_heap_.front().first, next_connect_allowed_ns_));
         }
@@ -151,6 +175,8 @@ void Worker::loop() noexcept {
             break;
         }
         now = net::now_ns();
+        // Before any completion is handled, so no send at or past a boundary uses old targets.
+        update_stage(now);
         if (now >= setup_.measure_start_ns) {
             interval_.tick(static_cast<std::uint64_t>(now - setup_.measure_start_ns),
                            *setup_.timeline, setup_.index);
@@ -197,9 +223,91 @@ void Worker::start_due_connects(std::int64_t now) noexcept {
         std::pop_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
         const std::uint32_t index = connect_heap_.back().second;
         connect_heap_.pop_back();
+        Connection& c = connections_[index];
+        c.connect_queued = false;
+        // A ramp down may have made it unwanted meanwhile; a ramp up re-queues it.
+        if (index >= active_ || c.state != Connection::State::Waiting) continue;
         next_connect_allowed_ns_ += connect_interval_ns_;
         start_connect(index, now);
         if (setup_.abort->load(std::memory_order_relaxed)) return;
+    }
+}
+
+void Worker::queue_connect(std::uint32_t index, std::int64_t due) noexcept {
+    Connection& c = connections_[index];
+    if (c.connect_queued) return;
+    c.connect_queued = true;
+    connect_heap_.emplace_back(due, index);
+    std::push_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+}
+
+std::uint32_t Worker::share_of(std::uint32_t total) const noexcept {
+    const std::uint32_t n = setup_.threads;
+    const std::uint32_t share = total / n + (setup_.index < total % n ? 1 : 0);
+    return std::min(share, setup_.connections);
+}
+
+void Worker::update_stage(std::int64_t now) noexcept {
+    if (now < next_stage_update_ns_) return;
+    apply_stage_targets(now);
+    const std::int64_t offset = now - setup_.measure_start_ns;
+    const std::int64_t boundary = setup_.schedule->next_boundary_ns(offset);
+    next_stage_update_ns_ =
+        std::min(now + kStageUpdateNs,
+                 boundary == INT64_MAX ? INT64_MAX : setup_.measure_start_ns + boundary);
+}
+
+void Worker::apply_stage_targets(std::int64_t now) noexcept {
+    const StageTargets t = setup_.schedule->at(now - setup_.measure_start_ns);
+    set_active_connections(share_of(t.connections), now);
+    if (!open_loop_) return;
+    // Each thread paces its share of the rate over the connections it holds.
+    rate_ = t.connections == 0 ? 0 : t.rate * active_ / t.connections;
+    if (pacer_started_) pacer_.set_rate(rate_, now);
+}
+
+void Worker::set_active_connections(std::uint32_t count, std::int64_t now) noexcept {
+    if (count == active_) return;
+    const std::uint32_t before = active_;
+    active_ = count;
+    if (count > before) {
+        for (std::uint32_t i = before; i < count; ++i) {
+            Connection& c = connections_[i];
+            if (c.state == Connection::State::Waiting) {
+                queue_connect(i, now);
+            } else if (c.state == Connection::State::Open) {
+                refill(i, now);  // was draining: wanted again
+            }
+        }
+    } else {
+        // Surplus connections stop sending and close once their answers are in.
+        for (std::uint32_t i = count; i < before; ++i) retire_if_idle(i);
+    }
+}
+
+void Worker::retire_if_idle(std::uint32_t index) noexcept {
+    Connection& c = connections_[index];
+    if (index < active_ || c.state != Connection::State::Open || c.table.outstanding() != 0) return;
+    open_connections.fetch_sub(1, std::memory_order_relaxed);
+    ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
+    ::close(c.fd);
+    c.fd = -1;
+    c.generation = net::next_generation(c.generation);
+    c.state = Connection::State::Waiting;
+    c.queued = 0;
+    c.recv_armed = false;
+    c.splitter.reset();
+    c.ever_opened = false;  // opening it again later is not a reconnect after a failure
+    c.backoff_ns = plan_.reconnect_backoff_min.count();
+}
+
+void Worker::refill(std::uint32_t index, std::int64_t now) noexcept {
+    if (index >= active_) {
+        retire_if_idle(index);
+    } else if (open_loop_) {
+        push_ready(index);
+    } else {
+        fill_closed_loop(index, now);
     }
 }
 
@@ -239,16 +347,11 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         open_connections.fetch_add(1, std::memory_order_relaxed);
         c.splitter.reset();
         arm_recv(index);
-        if (open_loop_) {
-            if (!pacer_started_) {
-                pacer_ = Pacer(setup_.rate, plan_.arrival,
-                               derive_seed(plan_.seed, 1000 + setup_.index), now);
-                pacer_started_ = true;
-            }
-            push_ready(index);
-        } else {
-            fill_closed_loop(index, now);
+        if (open_loop_ && !pacer_started_) {
+            pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
+            pacer_started_ = true;
         }
+        refill(index, now);
         return;
     }
     ++connection_stats.failed;
@@ -273,8 +376,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
 void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept {
     if (stopping_) return;
     Connection& c = connections_[index];
-    connect_heap_.emplace_back(now + c.backoff_ns, index);
-    std::push_heap(connect_heap_.begin(), connect_heap_.end(), kHeapOrder);
+    queue_connect(index, now + c.backoff_ns);
     const std::int64_t doubled = std::max<std::int64_t>(c.backoff_ns * 2, net::kNsPerMs);
     c.backoff_ns = std::min(doubled, plan_.reconnect_backoff_max.count());
 }
@@ -383,11 +485,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
             return;
         }
         if (!c.recv_armed) arm_recv(index);
-        if (open_loop_) {
-            push_ready(index);
-        } else {
-            fill_closed_loop(index, now);
-        }
+        refill(index, now);
         return;
     }
     if (has_buffer) buf_ring_.recycle(buffer_id);
@@ -474,8 +572,16 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
     c.queued += static_cast<std::uint32_t>(size);
     ++sent_;
     ++outstanding_;
-    if (now >= setup_.measure_start_ns)
+    if (now >= setup_.measure_start_ns) {
         ++operations[t->request.op_index].counters.transactions_sent;
+        if (setup_.schedule != nullptr) {
+            stats::StageResult& stage =
+                stages[setup_.schedule->stage_at(intended - setup_.measure_start_ns)];
+            ++stage.counters.transactions_sent;
+            if (!stage.operations.empty())
+                ++stage.operations[t->request.op_index].counters.transactions_sent;
+        }
+    }
     if (!c.dirty) {
         c.dirty = true;
         dirty_.push_back(index);
@@ -485,15 +591,16 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
 
 void Worker::fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept {
     Connection& c = connections_[index];
-    while (c.state == Connection::State::Open && c.table.outstanding() < plan_.depth &&
-           may_send()) {
+    while (c.state == Connection::State::Open && index < active_ &&
+           c.table.outstanding() < plan_.depth && may_send()) {
         if (!enqueue(index, now, now)) break;
     }
 }
 
 void Worker::push_ready(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
-    if (c.in_ready || c.state != Connection::State::Open || c.table.outstanding() >= plan_.depth) {
+    if (c.in_ready || c.state != Connection::State::Open || index >= active_ ||
+        c.table.outstanding() >= plan_.depth) {
         return;
     }
     ready_[(ready_head_ + ready_size_) % ready_.size()] = index;
@@ -509,7 +616,9 @@ void Worker::issue_open_loop(std::int64_t now) noexcept {
         --ready_size_;
         Connection& c = connections_[index];
         c.in_ready = false;
-        if (c.state != Connection::State::Open || c.table.outstanding() >= plan_.depth) continue;
+        if (c.state != Connection::State::Open || index >= active_ ||
+            c.table.outstanding() >= plan_.depth)
+            continue;
         const std::int64_t intended = pacer_.next_intended_ns();
         if (!enqueue(index, now, intended)) continue;
         if (now >= setup_.measure_start_ns) lag_.record(intended, now);
@@ -547,30 +656,39 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
             record(t, stats::Outcome::Timeout, 0, now);
         });
         if (expired == 0) continue;
-        if (open_loop_) {
-            push_ready(index);
-        } else {
-            fill_closed_loop(index, now);
-        }
+        refill(index, now);
     }
 }
 
 void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
                     std::int64_t now) noexcept {
     if (t.sent_ns < setup_.measure_start_ns) return;  // warm-up
-    stats::OperationResult& op = operations[t.request.op_index];
-    if (outcome == stats::Outcome::Exception) {
-        op.counters.record_exception(exception_code);
-    } else {
-        op.counters.record(outcome);
+    // Open loop: from the intended send time, so queueing delay is never hidden.
+    const std::int64_t from = open_loop_ ? t.intended_ns : t.sent_ns;
+    const auto latency = static_cast<std::uint64_t>(std::max<std::int64_t>(now - from, 0));
+    const bool answered = has_response(outcome);
+    auto count = [&](stats::OperationResult& into) {
+        if (outcome == stats::Outcome::Exception) {
+            into.counters.record_exception(exception_code);
+        } else {
+            into.counters.record(outcome);
+        }
+        if (answered) into.latency.record(latency);
+    };
+    count(operations[t.request.op_index]);
+    if (setup_.schedule != nullptr) {
+        // A transaction belongs to the stage it was (meant to be) sent in.
+        stats::StageResult& stage =
+            stages[setup_.schedule->stage_at(from - setup_.measure_start_ns)];
+        if (outcome == stats::Outcome::Exception) {
+            stage.counters.record_exception(exception_code);
+        } else {
+            stage.counters.record(outcome);
+        }
+        if (answered) stage.latency.record(latency);
+        if (!stage.operations.empty()) count(stage.operations[t.request.op_index]);
     }
-    if (has_response(outcome)) {
-        // Open loop: from the intended send time, so queueing delay is never hidden.
-        const std::int64_t from = open_loop_ ? t.intended_ns : t.sent_ns;
-        const auto latency = static_cast<std::uint64_t>(std::max<std::int64_t>(now - from, 0));
-        op.latency.record(latency);
-        interval_.record_latency(latency);
-    }
+    if (answered) interval_.record_latency(latency);
     interval_.record_transaction(outcome != stats::Outcome::Ok);
 }
 

@@ -14,6 +14,7 @@
 #include "load/operation_generator.hpp"
 #include "load/pacer.hpp"
 #include "load/plan.hpp"
+#include "load/stage_schedule.hpp"
 #include "net/buf_ring.hpp"
 #include "net/ring.hpp"
 #include "net/socket.hpp"
@@ -27,10 +28,11 @@ struct WorkerSetup {
     net::Endpoint endpoint;
     std::string target;  // for messages
     std::uint32_t index = 0;
-    std::uint32_t connections = 1;
-    std::uint64_t quota = 0;  // transactions this thread sends; 0: unlimited
-    double rate = 0;          // open loop: this thread's share
-    double connect_rate = 1;  // this thread's share
+    std::uint32_t threads = 1;
+    std::uint32_t connections = 1;  // this thread's share of the peak connection count
+    std::uint64_t quota = 0;        // transactions this thread sends; 0: unlimited
+    double rate = 0;                // open loop: this thread's share
+    double connect_rate = 1;        // this thread's share
     std::int64_t start_ns = 0;
     std::int64_t measure_start_ns = 0;  // end of warm-up
     std::int64_t end_ns = INT64_MAX;
@@ -39,6 +41,7 @@ struct WorkerSetup {
     std::atomic<bool>* any_connected = nullptr;
     ResponseVerifier verifier;
     stats::IntervalTimeline* timeline = nullptr;
+    const StageSchedule* schedule = nullptr;  // staged runs only
 };
 
 class Worker {
@@ -48,7 +51,8 @@ class Worker {
 
     // Results, valid after run() returned.
     std::vector<stats::OperationResult> operations;
-    stats::OutcomeCounters stray;  // UnknownId / DuplicateId and traffic totals
+    std::vector<stats::StageResult> stages;  // staged runs: by the stage a transaction was sent in
+    stats::OutcomeCounters stray;            // UnknownId / DuplicateId and traffic totals
     stats::ScheduleLag schedule_lag;
     stats::ConnectionStats connection_stats;
     std::uint64_t pending_at_end = 0;
@@ -67,6 +71,12 @@ class Worker {
     void teardown() noexcept;
 
     void start_due_connects(std::int64_t now) noexcept;
+    void queue_connect(std::uint32_t index, std::int64_t due) noexcept;
+    void update_stage(std::int64_t now) noexcept;  // staged runs: at most every 10 ms
+    void apply_stage_targets(std::int64_t now) noexcept;
+    void set_active_connections(std::uint32_t count, std::int64_t now) noexcept;
+    void retire_if_idle(std::uint32_t index) noexcept;
+    std::uint32_t share_of(std::uint32_t total) const noexcept;
     void start_connect(std::uint32_t index, std::int64_t now) noexcept;
     void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
     void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
@@ -80,6 +90,7 @@ class Worker {
     bool may_send() const noexcept { return !stopping_ && (quota_ == 0 || sent_ < quota_); }
     bool enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept;
     void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
+    void refill(std::uint32_t index, std::int64_t now) noexcept;  // after answers or timeouts
     void issue_open_loop(std::int64_t now) noexcept;
     void push_ready(std::uint32_t index) noexcept;
     void flush(std::int64_t now) noexcept;
@@ -104,6 +115,9 @@ class Worker {
     OperationGenerator generator_;
     Pacer pacer_;
     bool pacer_started_ = false;
+    double rate_ = 0;           // open loop: this thread's current rate
+    std::uint32_t active_ = 0;  // connections [0, active_) are wanted open; the rest drain
+    std::int64_t next_stage_update_ns_ = INT64_MAX;
     LagTracker lag_;
     stats::IntervalRecorder interval_;
 

@@ -258,6 +258,7 @@ std::string throughput_chart(const stats::RunResult& r) {
     c.y_label = "transactions / s";
     Series tx{"transactions/s", kPalette[0], {}};
     Series errors{"errors/s", kPalette[1], {}};
+    Series target{"target rate", kPalette[2], {}, 1.2};
     double max_rate = 0.0;
     for (const auto& i : r.timeline) {
         const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
@@ -266,12 +267,35 @@ std::string throughput_chart(const stats::RunResult& r) {
             i.duration_ns == 0 ? 0.0 : static_cast<double>(i.errors) * 1e9 / i.duration_ns;
         tx.points.emplace_back(mid, rate);
         errors.points.emplace_back(mid, error_rate);
-        max_rate = std::max(max_rate, rate);
+        target.points.emplace_back(mid, i.target_rate);
+        max_rate = std::max({max_rate, rate, i.target_rate});
     }
     c.series.push_back(std::move(tx));
     c.series.push_back(std::move(errors));
+    // Open loop: the offered rate next to what was achieved shows where the target fell behind.
+    if (r.metadata.model == stats::LoadModel::Open) c.series.push_back(std::move(target));
     c.x_max = linear_ticks(timeline_end_seconds(r), c.x_ticks);
     c.y_max = linear_ticks(max_rate, c.y_ticks);
+    add_stage_markers(r, c);
+    return render_chart(c);
+}
+
+// Staged runs: how many connections were open, so connection ramps can be read off.
+std::string connections_chart(const stats::RunResult& r) {
+    Chart c;
+    c.title = "Open connections over time";
+    c.x_label = "time (s)";
+    c.y_label = "connections";
+    Series open{"open connections", kPalette[2], {}};
+    double max_open = 0.0;
+    for (const auto& i : r.timeline) {
+        const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
+        open.points.emplace_back(mid, i.open_connections);
+        max_open = std::max(max_open, static_cast<double>(i.open_connections));
+    }
+    c.series.push_back(std::move(open));
+    c.x_max = linear_ticks(timeline_end_seconds(r), c.x_ticks);
+    c.y_max = linear_ticks(std::max(max_open, 1.0), c.y_ticks);
     add_stage_markers(r, c);
     return render_chart(c);
 }
@@ -511,6 +535,7 @@ std::string format_html(const stats::RunResult& r) {
         out += "<h2>Over time</h2>\n";
         out += throughput_chart(r);
         out += latency_over_time_chart(r);
+        if (!r.stages.empty()) out += connections_chart(r);
     }
     if (!r.stages.empty()) out += "<h2>Stages</h2>\n" + stages_table(r);
     out += "<h2>Errors</h2>\n" + errors_table(r);

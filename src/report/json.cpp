@@ -126,7 +126,9 @@ std::string format_json(const stats::RunResult& r, int indent) {
                              {"p99_ns", i.p99_ns},
                              {"p99_9_ns", i.p999_ns},
                              {"max_ns", i.max_ns},
-                             {"mean_ns", i.mean_ns}});
+                             {"mean_ns", i.mean_ns},
+                             {"target_rate_per_s", i.target_rate},
+                             {"open_connections", i.open_connections}});
     }
 
     json thresholds = json::array();

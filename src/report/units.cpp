@@ -76,7 +76,8 @@ std::string format_utc(std::chrono::system_clock::time_point t) {
 
 std::string format_exception_code(std::uint8_t code) {
     if (!codec::is_known_exception(code)) return format_hex_byte(code);
-    return fmt::format("0x{:02X} {}", code, codec::exception_name(static_cast<codec::ExceptionCode>(code)));
+    return fmt::format("0x{:02X} {}", code,
+                       codec::exception_name(static_cast<codec::ExceptionCode>(code)));
 }
 
 std::string format_hex_byte(std::uint8_t b) {

@@ -262,7 +262,9 @@ std::optional<codec::Table> function_table(std::uint8_t fc) noexcept {
     }
 }
 
-QuantityLimits quantity_limits(std::uint8_t fc) noexcept { return codec::limits::quantity_range(fc); }
+QuantityLimits quantity_limits(std::uint8_t fc) noexcept {
+    return codec::limits::quantity_range(fc);
+}
 
 bool takes_values(std::uint8_t fc) noexcept {
     switch (fc) {

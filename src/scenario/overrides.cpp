@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "scenario/runner.hpp"
 #include "scenario/scenario.hpp"
 #include "scenario/yaml_reader.hpp"
 
@@ -11,7 +12,7 @@ namespace mbstorm::scenario {
 
 std::vector<std::string> validate_scenario(const Scenario& s) {
     std::vector<std::string> problems;
-    load::Plan check = s.plan;
+    load::Plan check = engine_plan(s);
     if (s.target.empty()) {
         check.host = "127.0.0.1";
         check.port = 1;  // the embedded slave's port is not known yet
@@ -19,27 +20,6 @@ std::vector<std::string> validate_scenario(const Scenario& s) {
         std::string error;
         if (!parse_target(s.target, check.host, check.port, error)) {
             problems.push_back("target: " + error);
-        }
-    }
-    if (!s.stages.empty()) {
-        // Stages are run by the scenario layer (see runner.cpp); the engine sees one step at a
-        // time, so check the plan with a positive rate standing in for the stage rates.
-        check.stages.clear();
-        check.duration = s.total_duration();
-        if (check.model == load::LoadModel::OpenLoop && check.rate <= 0) check.rate = 1;
-        if (check.transactions != 0) {
-            problems.push_back("transactions: not supported with stages (stages end by time)");
-        }
-        for (std::size_t i = 0; i < s.stages.size(); ++i) {
-            const StageSpec& st = s.stages[i];
-            if (st.duration <= load::Duration::zero()) {
-                problems.push_back(
-                    fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
-                                duration_text(st.duration)));
-            }
-            if (st.rate && check.model == load::LoadModel::ClosedLoop) {
-                problems.push_back(fmt::format("stages[{}]: rate needs an open-loop scenario", i));
-            }
         }
     }
     for (auto& p : load::validate_plan(check)) problems.push_back(std::move(p));

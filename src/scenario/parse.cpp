@@ -129,9 +129,8 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                                    "timeout",        "connect_timeout",
                                    "connect_rate",   "reconnect_backoff",
                                    "late_threshold", "allow_writes",
-                                   "seed",           "stage_step",
-                                   "stages",         "operations",
-                                   "thresholds"},
+                                   "seed",           "stages",
+                                   "operations",     "thresholds"},
             [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
                 if (key == "name")
                     s.name = r.scalar(v, "name");
@@ -196,8 +195,6 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                 else if (key == "seed")
                     p.seed =
                         static_cast<std::uint64_t>(r.integer(v, "seed", 0, std::int64_t{1} << 62));
-                else if (key == "stage_step")
-                    s.stage_step = r.duration(v, "stage_step", 10ms, 1h);
                 else if (key == "stages")
                     stages_node = v;
                 else if (key == "operations")

@@ -145,7 +145,6 @@ std::string format_scenario(const Scenario& s) {
     out << YAML::Key << "allow_writes" << YAML::Value << p.allow_writes;
     out << YAML::Key << "seed" << YAML::Value << p.seed;
     if (!s.stages.empty()) {
-        out << YAML::Key << "stage_step" << YAML::Value << duration_text(s.stage_step);
         out << YAML::Key << "stages" << YAML::Value << YAML::BeginSeq;
         for (const auto& st : s.stages) {
             out << YAML::Flow << YAML::BeginMap;

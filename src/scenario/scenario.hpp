@@ -42,7 +42,6 @@ struct StageSpec {
     load::Ramp ramp = load::Ramp::Linear;
 };
 
-inline constexpr load::Duration kDefaultStageStep = std::chrono::seconds(1);
 inline constexpr std::uint32_t kDefaultConnections = 16;
 inline constexpr std::uint32_t kDefaultDepth = 16;
 
@@ -58,7 +57,6 @@ struct Scenario {
     std::optional<load::LoadModel> model;
 
     std::vector<StageSpec> stages;
-    load::Duration stage_step = kDefaultStageStep;
 
     std::vector<ThresholdSpec> thresholds;  // overall and per operation
     std::vector<Expectation> expectations;  // one per operation (may be inactive)

@@ -32,6 +32,10 @@ struct IntervalSummary {
     std::uint64_t p999_ns = 0;
     std::uint64_t max_ns = 0;
     double mean_ns = 0.0;
+    // Filled by the engine after the run: the open-loop rate scheduled at the interval's
+    // midpoint (0 in closed loop) and the most connections seen open during the interval.
+    double target_rate = 0.0;
+    std::uint32_t open_connections = 0;
 
     double transactions_per_second() const noexcept {
         return duration_ns == 0 ? 0.0 : static_cast<double>(transactions) * 1e9 / duration_ns;

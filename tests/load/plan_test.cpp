@@ -116,14 +116,28 @@ TEST(PlanValidation, DurationWarmupAndEmptyMix) {
     EXPECT_TRUE(any_contains(validate_plan(plan), "operations: none given"));
 }
 
-TEST(PlanValidation, StagesNeedTheirTarget) {
+TEST(PlanValidation, StageTargetsAreCheckedAgainstTheModel) {
     Plan plan = valid_plan();
+    Stage stage;
+    stage.duration = std::chrono::seconds(1);
+    stage.target_rate = 500;
+    plan.stages.push_back(stage);
+    EXPECT_TRUE(any_contains(validate_plan(plan), "stages[0]: a target rate needs an open-loop"));
     plan.model = LoadModel::OpenLoop;
-    plan.rate = 100;
-    plan.stages.push_back(Stage{std::chrono::seconds(1), std::nullopt, 10, Ramp::Linear});
-    EXPECT_TRUE(any_contains(validate_plan(plan), "target_rate"));
-    plan.stages[0].target_rate = 500;
+    plan.rate = 0;  // a ramp up from nothing is fine when a stage has a rate
     EXPECT_TRUE(validate_plan(plan).empty());
+    plan.stages[0].target_rate = 0;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "rate: 0 is out of range"));
+    plan.stages[0].target_rate = 500;
+    plan.stages[0].duration = Duration::zero();
+    EXPECT_TRUE(any_contains(validate_plan(plan), "stages[0]: duration 0s is out of range"));
+    plan.stages[0].duration = std::chrono::seconds(1);
+    plan.stages[0].target_connections = kMaxConnections + 1;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "target connections 100001 is out of range"));
+    plan.stages[0].target_connections = 0;  // closes every connection: allowed
+    EXPECT_TRUE(validate_plan(plan).empty());
+    plan.transactions = 5;
+    EXPECT_TRUE(any_contains(validate_plan(plan), "transactions: not supported with stages"));
 }
 
 TEST(PlanValidation, LastStartAddressAndThreads) {

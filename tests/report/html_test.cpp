@@ -44,14 +44,18 @@ void expect_well_formed(const std::string& html) {
 TEST(Html, SampleReportIsSelfContainedAndWellFormed) {
     const std::string html = format_html(testing::make_sample_result());
     expect_well_formed(html);
-    EXPECT_EQ(count(html, "<svg "), 3u);  // percentile, throughput, latency over time
+    // Percentile, throughput, latency over time, and (staged) open connections.
+    EXPECT_EQ(count(html, "<svg "), 4u);
     for (const char* label : {">0%<", ">90%<", ">99%<", ">99.9%<", ">99.99%<"}) {
         EXPECT_NE(html.find(label), std::string::npos) << label;
     }
-    // One line per operation plus overall in the percentile plot, 2 + 3 in the time plots.
-    EXPECT_EQ(count(html, "<polyline "), 3u + 2u + 3u);
-    // Stage boundaries are marked on both time plots.
-    EXPECT_EQ(count(html, "class=\"marker\""), 6u);
+    // One line per operation plus overall in the percentile plot; throughput, errors and the
+    // open-loop target rate; p50, p99 and max; open connections.
+    EXPECT_EQ(count(html, "<polyline "), 3u + 3u + 3u + 1u);
+    EXPECT_NE(html.find("target rate"), std::string::npos);
+    EXPECT_NE(html.find("Open connections over time"), std::string::npos);
+    // Stage boundaries are marked on the three time plots.
+    EXPECT_EQ(count(html, "class=\"marker\""), 9u);
     EXPECT_NE(html.find(">spike</text>"), std::string::npos);
     // User text is escaped.
     EXPECT_NE(html.find("synthetic data &lt;for tests&gt; &amp; demos"), std::string::npos);
@@ -65,6 +69,7 @@ TEST(Html, WithoutStagesThereAreNoMarkers) {
     expect_well_formed(html);
     EXPECT_EQ(count(html, "class=\"marker\""), 0u);
     EXPECT_EQ(html.find("<h2>Stages"), std::string::npos);
+    EXPECT_EQ(html.find("Open connections over time"), std::string::npos);
 }
 
 TEST(Html, EmptyRunStillRenders) {

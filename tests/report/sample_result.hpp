@@ -103,6 +103,11 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
     recorder.flush(timeline, 0);
     timeline.finish();
     r.timeline = timeline.summaries();
+    for (auto& iv : r.timeline) {  // the offered rate ramps with the first stage, as above
+        const std::uint64_t second = iv.start_offset_ns / kS;
+        iv.target_rate = second < stage_len ? kPerSecond * (second + 1.0) / stage_len : kPerSecond;
+        iv.open_connections = 16;
+    }
     r.timeline_interval_ns = kS;
     r.schedule_lag = {37, 2'400'000, 37 * 600'000};
     r.connections = {16, 0, 1, 1};

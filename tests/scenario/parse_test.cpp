@@ -31,7 +31,6 @@ reconnect_backoff: {min: 10ms, max: 2s}
 late_threshold: 2ms
 allow_writes: true
 seed: 42
-stage_step: 500ms
 stages:
   - {name: up, duration: 2s, rate: 3000}
   - {duration: 1s, connections: 8, ramp: constant}
@@ -96,7 +95,6 @@ TEST(ScenarioParse, EveryKeyLandsInThePlan) {
     EXPECT_EQ(p.late_threshold, 2ms);
     EXPECT_TRUE(p.allow_writes);
     EXPECT_EQ(p.seed, 42U);
-    EXPECT_EQ(s.stage_step, 500ms);
     ASSERT_EQ(s.stages.size(), 2U);
     EXPECT_EQ(s.stages[0].name, "up");
     EXPECT_EQ(s.stages[0].ramp, load::Ramp::Linear);

@@ -10,87 +10,26 @@ namespace {
 
 using namespace std::chrono_literals;
 
-TEST(StageSteps, LinearRampsBecomeStepsAtTheirMidpoints) {
+TEST(EnginePlan, CarriesTheStagesToTheEngine) {
     Scenario s = parse_scenario(R"(
 rate: 100
-stage_step: 1s
 stages:
-  - {duration: 2s, rate: 1100}
-  - {duration: 3s, rate: 1100}
-  - {duration: 1500ms, rate: 100, ramp: constant}
-  - {duration: 1s, rate: 0}
+  - {name: up, duration: 2s, rate: 1100}
+  - {duration: 1500ms, connections: 3, ramp: constant}
 operations: [{function: 3}]
 )",
                                 "s.yaml");
-    const auto steps = plan_stage_steps(s);
-    ASSERT_EQ(steps.size(), 5U);
-    EXPECT_EQ(steps[0].stage, 0U);
-    EXPECT_DOUBLE_EQ(steps[0].rate, 350);  // midpoint of 100 -> 1100 over the first second
-    EXPECT_DOUBLE_EQ(steps[1].rate, 850);
-    EXPECT_EQ(steps[0].duration, 1s);
-    EXPECT_EQ(steps[2].stage, 1U);  // flat: one step for the whole stage
-    EXPECT_EQ(steps[2].duration, 3s);
-    EXPECT_DOUBLE_EQ(steps[3].rate, 100);  // constant
-    EXPECT_EQ(steps[3].duration, 1500ms);
-    EXPECT_DOUBLE_EQ(steps[4].rate, 50);  // ramp down 100 -> 0, one step
-    EXPECT_EQ(steps[0].connections, kDefaultConnections);
-}
-
-TEST(StageSteps, ConnectionRampsRoundAndLastStepIsShort) {
-    Scenario s = parse_scenario(R"(
-connections: 1
-stage_step: 400ms
-stages: [{duration: 1s, connections: 11}]
-operations: [{function: 3}]
-)",
-                                "c.yaml");
-    const auto steps = plan_stage_steps(s);
-    ASSERT_EQ(steps.size(), 3U);
-    EXPECT_EQ(steps[0].connections, 3U);   // 1 + 10 * 0.2
-    EXPECT_EQ(steps[1].connections, 7U);   // 1 + 10 * 0.6
-    EXPECT_EQ(steps[2].connections, 10U);  // 1 + 10 * 0.9
-    EXPECT_EQ(steps[2].duration, 200ms);
-}
-
-TEST(MergeStep, ShiftsTimelinesAndAddsIntoTheStage) {
-    stats::RunResult step;
-    step.metadata.measured_duration_ns = 1'000'000'000;
-    step.latency.record(1000);
-    step.counters.record(stats::Outcome::Ok);
-    stats::IntervalSummary iv;
-    iv.duration_ns = 1'000'000'000;
-    iv.transactions = 1;
-    step.timeline.push_back(iv);
-    stats::OperationResult op;
-    op.name = "r";
-    op.latency.record(1000);
-    op.counters.record(stats::Outcome::Ok);
-    step.operations.push_back(op);
-    op.name = "w";
-    step.operations.push_back(op);
-
-    stats::RunResult total;
-    stats::StageResult stage;
-    merge_step(total, step, &stage);
-    merge_step(total, step, &stage);
-    EXPECT_EQ(total.metadata.measured_duration_ns, 2'000'000'000U);
-    ASSERT_EQ(total.timeline.size(), 2U);
-    EXPECT_EQ(total.timeline[1].start_offset_ns, 1'000'000'000U);
-    EXPECT_EQ(total.timeline[1].index, 1U);
-    EXPECT_EQ(total.counters.ok(), 2U);
-    EXPECT_EQ(stage.latency.total_count(), 2U);
-    ASSERT_EQ(total.operations.size(), 2U);
-    EXPECT_EQ(total.operations[1].name, "w");
-    ASSERT_EQ(stage.operations.size(), 2U);
-    EXPECT_EQ(stage.operations[0].counters.ok(), 2U);
-
-    // A one-operation mix has no per-stage operation rows (they would repeat the stage's).
-    stats::RunResult single_step = step;
-    single_step.operations.resize(1);
-    stats::StageResult single;
-    merge_step(total, single_step, &single);
-    EXPECT_TRUE(single.operations.empty());
-    EXPECT_EQ(single.counters.ok(), 1U);
+    const load::Plan plan = engine_plan(s);
+    ASSERT_EQ(plan.stages.size(), 2U);
+    EXPECT_EQ(plan.stages[0].name, "up");
+    EXPECT_EQ(plan.stages[0].target_rate, 1100);
+    EXPECT_FALSE(plan.stages[0].target_connections);
+    EXPECT_EQ(plan.stages[0].ramp, load::Ramp::Linear);
+    EXPECT_EQ(plan.stages[1].name, "stage 2");
+    EXPECT_EQ(plan.stages[1].target_connections, 3U);
+    EXPECT_EQ(plan.stages[1].ramp, load::Ramp::Constant);
+    EXPECT_TRUE(load::validate_plan(plan).empty() ||
+                load::validate_plan(plan).front().find("port") != std::string::npos);
 }
 
 TEST(RunScenario, StagedClosedLoopRunHasPerStageResults) {
@@ -99,7 +38,6 @@ connections: 1
 depth: 2
 slave_threads: 1
 threads: 1
-stage_step: 250ms
 stages:
   - {name: ramp, duration: 500ms, connections: 4}
   - {name: hold, duration: 300ms, ramp: constant}
@@ -123,34 +61,65 @@ thresholds:
     EXPECT_EQ(r.run.stages[0].end_offset_ns, r.run.stages[1].start_offset_ns);
     EXPECT_EQ(r.run.stages[1].end_offset_ns, r.run.metadata.measured_duration_ns);
     EXPECT_EQ(r.run.metadata.connections, 4U);
+    // Connections stay open across the ramp and the stage boundary: four opens, no re-opens.
+    EXPECT_EQ(r.run.connections.opened, 4U);
+    EXPECT_EQ(r.run.connections.reconnects, 0U);
     ASSERT_EQ(r.run.thresholds.size(), 3U);
     EXPECT_TRUE(r.run.thresholds_passed());
 }
 
-TEST(MergeStep, ShortLastIntervalsAreTrimmedOrFolded) {
-    stats::RunResult step;
-    step.metadata.measured_duration_ns = 1'200'000'000;  // 1.2 s: a 0.2 s sliver at the end
-    stats::IntervalSummary full;
-    full.duration_ns = 1'000'000'000;
-    full.transactions = 100;
-    stats::IntervalSummary sliver = full;
-    sliver.index = 1;
-    sliver.start_offset_ns = 1'000'000'000;
-    sliver.transactions = 20;
-    step.timeline = {full, sliver};
-    stats::RunResult total;
-    merge_step(total, step, nullptr);
-    ASSERT_EQ(total.timeline.size(), 1U);
-    EXPECT_EQ(total.timeline[0].transactions, 120U);
-    EXPECT_EQ(total.timeline[0].duration_ns, 1'200'000'000U);
+TEST(RunScenario, ConnectionsCloseAtZeroAndOpenAgainWithoutErrors) {
+    Scenario s = parse_scenario(R"(
+connections: 3
+depth: 4
+slave_threads: 1
+threads: 1
+stages:
+  - {name: three, duration: 300ms, ramp: constant}
+  - {name: none, duration: 300ms, connections: 0, ramp: constant}
+  - {name: two, duration: 300ms, connections: 2, ramp: constant}
+operations: [{function: 3, address: 0-99, quantity: 5}]
+)",
+                                "zero.yaml");
+    const load::LoadResult r = run_scenario(s);
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_EQ(r.run.stages.size(), 3U);
+    EXPECT_GT(r.run.stages[0].counters.ok(), 0U);
+    // Nothing is sent in a stage without connections; the surplus drained, never errored.
+    EXPECT_EQ(r.run.stages[1].counters.transactions_sent, 0U);
+    EXPECT_GT(r.run.stages[2].counters.ok(), 0U);
+    EXPECT_EQ(r.run.counters.errors(), 0U);
+    EXPECT_EQ(r.run.connections.opened, 5U);  // 3, then 2 again after the pause
+    EXPECT_EQ(r.run.connections.reconnects, 0U);
+    EXPECT_EQ(r.run.counters.transactions_sent, load::transactions_accounted(r.run.counters) +
+                                                    r.pending_at_end);
+}
 
-    stats::RunResult short_step;  // a 0.3 s step: its only interval covers 0.3 s
-    short_step.metadata.measured_duration_ns = 300'000'000;
-    short_step.timeline = {full};
-    merge_step(total, short_step, nullptr);
-    ASSERT_EQ(total.timeline.size(), 2U);
-    EXPECT_EQ(total.timeline[1].duration_ns, 300'000'000U);
-    EXPECT_EQ(total.timeline[1].start_offset_ns, 1'200'000'000U);
+TEST(RunScenario, OpenLoopRampFollowsTheScheduledRate) {
+    Scenario s = parse_scenario(R"(
+rate: 200
+connections: 4
+depth: 8
+slave_threads: 1
+threads: 1
+stages:
+  - {name: ramp, duration: 1s, rate: 1800}
+  - {name: hold, duration: 1s}
+operations: [{function: 3, quantity: 2}]
+)",
+                                "ramp.yaml");
+    const load::LoadResult r = run_scenario(s);
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_EQ(r.run.stages.size(), 2U);
+    // A linear ramp 200 -> 1800 over 1 s sends its mean, 1000; the hold sends 1800.
+    EXPECT_NEAR(static_cast<double>(r.run.stages[0].counters.transactions_sent), 1000, 100);
+    EXPECT_NEAR(static_cast<double>(r.run.stages[1].counters.transactions_sent), 1800, 150);
+    EXPECT_EQ(r.run.connections.opened, 4U);
+    ASSERT_GE(r.run.timeline.size(), 2U);
+    EXPECT_NEAR(r.run.timeline[0].target_rate, 1000, 1);
+    EXPECT_NEAR(r.run.timeline[1].target_rate, 1800, 1);
+    EXPECT_EQ(r.run.timeline[0].open_connections, 4U);
+    EXPECT_DOUBLE_EQ(r.run.metadata.rate_per_second, 1800);
 }
 
 TEST(RunScenario, ExpectCountsMismatchesAgainstTheEmbeddedSlave) {
