@@ -8,7 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "report/files.hpp"
-#include "scenario/junit.hpp"
+#include "report/junit.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -59,7 +59,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     if (!request.junit.empty()) {
         std::string error;
         const std::string xml =
-            scenario::format_junit(result.run, s.name, result.ok ? "" : result.error);
+            report::format_junit(result.run, s.name, result.ok ? "" : result.error);
         if (!report::write_text_file(request.junit, xml, error)) {
             fmt::print(stderr, "mbstorm run: cannot write JUnit XML {}: {}\n", request.junit,
                        error);

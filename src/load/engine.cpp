@@ -249,6 +249,19 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     if (!series.empty() && series.back().start_offset_ns < meta.measured_duration_ns &&
         series.back().start_offset_ns + series.back().duration_ns > meta.measured_duration_ns)
         series.back().duration_ns = meta.measured_duration_ns - series.back().start_offset_ns;
+    // A sliver of an interval at the very end would plot as a false spike or dip: fold it into
+    // the interval before (counts add; the percentiles stay those of the full interval).
+    if (series.size() >= 2 &&
+        series.back().duration_ns * 2 < static_cast<std::uint64_t>(interval_ns)) {
+        const stats::IntervalSummary sliver = series.back();
+        series.pop_back();
+        stats::IntervalSummary& last = series.back();
+        last.transactions += sliver.transactions;
+        last.errors += sliver.errors;
+        last.latency_count += sliver.latency_count;
+        last.max_ns = std::max(last.max_ns, sliver.max_ns);
+        last.duration_ns += sliver.duration_ns;
+    }
     for (auto& iv : series) {
         if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
         if (plan.model != LoadModel::OpenLoop) continue;
@@ -264,7 +277,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.run.stages[i].end_offset_ns = clip(schedule.stage_end_ns(i));
     }
     // The last stage ends where measuring ended (a run stops a hair after its schedule).
-    if (!result.run.stages.empty()) result.run.stages.back().end_offset_ns = meta.measured_duration_ns;
+    if (!result.run.stages.empty())
+        result.run.stages.back().end_offset_ns = meta.measured_duration_ns;
     if (!schedule.empty()) {
         meta.notes.push_back(fmt::format(
             "stages: {} stage{}, rate and connections changed live (connections stay open)",

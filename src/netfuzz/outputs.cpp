@@ -5,36 +5,14 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "report/xml_escape.hpp"
+
 namespace mbstorm::netfuzz {
 namespace {
 
-using nlohmann::json;
+using report::xml_escape;
 
-std::string xml_escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        switch (c) {
-            case '&':
-                o += "&amp;";
-                break;
-            case '<':
-                o += "&lt;";
-                break;
-            case '>':
-                o += "&gt;";
-                break;
-            case '"':
-                o += "&quot;";
-                break;
-            default:
-                if (static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t')
-                    o += ' ';
-                else
-                    o += c;
-        }
-    }
-    return o;
-}
+using nlohmann::json;
 
 std::string_view sarif_level(Oracle o) {
     return (o == Oracle::Crash || o == Oracle::Hang) ? "error" : "warning";

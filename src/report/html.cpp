@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "report/units.hpp"
+#include "report/xml_escape.hpp"
 
 namespace mbstorm::report {
 namespace {
@@ -21,30 +22,7 @@ constexpr std::array<const char*, 8> kPalette = {"#1f77b4", "#d62728", "#2ca02c"
 constexpr const char* kOverallColor = "#222222";
 
 std::string escape(std::string_view text) {
-    std::string out;
-    out.reserve(text.size());
-    for (char c : text) {
-        switch (c) {
-            case '&':
-                out += "&amp;";
-                break;
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            case '\'':
-                out += "&#39;";
-                break;
-            default:
-                out += c;
-        }
-    }
-    return out;
+    return xml_escape(text);
 }
 
 // ---------------------------------------------------------------- charts (inline SVG)

@@ -352,9 +352,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
             } catch (const slave::DeviceYamlError& e) {
                 throw ScenarioError(e.what(), e.line(), e.column());
             }
-            YAML::Emitter out;
-            out << slave_node.node;
-            s.slave_yaml = out.c_str();
+            s.slave_given = true;
         }
     } catch (const YAML::Exception& e) {  // e.g. a conversion yaml-cpp refused
         r.fail(e.mark, e.msg);

@@ -6,6 +6,7 @@
 #include "codec/function_code.hpp"
 #include "scenario/operation_yaml.hpp"
 #include "scenario/yaml_reader.hpp"
+#include "slave/device_yaml_print.hpp"
 
 namespace mbstorm::scenario {
 namespace {
@@ -116,9 +117,8 @@ std::string format_scenario(const Scenario& s) {
     } else {
         out << YAML::Key << "slave_threads" << YAML::Value << s.slave_threads
             << YAML::Comment("no target: the embedded reference slave (0 = half the cores)");
-        if (!s.slave_yaml.empty()) {
-            out << YAML::Key << "slave" << YAML::Value << YAML::Load(s.slave_yaml);
-        }
+        out << YAML::Key << "slave" << YAML::Value;
+        slave::emit_device_yaml(out, s.slave);
     }
     out << YAML::Key << "threads" << YAML::Value << p.threads << YAML::Comment("0 = one per core");
     out << YAML::Key << "connections" << YAML::Value << p.connections;

@@ -87,7 +87,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         out.run.metadata.notes.push_back(
             fmt::format("target: embedded reference slave on {}", embedded->endpoint()));
         embedded->stop();
-    } else if (!s.slave_yaml.empty()) {
+    } else if (s.slave_given) {
         out.run.metadata.notes.push_back("slave: settings not used (a target was given)");
     }
     if (!s.name.empty()) out.run.metadata.notes.push_back("scenario: " + s.name);

@@ -63,7 +63,7 @@ struct Scenario {
 
     // The embedded slave (used only when `target` is empty).
     slave::DeviceDescription slave;
-    std::string slave_yaml;      // the `slave:` section as written, for --print-scenario
+    bool slave_given = false;    // the file had a `slave:` section (noted when unused)
     unsigned slave_threads = 0;  // 0: half the cores
 
     // Sum of the stage durations, or plan.duration when there are no stages.

@@ -3,7 +3,6 @@
 #include <array>
 
 #include "scenario/expect.hpp"
-#include "scenario/junit.hpp"
 #include "scenario/threshold.hpp"
 
 namespace mbstorm::scenario {
@@ -84,25 +83,6 @@ TEST(Threshold, NoSamplesFailsLatencyAndRateLimits) {
     EXPECT_EQ(evaluate_threshold(parse("p99 < 1s"), empty).observed_text, "no samples");
     EXPECT_FALSE(evaluate_threshold(parse("error_rate < 100%"), empty).passed);
     EXPECT_TRUE(evaluate_threshold(parse("errors == 0"), empty).passed);
-}
-
-TEST(Junit, OneTestCasePerThresholdWithFailures) {
-    stats::RunResult run;
-    run.metadata.measured_duration_ns = 1'500'000'000;
-    run.thresholds.push_back({"p99 < 5ms", 3e6, "3ms", true});
-    run.thresholds.push_back({"error_rate < 0.1% & <more>", 0.5, "50%", false});
-    const std::string xml = format_junit(run, "ci-gate");
-    EXPECT_NE(xml.find("tests=\"2\" failures=\"1\""), std::string::npos) << xml;
-    EXPECT_NE(xml.find("<testcase classname=\"mbstorm.ci-gate\" name=\"p99 &lt; 5ms\""),
-              std::string::npos)
-        << xml;
-    EXPECT_NE(xml.find("&amp; &lt;more&gt;"), std::string::npos);
-    EXPECT_NE(xml.find("<failure message=\"threshold breached: observed 50%\""), std::string::npos);
-    EXPECT_NE(xml.find("time=\"1.500\""), std::string::npos);
-
-    const std::string failed_run = format_junit(run, "x", "cannot connect");
-    EXPECT_NE(failed_run.find("tests=\"3\" failures=\"2\""), std::string::npos) << failed_run;
-    EXPECT_NE(failed_run.find("cannot connect"), std::string::npos);
 }
 
 TEST(Expect, ChecksRegistersAndBits) {

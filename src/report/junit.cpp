@@ -1,42 +1,9 @@
-#include "scenario/junit.hpp"
+#include "report/junit.hpp"
+#include "report/xml_escape.hpp"
 
 #include <fmt/format.h>
 
-namespace mbstorm::scenario {
-namespace {
-
-std::string xml_escape(const std::string& s) {
-    std::string out;
-    out.reserve(s.size());
-    for (const char c : s) {
-        switch (c) {
-            case '&':
-                out += "&amp;";
-                break;
-            case '<':
-                out += "&lt;";
-                break;
-            case '>':
-                out += "&gt;";
-                break;
-            case '"':
-                out += "&quot;";
-                break;
-            case '\'':
-                out += "&apos;";
-                break;
-            default:
-                // Control characters are not allowed in XML 1.0.
-                if (static_cast<unsigned char>(c) < 0x20 && c != '\n' && c != '\t')
-                    out += ' ';
-                else
-                    out += c;
-        }
-    }
-    return out;
-}
-
-}  // namespace
+namespace mbstorm::report {
 
 std::string format_junit(const stats::RunResult& run, const std::string& suite_name,
                          const std::string& run_error) {
@@ -80,4 +47,4 @@ std::string format_junit(const stats::RunResult& run, const std::string& suite_n
     return out;
 }
 
-}  // namespace mbstorm::scenario
+}  // namespace mbstorm::report
