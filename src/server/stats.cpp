@@ -23,6 +23,7 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     idle_closes += o.idle_closes;
     evictions += o.evictions;
     refusals += o.refusals;
+    accept_fd_exhausted += o.accept_fd_exhausted;
     busy_rejects += o.busy_rejects;
     foreign_unit += o.foreign_unit;
     fault_drops += o.fault_drops;
@@ -51,6 +52,7 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.idle_closes = v(IdleCloses);
     s.evictions = v(Evictions);
     s.refusals = v(Refusals);
+    s.accept_fd_exhausted = v(AcceptFdExhausted);
     s.busy_rejects = v(BusyRejects);
     s.foreign_unit = v(ForeignUnit);
     s.fault_drops = v(FaultDrops);
@@ -81,20 +83,22 @@ std::string format_stats_line(const ServerStats& now, const ServerStats& before,
     const double dt = interval_s > 0 ? interval_s : 1.0;
     return fmt::format(
         "[{:7.1f}s] tps {:.0f} conns {} (total {}) in {:.2f} MB/s out {:.2f} MB/s exc {} "
-        "discarded {} bad-framing {} idle {} evicted {} refused {} pending {} B",
+        "discarded {} bad-framing {} idle {} evicted {} refused {} out-of-fds {} pending {} B",
         elapsed_s, static_cast<double>(now.transactions - before.transactions) / dt,
         now.connections_current, now.connections_total,
         static_cast<double>(now.bytes_in - before.bytes_in) / dt / 1e6,
         static_cast<double>(now.bytes_out - before.bytes_out) / dt / 1e6,
         now.exceptions_total() - before.exceptions_total(), now.discarded_frames,
-        now.bad_framing_closes, now.idle_closes, now.evictions, now.refusals, now.pending_output);
+        now.bad_framing_closes, now.idle_closes, now.evictions, now.refusals,
+        now.accept_fd_exhausted, now.pending_output);
 }
 
 std::string format_summary(const ServerStats& t, double elapsed_s) {
     const double secs = elapsed_s > 0 ? elapsed_s : 1.0;
     return fmt::format(
         "summary: {:.1f}s, {} transactions ({:.0f}/s), {} requests\n"
-        "  connections: {} total, {} open, {} idle-closed, {} evicted, {} refused\n"
+        "  connections: {} total, {} open, {} idle-closed, {} evicted, {} refused, "
+        "{} accepts out of fds (EMFILE/ENFILE)\n"
         "  bytes: {} in, {} out\n"
         "  exceptions: {} ({})\n"
         "  framing: {} discarded (protocol id != 0), {} closed for bad length\n"
@@ -103,9 +107,10 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
         "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
         elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
         t.connections_total, t.connections_current, t.idle_closes, t.evictions, t.refusals,
-        t.bytes_in, t.bytes_out, t.exceptions_total(), exceptions_text(t), t.discarded_frames,
-        t.bad_framing_closes, t.busy_rejects, t.foreign_unit, t.fault_delayed, t.fault_drops,
-        t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak, t.output_blocks);
+        t.accept_fd_exhausted, t.bytes_in, t.bytes_out, t.exceptions_total(), exceptions_text(t),
+        t.discarded_frames, t.bad_framing_closes, t.busy_rejects, t.foreign_unit, t.fault_delayed,
+        t.fault_drops, t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak,
+        t.output_blocks);
 }
 
 }  // namespace mbstorm::server

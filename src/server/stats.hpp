@@ -22,8 +22,9 @@ struct ServerStats {
     std::uint64_t idle_closes = 0;
     std::uint64_t evictions = 0;
     std::uint64_t refusals = 0;
-    std::uint64_t busy_rejects = 0;  // 06 from the outstanding cap
-    std::uint64_t foreign_unit = 0;  // requests for another unit id
+    std::uint64_t accept_fd_exhausted = 0;  // accepts failed with EMFILE/ENFILE (then a pause)
+    std::uint64_t busy_rejects = 0;         // 06 from the outstanding cap
+    std::uint64_t foreign_unit = 0;         // requests for another unit id
     std::uint64_t fault_drops = 0;
     std::uint64_t fault_no_answer = 0;
     std::uint64_t fault_delayed = 0;
@@ -50,6 +51,7 @@ class ServerCounters {
         IdleCloses,
         Evictions,
         Refusals,
+        AcceptFdExhausted,
         BusyRejects,
         ForeignUnit,
         FaultDrops,

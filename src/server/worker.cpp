@@ -21,6 +21,10 @@ namespace {
 
 constexpr std::uint16_t kBufGroup = 1;
 constexpr std::int64_t kStopDrainNs = 2 * net::kNsPerSec;
+// Out of file descriptors, an accept fails at once until one is freed: wait this long before
+// trying again, doubling up to the maximum while it keeps failing.
+constexpr std::int64_t kAcceptPauseMinNs = 10 * net::kNsPerMs;
+constexpr std::int64_t kAcceptPauseMaxNs = 500 * net::kNsPerMs;
 
 }  // namespace
 
@@ -74,6 +78,7 @@ int Worker::setup() noexcept {
     } catch (...) {
         return -ENOMEM;
     }
+    accept_pause_ns_ = kAcceptPauseMinNs;
     arm_accept();
     arm_stop();
     ring_.submit();
@@ -190,6 +195,9 @@ void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
         case OpStop:
             stopping_ = true;
             break;
+        case OpAcceptPause:
+            if (!stopping_) arm_accept();
+            break;
         default:
             break;
     }
@@ -202,8 +210,28 @@ void Worker::on_accept(const io_uring_cqe& cqe) noexcept {
         else
             admit(cqe.res);
     }
-    bool more = (cqe.flags & IORING_CQE_F_MORE) != 0;
-    if (!more && !stopping_ && cqe.res != -EBADF && cqe.res != -EINVAL) arm_accept();
+    const bool out_of_fds = cqe.res == -EMFILE || cqe.res == -ENFILE;
+    if (out_of_fds)
+        counters_.add(ServerCounters::AcceptFdExhausted);
+    else if (cqe.res >= 0)
+        accept_pause_ns_ = kAcceptPauseMinNs;
+    const bool more = (cqe.flags & IORING_CQE_F_MORE) != 0;
+    if (more || stopping_ || cqe.res == -EBADF || cqe.res == -EINVAL) return;
+    if (out_of_fds)
+        pause_accept();
+    else
+        arm_accept();
+}
+
+void Worker::pause_accept() noexcept {
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    // Read by the kernel when the SQE is submitted; a member, so it outlives that.
+    accept_pause_ts_.tv_sec = accept_pause_ns_ / net::kNsPerSec;
+    accept_pause_ts_.tv_nsec = accept_pause_ns_ % net::kNsPerSec;
+    io_uring_prep_timeout(sqe, &accept_pause_ts_, 0, 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAcceptPause, 0, 0));
+    accept_pause_ns_ = std::min(accept_pause_ns_ * 2, kAcceptPauseMaxNs);
 }
 
 void Worker::admit(int fd) noexcept {

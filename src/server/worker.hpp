@@ -40,7 +40,7 @@ class Worker {
     std::size_t buf_ring_bytes() const noexcept { return buf_ring_.memory_bytes(); }
 
   private:
-    enum Op : std::uint8_t { OpAccept = 1, OpRecv, OpSend, OpStop, OpCancel };
+    enum Op : std::uint8_t { OpAccept = 1, OpRecv, OpSend, OpStop, OpCancel, OpAcceptPause };
 
     int setup() noexcept;
     void loop() noexcept;
@@ -51,6 +51,9 @@ class Worker {
     void on_send(const io_uring_cqe& cqe) noexcept;
 
     void arm_accept() noexcept;
+    // Out of file descriptors: re-arms the accept after a growing pause (an io_uring timeout,
+    // so open connections are served meanwhile) instead of spinning on EMFILE.
+    void pause_accept() noexcept;
     void arm_stop() noexcept;
     void arm_recv(std::uint32_t index) noexcept;
     void cancel_recv(std::uint32_t index) noexcept;
@@ -94,6 +97,8 @@ class Worker {
     std::uint64_t stop_value_ = 0;
     bool stopping_ = false;
     std::int64_t now_ = 0;
+    std::int64_t accept_pause_ns_ = 0;  // next pause after EMFILE/ENFILE; reset by an accept
+    __kernel_timespec accept_pause_ts_{};
 
     std::deque<Connection> conns_;  // stable addresses; grows, never shrinks
     std::vector<std::uint32_t> free_slots_;

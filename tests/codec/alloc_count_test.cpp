@@ -1,66 +1,27 @@
 // The codec never allocates: global operator new/delete are replaced in this binary with
 // counting versions (forwarding to malloc/free), and millions of encode/decode calls over
-// every function code run while counting is switched on. Counting is off otherwise, so the
-// rest of test_codec (and GoogleTest itself) are unaffected.
+// every function code run between two readings of the count.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
+#include "../support/counting_allocator.hpp"
 #include "pdu_test_support.hpp"
 #include "pdu_vectors.hpp"
-
-namespace {
-std::atomic<bool> g_counting{false};
-std::atomic<std::size_t> g_allocations{0};
-
-void* counted_alloc(std::size_t size) {
-    if (g_counting.load(std::memory_order_relaxed)) {
-        g_allocations.fetch_add(1, std::memory_order_relaxed);
-    }
-    void* p = std::malloc(size == 0 ? 1 : size);
-    if (p == nullptr) throw std::bad_alloc();
-    return p;
-}
-}  // namespace
-
-// Aligned and nothrow variants are left to the runtime: their defaults call these.
-void* operator new(std::size_t size) {
-    return counted_alloc(size);
-}
-void* operator new[](std::size_t size) {
-    return counted_alloc(size);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 namespace mbstorm::codec::test {
 namespace {
 
+// Allocations since construction (this binary is single-threaded while it counts).
 class CountAllocations {
   public:
-    CountAllocations() {
-        g_allocations = 0;
-        g_counting = true;
-    }
-    ~CountAllocations() { g_counting = false; }
-    std::size_t count() const { return g_allocations.load(); }
+    std::uint64_t count() const { return mbstorm::testing::allocations() - start_; }
+
+  private:
+    std::uint64_t start_ = mbstorm::testing::allocations();
 };
 
 TEST(AllocCount, CounterSeesAllocations) {
     CountAllocations counter;
-    auto* p = new int(3);
+    int* volatile p = new int(3);  // volatile: the compiler may not elide the pair
     delete p;
     EXPECT_EQ(counter.count(), 1u);
 }

@@ -4,51 +4,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <chrono>
-#include <cstdlib>
-#include <new>
 #include <string>
 
+#include "../support/counting_allocator.hpp"
 #include "load/engine.hpp"
 #include "server/server.hpp"
-
-namespace {
-std::atomic<std::uint64_t> g_allocations{0};
-}
-
-// The replacements pair malloc with free on purpose; GCC cannot see that they belong together.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-void* operator new(std::size_t size) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-    return operator new(size);
-}
-void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    return std::malloc(size == 0 ? 1 : size);
-}
-void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
-    return operator new(size, tag);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 namespace mbstorm::load {
 namespace {
@@ -119,8 +80,8 @@ void run_steady_state_check(LoadModel model) {
     EngineOptions options;
     options.on_progress = [&](const ProgressSnapshot&) {
         ++reports;
-        if (reports == 1) at_first = g_allocations.load();
-        if (reports == 3) at_third = g_allocations.load();
+        if (reports == 1) at_first = mbstorm::testing::allocations();
+        if (reports == 3) at_third = mbstorm::testing::allocations();
     };
     const LoadResult r = run_load(plan, options);
     ASSERT_TRUE(r.ok) << r.error;

@@ -40,26 +40,36 @@ inline std::size_t read_holding_response_size(std::uint16_t quantity) {
 
 class Client {
   public:
+    // Creates the socket now and connects later with connect() (tests that need the
+    // descriptor before the process runs out of them).
+    struct DeferConnect {};
+
     // rcvbuf > 0: a small receive buffer, set before connecting (backpressure tests).
     explicit Client(const server::Server& srv, const std::string& host = "127.0.0.1",
-                    int rcvbuf = 0) {
-        net::Endpoint ep;
-        net::parse_endpoint(host.find(':') != std::string::npos ? "[" + host + "]:0" : host + ":0",
-                            ep);
-        ep.set_port(srv.port());
-        fd_ = ::socket(ep.family(), SOCK_STREAM | SOCK_CLOEXEC, 0);
+                    int rcvbuf = 0)
+        : Client(DeferConnect{}, host) {
         if (rcvbuf > 0) ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
-        if (::connect(fd_, ep.sa(), ep.len) != 0) {
-            ::close(fd_);
-            fd_ = -1;
-        }
+        connect(srv);
+    }
+    explicit Client(DeferConnect, const std::string& host = "127.0.0.1") {
+        net::parse_endpoint(host.find(':') != std::string::npos ? "[" + host + "]:0" : host + ":0",
+                            ep_);
+        fd_ = ::socket(ep_.family(), SOCK_STREAM | SOCK_CLOEXEC, 0);
+    }
+    // False (and the socket closed) when the connection fails.
+    bool connect(const server::Server& srv) {
+        ep_.set_port(srv.port());
+        if (fd_ >= 0 && ::connect(fd_, ep_.sa(), ep_.len) == 0) return true;
+        if (fd_ >= 0) ::close(fd_);
+        fd_ = -1;
+        return false;
     }
     ~Client() {
         if (fd_ >= 0) ::close(fd_);
     }
     Client(const Client&) = delete;
     Client& operator=(const Client&) = delete;
-    Client(Client&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
+    Client(Client&& o) noexcept : ep_(o.ep_), fd_(o.fd_) { o.fd_ = -1; }
 
     bool ok() const { return fd_ >= 0; }
     int fd() const { return fd_; }
@@ -108,6 +118,7 @@ class Client {
         pollfd p{fd_, POLLIN, 0};
         return ::poll(&p, 1, timeout_ms) == 1;
     }
+    net::Endpoint ep_;
     int fd_ = -1;
 };
 

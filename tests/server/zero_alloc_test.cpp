@@ -2,50 +2,11 @@
 // pipelined load runs against an in-process server.
 #include <gtest/gtest.h>
 
-// The replacement operators below pair malloc with free on purpose.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-#endif
-
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
+#include "../support/counting_allocator.hpp"
 #include "server/server.hpp"
 #include "test_client.hpp"
-
-namespace {
-std::atomic<std::uint64_t> g_allocations{0};
-}
-
-void* operator new(std::size_t n) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-    return operator new(n);
-}
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    return std::malloc(n ? n : 1);
-}
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept {
-    return operator new(n, t);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 using namespace mbstorm;
 
@@ -70,10 +31,10 @@ TEST(ZeroAlloc, SteadyStatePipelinedLoadAllocatesNothing) {
         return ok;
     };
     for (int i = 0; i < 200; ++i) ASSERT_TRUE(round());  // warm-up: pools reach their size
-    const std::uint64_t before = g_allocations.load();
+    const std::uint64_t before = mbstorm::testing::allocations();
     bool ok = true;
     for (int i = 0; i < 2000 && ok; ++i) ok = round();
-    const std::uint64_t after = g_allocations.load();
+    const std::uint64_t after = mbstorm::testing::allocations();
     ASSERT_TRUE(ok);
     EXPECT_EQ(after - before, 0u) << "allocations during " << 2000 * kDepth * kConns
                                   << " transactions";

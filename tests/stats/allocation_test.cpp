@@ -2,48 +2,21 @@
 // operator new in this test binary.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <random>
 
+#include "../support/counting_allocator.hpp"
 #include "stats/counters.hpp"
 #include "stats/histogram.hpp"
 #include "stats/interval_recorder.hpp"
-
-namespace {
-std::atomic<std::uint64_t> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) {
-    return ::operator new(size);
-}
-void operator delete(void* p) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p) noexcept {
-    std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-    std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-    std::free(p);
-}
 
 namespace mbstorm::stats {
 namespace {
 
 TEST(Allocation, CountingHookSeesAllocations) {
-    const auto before = g_allocations.load();
+    const auto before = mbstorm::testing::allocations();
     int* volatile p = new int(3);  // volatile: the compiler may not elide the pair
     delete p;
-    EXPECT_GT(g_allocations.load(), before);
+    EXPECT_GT(mbstorm::testing::allocations(), before);
 }
 
 TEST(Allocation, HistogramHotPathNeverAllocates) {
@@ -51,7 +24,7 @@ TEST(Allocation, HistogramHotPathNeverAllocates) {
     Histogram other;
     other.record(12345);
     std::mt19937_64 rng(5);
-    const auto before = g_allocations.load();
+    const auto before = mbstorm::testing::allocations();
     for (int i = 0; i < 1'000'000; ++i) h.record(1000 + rng() % 5'000'000'000ULL);
     h.record(Histogram::kOneHourNs * 2);  // saturated
     h.record_corrected(50'000'000, 1'000'000);
@@ -62,14 +35,14 @@ TEST(Allocation, HistogramHotPathNeverAllocates) {
     (void)p99;
     (void)mean;
     h.reset();
-    EXPECT_EQ(g_allocations.load(), before);
+    EXPECT_EQ(mbstorm::testing::allocations(), before);
 }
 
 TEST(Allocation, CountersAndIntervalTickNeverAllocate) {
     IntervalTimeline timeline(1'000'000'000, 1, 64);
     IntervalRecorder rec(1'000'000'000);
     OutcomeCounters counters;
-    const auto before = g_allocations.load();
+    const auto before = mbstorm::testing::allocations();
     for (std::uint64_t i = 0; i < 50'000; ++i) {
         const std::uint64_t now = i * 1'000'000;  // 50 simulated seconds
         rec.tick(now, timeline, 0);
@@ -80,7 +53,7 @@ TEST(Allocation, CountersAndIntervalTickNeverAllocate) {
     }
     rec.flush(timeline, 0);
     timeline.finish();
-    EXPECT_EQ(g_allocations.load(), before);
+    EXPECT_EQ(mbstorm::testing::allocations(), before);
     EXPECT_EQ(timeline.summaries().size(), 50u);
 }
 
