@@ -520,6 +520,11 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
 void parse_faults(const Parser& p, const YAML::Node& n, FaultConfig& f) {
     p.each_key(n, "faults", [&](const std::string& key, const YAML::Node& v) {
         if (key == "delay") {
+            // `none` is the default written out (what --print-scenario shows).
+            if (v.IsScalar() && v.Scalar() == "none") {
+                f.delay = DelayConfig{};
+                return true;
+            }
             int kinds = 0;
             p.each_key(v, "faults.delay", [&](const std::string& k, const YAML::Node& x) {
                 ++kinds;
@@ -542,7 +547,9 @@ void parse_faults(const Parser& p, const YAML::Node& n, FaultConfig& f) {
                 return true;
             });
             if (kinds != 1)
-                p.fail(v, "delay needs exactly one of fixed_ms, uniform_ms, exponential_mean_ms");
+                p.fail(v,
+                       "delay needs exactly one of fixed_ms, uniform_ms, exponential_mean_ms (or "
+                       "delay: none)");
         } else if (key == "stall") {
             p.each_key(v, "faults.stall", [&](const std::string& k, const YAML::Node& x) {
                 if (k == "duration_ms")

@@ -10,6 +10,9 @@
 #include <sstream>
 #include <string>
 
+#include "scenario/scenario.hpp"
+#include "slave/device_yaml_print.hpp"
+
 namespace {
 
 struct CommandResult {
@@ -98,6 +101,30 @@ TEST(CliScenario, PrintScenarioAppliesOverridesAndSendsNothing) {
     EXPECT_NE(flags_only.output.find("function: read_input_registers"), std::string::npos)
         << flags_only.output;
     EXPECT_NE(flags_only.output.find("connections: 5"), std::string::npos);
+}
+
+// quickstart.yaml has no `slave:` key: the printout shows the embedded slave's defaults, and
+// the printout is itself a scenario that prints the same again.
+TEST(CliScenario, PrintScenarioShowsSlaveDefaultsAndRoundTrips) {
+    const auto r = run_mbstorm("run " + kLibrary + "quickstart.yaml --print-scenario");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    for (const char* key : {"slave:", "units: shared", "unknown_unit: gateway_target_failed",
+                            "coils: 65536", "server_id: \"mbstorm\"", "init: []", "simulate: []",
+                            "delay: none", "exception: {rate: 0, code: 4}", "drop_rate: 0"}) {
+        EXPECT_NE(r.output.find(key), std::string::npos) << key << " missing in\n" << r.output;
+    }
+
+    const std::string path = write_temp("quickstart-printed.yaml", r.output);
+    const mbstorm::scenario::Scenario parsed = mbstorm::scenario::load_scenario_file(path);
+    EXPECT_EQ(mbstorm::slave::format_device_yaml(parsed.slave),
+              mbstorm::slave::format_device_yaml(mbstorm::slave::DeviceDescription{}));
+    EXPECT_EQ(parsed.name, "quickstart");
+
+    const auto again = run_mbstorm("run " + path + " --print-scenario");
+    ASSERT_EQ(again.exit_code, 0) << again.output;
+    // Only the first line (it names the source file) may differ.
+    const auto body = [](const std::string& text) { return text.substr(text.find('\n')); };
+    EXPECT_EQ(body(again.output), body(r.output));
 }
 
 TEST(CliScenario, UsageErrorsExitTwo) {

@@ -4,6 +4,7 @@
 
 #include "scenario/print.hpp"
 #include "scenario/scenario.hpp"
+#include "slave/device_yaml_print.hpp"
 
 namespace mbstorm::scenario {
 namespace {
@@ -204,6 +205,58 @@ TEST(ScenarioPrint, MinimalFileShowsEveryDefault) {
           "distribution: sequential", "mode: constant", "weight: 1"}) {
         EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
     }
+}
+
+// The embedded slave is printed resolved (every device key, defaults included), not as written.
+TEST(ScenarioPrint, SlaveIsPrintedResolvedAndReadsBack) {
+    const Scenario s = parse_scenario(R"(
+operations: [{function: 3}]
+slave:
+  units: [1, "3-5"]
+  init:
+    - {table: holding_registers, address: 10, type: float32, values: [1.5], units: [4]}
+    - {table: input_registers, address: 0, count: 3, random: {min: 1, max: 9, seed: 5}}
+  counters:
+    - {address: 7, step: -2}
+    - {address: 8, mode: interval, interval_ms: 250, units: [1]}
+  simulate:
+    - {table: coils, address: 3, wave: square, period_ms: 100, amplitude: 1, duty: 0.1}
+  faults:
+    delay: {fixed_ms: 0.5}
+    exception: {rate: 0.5, code: 6}
+)",
+                                      "slave.yaml");
+    const std::string printed = format_scenario(s);
+    for (const char* key :
+         {"units: [1, 3-5]", "unknown_unit: gateway_target_failed", "diagnostics: true",
+          "files: {count: 4, records: 10000}", "delay: {fixed_ms: 0.5}",
+          "stall: {duration_ms: 0, every_ms: 0}", "exception: {rate: 0.5, code: 6}", "drop_rate: 0",
+          "mode: interval", "wave: square", "vendor_name: \"mbstorm\""}) {
+        EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
+    }
+    const Scenario again = parse_scenario(printed, "printed.yaml");
+    EXPECT_EQ(slave::format_device_yaml(again.slave), slave::format_device_yaml(s.slave));
+    ASSERT_EQ(again.slave.init.size(), 2U);
+    EXPECT_EQ(again.slave.init[0].words, s.slave.init[0].words);  // float32 as its two words
+    EXPECT_EQ(again.slave.init[1].words, s.slave.init[1].words);  // the drawn random values
+    EXPECT_EQ(again.slave.read_counters[0].step, s.slave.read_counters[0].step);
+    EXPECT_EQ(again.slave.faults.delay.fixed_ns, 500'000U);
+}
+
+TEST(ScenarioPrint, NoSlaveKeyPrintsTheDefaultSlaveButATargetPrintsNone) {
+    const std::string printed =
+        format_scenario(parse_scenario("operations: [{function: 3}]\n", "plain.yaml"));
+    const Scenario again = parse_scenario(printed, "printed.yaml");
+    EXPECT_EQ(slave::format_device_yaml(again.slave),
+              slave::format_device_yaml(slave::DeviceDescription{}));
+    for (const char* key : {"slave:", "units: shared", "holding_registers: 65536", "init: []",
+                            "delay: none", "no_answer_rate: 0"}) {
+        EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
+    }
+
+    const std::string with_target = format_scenario(
+        parse_scenario("target: 127.0.0.1:502\noperations: [{function: 3}]\n", "t.yaml"));
+    EXPECT_EQ(with_target.find("slave"), std::string::npos) << with_target;
 }
 
 TEST(ScenarioOverrides, FlagsReplaceFileValues) {
