@@ -8,7 +8,7 @@
 #     (both minimal epoll loops), next to `mbstorm run` against the same limit_server.
 #  2. Without pipelining (64 connections x depth 1): `mbstorm run` against a libmodbus-style
 #     client (64 threads, one blocking connection each), both against `mbstorm serve`.
-# Medians of `repeats` runs.
+# Medians of `repeats` runs; the two clients of a row take turns within each repeat.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 build=${1:-$here/../build/release}
@@ -54,8 +54,14 @@ echo "|---|---:|---:|---:|"
 for shape in 1:16 16:16 64:16 1:256; do
   c=${shape%:*}; d=${shape#*:}
   start_limit
-  a=$(for _ in $(seq "$repeats"); do pair_client "$c" "$d"; done | median)
-  b=$(for _ in $(seq "$repeats"); do mbstorm_client "$c" "$d"; done | median)
+  # The two clients take turns, so this VM's drift from minute to minute hits both alike.
+  runs_a="" runs_b=""
+  for _ in $(seq "$repeats"); do
+    runs_a+="$(pair_client "$c" "$d") "
+    runs_b+="$(mbstorm_client "$c" "$d") "
+  done
+  a=$(tr ' ' '\n' <<<"$runs_a" | grep -v '^$' | median)
+  b=$(tr ' ' '\n' <<<"$runs_b" | grep -v '^$' | median)
   stop_server
   printf '| %s x %s | %s | %s | %.2fx |\n' "$c" "$d" "$a" "$b" "$(echo "$b / $a" | bc -l)"
 done
@@ -64,8 +70,13 @@ echo
 echo "| no pipelining, 64 x 1, against mbstorm serve | tx/s |"
 echo "|---|---:|"
 start_mbstorm_serve
-a=$(for _ in $(seq "$repeats"); do libmodbus 64; done | median)
-b=$(for _ in $(seq "$repeats"); do mbstorm_client 64 1; done | median)
+runs_a="" runs_b=""
+for _ in $(seq "$repeats"); do
+  runs_a+="$(libmodbus 64) "
+  runs_b+="$(mbstorm_client 64 1) "
+done
+a=$(tr ' ' '\n' <<<"$runs_a" | grep -v '^$' | median)
+b=$(tr ' ' '\n' <<<"$runs_b" | grep -v '^$' | median)
 stop_server
 echo "| libmodbus client, 64 threads | $a |"
 printf '| mbstorm run, 1 thread | %s (%.2fx) |\n' "$b" "$(echo "$b / $a" | bc -l)"

@@ -415,26 +415,25 @@ void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
                 close_connection(index);
                 return;
             case codec::MbapSplitter::Status::Frame:
-                if (!on_frame(index, frame)) return;
+                if (!on_frame(c, index, frame)) return;
                 break;
         }
     }
 }
 
-bool Worker::on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcept {
-    Connection& c = conns_[index];
+bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     counters_.add(ServerCounters::Requests);
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
             queue_exception(c, frame, 0x0B);
-        mark_dirty(index);
+        mark_dirty(c, index);
         return true;
     }
     if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
         counters_.add(ServerCounters::BusyRejects);
         queue_exception(c, frame, 0x06);
-        mark_dirty(index);
+        mark_dirty(c, index);
         return true;
     }
 
@@ -459,7 +458,7 @@ bool Worker::on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcep
         }
         if (decision.action == slave::FaultDecision::Action::Exception) {
             queue_exception(c, frame, static_cast<std::uint8_t>(decision.exception));
-            mark_dirty(index);
+            mark_dirty(c, index);
             return true;
         }
     }
@@ -487,7 +486,7 @@ bool Worker::on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcep
     if (r.outcome == slave::Outcome::Exception)
         counters_.add_exception(static_cast<std::uint8_t>(r.exception));
     ++c.unanswered;
-    mark_dirty(index);
+    mark_dirty(c, index);
     return true;
 }
 
@@ -527,8 +526,7 @@ void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept
     }
 }
 
-void Worker::mark_dirty(std::uint32_t index) noexcept {
-    Connection& c = conns_[index];
+void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
     if (!c.dirty) {
         c.dirty = true;
         dirty_.push_back(index);
@@ -590,7 +588,7 @@ void Worker::run_timers() noexcept {
             if (c.hold_until_ns <= now_) {
                 c.hold_pos = kNoHold;
                 c.in_hold_list = false;
-                mark_dirty(index);
+                mark_dirty(c, index);
                 continue;
             }
             held_[keep++] = index;

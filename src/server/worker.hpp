@@ -68,10 +68,11 @@ class Worker {
     bool check_backpressure(std::uint32_t index) noexcept;
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
     // False when the connection was closed (fault drop).
-    bool on_frame(std::uint32_t index, const codec::TcpFrame& frame) noexcept;
+    // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
+    bool on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
     void queue_exception(Connection& c, const codec::TcpFrame& frame, std::uint8_t code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
-    void mark_dirty(std::uint32_t index) noexcept;
+    void mark_dirty(Connection& c, std::uint32_t index) noexcept;
     void flush(std::uint32_t index) noexcept;
     void run_timers() noexcept;
     std::int64_t next_deadline() const noexcept;
