@@ -14,7 +14,7 @@
 namespace mbstorm::slave {
 class DataModel;
 class UnitModels;
-}
+}  // namespace mbstorm::slave
 
 namespace mbstorm::server {
 

@@ -59,6 +59,9 @@ bool Server::start(std::string* error) {
         workers_.push_back(
             std::make_unique<Worker>(config_, *model_, fd, i, open_connections_, stall_origin));
     }
+    std::vector<Worker*> peers;
+    for (auto& w : workers_) peers.push_back(w.get());
+    for (auto& w : workers_) w->set_peers(peers);
     for (auto& w : workers_) threads_.emplace_back([wp = w.get()] { wp->run(); });
     running_ = true;
     if (!config_.simulated.empty()) {
@@ -67,7 +70,8 @@ bool Server::start(std::string* error) {
         simulator_stop_ = false;
         simulator_thread_ = std::thread([this] {
             const auto start = net::now_ns();
-            const auto interval = std::chrono::milliseconds(std::max<std::uint32_t>(1, config_.simulate_interval_ms));
+            const auto interval =
+                std::chrono::milliseconds(std::max<std::uint32_t>(1, config_.simulate_interval_ms));
             while (!simulator_stop_.load(std::memory_order_relaxed)) {
                 simulator_->update(static_cast<std::uint64_t>(net::now_ns() - start));
                 std::this_thread::sleep_for(interval);

@@ -38,10 +38,12 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
       open_connections_(open_connections),
       faults_(config.faults, index, stall_origin_ns) {
     stop_fd_ = eventfd(0, EFD_CLOEXEC);
+    mail_fd_ = eventfd(0, EFD_CLOEXEC);
 }
 
 Worker::~Worker() {
     if (stop_fd_ >= 0) ::close(stop_fd_);
+    if (mail_fd_ >= 0) ::close(mail_fd_);
     if (listen_fd_ >= 0) ::close(listen_fd_);
 }
 
@@ -81,6 +83,9 @@ int Worker::setup() noexcept {
     accept_pause_ns_ = kAcceptPauseMinNs;
     arm_accept();
     arm_stop();
+    cross_evict_ = peers_.size() > 1 && config_.max_connections != 0 &&
+                   config_.full_policy == FullPolicy::EvictOldestIdle && mail_fd_ >= 0;
+    if (cross_evict_) arm_mail();
     ring_.submit();
     return 0;
 }
@@ -108,6 +113,62 @@ void Worker::arm_stop() noexcept {
     if (!sqe) return;
     io_uring_prep_read(sqe, stop_fd_, &stop_value_, sizeof stop_value_, 0);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(OpStop, 0, 0));
+}
+
+void Worker::arm_mail() noexcept {
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    io_uring_prep_read(sqe, mail_fd_, &mail_value_, sizeof mail_value_, 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpMail, 0, 0));
+}
+
+void Worker::request_eviction() noexcept {
+    evict_requests_.fetch_add(1, std::memory_order_relaxed);
+    std::uint64_t one = 1;
+    [[maybe_unused]] auto n = ::write(mail_fd_, &one, sizeof one);
+}
+
+void Worker::serve_evictions() noexcept {
+    // Each request closes this worker's oldest idle connection, if it still has one (it may
+    // have closed meanwhile: then the server is below the limit anyway).
+    for (std::uint32_t n = evict_requests_.exchange(0, std::memory_order_relaxed); n > 0; --n) {
+        if (lru_head_ == kNoConn) break;
+        counters_.add(ServerCounters::Evictions);
+        close_connection(lru_head_);
+    }
+}
+
+void Worker::publish_oldest_idle() noexcept {
+    if (!cross_evict_) return;
+    oldest_idle_ns_.store(lru_head_ == kNoConn ? INT64_MAX : conns_[lru_head_].last_active_ns,
+                          std::memory_order_relaxed);
+}
+
+bool Worker::evict_server_wide_oldest() noexcept {
+    Worker* victim = nullptr;
+    std::int64_t oldest = INT64_MAX;
+    if (lru_head_ != kNoConn) {
+        victim = this;
+        oldest = conns_[lru_head_].last_active_ns;
+    }
+    for (Worker* peer : peers_) {
+        if (peer == this) continue;
+        const std::int64_t t = peer->oldest_idle_ns_.load(std::memory_order_relaxed);
+        if (t < oldest) {
+            oldest = t;
+            victim = peer;
+        }
+    }
+    if (victim == nullptr) return false;
+    if (victim == this) {
+        counters_.add(ServerCounters::Evictions);
+        close_connection(lru_head_);
+    } else {
+        // The new connection is admitted now; the server is one over its limit until the
+        // other worker has closed its oldest (it counts the eviction).
+        victim->request_eviction();
+    }
+    return true;
 }
 
 void Worker::arm_recv(std::uint32_t index) noexcept {
@@ -198,6 +259,10 @@ void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
         case OpAcceptPause:
             if (!stopping_) arm_accept();
             break;
+        case OpMail:
+            serve_evictions();
+            if (!stopping_) arm_mail();
+            break;
         default:
             break;
     }
@@ -237,10 +302,12 @@ void Worker::pause_accept() noexcept {
 void Worker::admit(int fd) noexcept {
     const std::uint32_t limit = config_.max_connections;
     if (limit != 0 && open_connections_.load(std::memory_order_relaxed) >= limit) {
-        if (config_.full_policy == FullPolicy::EvictOldestIdle && lru_head_ != kNoConn) {
+        const bool evicted = config_.full_policy == FullPolicy::EvictOldestIdle &&
+                             (cross_evict_ ? evict_server_wide_oldest() : lru_head_ != kNoConn);
+        if (evicted && !cross_evict_) {
             counters_.add(ServerCounters::Evictions);
             close_connection(lru_head_);
-        } else {
+        } else if (!evicted) {
             counters_.add(ServerCounters::Refusals);
             ::close(fd);
             return;
@@ -633,6 +700,7 @@ void Worker::lru_unlink(std::uint32_t index) noexcept {
     else if (lru_tail_ == index)
         lru_tail_ = c.lru_prev;
     c.lru_prev = c.lru_next = kNoConn;
+    publish_oldest_idle();
 }
 
 void Worker::lru_push_back(std::uint32_t index) noexcept {
@@ -644,6 +712,7 @@ void Worker::lru_push_back(std::uint32_t index) noexcept {
     else
         lru_head_ = index;
     lru_tail_ = index;
+    publish_oldest_idle();
 }
 
 void Worker::touch(std::uint32_t index) noexcept {
@@ -652,6 +721,8 @@ void Worker::touch(std::uint32_t index) noexcept {
     if (lru_tail_ != index) {
         lru_unlink(index);
         lru_push_back(index);
+    } else if (lru_head_ == index) {
+        publish_oldest_idle();  // the only connection: still the oldest, now less idle
     }
 }
 

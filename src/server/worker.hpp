@@ -39,8 +39,22 @@ class Worker {
     static std::size_t connection_bytes() noexcept { return sizeof(Connection); }
     std::size_t buf_ring_bytes() const noexcept { return buf_ring_.memory_bytes(); }
 
+    // Max-connections with the evict-oldest-idle policy over several threads: each worker
+    // publishes the last activity of its oldest idle connection, and the worker that accepts
+    // at the limit asks the one holding the server-wide oldest to close it. Set before run().
+    void set_peers(std::vector<Worker*> peers) { peers_ = std::move(peers); }
+    void request_eviction() noexcept;  // any thread
+
   private:
-    enum Op : std::uint8_t { OpAccept = 1, OpRecv, OpSend, OpStop, OpCancel, OpAcceptPause };
+    enum Op : std::uint8_t {
+        OpAccept = 1,
+        OpRecv,
+        OpSend,
+        OpStop,
+        OpCancel,
+        OpAcceptPause,
+        OpMail
+    };
 
     int setup() noexcept;
     void loop() noexcept;
@@ -55,6 +69,10 @@ class Worker {
     // so open connections are served meanwhile) instead of spinning on EMFILE.
     void pause_accept() noexcept;
     void arm_stop() noexcept;
+    void arm_mail() noexcept;
+    void serve_evictions() noexcept;  // eviction requests from other workers
+    void publish_oldest_idle() noexcept;
+    bool evict_server_wide_oldest() noexcept;  // false: nothing idle anywhere
     void arm_recv(std::uint32_t index) noexcept;
     void cancel_recv(std::uint32_t index) noexcept;
     void admit(int fd) noexcept;
@@ -96,6 +114,12 @@ class Worker {
     bool multishot_accept_ = false;
     int stop_fd_ = -1;
     std::uint64_t stop_value_ = 0;
+    int mail_fd_ = -1;  // eventfd: another worker asked for an eviction
+    std::uint64_t mail_value_ = 0;
+    bool cross_evict_ = false;  // several workers, a limit, and the evict policy
+    std::vector<Worker*> peers_;
+    std::atomic<std::int64_t> oldest_idle_ns_{INT64_MAX};  // INT64_MAX: no connection
+    std::atomic<std::uint32_t> evict_requests_{0};
     bool stopping_ = false;
     std::int64_t now_ = 0;
     std::int64_t accept_pause_ns_ = 0;  // next pause after EMFILE/ENFILE; reset by an accept

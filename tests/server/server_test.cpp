@@ -232,6 +232,42 @@ TEST(Server, MaxConnectionsEvictsOldestIdle) {
     EXPECT_EQ(srv->stats().evictions, 1u);
 }
 
+TEST(Server, MaxConnectionsEvictsTheServerWideOldestAcrossThreads) {
+    // Four threads: the kernel spreads connections over their listening sockets, so the
+    // oldest idle connection usually belongs to another thread than the one accepting the
+    // newcomer. Whichever it is, the oldest must go and the others stay, every round.
+    auto config = test::test_config();
+    config.threads = 4;
+    config.max_connections = 4;
+    auto srv = start(config);
+    std::uint16_t tid = 1;
+    std::vector<std::unique_ptr<Client>> open;
+    for (int i = 0; i < 4; ++i) {
+        open.push_back(std::make_unique<Client>(*srv));
+        ASSERT_TRUE(open.back()->send_all(read_holding(tid, 1, 0, 10)));
+        expect_responses(*open.back(), 1, tid++);
+    }
+    for (int round = 0; round < 8; ++round) {
+        // Activity on all but the front makes the front the server-wide oldest idle one.
+        for (std::size_t i = 1; i < open.size(); ++i) {
+            ASSERT_TRUE(open[i]->send_all(read_holding(tid, 1, 0, 10)));
+            expect_responses(*open[i], 1, tid++);
+        }
+        auto newcomer = std::make_unique<Client>(*srv);
+        EXPECT_TRUE(open.front()->closed_by_peer()) << "round " << round;
+        for (std::size_t i = 1; i < open.size(); ++i) {
+            ASSERT_TRUE(open[i]->send_all(read_holding(tid, 1, 0, 10))) << "round " << round;
+            expect_responses(*open[i], 1, tid++);
+        }
+        ASSERT_TRUE(newcomer->send_all(read_holding(tid, 1, 0, 10)));
+        expect_responses(*newcomer, 1, tid++);
+        open.erase(open.begin());
+        open.push_back(std::move(newcomer));
+    }
+    EXPECT_TRUE(test::eventually([&] { return srv->stats().evictions == 8u; }));
+    EXPECT_EQ(srv->stats().connections_current, 4u);
+}
+
 TEST(Server, MaxConnectionsRefuses) {
     auto config = test::test_config();
     config.max_connections = 2;
