@@ -288,15 +288,7 @@ void Worker::set_active_connections(std::uint32_t count, std::int64_t now) noexc
 void Worker::retire_if_idle(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     if (index < active_ || c.state != Connection::State::Open || c.table.outstanding() != 0) return;
-    open_connections.fetch_sub(1, std::memory_order_relaxed);
-    ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
-    ::close(c.fd);
-    c.fd = -1;
-    c.generation = net::next_generation(c.generation);
-    c.state = Connection::State::Waiting;
-    c.queued = 0;
-    c.recv_armed = false;
-    c.splitter.reset();
+    drop_socket(c);
     c.ever_opened = false;  // opening it again later is not a reconnect after a failure
     c.backoff_ns = plan_.reconnect_backoff_min.count();
 }
@@ -381,24 +373,29 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
     c.backoff_ns = std::min(doubled, plan_.reconnect_backoff_max.count());
 }
 
-void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept {
-    Connection& c = connections_[index];
+void Worker::drop_socket(Connection& c) noexcept {
     if (c.state == Connection::State::Open)
         open_connections.fetch_sub(1, std::memory_order_relaxed);
-    c.table.abort_all([&](const Transaction& t) {
-        --outstanding_;
-        record(t, why, 0, now);
-    });
     if (c.fd >= 0) {
         ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
         ::close(c.fd);
         c.fd = -1;
     }
+    // A new generation makes the old socket's late completions stale.
     c.generation = net::next_generation(c.generation);
     c.state = Connection::State::Waiting;
     c.queued = 0;
     c.recv_armed = false;
     c.splitter.reset();
+}
+
+void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept {
+    Connection& c = connections_[index];
+    c.table.abort_all([&](const Transaction& t) {
+        --outstanding_;
+        record(t, why, 0, now);
+    });
+    drop_socket(c);
     schedule_reconnect(index, now);
 }
 

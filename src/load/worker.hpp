@@ -80,6 +80,7 @@ class Worker {
     void start_connect(std::uint32_t index, std::int64_t now) noexcept;
     void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
     void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
+    void drop_socket(Connection& c) noexcept;  // closes it; the connection waits to reopen
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
     void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;

@@ -274,15 +274,6 @@ void parse_files(const Parser& p, const YAML::Node& n, ModelConfig& m) {
 }
 
 void parse_identification(const Parser& p, const YAML::Node& n, DeviceIdentity& ident) {
-    static const std::map<std::string, std::uint8_t, std::less<>> kNames = {
-        {"vendor_name", DeviceIdentity::kVendorName},
-        {"product_code", DeviceIdentity::kProductCode},
-        {"major_minor_revision", DeviceIdentity::kMajorMinorRevision},
-        {"vendor_url", DeviceIdentity::kVendorUrl},
-        {"product_name", DeviceIdentity::kProductName},
-        {"model_name", DeviceIdentity::kModelName},
-        {"user_application_name", DeviceIdentity::kUserApplicationName},
-    };
     auto set = [&](const YAML::Node& v, std::uint8_t id) {
         std::string value = p.scalar(v, "identification object");
         if (value.size() > DeviceIdentity::kMaxObjectLength) {
@@ -292,9 +283,11 @@ void parse_identification(const Parser& p, const YAML::Node& n, DeviceIdentity& 
         ident.set(id, std::move(value));
     };
     p.each_key(n, "identification", [&](const std::string& key, const YAML::Node& v) {
-        if (auto it = kNames.find(key); it != kNames.end()) {
-            set(v, it->second);
-            return true;
+        for (const IdentificationKey& named : identification_keys()) {
+            if (key == named.key) {
+                set(v, named.object_id);
+                return true;
+            }
         }
         if (key != "extended") return false;
         if (!v.IsMap()) p.fail(v, "identification.extended must be a mapping of id: value");
@@ -681,6 +674,19 @@ DeviceDescription parse_device_node(const YAML::Node& node, std::string_view sou
     } catch (const YAML::Exception& e) {  // e.g. a mapping where a scalar was expected
         p.fail(e.mark, e.msg);
     }
+}
+
+std::span<const IdentificationKey> identification_keys() noexcept {
+    static constexpr IdentificationKey kKeys[] = {
+        {"vendor_name", DeviceIdentity::kVendorName},
+        {"product_code", DeviceIdentity::kProductCode},
+        {"major_minor_revision", DeviceIdentity::kMajorMinorRevision},
+        {"vendor_url", DeviceIdentity::kVendorUrl},
+        {"product_name", DeviceIdentity::kProductName},
+        {"model_name", DeviceIdentity::kModelName},
+        {"user_application_name", DeviceIdentity::kUserApplicationName},
+    };
+    return kKeys;
 }
 
 DeviceDescription parse_device_yaml(std::string_view text, std::string_view source) {

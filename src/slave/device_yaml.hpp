@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -60,6 +61,13 @@ struct DeviceDescription {
     std::vector<SimulatedInput> simulated;  // includes interval counters (Waveform::Counter)
     FaultConfig faults;
 };
+
+// The YAML keys of the named identification objects (`identification:`), in object-id order.
+struct IdentificationKey {
+    const char* key;
+    std::uint8_t object_id;
+};
+std::span<const IdentificationKey> identification_keys() noexcept;
 
 DeviceDescription parse_device_yaml(std::string_view text, std::string_view source = "<device>");
 DeviceDescription load_device_file(const std::string& path);

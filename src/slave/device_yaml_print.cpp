@@ -105,18 +105,10 @@ void emit_entry_units(YAML::Emitter& out, const std::vector<std::uint8_t>& ids) 
 }
 
 void emit_identification(YAML::Emitter& out, const DeviceIdentity& ident) {
-    static constexpr std::pair<const char*, std::uint8_t> kNamed[] = {
-        {"vendor_name", DeviceIdentity::kVendorName},
-        {"product_code", DeviceIdentity::kProductCode},
-        {"major_minor_revision", DeviceIdentity::kMajorMinorRevision},
-        {"vendor_url", DeviceIdentity::kVendorUrl},
-        {"product_name", DeviceIdentity::kProductName},
-        {"model_name", DeviceIdentity::kModelName},
-        {"user_application_name", DeviceIdentity::kUserApplicationName},
-    };
     out << YAML::BeginMap;
-    for (const auto& [name, id] : kNamed) {
-        out << YAML::Key << name << YAML::Value << YAML::DoubleQuoted << ident.get(id);
+    for (const IdentificationKey& named : identification_keys()) {
+        out << YAML::Key << named.key << YAML::Value << YAML::DoubleQuoted
+            << ident.get(named.object_id);
     }
     bool any_extended = false;
     for (unsigned id = 0x80; id <= 0xFF; ++id) {
