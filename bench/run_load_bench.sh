@@ -2,6 +2,7 @@
 # End-to-end load-engine benchmark (results go into bench/README.md).
 #
 #   bench/run_load_bench.sh [build-dir] [seconds-per-run] [repeats]
+#   SHAPES="" bench/run_load_bench.sh ...   only the no-pipelining row (SHAPES="1:16 64:16": a subset)
 #
 # Server pinned to core 0, client to core 1, FC03 reading 10 registers, one thread each.
 #  1. The physical limit for each shape: bench/tools/pipeline_client against limit_server
@@ -51,7 +52,7 @@ libmodbus() { taskset -c 1 "$libmodbus_client" 127.0.0.1 "$port" "$1" "$secs" | 
 
 echo "| shape (connections x depth) | limit pair client | mbstorm run | ratio |"
 echo "|---|---:|---:|---:|"
-for shape in 1:16 16:16 64:16 1:256; do
+for shape in ${SHAPES-1:16 16:16 64:16 1:256}; do
   c=${shape%:*}; d=${shape#*:}
   start_limit
   # The two clients take turns, so this VM's drift from minute to minute hits both alike.
