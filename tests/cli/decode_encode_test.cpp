@@ -3,7 +3,7 @@
 
 #include <algorithm>
 
-#include "cli_test_support.hpp"
+#include "../support/run_mbstorm.hpp"
 
 using mbstorm::test::run_mbstorm;
 using testing::HasSubstr;
@@ -53,7 +53,9 @@ TEST(DecodeCommand, AsciiFrame) {
 }
 
 TEST(DecodeCommand, PipelinedTcpFramesAreAllShown) {
-    auto r = run_mbstorm("decode --tcp --request 00 01 00 00 00 06 01 03 00 00 00 0A 00 02 00 00 00 06 01 04 00 10 00 02");
+    auto r = run_mbstorm(
+        "decode --tcp --request 00 01 00 00 00 06 01 03 00 00 00 0A 00 02 00 00 00 06 01 04 00 10 "
+        "00 02");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_THAT(r.output, HasSubstr("#1"));
     EXPECT_THAT(r.output, HasSubstr("#2"));
@@ -61,12 +63,12 @@ TEST(DecodeCommand, PipelinedTcpFramesAreAllShown) {
 }
 
 TEST(DecodeCommand, BadInputIsOneLineAndExitTwo) {
-    for (const char* args : {"decode ZZ", "decode 0",
-                             "decode --tcp 00 01 00 00 00 00 01", "decode --rtu 01 03 00",
-                             "decode --pdu --request 03 00 00 00 00"}) {
+    for (const char* args : {"decode ZZ", "decode 0", "decode --tcp 00 01 00 00 00 00 01",
+                             "decode --rtu 01 03 00", "decode --pdu --request 03 00 00 00 00"}) {
         auto r = run_mbstorm(args);
         EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
-        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n" << r.output;
+        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n"
+                                                                         << r.output;
     }
 }
 
@@ -77,7 +79,8 @@ TEST(DecodeCommand, NonModbusProtocolIdIsShownAndFlagged) {
 }
 
 TEST(EncodeCommand, BuildsFramesInEveryFraming) {
-    EXPECT_EQ(run_mbstorm("encode --fc 3 --addr 0 --count 10 --rtu").output, "01 03 00 00 00 0A C5 CD\n");
+    EXPECT_EQ(run_mbstorm("encode --fc 3 --addr 0 --count 10 --rtu").output,
+              "01 03 00 00 00 0A C5 CD\n");
     EXPECT_EQ(run_mbstorm("encode --fc read_holding_registers --count 10 --tid 1").output,
               "00 01 00 00 00 06 01 03 00 00 00 0A\n");
     EXPECT_EQ(run_mbstorm("encode --fc 3 --count 1 --ascii").output, ":010300000001FB\n");

@@ -15,28 +15,9 @@
 #include <thread>
 #include <vector>
 
+#include "../support/run_mbstorm.hpp"
+
 namespace mbstorm::test {
-
-struct CommandResult {
-    int exit_code = -1;
-    std::string output;
-};
-
-inline CommandResult run_command(const std::string& cmd) {
-    CommandResult result;
-    FILE* pipe = popen((cmd + " 2>&1").c_str(), "r");
-    if (!pipe) return result;
-    std::array<char, 4096> buf{};
-    std::size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) result.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
-
-inline CommandResult run_mbstorm(const std::string& args) {
-    return run_command(std::string(MBSTORM_BINARY) + " " + args);
-}
 
 // The broken servers are built next to the test executables (build/tests/).
 inline std::string tool_path(const std::string& name) {

@@ -2,36 +2,19 @@
 // --print-scenario and --junit. Runs are one second or less, loopback only.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-
 #include <array>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "../support/run_mbstorm.hpp"
 #include "scenario/scenario.hpp"
 #include "slave/device_yaml_print.hpp"
 
 namespace {
 
-struct CommandResult {
-    int exit_code = -1;
-    std::string output;
-};
-
-CommandResult run_mbstorm(const std::string& args) {
-    const std::string cmd = std::string(MBSTORM_BINARY) + " " + args + " 2>&1";
-    CommandResult result;
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return result;
-    std::array<char, 4096> buf{};
-    std::size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) result.output.append(buf.data(), n);
-    const int status = pclose(pipe);
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
+using mbstorm::test::run_mbstorm;
 
 std::string write_temp(const std::string& name, const std::string& text) {
     const std::string path = ::testing::TempDir() + "/" + name;
