@@ -229,6 +229,11 @@ double timeline_end_seconds(const stats::RunResult& r) {
     return end > 0.0 ? end : 1.0;
 }
 
+// Where an interval is plotted on the time axis.
+double midpoint_seconds(const stats::IntervalSummary& i) {
+    return (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
+}
+
 std::string throughput_chart(const stats::RunResult& r) {
     Chart c;
     c.title = "Throughput over time";
@@ -239,7 +244,7 @@ std::string throughput_chart(const stats::RunResult& r) {
     Series target{"target rate", kPalette[2], {}, 1.2};
     double max_rate = 0.0;
     for (const auto& i : r.timeline) {
-        const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
+        const double mid = midpoint_seconds(i);
         const double rate = i.transactions_per_second();
         const double error_rate =
             i.duration_ns == 0 ? 0.0 : static_cast<double>(i.errors) * 1e9 / i.duration_ns;
@@ -267,7 +272,7 @@ std::string connections_chart(const stats::RunResult& r) {
     Series open{"open connections", kPalette[2], {}};
     double max_open = 0.0;
     for (const auto& i : r.timeline) {
-        const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
+        const double mid = midpoint_seconds(i);
         open.points.emplace_back(mid, i.open_connections);
         max_open = std::max(max_open, static_cast<double>(i.open_connections));
     }
@@ -290,7 +295,7 @@ std::string latency_over_time_chart(const stats::RunResult& r) {
         max{"max", kPalette[1], {}, 1.2};
     for (const auto& i : r.timeline) {
         if (i.latency_count == 0) continue;
-        const double mid = (static_cast<double>(i.start_offset_ns) + i.duration_ns / 2.0) / 1e9;
+        const double mid = midpoint_seconds(i);
         p50.points.emplace_back(mid, static_cast<double>(i.p50_ns) / unit.divisor);
         p99.points.emplace_back(mid, static_cast<double>(i.p99_ns) / unit.divisor);
         max.points.emplace_back(mid, static_cast<double>(i.max_ns) / unit.divisor);
