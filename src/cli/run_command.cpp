@@ -27,7 +27,8 @@ struct RunOptions {
     int value = 0;
     int count = 0;
     std::uint64_t duration_ns = 10'000'000'000ULL;
-    std::uint64_t warmup_ns = 0, timeout_ns = 1'000'000'000ULL, connect_timeout_ns = 3'000'000'000ULL;
+    std::uint64_t warmup_ns = 0, timeout_ns = 1'000'000'000ULL,
+                  connect_timeout_ns = 3'000'000'000ULL;
     unsigned slave_threads = 0;
     bool quiet = false;
     OutputFiles outputs;
@@ -53,8 +54,10 @@ std::string build_plan(RunOptions& o) {
             if (used != o.function.size() || fc < 1 || fc > 127) throw std::invalid_argument("fc");
             op.function = static_cast<std::uint8_t>(fc);
         } catch (...) {
-            return fmt::format("--fc '{}' is neither a function code (1..127) nor a name like "
-                               "read_holding_registers", o.function);
+            return fmt::format(
+                "--fc '{}' is neither a function code (1..127) nor a name like "
+                "read_holding_registers",
+                o.function);
         }
     }
     // --addr takes "N", "FIRST-LAST", or reference numbers "40001-40100".
@@ -78,21 +81,27 @@ std::string build_plan(RunOptions& o) {
     std::uint16_t first = 0, last = 0;
     if (!parse_one(o.address.substr(0, dash), first) ||
         (dash != std::string::npos && !parse_one(o.address.substr(dash + 1), last)))
-        return fmt::format("--addr '{}' is not an address 0..65535, a range FIRST-LAST or reference "
-                           "numbers like 40001-40100", o.address);
+        return fmt::format(
+            "--addr '{}' is not an address 0..65535, a range FIRST-LAST or reference "
+            "numbers like 40001-40100",
+            o.address);
     op.first_address = first;
     if (dash != std::string::npos) op.last_address = last;
-    if (o.addr_mode == "uniform") op.address_mode = load::AddressMode::Uniform;
-    else if (o.addr_mode == "zipf") op.address_mode = load::AddressMode::Zipf;
+    if (o.addr_mode == "uniform")
+        op.address_mode = load::AddressMode::Uniform;
+    else if (o.addr_mode == "zipf")
+        op.address_mode = load::AddressMode::Zipf;
     op.values.value = static_cast<std::uint16_t>(o.value);
     op.name = std::string(codec::function_name(op.function));
     if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
     // No --count: 10 for reads, 1 where the function has a fixed quantity of one.
     op.quantity = o.count;
-    if (op.quantity == 0) op.quantity = (op.function == 5 || op.function == 6 || op.function == 0x16) ? 1 : 10;
+    if (op.quantity == 0)
+        op.quantity = (op.function == 5 || op.function == 6 || op.function == 0x16) ? 1 : 10;
     p.operations.assign(1, op);
 
-    p.model = o.model == "open" || p.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
+    p.model =
+        o.model == "open" || p.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
     if (p.model == load::LoadModel::OpenLoop && p.rate <= 0)
         return "--model open needs --rate (transactions per second, e.g. --rate 50000)";
     p.arrival = o.arrival == "poisson" ? load::Arrival::Poisson : load::Arrival::Even;
@@ -100,7 +109,8 @@ std::string build_plan(RunOptions& o) {
     p.warmup = std::chrono::nanoseconds(o.warmup_ns);
     p.transaction_timeout = std::chrono::nanoseconds(o.timeout_ns);
     p.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
-    if (o.duration_ns == 0 && p.transactions == 0) return "-d 0 needs --transactions N to end the run";
+    if (o.duration_ns == 0 && p.transactions == 0)
+        return "-d 0 needs --transactions N to end the run";
     return {};
 }
 
@@ -117,14 +127,15 @@ int run_load_test(RunOptions& o) {
     scenario::Scenario s = scenario::scenario_from_plan(plan, o.target);
     s.name.clear();
     s.slave_threads = o.slave_threads;
-    fmt::print("mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
-               o.target.empty() ? std::string("the embedded reference slave (no --target given)") : o.target,
-               plan.connections,
-               plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
-               plan.model == load::LoadModel::OpenLoop ? fmt::format("open loop at {:.0f} tx/s", plan.rate)
-                                                       : std::string("closed loop"),
-               plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
-                                     : fmt::format("for {} transactions", plan.transactions));
+    fmt::print(
+        "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
+        o.target.empty() ? std::string("the embedded reference slave (no --target given)")
+                         : o.target,
+        plan.connections, plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
+        plan.model == load::LoadModel::OpenLoop ? fmt::format("open loop at {:.0f} tx/s", plan.rate)
+                                                : std::string("closed loop"),
+        plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
+                              : fmt::format("for {} transactions", plan.transactions));
     std::fflush(stdout);
     ScenarioRunRequest request;
     request.quiet = o.quiet;
@@ -135,10 +146,11 @@ int run_load_test(RunOptions& o) {
 // Flags given next to a scenario FILE override its values; the single-operation flags have no
 // meaning there (the file lists the operations).
 int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
-    for (const char* flag : {"--fc", "--addr", "--count", "--unit", "--addr-mode", "--zipf", "--value",
-                             "--model", "--arrival"}) {
+    for (const char* flag : {"--fc", "--addr", "--count", "--unit", "--addr-mode", "--zipf",
+                             "--value", "--model", "--arrival"}) {
         if (cmd.count(flag) != 0)
-            return fail(fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
+            return fail(
+                fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
     }
     ScenarioRunRequest r;
     r.file = o.scenario_file;
@@ -158,7 +170,8 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     if (given("--rate")) ov.rate = p.rate;
     if (given("--transactions")) ov.transactions = p.transactions;
     if (given("--timeout")) ov.transaction_timeout = std::chrono::nanoseconds(o.timeout_ns);
-    if (given("--connect-timeout")) ov.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
+    if (given("--connect-timeout"))
+        ov.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
     if (given("--connect-rate")) ov.connect_rate = p.connect_rate;
     if (given("--seed")) ov.seed = p.seed;
     if (given("--slave-threads")) ov.slave_threads = o.slave_threads;
@@ -174,42 +187,69 @@ void add_run_command(CLI::App& app, Action& action) {
     o->plan.connections = 16;
     o->plan.depth = 16;
     auto& p = o->plan;
-    auto* cmd = app.add_subcommand("run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
-    cmd->add_option("--target", o->target, "server to test, HOST:PORT or [IPv6]:PORT (default: start the embedded slave)");
-    cmd->add_option("-c,--connections", p.connections, "connections")->check(CLI::Range(1u, load::kMaxConnections))->capture_default_str();
+    auto* cmd = app.add_subcommand(
+        "run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
+    cmd->add_option("--target", o->target,
+                    "server to test, HOST:PORT or [IPv6]:PORT (default: start the embedded slave)");
+    cmd->add_option("-c,--connections", p.connections, "connections")
+        ->check(CLI::Range(1u, load::kMaxConnections))
+        ->capture_default_str();
     cmd->add_option("--depth", p.depth, "outstanding transactions per connection (pipelining)")
-        ->check(CLI::Range(1u, load::kMaxDepth))->capture_default_str();
-    cmd->add_option("--threads", p.threads, "engine threads, one ring each (0: the cores left over)")->check(CLI::Range(0u, load::kMaxThreads));
-    cmd->add_option("--slave-threads", o->slave_threads, "threads of the embedded slave (0: half the cores)")->check(CLI::Range(0u, 1024u));
-    add_duration_option(cmd, "-d,--duration", o->duration_ns, "how long to measure (default 10s; 0 with --transactions)");
-    cmd->add_option("-n,--transactions", p.transactions, "stop after this many transactions");
+        ->check(CLI::Range(1u, load::kMaxDepth))
+        ->capture_default_str();
+    cmd->add_option("--threads", p.threads,
+                    "engine threads, one ring each (0: the cores left over)")
+        ->check(CLI::Range(0u, load::kMaxThreads));
+    cmd->add_option("--slave-threads", o->slave_threads,
+                    "threads of the embedded slave (0: half the cores)")
+        ->check(CLI::Range(0u, 1024u));
+    add_duration_option(cmd, "-d,--duration", o->duration_ns,
+                        "how long to measure (default 10s; 0 with --transactions)");
+    cmd->add_option("-n,--transactions", p.transactions,
+                    "stop after this many measured transactions (warm-up sends not counted)");
     add_duration_option(cmd, "--warmup", o->warmup_ns, "run this long first without recording");
-    cmd->add_option("--model", o->model, "closed loop (keep --depth outstanding) or open loop (--rate)")
+    cmd->add_option("--model", o->model,
+                    "closed loop (keep --depth outstanding) or open loop (--rate)")
         ->check(CLI::IsMember({"closed", "open"}));
-    cmd->add_option("-R,--rate", p.rate, "open loop: total transactions per second; latency is measured from each "
-                    "transaction's intended send time (coordinated-omission corrected)")->check(CLI::Range(0.0, load::kMaxRate));
-    cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")->check(CLI::IsMember({"even", "poisson"}));
-    cmd->add_option("--fc", o->function, "function code or name (default 3, read_holding_registers)");
-    cmd->add_option("--addr", o->address, "start address, range FIRST-LAST, or reference numbers 40001-40100");
-    cmd->add_option("--count", o->count, "quantity per request (default 10; 1 for FC05/06/16)")->check(CLI::Range(1, 2000));
+    cmd->add_option("-R,--rate", p.rate,
+                    "open loop: total transactions per second; latency is measured from each "
+                    "transaction's intended send time (coordinated-omission corrected)")
+        ->check(CLI::Range(0.0, load::kMaxRate));
+    cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
+        ->check(CLI::IsMember({"even", "poisson"}));
+    cmd->add_option("--fc", o->function,
+                    "function code or name (default 3, read_holding_registers)");
+    cmd->add_option("--addr", o->address,
+                    "start address, range FIRST-LAST, or reference numbers 40001-40100");
+    cmd->add_option("--count", o->count, "quantity per request (default 10; 1 for FC05/06/16)")
+        ->check(CLI::Range(1, 2000));
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
-    cmd->add_option("--zipf", p.operations[0].zipf_exponent, "zipf exponent")->check(CLI::Range(0.0, load::kMaxZipfExponent));
-    cmd->add_option("--value", o->value, "value written by write operations")->check(CLI::Range(0, 65535));
+    cmd->add_option("--zipf", p.operations[0].zipf_exponent, "zipf exponent")
+        ->check(CLI::Range(0.0, load::kMaxZipfExponent));
+    cmd->add_option("--value", o->value, "value written by write operations")
+        ->check(CLI::Range(0, 65535));
     add_duration_option(cmd, "--timeout", o->timeout_ns, "per-transaction timeout (default 1s)");
-    add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns, "connect timeout (default 3s)");
-    cmd->add_option("--connect-rate", p.connect_rate, "new connections per second")->check(CLI::Range(1.0, 1e7));
-    cmd->add_flag("--allow-writes", p.allow_writes, "allow write function codes to a target outside loopback");
+    add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns,
+                        "connect timeout (default 3s)");
+    cmd->add_option("--connect-rate", p.connect_rate, "new connections per second")
+        ->check(CLI::Range(1.0, 1e7));
+    cmd->add_flag("--allow-writes", p.allow_writes,
+                  "allow write function codes to a target outside loopback");
     cmd->add_option("--seed", p.seed, "seed for address and value generators");
     cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
     add_output_options(cmd, o->outputs);
-    cmd->add_option("file", o->scenario_file, "scenario file (YAML, see scenarios/README.md); flags override its values")
+    cmd->add_option("file", o->scenario_file,
+                    "scenario file (YAML, see scenarios/README.md); flags override its values")
         ->check(CLI::ExistingFile);
-    cmd->add_flag("--print-scenario", o->print_scenario, "print the fully resolved scenario (defaults included) as YAML and exit");
+    cmd->add_flag("--print-scenario", o->print_scenario,
+                  "print the fully resolved scenario (defaults included) as YAML and exit");
     cmd->add_option("--junit", o->junit, "write the scenario's thresholds as JUnit XML test cases");
     cmd->callback([o, cmd, &action] {
-        action = [o, cmd] { return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd); };
+        action = [o, cmd] {
+            return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
+        };
     });
 }
 

@@ -75,11 +75,6 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
 
 }  // namespace
 
-std::uint64_t transactions_accounted(const stats::OutcomeCounters& counters) noexcept {
-    return counters.completed() - counters.count(stats::Outcome::UnknownId) -
-           counters.count(stats::Outcome::DuplicateId);
-}
-
 LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     LoadResult result;
     if (const auto errors = validate_plan(plan); !errors.empty()) {

@@ -53,8 +53,8 @@ struct LoadResult {
     std::string error;  // e.g. "cannot connect to 10.0.0.9:502: Connection refused"
     std::vector<std::string> warnings;
     stats::RunResult run;
-    // Accounting: run.counters.transactions_sent == (sum of per-transaction outcomes, i.e.
-    // every outcome except UnknownId and DuplicateId) + pending_at_end.
+    // Accounting: run.counters.transactions_sent == run.counters.completed() + pending_at_end
+    // (stray responses are counted apart: they answer no transaction).
     std::uint64_t pending_at_end = 0;  // sent but neither answered nor timed out at the end
     std::uint64_t late_responses = 0;  // answers that arrived after their transaction timed out
     std::uint64_t framing_errors = 0;  // unrecoverable MBAP framing (connection was reset)
@@ -62,8 +62,5 @@ struct LoadResult {
 };
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options = {});
-
-// Transactions that ended with a per-transaction outcome (not counting stray responses).
-std::uint64_t transactions_accounted(const stats::OutcomeCounters& counters) noexcept;
 
 }  // namespace mbstorm::load

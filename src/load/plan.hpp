@@ -83,8 +83,8 @@ struct Plan {
     // Length of the run: by time, by transaction count, or both (whichever ends first).
     // With stages the run lasts warm-up + the sum of the stage durations instead.
     Duration duration = std::chrono::seconds(10);  // 0: no time limit (needs `transactions`)
-    std::uint64_t transactions = 0;                // 0: no count limit; counts warm-up sends too
-    Duration warmup{};                             // excluded from the results
+    std::uint64_t transactions = 0;  // 0: no count limit; measured sends only (after warm-up)
+    Duration warmup{};               // excluded from the results
 
     std::vector<Stage> stages;
 

@@ -146,7 +146,7 @@ void Worker::loop() noexcept {
             setup_.abort->load(std::memory_order_relaxed) || now >= setup_.end_ns) {
             break;
         }
-        if (quota_ != 0 && sent_ >= quota_ && outstanding_ == 0) break;
+        if (quota_ != 0 && measured_sent_ >= quota_ && outstanding_ == 0) break;
 
         if (!connect_heap_.empty()) start_due_connects(now);
         if (open_loop_) issue_open_loop(now);
@@ -567,9 +567,9 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
         return false;
     }
     c.queued += static_cast<std::uint32_t>(size);
-    ++sent_;
     ++outstanding_;
     if (now >= setup_.measure_start_ns) {
+        ++measured_sent_;
         ++operations[t->request.op_index].counters.transactions_sent;
         if (setup_.schedule != nullptr) {
             stats::StageResult& stage =

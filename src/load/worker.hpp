@@ -30,7 +30,7 @@ struct WorkerSetup {
     std::uint32_t index = 0;
     std::uint32_t threads = 1;
     std::uint32_t connections = 1;  // this thread's share of the peak connection count
-    std::uint64_t quota = 0;        // transactions this thread sends; 0: unlimited
+    std::uint64_t quota = 0;        // measured transactions this thread sends; 0: unlimited
     double rate = 0;                // open loop: this thread's share
     double connect_rate = 1;        // this thread's share
     std::int64_t start_ns = 0;
@@ -88,7 +88,9 @@ class Worker {
     void on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
     void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
 
-    bool may_send() const noexcept { return !stopping_ && (quota_ == 0 || sent_ < quota_); }
+    bool may_send() const noexcept {
+        return !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
+    }
     bool enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept;
     void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
     void refill(std::uint32_t index, std::int64_t now) noexcept;  // after answers or timeouts
@@ -103,9 +105,9 @@ class Worker {
     const Plan& plan_;
     bool open_loop_;
     std::uint64_t quota_;
-    std::uint64_t sent_ = 0;
-    std::uint64_t outstanding_ = 0;  // over all connections
-    std::int64_t inflight_ops_ = 0;  // ring operations not yet completed (for teardown)
+    std::uint64_t measured_sent_ = 0;  // sends after warm-up: what the quota counts
+    std::uint64_t outstanding_ = 0;    // over all connections
+    std::int64_t inflight_ops_ = 0;    // ring operations not yet completed (for teardown)
     bool stopping_ = false;
 
     net::Ring ring_;

@@ -42,7 +42,7 @@ void append_latency_table(std::string& out, const Histogram& h) {
 void append_error_lines(std::string& out, const OutcomeCounters& c, const char* indent) {
     for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
         const auto outcome = static_cast<stats::Outcome>(i);
-        if (c.count(outcome) == 0) continue;
+        if (c.count(outcome) == 0 || stats::is_stray(outcome)) continue;
         out += fmt::format("{}{:<22}{:>14}\n", indent, stats::outcome_name(outcome),
                            format_count(c.count(outcome)));
         if (outcome == stats::Outcome::Exception) {
@@ -130,6 +130,13 @@ std::string format_console_report(const stats::RunResult& r) {
     out += fmt::format("\nErrors      {} of {} ({:.3f}%)\n", format_count(c.errors()),
                        format_count(c.completed()), percent(c.errors(), c.completed()));
     append_error_lines(out, c, "  ");
+    if (c.stray_responses() != 0) {
+        out += fmt::format(
+            "Stray       {} responses answered no transaction (unknown_id {}, duplicate_id {}); "
+            "discarded\n",
+            format_count(c.stray_responses()), format_count(c.count(stats::Outcome::UnknownId)),
+            format_count(c.count(stats::Outcome::DuplicateId)));
+    }
 
     if (!r.operations.empty()) {
         out += "\nPer operation\n";

@@ -352,6 +352,9 @@ std::string summary_table(const stats::RunResult& r) {
                                    format_count(c.transactions_sent)));
     kv("Errors", fmt::format("{} ({:.3f}%)", format_count(c.errors()),
                              c.completed() == 0 ? 0.0 : 100.0 * c.errors() / c.completed()));
+    if (c.stray_responses() != 0)
+        kv("Stray responses", fmt::format("{} answered no transaction (discarded)",
+                                          format_count(c.stray_responses())));
     kv("Traffic", fmt::format("sent {}, received {}", format_bytes(c.bytes_sent),
                               format_bytes(c.bytes_received)));
     kv("Connections",
@@ -400,7 +403,8 @@ std::string latency_table(const stats::RunResult& r) {
 }
 
 std::string errors_table(const stats::RunResult& r) {
-    if (r.counters.errors() == 0) return "<p class=\"ok\">No errors.</p>\n";
+    if (r.counters.errors() == 0 && r.counters.stray_responses() == 0)
+        return "<p class=\"ok\">No errors.</p>\n";
     std::string t = "<table>\n<tr><th class=\"l\">error</th><th>all</th>";
     for (const auto& op : r.operations) t += fmt::format("<th>{}</th>", escape(op.name));
     t += "</tr>\n";
@@ -414,7 +418,8 @@ std::string errors_table(const stats::RunResult& r) {
     for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
         const auto outcome = static_cast<stats::Outcome>(i);
         if (r.counters.count(outcome) == 0) continue;
-        emit(std::string(stats::outcome_name(outcome)), false,
+        const std::string name(stats::outcome_name(outcome));
+        emit(stats::is_stray(outcome) ? name + " (stray response)" : name, false,
              [outcome](const OutcomeCounters& c) { return c.count(outcome); });
         if (outcome != stats::Outcome::Exception) continue;
         for (std::size_t code = 0; code < 256; ++code) {

@@ -62,6 +62,7 @@ json totals_json(const stats::OutcomeCounters& c, std::uint64_t duration_ns) {
             {"transactions_sent", c.transactions_sent},
             {"ok", c.ok()},
             {"errors", c.errors()},
+            {"stray_responses", c.stray_responses()},
             {"error_rate", completed == 0 ? 0.0 : static_cast<double>(c.errors()) / completed},
             {"throughput_per_s", s > 0.0 ? static_cast<double>(completed) / s : 0.0},
             {"bytes_sent", c.bytes_sent},

@@ -281,7 +281,8 @@ stats::ThresholdResult evaluate_threshold(const ThresholdSpec& spec, const stats
             observed = static_cast<double>(counters->errors()) / static_cast<double>(completed);
             break;
         case Metric::Errors:
-            observed = static_cast<double>(counters->errors());
+            // Stray responses answer no transaction, but a target that sends them is faulty.
+            observed = static_cast<double>(counters->errors() + counters->stray_responses());
             break;
         case Metric::Throughput:
             observed = run.metadata.measured_duration_ns == 0

@@ -46,6 +46,11 @@ constexpr std::string_view outcome_name(Outcome outcome) noexcept {
 constexpr bool is_error(Outcome outcome) noexcept {
     return outcome != Outcome::Ok;
 }
+// A stray response answers no transaction (its id is unknown or already answered): counted,
+// but never as a transaction, so throughput and error rates stay per transaction.
+constexpr bool is_stray(Outcome outcome) noexcept {
+    return outcome == Outcome::UnknownId || outcome == Outcome::DuplicateId;
+}
 
 struct OutcomeCounters {
     std::array<std::uint64_t, kOutcomeCount> outcomes{};  // indexed by Outcome
@@ -63,14 +68,18 @@ struct OutcomeCounters {
         return outcomes[static_cast<std::size_t>(outcome)];
     }
     std::uint64_t ok() const noexcept { return count(Outcome::Ok); }
-    // Every recorded outcome (ok + errors). Stray responses (UnknownId, DuplicateId) count
-    // here too, so this can exceed the number of requests sent.
+    // Transactions that ended (ok + failed); stray responses are not transactions.
     std::uint64_t completed() const noexcept {
         std::uint64_t sum = 0;
-        for (auto n : outcomes) sum += n;
+        for (std::size_t i = 0; i < kOutcomeCount; ++i)
+            if (!is_stray(static_cast<Outcome>(i))) sum += outcomes[i];
         return sum;
     }
+    // Transactions that ended with anything but a valid, matching response.
     std::uint64_t errors() const noexcept { return completed() - ok(); }
+    std::uint64_t stray_responses() const noexcept {
+        return count(Outcome::UnknownId) + count(Outcome::DuplicateId);
+    }
 
     void add(const OutcomeCounters& other) noexcept {
         for (std::size_t i = 0; i < kOutcomeCount; ++i) outcomes[i] += other.outcomes[i];

@@ -60,6 +60,7 @@ TEST(Json, ValuesMatchTheRunResult) {
     EXPECT_EQ(doc["run"]["start_time"], "2024-05-01T12:00:00Z");
     EXPECT_EQ(doc["totals"]["transactions"], r.counters.completed());
     EXPECT_EQ(doc["totals"]["errors"], r.counters.errors());
+    EXPECT_EQ(doc["totals"]["stray_responses"], r.counters.stray_responses());
     EXPECT_DOUBLE_EQ(doc["totals"]["throughput_per_s"].get<double>(), r.throughput());
     EXPECT_EQ(doc["latency"]["count"], r.latency.total_count());
     EXPECT_EQ(doc["latency"]["percentiles_ns"]["99.9"], r.latency.value_at_percentile(99.9));

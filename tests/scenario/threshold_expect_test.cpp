@@ -77,6 +77,16 @@ TEST(Threshold, EvaluatesOverallAndPerOperation) {
     EXPECT_FALSE(eval("errors == 0", "missing").passed);
 }
 
+TEST(Threshold, StrayResponsesFailAnErrorCountButAreNoTransactions) {
+    stats::RunResult run = sample_run();
+    run.counters.record(stats::Outcome::UnknownId);
+    run.counters.record(stats::Outcome::DuplicateId);
+    EXPECT_TRUE(evaluate_threshold(parse("errors == 12"), run).passed);
+    EXPECT_TRUE(evaluate_threshold(parse("transactions == 1000"), run).passed);
+    EXPECT_TRUE(evaluate_threshold(parse("throughput < 501/s"), run).passed);
+    EXPECT_EQ(evaluate_threshold(parse("error_rate < 1%"), run).observed_text, "1%");
+}
+
 TEST(Threshold, NoSamplesFailsLatencyAndRateLimits) {
     const stats::RunResult empty;
     EXPECT_FALSE(evaluate_threshold(parse("p99 < 1s"), empty).passed);

@@ -24,6 +24,19 @@ TEST(OutcomeCounters, CountsOutcomesAndExceptionCodes) {
     EXPECT_EQ(c.errors(), 4u);
 }
 
+TEST(OutcomeCounters, StrayResponsesAreCountedButAreNotTransactions) {
+    OutcomeCounters c;
+    c.record(Outcome::Ok);
+    c.record(Outcome::Timeout);
+    c.record(Outcome::UnknownId);
+    c.record(Outcome::DuplicateId);
+    c.record(Outcome::DuplicateId);
+    EXPECT_EQ(c.completed(), 2u);
+    EXPECT_EQ(c.errors(), 1u);
+    EXPECT_EQ(c.stray_responses(), 3u);
+    EXPECT_EQ(c.count(Outcome::DuplicateId), 2u);
+}
+
 TEST(OutcomeCounters, MergeAddsEveryField) {
     OutcomeCounters a, b;
     a.record(Outcome::WrongUnitId);
