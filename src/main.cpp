@@ -1,3 +1,5 @@
 #include "cli/run_cli.hpp"
 
-int main(int argc, char** argv) { return mbstorm::cli::run_cli(argc, argv); }
+int main(int argc, char** argv) {
+    return mbstorm::cli::run_cli(argc, argv);
+}

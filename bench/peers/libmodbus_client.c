@@ -40,8 +40,10 @@ static void* run_worker(void* arg) {
     while (now_seconds() < end) {
         /* Check the clock only every 64 requests so it costs nothing measurable. */
         for (int i = 0; i < 64; ++i) {
-            if (modbus_read_registers(ctx, 0, 10, regs) == 10) w->transactions++;
-            else w->errors++;
+            if (modbus_read_registers(ctx, 0, 10, regs) == 10)
+                w->transactions++;
+            else
+                w->errors++;
         }
     }
     modbus_close(ctx);

@@ -27,9 +27,9 @@ constexpr std::size_t kReadSize = 64 * 1024;
 
 struct Conn {
     int fd = -1;
-    std::size_t partial = 0;         // bytes of an incomplete request carried over
+    std::size_t partial = 0;          // bytes of an incomplete request carried over
     unsigned char carry[2] = {0, 0};  // its transaction id bytes, where they arrived
-    std::vector<unsigned char> out;  // unsent answers (only when the socket was full)
+    std::vector<unsigned char> out;   // unsent answers (only when the socket was full)
     std::size_t out_off = 0;
 };
 

@@ -36,7 +36,9 @@ std::vector<Direction> directions(const DecodeOptions& o) {
     return {Direction::Request, Direction::Response};
 }
 
-const char* direction_name(Direction d) { return d == Direction::Request ? "request" : "response"; }
+const char* direction_name(Direction d) {
+    return d == Direction::Request ? "request" : "response";
+}
 
 // Decodes the PDU in each allowed direction, wrapping it with the framing rows.
 bool describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
@@ -79,19 +81,23 @@ bool decode_tcp(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>
             {"Transaction identifier", codec::format_hex(frame.adu.subspan(0, 2)),
              std::to_string(h.transaction_id)},
             {"Protocol identifier", codec::format_hex(frame.adu.subspan(2, 2)),
-             h.protocol_id == 0 ? "0 (Modbus)" : fmt::format("{} (not Modbus: a server discards it)", h.protocol_id)},
+             h.protocol_id == 0
+                 ? "0 (Modbus)"
+                 : fmt::format("{} (not Modbus: a server discards it)", h.protocol_id)},
             {"Length", codec::format_hex(frame.adu.subspan(4, 2)),
              fmt::format("{} (unit id + PDU)", h.length)},
-            {"Unit identifier", codec::format_hex(frame.adu.subspan(6, 1)), std::to_string(h.unit_id)},
+            {"Unit identifier", codec::format_hex(frame.adu.subspan(6, 1)),
+             std::to_string(h.unit_id)},
         };
-        std::string what = fmt::format("Modbus TCP ADU{} ({} bytes)",
-                                       index > 1 || splitter.pending() ? fmt::format(" #{}", index) : "",
-                                       frame.adu.size());
+        std::string what = fmt::format(
+            "Modbus TCP ADU{} ({} bytes)",
+            index > 1 || splitter.pending() ? fmt::format(" #{}", index) : "", frame.adu.size());
         if (!describe_framed(frame.pdu, o, what, head, {}, out, error)) return false;
     }
     if (index == 0 || splitter.buffered() != 0) {
-        error = fmt::format("truncated Modbus TCP frame: {} bytes left over after {} complete frame(s)",
-                            splitter.buffered(), index);
+        error =
+            fmt::format("truncated Modbus TCP frame: {} bytes left over after {} complete frame(s)",
+                        splitter.buffered(), index);
         return false;
     }
     return true;
@@ -100,15 +106,17 @@ bool decode_tcp(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>
 bool decode_rtu(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>& out,
                 std::string& error) {
     if (bytes.size() < 4) {
-        error = fmt::format("RTU frame too short: {} bytes (address, function, CRC need 4)", bytes.size());
+        error = fmt::format("RTU frame too short: {} bytes (address, function, CRC need 4)",
+                            bytes.size());
         return false;
     }
     std::uint16_t computed = codec::crc16(bytes.first(bytes.size() - 2));
-    std::uint16_t carried = static_cast<std::uint16_t>(bytes[bytes.size() - 2] | (bytes[bytes.size() - 1] << 8));
-    std::string crc_meaning =
-        computed == carried
-            ? fmt::format("0x{:04X} correct (low byte first)", carried)
-            : fmt::format("0x{:04X} WRONG: expected {:02X} {:02X}", carried, computed & 0xFF, computed >> 8);
+    std::uint16_t carried =
+        static_cast<std::uint16_t>(bytes[bytes.size() - 2] | (bytes[bytes.size() - 1] << 8));
+    std::string crc_meaning = computed == carried
+                                  ? fmt::format("0x{:04X} correct (low byte first)", carried)
+                                  : fmt::format("0x{:04X} WRONG: expected {:02X} {:02X}", carried,
+                                                computed & 0xFF, computed >> 8);
     std::vector<FieldRow> head{{"Slave address", codec::format_hex(bytes.first(1)),
                                 bytes[0] == 0 ? "0 (broadcast)" : std::to_string(bytes[0])}};
     std::vector<FieldRow> tail{{"CRC", codec::format_hex(bytes.last(2)), crc_meaning}};
@@ -129,19 +137,21 @@ bool decode_ascii(std::string text, const DecodeOptions& o, std::vector<Decoded>
         error = fmt::format("bad ASCII frame: {}", codec::error_description(err));
         return false;
     }
-    std::vector<FieldRow> head{{"Start", ":", "frame start"},
-                               {"Slave address", codec::format_hex(frame.binary.first(1)),
-                                std::to_string(frame.address)}};
+    std::vector<FieldRow> head{
+        {"Start", ":", "frame start"},
+        {"Slave address", codec::format_hex(frame.binary.first(1)), std::to_string(frame.address)}};
     std::vector<FieldRow> tail{{"LRC", codec::format_hex(frame.binary.last(1)), "correct"},
                                {"End", "CR LF", "frame end"}};
-    return describe_framed(frame.pdu, o, fmt::format("Modbus ASCII frame ({} characters)", text.size()),
-                           head, tail, out, error);
+    return describe_framed(frame.pdu, o,
+                           fmt::format("Modbus ASCII frame ({} characters)", text.size()), head,
+                           tail, out, error);
 }
 
 Framing guess_framing(codec::Bytes bytes) {
     if (bytes.size() >= 8) {
         auto h = codec::read_mbap_header(bytes.data());
-        if (h.protocol_id == 0 && h.length >= 2 && h.length + 6u <= bytes.size()) return Framing::Tcp;
+        if (h.protocol_id == 0 && h.length >= 2 && h.length + 6u <= bytes.size())
+            return Framing::Tcp;
     }
     if (bytes.size() >= 4) {
         std::uint16_t crc = codec::crc16(bytes.first(bytes.size() - 2));
@@ -154,8 +164,11 @@ Framing guess_framing(codec::Bytes bytes) {
 int run_decode(const DecodeOptions& o) {
     std::string text;
     for (const auto& w : o.hex_words) text += (text.empty() ? "" : " ") + w;
-    Framing framing = o.tcp ? Framing::Tcp : o.rtu ? Framing::Rtu : o.ascii ? Framing::Ascii
-                    : o.pdu ? Framing::Pdu : Framing::Auto;
+    Framing framing = o.tcp     ? Framing::Tcp
+                      : o.rtu   ? Framing::Rtu
+                      : o.ascii ? Framing::Ascii
+                      : o.pdu   ? Framing::Pdu
+                                : Framing::Auto;
     if (framing == Framing::Auto && !text.empty() && text.front() == ':') framing = Framing::Ascii;
 
     std::vector<Decoded> decoded;
@@ -175,11 +188,15 @@ int run_decode(const DecodeOptions& o) {
         codec::Bytes bytes(buf.data(), parsed.size);
         if (framing == Framing::Auto) framing = guess_framing(bytes);
         switch (framing) {
-            case Framing::Tcp: ok = decode_tcp(bytes, o, decoded, error); break;
-            case Framing::Rtu: ok = decode_rtu(bytes, o, decoded, error); break;
+            case Framing::Tcp:
+                ok = decode_tcp(bytes, o, decoded, error);
+                break;
+            case Framing::Rtu:
+                ok = decode_rtu(bytes, o, decoded, error);
+                break;
             default:
-                ok = describe_framed(bytes, o, fmt::format("Modbus PDU ({} bytes)", bytes.size()), {}, {},
-                                     decoded, error);
+                ok = describe_framed(bytes, o, fmt::format("Modbus PDU ({} bytes)", bytes.size()),
+                                     {}, {}, decoded, error);
         }
     }
     if (!ok) {
@@ -197,7 +214,8 @@ int run_decode(const DecodeOptions& o) {
 void add_decode_command(CLI::App& app, Action& action) {
     auto opts = std::make_shared<DecodeOptions>();
     auto* cmd = app.add_subcommand("decode", "Print a Modbus frame field by field");
-    cmd->add_option("hex", opts->hex_words, "Frame as hex, spaces optional (e.g. \"01 03 00 00 00 0A C5 CD\")")
+    cmd->add_option("hex", opts->hex_words,
+                    "Frame as hex, spaces optional (e.g. \"01 03 00 00 00 0A C5 CD\")")
         ->required();
     auto* tcp = cmd->add_flag("--tcp", opts->tcp, "Modbus TCP ADU(s) with MBAP header");
     auto* rtu = cmd->add_flag("--rtu", opts->rtu, "RTU frame: address, PDU, CRC-16");

@@ -37,8 +37,8 @@ CLI::Option* add_rate_option(CLI::App* cmd, const std::string& name, double& fra
                 }
                 if (percent) v /= 100.0;
                 if (!(v >= 0.0 && v <= 1.0))
-                    throw CLI::ValidationError(name, "'" + text +
-                                                         "' is not a rate in 0..1 (e.g. 0.01 or 1%)");
+                    throw CLI::ValidationError(
+                        name, "'" + text + "' is not a rate in 0..1 (e.g. 0.01 or 1%)");
                 fraction = v;
             },
             description)

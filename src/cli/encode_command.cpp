@@ -19,8 +19,8 @@ namespace mbstorm::cli {
 namespace {
 
 struct EncodeOptions {
-    std::string function;  // number or name
-    std::string reference; // e.g. 40001: sets function table and address
+    std::string function;   // number or name
+    std::string reference;  // e.g. 40001: sets function table and address
     int address = 0;
     int count = 1;
     int value = 0;
@@ -59,8 +59,9 @@ int run_encode(EncodeOptions o) {
     if (!o.reference.empty()) {
         codec::Reference ref;
         if (!codec::parse_reference(o.reference, ref))
-            return fail(fmt::format("bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)",
-                                    o.reference));
+            return fail(
+                fmt::format("bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)",
+                            o.reference));
         o.address = ref.offset;
         if (o.function.empty()) {
             static constexpr std::uint8_t read_fc[] = {1, 2, 4, 3};
@@ -68,8 +69,9 @@ int run_encode(EncodeOptions o) {
         }
     }
     if (!o.function.empty() && !parse_function(o.function, fc))
-        return fail(fmt::format("unknown function '{}' (a number 1..127 or a name like read_holding_registers)",
-                                o.function));
+        return fail(fmt::format(
+            "unknown function '{}' (a number 1..127 or a name like read_holding_registers)",
+            o.function));
     if (fc == 0) return fail("--fc (or --ref) is required");
 
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload{};
@@ -121,7 +123,8 @@ int run_encode(EncodeOptions o) {
             case FC::ReadFileRecord:
             case FC::WriteFileRecord: {
                 bool write = fc == codec::to_byte(FC::WriteFileRecord);
-                std::uint16_t length = static_cast<std::uint16_t>(write ? o.values.size() : o.count);
+                std::uint16_t length =
+                    static_cast<std::uint16_t>(write ? o.values.size() : o.count);
                 payload[n++] = codec::limits::kFileReferenceType;
                 codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(o.file));
                 codec::store_be16(payload.data() + n + 2, static_cast<std::uint16_t>(o.record));
@@ -142,8 +145,10 @@ int run_encode(EncodeOptions o) {
         r.payload = codec::Bytes(payload.data(), n);
         enc = codec::encode_request(r, pdu);
         if (enc.error == codec::CodecError::InvalidArgument)
-            return fail(fmt::format("these fields do not form a valid {} request (check the quantity "
-                                    "limits of the Modbus specification)", codec::function_name(fc)));
+            return fail(
+                fmt::format("these fields do not form a valid {} request (check the quantity "
+                            "limits of the Modbus specification)",
+                            codec::function_name(fc)));
     }
     if (!enc.ok()) return fail(std::string(codec::error_description(enc.error)));
 
@@ -176,26 +181,36 @@ int run_encode(EncodeOptions o) {
 
 void add_encode_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<EncodeOptions>();
-    auto* cmd = app.add_subcommand("encode", "Build a request frame from fields and print it as hex");
-    cmd->add_option("--fc,-f", o->function, "function code (number) or name, e.g. 3 or read_holding_registers");
-    cmd->add_option("--ref", o->reference, "reference number (40001 = holding register 0); picks the read function");
-    cmd->add_option("--addr,-a", o->address, "starting address (0-based)")->check(CLI::Range(0, 65535));
-    cmd->add_option("--count,-n", o->count, "quantity (bits or registers)")->check(CLI::Range(0, 65535));
-    cmd->add_option("--value", o->value, "value for FC05 (0/1) and FC06")->check(CLI::Range(0, 65535));
+    auto* cmd =
+        app.add_subcommand("encode", "Build a request frame from fields and print it as hex");
+    cmd->add_option("--fc,-f", o->function,
+                    "function code (number) or name, e.g. 3 or read_holding_registers");
+    cmd->add_option("--ref", o->reference,
+                    "reference number (40001 = holding register 0); picks the read function");
+    cmd->add_option("--addr,-a", o->address, "starting address (0-based)")
+        ->check(CLI::Range(0, 65535));
+    cmd->add_option("--count,-n", o->count, "quantity (bits or registers)")
+        ->check(CLI::Range(0, 65535));
+    cmd->add_option("--value", o->value, "value for FC05 (0/1) and FC06")
+        ->check(CLI::Range(0, 65535));
     cmd->add_option("--values", o->values, "values for FC0F/10/15/17 and FC08 data")
         ->delimiter(',')
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--and", o->and_mask, "AND mask for FC16")->check(CLI::Range(0, 65535));
     cmd->add_option("--or", o->or_mask, "OR mask for FC16")->check(CLI::Range(0, 65535));
-    cmd->add_option("--write-addr", o->write_address, "write address for FC17")->check(CLI::Range(0, 65535));
+    cmd->add_option("--write-addr", o->write_address, "write address for FC17")
+        ->check(CLI::Range(0, 65535));
     cmd->add_option("--sub", o->sub_function, "FC08 sub-function")->check(CLI::Range(0, 65535));
     cmd->add_option("--file", o->file, "file number for FC14/15")->check(CLI::Range(0, 65535));
     cmd->add_option("--record", o->record, "record number for FC14/15")->check(CLI::Range(0, 9999));
-    cmd->add_option("--device-id-code", o->device_id_code, "FC2B/0E read device id code")->check(CLI::Range(1, 4));
+    cmd->add_option("--device-id-code", o->device_id_code, "FC2B/0E read device id code")
+        ->check(CLI::Range(1, 4));
     cmd->add_option("--object", o->object_id, "FC2B/0E object id")->check(CLI::Range(0, 255));
-    cmd->add_option("--unit,-u", o->unit, "unit id (TCP) or slave address (RTU/ASCII)")->check(CLI::Range(0, 255));
+    cmd->add_option("--unit,-u", o->unit, "unit id (TCP) or slave address (RTU/ASCII)")
+        ->check(CLI::Range(0, 255));
     cmd->add_option("--tid", o->transaction_id, "MBAP transaction id")->check(CLI::Range(0, 65535));
-    cmd->add_option("--exception", o->exception, "build an exception response with this code instead")
+    cmd->add_option("--exception", o->exception,
+                    "build an exception response with this code instead")
         ->check(CLI::Range(1, 255));
     auto* rtu = cmd->add_flag("--rtu", o->rtu, "RTU framing (address + PDU + CRC)");
     auto* ascii = cmd->add_flag("--ascii", o->ascii, "ASCII framing");

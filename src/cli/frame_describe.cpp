@@ -17,7 +17,7 @@ using codec::Bytes;
 // Walks the PDU left to right, one row per field, so the hex column always shows the
 // exact bytes the meaning was read from.
 class RowWriter {
-public:
+  public:
     RowWriter(Bytes pdu, std::vector<FieldRow>& rows) : pdu_(pdu), rows_(rows) {}
 
     void field(const std::string& name, std::size_t width, const std::string& meaning) {
@@ -40,9 +40,10 @@ public:
     // Register values, one row each, numbered from the first address.
     void registers(const std::string& name, std::size_t count, int first_address) {
         for (std::size_t i = 0; i < count && pos_ + 2 <= pdu_.size(); ++i) {
-            std::string label = first_address >= 0
-                                    ? fmt::format("{} [{}]", name, first_address + static_cast<int>(i))
-                                    : fmt::format("{} {}", name, i + 1);
+            std::string label =
+                first_address >= 0
+                    ? fmt::format("{} [{}]", name, first_address + static_cast<int>(i))
+                    : fmt::format("{} {}", name, i + 1);
             u16(label);
         }
     }
@@ -62,11 +63,12 @@ public:
         }
     }
     void rest(const std::string& name) {
-        if (pos_ < pdu_.size()) field(name, pdu_.size() - pos_, fmt::format("{} bytes", pdu_.size() - pos_));
+        if (pos_ < pdu_.size())
+            field(name, pdu_.size() - pos_, fmt::format("{} bytes", pdu_.size() - pos_));
     }
     std::size_t pos() const { return pos_; }
 
-private:
+  private:
     Bytes pdu_;
     std::vector<FieldRow>& rows_;
     std::size_t pos_ = 0;
@@ -125,7 +127,8 @@ void describe_request_fields(const codec::Request& r, RowWriter& w) {
                 w.u16(fmt::format("Sub-req {} file number", n));
                 w.u16(fmt::format("Sub-req {} record number", n));
                 w.u16(fmt::format("Sub-req {} record length", n));
-                if (with_data) w.registers(fmt::format("Sub-req {} data", n), sub.record_length, -1);
+                if (with_data)
+                    w.registers(fmt::format("Sub-req {} data", n), sub.record_length, -1);
             }
             break;
         }
@@ -146,7 +149,8 @@ void describe_request_fields(const codec::Request& r, RowWriter& w) {
             w.u16("FIFO pointer address");
             break;
         case FC::EncapsulatedInterface:
-            w.u8("MEI type", r.mei_type == codec::kMeiReadDeviceId ? "read device identification" : "");
+            w.u8("MEI type",
+                 r.mei_type == codec::kMeiReadDeviceId ? "read device identification" : "");
             w.u8("Read device id code");
             w.u8("Object id");
             break;
@@ -309,7 +313,8 @@ std::string render_rows(const std::vector<FieldRow>& rows) {
         field_w = std::max(field_w, r.field.size());
         hex_w = std::max(hex_w, std::min<std::size_t>(r.hex.size(), 24));
     }
-    std::string out = fmt::format("  {:<{}}  {:<{}}  {}\n", "Field", field_w, "Bytes", hex_w, "Meaning");
+    std::string out =
+        fmt::format("  {:<{}}  {:<{}}  {}\n", "Field", field_w, "Bytes", hex_w, "Meaning");
     for (const auto& r : rows) {
         out += fmt::format("  {:<{}}  {:<{}}  {}\n", r.field, field_w, r.hex, hex_w, r.meaning);
     }

@@ -11,8 +11,10 @@
 namespace mbstorm::cli {
 
 void add_output_options(CLI::App* cmd, OutputFiles& files) {
-    cmd->add_option("--json", files.json, "write a machine-readable summary (schema: docs/json-schema.md)");
-    cmd->add_option("--hdr", files.hdr, "write the latency distribution in HdrHistogram's .hgrm format");
+    cmd->add_option("--json", files.json,
+                    "write a machine-readable summary (schema: docs/json-schema.md)");
+    cmd->add_option("--hdr", files.hdr,
+                    "write the latency distribution in HdrHistogram's .hgrm format");
     cmd->add_option("--html", files.html, "write a self-contained HTML report with plots");
 }
 

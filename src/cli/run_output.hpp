@@ -19,12 +19,14 @@ void add_output_options(CLI::App* cmd, OutputFiles& files);
 
 // Live progress on stderr: one updating line on a terminal, plain lines otherwise.
 class LiveProgress {
-public:
+  public:
     LiveProgress(std::FILE* out, bool quiet) : printer_(out), quiet_(quiet) {}
     void update(const load::ProgressSnapshot& s);
-    void finish() { if (!quiet_) printer_.finish(); }
+    void finish() {
+        if (!quiet_) printer_.finish();
+    }
 
-private:
+  private:
     report::ProgressPrinter printer_;
     bool quiet_;
     stats::IntervalSummary last_{};

@@ -56,9 +56,12 @@ int run_serve(ServeOptions& o) {
     auto& f = c.faults;
     if (!o.delay_kind.empty()) {
         using K = slave::DelayConfig::Kind;
-        if (o.delay_kind == "fixed") f.delay = {K::Fixed, o.delay_ns, 0, 0, 0};
-        else if (o.delay_kind == "uniform") f.delay = {K::Uniform, 0, o.delay_ns, o.delay_max_ns, 0};
-        else if (o.delay_kind == "exponential") f.delay = {K::Exponential, 0, 0, 0, o.delay_ns};
+        if (o.delay_kind == "fixed")
+            f.delay = {K::Fixed, o.delay_ns, 0, 0, 0};
+        else if (o.delay_kind == "uniform")
+            f.delay = {K::Uniform, 0, o.delay_ns, o.delay_max_ns, 0};
+        else if (o.delay_kind == "exponential")
+            f.delay = {K::Exponential, 0, 0, 0, o.delay_ns};
     } else if (o.delay_ns) {
         f.delay = {slave::DelayConfig::Kind::Fixed, o.delay_ns, 0, 0, 0};
     }
@@ -70,12 +73,13 @@ int run_serve(ServeOptions& o) {
     if (o.seed) f.seed = o.seed;
     if (auto problem = slave::validate(f); !problem.empty()) return fail(problem);
 
-    c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse : server::FullPolicy::EvictOldestIdle;
+    c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse
+                                              : server::FullPolicy::EvictOldestIdle;
     c.idle_timeout_ms = o.idle_timeout_ns / 1'000'000;
     if (o.only_unit >= 0) {
         c.only_unit = static_cast<std::uint8_t>(o.only_unit);
         c.foreign_unit = o.foreign_unit == "exception" ? server::ForeignUnitPolicy::GatewayException
-                                                        : server::ForeignUnitPolicy::NoAnswer;
+                                                       : server::ForeignUnitPolicy::NoAnswer;
     }
 
     server::block_stop_signals();
@@ -99,33 +103,46 @@ void add_serve_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
     cmd->add_option("--listen,-l", o->config.listen, "address to listen on, host:port or [v6]:port")
         ->capture_default_str();
-    cmd->add_option("--threads,-t", o->config.threads, "worker threads, each with its own ring (0: one per core)")
+    cmd->add_option("--threads,-t", o->config.threads,
+                    "worker threads, each with its own ring (0: one per core)")
         ->check(CLI::Range(0u, 1024u));
-    cmd->add_option("--device", o->device_file, "YAML device description: tables, initial data, simulated inputs, faults");
+    cmd->add_option("--device", o->device_file,
+                    "YAML device description: tables, initial data, simulated inputs, faults");
     cmd->add_flag("--stats", o->stats, "print a line of statistics every second");
-    add_duration_option(cmd, "--duration", o->duration_ns, "stop by itself after this long (default: until Ctrl-C)");
+    add_duration_option(cmd, "--duration", o->duration_ns,
+                        "stop by itself after this long (default: until Ctrl-C)");
     cmd->add_option("--max-connections", o->config.max_connections, "connection limit (0: none)")
         ->capture_default_str();
-    cmd->add_option("--full-policy", o->full_policy, "at the limit: evict the oldest idle connection, or refuse the new one")
+    cmd->add_option("--full-policy", o->full_policy,
+                    "at the limit: evict the oldest idle connection, or refuse the new one")
         ->check(CLI::IsMember({"evict", "refuse"}))
         ->capture_default_str();
-    add_duration_option(cmd, "--idle-timeout", o->idle_timeout_ns, "close connections idle this long (default: never)");
+    add_duration_option(cmd, "--idle-timeout", o->idle_timeout_ns,
+                        "close connections idle this long (default: never)");
     cmd->add_option("--max-outstanding", o->config.max_outstanding,
-                    "answer requests beyond this many unanswered ones per connection with exception 06 (0: no cap)")
+                    "answer requests beyond this many unanswered ones per connection with "
+                    "exception 06 (0: no cap)")
         ->check(CLI::Range(0u, 65535u));
-    cmd->add_option("--only-unit", o->only_unit, "answer only this unit id")->check(CLI::Range(0, 255));
-    cmd->add_option("--foreign-unit", o->foreign_unit, "other unit ids: no answer, or exception 0B like a gateway")
+    cmd->add_option("--only-unit", o->only_unit, "answer only this unit id")
+        ->check(CLI::Range(0, 255));
+    cmd->add_option("--foreign-unit", o->foreign_unit,
+                    "other unit ids: no answer, or exception 0B like a gateway")
         ->check(CLI::IsMember({"none", "exception"}));
     cmd->add_option("--delay-kind", o->delay_kind, "response delay distribution")
         ->check(CLI::IsMember({"fixed", "uniform", "exponential"}));
-    add_duration_option(cmd, "--delay", o->delay_ns, "response delay (fixed value, uniform minimum, or exponential mean)");
+    add_duration_option(cmd, "--delay", o->delay_ns,
+                        "response delay (fixed value, uniform minimum, or exponential mean)");
     add_duration_option(cmd, "--delay-max", o->delay_max_ns, "uniform delay maximum");
     add_duration_option(cmd, "--stall", o->stall_ns, "hold all responses this long ...");
     add_duration_option(cmd, "--stall-every", o->stall_every_ns, "... once every this long");
-    add_rate_option(cmd, "--exception-rate", o->exception_rate, "answer this share of requests with an exception");
-    cmd->add_option("--exception-code", o->exception_code, "code of injected exceptions")->check(CLI::Range(1, 255));
-    add_rate_option(cmd, "--drop-rate", o->drop_rate, "close the connection instead of answering, for this share");
-    add_rate_option(cmd, "--no-answer-rate", o->no_answer_rate, "leave this share of requests unanswered");
+    add_rate_option(cmd, "--exception-rate", o->exception_rate,
+                    "answer this share of requests with an exception");
+    cmd->add_option("--exception-code", o->exception_code, "code of injected exceptions")
+        ->check(CLI::Range(1, 255));
+    add_rate_option(cmd, "--drop-rate", o->drop_rate,
+                    "close the connection instead of answering, for this share");
+    add_rate_option(cmd, "--no-answer-rate", o->no_answer_rate,
+                    "leave this share of requests unanswered");
     cmd->add_option("--seed", o->seed, "seed for fault injection draws");
     cmd->callback([o, &action] { action = [o] { return run_serve(*o); }; });
 }

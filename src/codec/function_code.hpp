@@ -28,7 +28,9 @@ enum class FunctionCode : std::uint8_t {
     EncapsulatedInterface = 0x2B,
 };
 
-constexpr std::uint8_t to_byte(FunctionCode fc) noexcept { return static_cast<std::uint8_t>(fc); }
+constexpr std::uint8_t to_byte(FunctionCode fc) noexcept {
+    return static_cast<std::uint8_t>(fc);
+}
 
 // Set on the function code of an exception response.
 inline constexpr std::uint8_t kExceptionBit = 0x80;

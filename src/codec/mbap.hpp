@@ -50,7 +50,7 @@ EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id
 // Length 0, 1 or > 254 cannot be resynchronised: the splitter reports it and stays failed
 // until reset().
 class MbapSplitter {
-public:
+  public:
     enum class Status : std::uint8_t {
         Frame,          // `out` holds a complete, valid frame
         NeedMore,       // the fed bytes are used up
@@ -67,7 +67,7 @@ public:
     std::size_t pending() const noexcept { return chunk_.size(); }
     void reset() noexcept;
 
-private:
+  private:
     Bytes chunk_;
     std::array<std::uint8_t, limits::kMaxTcpAdu> partial_{};
     std::size_t partial_size_ = 0;

@@ -16,11 +16,12 @@ namespace mbstorm::codec {
 // `payload` points into the bytes that were decoded (or that the encoder should copy).
 struct Request {
     std::uint8_t function = 0;
-    std::uint16_t address = 0;   // FC01-06,0F,10,16: start/target; FC17: read start; FC18: FIFO pointer
-    std::uint16_t quantity = 0;  // FC01-04,0F,10: count; FC17: read count
-    std::uint16_t value = 0;     // FC05: 0xFF00/0x0000; FC06: register value
-    std::uint16_t and_mask = 0;  // FC16
-    std::uint16_t or_mask = 0;   // FC16
+    std::uint16_t address =
+        0;  // FC01-06,0F,10,16: start/target; FC17: read start; FC18: FIFO pointer
+    std::uint16_t quantity = 0;        // FC01-04,0F,10: count; FC17: read count
+    std::uint16_t value = 0;           // FC05: 0xFF00/0x0000; FC06: register value
+    std::uint16_t and_mask = 0;        // FC16
+    std::uint16_t or_mask = 0;         // FC16
     std::uint16_t write_address = 0;   // FC17
     std::uint16_t write_quantity = 0;  // FC17
     std::uint16_t sub_function = 0;    // FC08
@@ -34,25 +35,25 @@ struct Request {
 
 // One response PDU (normal or exception).
 struct Response {
-    std::uint8_t function = 0;  // without the exception bit
+    std::uint8_t function = 0;                      // without the exception bit
     ExceptionCode exception = ExceptionCode::None;  // != None: exception response
-    std::uint16_t address = 0;      // FC05,06,0F,10,16 echo
-    std::uint16_t quantity = 0;     // FC0F,10 echo
-    std::uint16_t value = 0;        // FC05,06 echo
-    std::uint16_t and_mask = 0;     // FC16 echo
-    std::uint16_t or_mask = 0;      // FC16 echo
-    std::uint16_t sub_function = 0; // FC08 echo
-    std::uint8_t exception_status = 0;  // FC07
-    std::uint16_t status = 0;         // FC0B/0C
-    std::uint16_t event_count = 0;    // FC0B/0C
-    std::uint16_t message_count = 0;  // FC0C
-    std::uint16_t fifo_count = 0;     // FC18
-    std::uint8_t mei_type = 0;          // FC2B
-    std::uint8_t device_id_code = 0;    // FC2B/0E
-    std::uint8_t conformity_level = 0;  // FC2B/0E
-    std::uint8_t more_follows = 0;      // FC2B/0E: 0x00 or 0xFF
-    std::uint8_t next_object_id = 0;    // FC2B/0E
-    std::uint8_t object_count = 0;      // FC2B/0E
+    std::uint16_t address = 0;                      // FC05,06,0F,10,16 echo
+    std::uint16_t quantity = 0;                     // FC0F,10 echo
+    std::uint16_t value = 0;                        // FC05,06 echo
+    std::uint16_t and_mask = 0;                     // FC16 echo
+    std::uint16_t or_mask = 0;                      // FC16 echo
+    std::uint16_t sub_function = 0;                 // FC08 echo
+    std::uint8_t exception_status = 0;              // FC07
+    std::uint16_t status = 0;                       // FC0B/0C
+    std::uint16_t event_count = 0;                  // FC0B/0C
+    std::uint16_t message_count = 0;                // FC0C
+    std::uint16_t fifo_count = 0;                   // FC18
+    std::uint8_t mei_type = 0;                      // FC2B
+    std::uint8_t device_id_code = 0;                // FC2B/0E
+    std::uint8_t conformity_level = 0;              // FC2B/0E
+    std::uint8_t more_follows = 0;                  // FC2B/0E: 0x00 or 0xFF
+    std::uint8_t next_object_id = 0;                // FC2B/0E
+    std::uint8_t object_count = 0;                  // FC2B/0E
     // FC01-04,17: data bytes after the byte count; FC08: data after sub-function;
     // FC0C: events; FC11: server id bytes; FC14: sub-responses; FC15: echo of sub-requests;
     // FC18: FIFO values (big-endian); FC2B/0E: object list (id, length, value)*.
@@ -83,7 +84,8 @@ CodecError decode_response(Bytes pdu, Response& out) noexcept;
 
 // Encodes a request PDU into `out`. Validates limits (InvalidArgument when broken) unless
 // `allow_invalid` is set, which the fuzzer uses to build out-of-spec requests on purpose.
-EncodeResult encode_request(const Request& req, MutableBytes out, bool allow_invalid = false) noexcept;
+EncodeResult encode_request(const Request& req, MutableBytes out,
+                            bool allow_invalid = false) noexcept;
 
 // Encodes a response PDU (or an exception response when `exception != None`).
 EncodeResult encode_response(const Response& rsp, MutableBytes out) noexcept;
@@ -109,14 +111,14 @@ struct FileSubRequest {
     Bytes record_data;                // FC15 only: record_length * 2 bytes
 };
 class FileRecordIterator {
-public:
+  public:
     // `with_data`: true for FC15 (sub-requests carry data), false for FC14.
     FileRecordIterator(Bytes sub_requests, bool with_data) noexcept
         : rest_(sub_requests), with_data_(with_data) {}
     // Returns Ok with the next sub-request, Empty at the end, or an error.
     CodecError next(FileSubRequest& out) noexcept;
 
-private:
+  private:
     Bytes rest_;
     bool with_data_;
 };
@@ -127,11 +129,11 @@ struct FileSubResponse {
     Bytes record_data;
 };
 class FileResponseIterator {
-public:
+  public:
     explicit FileResponseIterator(Bytes sub_responses) noexcept : rest_(sub_responses) {}
     CodecError next(FileSubResponse& out) noexcept;
 
-private:
+  private:
     Bytes rest_;
 };
 
@@ -141,11 +143,11 @@ struct DeviceIdObject {
     Bytes value;
 };
 class DeviceIdObjectIterator {
-public:
+  public:
     explicit DeviceIdObjectIterator(Bytes objects) noexcept : rest_(objects) {}
     CodecError next(DeviceIdObject& out) noexcept;
 
-private:
+  private:
     Bytes rest_;
 };
 

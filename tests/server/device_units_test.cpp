@@ -70,8 +70,10 @@ simulate:
         ASSERT_TRUE(c.send_all(read_holding(static_cast<std::uint16_t>(i), 1, 5, 1)));
         auto r = c.recv_n(test::read_holding_response_size(1));
         ASSERT_EQ(r.size(), test::read_holding_response_size(1));
-        if (i == 0) first = first_register(r);
-        else changed = first_register(r) != first;
+        if (i == 0)
+            first = first_register(r);
+        else
+            changed = first_register(r) != first;
         usleep(10'000);
     }
     EXPECT_TRUE(changed) << "a ramp input should move within 2 s";
