@@ -79,6 +79,20 @@ std::string function_label(std::uint8_t fc) {
     return name.empty() ? std::string("(unsupported)") : std::string(name);
 }
 
+// FC14 and FC15 requests and the FC15 response: a byte count, then sub-requests.
+void describe_file_sub_requests(Bytes payload, bool with_data, RowWriter& w) {
+    w.u8("Byte count");
+    codec::FileRecordIterator it(payload, with_data);
+    codec::FileSubRequest sub;
+    for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
+        w.u8(fmt::format("Sub-req {} reference type", n));
+        w.u16(fmt::format("Sub-req {} file number", n));
+        w.u16(fmt::format("Sub-req {} record number", n));
+        w.u16(fmt::format("Sub-req {} record length", n));
+        if (with_data) w.registers(fmt::format("Sub-req {} data", n), sub.record_length, -1);
+    }
+}
+
 void describe_request_fields(const codec::Request& r, RowWriter& w) {
     using FC = codec::FunctionCode;
     switch (static_cast<FC>(r.function)) {
@@ -117,21 +131,10 @@ void describe_request_fields(const codec::Request& r, RowWriter& w) {
             w.registers("Register", r.quantity, r.address);
             break;
         case FC::ReadFileRecord:
-        case FC::WriteFileRecord: {
-            w.u8("Byte count");
-            bool with_data = r.function == codec::to_byte(FC::WriteFileRecord);
-            codec::FileRecordIterator it(r.payload, with_data);
-            codec::FileSubRequest sub;
-            for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
-                w.u8(fmt::format("Sub-req {} reference type", n));
-                w.u16(fmt::format("Sub-req {} file number", n));
-                w.u16(fmt::format("Sub-req {} record number", n));
-                w.u16(fmt::format("Sub-req {} record length", n));
-                if (with_data)
-                    w.registers(fmt::format("Sub-req {} data", n), sub.record_length, -1);
-            }
+        case FC::WriteFileRecord:
+            describe_file_sub_requests(r.payload, r.function == codec::to_byte(FC::WriteFileRecord),
+                                       w);
             break;
-        }
         case FC::MaskWriteRegister:
             w.u16("Reference address");
             w.u16("AND mask");
@@ -220,19 +223,9 @@ void describe_response_fields(const codec::Response& r, RowWriter& w, Bytes pdu)
             }
             break;
         }
-        case FC::WriteFileRecord: {
-            w.u8("Byte count");
-            codec::FileRecordIterator it(r.payload, true);
-            codec::FileSubRequest sub;
-            for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
-                w.u8(fmt::format("Sub-req {} reference type", n));
-                w.u16(fmt::format("Sub-req {} file number", n));
-                w.u16(fmt::format("Sub-req {} record number", n));
-                w.u16(fmt::format("Sub-req {} record length", n));
-                w.registers(fmt::format("Sub-req {} data", n), sub.record_length, -1);
-            }
+        case FC::WriteFileRecord:  // the response echoes the request
+            describe_file_sub_requests(r.payload, true, w);
             break;
-        }
         case FC::MaskWriteRegister:
             w.u16("Reference address");
             w.u16("AND mask");

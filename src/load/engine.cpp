@@ -10,17 +10,13 @@
 
 #include "load/preflight.hpp"
 #include "load/stage_schedule.hpp"
+#include "load/thread_share.hpp"
 #include "load/worker.hpp"
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
 
 namespace mbstorm::load {
 namespace {
-
-// Splits `total` over `parts` as evenly as possible; part i gets the i-th share.
-std::uint64_t share(std::uint64_t total, std::uint32_t parts, std::uint32_t i) {
-    return total / parts + (i < total % parts ? 1 : 0);
-}
 
 void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& workers,
                    LoadResult& result) {
@@ -125,11 +121,11 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         setup.target = endpoint.to_string();
         setup.index = i;
         setup.threads = threads;
-        setup.connections = static_cast<std::uint32_t>(share(capacity, threads, i));
+        setup.connections = static_cast<std::uint32_t>(thread_share(capacity, threads, i));
         const double fraction = static_cast<double>(setup.connections) / capacity;
         setup.quota = plan.transactions == 0
                           ? 0
-                          : std::max<std::uint64_t>(share(plan.transactions, threads, i), 1);
+                          : std::max<std::uint64_t>(thread_share(plan.transactions, threads, i), 1);
         setup.rate = plan.rate * fraction;
         setup.connect_rate = plan.connect_rate / threads;
         setup.start_ns = start_ns;

@@ -14,6 +14,7 @@
 
 #include "load/response_check.hpp"
 #include "load/rng.hpp"
+#include "load/thread_share.hpp"
 #include "net/clock.hpp"
 #include "net/features.hpp"
 #include "net/user_data.hpp"
@@ -242,8 +243,8 @@ void Worker::queue_connect(std::uint32_t index, std::int64_t due) noexcept {
 }
 
 std::uint32_t Worker::share_of(std::uint32_t total) const noexcept {
-    const std::uint32_t n = setup_.threads;
-    const std::uint32_t share = total / n + (setup_.index < total % n ? 1 : 0);
+    const auto share =
+        static_cast<std::uint32_t>(thread_share(total, setup_.threads, setup_.index));
     return std::min(share, setup_.connections);
 }
 

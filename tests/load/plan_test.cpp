@@ -1,4 +1,5 @@
 #include "load/plan.hpp"
+#include "load/thread_share.hpp"
 
 #include <gtest/gtest.h>
 
@@ -152,6 +153,23 @@ TEST(PlanValidation, LastStartAddressAndThreads) {
     plan.threads = 8;
     plan.connections = 3;
     EXPECT_EQ(effective_threads(plan), 3u);
+}
+
+TEST(ThreadShare, SplitsEvenlyAndLosesNothing) {
+    for (std::uint32_t threads : {1u, 2u, 3u, 7u}) {
+        for (std::uint64_t total : {0ull, 1ull, 5ull, 64ull, 100001ull}) {
+            std::uint64_t sum = 0;
+            for (std::uint32_t i = 0; i < threads; ++i) {
+                const std::uint64_t part = thread_share(total, threads, i);
+                EXPECT_LE(part, total / threads + 1);
+                EXPECT_GE(part, total / threads);
+                sum += part;
+            }
+            EXPECT_EQ(sum, total) << total << " over " << threads;
+        }
+    }
+    EXPECT_EQ(thread_share(5, 2, 0), 3u);  // the first threads take the remainder
+    EXPECT_EQ(thread_share(5, 2, 1), 2u);
 }
 
 }  // namespace
