@@ -17,12 +17,16 @@
 #include "netfuzz/batch.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
+#include "netfuzz/restart_command.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
 
 namespace lim = codec::limits;
 using Pdu = std::vector<std::uint8_t>;
+
+// How much longer than --restart-wait a --restart-cmd that has not returned may take.
+constexpr std::int64_t kRestartCommandGraceNs = 60 * net::kNsPerSec;
 
 Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit) {
     Pdu f(lim::kMbapHeader + pdu.size());
@@ -124,8 +128,17 @@ bool Campaign::recover() {
     if (!wait_for_target(o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms,
                          o_.timeout_ms)) {
         r_.target_lost = true;
+        // Name the command and the wait: the user has to fix one of them.
         r_.stop_reason =
-            fmt::format("the target did not come back within {} ms", o_.restart_wait_ms);
+            o_.restart_cmd.empty()
+                ? fmt::format(
+                      "the target did not come back within {} ms (--restart-wait; no "
+                      "--restart-cmd given)",
+                      o_.restart_wait_ms)
+                : fmt::format(
+                      "the target did not come back within {} ms (--restart-wait) after "
+                      "--restart-cmd '{}'",
+                      o_.restart_wait_ms, o_.restart_cmd);
         return false;
     }
     ++r_.restarts;
@@ -399,19 +412,29 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
 
 bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
                      const std::string& restart_cmd, int wait_ms, int timeout_ms) {
-    const std::int64_t deadline = net::now_ns() + wait_ms * net::kNsPerMs;
+    const std::int64_t wait_ns = std::int64_t{wait_ms} * net::kNsPerMs;
+    std::int64_t deadline = net::now_ns() + wait_ns;
+    RestartCommand command;
+    bool command_running = false;
     if (!restart_cmd.empty()) {
-        const int rc = std::system(restart_cmd.c_str());
-        (void)rc;
+        std::string error;
+        command_running = command.start(restart_cmd, error);
+        // The wait counts from when the command returns (a `systemctl restart` may take its
+        // time); one that does not return (the target in the foreground) gets a minute more.
+        if (command_running) deadline += kRestartCommandGraceNs;
     }
     int backoff_ms = 20;
-    while (net::now_ns() < deadline) {
+    for (;;) {
+        if (command_running && command.returned()) {
+            command_running = false;
+            deadline = net::now_ns() + wait_ns;
+        }
         if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok)
             return true;
+        if (net::now_ns() >= deadline) return false;
         std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
         backoff_ms = std::min(backoff_ms * 3 / 2, 1000);
     }
-    return false;
 }
 
 CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on_progress,

@@ -74,8 +74,9 @@ CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on
 bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout_ms,
                      TargetProfile& profile, std::string& error);
 
-// Waits (connects retried with backoff) until the target answers the probe, running
-// `restart_cmd` first when given. False when it does not come back within `wait_ms`.
+// Waits (connects retried with backoff) until the target answers the probe, starting
+// `restart_cmd` first when given. False when it does not come back within `wait_ms` of the
+// command returning (or, for a command that keeps running, of its start plus a minute).
 bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
                      const std::string& restart_cmd, int wait_ms, int timeout_ms);
 

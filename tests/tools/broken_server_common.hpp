@@ -2,9 +2,13 @@
 // single-threaded poll() server that answers through the reference handler (slave/handler)
 // except where a planted fault hook says otherwise. Each broken_server_*.cpp plants one fault.
 //
-// Usage: broken_server_X [--port P] [--respawn] [--restart-delay-ms N]
+// Usage: broken_server_X [--port P] [--respawn] [--restart-delay-ms N] [--pid-file F]
+//                        [--exit-after-s N]
 // Prints "PORT <n>" once listening. With --respawn a supervisor restarts the server after it
 // dies (as systemd or a PLC watchdog would), on the same port, after the restart delay.
+// --pid-file appends the process id to F, so a test that starts servers in the background
+// (a fuzzer's --restart-cmd) can stop every one; --exit-after-s bounds the lifetime of such a
+// server in case the test itself dies before it can.
 #pragma once
 
 #include <arpa/inet.h>
@@ -186,13 +190,18 @@ inline std::uint16_t port_of(int fd) {
 
 inline pid_t g_child = 0;
 inline void forward_stop(int) {
-    if (g_child > 0) ::kill(g_child, SIGKILL);
+    if (g_child > 0) {
+        ::kill(g_child, SIGKILL);
+        // Reap it: orphaned, it would stay a zombie where PID 1 does not reap (containers).
+        ::waitpid(g_child, nullptr, 0);
+    }
     _exit(0);
 }
 
 inline int main_with(int argc, char** argv, const Faults& f) {
-    int port = 0, restart_delay_ms = 300;
+    int port = 0, restart_delay_ms = 300, exit_after_s = 0;
     bool respawn = false;
+    const char* pid_file = nullptr;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--port" && i + 1 < argc)
@@ -201,7 +210,20 @@ inline int main_with(int argc, char** argv, const Faults& f) {
             respawn = true;
         else if (a == "--restart-delay-ms" && i + 1 < argc)
             restart_delay_ms = std::atoi(argv[++i]);
+        else if (a == "--pid-file" && i + 1 < argc)
+            pid_file = argv[++i];
+        else if (a == "--exit-after-s" && i + 1 < argc)
+            exit_after_s = std::atoi(argv[++i]);
     }
+    if (pid_file) {
+        FILE* out = std::fopen(pid_file, "a");
+        if (!out) return 2;
+        std::fprintf(out, "%d\n", static_cast<int>(::getpid()));
+        std::fclose(out);
+    }
+    // SIGALRM's default action ends the process (and, with --respawn, its child through
+    // PR_SET_PDEATHSIG).
+    if (exit_after_s > 0) ::alarm(static_cast<unsigned>(exit_after_s));
     rlimit no_core{0, 0};
     ::setrlimit(RLIMIT_CORE, &no_core);  // planted crashes leave no core files
     ::signal(SIGPIPE, SIG_IGN);

@@ -1,0 +1,252 @@
+// `mbstorm fuzz --restart-cmd`: after the planted crash in tests/tools/broken_server_crash.cpp
+// the fuzzer runs the restart command, waits for the target to answer again and fuzzes on;
+// a restart command that does not bring the target back ends the run with a clear reason.
+#include <gtest/gtest.h>
+#include <sys/prctl.h>
+
+#include <cerrno>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "fuzz_test_support.hpp"
+
+namespace {
+
+using mbstorm::test::CommandResult;
+using mbstorm::test::Target;
+using mbstorm::test::tool_path;
+
+// Every run is bounded from outside too: a fuzzer stuck in the restart path fails the test
+// (exit 124 from timeout(1)) instead of blocking the suite.
+constexpr int kRunLimitSeconds = 180;
+// Servers started by a restart command end by themselves even if this test dies first.
+constexpr int kServerLifetimeSeconds = 300;
+// Cases per round of the campaign loop with the default 4 connections (4 lanes x 48).
+constexpr std::uint64_t kCasesPerRound = 4 * 48;
+
+CommandResult run_mbstorm_bounded(const std::string& args) {
+    std::string cmd = "timeout -k 10 ";
+    cmd.append(std::to_string(kRunLimitSeconds)).append(" ").append(MBSTORM_BINARY);
+    cmd.append(" ").append(args).append(" 2>&1");
+    CommandResult result;
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    if (!pipe) return result;
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
+    const int status = ::pclose(pipe);
+    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return result;
+}
+
+// The first port of the kernel's ephemeral range (connect() picks local ports from it).
+int ephemeral_port_start() {
+    std::ifstream in("/proc/sys/net/ipv4/ip_local_port_range");
+    int low = 32768;
+    in >> low;
+    return low;
+}
+
+// Servers the restart command started in the background: their parent shell exits at once,
+// so without a subreaper they would be re-parented to PID 1 (which in a container may never
+// reap them). While this object lives, this test process adopts them instead, so it can stop
+// and reap every one.
+class RestartedServers {
+  public:
+    explicit RestartedServers(std::string pid_file) : pid_file_(std::move(pid_file)) {
+        ::prctl(PR_SET_CHILD_SUBREAPER, 1);
+    }
+    ~RestartedServers() {
+        stop_all();
+        ::prctl(PR_SET_CHILD_SUBREAPER, 0);
+    }
+    RestartedServers(const RestartedServers&) = delete;
+    RestartedServers& operator=(const RestartedServers&) = delete;
+
+    std::vector<pid_t> pids() const {
+        std::vector<pid_t> out;
+        std::ifstream in(pid_file_);
+        for (int pid = 0; in >> pid;)
+            if (pid > 1) out.push_back(pid);
+        return out;
+    }
+    // SIGKILL and reap each one (the ones that crashed are zombies already). True when none
+    // is left.
+    bool stop_all() {
+        bool all_gone = true;
+        for (pid_t pid : pids()) {
+            if (reaped_.count(pid)) continue;
+            ::kill(pid, SIGKILL);
+            // While this process is their subreaper they stay our (zombie) children until
+            // reaped here, so a pid from the file cannot have been reused by then.
+            const pid_t waited = ::waitpid(pid, nullptr, 0);
+            if (waited == pid || (waited < 0 && errno == ECHILD)) reaped_.insert(pid);
+            if (::kill(pid, 0) == 0) all_gone = false;
+        }
+        return all_gone;
+    }
+
+  private:
+    std::string pid_file_;
+    std::set<pid_t> reaped_;
+};
+
+// broken_server_crash on 127.0.0.1, on a fixed port below the ephemeral range so the restart
+// command can bind the same port again, and so that none of the fuzzer's own connects while
+// the target is down can take the port (a TCP self-connect on loopback would hold it).
+std::unique_ptr<Target> start_crash_server(int& port) {
+    const int high = std::max(ephemeral_port_start(), 9024);
+    const int low = std::max(1024, high - 8000);
+    for (int attempt = 0; attempt < 40; ++attempt) {
+        const int candidate =
+            low + (static_cast<int>(::getpid()) * 7 + attempt * 997) % (high - low);
+        auto server = std::make_unique<Target>(std::vector<std::string>{
+            tool_path("broken_server_crash"), "--port", std::to_string(candidate), "--exit-after-s",
+            std::to_string(kServerLifetimeSeconds)});
+        // A port in use makes the server exit without printing its port.
+        if (!server->wait_for_line("PORT ").empty()) {
+            port = candidate;
+            return server;
+        }
+    }
+    return nullptr;
+}
+
+const nlohmann::json* find_crash(const nlohmann::json& summary) {
+    for (const auto& f : summary.at("findings"))
+        if (f.at("oracle") == "crash" && f.at("function") == 0x0F) return &f;
+    return nullptr;
+}
+
+// One broken_server_crash to fuzz, a scratch folder, and whatever the restart command starts.
+class RestartCmd : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        first_ = start_crash_server(port_);
+        ASSERT_TRUE(first_) << "broken_server_crash did not start on any port";
+        dir_ = mbstorm::test::temp_dir("restart-cmd");
+        restarted_ = std::make_unique<RestartedServers>(dir_ + "/restarted.pids");
+    }
+    void TearDown() override {
+        if (restarted_) {
+            EXPECT_TRUE(restarted_->stop_all()) << "a restarted server survived";
+        }
+        restarted_.reset();
+        first_.reset();
+        if (!dir_.empty()) std::filesystem::remove_all(dir_);
+    }
+    // The restart command: broken_server_crash again on the same port, after `delay` (shell
+    // sleep syntax) when given, in the background with no tie to the fuzzer's output so that
+    // the test's pipe from mbstorm closes when mbstorm exits.
+    std::string restart_cmd(const std::string& delay = "") const {
+        std::string cmd = delay.empty() ? "" : "sleep " + delay + "; ";
+        return cmd + server_cmd() + " </dev/null >/dev/null 2>&1 &";
+    }
+    // The same server run in the foreground: the command never returns while it serves.
+    std::string foreground_restart_cmd() const {
+        return "exec " + server_cmd() + " </dev/null >/dev/null 2>&1";
+    }
+    std::string server_cmd() const {
+        return tool_path("broken_server_crash") + " --port " + std::to_string(port_) +
+               " --pid-file " + dir_ + "/restarted.pids --exit-after-s " +
+               std::to_string(kServerLifetimeSeconds);
+    }
+    // Fuzzes the server with a fixed seed; `extra` adds the bounds and restart options.
+    CommandResult fuzz(const std::string& extra) const {
+        return run_mbstorm_bounded("fuzz --target 127.0.0.1:" + std::to_string(port_) +
+                                   " --seed 7 --timeout 300ms --out " + dir_ + "/findings --json " +
+                                   dir_ + "/summary.json " + extra);
+    }
+    nlohmann::json summary() const {
+        std::ifstream in(dir_ + "/summary.json");
+        return nlohmann::json::parse(in);
+    }
+
+    int port_ = 0;
+    std::unique_ptr<Target> first_;
+    std::string dir_;
+    std::unique_ptr<RestartedServers> restarted_;
+};
+
+TEST_F(RestartCmd, CrashedTargetIsRestartedAndFuzzingGoesOn) {
+    const std::uint64_t cases = 60000;
+    const auto run = fuzz("--cases " + std::to_string(cases) +
+                          " --restart-wait 30s --restart-cmd '" + restart_cmd() + "'");
+    // Documented: exit 1 when there are findings.
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = summary();
+    const nlohmann::json* crash = find_crash(s);
+    ASSERT_NE(crash, nullptr) << "planted crash not found:\n" << run.output;
+    EXPECT_GE(s.at("restarts").get<std::uint64_t>(), 1u) << run.output;
+    EXPECT_NE(run.output.find("restart(s)"), std::string::npos) << run.output;
+    EXPECT_FALSE(s.at("target_lost").get<bool>()) << run.output;
+    // It went on to the full case budget, at least two whole rounds after the crash's round.
+    EXPECT_EQ(s.at("stop_reason"), "case limit reached") << run.output;
+    EXPECT_EQ(s.at("cases").get<std::uint64_t>(), cases);
+    EXPECT_GT(cases - crash->at("case_number").get<std::uint64_t>(), 3 * kCasesPerRound)
+        << run.output;
+    // The restart command really ran, and the server it started last is still serving.
+    const auto pids = restarted_->pids();
+    ASSERT_FALSE(pids.empty()) << run.output;
+    EXPECT_EQ(::kill(pids.back(), 0), 0) << "the last restarted server is not running";
+}
+
+// The wait starts when the restart command returns: a command that takes longer than
+// --restart-wait itself (as `systemctl restart` may) still gets the whole wait afterwards.
+TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
+    const auto run = fuzz("--cases " + std::to_string(kCasesPerRound) +
+                          " -q --restart-wait 1s --restart-cmd '" + restart_cmd("1.5") + "'");
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = summary();
+    ASSERT_NE(find_crash(s), nullptr) << run.output;
+    EXPECT_FALSE(s.at("target_lost").get<bool>()) << run.output;
+    EXPECT_GE(s.at("restarts").get<std::uint64_t>(), 1u) << run.output;
+    EXPECT_EQ(s.at("stop_reason"), "case limit reached") << run.output;
+}
+
+// A command that runs the target in the foreground never returns: the fuzzer must not wait
+// for it, only for the target to answer.
+TEST_F(RestartCmd, ForegroundRestartCmdIsLeftRunningAndFuzzingGoesOn) {
+    const auto run = fuzz("--cases " + std::to_string(3 * kCasesPerRound) +
+                          " -q --restart-wait 5s --restart-cmd '" + foreground_restart_cmd() + "'");
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = summary();
+    ASSERT_NE(find_crash(s), nullptr) << run.output;
+    EXPECT_FALSE(s.at("target_lost").get<bool>()) << run.output;
+    EXPECT_GE(s.at("restarts").get<std::uint64_t>(), 1u) << run.output;
+    EXPECT_EQ(s.at("stop_reason"), "case limit reached") << run.output;
+    const auto pids = restarted_->pids();
+    ASSERT_FALSE(pids.empty()) << run.output;
+    EXPECT_EQ(::kill(pids.back(), 0), 0) << "the last restarted server is not running";
+}
+
+TEST_F(RestartCmd, RestartCmdThatDoesNotRestoreTargetEndsRunWithReason) {
+    const auto run =
+        fuzz("--cases 1000000 --seconds 120 -q --restart-wait 1s --restart-cmd 'true'");
+    // Documented: exit 1 when the target never came back (124 would mean it hung).
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = summary();
+    EXPECT_TRUE(s.at("target_lost").get<bool>()) << run.output;
+    EXPECT_EQ(s.at("restarts"), 0);
+    const std::string reason = s.at("stop_reason").get<std::string>();
+    EXPECT_NE(reason.find("did not come back within 1000 ms"), std::string::npos) << reason;
+    EXPECT_NE(reason.find("--restart-wait"), std::string::npos) << reason;
+    EXPECT_NE(reason.find("--restart-cmd 'true'"), std::string::npos) << reason;
+    // The human-readable summary says the same.
+    EXPECT_NE(run.output.find("stopped: " + reason), std::string::npos) << run.output;
+    EXPECT_LT(s.at("cases").get<std::uint64_t>(), 1000000u) << "it did not stop early";
+}
+
+TEST_F(RestartCmd, NoRestartCmdAndNoRecoveryNamesTheMissingOption) {
+    const auto run = fuzz("--cases 1000000 --seconds 120 -q --restart-wait 1s");
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = summary();
+    EXPECT_TRUE(s.at("target_lost").get<bool>()) << run.output;
+    const std::string reason = s.at("stop_reason").get<std::string>();
+    EXPECT_NE(reason.find("within 1000 ms"), std::string::npos) << reason;
+    EXPECT_NE(reason.find("no --restart-cmd given"), std::string::npos) << reason;
+}
+
+}  // namespace
