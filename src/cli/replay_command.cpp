@@ -37,6 +37,7 @@ int run_replay(const ReplayOptions& o) {
     }
     fmt::print("mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
+    if (!f.note.empty()) fmt::print("note: {}\n", f.note);
     netfuzz::ExecOptions ex;
     ex.timeout_ms = o.timeout_ns ? static_cast<int>(o.timeout_ns / 1'000'000) : f.timeout_ms;
     unsigned reproduced = 0;
@@ -58,7 +59,9 @@ int run_replay(const ReplayOptions& o) {
                              : std::string());
         if (same)
             fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
-        if (e.target_down) netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
+        // Only another run needs the target back.
+        if (e.target_down && i + 1 < std::max(1u, o.runs))
+            netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
     }
     fmt::print("{} of {} run(s) reproduced the finding\n", reproduced, std::max(1u, o.runs));
     return reproduced ? kExitFailed : kExitOk;

@@ -107,6 +107,11 @@ class Campaign {
     bool isolate(const Case& c, bool& fired);
     bool recover();
     void record(const Case& c, Execution ex);
+    // The target went down in a pipelined batch and was lost before the case that did it was
+    // re-run alone: keep the batch itself (every frame, in order) as an unconfirmed finding.
+    void record_lost_batch(const std::vector<Case>& batch);
+    // Numbers, stamps, saves and announces a new finding.
+    void keep(Finding f);
     void progress(bool force);
 
     const CampaignOptions& o_;
@@ -120,6 +125,7 @@ class Campaign {
     std::int64_t last_progress_ = 0;
     std::uint64_t last_cases_ = 0;
     bool up_ = true;
+    std::uint64_t downs_seen_ = 0;  // isolated runs after which the target was down
 };
 
 bool Campaign::recover() {
@@ -160,6 +166,7 @@ bool Campaign::isolate(const Case& c, bool& fired) {
         }
     }
     const bool down = ex.target_down;
+    if (down) ++downs_seen_;
     if (ex.verdict) {
         fired = true;
         record(c, std::move(ex));
@@ -231,6 +238,10 @@ void Campaign::record(const Case& c, Execution ex) {
         return;
     }
     if (costly) gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
+    keep(std::move(f));
+}
+
+void Campaign::keep(Finding f) {
     f.id = r_.findings.size() + 1;
     f.profile = r_.profile;
     f.target = o_.target_text;
@@ -250,6 +261,39 @@ void Campaign::record(const Case& c, Execution ex) {
     }
     r_.findings.push_back(std::move(f));
     if (on_finding_) on_finding_(r_.findings.back());
+}
+
+void Campaign::record_lost_batch(const std::vector<Case>& batch) {
+    // What the server looks like now decides crash or whole-server hang, as after one case.
+    Verdict v = fresh_probe_verdict(probe_target(o_.target, r_.profile, o_.timeout_ms));
+    if (!v) v = fresh_probe_verdict(ProbeResult::ConnectFailed);
+    Case all;
+    all.cls = MutationClass::Coalesced;
+    all.pipelinable = true;
+    for (const Case& c : batch)
+        for (Step s : c.steps) {
+            s.conn = 0;
+            s.delay_us = 0;
+            all.steps.push_back(std::move(s));
+        }
+    Finding f;
+    f.fuzz_case = split_frames(all);  // one step per frame, the batch's order kept
+    f.fuzz_case.function = first_function(f.fuzz_case);
+    std::size_t frames = 0;
+    for (const Step& s : f.fuzz_case.steps) frames += s.op == Op::Send;
+    f.verdict = std::move(v);
+    f.verdict.summary =
+        fmt::format("{} during a pipelined batch of {} cases ({} frames) [{}]", f.verdict.summary,
+                    batch.size(), frames, "unconfirmed, not minimised");
+    f.confirmed = false;
+    f.note = fmt::format(
+        "the target went down during a pipelined batch of {} cases and did not come back, so "
+        "the case that did it could not be re-run alone; unconfirmed and not minimised: the "
+        "reproducer resends all {} frames of the batch in order on one connection",
+        batch.size(), frames);
+    f.original_steps = f.fuzz_case.steps.size();
+    seen_.insert(Key{f.oracle(), f.fuzz_case.function, f.fuzz_case.cls});
+    keep(std::move(f));
 }
 
 void Campaign::progress(bool force) {
@@ -305,6 +349,8 @@ CampaignResult Campaign::run() {
             batch.close_all();
             if (probe_target(o_.target, r_.profile, o_.timeout_ms) != ProbeResult::Ok &&
                 !recover()) {
+                // Nothing can be re-run: the batch is all there is to show for it.
+                if (br.lane_lost) record_lost_batch(piped);
                 r_.cases += n;
                 break;
             }
@@ -313,6 +359,7 @@ CampaignResult Campaign::run() {
         // target answered: answers depend on state that concurrent lanes change in a timing-
         // dependent order, and a seed must replay the same cases.
         bool lost = false;
+        const std::uint64_t downs_before = downs_seen_;
         for (std::size_t i : br.suspects) {
             bool fired = false;
             if (!isolate(piped[i], fired)) {
@@ -321,6 +368,9 @@ CampaignResult Campaign::run() {
             }
             if (!fired) ++r_.unconfirmed;
         }
+        // Lost while re-running suspects and none of them was seen taking the target down:
+        // what did it is still somewhere in the batch.
+        if (lost && downs_seen_ == downs_before) record_lost_batch(piped);
         for (std::size_t i = 0; !lost && i < alone.size(); ++i) {
             bool fired = false;
             if (!isolate(alone[i], fired)) lost = true;

@@ -337,20 +337,9 @@ void Runner::judge(const Case& c) {
             r = probe_target(target_, profile_, options_.timeout_ms);
             event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
         }
-        if (r == ProbeResult::ConnectFailed || r == ProbeResult::Closed) {
-            out_.target_down = true;
-            candidate = Verdict{Oracle::Crash,
-                                r == ProbeResult::Closed ? "target closes every new connection"
-                                                         : "target stopped accepting connections",
-                                "the target accepts and serves a fresh connection",
-                                std::string(probe_result_name(r))};
-        } else if (r != ProbeResult::Ok) {
-            // The server as a whole no longer answers (not just one connection).
-            candidate =
-                Verdict{Oracle::Hang,
-                        fmt::format("whole server hangs: a fresh connection's probe got {}",
-                                    probe_result_name(r)),
-                        "an answer on a fresh connection", std::string(probe_result_name(r))};
+        if (r != ProbeResult::Ok) {
+            out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
+            candidate = fresh_probe_verdict(r);
         } else if (candidate && candidate.oracle == Oracle::Hang) {
             candidate.summary += " (other connections are still served)";
         }
@@ -463,6 +452,28 @@ std::string_view probe_result_name(ProbeResult r) noexcept {
             return "bad answer";
     }
     return "unknown";
+}
+
+Verdict fresh_probe_verdict(ProbeResult r) {
+    switch (r) {
+        case ProbeResult::Ok:
+            return {};
+        case ProbeResult::ConnectFailed:
+        case ProbeResult::Closed:
+            return Verdict{Oracle::Crash,
+                           r == ProbeResult::Closed ? "target closes every new connection"
+                                                    : "target stopped accepting connections",
+                           "the target accepts and serves a fresh connection",
+                           std::string(probe_result_name(r))};
+        case ProbeResult::NoAnswer:
+        case ProbeResult::BadAnswer:
+            break;
+    }
+    // The server as a whole no longer answers (not just one connection).
+    return Verdict{
+        Oracle::Hang,
+        fmt::format("whole server hangs: a fresh connection's probe got {}", probe_result_name(r)),
+        "an answer on a fresh connection", std::string(probe_result_name(r))};
 }
 
 int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept {

@@ -58,6 +58,10 @@ std::string_view probe_result_name(ProbeResult r) noexcept;
 // One liveness probe on a fresh connection: connect, send the profile's probe, await it.
 ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile, int timeout_ms);
 
+// What a fresh connection's probe result says about the whole server: crash (refuses or
+// closes new connections), hang (accepts but does not answer properly), nothing for Ok.
+Verdict fresh_probe_verdict(ProbeResult r);
+
 // Connects with a timeout; returns a connected non-blocking fd (TCP_NODELAY) or -errno.
 int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept;
 

@@ -12,6 +12,10 @@ namespace {
 
 using nlohmann::json;
 
+// A sanity bound on what a finding file may ask us to send: room for a whole pipelined batch
+// (one step per frame: up to 64 connections x 48 cases, coalesced cases holding up to 17).
+constexpr std::size_t kMaxLoadedSteps = 64 * 48 * 17;
+
 std::string_view op_name(Op op) {
     switch (op) {
         case Op::Send:
@@ -122,6 +126,8 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"case_number", f.case_number},
         {"found_after_s", f.found_after_s},
         {"minimized", f.minimized},
+        {"confirmed", f.confirmed},
+        {"note", f.note},
         {"original_steps", f.original_steps},
         {"timeout_ms", f.timeout_ms},
         {"profile",
@@ -143,7 +149,9 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
     };
     std::ostringstream traffic;
     traffic << "# " << f.verdict.summary << "\n# expected: " << f.verdict.expected
-            << "\n# seen:     " << f.verdict.seen << "\n# time(us) conn event bytes\n";
+            << "\n# seen:     " << f.verdict.seen << "\n";
+    if (!f.note.empty()) traffic << "# note:     " << f.note << "\n";
+    traffic << "# time(us) conn event bytes\n";
     for (const TraceEvent& e : f.trace) {
         traffic << fmt::format("{:>9} {:>4} {:<14} {}{}\n", e.t_us,
                                e.conn == 255 ? std::string("new") : std::to_string(e.conn),
@@ -151,7 +159,8 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
                                e.note.empty() ? "" : "  (" + e.note + ")");
     }
     return write("finding.json", j.dump(2) + "\n") &&
-           write("summary.txt", f.verdict.summary + "\n") && write("traffic.txt", traffic.str());
+           write("summary.txt", f.verdict.summary + "\n" + (f.note.empty() ? "" : f.note + "\n")) &&
+           write("traffic.txt", traffic.str());
 }
 
 bool load_finding(const std::string& path, Finding& out, std::string& error) {
@@ -178,6 +187,9 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         out.target = j.value("target", "");
         out.seed = j.value("seed", std::uint64_t{0});
         out.timeout_ms = j.value("timeout_ms", 1000);
+        out.minimized = j.value("minimized", false);
+        out.confirmed = j.value("confirmed", true);
+        out.note = j.value("note", "");
         const json& p = j.at("profile");
         out.profile.unit = p.at("unit").get<std::uint8_t>();
         if (!from_hex(p.at("probe").get<std::string>(), out.profile.probe_pdu) ||
@@ -195,7 +207,7 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
             if (!from_hex(s.value("hex", ""), st.bytes)) throw std::runtime_error("bad hex");
             out.fuzz_case.steps.push_back(std::move(st));
         }
-        if (out.fuzz_case.steps.size() > 64 || out.fuzz_case.connections() > 8)
+        if (out.fuzz_case.steps.size() > kMaxLoadedSteps || out.fuzz_case.connections() > 8)
             throw std::runtime_error("case too large");
     } catch (const std::exception& e) {
         error = fmt::format("{}: not a finding: {}", file, e.what());

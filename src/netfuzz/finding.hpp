@@ -23,6 +23,10 @@ struct Finding {
     std::uint64_t case_number = 0;  // cases run before it was found
     double found_after_s = 0;
     bool minimized = false;
+    // False when no isolated run confirmed it (the target was lost before the case that did it
+    // could be re-run alone); `note` then says why and what the reproducer holds.
+    bool confirmed = true;
+    std::string note;
     std::size_t original_steps = 0;
     int timeout_ms = 1000;
     std::string folder;  // where it was saved ("" if not saved)

@@ -33,7 +33,9 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
                             {"folder", f.folder},
                             {"case_number", f.case_number},
                             {"found_after_s", f.found_after_s},
-                            {"minimized", f.minimized}});
+                            {"minimized", f.minimized},
+                            {"confirmed", f.confirmed},
+                            {"note", f.note}});
     }
     json classes = json::object();
     for (std::size_t i = 0; i < r.cases_by_class.size(); ++i)
@@ -84,9 +86,9 @@ std::string format_fuzz_junit(const CampaignResult& r, const RunInfo& info) {
         if (!list.empty()) {
             std::string body;
             for (const Finding* f : list)
-                body +=
-                    fmt::format("{}\nexpected: {}\nseen: {}\nfolder: {}\n\n", f->verdict.summary,
-                                f->verdict.expected, f->verdict.seen, f->folder);
+                body += fmt::format("{}\nexpected: {}\nseen: {}\n{}folder: {}\n\n",
+                                    f->verdict.summary, f->verdict.expected, f->verdict.seen,
+                                    f->note.empty() ? "" : "note: " + f->note + "\n", f->folder);
             x += fmt::format(
                 "      <failure message=\"{} finding(s)\" type=\"{}\">{}</failure>\n", list.size(),
                 xml_escape(std::string(oracle_name(list.front()->oracle()))), xml_escape(body));
@@ -116,11 +118,13 @@ std::string format_fuzz_sarif(const CampaignResult& r, const RunInfo& info) {
             {"ruleId", oracle_name(f.oracle())},
             {"level", sarif_level(f.oracle())},
             {"message",
-             {{"text", f.verdict.summary + " | expected: " + f.verdict.expected +
-                           " | seen: " + f.verdict.seen}}},
+             {{"text", f.verdict.summary + " | expected: " + f.verdict.expected + " | seen: " +
+                           f.verdict.seen + (f.note.empty() ? "" : " | note: " + f.note)}}},
             {"partialFingerprints", {{"mbstormKey", f.key()}}},
             {"properties",
-             {{"function", f.fuzz_case.function}, {"class", class_name(f.fuzz_case.cls)}}}};
+             {{"function", f.fuzz_case.function},
+              {"class", class_name(f.fuzz_case.cls)},
+              {"confirmed", f.confirmed}}}};
         if (!f.folder.empty())
             result["locations"] =
                 json::array({{{"physicalLocation",
@@ -159,8 +163,9 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     } else {
         s += fmt::format("  {} finding(s):\n", r.findings.size());
         for (const Finding& f : r.findings)
-            s += fmt::format("  #{} {:<18} {}\n      {}\n", f.id, oracle_name(f.oracle()),
+            s += fmt::format("  #{} {:<18} {}\n      {}{}\n", f.id, oracle_name(f.oracle()),
                              f.verdict.summary,
+                             f.note.empty() ? std::string() : "note: " + f.note + "\n      ",
                              f.folder.empty() ? std::string("(not saved)") : f.folder);
     }
     return s;

@@ -1,0 +1,180 @@
+// A target that crashes during a pipelined batch and never comes back (no --restart-cmd): the
+// suspects cannot be re-run alone, so the batch itself is reported as one unconfirmed crash
+// finding whose reproducer resends every frame of the batch in order, and it replays.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "fuzz_test_support.hpp"
+#include "netfuzz/finding.hpp"
+#include "netfuzz/generator.hpp"
+#include "netfuzz/minimize.hpp"
+
+namespace {
+
+using mbstorm::test::CommandResult;
+using mbstorm::test::Target;
+using mbstorm::test::tool_path;
+namespace nf = mbstorm::netfuzz;
+
+// Runs are bounded from outside too: a stuck fuzzer or replay fails (exit 124) instead of
+// blocking the suite.
+constexpr int kRunLimitSeconds = 120;
+constexpr std::uint64_t kSeed = 7;
+// Cases per round of the campaign loop with the default 4 connections (4 lanes x 48).
+constexpr std::size_t kCasesPerRound = 4 * 48;
+
+CommandResult run_bounded(const std::string& args) {
+    std::string cmd = "timeout -k 10 ";
+    cmd.append(std::to_string(kRunLimitSeconds)).append(" ").append(MBSTORM_BINARY);
+    cmd.append(" ").append(args).append(" 2>&1");
+    CommandResult result;
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    if (!pipe) return result;
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
+    const int status = ::pclose(pipe);
+    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return result;
+}
+
+// broken_server_crash without a supervisor, on a fixed port below the kernel's ephemeral
+// range: while the target is down the fuzzer keeps connecting, and a loopback self-connect on
+// an ephemeral port would look like a target that answers.
+std::unique_ptr<Target> start_crash_server(int& port, int salt) {
+    std::ifstream range("/proc/sys/net/ipv4/ip_local_port_range");
+    int ephemeral_low = 32768;
+    range >> ephemeral_low;
+    const int high = std::max(ephemeral_low, 9024);
+    const int low = std::max(1024, high - 8000);
+    for (int attempt = 0; attempt < 40; ++attempt) {
+        const int candidate =
+            low + (static_cast<int>(::getpid()) * 13 + salt * 4001 + attempt * 997) % (high - low);
+        // --exit-after-s: it ends by itself even if this test dies first.
+        auto server = std::make_unique<Target>(
+            std::vector<std::string>{tool_path("broken_server_crash"), "--port",
+                                     std::to_string(candidate), "--exit-after-s", "300"});
+        // A port in use makes the server exit without printing its port.
+        if (!server->wait_for_line("PORT ").empty()) {
+            port = candidate;
+            return server;
+        }
+    }
+    return nullptr;
+}
+
+nlohmann::json read_json(const std::string& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in, nullptr, false);
+}
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The pipelined frames of the round that starts after `cases_before` cases, as the campaign
+// builds it: same seed, every case pipelinable (--transport-share 0), nothing deprioritised
+// before the crash. One entry per MBAP frame, in order.
+std::vector<std::vector<std::uint8_t>> batch_frames(std::uint64_t cases_before) {
+    nf::Generator gen(nf::GeneratorOptions{kSeed, 1, false, 0});
+    nf::Case c;
+    for (std::uint64_t i = 0; i < cases_before; ++i) gen.next(c);
+    nf::Case all;
+    for (std::size_t i = 0; i < kCasesPerRound; ++i) {
+        gen.next(c);
+        if (!c.pipelinable) continue;
+        all.steps.insert(all.steps.end(), c.steps.begin(), c.steps.end());
+    }
+    std::vector<std::vector<std::uint8_t>> frames;
+    for (const nf::Step& s : nf::split_frames(all).steps) frames.push_back(s.bytes);
+    return frames;
+}
+
+bool is_zero_quantity_fc0f(const std::vector<std::uint8_t>& frame) {
+    return frame.size() >= 12 && frame[7] == 0x0F && frame[10] == 0 && frame[11] == 0;
+}
+
+TEST(BatchCrash, LostTargetAfterPipelinedCrashIsReportedAsUnconfirmedBatchFinding) {
+    int port = 0;
+    auto server = start_crash_server(port, 0);
+    ASSERT_TRUE(server) << "broken_server_crash did not start on any port";
+    const std::string dir = mbstorm::test::temp_dir("batch-crash");
+    // Every case pipelined (--transport-share 0): the planted crash can only hit in a batch.
+    const auto run = run_bounded("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed " +
+                                 std::to_string(kSeed) +
+                                 " --transport-share 0 --timeout 300ms --cases 1000000 "
+                                 "--seconds 60 -q --restart-wait 1s --out " +
+                                 dir + "/findings --json " + dir + "/summary.json --junit " + dir +
+                                 "/fuzz.xml --sarif " + dir + "/fuzz.sarif");
+    // Documented: exit 1 for findings (and for a target that never came back).
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    const auto s = read_json(dir + "/summary.json");
+    ASSERT_FALSE(s.is_discarded()) << run.output;
+    EXPECT_TRUE(s.at("target_lost").get<bool>()) << run.output;
+    EXPECT_EQ(s.at("restarts"), 0);
+    ASSERT_EQ(s.at("findings").size(), 1u) << s.dump(2);
+    const auto& f = s.at("findings")[0];
+    EXPECT_EQ(f.at("oracle"), "crash") << f.dump(2);
+    EXPECT_FALSE(f.at("confirmed").get<bool>()) << f.dump(2);
+    EXPECT_FALSE(f.at("minimized").get<bool>()) << f.dump(2);
+    const std::string note = f.at("note").get<std::string>();
+    EXPECT_NE(note.find("pipelined batch"), std::string::npos) << note;
+    EXPECT_NE(note.find("not minimised"), std::string::npos) << note;
+    EXPECT_NE(run.output.find("note: " + note), std::string::npos) << run.output;
+
+    // The reproducer: one send per frame of the batch, in the batch's order, on one connection.
+    const std::string folder = f.at("folder").get<std::string>();
+    ASSERT_FALSE(folder.empty());
+    const auto saved = read_json(folder + "/finding.json");
+    ASSERT_FALSE(saved.is_discarded());
+    EXPECT_EQ(saved.at("oracle"), "crash");
+    EXPECT_FALSE(saved.at("confirmed").get<bool>());
+    EXPECT_EQ(saved.at("note"), note);
+    const auto expected = batch_frames(f.at("case_number").get<std::uint64_t>());
+    const auto& steps = saved.at("case").at("steps");
+    ASSERT_EQ(steps.size(), expected.size());
+    ASSERT_GT(expected.size(), 1u);
+    bool has_planted = false;
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+        std::vector<std::uint8_t> bytes;
+        ASSERT_TRUE(nf::from_hex(steps[i].at("hex").get<std::string>(), bytes));
+        EXPECT_EQ(steps[i].at("op"), "send");
+        EXPECT_EQ(steps[i].at("conn"), 0);
+        EXPECT_EQ(bytes, expected[i]) << "frame " << i;
+        has_planted |= is_zero_quantity_fc0f(bytes);
+    }
+    EXPECT_TRUE(has_planted) << "the batch does not hold the planted FC0F quantity-0 frame";
+    EXPECT_NE(f.at("summary").get<std::string>().find(std::to_string(steps.size()) + " frames"),
+              std::string::npos)
+        << f.dump(2);
+
+    // JUnit and SARIF show it like any other finding.
+    const std::string junit = read_text(dir + "/fuzz.xml");
+    EXPECT_NE(junit.find("type=\"crash\""), std::string::npos) << junit;
+    EXPECT_NE(junit.find("pipelined batch"), std::string::npos) << junit;
+    const auto sarif = read_json(dir + "/fuzz.sarif");
+    ASSERT_FALSE(sarif.is_discarded());
+    const auto& results = sarif.at("runs")[0].at("results");
+    ASSERT_EQ(results.size(), 1u);
+    EXPECT_EQ(results[0].at("ruleId"), "crash");
+    EXPECT_FALSE(results[0].at("properties").at("confirmed").get<bool>());
+    server.reset();
+
+    // Replaying the batch against a fresh server crashes it again.
+    int replay_port = 0;
+    auto fresh = start_crash_server(replay_port, 1);
+    ASSERT_TRUE(fresh) << "broken_server_crash did not start on any port";
+    const auto replay =
+        run_bounded("replay " + folder + " --target 127.0.0.1:" + std::to_string(replay_port));
+    EXPECT_EQ(replay.exit_code, 1) << replay.output;  // documented: 1 = reproduces
+    EXPECT_NE(replay.output.find("REPRODUCES"), std::string::npos) << replay.output;
+    EXPECT_NE(replay.output.find("1 of 1 run(s) reproduced"), std::string::npos) << replay.output;
+    fresh.reset();
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
