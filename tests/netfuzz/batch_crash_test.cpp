@@ -15,6 +15,8 @@
 namespace {
 
 using mbstorm::test::CommandResult;
+using mbstorm::test::run_mbstorm;
+using mbstorm::test::start_crash_server;
 using mbstorm::test::Target;
 using mbstorm::test::tool_path;
 namespace nf = mbstorm::netfuzz;
@@ -27,43 +29,7 @@ constexpr std::uint64_t kSeed = 7;
 constexpr std::size_t kCasesPerRound = 4 * 48;
 
 CommandResult run_bounded(const std::string& args) {
-    std::string cmd = "timeout -k 10 ";
-    cmd.append(std::to_string(kRunLimitSeconds)).append(" ").append(MBSTORM_BINARY);
-    cmd.append(" ").append(args).append(" 2>&1");
-    CommandResult result;
-    FILE* pipe = ::popen(cmd.c_str(), "r");
-    if (!pipe) return result;
-    char buf[4096];
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
-    const int status = ::pclose(pipe);
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
-
-// broken_server_crash without a supervisor, on a fixed port below the kernel's ephemeral
-// range: while the target is down the fuzzer keeps connecting, and a loopback self-connect on
-// an ephemeral port would look like a target that answers.
-std::unique_ptr<Target> start_crash_server(int& port, int salt) {
-    std::ifstream range("/proc/sys/net/ipv4/ip_local_port_range");
-    int ephemeral_low = 32768;
-    range >> ephemeral_low;
-    const int high = std::max(ephemeral_low, 9024);
-    const int low = std::max(1024, high - 8000);
-    for (int attempt = 0; attempt < 40; ++attempt) {
-        const int candidate =
-            low + (static_cast<int>(::getpid()) * 13 + salt * 4001 + attempt * 997) % (high - low);
-        // --exit-after-s: it ends by itself even if this test dies first.
-        auto server = std::make_unique<Target>(
-            std::vector<std::string>{tool_path("broken_server_crash"), "--port",
-                                     std::to_string(candidate), "--exit-after-s", "300"});
-        // A port in use makes the server exit without printing its port.
-        if (!server->wait_for_line("PORT ").empty()) {
-            port = candidate;
-            return server;
-        }
-    }
-    return nullptr;
+    return run_mbstorm(args, kRunLimitSeconds);
 }
 
 nlohmann::json read_json(const std::string& path) {

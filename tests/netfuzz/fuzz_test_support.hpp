@@ -7,10 +7,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -104,6 +107,32 @@ inline std::string temp_dir(const std::string& name) {
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir.string();
+}
+
+// broken_server_crash without a supervisor, on a fixed port below the kernel's ephemeral
+// range, so a restart can bind the same port again and none of the fuzzer's own connects
+// while the target is down can take it (a loopback self-connect would look like a target
+// that answers). It ends by itself after `lifetime_s` even if the test dies first. `salt`
+// keeps two servers of one test apart.
+inline std::unique_ptr<Target> start_crash_server(int& port, int salt = 0, int lifetime_s = 300) {
+    std::ifstream range("/proc/sys/net/ipv4/ip_local_port_range");
+    int ephemeral_low = 32768;
+    range >> ephemeral_low;
+    const int high = std::max(ephemeral_low, 9024);
+    const int low = std::max(1024, high - 8000);
+    for (int attempt = 0; attempt < 40; ++attempt) {
+        const int candidate =
+            low + (static_cast<int>(::getpid()) * 13 + salt * 4001 + attempt * 997) % (high - low);
+        auto server = std::make_unique<Target>(std::vector<std::string>{
+            tool_path("broken_server_crash"), "--port", std::to_string(candidate), "--exit-after-s",
+            std::to_string(lifetime_s)});
+        // A port in use makes the server exit without printing its port.
+        if (!server->wait_for_line("PORT ").empty()) {
+            port = candidate;
+            return server;
+        }
+    }
+    return nullptr;
 }
 
 }  // namespace mbstorm::test

@@ -15,6 +15,8 @@
 namespace {
 
 using mbstorm::test::CommandResult;
+using mbstorm::test::run_mbstorm;
+using mbstorm::test::start_crash_server;
 using mbstorm::test::Target;
 using mbstorm::test::tool_path;
 
@@ -27,26 +29,7 @@ constexpr int kServerLifetimeSeconds = 300;
 constexpr std::uint64_t kCasesPerRound = 4 * 48;
 
 CommandResult run_mbstorm_bounded(const std::string& args) {
-    std::string cmd = "timeout -k 10 ";
-    cmd.append(std::to_string(kRunLimitSeconds)).append(" ").append(MBSTORM_BINARY);
-    cmd.append(" ").append(args).append(" 2>&1");
-    CommandResult result;
-    FILE* pipe = ::popen(cmd.c_str(), "r");
-    if (!pipe) return result;
-    char buf[4096];
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
-    const int status = ::pclose(pipe);
-    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return result;
-}
-
-// The first port of the kernel's ephemeral range (connect() picks local ports from it).
-int ephemeral_port_start() {
-    std::ifstream in("/proc/sys/net/ipv4/ip_local_port_range");
-    int low = 32768;
-    in >> low;
-    return low;
+    return run_mbstorm(args, kRunLimitSeconds);
 }
 
 // Servers the restart command started in the background: their parent shell exits at once,
@@ -93,27 +76,6 @@ class RestartedServers {
     std::set<pid_t> reaped_;
 };
 
-// broken_server_crash on 127.0.0.1, on a fixed port below the ephemeral range so the restart
-// command can bind the same port again, and so that none of the fuzzer's own connects while
-// the target is down can take the port (a TCP self-connect on loopback would hold it).
-std::unique_ptr<Target> start_crash_server(int& port) {
-    const int high = std::max(ephemeral_port_start(), 9024);
-    const int low = std::max(1024, high - 8000);
-    for (int attempt = 0; attempt < 40; ++attempt) {
-        const int candidate =
-            low + (static_cast<int>(::getpid()) * 7 + attempt * 997) % (high - low);
-        auto server = std::make_unique<Target>(std::vector<std::string>{
-            tool_path("broken_server_crash"), "--port", std::to_string(candidate), "--exit-after-s",
-            std::to_string(kServerLifetimeSeconds)});
-        // A port in use makes the server exit without printing its port.
-        if (!server->wait_for_line("PORT ").empty()) {
-            port = candidate;
-            return server;
-        }
-    }
-    return nullptr;
-}
-
 const nlohmann::json* find_crash(const nlohmann::json& summary) {
     for (const auto& f : summary.at("findings"))
         if (f.at("oracle") == "crash" && f.at("function") == 0x0F) return &f;
@@ -124,7 +86,7 @@ const nlohmann::json* find_crash(const nlohmann::json& summary) {
 class RestartCmd : public ::testing::Test {
   protected:
     void SetUp() override {
-        first_ = start_crash_server(port_);
+        first_ = start_crash_server(port_, 0, kServerLifetimeSeconds);
         ASSERT_TRUE(first_) << "broken_server_crash did not start on any port";
         dir_ = mbstorm::test::temp_dir("restart-cmd");
         restarted_ = std::make_unique<RestartedServers>(dir_ + "/restarted.pids");
@@ -197,7 +159,7 @@ TEST_F(RestartCmd, CrashedTargetIsRestartedAndFuzzingGoesOn) {
 // --restart-wait itself (as `systemctl restart` may) still gets the whole wait afterwards.
 TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
     const auto run = fuzz("--cases " + std::to_string(kCasesPerRound) +
-                          " -q --restart-wait 1s --restart-cmd '" + restart_cmd("1.5") + "'");
+                          " -q --restart-wait 2s --restart-cmd '" + restart_cmd("3") + "'");
     ASSERT_EQ(run.exit_code, 1) << run.output;
     const auto s = summary();
     ASSERT_NE(find_crash(s), nullptr) << run.output;

@@ -14,9 +14,14 @@ struct CommandResult {
     std::string output;  // stdout and stderr together
 };
 
-inline CommandResult run_mbstorm(const std::string& args) {
+// `limit_seconds` > 0 bounds the run from outside (timeout(1): exit 124 when it hits), so a
+// stuck command fails its test instead of blocking the suite.
+inline CommandResult run_mbstorm(const std::string& args, int limit_seconds = 0) {
     // Appended piecewise: g++ 12 warns falsely (-Warray-bounds) on `literal + string` chains.
-    std::string cmd = MBSTORM_BINARY;
+    std::string cmd;
+    if (limit_seconds > 0)
+        cmd.append("timeout -k 10 ").append(std::to_string(limit_seconds)).append(" ");
+    cmd.append(MBSTORM_BINARY);
     cmd.append(" ").append(args).append(" 2>&1");
     CommandResult result;
     FILE* pipe = popen(cmd.c_str(), "r");
