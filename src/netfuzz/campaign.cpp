@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <set>
 #include <thread>
+#include <utility>
 
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
@@ -27,6 +28,13 @@ using Pdu = std::vector<std::uint8_t>;
 
 // How much longer than --restart-wait a --restart-cmd that has not returned may take.
 constexpr std::int64_t kRestartCommandGraceNs = 60 * net::kNsPerSec;
+
+// How big a reproducer is: its steps first, then its bytes.
+std::pair<std::size_t, std::size_t> size_of(const Case& c) {
+    std::size_t bytes = 0;
+    for (const Step& s : c.steps) bytes += s.bytes.size();
+    return {c.steps.size(), bytes};
+}
 
 Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit) {
     Pdu f(lim::kMbapHeader + pdu.size());
@@ -209,7 +217,7 @@ void Campaign::record(const Case& c, Execution ex) {
     f.fuzz_case = c;
     f.trace = std::move(ex.trace);
     f.original_steps = c.steps.size();
-    if (o_.minimize && frames.steps.size() > 1) {
+    if (o_.minimize) {
         Execution last;
         bool lost = false;
         auto reproduces = [&](const Case& candidate) {
@@ -225,7 +233,7 @@ void Campaign::record(const Case& c, Execution ex) {
         // Crashes and hangs cost a restart or a timeout per try: a smaller budget.
         Case small =
             minimize_case(c, reproduces, costly ? o_.minimize_budget / 3 : o_.minimize_budget);
-        if (small.steps.size() < frames.steps.size() && last.verdict) {
+        if (size_of(small) < size_of(frames) && last.verdict) {
             f.fuzz_case = std::move(small);
             f.verdict = last.verdict;
             f.trace = std::move(last.trace);

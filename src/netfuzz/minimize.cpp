@@ -37,14 +37,12 @@ Case split_frames(const Case& c) {
     return out;
 }
 
-Case minimize_case(const Case& original, const std::function<bool(const Case&)>& reproduces,
-                   unsigned budget) {
-    Case best = split_frames(original);
-    if (best.steps.size() < 2) return original;
-    if (best.steps.size() != original.steps.size()) {
-        if (budget == 0 || !reproduces(best)) return original;
-        --budget;
-    }
+namespace {
+
+using Reproduces = std::function<bool(const Case&)>;
+
+// ddmin over the steps: drop chunks while the oracle still fires.
+void drop_steps(Case& best, const Reproduces& reproduces, unsigned& budget) {
     std::size_t n = 2;
     while (best.steps.size() >= 2 && budget > 0) {
         const std::size_t len = best.steps.size();
@@ -70,6 +68,58 @@ Case minimize_case(const Case& original, const std::function<bool(const Case&)>&
             n = std::min(len, n * 2);
         }
     }
+}
+
+bool is_one_frame(const std::vector<std::uint8_t>& bytes) {
+    return bytes.size() > codec::limits::kMbapHeader &&
+           bytes.size() == 6u + codec::load_be16(bytes.data() + 4);
+}
+
+// The frame with its PDU cut to `pdu_size` bytes and its MBAP length field to match.
+std::vector<std::uint8_t> cut_frame(const std::vector<std::uint8_t>& frame, std::size_t pdu_size) {
+    std::vector<std::uint8_t> out(
+        frame.begin(),
+        frame.begin() + static_cast<std::ptrdiff_t>(codec::limits::kMbapHeader + pdu_size));
+    codec::store_be16(out.data() + 4, static_cast<std::uint16_t>(1 + pdu_size));
+    return out;
+}
+
+// Byte level: the shortest tail of each well-framed send's PDU that still makes the oracle
+// fire, found by bisection (each candidate stays a well-framed ADU, so it still pipelines).
+void shorten_frames(Case& best, const Reproduces& reproduces, unsigned& budget) {
+    for (std::size_t i = 0; i < best.steps.size() && budget > 0; ++i) {
+        if (best.steps[i].op != Op::Send || !is_one_frame(best.steps[i].bytes)) continue;
+        std::size_t keep = best.steps[i].bytes.size() - codec::limits::kMbapHeader;
+        std::size_t shortest = 1;  // the function code stays
+        while (shortest < keep && budget > 0) {
+            const std::size_t size = shortest + (keep - shortest) / 2;
+            Case candidate = best;
+            candidate.steps[i].bytes = cut_frame(best.steps[i].bytes, size);
+            --budget;
+            if (reproduces(candidate)) {
+                best = std::move(candidate);
+                keep = size;
+            } else {
+                shortest = size + 1;
+            }
+        }
+    }
+}
+
+}  // namespace
+
+Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned budget) {
+    Case best = split_frames(original);
+    if (best.steps.size() != original.steps.size()) {
+        if (budget > 0 && reproduces(best)) {
+            --budget;
+        } else {
+            if (budget > 0) --budget;
+            best = original;
+        }
+    }
+    drop_steps(best, reproduces, budget);
+    shorten_frames(best, reproduces, budget);
     return best;
 }
 

@@ -1,6 +1,7 @@
 // Delta debugging (ddmin) over a case's steps: the smallest sequence that still makes the
 // same oracle fire. A single send holding several frames is first cut into one step per
-// frame, so coalesced bursts shrink to the frame that matters.
+// frame, so coalesced bursts shrink to the frame that matters; then each remaining frame's
+// PDU is cut to the shortest tail that still fires (the MBAP length kept consistent).
 #pragma once
 
 #include <functional>

@@ -160,6 +160,45 @@ TEST(Minimize, ShrinksCoalescedFramesToTheCulprit) {
     EXPECT_LT(runs, 40);
 }
 
+TEST(Minimize, CutsAFramesPduToTheShortestTailThatStillFires) {
+    // FC16 writing 8 registers; the "fault" needs only the function code and the address.
+    Case c;
+    c.steps.push_back(
+        Step{Op::Send, 0, 0, 0, adu(3, {0x10, 0x12, 0x34, 0x00, 0x08, 0x10, 1,  2,  3,  4,  5,
+                                        6,    7,    8,    9,    10,   11,   12, 13, 14, 15, 16})});
+    int runs = 0;
+    const Case small = minimize_case(
+        c,
+        [&](const Case& k) {
+            ++runs;
+            const auto& b = k.steps[0].bytes;
+            // Every candidate is still one well-framed ADU.
+            EXPECT_EQ(b.size(), 6u + codec::load_be16(b.data() + 4));
+            return b.size() >= 10 && b[7] == 0x10 && b[8] == 0x12 && b[9] == 0x34;
+        },
+        40);
+    ASSERT_EQ(small.steps.size(), 1u);
+    EXPECT_EQ(small.steps[0].bytes, adu(3, {0x10, 0x12, 0x34}));
+    EXPECT_LE(runs, 6);  // bisection over a 22-byte PDU
+}
+
+TEST(Minimize, LeavesDeliberatelyMisframedBytesAlone) {
+    Case c;
+    auto bytes = adu(1, {0x03, 0, 0, 0, 1});
+    bytes[5] = 0x40;  // MBAP length says 64: a transport case, not a frame to cut
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, bytes});
+    int runs = 0;
+    const Case small = minimize_case(
+        c,
+        [&](const Case&) {
+            ++runs;
+            return true;
+        },
+        40);
+    EXPECT_EQ(small.steps[0].bytes, bytes);
+    EXPECT_EQ(runs, 0);
+}
+
 TEST(Finding, SaveLoadRoundTrip) {
     Finding f;
     f.verdict = Verdict{Oracle::Hang, "no answer", "an answer", "silence"};
