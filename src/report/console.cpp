@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <string_view>
 #include <utility>
 
 namespace mbstorm::report {
@@ -60,24 +62,42 @@ double percent(std::uint64_t part, std::uint64_t whole) {
     return whole == 0 ? 0.0 : 100.0 * static_cast<double>(part) / static_cast<double>(whole);
 }
 
-void append_row_header(std::string& out, const char* first) {
-    out += fmt::format("  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", first, "count",
-                       "tx/s", "errors", "p50", "p90", "p99", "p99.9", "max");
+// The first column is as wide as its longest label (at least 33): names are never cut.
+void append_row_header(std::string& out, const char* first, std::size_t width) {
+    out += fmt::format("  {:<{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", first, width,
+                       "count", "tx/s", "errors", "p50", "p90", "p99", "p99.9", "max");
 }
 
-void append_row(std::string& out, const std::string& name, const Histogram& h,
+void append_row(std::string& out, std::size_t width, const std::string& name, const Histogram& h,
                 const OutcomeCounters& c, double seconds) {
     const double rate = seconds > 0.0 ? static_cast<double>(c.completed()) / seconds : 0.0;
-    out += fmt::format(
-        "  {:<33}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n",
-        name.size() > 32 ? name.substr(0, 32) : name, format_count(c.completed()),
-        format_rate(rate), format_count(c.errors()), format_latency(h.value_at_percentile(50)),
-        format_latency(h.value_at_percentile(90)), format_latency(h.value_at_percentile(99)),
-        format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
+    out += fmt::format("  {:<{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", name, width,
+                       format_count(c.completed()), format_rate(rate), format_count(c.errors()),
+                       format_latency(h.value_at_percentile(50)),
+                       format_latency(h.value_at_percentile(90)),
+                       format_latency(h.value_at_percentile(99)),
+                       format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
 }
 
 std::string operation_label(const stats::OperationResult& op) {
     return fmt::format("{} ({:02X})", op.name, op.function_code);
+}
+
+std::string stage_label(const stats::StageResult& st) {
+    return fmt::format("{}. {}", st.index, st.name);
+}
+
+constexpr std::string_view kStageOperationIndent = "   ";
+
+std::size_t label_width(const stats::RunResult& r) {
+    std::size_t width = 32;
+    for (const auto& op : r.operations) width = std::max(width, operation_label(op).size());
+    for (const auto& st : r.stages) {
+        width = std::max(width, stage_label(st).size());
+        for (const auto& op : st.operations)
+            width = std::max(width, kStageOperationIndent.size() + operation_label(op).size());
+    }
+    return width + 1;
 }
 
 }  // namespace
@@ -138,25 +158,25 @@ std::string format_console_report(const stats::RunResult& r) {
             format_count(c.count(stats::Outcome::DuplicateId)));
     }
 
+    const std::size_t width = label_width(r);
     if (!r.operations.empty()) {
         out += "\nPer operation\n";
-        append_row_header(out, "operation (fc)");
+        append_row_header(out, "operation (fc)", width);
         for (const auto& op : r.operations) {
-            append_row(out, operation_label(op), op.latency, op.counters, seconds);
+            append_row(out, width, operation_label(op), op.latency, op.counters, seconds);
         }
     }
 
     if (!r.stages.empty()) {
         out += "\nPer stage\n";
-        append_row_header(out, "stage");
+        append_row_header(out, "stage", width);
         for (const auto& st : r.stages) {
             const double stage_seconds =
                 static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
-            append_row(out, fmt::format("{}. {}", st.index, st.name), st.latency, st.counters,
-                       stage_seconds);
+            append_row(out, width, stage_label(st), st.latency, st.counters, stage_seconds);
             for (const auto& op : st.operations) {
-                append_row(out, "   " + operation_label(op), op.latency, op.counters,
-                           stage_seconds);
+                append_row(out, width, std::string(kStageOperationIndent) + operation_label(op),
+                           op.latency, op.counters, stage_seconds);
             }
         }
     }

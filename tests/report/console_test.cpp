@@ -1,5 +1,6 @@
 #include "report/console.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -65,6 +66,29 @@ TEST(ConsoleReport, ContainsPercentileTableErrorsOperationsStagesThresholds) {
     EXPECT_TRUE(contains(text, "note: embedded slave on 127.0.0.1:15020"));
     // The p99 row shows the histogram's value in its chosen unit.
     EXPECT_TRUE(contains(text, format_latency(result.latency.value_at_percentile(99))));
+}
+
+TEST(ConsoleReport, LongOperationNamesAreNotCutAndColumnsStayAligned) {
+    auto result = testing::make_sample_result();
+    result.operations[0].name = "read_write_multiple_registers_of_the_second_boiler";
+    const std::string text = format_console_report(result);
+    const std::string label = result.operations[0].name + " (" +
+                              fmt::format("{:02X}", result.operations[0].function_code) + ")";
+    const auto row = text.find("  " + label + " ");
+    ASSERT_NE(row, std::string::npos) << text;
+    // The header's "count" column ends where the row's count ends.
+    const auto header = text.rfind("\n", text.find("operation (fc)")) + 1;
+    const auto header_end = text.find('\n', header);
+    const auto row_end = text.find('\n', row);
+    const std::string header_line = text.substr(header, header_end - header);
+    const std::string row_line = text.substr(row, row_end - row);
+    // Columns, not bytes: "µs" is two bytes of UTF-8 in one column.
+    auto columns = [](const std::string& line) {
+        return std::count_if(line.begin(), line.end(), [](char ch) {
+            return (static_cast<unsigned char>(ch) & 0xC0) != 0x80;
+        });
+    };
+    EXPECT_EQ(columns(header_line), columns(row_line)) << header_line << "\n" << row_line;
 }
 
 TEST(ConsoleReport, EmptyRunDoesNotPretend) {
