@@ -158,8 +158,9 @@ TEST_F(RestartCmd, CrashedTargetIsRestartedAndFuzzingGoesOn) {
 // The wait starts when the restart command returns: a command that takes longer than
 // --restart-wait itself (as `systemctl restart` may) still gets the whole wait afterwards.
 TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
-    const auto run = fuzz("--cases " + std::to_string(kCasesPerRound) +
-                          " -q --restart-wait 2s --restart-cmd '" + restart_cmd("3") + "'");
+    const auto run =
+        fuzz("--cases " + std::to_string(kCasesPerRound) +
+             " -q --no-minimize --restart-wait 2s --restart-cmd '" + restart_cmd("3") + "'");
     ASSERT_EQ(run.exit_code, 1) << run.output;
     const auto s = summary();
     ASSERT_NE(find_crash(s), nullptr) << run.output;
@@ -172,7 +173,8 @@ TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
 // for it, only for the target to answer.
 TEST_F(RestartCmd, ForegroundRestartCmdIsLeftRunningAndFuzzingGoesOn) {
     const auto run = fuzz("--cases " + std::to_string(3 * kCasesPerRound) +
-                          " -q --restart-wait 5s --restart-cmd '" + foreground_restart_cmd() + "'");
+                          " -q --no-minimize --restart-wait 5s --restart-cmd '" +
+                          foreground_restart_cmd() + "'");
     ASSERT_EQ(run.exit_code, 1) << run.output;
     const auto s = summary();
     ASSERT_NE(find_crash(s), nullptr) << run.output;
