@@ -13,21 +13,11 @@ bin_dir=$(cd "$(dirname "$mbstorm")" && pwd)
 pymodbus_server="$scripts/../../bench/peers/pymodbus_server.py"
 libmodbus_server="$bin_dir/tests/libmodbus_test_server"
 
+source "$scripts/lib/peer.bash"
 work=$(mktemp -d)
-peer_pid=""
-stop_peer() { [ -n "$peer_pid" ] && kill "$peer_pid" 2>/dev/null && wait "$peer_pid" 2>/dev/null; peer_pid=""; }
-trap 'stop_peer; rm -rf "$work"' EXIT
-
-# start_peer <command...>: sets $port from the peer's "PORT n" line.
-start_peer() {
-  "$@" --seconds 120 >"$work/peer.out" 2>/dev/null &
-  peer_pid=$!
-  port=""
-  for _ in $(seq 100); do
-    port=$(awk '/^PORT/{print $2}' "$work/peer.out"); [ -n "$port" ] && break; sleep 0.1
-  done
-  [ -n "$port" ]
-}
+trap 'stop_server; rm -rf "$work"' EXIT
+# start_peer <command...>: a peer server for at most 120 s; sets $port.
+start_peer() { start_server "$work/peer.out" "$@" --seconds 120; }
 
 # json <file> <python expression over d>: prints the value.
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print($2)" "$1"; }
@@ -78,7 +68,7 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus' 2>/dev/nul
     check pymodbus "17 function codes pipelined, no errors, no stray answers" \
       'd["totals"]["errors"] == 0 and d["totals"]["stray_responses"] == 0 and len(d["operations"]) == 17 and all(o["totals"]["ok"] > 10 for o in d["operations"])'
   else echo "FAIL pymodbus server did not start"; fail=1; fi
-  stop_peer
+  stop_server
 else
   echo "pymodbus not available: skipped that peer"
 fi
@@ -98,7 +88,7 @@ if [ -x "$libmodbus_server" ]; then
     check libmodbus-unsupported "an unsupported function code is counted as exception 01" \
       'd["totals"]["transactions"] == 4 and d["outcomes"]["exception"] == d["totals"]["transactions"] and d["exceptions"] == {"0x01": d["totals"]["transactions"]} and d["outcomes"]["malformed"] == 0'
   else echo "FAIL libmodbus server did not start"; fail=1; fi
-  stop_peer
+  stop_server
 else
   echo "libmodbus server not built (libmodbus-dev missing): skipped that peer"
 fi

@@ -8,14 +8,9 @@ scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 tool="$bin_dir/tests/mbstorm_test_server"
 [ -x "$tool" ] || { echo "missing $tool"; exit 1; }
 
-out=$(mktemp); trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null; rm -f "$out"' EXIT
-"$tool" --threads 2 --seconds 120 >"$out" 2>/dev/null &
-pid=$!
-port=""
-for _ in $(seq 100); do
-  port=$(awk '/^PORT/{print $2}' "$out"); [ -n "$port" ] && break; sleep 0.1
-done
-[ -n "$port" ] || { echo "server did not start"; exit 1; }
+source "$scripts/lib/peer.bash"
+out=$(mktemp); trap 'stop_server; rm -f "$out"' EXIT
+start_server "$out" "$tool" --threads 2 --seconds 120 || { echo "server did not start"; exit 1; }
 
 fail=0
 /usr/bin/python3 "$scripts/interop_pymodbus.py" "$port" || fail=1

@@ -12,22 +12,17 @@ tool="$bin_dir/tests/mbstorm_test_server"
 [ -x "$tool" ] || { echo "missing $tool"; exit 1; }
 command -v tshark >/dev/null || { echo "tshark is not installed (scripts/setup.sh installs it): skipped"; exit 77; }
 
+source "$(cd "$(dirname "$0")" && pwd)/lib/peer.bash"
 work=$(mktemp -d)
-server_pid="" capture_pid=""
+capture_pid=""
 cleanup() {
   [ -n "$capture_pid" ] && kill "$capture_pid" 2>/dev/null && wait "$capture_pid" 2>/dev/null
-  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null
+  stop_server
   rm -rf "$work"
 }
 trap cleanup EXIT
 
-"$tool" --threads 1 --seconds 120 >"$work/server.out" 2>/dev/null &
-server_pid=$!
-port=""
-for _ in $(seq 100); do
-  port=$(awk '/^PORT/{print $2}' "$work/server.out"); [ -n "$port" ] && break; sleep 0.1
-done
-[ -n "$port" ] || { echo "server did not start"; exit 1; }
+start_server "$work/server.out" "$tool" --threads 1 --seconds 120 || { echo "server did not start"; exit 1; }
 
 # The capture stops by itself (-a duration), so it always ends with every packet flushed.
 timeout 60 tshark -i lo -f "tcp port $port" -a duration:4 -w "$work/capture.pcapng" >"$work/tshark.log" 2>&1 &

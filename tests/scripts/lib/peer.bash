@@ -1,0 +1,23 @@
+# Sourced by the script tests: start a server that prints "PORT <n>" once it listens.
+#
+#   start_server OUTFILE COMMAND [ARGS...]
+# Starts COMMAND in the background with stdout to OUTFILE; sets $server_pid, and $port once
+# the line appears (up to 10 s). Returns non-zero if it never does.
+start_server() {
+  local out=$1; shift
+  "$@" >"$out" 2>/dev/null &
+  server_pid=$!
+  port=""
+  for _ in $(seq 100); do
+    port=$(awk '/^PORT/{print $2}' "$out"); [ -n "$port" ] && return 0
+    kill -0 "$server_pid" 2>/dev/null || return 1
+    sleep 0.1
+  done
+  return 1
+}
+
+# stop_server: stops and reaps what start_server started (safe to call twice).
+stop_server() {
+  if [ -n "${server_pid:-}" ]; then kill "$server_pid" 2>/dev/null; wait "$server_pid" 2>/dev/null; fi
+  server_pid=""
+}
