@@ -213,6 +213,7 @@ void Campaign::record(const Case& c, Execution ex) {
         return;
     }
     Finding f;
+    f.found_after_s = elapsed();  // when it was seen, not when minimising it ended
     f.verdict = ex.verdict;
     f.fuzz_case = c;
     f.trace = std::move(ex.trace);
@@ -255,7 +256,6 @@ void Campaign::keep(Finding f) {
     f.target = o_.target_text;
     f.seed = o_.seed;
     f.case_number = r_.cases;
-    f.found_after_s = elapsed();
     f.timeout_ms = o_.timeout_ms;
     if (!o_.out_dir.empty()) {
         const std::string dir =
@@ -285,6 +285,7 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
             all.steps.push_back(std::move(s));
         }
     Finding f;
+    f.found_after_s = elapsed();  // when it was seen, not when minimising it ended
     f.fuzz_case = split_frames(all);  // one step per frame, the batch's order kept
     f.fuzz_case.function = first_function(f.fuzz_case);
     std::size_t frames = 0;
