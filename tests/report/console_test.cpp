@@ -91,6 +91,21 @@ TEST(ConsoleReport, LongOperationNamesAreNotCutAndColumnsStayAligned) {
     EXPECT_EQ(columns(header_line), columns(row_line)) << header_line << "\n" << row_line;
 }
 
+TEST(ConsoleReport, StrayResponsesHaveTheirOwnLineOutsideTheErrors) {
+    auto result = testing::make_sample_result();
+    const std::uint64_t errors = result.counters.errors();
+    result.counters.record(stats::Outcome::UnknownId);
+    result.counters.record(stats::Outcome::DuplicateId);
+    result.counters.record(stats::Outcome::DuplicateId);
+    const std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text,
+                         "Stray       3 responses answered no transaction (unknown_id 1, "
+                         "duplicate_id 2)"))
+        << text;
+    EXPECT_TRUE(contains(text, "Errors      " + format_count(errors) + " of ")) << text;
+    EXPECT_FALSE(contains(text, "  unknown_id ")) << text;
+}
+
 TEST(ConsoleReport, EmptyRunDoesNotPretend) {
     stats::RunResult empty;
     const std::string text = format_console_report(empty);

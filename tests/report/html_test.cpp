@@ -72,6 +72,14 @@ TEST(Html, WithoutStagesThereAreNoMarkers) {
     EXPECT_EQ(html.find("Open connections over time"), std::string::npos);
 }
 
+TEST(Html, StrayResponsesAreShownApartFromTransactions) {
+    auto result = testing::make_sample_result();
+    result.counters.record(stats::Outcome::DuplicateId);
+    const std::string html = format_html(result);
+    EXPECT_NE(html.find("Stray responses"), std::string::npos);
+    EXPECT_NE(html.find("duplicate_id (stray response)"), std::string::npos);
+}
+
 TEST(Html, EmptyRunStillRenders) {
     const std::string html = format_html(stats::RunResult{});
     expect_well_formed(html);
