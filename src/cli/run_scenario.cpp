@@ -96,10 +96,12 @@ int run_scenario_file(const ScenarioRunRequest& request) {
 
     const auto& plan = s.plan;
     fmt::print(
-        "mbstorm run: scenario '{}' ({}): {} operation{}, {} connection{} x depth {}, {}, "
+        "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
         "{}{}\n",
-        s.name, request.file, plan.operations.size(), plan.operations.size() == 1 ? "" : "s",
-        plan.connections, plan.connections == 1 ? "" : "s", plan.depth,
+        s.name, request.file,
+        s.target.empty() ? " against the embedded reference slave (no target given)" : "",
+        plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
+        plan.connections == 1 ? "" : "s", plan.depth,
         plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
         s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
         fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));

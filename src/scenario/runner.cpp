@@ -64,7 +64,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         }
         plan.host = "127.0.0.1";
         plan.port = embedded->port();
-        say(fmt::format("no target: load-testing the embedded reference slave on {} ({} thread{})",
+        // The caller's first line already said there is no target: this adds where it listens.
+        say(fmt::format("embedded reference slave listening on {} ({} thread{})",
                         embedded->endpoint(), embedded->threads(),
                         embedded->threads() == 1 ? "" : "s"));
     } else {
