@@ -285,7 +285,7 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
             all.steps.push_back(std::move(s));
         }
     Finding f;
-    f.found_after_s = elapsed();  // when it was seen, not when minimising it ended
+    f.found_after_s = elapsed();      // when it was seen, not when minimising it ended
     f.fuzz_case = split_frames(all);  // one step per frame, the batch's order kept
     f.fuzz_case.function = first_function(f.fuzz_case);
     std::size_t frames = 0;
