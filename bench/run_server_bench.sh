@@ -18,36 +18,13 @@ client="$build/bench/pipeline_client"
 limit="$build/bench/limit_server"
 libmodbus="$build/bench/libmodbus_server"
 mbstorm="$build/tests/mbstorm_test_server"
-pymodbus="$here/peers/pymodbus_server.py"
 for f in "$client" "$limit" "$mbstorm"; do
   [ -x "$f" ] || { echo "missing $f (build the bench/ and tests/tools targets)" >&2; exit 1; }
 done
 ulimit -n 20000 2>/dev/null || true
 
-server_pid=""
-stop_server() {
-  if [ -n "$server_pid" ]; then kill "$server_pid" 2>/dev/null; wait "$server_pid" 2>/dev/null; fi
-  server_pid=""
-}
+source "$here/lib/servers.bash"
 trap stop_server EXIT
-
-# start_server <name>: sets $port
-start_server() {
-  local out; out=$(mktemp)
-  case "$1" in
-    mbstorm)   taskset -c 0 "$mbstorm" --threads 1 --seconds 3600 >"$out" 2>/dev/null & ;;
-    limit)     taskset -c 0 "$limit" --seconds 3600 >"$out" 2>/dev/null & ;;
-    libmodbus) taskset -c 0 "$libmodbus" --seconds 3600 >"$out" 2>/dev/null & ;;
-    pymodbus)  taskset -c 0 /usr/bin/python3 "$pymodbus" --seconds 3600 >"$out" 2>/dev/null & ;;
-  esac
-  server_pid=$!
-  port=""
-  for _ in $(seq 100); do
-    port=$(awk '/^PORT/{print $2}' "$out"); [ -n "$port" ] && break; sleep 0.1
-  done
-  rm -f "$out"
-  [ -n "$port" ]
-}
 
 cpu_ticks() { awk '{print $14 + $15}' "/proc/$1/stat" 2>/dev/null || echo 0; }
 hz=$(getconf CLK_TCK)

@@ -18,26 +18,8 @@ secs=${4:-4}
 client="$build/bench/pipeline_client"
 command -v perf >/dev/null || { echo "perf is not installed" >&2; exit 1; }
 work=$(mktemp -d)
-server_pid=""
-cleanup() {
-  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-start_server() {
-  case "$1" in
-    mbstorm)   taskset -c 0 "$build/tests/mbstorm_test_server" --threads 1 --seconds 3600 >"$work/port" 2>/dev/null & ;;
-    limit)     taskset -c 0 "$build/bench/limit_server" --seconds 3600 >"$work/port" 2>/dev/null & ;;
-    libmodbus) taskset -c 0 "$build/bench/libmodbus_server" --seconds 3600 >"$work/port" 2>/dev/null & ;;
-  esac
-  server_pid=$!
-  port=""
-  for _ in $(seq 100); do
-    port=$(awk '/^PORT/{print $2}' "$work/port"); [ -n "$port" ] && break; sleep 0.1
-  done
-  [ -n "$port" ]
-}
+source "$here/lib/servers.bash"
+trap 'stop_server; rm -rf "$work"' EXIT
 
 # Percent of samples whose call chain passes through symbol $2 (perf's "children" column).
 share_of() {
@@ -62,7 +44,7 @@ for s in ${SERVERS:-mbstorm limit libmodbus}; do
   t1=$(awk '{print $14 + $15}' "/proc/$server_pid/stat"); w1=$(date +%s.%N)
   wait "$cpid"
   tps=$(sed -n 's/^RESULT tps=\([0-9]*\).*/\1/p' "$work/client")
-  kill "$server_pid"; wait "$server_pid" 2>/dev/null || true; server_pid=""
+  stop_server
   user=$(user_share "$work/perf.data")
   send=$(share_of "$work/perf.data" tcp_sendmsg)
   recv=$(share_of "$work/perf.data" tcp_recvmsg)
