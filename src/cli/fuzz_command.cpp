@@ -12,6 +12,7 @@
 #include "cli/duration_option.hpp"
 #include "cli/fuzz_target.hpp"
 #include "netfuzz/campaign.hpp"
+#include "netfuzz/dictionary.hpp"
 #include "netfuzz/outputs.hpp"
 #include "report/files.hpp"
 
@@ -40,7 +41,39 @@ struct FuzzOptions {
     bool no_minimize = false;
     bool naive = false;
     bool quiet = false;
+    std::string dict;
+    std::string state_range = "0x6000-0x6FFF";
+    std::uint32_t max_connections = 4096;
 };
+
+// "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
+bool parse_state_range(const std::string& text, netfuzz::StateRange& out, std::string& error) {
+    if (text == "all") {
+        out = netfuzz::StateRange{0, 0x10000};
+        return true;
+    }
+    const auto dash = text.find('-');
+    auto number = [](const std::string& s, unsigned long& v) {
+        try {
+            std::size_t used = 0;
+            v = std::stoul(s, &used, 0);
+            return used == s.size() && v <= 0xFFFF;
+        } catch (const std::exception&) {
+            return false;
+        }
+    };
+    unsigned long a = 0, b = 0;
+    if (dash == std::string::npos || !number(text.substr(0, dash), a) ||
+        !number(text.substr(dash + 1), b) || b < a || b - a < 255) {
+        error = fmt::format(
+            "--state-range '{}': expected 'all' or FIRST-LAST (protocol addresses 0..65535, "
+            "at least 256 of them, e.g. 0x6000-0x6FFF)",
+            text);
+        return false;
+    }
+    out = netfuzz::StateRange{static_cast<std::uint16_t>(a), static_cast<std::uint32_t>(b - a + 1)};
+    return true;
+}
 
 int usage(const std::string& msg) {
     fmt::print(stderr, "mbstorm fuzz: {}\n", msg);
@@ -63,6 +96,14 @@ int run_fuzz(const FuzzOptions& o) {
     std::string error;
     if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
     if (o.seconds <= 0 && o.cases == 0) return usage("bound the run with --seconds N or --cases N");
+    if (!parse_state_range(o.state_range, c.state, error)) return usage(error);
+    if (!o.dict.empty()) {
+        netfuzz::Dictionary d;
+        if (!netfuzz::load_dictionary(o.dict, d, error)) return usage(error);
+        c.dict_words = std::move(d.words);
+        c.dict_tokens = std::move(d.tokens);
+    }
+    c.max_connections = o.max_connections;
     // The first line, always: this is not a read-only tool.
     fmt::print(
         "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
@@ -158,6 +199,17 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->add_flag("--naive", o->naive,
                   "baseline: random PDU bytes instead of the structure-aware generator");
     cmd->add_flag("--quiet,-q", o->quiet, "no progress lines");
+    cmd->add_option("--dict", o->dict,
+                    "AFL-style dictionary of your own addresses, values and byte strings");
+    cmd->add_option("--state-range", o->state_range,
+                    "holding registers/coils that stateful cases write and read back: FIRST-LAST "
+                    "or 'all' (the whole map; only if nothing else writes there)")
+        ->capture_default_str();
+    cmd->add_option("--max-connections", o->max_connections,
+                    "connection-capacity check: hold up to this many connections at once (0: "
+                    "skip the check)")
+        ->check(CLI::Range(0u, 1000000u))
+        ->capture_default_str();
     cmd->callback([o, &action] { action = [o] { return run_fuzz(*o); }; });
 }
 

@@ -21,6 +21,7 @@ struct ReplayOptions {
     bool allow_remote = false;
     std::uint64_t timeout_ns = 0;  // 0: the finding's own timeout
     unsigned runs = 1;
+    bool original = false;
 };
 
 int run_replay(const ReplayOptions& o) {
@@ -41,8 +42,13 @@ int run_replay(const ReplayOptions& o) {
     netfuzz::ExecOptions ex;
     ex.timeout_ms = o.timeout_ns ? static_cast<int>(o.timeout_ns / 1'000'000) : f.timeout_ms;
     unsigned reproduced = 0;
+    const netfuzz::Case& replayed = o.original ? f.original_case : f.fuzz_case;
+    if (replayed.steps.empty()) {
+        fmt::print(stderr, "mbstorm replay: the finding holds no original case\n");
+        return kExitUsage;
+    }
     for (unsigned i = 0; i < std::max(1u, o.runs); ++i) {
-        netfuzz::Execution e = netfuzz::execute_case(f.fuzz_case, target, f.profile, ex);
+        netfuzz::Execution e = netfuzz::execute_case(replayed, target, f.profile, ex);
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.
             if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
@@ -50,9 +56,12 @@ int run_replay(const ReplayOptions& o) {
                            target.to_string());
                 return kExitUsage;
             }
-            e = netfuzz::execute_case(f.fuzz_case, target, f.profile, ex);
+            e = netfuzz::execute_case(replayed, target, f.profile, ex);
         }
-        const bool same = e.verdict.oracle == f.oracle();
+        // The same root cause (oracle and rule); findings saved before rules existed compare
+        // by oracle.
+        const bool same = f.verdict.rule.empty() ? e.verdict.oracle == f.oracle()
+                                                 : netfuzz::root_cause_key(e.verdict) == f.key();
         reproduced += same;
         fmt::print("run {}: {}{}\n", i + 1, same ? "REPRODUCES: " : "does not reproduce",
                    e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")")
@@ -63,7 +72,8 @@ int run_replay(const ReplayOptions& o) {
         if (e.target_down && i + 1 < std::max(1u, o.runs))
             netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
     }
-    fmt::print("{} of {} run(s) reproduced the finding\n", reproduced, std::max(1u, o.runs));
+    fmt::print("{} of {} run(s) reproduced the finding ({})\n", reproduced, std::max(1u, o.runs),
+               o.original ? "original case" : "minimised case");
     return reproduced ? kExitFailed : kExitOk;
 }
 
@@ -77,7 +87,10 @@ void add_replay_command(CLI::App& app, Action& action) {
     cmd->add_option("--target", o->target, "HOST:PORT to replay against (required)")->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout (default: the finding's)");
-    cmd->add_option("--runs", o->runs, "replay this many times")->check(CLI::Range(1u, 1000u));
+    cmd->add_option("--runs", o->runs, "replay this many times and report k of n")
+        ->check(CLI::Range(1u, 1000u));
+    cmd->add_flag("--original", o->original,
+                  "replay the case as it was first found, not the minimised one");
     cmd->callback([o, &action] { action = [o] { return run_replay(*o); }; });
 }
 

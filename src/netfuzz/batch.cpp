@@ -1,5 +1,6 @@
 #include "netfuzz/batch.hpp"
 
+#include <fmt/format.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -18,16 +19,21 @@ struct BatchRunner::Lane {
     struct Frame {
         std::size_t case_index;
         RequestInfo info;
+        std::size_t end = 0;  // offset in `out` just past this frame
         bool answered = false;
+        bool exception = false;  // answered with an exception
         bool fence = false;
+        bool barrier = false;  // what follows is sent once this is answered
     };
     net::UniqueFd fd;
     std::vector<std::uint8_t> out, in;
     std::size_t out_pos = 0, in_pos = 0;
+    std::size_t send_limit = 0;    // bytes of `out` that may be sent now
+    std::size_t next_barrier = 0;  // index of the frame the limit waits for
     std::vector<Frame> frames;
     std::vector<std::int32_t> by_tid = std::vector<std::int32_t>(65536, -1);
     std::vector<std::size_t> cases;  // case indexes on this lane, in order
-    bool done = false, failed = false, fence_answered = false;
+    bool done = false, failed = false, closed = false, fence_answered = false;
     bool suspect_all = false;
 
     void reset_round() {
@@ -36,8 +42,21 @@ struct BatchRunner::Lane {
         cases.clear();
         out.clear();
         in.clear();
-        out_pos = in_pos = 0;
-        done = failed = fence_answered = suspect_all = false;
+        out_pos = in_pos = send_limit = next_barrier = 0;
+        done = failed = closed = fence_answered = suspect_all = false;
+    }
+
+    // Moves the send limit past every barrier whose frame is answered (or owes nothing).
+    void advance_limit() {
+        while (next_barrier < frames.size()) {
+            const Frame& f = frames[next_barrier];
+            if (f.barrier && !f.answered && f.info.expect == Expect::Answer) {
+                send_limit = f.end;
+                return;
+            }
+            ++next_barrier;
+        }
+        send_limit = out.size();
     }
 };
 
@@ -57,7 +76,7 @@ void BatchRunner::close_all() noexcept {
 
 BatchResult BatchRunner::run(const std::vector<Case>& cases) {
     BatchResult result;
-    std::vector<bool> suspect(cases.size(), false);
+    std::vector<bool> suspect(cases.size(), false), judged(cases.size(), false);
     const std::size_t n_lanes = lanes_.size();
     for (Lane* l : lanes_) l->reset_round();
     // Build each lane's stream (stable from here on: RequestInfo views point into it).
@@ -74,42 +93,44 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             continue;
         }
         std::uint16_t fence_tid = 0xFE00;
-        std::vector<std::uint8_t> fence;
         // Frames: the lane's cases in order (each well-framed by construction).
         std::size_t off = 0;
+        std::vector<std::size_t> sizes;
         for (std::size_t ci : l.cases) {
             std::size_t case_bytes = 0;
             for (const Step& s : cases[ci].steps) case_bytes += s.bytes.size();
             const std::size_t end = off + case_bytes;
             while (off + lim::kMbapHeader <= end) {
                 const std::size_t size = 6u + codec::load_be16(l.out.data() + off + 4);
-                Lane::Frame f{ci, {}, false, false};
-                describe_request(codec::Bytes(l.out.data() + off, size), profile_, f.info);
-                const std::uint16_t tid = f.info.header.transaction_id;
+                Lane::Frame f{ci, {}, off + size};
+                const std::uint16_t tid = codec::load_be16(l.out.data() + off);
                 if (l.by_tid[tid] >= 0)
                     suspect[ci] = true;  // cannot match: check it alone
                 else
                     l.by_tid[tid] = static_cast<std::int32_t>(l.frames.size());
                 l.frames.push_back(f);
+                sizes.push_back(size);
                 off += size;
             }
             off = end;
         }
         while (l.by_tid[fence_tid] >= 0) ++fence_tid;
-        fence = probe_frame(profile_, fence_tid);
+        const std::vector<std::uint8_t> fence = probe_frame(profile_, fence_tid);
         l.out.insert(l.out.end(), fence.begin(), fence.end());
-        // The fence's own frame (describe after the insert: `out` may have moved).
+        // Describe every frame against the final buffer.
         for (std::size_t k = 0, o = 0; k < l.frames.size(); ++k) {
-            // Re-point every view at the final buffer.
-            const std::size_t size = l.frames[k].info.pdu.size() + lim::kMbapHeader;
-            describe_request(codec::Bytes(l.out.data() + o, size), profile_, l.frames[k].info);
-            o += size;
+            describe_request(codec::Bytes(l.out.data() + o, sizes[k]), profile_, l.frames[k].info);
+            l.frames[k].barrier =
+                options_.barrier_after_exception && owes_exception(l.frames[k].info, profile_);
+            o += sizes[k];
         }
-        Lane::Frame ff{static_cast<std::size_t>(-1), {}, false, true};
+        Lane::Frame ff{static_cast<std::size_t>(-1), {}, l.out.size()};
+        ff.fence = true;
         describe_request(codec::Bytes(l.out.data() + l.out.size() - fence.size(), fence.size()),
                          profile_, ff.info);
         l.by_tid[fence_tid] = static_cast<std::int32_t>(l.frames.size());
         l.frames.push_back(ff);
+        l.advance_limit();
         if (!l.fd.valid()) {
             const int fd = connect_with_timeout(target_, options_.timeout_ms);
             if (fd < 0) {
@@ -123,8 +144,9 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         }
     }
 
-    auto fail_lane = [&](Lane& l) {
+    auto fail_lane = [&](Lane& l, bool closed) {
         l.failed = true;
+        l.closed = closed;
         l.done = true;
         l.fd.reset();
         result.lane_lost = true;
@@ -135,64 +157,74 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             const codec::MbapHeader h = codec::read_mbap_header(p);
             if (h.length < 2 || h.length > lim::kMaxMbapLength) {
                 l.suspect_all = true;
-                fail_lane(l);
+                fail_lane(l, false);
                 return;
             }
             const std::size_t size = 6u + h.length;
             if (l.in.size() - l.in_pos < size) return;
             const std::int32_t k = l.by_tid[h.transaction_id];
-            if (k < 0 || l.frames[k].answered) {
+            if (k >= 0 && l.frames[k].answered && !l.frames[k].fence) {
+                suspect[l.frames[k].case_index] = true;  // answered twice: that one is odd
+            } else if (k < 0 || l.frames[k].answered) {
                 l.suspect_all = true;  // an answer nobody asked for: attribute in isolation
             } else {
                 Lane::Frame& f = l.frames[k];
                 f.answered = true;
+                ++result.answers;
+                f.exception = size > lim::kMbapHeader + 1 && (p[7] & codec::kExceptionBit);
+                if (f.exception && p[8] == 0x06) ++result.busy_answers;
                 if (f.fence) {
                     l.fence_answered = true;
                 } else {
-                    const Verdict v = judge_response(f.info, codec::Bytes(p, size), profile_);
-                    if (v)
-                        suspect[f.case_index] = true;
-                    else if (f.info.status.ok() && !(p[7] & codec::kExceptionBit))
-                        result.answered_valid.push_back(f.case_index);
+                    Verdict v = judge_response(f.info, codec::Bytes(p, size), profile_);
+                    judged[f.case_index] = true;
+                    if (v) result.verdicts.emplace_back(f.case_index, std::move(v));
                 }
             }
             l.in_pos += size;
         }
+        l.advance_limit();
         if (l.fence_answered) l.done = true;
     };
 
-    const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    // A lane that makes no progress for the timeout is given up (a barrier after an exception
+    // may legitimately take a while: each answer restarts the clock).
+    std::vector<std::int64_t> last_progress(lanes_.size(), net::now_ns());
     std::vector<pollfd> fds;
-    std::vector<Lane*> polled;
+    std::vector<std::size_t> polled;
     std::uint8_t buf[65536];
     for (;;) {
         fds.clear();
         polled.clear();
-        for (Lane* l : lanes_) {
-            if (l->done) continue;
+        const std::int64_t now = net::now_ns();
+        std::int64_t wait_ns = options_.timeout_ms * net::kNsPerMs;
+        for (std::size_t li = 0; li < lanes_.size(); ++li) {
+            Lane& l = *lanes_[li];
+            if (l.done) continue;
+            const std::int64_t left = last_progress[li] + options_.timeout_ms * net::kNsPerMs - now;
+            if (left <= 0) {
+                fail_lane(l, false);  // silence: the unanswered become suspects
+                continue;
+            }
+            wait_ns = std::min(wait_ns, left);
             fds.push_back(
-                pollfd{l->fd.get(),
-                       static_cast<short>(POLLIN | (l->out_pos < l->out.size() ? POLLOUT : 0)), 0});
-            polled.push_back(l);
+                pollfd{l.fd.get(),
+                       static_cast<short>(POLLIN | (l.out_pos < l.send_limit ? POLLOUT : 0)), 0});
+            polled.push_back(li);
         }
         if (fds.empty()) break;
-        const std::int64_t left = deadline - net::now_ns();
-        if (left <= 0) {
-            for (Lane* l : polled) fail_lane(*l);  // timeout: the unanswered become suspects
-            break;
-        }
         const int rc = ::poll(fds.data(), fds.size(),
-                              static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs)));
+                              static_cast<int>(std::max<std::int64_t>(1, wait_ns / net::kNsPerMs)));
         if (rc <= 0) continue;
         for (std::size_t i = 0; i < fds.size(); ++i) {
-            Lane& l = *polled[i];
+            Lane& l = *lanes_[polled[i]];
             if (fds[i].revents & POLLOUT) {
                 const ssize_t n = ::send(l.fd.get(), l.out.data() + l.out_pos,
-                                         l.out.size() - l.out_pos, MSG_NOSIGNAL);
-                if (n > 0)
+                                         l.send_limit - l.out_pos, MSG_NOSIGNAL);
+                if (n > 0) {
                     l.out_pos += static_cast<std::size_t>(n);
-                else if (n < 0 && errno != EAGAIN && errno != EINTR) {
-                    fail_lane(l);
+                } else if (n < 0 && errno != EAGAIN && errno != EINTR) {
+                    fail_lane(l, true);
                     continue;
                 }
             }
@@ -200,6 +232,7 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                 for (;;) {
                     const ssize_t n = ::recv(l.fd.get(), buf, sizeof buf, 0);
                     if (n > 0) {
+                        last_progress[polled[i]] = net::now_ns();
                         if (l.in_pos == l.in.size()) {
                             l.in.clear();
                             l.in_pos = 0;
@@ -209,12 +242,13 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                         if (l.done) break;
                         continue;
                     }
-                    if (n == 0 || (errno != EAGAIN && errno != EINTR)) fail_lane(l);
+                    if (n == 0 || (errno != EAGAIN && errno != EINTR)) fail_lane(l, true);
                     break;
                 }
             }
         }
     }
+    std::vector<bool> requeued(cases.size(), false);
     for (Lane* lp : lanes_) {
         Lane& l = *lp;
         if (l.cases.empty()) continue;
@@ -222,20 +256,69 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             for (std::size_t ci : l.cases) suspect[ci] = true;
             continue;
         }
-        // Unanswered frames that owed an answer (after the fence, or on a failed lane).
-        for (const Lane::Frame& f : l.frames)
-            if (!f.fence && !f.answered && f.info.expect == Expect::Answer)
-                suspect[f.case_index] = true;
-        if (l.failed) {
-            // A crash or close may have been caused by an answered frame that the server
-            // choked on afterwards: the last answered case is suspect too.
-            for (const Lane::Frame& f : l.frames)
-                if (!f.fence && !f.answered) suspect[f.case_index] = true;
-            std::size_t last = l.cases.front();
-            for (const Lane::Frame& f : l.frames)
-                if (!f.fence && f.answered) last = f.case_index;
-            suspect[last] = true;
+        if (!l.failed) {
+            // The lane went on past them: a request with no answer is its own fault.
+            for (const Lane::Frame& f : l.frames) {
+                if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
+                if (judged[f.case_index]) continue;
+                judged[f.case_index] = true;
+                result.verdicts.emplace_back(
+                    f.case_index,
+                    Verdict{Oracle::Hang,
+                            "no-answer/" + culprit_text(cases[f.case_index].cls, &f.info),
+                            f.info.pdu.empty() ? -1 : f.info.pdu[0],
+                            fmt::format("no answer to request {} (later requests were answered)",
+                                        hex(f.info.pdu, 16)),
+                            "an answer", "silence"});
+            }
+            continue;
         }
+        // The lane broke: blame the first request owed an answer that got none, or the one
+        // answered just before it; whatever came after is run again in a later round.
+        std::size_t first = l.frames.size();
+        for (std::size_t k = 0; k < l.frames.size(); ++k) {
+            const Lane::Frame& f = l.frames[k];
+            if (!f.answered && f.info.expect == Expect::Answer) {
+                first = k;
+                break;
+            }
+        }
+        LaneBreak br;
+        br.closed = l.closed;
+        for (const Lane::Frame& f : l.frames) {
+            if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
+            if (br.unanswered.empty() || br.unanswered.back() != f.case_index)
+                br.unanswered.push_back(f.case_index);
+        }
+        std::size_t prev = l.frames.size();
+        for (std::size_t k = 0; k < first && k < l.frames.size(); ++k)
+            if (l.frames[k].answered && !l.frames[k].fence) prev = k;
+        if (prev < l.frames.size()) {
+            const Lane::Frame& f = l.frames[prev];
+            br.has_previous = true;
+            br.previous_case = f.case_index;
+            br.previous_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+            br.previous_exception = f.exception;
+            suspect[f.case_index] = true;
+        }
+        if (first < l.frames.size() && !l.frames[first].fence) {
+            const Lane::Frame& f = l.frames[first];
+            br.unanswered_case = f.case_index;
+            br.unanswered_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+            suspect[f.case_index] = true;
+            for (std::size_t k = first + 1; k < l.frames.size(); ++k) {
+                const std::size_t ci = l.frames[k].case_index;
+                if (l.frames[k].fence || ci == f.case_index || suspect[ci] || requeued[ci] ||
+                    judged[ci])
+                    continue;
+                requeued[ci] = true;
+                result.requeue.push_back(ci);
+            }
+        } else {
+            br.unanswered_case = static_cast<std::size_t>(-1);  // only the fence went unanswered
+            br.unanswered_culprit = "fence";
+        }
+        result.breaks.push_back(std::move(br));
     }
     for (std::size_t i = 0; i < cases.size(); ++i)
         if (suspect[i]) result.suspects.push_back(i);

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "net/socket.hpp"
@@ -16,14 +18,38 @@ namespace mbstorm::netfuzz {
 
 struct BatchOptions {
     unsigned lanes = 4;
-    int timeout_ms = 1000;
+    int timeout_ms = 1000;  // silence for this long on a lane ends it
+    // A request owed an exception ends a send: what follows waits for its answer (for targets
+    // that drop what is pipelined behind an exception).
+    bool barrier_after_exception = false;
+};
+
+// Where a lane broke (closed, reset or went silent): the first request owed an answer that got
+// none, and the request answered just before it. One of the two is at fault.
+struct LaneBreak {
+    std::size_t unanswered_case = 0;
+    std::string unanswered_culprit;  // culprit_text of that request
+    bool has_previous = false;
+    std::size_t previous_case = 0;
+    std::string previous_culprit;
+    bool previous_exception = false;  // the request before drew an exception
+    bool closed = false;              // the lane was closed or reset, not silent
+    // Every case with a frame left unanswered, in the lane's order: where a target that died
+    // or hung as a whole must be looked for (it may not answer what came before the culprit
+    // either).
+    std::vector<std::size_t> unanswered;
 };
 
 struct BatchResult {
-    std::vector<std::size_t> suspects;        // case indexes to re-run in isolation, ascending
-    std::vector<std::size_t> answered_valid;  // valid requests answered normally (corpus)
-    bool lane_lost = false;                   // a lane was closed, reset or timed out
-    bool connect_failed = false;              // a lane could not (re)connect
+    std::vector<std::size_t> suspects;  // case indexes to re-run in isolation, ascending
+    // Verdicts seen on the fly, one per case at most (the case index with it).
+    std::vector<std::pair<std::size_t, Verdict>> verdicts;
+    std::vector<LaneBreak> breaks;
+    // Cases whose frames came after a lane broke: never judged, to be run again.
+    std::vector<std::size_t> requeue;
+    std::uint64_t answers = 0, busy_answers = 0;  // busy: exception 06
+    bool lane_lost = false;                       // a lane was closed, reset or timed out
+    bool connect_failed = false;                  // a lane could not (re)connect
 };
 
 class BatchRunner {

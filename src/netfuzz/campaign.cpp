@@ -6,8 +6,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
+#include <limits>
+#include <map>
+#include <memory>
 #include <set>
 #include <thread>
 #include <utility>
@@ -16,11 +20,17 @@
 #include "codec/limits.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/batch.hpp"
+#include "netfuzz/capacity.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
 
 namespace mbstorm::netfuzz {
+// Defined below; the campaign keeps one RestartCommand for the whole run.
+bool wait_for_target_with(RestartCommand& command, const net::Endpoint& target,
+                          const TargetProfile& profile, const std::string& restart_cmd, int wait_ms,
+                          int timeout_ms, std::int64_t deadline_ns);
+
 namespace {
 
 namespace lim = codec::limits;
@@ -88,14 +98,103 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
     return answers;
 }
 
-struct Key {
-    Oracle oracle;
-    std::uint8_t function;
-    MutationClass cls;
-    bool operator<(const Key& o) const {
-        return std::tie(oracle, function, cls) < std::tie(o.oracle, o.function, o.cls);
+// Each crash root cause may cost at most this many target restarts (finding it, confirming
+// it, minimising it).
+constexpr unsigned kMaxRestartsPerCause = 3;
+
+// A rule as a folder name part: "target-down/fc0F-invalid" -> "target-down-fc0F-invalid".
+std::string slug(std::string_view rule) {
+    std::string s;
+    for (char c : rule) {
+        const bool keep = std::isalnum(static_cast<unsigned char>(c)) != 0;
+        if (keep)
+            s += c;
+        else if (!s.empty() && s.back() != '-')
+            s += '-';
     }
-};
+    while (!s.empty() && s.back() == '-') s.pop_back();
+    return s.substr(0, 64);
+}
+
+// Where a root cause showed up: "fc03 invalid-values unit 1".
+std::string variant_of(const Verdict& v, const Case& c) {
+    std::string s = v.culprit_fc >= 0 ? fmt::format("fc{:02X} ", v.culprit_fc) : std::string();
+    s += class_name(c.cls);
+    if (v.culprit_unit >= 0) s += fmt::format(" unit {}", v.culprit_unit);
+    return s;
+}
+
+// The culprit part of a rule that names one ("no-answer/fc07-valid" -> "fc07-valid").
+std::string culprit_of(const std::string& rule) {
+    const auto slash = rule.find('/');
+    return slash == std::string::npos ? std::string() : rule.substr(slash + 1);
+}
+
+// The frames a case sends on its first connection, put back together: for a transport case
+// (split, drip, ...) the requests it delivers in the end. False when the bytes are not a clean
+// run of complete frames or the case uses other steps.
+bool reassemble(const Case& c, Case& plain) {
+    std::vector<std::uint8_t> bytes;
+    for (const Step& s : c.steps) {
+        if (s.op == Op::Send && s.conn == 0)
+            bytes.insert(bytes.end(), s.bytes.begin(), s.bytes.end());
+        else if (s.op != Op::SideProbe && (s.op != Op::Await || s.conn != 0))
+            return false;
+    }
+    std::size_t off = 0, frames = 0;
+    while (bytes.size() - off > lim::kMbapHeader) {
+        const std::size_t size = 6u + codec::load_be16(bytes.data() + off + 4);
+        if (size <= lim::kMbapHeader || size > bytes.size() - off) return false;
+        off += size;
+        ++frames;
+    }
+    if (off != bytes.size() || frames == 0) return false;
+    plain = Case{};
+    plain.cls = frames > 1 ? MutationClass::Coalesced : MutationClass::ValidLimits;
+    plain.function = bytes[lim::kMbapHeader];
+    plain.number = c.number;
+    plain.pipelinable = true;
+    plain.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(bytes)});
+    return true;
+}
+
+// What a case's culprit would be called: each frame's, and its class for transport cases
+// (whose frames, once delivered, may be at fault as well as the way they arrived).
+std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
+    std::vector<std::string> out;
+    if (is_transport_class(c.cls)) out.emplace_back(class_name(c.cls));
+    Case plain;
+    const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
+    if (&framed == &c && is_transport_class(c.cls)) return out;
+    for (const Step& s : framed.steps) {
+        if (s.op != Op::Send) continue;
+        std::size_t off = 0;
+        while (s.bytes.size() - off > lim::kMbapHeader) {
+            const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+            if (size > s.bytes.size() - off) break;
+            RequestInfo info;
+            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
+            out.push_back(culprit_text(framed.cls, &info));
+            off += size;
+        }
+    }
+    if (out.empty()) out.emplace_back(class_name(c.cls));
+    return out;
+}
+
+// The part of a rule minimisation must keep: all of it but the detail that names the request
+// (a codec error in brackets, a culprit after '/'): "exception-02-where-03-owed(trailing_bytes)"
+// may shrink to "...(quantity_out_of_range)", and a whole-server hang by a burst of frames to
+// the one frame that does it ("whole-server-hang/fc02" to "whole-server-hang/fc14"). The
+// minimised reproducer then says which root cause it is.
+std::string rule_stem(const std::string& rule) {
+    const auto cut = rule.find_first_of("(/");
+    return cut == std::string::npos ? rule : rule.substr(0, cut);
+}
+
+bool whole_server_hang(const Verdict& v) {
+    return v.oracle == Oracle::Hang && v.rule.rfind("whole-server-hang", 0) == 0;
+}
 
 class Campaign {
   public:
@@ -104,47 +203,116 @@ class Campaign {
     CampaignResult run();
 
   private:
-    bool out_of_budget() const {
-        if (o_.stop && o_.stop->load()) return true;
-        if (o_.max_cases && r_.cases >= o_.max_cases) return true;
-        if (o_.max_seconds > 0 && elapsed() >= o_.max_seconds) return true;
-        return false;
-    }
+    enum class Outcome { Clean, Fired, Skipped, Lost };
+
     double elapsed() const { return static_cast<double>(net::now_ns() - start_) / 1e9; }
-    // Runs one case alone; records a finding when an oracle fires. False: target lost.
-    bool isolate(const Case& c, bool& fired);
-    bool recover();
+    bool stopped() const { return o_.stop && o_.stop->load(); }
+    std::int64_t remaining_ns() const {
+        return deadline_ ? deadline_ - net::now_ns() : std::numeric_limits<std::int64_t>::max();
+    }
+    bool out_of_budget() const {
+        if (stopped()) return true;
+        if (o_.max_cases && r_.cases >= o_.max_cases) return true;
+        return remaining_ns() <= 0;
+    }
+    // Whether `runs` isolated runs still fit before the deadline (each may wait a timeout for
+    // the answer and another for the fresh probe).
+    bool can_afford(unsigned runs) const {
+        if (stopped()) return false;
+        const std::int64_t per_run =
+            2 * std::int64_t{o_.timeout_ms} * net::kNsPerMs + 200 * net::kNsPerMs;
+        return remaining_ns() > runs * per_run;
+    }
+
+    Finding* known(const Verdict& v);
+    void hit(Finding& f, const Verdict& v, const Case& c);
+    bool would_retrigger(const Case& c) const;
+    void learn_costly(const Finding& f);
+    // Runs one case alone and records what it shows.
+    Outcome isolate(Case c);
+    // The target is down (or was found down): restart it. `cause` (a root-cause key, or "")
+    // is charged with the restart.
+    bool recover(const std::string& cause);
+    // The target accepts but does not answer (a whole-server hang): wait for it to answer
+    // again before anything else is judged, restarting it if it never does.
+    bool settle();
     void record(const Case& c, Execution ex);
-    // The target went down in a pipelined batch and was lost before the case that did it was
-    // re-run alone: keep the batch itself (every frame, in order) as an unconfirmed finding.
     void record_lost_batch(const std::vector<Case>& batch);
-    // Numbers, stamps, saves and announces a new finding.
     void keep(Finding f);
+    void check_capacity_once();
     void progress(bool force);
+    void set_drops_after_exception();
 
     const CampaignOptions& o_;
     const ProgressFn& on_progress_;
     const FindingFn& on_finding_;
     CampaignResult r_;
-    std::int64_t start_ = 0;
-    std::set<Key> seen_;
-    Generator* gen_ = nullptr;
+    std::int64_t start_ = 0, deadline_ = 0;
+    std::map<std::string, std::size_t> by_key_;  // root cause -> index in r_.findings
+    std::set<std::string> costly_culprits_;      // culprits of known crashes and hangs
+    std::map<std::string, unsigned> restarts_by_cause_;
+    std::unique_ptr<Generator> gen_;
+    std::unique_ptr<BatchRunner> batch_;
+    RestartCommand restart_;
     ExecOptions exec_;
     std::int64_t last_progress_ = 0;
     std::uint64_t last_cases_ = 0;
     bool up_ = true;
-    std::uint64_t downs_seen_ = 0;  // isolated runs after which the target was down
+    bool capacity_checked_ = false;
+    Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
+    unsigned lane_depth_ = 48;
 };
 
-bool Campaign::recover() {
+Finding* Campaign::known(const Verdict& v) {
+    const auto it = by_key_.find(root_cause_key(v));
+    return it == by_key_.end() ? nullptr : &r_.findings[it->second];
+}
+
+void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
+    ++f.hits;
+    ++f.variants[variant_of(v, c)];
+    ++r_.duplicates;
+}
+
+bool Campaign::would_retrigger(const Case& c) const {
+    if (costly_culprits_.empty()) return false;
+    for (const std::string& k : culprits(c, r_.profile))
+        if (costly_culprits_.count(k)) return true;
+    return false;
+}
+
+void Campaign::learn_costly(const Finding& f) {
+    const Oracle o = f.oracle();
+    if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
+    const std::string culprit = culprit_of(f.verdict.rule);
+    if (!culprit.empty() && culprit != "capacity") costly_culprits_.insert(culprit);
+    // Hangs without a culprit (stalls of other connections) are charged to their class.
+    if (culprit.empty() && o == Oracle::Hang)
+        gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
+    if (f.verdict.rule == "drops-requests-after-exception") set_drops_after_exception();
+}
+
+void Campaign::set_drops_after_exception() {
+    if (r_.profile.drops_after_exception) return;
+    r_.profile.drops_after_exception = true;
+    batch_ = std::make_unique<BatchRunner>(o_.target, r_.profile,
+                                           BatchOptions{o_.lanes, o_.timeout_ms, true});
+}
+
+bool Campaign::recover(const std::string& cause) {
+    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
+        fmt::print(stderr, "[{:.2f}] recover (cause '{}')\n", elapsed(), cause);
     up_ = false;
     progress(true);
-    if (!wait_for_target(o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms,
-                         o_.timeout_ms)) {
+    std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
+    if (!wait_for_target_with(restart_, o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms,
+                              o_.timeout_ms, wait_deadline)) {
         r_.target_lost = true;
         // Name the command and the wait: the user has to fix one of them.
         r_.stop_reason =
-            o_.restart_cmd.empty()
+            remaining_ns() <= 0
+                ? std::string("time limit reached while waiting for the target to come back")
+            : o_.restart_cmd.empty()
                 ? fmt::format(
                       "the target did not come back within {} ms (--restart-wait; no "
                       "--restart-cmd given)",
@@ -156,97 +324,256 @@ bool Campaign::recover() {
         return false;
     }
     ++r_.restarts;
+    if (!cause.empty()) ++restarts_by_cause_[cause];
     up_ = true;
     return true;
 }
 
-bool Campaign::isolate(const Case& c, bool& fired) {
-    fired = false;
+bool Campaign::settle() {
+    up_ = false;
+    progress(true);
+    RestartCommand none;
+    const std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
+    if (wait_for_target_with(none, o_.target, r_.profile, "", o_.restart_wait_ms, o_.timeout_ms,
+                             wait_deadline)) {
+        up_ = true;
+        return true;
+    }
+    if (remaining_ns() <= 0) return false;
+    ++r_.deaths;
+    return recover("");
+}
+
+Campaign::Outcome Campaign::isolate(Case c) {
+    if (would_retrigger(c)) {
+        ++r_.skipped_known;
+        return Outcome::Skipped;
+    }
     ++r_.isolated_runs;
+    const std::int64_t t_debug = net::now_ns();
     Execution ex = execute_case(c, o_.target, r_.profile, exec_);
+    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
+        fmt::print(stderr, "[{:.2f}] isolate #{} {} fc{:02X}: {} ms, {}\n", elapsed(), c.number,
+                   class_name(c.cls), c.function, (net::now_ns() - t_debug) / 1000000,
+                   ex.verdict ? root_cause_key(ex.verdict) : std::string("clean"));
     if (ex.down_before) {
-        if (!recover()) return false;
+        // Down before this case began: whatever did it is not this case.
+        ++r_.deaths;
+        ++r_.unattributed_deaths;
+        if (!recover("")) return Outcome::Lost;
         ex = execute_case(c, o_.target, r_.profile, exec_);
         if (ex.down_before) {
             r_.target_lost = true;
             r_.stop_reason = "the target keeps refusing connections";
-            return false;
+            return Outcome::Lost;
         }
     }
-    const bool down = ex.target_down;
-    if (down) ++downs_seen_;
-    if (ex.verdict) {
-        fired = true;
-        record(c, std::move(ex));
+    if (!ex.verdict) return Outcome::Clean;
+    last_oracle_ = ex.verdict.oracle;
+    std::string key = root_cause_key(ex.verdict);
+    if (Finding* f = known(ex.verdict)) {
+        hit(*f, ex.verdict, c);
+        if (ex.target_down) {
+            ++r_.deaths;
+            if (!recover(key)) return Outcome::Lost;
+        } else if (whole_server_hang(ex.verdict) && !settle()) {
+            return Outcome::Lost;
+        }
+        return Outcome::Fired;
     }
-    if (down && !recover()) return false;
-    return true;
-}
-
-// The function code of the first request frame a case sends (0 when there is none).
-std::uint8_t first_function(const Case& c) {
-    for (const Step& s : c.steps)
-        if (s.op == Op::Send && s.bytes.size() > lim::kMbapHeader) return s.bytes[lim::kMbapHeader];
-    return c.function;
+    // A transport case that crashed or hung the target: were the frames it delivered the
+    // culprit, rather than the way they arrived? Sent whole, do they do the same?
+    Case plain;
+    if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang) &&
+        is_transport_class(c.cls) && reassemble(c, plain)) {
+        if (ex.target_down) {
+            ++r_.deaths;
+            if (!recover(key)) return Outcome::Lost;
+        } else if (whole_server_hang(ex.verdict) && !settle()) {
+            return Outcome::Lost;
+        }
+        if (!can_afford(1)) {
+            ++r_.suspects_left;
+            return Outcome::Clean;
+        }
+        ++r_.isolated_runs;
+        Execution whole = execute_case(plain, o_.target, r_.profile, exec_);
+        if (whole.verdict.oracle == ex.verdict.oracle) {
+            // The content: judge it as the plain case (its death confirms a crash).
+            c = std::move(plain);
+            ex = std::move(whole);
+            key = root_cause_key(ex.verdict);
+            if (Finding* f = known(ex.verdict)) {
+                hit(*f, ex.verdict, c);
+                if (ex.target_down) {
+                    ++r_.deaths;
+                    if (!recover(key)) return Outcome::Lost;
+                } else if (whole_server_hang(ex.verdict) && !settle()) {
+                    return Outcome::Lost;
+                }
+                return Outcome::Fired;
+            }
+            if (ex.target_down) {
+                ++r_.deaths;
+                ++restarts_by_cause_[key];  // the transport case's death was this one's too
+                if (!recover(key)) return Outcome::Lost;
+                ex.target_down = false;  // confirmed: it killed the target twice
+            } else if (whole_server_hang(ex.verdict) && !settle()) {
+                return Outcome::Lost;
+            }
+            record(c, std::move(ex));
+            return up_ ? Outcome::Fired : Outcome::Lost;
+        }
+        if (whole.target_down) {
+            ++r_.deaths;
+            if (!recover("")) return Outcome::Lost;
+        }
+        // The way the bytes arrived: confirm the transport case itself below.
+        if (!can_afford(1)) {
+            ++r_.suspects_left;
+            return Outcome::Clean;
+        }
+        ++r_.isolated_runs;
+        ex = execute_case(c, o_.target, r_.profile, exec_);
+        if (!ex.verdict || root_cause_key(ex.verdict) != key) {
+            ++r_.unconfirmed;
+            if (ex.target_down) {
+                ++r_.deaths;
+                if (!recover("")) return Outcome::Lost;
+            }
+            return Outcome::Clean;
+        }
+        if (ex.target_down) {
+            ++r_.deaths;
+            if (!recover(key)) return Outcome::Lost;
+            ex.target_down = false;  // confirmed
+        }
+    }
+    if (whole_server_hang(ex.verdict) && !ex.target_down && !settle()) return Outcome::Lost;
+    if (ex.target_down) {
+        // A death is a crash only if the case, replayed alone, kills the target again.
+        ++r_.deaths;
+        if (!recover(key)) {
+            Finding f;
+            f.found_after_s = elapsed();
+            f.verdict = ex.verdict;
+            f.fuzz_case = f.original_case = c;
+            f.case_number = c.number;
+            f.trace = std::move(ex.trace);
+            f.original_steps = c.steps.size();
+            f.variants[variant_of(f.verdict, c)] = 1;
+            f.confirmed = false;
+            f.note =
+                "the target went down after this case and did not come back, so it could "
+                "not be replayed to confirm it";
+            keep(std::move(f));
+            return Outcome::Lost;
+        }
+        if (!can_afford(1)) {
+            ++r_.suspects_left;
+            return Outcome::Clean;
+        }
+        ++r_.isolated_runs;
+        Execution again = execute_case(c, o_.target, r_.profile, exec_);
+        const bool same = again.verdict && root_cause_key(again.verdict) == key;
+        if (!same) {
+            ++r_.unattributed_deaths;
+            if (again.target_down) {
+                ++r_.deaths;
+                if (!recover("")) return Outcome::Lost;
+            }
+            return Outcome::Clean;
+        }
+        ++r_.deaths;
+        if (!recover(key)) {
+            Finding f;
+            f.found_after_s = elapsed();
+            f.verdict = again.verdict;
+            f.fuzz_case = f.original_case = c;
+            f.case_number = c.number;
+            f.trace = std::move(again.trace);
+            f.original_steps = c.steps.size();
+            f.variants[variant_of(f.verdict, c)] = 1;
+            f.note = "confirmed (killed the target twice); not minimised: it did not come back";
+            keep(std::move(f));
+            return Outcome::Lost;
+        }
+        ex = std::move(again);
+    }
+    record(c, std::move(ex));
+    return up_ ? Outcome::Fired : Outcome::Lost;
 }
 
 void Campaign::record(const Case& c, Execution ex) {
-    const Oracle want = ex.verdict.oracle;
-    const bool costly = want == Oracle::Crash || want == Oracle::Hang;
-    const Case frames = split_frames(c);
-    const bool multi_frame = frames.steps.size() > 1 && c.cls != MutationClass::Split &&
-                             c.cls != MutationClass::Drip && c.cls != MutationClass::StatefulSame &&
-                             c.cls != MutationClass::StatefulCross;
-    if (costly) gen_->deprioritise(c.function, c.cls);
-    // Several frames: the finding belongs to whichever frame causes it. Already known when any
-    // of its frames has a known key; otherwise shrink first, then key by what is left.
-    if (multi_frame) {
-        for (const Step& s : frames.steps) {
-            if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader) continue;
-            if (seen_.count(Key{want, s.bytes[lim::kMbapHeader], c.cls})) {
-                ++r_.duplicates;
-                return;
-            }
-        }
-    } else if (seen_.count(Key{want, c.function, c.cls})) {
-        ++r_.duplicates;
-        return;
-    }
+    const std::string key = root_cause_key(ex.verdict);
+    const std::string stem = rule_stem(ex.verdict.rule);
+    const Oracle oracle = ex.verdict.oracle;
+    const bool crash = oracle == Oracle::Crash;
+    const bool costly = crash || oracle == Oracle::Hang;
     Finding f;
     f.found_after_s = elapsed();  // when it was seen, not when minimising it ended
     f.verdict = ex.verdict;
-    f.fuzz_case = c;
+    f.fuzz_case = f.original_case = c;
+    f.case_number = c.number;
     f.trace = std::move(ex.trace);
     f.original_steps = c.steps.size();
+    f.variants[variant_of(f.verdict, c)] = 1;
+    // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
+    learn_costly(f);
     if (o_.minimize) {
         Execution last;
-        bool lost = false;
+        bool lost = false, cut = false, restart_budget = false;
         auto reproduces = [&](const Case& candidate) {
             if (lost) return false;
-            Execution e = execute_case(candidate, o_.target, r_.profile, exec_);
-            if (e.down_before || e.target_down) {
-                if (!recover()) lost = true;
+            if (!can_afford(1)) {
+                cut = true;
+                return false;
             }
-            if (e.verdict.oracle != want) return false;
+            if (crash && restarts_by_cause_[key] >= kMaxRestartsPerCause) {
+                restart_budget = true;
+                return false;
+            }
+            ++r_.isolated_runs;
+            Execution e = execute_case(candidate, o_.target, r_.profile, exec_);
+            // The same fault, not merely the same oracle: else it drifted to another bug.
+            const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
+            if (e.down_before || e.target_down) {
+                ++r_.deaths;
+                if (!recover(same && e.target_down ? key : "")) lost = true;
+            } else if (whole_server_hang(e.verdict) && !settle()) {
+                lost = true;
+            }
+            if (!same) return false;
             last = std::move(e);
             return true;
         };
-        // Crashes and hangs cost a restart or a timeout per try: a smaller budget.
-        Case small =
-            minimize_case(c, reproduces, costly ? o_.minimize_budget / 3 : o_.minimize_budget);
-        if (size_of(small) < size_of(frames) && last.verdict) {
+        // Crashes and hangs cost a restart or a timeout per try: a smaller budget, whole
+        // frames only.
+        Case small = minimize_case(
+            c, reproduces, costly ? std::min(8u, o_.minimize_budget / 3) : o_.minimize_budget,
+            !costly);
+        if (size_of(small) < size_of(c) && last.verdict) {
             f.fuzz_case = std::move(small);
             f.verdict = last.verdict;
             f.trace = std::move(last.trace);
             f.minimized = true;
         }
+        if (cut) {
+            f.minimize_note = "minimisation cut short by --seconds";
+            ++r_.findings_not_minimized;
+        } else if (restart_budget) {
+            f.minimize_note = fmt::format(
+                "minimisation stopped: a crash may cost at most {} restarts", kMaxRestartsPerCause);
+        }
     }
-    if (multi_frame) f.fuzz_case.function = first_function(f.fuzz_case);
-    if (!seen_.insert(Key{want, f.fuzz_case.function, f.fuzz_case.cls}).second) {
-        ++r_.duplicates;
+    // The identity is what the minimised reproducer violates: it may turn out to be a root
+    // cause already known under another guise (a codec detail that fell away).
+    if (Finding* existing = known(f.verdict)) {
+        hit(*existing, f.verdict, c);
+        by_key_[key] = static_cast<std::size_t>(existing - r_.findings.data());
         return;
     }
-    if (costly) gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
+    by_key_[key] = r_.findings.size();  // the unminimised guise leads here too
     keep(std::move(f));
 }
 
@@ -255,18 +582,20 @@ void Campaign::keep(Finding f) {
     f.profile = r_.profile;
     f.target = o_.target_text;
     f.seed = o_.seed;
-    f.case_number = r_.cases;
     f.timeout_ms = o_.timeout_ms;
+    if (f.verdict.culprit_fc >= 0)
+        f.fuzz_case.function = static_cast<std::uint8_t>(f.verdict.culprit_fc);
     if (!o_.out_dir.empty()) {
-        const std::string dir =
-            fmt::format("{}/{:03}-{}-fc{:02X}-{}", o_.out_dir, f.id, oracle_name(f.oracle()),
-                        f.fuzz_case.function, class_name(f.fuzz_case.cls));
+        const std::string dir = fmt::format("{}/{:03}-{}-{}", o_.out_dir, f.id,
+                                            oracle_name(f.oracle()), slug(f.verdict.rule));
         std::string err;
         if (save_finding(f, dir, err))
             f.folder = dir;
         else
             fmt::print(stderr, "mbstorm fuzz: {}\n", err);
     }
+    by_key_[f.key()] = r_.findings.size();
+    learn_costly(f);
     r_.findings.push_back(std::move(f));
     if (on_finding_) on_finding_(r_.findings.back());
 }
@@ -275,6 +604,7 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
     // What the server looks like now decides crash or whole-server hang, as after one case.
     Verdict v = fresh_probe_verdict(probe_target(o_.target, r_.profile, o_.timeout_ms));
     if (!v) v = fresh_probe_verdict(ProbeResult::ConnectFailed);
+    v.rule += "/pipelined-batch";
     Case all;
     all.cls = MutationClass::Coalesced;
     all.pipelinable = true;
@@ -285,9 +615,10 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
             all.steps.push_back(std::move(s));
         }
     Finding f;
-    f.found_after_s = elapsed();      // when it was seen, not when minimising it ended
+    f.found_after_s = elapsed();
     f.fuzz_case = split_frames(all);  // one step per frame, the batch's order kept
-    f.fuzz_case.function = first_function(f.fuzz_case);
+    f.original_case = f.fuzz_case;
+    f.case_number = batch.empty() ? 0 : batch.front().number;
     std::size_t frames = 0;
     for (const Step& s : f.fuzz_case.steps) frames += s.op == Op::Send;
     f.verdict = std::move(v);
@@ -301,8 +632,40 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
         "reproducer resends all {} frames of the batch in order on one connection",
         batch.size(), frames);
     f.original_steps = f.fuzz_case.steps.size();
-    seen_.insert(Key{f.oracle(), f.fuzz_case.function, f.fuzz_case.cls});
+    f.variants["pipelined batch"] = 1;
     keep(std::move(f));
+}
+
+void Campaign::check_capacity_once() {
+    if (capacity_checked_ || o_.max_connections == 0 || !can_afford(4)) return;
+    capacity_checked_ = true;
+    const CapacityResult cr =
+        check_capacity(o_.target, r_.profile, o_.max_connections, o_.timeout_ms, deadline_);
+    r_.capacity_held = cr.held;
+    if (cr.verdict && !known(cr.verdict)) {
+        Finding f;
+        f.found_after_s = elapsed();
+        f.verdict = cr.verdict;
+        f.fuzz_case.cls = MutationClass::Flood;
+        f.fuzz_case.steps.push_back(Step{
+            Op::Flood,
+            0,
+            0,
+            static_cast<std::uint16_t>(std::min<std::uint32_t>(cr.held + cr.refused + 64, 0xFFFF)),
+            {}});
+        f.original_case = f.fuzz_case;
+        f.original_steps = 1;
+        f.variants["capacity check"] = 1;
+        f.note = fmt::format(
+            "found by the connection-capacity check (held {} connections, {} refused); the "
+            "reproducer opens that many connections at once and probes each",
+            cr.held, cr.refused);
+        keep(std::move(f));
+    }
+    if (cr.target_down) {
+        ++r_.deaths;
+        recover(cr.verdict ? root_cause_key(cr.verdict) : "");
+    }
 }
 
 void Campaign::progress(bool force) {
@@ -325,72 +688,192 @@ void Campaign::progress(bool force) {
 CampaignResult Campaign::run() {
     start_ = net::now_ns();
     last_progress_ = start_;
+    if (o_.max_seconds > 0) deadline_ = start_ + static_cast<std::int64_t>(o_.max_seconds * 1e9);
     if (!discover_target(o_.target, o_.unit, o_.timeout_ms, r_.profile, r_.error)) return r_;
     r_.started = true;
     exec_.timeout_ms = o_.timeout_ms;
-    exec_.settle_ms = std::min(o_.timeout_ms, 300);
+    exec_.state = o_.state;
     GeneratorOptions go;
     go.seed = o_.seed;
     go.unit = o_.unit;
     go.naive = o_.naive;
     go.isolated_per_mille = o_.isolated_per_mille;
-    Generator gen(go);
-    gen_ = &gen;
-    BatchRunner batch(o_.target, r_.profile, BatchOptions{o_.lanes, o_.timeout_ms});
-    const std::size_t round = std::max(1u, o_.lanes) * std::max(1u, o_.lane_depth);
-    std::vector<Case> cases(round), piped, alone;
+    go.state = o_.state;
+    go.dict_words = o_.dict_words;
+    go.dict_tokens = o_.dict_tokens;
+    gen_ = std::make_unique<Generator>(go);
+    batch_ = std::make_unique<BatchRunner>(
+        o_.target, r_.profile,
+        BatchOptions{o_.lanes, o_.timeout_ms, r_.profile.drops_after_exception});
+    lane_depth_ = std::max(1u, o_.lane_depth);
+    std::uint64_t generated = 0;
+    std::vector<Case> requeue, piped, alone;
+    std::set<std::uint64_t> requeued_once;
+    std::size_t rounds = 0;
     while (!out_of_budget()) {
+        const std::size_t round = std::max(1u, o_.lanes) * lane_depth_;
         std::size_t n = round;
         if (o_.max_cases) n = std::min<std::uint64_t>(n, o_.max_cases - r_.cases);
         piped.clear();
         alone.clear();
-        for (std::size_t i = 0; i < n; ++i) {
-            gen.next(cases[i]);
-            ++r_.cases_by_class[static_cast<std::size_t>(cases[i].cls)];
-            (cases[i].pipelinable ? piped : alone).push_back(cases[i]);
+        for (Case& c : requeue) (c.pipelinable ? piped : alone).push_back(std::move(c));
+        requeue.clear();
+        std::size_t fresh = 0;
+        for (std::size_t tries = 0; piped.size() + alone.size() < n && tries < 8 * n; ++tries) {
+            Case c;
+            gen_->next(c);
+            c.number = ++generated;
+            if (would_retrigger(c)) {
+                ++r_.skipped_known;
+                continue;
+            }
+            ++fresh;
+            ++r_.cases_by_class[static_cast<std::size_t>(c.cls)];
+            (c.pipelinable ? piped : alone).push_back(std::move(c));
         }
         const std::int64_t t0 = net::now_ns();
-        BatchResult br = batch.run(piped);
+        BatchResult br = batch_->run(piped);
         const std::int64_t t1 = net::now_ns();
         r_.batch_seconds += static_cast<double>(t1 - t0) / 1e9;
         r_.batched_cases += piped.size();
+        r_.answers += br.answers;
+        r_.busy_answers += br.busy_answers;
+        // A target answering mostly 06 (busy) wastes the cases: thin the lanes and pause.
+        if (br.answers >= 16 && br.busy_answers * 2 > br.answers) {
+            r_.slowed_for_busy = true;
+            lane_depth_ = std::max(1u, lane_depth_ / 2);
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+        if (std::getenv("MBSTORM_FUZZ_DEBUG"))
+            fmt::print(stderr,
+                       "[{:.2f}] batch {} cases: {} ms, {} answers, {} verdicts, {} breaks, {} "
+                       "suspects, {} requeued{}\n",
+                       elapsed(), piped.size(), (t1 - t0) / 1000000, br.answers, br.verdicts.size(),
+                       br.breaks.size(), br.suspects.size(), br.requeue.size(),
+                       br.lane_lost ? " LANE LOST" : "");
+        std::vector<std::size_t> suspects = br.suspects;
+        for (auto& [ci, v] : br.verdicts) {
+            if (Finding* f = known(v))
+                hit(*f, v, piped[ci]);
+            else
+                suspects.push_back(ci);
+        }
+        // A broken lane whose break matches a known root cause needs no re-run.
+        for (const LaneBreak& b : br.breaks) {
+            std::vector<std::string> keys;
+            const std::string close = b.closed ? "unexpected-close:" : "hang:";
+            if (b.has_previous && b.previous_exception)
+                keys.push_back(close + (b.closed ? "closes-after-exception"
+                                                 : "drops-requests-after-exception"));
+            if (b.has_previous)
+                keys.push_back(close + (b.closed ? "closes-after/" : "drops-requests-after/") +
+                               b.previous_culprit);
+            keys.push_back(close + (b.closed ? "close-with-request-pending/" : "no-answer/") +
+                           b.unanswered_culprit);
+            for (const std::string& k : keys) {
+                const auto it = by_key_.find(k);
+                if (it == by_key_.end()) continue;
+                Finding& f = r_.findings[it->second];
+                const std::size_t ci = b.has_previous ? b.previous_case : b.unanswered_case;
+                if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
+                std::erase(suspects, b.previous_case);
+                std::erase(suspects, b.unanswered_case);
+                break;
+            }
+        }
+        std::sort(suspects.begin(), suspects.end());
+        suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
+        bool lost = false, whole_target = false;
         if (br.connect_failed || br.lane_lost) {
-            batch.close_all();
-            if (probe_target(o_.target, r_.profile, o_.timeout_ms) != ProbeResult::Ok &&
-                !recover()) {
-                // Nothing can be re-run: the batch is all there is to show for it.
-                if (br.lane_lost) record_lost_batch(piped);
-                r_.cases += n;
-                break;
+            batch_->close_all();
+            const ProbeResult pr = probe_target(o_.target, r_.profile, o_.timeout_ms);
+            if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
+                whole_target = true;
+                ++r_.deaths;
+                if (!recover("")) {
+                    // Nothing can be re-run: the batch is all there is to show for it.
+                    if (br.lane_lost) record_lost_batch(piped);
+                    r_.cases += fresh;
+                    break;
+                }
+            } else if (pr != ProbeResult::Ok) {
+                whole_target = true;
+                if (!settle()) {
+                    // Hung and never back: the suspects cannot be judged.
+                    r_.cases += fresh;
+                    break;
+                }
             }
         }
-        // The mutation corpus is the valid traffic the generator itself recorded, not what the
-        // target answered: answers depend on state that concurrent lanes change in a timing-
-        // dependent order, and a seed must replay the same cases.
-        bool lost = false;
-        const std::uint64_t downs_before = downs_seen_;
-        for (std::size_t i : br.suspects) {
-            bool fired = false;
-            if (!isolate(piped[i], fired)) {
-                lost = true;
-                break;
+        std::vector<std::size_t> later;  // cases to run again in a later round
+        if (whole_target) {
+            // The target died or hung as a whole: the culprit may be any unanswered frame (a
+            // server may not even have answered what came before it). Look at them one by one,
+            // lane by lane in turn from where each broke, until a crash or hang shows up; the
+            // rest go back into the queue.
+            std::vector<std::size_t> candidates;
+            std::vector<bool> seen(piped.size(), false);
+            for (std::size_t pos = 0;; ++pos) {
+                bool any = false;
+                for (const LaneBreak& b : br.breaks) {
+                    if (pos >= b.unanswered.size()) continue;
+                    any = true;
+                    const std::size_t ci = b.unanswered[pos];
+                    if (!seen[ci]) candidates.push_back(ci);
+                    seen[ci] = true;
+                }
+                if (!any) break;
             }
-            if (!fired) ++r_.unconfirmed;
+            for (std::size_t ci : suspects)
+                if (!seen[ci]) candidates.push_back(ci);
+            bool found = false;
+            for (std::size_t k = 0; k < candidates.size(); ++k) {
+                const std::size_t ci = candidates[k];
+                if (found || !can_afford(1)) {
+                    later.push_back(ci);
+                    continue;
+                }
+                const Outcome out = isolate(piped[ci]);
+                if (out == Outcome::Lost) {
+                    lost = true;
+                    break;
+                }
+                // A crash or hang explains the batch; anything else keeps looking.
+                found = out == Outcome::Fired &&
+                        (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
+            }
+        } else {
+            later = br.requeue;
+            for (std::size_t k = 0; k < suspects.size(); ++k) {
+                if (!can_afford(1)) {
+                    r_.suspects_left += suspects.size() - k;
+                    break;
+                }
+                const Outcome out = isolate(piped[suspects[k]]);
+                if (out == Outcome::Lost) {
+                    lost = true;
+                    break;
+                }
+                if (out == Outcome::Clean) ++r_.unconfirmed;
+            }
         }
-        // Lost while re-running suspects and none of them was seen taking the target down:
-        // what did it is still somewhere in the batch.
-        if (lost && downs_seen_ == downs_before) record_lost_batch(piped);
+        for (std::size_t ci : later) {
+            if (!requeued_once.insert(piped[ci].number).second) continue;
+            ++r_.requeued;
+            requeue.push_back(piped[ci]);
+        }
         for (std::size_t i = 0; !lost && i < alone.size(); ++i) {
-            bool fired = false;
-            if (!isolate(alone[i], fired)) lost = true;
+            if (!can_afford(1)) break;
+            if (isolate(alone[i]) == Outcome::Lost) lost = true;
         }
         r_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
-        r_.cases += n;
+        r_.cases += fresh;
         progress(false);
         if (lost) break;
+        if (++rounds == 1) check_capacity_once();
     }
     if (r_.stop_reason.empty()) {
-        r_.stop_reason = (o_.stop && o_.stop->load())                 ? "interrupted"
+        r_.stop_reason = stopped()                                    ? "interrupted"
                          : (o_.max_cases && r_.cases >= o_.max_cases) ? "case limit reached"
                                                                       : "time limit reached";
     }
@@ -450,15 +933,31 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
                                         {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
                                         {0x18, 0x5F, 0xFF},
                                         {0x2B, 0x0E, 0x01, 0x00}};
+    // Does it drop what is pipelined behind a request it answers with an exception? Then
+    // everything below goes one request at a time.
+    answers = pipeline(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
+                       timeout_ms, connected);
+    profile.drops_after_exception =
+        answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
     std::vector<Pdu> pdus = canonical;
-    for (unsigned fc = 0; fc < 256; ++fc)
-        if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
-            pdus.push_back(Pdu{static_cast<std::uint8_t>(fc)});
-    pdus.push_back(profile.probe_pdu);
-    frames.clear();
-    for (std::size_t i = 0; i < pdus.size(); ++i)
-        frames.push_back(frame_of(pdus[i], static_cast<std::uint16_t>(i), unit));
-    answers = pipeline(target, frames, timeout_ms, connected);
+    if (!profile.drops_after_exception) {
+        for (unsigned fc = 0; fc < 256; ++fc)
+            if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
+                pdus.push_back(Pdu{static_cast<std::uint8_t>(fc)});
+        pdus.push_back(profile.probe_pdu);
+        frames.clear();
+        for (std::size_t i = 0; i < pdus.size(); ++i)
+            frames.push_back(frame_of(pdus[i], static_cast<std::uint16_t>(i), unit));
+        answers = pipeline(target, frames, timeout_ms, connected);
+    } else {
+        // Undefined codes are assumed unsupported (no vendor extensions learned): asking each
+        // would cost the target's pause after every exception.
+        pdus.push_back(profile.probe_pdu);
+        answers.assign(pdus.size(), {});
+        for (std::size_t i = 0; i + 1 < pdus.size(); ++i)
+            answers[i] =
+                pipeline(target, {frame_of(pdus[i], 0, unit)}, timeout_ms, connected).front();
+    }
     for (std::size_t i = 0; i + 1 < pdus.size(); ++i) {
         const Pdu& a = answers[i];
         if (a.empty()) continue;
@@ -469,15 +968,21 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
     return true;
 }
 
-bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
-                     const std::string& restart_cmd, int wait_ms, int timeout_ms) {
+bool wait_for_target_with(RestartCommand& command, const net::Endpoint& target,
+                          const TargetProfile& profile, const std::string& restart_cmd, int wait_ms,
+                          int timeout_ms, std::int64_t deadline_ns) {
     const std::int64_t wait_ns = std::int64_t{wait_ms} * net::kNsPerMs;
     std::int64_t deadline = net::now_ns() + wait_ns;
-    RestartCommand command;
     bool command_running = false;
     if (!restart_cmd.empty()) {
-        std::string error;
-        command_running = command.start(restart_cmd, error);
+        // One copy at a time: a command still running (a slow restart, or the target itself
+        // run in the foreground) is waited for, not started again.
+        command_running = command.running();
+        if (!command_running) {
+            std::string error;
+            command_running = command.start(restart_cmd, error);
+            if (!command_running) fmt::print(stderr, "mbstorm fuzz: {}\n", error);
+        }
         // The wait counts from when the command returns (a `systemctl restart` may take its
         // time); one that does not return (the target in the foreground) gets a minute more.
         if (command_running) deadline += kRestartCommandGraceNs;
@@ -490,10 +995,19 @@ bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
         }
         if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok)
             return true;
-        if (net::now_ns() >= deadline) return false;
+        const std::int64_t now = net::now_ns();
+        if (now >= deadline || (deadline_ns && now >= deadline_ns)) return false;
         std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
         backoff_ms = std::min(backoff_ms * 3 / 2, 1000);
     }
+}
+
+bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
+                     const std::string& restart_cmd, int wait_ms, int timeout_ms,
+                     std::int64_t deadline_ns) {
+    RestartCommand command;
+    return wait_for_target_with(command, target, profile, restart_cmd, wait_ms, timeout_ms,
+                                deadline_ns);
 }
 
 CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on_progress,

@@ -1,7 +1,9 @@
 // The campaign loop: discover the target, generate cases, run them (pipelined lanes for the
-// well-framed ones, one by one for the rest and for every suspect), keep findings
-// (deduplicated by oracle, function code and mutation class), survive crashes by waiting for
-// the target to come back, and stop at --cases or --seconds.
+// well-framed ones, one by one for the rest and for suspects), keep one finding per root cause
+// (oracle and violated rule; every other case showing it is a hit with its variant), skip
+// cases that would only re-trigger a known crash or hang, survive crashes by restarting the
+// target, and keep --seconds as a deadline for everything, confirmation and minimisation
+// included.
 #pragma once
 
 #include <array>
@@ -13,6 +15,7 @@
 
 #include "net/socket.hpp"
 #include "netfuzz/finding.hpp"
+#include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -28,6 +31,10 @@ struct CampaignOptions {
     unsigned lane_depth = 48;  // cases per lane per round
     unsigned isolated_per_mille = 10;
     bool naive = false;  // baseline random-frame generator
+    StateRange state;    // where stateful cases write and read back (--state-range)
+    std::vector<std::uint16_t> dict_words;               // --dict: 16-bit entries
+    std::vector<std::vector<std::uint8_t>> dict_tokens;  // --dict: longer entries
+    std::uint32_t max_connections = 4096;  // capacity oracle cap (0: no capacity check)
     bool minimize = true;
     unsigned minimize_budget = 40;
     std::string restart_cmd;      // run (sh -c) when the target is down
@@ -53,10 +60,20 @@ struct CampaignResult {
     std::vector<Finding> findings;
     std::uint64_t cases = 0;
     std::uint64_t batched_cases = 0, isolated_runs = 0;
-    std::uint64_t duplicates = 0;   // findings suppressed as already known
-    std::uint64_t unconfirmed = 0;  // suspects that did not reproduce alone
-    std::uint64_t restarts = 0;     // times the target went down and came back
-    bool target_lost = false;       // it did not come back: the run ended early
+    std::uint64_t duplicates = 0;     // cases that showed an already known root cause (hits)
+    std::uint64_t unconfirmed = 0;    // suspects that did not reproduce alone
+    std::uint64_t skipped_known = 0;  // cases not sent: they would re-trigger a known crash/hang
+    std::uint64_t requeued = 0;       // cases sent again after a lane broke before them
+    std::uint64_t restarts = 0;       // times the target went down and came back
+    std::uint64_t deaths = 0;         // times the target was seen down
+    std::uint64_t unattributed_deaths = 0;        // deaths no case replayed alone could repeat
+    std::uint64_t busy_answers = 0, answers = 0;  // exception 06 among pipelined answers
+    bool slowed_for_busy = false;  // the target answered mostly 06: lanes were thinned
+    // Cut short by the deadline: suspects never re-run, findings left unminimised.
+    std::uint64_t suspects_left = 0;
+    std::uint64_t findings_not_minimized = 0;
+    std::uint32_t capacity_held = 0;  // most concurrent connections the capacity check held
+    bool target_lost = false;         // it did not come back: the run ended early
     double seconds = 0;
     double batch_seconds = 0, isolated_seconds = 0;  // where the time went
     std::string stop_reason;
@@ -76,8 +93,10 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
 
 // Waits (connects retried with backoff) until the target answers the probe, starting
 // `restart_cmd` first when given. False when it does not come back within `wait_ms` of the
-// command returning (or, for a command that keeps running, of its start plus a minute).
+// command returning (or, for a command that keeps running, of its start plus a minute), or by
+// `deadline_ns` (0: none).
 bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
-                     const std::string& restart_cmd, int wait_ms, int timeout_ms);
+                     const std::string& restart_cmd, int wait_ms, int timeout_ms,
+                     std::int64_t deadline_ns = 0);
 
 }  // namespace mbstorm::netfuzz

@@ -6,11 +6,14 @@ namespace mbstorm::netfuzz {
 namespace {
 
 constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::Count)> kNames = {
-    "valid-limits",      "invalid-values", "unknown-function", "unit-id",
-    "transaction-id",    "protocol-id",    "mbap-length",      "trailing-bytes",
-    "truncated",         "split",          "coalesced",        "drip",
-    "half-close",        "flood",          "stateful-same",    "stateful-cross",
-    "recorded-mutation", "naive-random"};
+    "valid-limits",  "invalid-values",      "unknown-function",
+    "unit-id",       "transaction-id",      "protocol-id",
+    "mbap-length",   "trailing-bytes",      "truncated",
+    "split",         "coalesced",           "drip",
+    "half-close",    "half-close-answered", "burst-split",
+    "partial-hold",  "exception-stall",     "flood",
+    "stateful-same", "stateful-cross",      "recorded-mutation",
+    "naive-random"};
 
 }  // namespace
 
@@ -27,6 +30,22 @@ bool class_from_name(std::string_view name, MutationClass& out) noexcept {
         }
     }
     return false;
+}
+
+bool is_transport_class(MutationClass c) noexcept {
+    switch (c) {
+        case MutationClass::MbapLength:
+        case MutationClass::Truncated:
+        case MutationClass::Split:
+        case MutationClass::Drip:
+        case MutationClass::HalfClose:
+        case MutationClass::BurstSplit:
+        case MutationClass::PartialHold:
+        case MutationClass::Flood:
+            return true;
+        default:
+            return false;
+    }
 }
 
 std::uint8_t Case::connections() const noexcept {

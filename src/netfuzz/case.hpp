@@ -12,28 +12,35 @@ namespace mbstorm::netfuzz {
 
 // How a case was made. Findings are deduplicated by (oracle, function code, class).
 enum class MutationClass : std::uint8_t {
-    ValidLimits,       // well-formed requests with values at the limits
-    InvalidValues,     // out-of-spec values: quantity 0/max+1, bad byte counts, bad coil values
-    UnknownFunction,   // function codes the spec does not define (0-255)
-    UnitId,            // unit ids 0, 0xF7, 0xFF, random
-    TransactionId,     // special transaction ids (0, 0x7FFF, 0x8000, 0xFFFF, duplicates)
-    ProtocolId,        // protocol id != 0 (must be discarded)
-    MbapLength,        // length 0, 1, > 254, too short, too long
-    TrailingBytes,     // PDU with extra bytes inside a consistent length
-    Truncated,         // frame cut short, then the connection is half-closed
-    Split,             // one frame split across two sends at every offset
-    Coalesced,         // many frames in one send
-    Drip,              // one byte per send with gaps
-    HalfClose,         // partial frame then shutdown(SHUT_WR)
-    Flood,             // a bounded burst of connections
-    StatefulSame,      // write then read back on the same connection
-    StatefulCross,     // write on one connection, read back on another
-    RecordedMutation,  // bit flips and field splices of recorded valid traffic
-    NaiveRandom,       // baseline: random PDU bytes in a valid MBAP frame
+    ValidLimits,        // well-formed requests with values at the limits
+    InvalidValues,      // out-of-spec values: quantity 0/max+1, bad byte counts, bad coil values
+    UnknownFunction,    // function codes the spec does not define (0-255)
+    UnitId,             // unit ids 0, 0xF7, 0xFF, random
+    TransactionId,      // special transaction ids (0, 0x7FFF, 0x8000, 0xFFFF, duplicates)
+    ProtocolId,         // protocol id != 0 (must be discarded)
+    MbapLength,         // length 0, 1, > 254, too short, too long
+    TrailingBytes,      // PDU with extra bytes inside a consistent length
+    Truncated,          // frame cut short, then the connection is half-closed
+    Split,              // one frame split across two sends at every offset
+    Coalesced,          // many frames in one send
+    Drip,               // one byte per send with gaps
+    HalfClose,          // partial frame then shutdown(SHUT_WR)
+    HalfCloseAnswered,  // complete frames then shutdown(SHUT_WR): every one is still owed
+    BurstSplit,         // a pipelined burst split inside one of its frames, the rest coalesced
+    PartialHold,        // a started frame held open while another connection probes
+    ExceptionStall,     // a request owed an exception, then another connection probes
+    Flood,              // a bounded burst of connections
+    StatefulSame,       // write then read back on the same connection
+    StatefulCross,      // write on one connection, read back on another
+    RecordedMutation,   // bit flips and field splices of recorded valid traffic
+    NaiveRandom,        // baseline: random PDU bytes in a valid MBAP frame
     Count
 };
 
 std::string_view class_name(MutationClass c) noexcept;
+// Classes whose faults lie in how bytes arrive (splits, drips, half-closes, lying lengths,
+// floods) rather than in what a request asks: their root causes are keyed by the class.
+bool is_transport_class(MutationClass c) noexcept;
 bool class_from_name(std::string_view name, MutationClass& out) noexcept;
 
 enum class Op : std::uint8_t {
@@ -41,6 +48,8 @@ enum class Op : std::uint8_t {
     ShutdownWrite,  // half-close `conn`
     Await,          // wait until every request sent on `conn` so far is answered
     Flood,          // open `count` extra connections at once, one probe each, close them
+    SideProbe,      // probe on a fresh connection now, while the case's connections are as they
+                    // are: a slow answer means the case stalls other clients too
 };
 
 struct Step {
@@ -53,7 +62,8 @@ struct Step {
 
 struct Case {
     MutationClass cls = MutationClass::ValidLimits;
-    std::uint8_t function = 0;  // the function code it is about (dedup key)
+    std::uint8_t function = 0;  // the function code it is about
+    std::uint64_t number = 0;   // its place in the run (1-based; 0: not from a run)
     std::vector<Step> steps;
 
     // True when the case is a single send on one connection of complete, well-framed ADUs:

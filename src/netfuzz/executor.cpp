@@ -19,6 +19,9 @@ namespace {
 
 namespace lim = codec::limits;
 constexpr std::uint8_t kFreshConn = 255;
+// A concurrent connection answered later than this was stalled by the case (loopback answers
+// take well under a millisecond; a loaded machine stays far below this).
+constexpr std::int64_t kStallMs = 250;
 
 constexpr std::array<std::string_view, 10> kTraceNames = {
     "connect",     "connect-failed", "send",    "recv",  "shutdown-write",
@@ -36,6 +39,7 @@ struct Pending {
 struct Conn {
     net::UniqueFd fd;
     bool opened = false, closed = false, reset = false, shut = false, desync = false;
+    bool shut_after_frames = false;  // half-closed with every frame sent complete
     bool framing_lost = false;
     std::vector<std::uint8_t> sent, received;
     std::size_t parsed = 0, rparsed = 0;
@@ -66,7 +70,17 @@ class Runner {
     bool pump(std::int64_t deadline, Done done);
     bool answered(const Conn& c) const;
     void flood(std::uint16_t count);
+    void side_probe();
     void judge(const Case& c);
+    std::int64_t stall_threshold_ms() const {
+        return std::min<std::int64_t>(kStallMs, options_.timeout_ms);
+    }
+
+    struct SideProbe {
+        ProbeResult result;
+        std::int64_t ms;
+        std::string during;  // "partial-frame", "exception" or "request"
+    };
 
     const net::Endpoint& target_;
     const TargetProfile& profile_;
@@ -76,6 +90,7 @@ class Runner {
     Execution out_;
     bool any_connect_ = false;
     bool flooded_ = false;
+    std::vector<SideProbe> side_probes_;
 };
 
 bool Runner::ensure_open(std::uint8_t index) {
@@ -260,6 +275,10 @@ void Runner::flood(std::uint16_t count) {
     }
 }
 
+std::string culprit_text(const Case& c, const RequestInfo* rq) {
+    return netfuzz::culprit_text(c.cls, rq);
+}
+
 void Runner::judge(const Case& c) {
     Verdict candidate;
     auto consider = [&](Verdict v) {
@@ -268,13 +287,18 @@ void Runner::judge(const Case& c) {
     std::vector<std::vector<RequestInfo>> infos(conns_.size());
     std::vector<Shadow::Event> shadow;
     bool need_fresh_probe = flooded_;
+    // The request a whole-server fault is blamed on: the first one owed an answer that got
+    // none, else the last one sent.
+    const RequestInfo* first_unanswered = nullptr;
+    const RequestInfo* last_sent = nullptr;
+    int last_fc = -1;
     for (std::size_t i = 0; i < conns_.size(); ++i) {
         Conn& cn = conns_[i];
         if (!cn.opened) continue;
         if (cn.closed || cn.shut || cn.desync) need_fresh_probe = true;
         if (cn.framing_lost) {
             consider(Verdict{
-                Oracle::MalformedResponse,
+                Oracle::MalformedResponse, "response-framing", -1,
                 fmt::format("response framing lost on connection {}: MBAP length {}", i,
                             codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
                 "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
@@ -283,42 +307,77 @@ void Runner::judge(const Case& c) {
             std::string tids;
             for (const Pending& pd : cn.pending)
                 tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
-            consider(Verdict{Oracle::MalformedResponse,
+            consider(Verdict{Oracle::MalformedResponse, "unmatched-transaction-id", -1,
                              fmt::format("response with transaction id {:04X} matches no request",
                                          codec::load_be16(cn.received.data() + off)),
                              fmt::format("transaction ids {}", tids),
                              hex(codec::Bytes(cn.received.data() + off, size))});
         }
         infos[i].resize(cn.pending.size());
+        // The case's own request before the current one on this connection, and whether it
+        // drew an exception: silence after it is blamed on it.
+        const RequestInfo* prev_own = nullptr;
+        bool prev_exception = false;
+        bool reported = false;  // only the first unanswered request per connection: the
+                                // silence after it follows from it
         for (std::size_t k = 0; k < cn.pending.size(); ++k) {
             const Pending& pd = cn.pending[k];
             RequestInfo& info = infos[i][k];
             describe_request(codec::Bytes(cn.sent.data() + pd.offset, pd.size), profile_, info);
-            codec::Bytes rsp;
+            bool exception = false;
             if (pd.answered_ns) {
-                rsp = codec::Bytes(cn.received.data() + pd.rsp_offset, pd.rsp_size);
+                const codec::Bytes rsp(cn.received.data() + pd.rsp_offset, pd.rsp_size);
                 consider(judge_response(info, rsp, profile_));
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
                                                rsp.subspan(lim::kMbapHeader)});
+                exception = rsp.size() > lim::kMbapHeader &&
+                            (rsp[lim::kMbapHeader] & codec::kExceptionBit) != 0;
             } else {
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
             }
-            if (pd.expect != Expect::Answer || pd.answered_ns) continue;
-            // A server may drop what it has not answered when we half-close: only streams we
-            // left intact must answer everything.
-            if (cn.shut || cn.desync) continue;
+            const RequestInfo* before = prev_own;
+            const bool before_exception = prev_exception;
+            if (!pd.probe) {
+                prev_own = &info;
+                prev_exception = exception;
+                last_sent = &info;
+                if (!info.pdu.empty()) last_fc = info.pdu[0];
+            }
+            if (pd.expect != Expect::Answer || pd.answered_ns || reported) continue;
+            // A server may drop what it has not answered when a frame was left unfinished;
+            // complete frames before a clean half-close are still owed their answers.
+            if (cn.desync || (cn.shut && !cn.shut_after_frames)) continue;
             // Answers that matched nothing or lost framing: the missing answer is already
             // explained by the malformed response.
             if (!cn.unmatched.empty() || cn.framing_lost) continue;
+            reported = true;
+            if (!pd.probe && !first_unanswered) first_unanswered = &info;
             const std::string what = pd.probe ? std::string("the in-stream liveness probe")
                                               : fmt::format("request {}", hex(info.pdu, 16));
-            if (cn.closed) {
-                consider(Verdict{Oracle::UnexpectedClose,
-                                 fmt::format("connection {} {} with {} unanswered", i,
-                                             cn.reset ? "reset" : "closed", what),
+            const bool closed = cn.closed;
+            std::string rule;
+            const RequestInfo* blamed = pd.probe ? before : &info;
+            if (cn.shut) {
+                rule = "drops-answers-on-half-close";
+            } else if (before && before_exception) {
+                rule = closed ? "closes-after-exception" : "drops-requests-after-exception";
+                blamed = before;
+            } else if (!pd.probe || !before) {
+                rule = fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
+                                   culprit_text(c, pd.probe ? nullptr : &info));
+            } else {
+                rule = fmt::format("{}/{}", closed ? "closes-after" : "drops-requests-after",
+                                   culprit_text(c, before));
+            }
+            const int fc = blamed && !blamed->pdu.empty() ? blamed->pdu[0] : -1;
+            if (closed) {
+                consider(Verdict{Oracle::UnexpectedClose, std::move(rule), fc,
+                                 fmt::format("connection {} {} with {} unanswered{}", i,
+                                             cn.reset ? "reset" : "closed", what,
+                                             cn.shut ? " after our half-close" : ""),
                                  "an answer, connection kept open", cn.reset ? "reset" : "FIN"});
             } else {
-                consider(Verdict{Oracle::Hang,
+                consider(Verdict{Oracle::Hang, std::move(rule), fc,
                                  fmt::format("no answer to {} within {} ms on open connection {}",
                                              what, options_.timeout_ms, i),
                                  "an answer", "silence"});
@@ -326,7 +385,24 @@ void Runner::judge(const Case& c) {
             need_fresh_probe = true;
         }
     }
-    consider(Shadow::check(shadow));
+    consider(Shadow::check(shadow, options_.state));
+    for (const SideProbe& sp : side_probes_) {
+        const bool stalled = sp.result != ProbeResult::Ok || sp.ms >= stall_threshold_ms();
+        if (!stalled || sp.result == ProbeResult::ConnectFailed) continue;
+        consider(
+            Verdict{Oracle::Hang, fmt::format("stalls-other-connections({})", sp.during), last_fc,
+                    fmt::format("a concurrent connection {} ({} ms) while another held {}",
+                                sp.result == ProbeResult::Ok
+                                    ? std::string("was answered late")
+                                    : fmt::format("got {}", probe_result_name(sp.result)),
+                                sp.ms,
+                                sp.during == "partial-frame" ? "a started frame"
+                                : sp.during == "exception" ? "a request answered with an exception"
+                                                           : "a request"),
+                    fmt::format("an answer within {} ms, whatever other connections do",
+                                stall_threshold_ms()),
+                    fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
+    }
     if (need_fresh_probe) {
         ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
@@ -340,14 +416,37 @@ void Runner::judge(const Case& c) {
         if (r != ProbeResult::Ok) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
             candidate = fresh_probe_verdict(r);
-        } else if (candidate && candidate.oracle == Oracle::Hang) {
-            candidate.summary += " (other connections are still served)";
+            const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
+            candidate.rule += "/" + culprit_text(c, at);
+            candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
         }
     }
     if (candidate)
-        candidate.summary =
-            fmt::format("{} [{} FC {:02X}]", candidate.summary, class_name(c.cls), c.function);
+        candidate.summary = candidate.culprit_fc >= 0
+                                ? fmt::format("{} [{} FC {:02X}]", candidate.summary,
+                                              class_name(c.cls), candidate.culprit_fc)
+                                : fmt::format("{} [{}]", candidate.summary, class_name(c.cls));
     out_.verdict = std::move(candidate);
+}
+
+void Runner::side_probe() {
+    const std::int64_t t0 = net::now_ns();
+    // What the case's connections are in the middle of, for the rule.
+    std::string during = "request";
+    for (const Conn& cn : conns_) {
+        if (!cn.opened || cn.closed) continue;
+        if (!cn.desync && cn.sent.size() > cn.parsed) during = "partial-frame";
+        for (const Pending& pd : cn.pending)
+            if (pd.answered_ns && pd.rsp_size > lim::kMbapHeader &&
+                (cn.received[pd.rsp_offset + lim::kMbapHeader] & codec::kExceptionBit) &&
+                during != "partial-frame")
+                during = "exception";
+    }
+    const ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
+    const std::int64_t ms = (net::now_ns() - t0) / net::kNsPerMs;
+    event(kFreshConn, TraceKind::FreshProbe, {},
+          fmt::format("concurrent probe: {} after {} ms", probe_result_name(r), ms));
+    side_probes_.push_back(SideProbe{r, ms, std::move(during)});
 }
 
 Execution Runner::run(const Case& c) {
@@ -366,8 +465,10 @@ Execution Runner::run(const Case& c) {
                 break;
             case Op::ShutdownWrite:
                 if (ensure_open(s.conn) && !conns_[s.conn].closed && !conns_[s.conn].shut) {
-                    ::shutdown(conns_[s.conn].fd.get(), SHUT_WR);
-                    conns_[s.conn].shut = true;
+                    Conn& cn = conns_[s.conn];
+                    ::shutdown(cn.fd.get(), SHUT_WR);
+                    cn.shut = true;
+                    cn.shut_after_frames = !cn.desync && cn.parsed == cn.sent.size();
                     event(s.conn, TraceKind::ShutdownWrite);
                 }
                 break;
@@ -380,13 +481,15 @@ Execution Runner::run(const Case& c) {
             case Op::Flood:
                 flood(s.count);
                 break;
+            case Op::SideProbe:
+                side_probe();
+                break;
         }
         if (out_.down_before) return std::move(out_);
     }
     // Close out each connection: an in-stream probe after intact streams (so that silence
     // to the case's frames is told apart from a stalled connection), a half-close after
     // desynchronised ones.
-    bool any_settle = false;
     for (std::size_t i = 0; i < conns_.size(); ++i) {
         Conn& cn = conns_[i];
         if (!cn.opened || !cn.fd.valid() || cn.closed) continue;
@@ -404,18 +507,20 @@ Execution Runner::run(const Case& c) {
                 cn.shut = true;
                 event(static_cast<std::uint8_t>(i), TraceKind::ShutdownWrite);
             }
-            any_settle = true;
         }
     }
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
     const bool ok = pump(deadline, [&] {
         for (const Conn& cn : conns_) {
             if (!cn.opened || !cn.fd.valid()) continue;
-            if ((cn.shut || cn.desync) ? !cn.closed : !answered(cn)) return false;
+            if (cn.shut_after_frames) {
+                if (!cn.closed && !answered(cn)) return false;
+            } else if ((cn.shut || cn.desync) ? !cn.closed : !answered(cn)) {
+                return false;
+            }
         }
         return true;
     });
-    (void)any_settle;
     if (!ok) event(0, TraceKind::Timeout);
     judge(c);
     return std::move(out_);
@@ -461,6 +566,8 @@ Verdict fresh_probe_verdict(ProbeResult r) {
         case ProbeResult::ConnectFailed:
         case ProbeResult::Closed:
             return Verdict{Oracle::Crash,
+                           "target-down",
+                           -1,
                            r == ProbeResult::Closed ? "target closes every new connection"
                                                     : "target stopped accepting connections",
                            "the target accepts and serves a fresh connection",
@@ -472,8 +579,11 @@ Verdict fresh_probe_verdict(ProbeResult r) {
     // The server as a whole no longer answers (not just one connection).
     return Verdict{
         Oracle::Hang,
+        "whole-server-hang",
+        -1,
         fmt::format("whole server hangs: a fresh connection's probe got {}", probe_result_name(r)),
-        "an answer on a fresh connection", std::string(probe_result_name(r))};
+        "an answer on a fresh connection",
+        std::string(probe_result_name(r))};
 }
 
 int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept {

@@ -39,7 +39,7 @@ struct TraceEvent {
 
 struct ExecOptions {
     int timeout_ms = 1000;  // answer timeout (hang oracle)
-    int settle_ms = 300;    // wait for the peer to close after our half-close
+    StateRange state;       // where read-after-write is checked
 };
 
 struct Execution {

@@ -26,12 +26,14 @@ std::string_view op_name(Op op) {
             return "await";
         case Op::Flood:
             return "flood";
+        case Op::SideProbe:
+            return "side-probe";
     }
     return "send";
 }
 
 bool op_from_name(const std::string& s, Op& out) {
-    for (Op op : {Op::Send, Op::ShutdownWrite, Op::Await, Op::Flood}) {
+    for (Op op : {Op::Send, Op::ShutdownWrite, Op::Await, Op::Flood, Op::SideProbe}) {
         if (op_name(op) == s) {
             out = op;
             return true;
@@ -58,9 +60,8 @@ void parse_list(const std::string& s, std::array<bool, 256>& flags) {
 
 }  // namespace
 
-std::string Finding::key() const {
-    return fmt::format("{}/fc{:02X}/{}", oracle_name(verdict.oracle), fuzz_case.function,
-                       class_name(fuzz_case.cls));
+std::string root_cause_key(const Verdict& v) {
+    return fmt::format("{}:{}", oracle_name(v.oracle), v.rule);
 }
 
 std::string to_hex(const std::vector<std::uint8_t>& bytes) {
@@ -97,14 +98,17 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         error = fmt::format("cannot create {}: {}", dir, ec.message());
         return false;
     }
-    json steps = json::array();
-    for (const Step& s : f.fuzz_case.steps) {
-        steps.push_back({{"op", op_name(s.op)},
-                         {"conn", s.conn},
-                         {"delay_us", s.delay_us},
-                         {"count", s.count},
-                         {"hex", to_hex(s.bytes)}});
-    }
+    auto steps_of = [](const Case& c) {
+        json steps = json::array();
+        for (const Step& s : c.steps) {
+            steps.push_back({{"op", op_name(s.op)},
+                             {"conn", s.conn},
+                             {"delay_us", s.delay_us},
+                             {"count", s.count},
+                             {"hex", to_hex(s.bytes)}});
+        }
+        return steps;
+    };
     json trace = json::array();
     for (const TraceEvent& e : f.trace) {
         json ev = {{"t_us", e.t_us}, {"conn", e.conn}, {"event", trace_kind_name(e.kind)}};
@@ -116,8 +120,12 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"schema", 1},
         {"id", f.id},
         {"oracle", oracle_name(f.verdict.oracle)},
-        {"function", f.fuzz_case.function},
+        {"rule", f.verdict.rule},
+        {"root_cause", f.key()},
+        {"function", f.function()},
         {"class", class_name(f.fuzz_case.cls)},
+        {"hits", f.hits},
+        {"variants", f.variants},
         {"summary", f.verdict.summary},
         {"expected", f.verdict.expected},
         {"seen", f.verdict.seen},
@@ -126,6 +134,7 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"case_number", f.case_number},
         {"found_after_s", f.found_after_s},
         {"minimized", f.minimized},
+        {"minimize_note", f.minimize_note},
         {"confirmed", f.confirmed},
         {"note", f.note},
         {"original_steps", f.original_steps},
@@ -135,7 +144,8 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
           {"probe", to_hex(f.profile.probe_pdu)},
           {"unsupported", bytes_list(f.profile.unsupported)},
           {"extended", bytes_list(f.profile.extended)}}},
-        {"case", {{"steps", steps}}},
+        {"case", {{"steps", steps_of(f.fuzz_case)}}},
+        {"original_case", {{"steps", steps_of(f.original_case)}}},
         {"trace", trace},
     };
     auto write = [&](const std::string& name, const std::string& text) {
@@ -178,10 +188,13 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         out.id = j.value("id", 0u);
         if (!oracle_from_name(j.at("oracle").get<std::string>(), out.verdict.oracle))
             throw std::runtime_error("unknown oracle");
+        out.verdict.rule = j.value("rule", "");
         out.verdict.summary = j.value("summary", "");
         out.verdict.expected = j.value("expected", "");
         out.verdict.seen = j.value("seen", "");
-        out.fuzz_case.function = j.at("function").get<std::uint8_t>();
+        out.verdict.culprit_fc = j.at("function").is_number() ? j.at("function").get<int>() : -1;
+        if (out.verdict.culprit_fc >= 0)
+            out.fuzz_case.function = static_cast<std::uint8_t>(out.verdict.culprit_fc);
         if (!class_from_name(j.at("class").get<std::string>(), out.fuzz_case.cls))
             throw std::runtime_error("unknown class");
         out.target = j.value("target", "");
@@ -197,18 +210,26 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
             throw std::runtime_error("bad probe");
         parse_list(p.value("unsupported", ""), out.profile.unsupported);
         parse_list(p.value("extended", ""), out.profile.extended);
-        for (const json& s : j.at("case").at("steps")) {
-            Step st;
-            if (!op_from_name(s.at("op").get<std::string>(), st.op))
-                throw std::runtime_error("unknown step op");
-            st.conn = s.value("conn", std::uint8_t{0});
-            st.delay_us = s.value("delay_us", 0u);
-            st.count = s.value("count", std::uint16_t{0});
-            if (!from_hex(s.value("hex", ""), st.bytes)) throw std::runtime_error("bad hex");
-            out.fuzz_case.steps.push_back(std::move(st));
-        }
-        if (out.fuzz_case.steps.size() > kMaxLoadedSteps || out.fuzz_case.connections() > 8)
-            throw std::runtime_error("case too large");
+        out.hits = j.value("hits", std::uint64_t{1});
+        auto load_steps = [](const json& steps, Case& c) {
+            for (const json& s : steps) {
+                Step st;
+                if (!op_from_name(s.at("op").get<std::string>(), st.op))
+                    throw std::runtime_error("unknown step op");
+                st.conn = s.value("conn", std::uint8_t{0});
+                st.delay_us = s.value("delay_us", 0u);
+                st.count = s.value("count", std::uint16_t{0});
+                if (!from_hex(s.value("hex", ""), st.bytes)) throw std::runtime_error("bad hex");
+                c.steps.push_back(std::move(st));
+                if (c.steps.size() > kMaxLoadedSteps || c.connections() > 8)
+                    throw std::runtime_error("case too large");
+            }
+        };
+        load_steps(j.at("case").at("steps"), out.fuzz_case);
+        out.original_case.cls = out.fuzz_case.cls;
+        out.original_case.function = out.fuzz_case.function;
+        if (j.contains("original_case"))
+            load_steps(j.at("original_case").at("steps"), out.original_case);
     } catch (const std::exception& e) {
         error = fmt::format("{}: not a finding: {}", file, e.what());
         return false;

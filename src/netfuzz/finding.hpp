@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -12,10 +13,14 @@
 
 namespace mbstorm::netfuzz {
 
+// A finding's root-cause identity: the oracle and the rule its verdict violates.
+std::string root_cause_key(const Verdict& v);
+
 struct Finding {
     std::size_t id = 0;
     Verdict verdict;
-    Case fuzz_case;
+    Case fuzz_case;      // the reproducer (minimised when `minimized`)
+    Case original_case;  // the case as it first fired, always kept
     std::vector<TraceEvent> trace;
     TargetProfile profile;
     std::string target;
@@ -28,12 +33,19 @@ struct Finding {
     bool confirmed = true;
     std::string note;
     std::size_t original_steps = 0;
+    // Every case that showed this root cause: how many, and under which function code, class
+    // and unit id ("fc03 invalid-values unit 1" -> count).
+    std::uint64_t hits = 1;
+    std::map<std::string, std::uint64_t> variants;
+    std::string minimize_note;  // why it was not (fully) minimised, if it was not
     int timeout_ms = 1000;
     std::string folder;  // where it was saved ("" if not saved)
 
     Oracle oracle() const noexcept { return verdict.oracle; }
-    // Dedup key text: "crash/fc0F/invalid-values".
-    std::string key() const;
+    // Root-cause key: "crash:target-down/fc0F-invalid".
+    std::string key() const { return root_cause_key(verdict); }
+    // The function code of the culprit request, if the fault has one.
+    int function() const noexcept { return verdict.culprit_fc; }
 };
 
 // Writes `dir`/finding.json, summary.txt and traffic.txt. False with `error` on failure.

@@ -209,19 +209,81 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
     return out;
 }
 
+const std::vector<std::uint16_t>& interesting_words() {
+    static const std::vector<std::uint16_t> words = {
+        0x0000, 0x0001, 0x0002, 0x007F, 0x0080, 0x00FF, 0x0100, 0x7FFE, 0x7FFF, 0x8000,
+        0x8001, 0xFF00, 0xFFFE, 0xFFFF, 0x5555, 0xAAAA, 0xDEAD, 0xBEEF, 0xCAFE, 0x1234};
+    return words;
+}
+
 Generator::Generator(const GeneratorOptions& options)
     : options_(options), rng_(options.seed), seeds_(structured_pdus()) {
     // Seed-dependent order, so that different seeds explore in different orders.
     for (std::size_t i = seeds_.size(); i > 1; --i)
         std::swap(seeds_[i - 1], seeds_[rng_.below(static_cast<std::uint32_t>(i))]);
+    // Coverage first, even on a slow target: one valid request of every function code, then
+    // one invalid one of each, then the rest in the shuffled order.
+    {
+        std::array<int, 256> valid_seen{}, invalid_seen{};
+        std::vector<int> rank(seeds_.size(), 2);
+        for (std::size_t i = 0; i < seeds_.size(); ++i) {
+            codec::Request r;
+            const bool ok = codec::decode_request(seeds_[i], r).ok();
+            auto& seen = ok ? valid_seen : invalid_seen;
+            if (!seen[seeds_[i][0]]++) rank[i] = ok ? 0 : 1;
+        }
+        std::vector<std::size_t> order(seeds_.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::size_t a, std::size_t b) { return rank[a] < rank[b]; });
+        std::vector<std::vector<std::uint8_t>> sorted;
+        sorted.reserve(seeds_.size());
+        for (std::size_t i : order) sorted.push_back(std::move(seeds_[i]));
+        seeds_ = std::move(sorted);
+    }
     tid_ = rng_.u16();
+    std::array<int, 256> function_slot;
+    function_slot.fill(-1);
     for (std::size_t i = 0; i < seeds_.size(); ++i) {
         codec::Request r;
+        const std::uint8_t fc = seeds_[i][0];
         if (codec::decode_request(seeds_[i], r).ok()) {
             valid_seeds_.push_back(i);
             corpus_.push_back(seeds_[i]);
+        } else {
+            invalid_seeds_.push_back(i);
         }
+        if (function_slot[fc] < 0) {
+            function_slot[fc] = static_cast<int>(seeds_by_function_.size());
+            seeds_by_function_.emplace_back();
+        }
+        seeds_by_function_[static_cast<std::size_t>(function_slot[fc])].push_back(i);
     }
+    for (const auto& token : options_.dict_tokens)
+        if (!token.empty() && token.size() <= lim::kMaxPdu) corpus_.push_back(token);
+}
+
+std::uint16_t Generator::word() {
+    if (!options_.dict_words.empty() && rng_.chance(2))
+        return options_
+            .dict_words[rng_.below(static_cast<std::uint32_t>(options_.dict_words.size()))];
+    if (rng_.chance(2)) {
+        const auto& words = interesting_words();
+        return words[rng_.below(static_cast<std::uint32_t>(words.size()))];
+    }
+    return rng_.u16();
+}
+
+std::uint16_t Generator::state_address(std::uint16_t room) {
+    const StateRange& st = options_.state;
+    const std::uint32_t span = std::min<std::uint32_t>(st.span, 0x10000u - st.base);
+    if (span <= room) return st.base;
+    if (st.whole_map()) {
+        // The user's own addresses first, then the edges of the map, then anywhere.
+        std::uint32_t a = rng_.chance(2) ? word() : rng_.u16();
+        return static_cast<std::uint16_t>(std::min<std::uint32_t>(a, 0x10000u - room));
+    }
+    return static_cast<std::uint16_t>(st.base + rng_.below(span - room));
 }
 
 void Generator::deprioritise(std::uint8_t function, MutationClass cls) {
@@ -234,11 +296,6 @@ bool Generator::deprioritised(const Case& c) const noexcept {
     const std::size_t bit = c.function * static_cast<std::size_t>(MutationClass::Count) +
                             static_cast<std::size_t>(c.cls);
     return (deprioritised_[bit / 32] >> (bit % 32)) & 1u;
-}
-
-void Generator::record_valid(const std::uint8_t* pdu, std::size_t size) {
-    if (corpus_.size() >= 4096 || size == 0 || size > lim::kMaxPdu) return;
-    corpus_.emplace_back(pdu, pdu + size);
 }
 
 std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
@@ -283,7 +340,7 @@ void Generator::next(Case& out) {
     for (Step& s : out.steps)
         if (s.op == Op::Send && out.cls != MutationClass::StatefulSame &&
             out.cls != MutationClass::StatefulCross)
-            relocate_writes(s.bytes.data(), s.bytes.size());
+            relocate_writes(s.bytes.data(), s.bytes.size(), options_.state);
 }
 
 void Generator::naive(Case& out) {
@@ -298,7 +355,20 @@ void Generator::naive(Case& out) {
 
 void Generator::structured(Case& out, MutationClass forced) {
     const std::uint32_t roll = rng_.below(100);
-    const auto& pdu = next_seed();
+    if (forced == MutationClass::Count && roll < 5) forced = MutationClass::UnitId;
+    // Unit ids walk pairwise with function codes: every unit-id class meets every function
+    // code's boundary cases.
+    const std::uint8_t units[] = {0x00, 0xF7, 0xFF, 0x02, 0x00};
+    const std::size_t n_units = sizeof units;
+    std::size_t unit_class = 0;
+    const std::vector<std::uint8_t>* chosen = nullptr;
+    if (forced == MutationClass::UnitId) {
+        const std::size_t k = unit_cursor_++;
+        unit_class = k % n_units;
+        const auto& list = seeds_by_function_[(k / n_units) % seeds_by_function_.size()];
+        chosen = &seeds_[list[rng_.below(static_cast<std::uint32_t>(list.size()))]];
+    }
+    const auto& pdu = chosen ? *chosen : next_seed();
     out.function = pdu[0];
     codec::Request r;
     const auto status = codec::decode_request(pdu, r);
@@ -309,9 +379,7 @@ void Generator::structured(Case& out, MutationClass forced) {
     out.pipelinable = true;
     std::uint8_t unit = options_.unit;
     if (forced == MutationClass::Count) {
-        if (roll < 5)
-            forced = MutationClass::UnitId;
-        else if (roll < 10)
+        if (roll < 10)
             forced = MutationClass::ProtocolId;
         else if (roll < 15)
             forced = MutationClass::TrailingBytes;
@@ -319,8 +387,7 @@ void Generator::structured(Case& out, MutationClass forced) {
             forced = MutationClass::Coalesced;
     }
     if (forced == MutationClass::UnitId) {
-        const std::uint8_t units[] = {0x00, 0xF7, 0xFF, 0x02};
-        unit = rng_.chance(4) ? rng_.byte() : rng_.pick(units);
+        unit = unit_class + 1 == n_units ? rng_.byte() : units[unit_class];  // last: random
         out.cls = MutationClass::UnitId;
     }
     std::vector<std::uint8_t> f = frame(pdu, unit);
@@ -348,7 +415,7 @@ void Generator::structured(Case& out, MutationClass forced) {
 void Generator::mutate_recorded(Case& out) {
     std::vector<std::uint8_t> pdu = corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
     const auto& other = corpus_[rng_.below(static_cast<std::uint32_t>(corpus_.size()))];
-    const std::uint32_t kind = rng_.below(6);
+    const std::uint32_t kind = rng_.below(7);
     const std::uint8_t interesting[] = {0x00, 0x01, 0x7F, 0x80, 0xFE, 0xFF};
     switch (kind) {
         case 0:  // bit flips
@@ -376,6 +443,13 @@ void Generator::mutate_recorded(Case& out) {
             }
             break;
         }
+        case 6:  // a 16-bit field set to an interesting or dictionary word
+            if (pdu.size() >= 3) {
+                const std::uint32_t at =
+                    1 + 2 * rng_.below(static_cast<std::uint32_t>((pdu.size() - 1) / 2));
+                codec::store_be16(pdu.data() + at, word());
+            }
+            break;
         case 4:  // insert a byte
             pdu.insert(pdu.begin() + 1 + rng_.below(static_cast<std::uint32_t>(pdu.size())),
                        rng_.byte());
@@ -395,15 +469,15 @@ void Generator::mutate_recorded(Case& out) {
 
 void Generator::isolated(Case& out) {
     const std::uint32_t roll = rng_.below(100);
-    if (roll < 20) {
+    if (roll < 15) {
         stateful(out, false);
         return;
     }
-    if (roll < 35) {
+    if (roll < 27) {
         stateful(out, true);
         return;
     }
-    if (roll < 45) {  // special transaction ids, twice the same on one connection
+    if (roll < 35) {  // special transaction ids, twice the same on one connection
         const std::uint16_t tids[] = {0x0000, 0x00FF, 0x0100, 0x7FFF, 0x8000, 0xFFFF};
         const auto& pdu = valid_seed();
         auto f = frame(pdu, options_.unit);
@@ -417,10 +491,24 @@ void Generator::isolated(Case& out) {
         }
         return;
     }
+    if (roll < 41) {
+        burst_split(out);
+        return;
+    }
+    if (roll < 83 && roll >= 77) {  // a request owed an exception, then another client probes
+        const auto& pdu =
+            seeds_[invalid_seeds_[rng_.below(static_cast<std::uint32_t>(invalid_seeds_.size()))]];
+        out.cls = MutationClass::ExceptionStall;
+        out.function = pdu[0];
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pdu, options_.unit)});
+        out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+        out.steps.push_back(Step{Op::SideProbe, 0, 0, 0, {}});
+        return;
+    }
     const auto& pdu = valid_seed();
     auto f = frame(pdu, options_.unit);
     out.function = pdu[0];
-    if (roll < 67) {  // split at every offset, in turn, with small gaps
+    if (roll < 55) {  // split at every offset, in turn, with small gaps
         out.cls = MutationClass::Split;
         const std::uint32_t at = 1 + split_cursor_++ % static_cast<std::uint32_t>(f.size() - 1);
         const std::uint32_t gaps[] = {0, 50, 200, 1000};
@@ -428,7 +516,7 @@ void Generator::isolated(Case& out) {
         out.steps.push_back(Step{Op::Send, 0, rng_.pick(gaps), 0, {f.begin() + at, f.end()}});
         return;
     }
-    if (roll < 75) {  // MBAP length field lies
+    if (roll < 60) {  // MBAP length field lies
         out.cls = MutationClass::MbapLength;
         const std::uint16_t actual = static_cast<std::uint16_t>(f.size() - 6);
         const std::uint16_t lengths[] = {0,
@@ -443,21 +531,39 @@ void Generator::isolated(Case& out) {
         out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
         return;
     }
-    if (roll < 82) {  // truncated frame: the header promises more, then half-close
+    if (roll < 64) {  // truncated frame: the header promises more, then half-close
         out.cls = MutationClass::Truncated;
         f.resize(lim::kMbapHeader + rng_.below(static_cast<std::uint32_t>(pdu.size())));
         out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
         out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
         return;
     }
-    if (roll < 90) {  // half-close after a partial frame (possibly inside the header)
+    if (roll < 68) {  // half-close after a partial frame (possibly inside the header)
         out.cls = MutationClass::HalfClose;
         f.resize(1 + rng_.below(static_cast<std::uint32_t>(f.size() - 1)));
         out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
         out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
         return;
     }
-    if (roll < 97) {  // slow drip, one byte per send
+    if (roll < 73) {  // complete frames, then half-close: each is still owed its answer
+        out.cls = MutationClass::HalfCloseAnswered;
+        for (std::uint32_t i = 0, n = rng_.below(4); i < n; ++i) {
+            auto more = frame(valid_seed(), options_.unit);
+            f.insert(f.end(), more.begin(), more.end());
+        }
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+        out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
+        return;
+    }
+    if (roll < 77) {  // a started frame held open while another client probes
+        out.cls = MutationClass::PartialHold;
+        const std::uint32_t at = 1 + rng_.below(static_cast<std::uint32_t>(f.size() - 1));
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin(), f.begin() + at}});
+        out.steps.push_back(Step{Op::SideProbe, 0, 0, 0, {}});
+        out.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin() + at, f.end()}});
+        return;
+    }
+    if (roll < 95) {  // slow drip, one byte per send
         out.cls = MutationClass::Drip;
         // The header and the start of the PDU one byte at a time, then the rest.
         const std::size_t dripped = std::min<std::size_t>(f.size(), 12);
@@ -472,10 +578,28 @@ void Generator::isolated(Case& out) {
     out.steps.push_back(Step{Op::Flood, 0, 0, static_cast<std::uint16_t>(8 + rng_.below(25)), {}});
 }
 
+// A pipelined burst of valid frames cut at one byte offset (walked in turn over the whole
+// burst, so every offset of every frame comes up), the rest coalesced with the frames after
+// it, with a gap of up to tens of milliseconds between the two sends.
+void Generator::burst_split(Case& out) {
+    out.cls = MutationClass::BurstSplit;
+    std::vector<std::uint8_t> burst;
+    const std::uint32_t n = 3 + rng_.below(6);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const auto& pdu = valid_seed();
+        if (i == 0) out.function = pdu[0];
+        auto f = frame(pdu, options_.unit);
+        burst.insert(burst.end(), f.begin(), f.end());
+    }
+    const std::uint32_t at = 1 + burst_cursor_++ % static_cast<std::uint32_t>(burst.size() - 1);
+    const std::uint32_t gaps[] = {0, 200, 2000, 10000, 40000};
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, {burst.begin(), burst.begin() + at}});
+    out.steps.push_back(Step{Op::Send, 0, rng_.pick(gaps), 0, {burst.begin() + at, burst.end()}});
+}
+
 void Generator::stateful(Case& out, bool cross) {
     out.cls = cross ? MutationClass::StatefulCross : MutationClass::StatefulSame;
-    const std::uint16_t base =
-        static_cast<std::uint16_t>(kStateBase + rng_.below(kStateSpan - 130));
+    const std::uint16_t base = state_address(130);
     const std::uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10, 0x10, 0x17, 0x16};
     const std::uint8_t fc = rng_.pick(writes);
     out.function = fc;
@@ -490,7 +614,7 @@ void Generator::stateful(Case& out, bool cross) {
             break;
         case 0x06:
             put16(w, base);
-            put16(w, rng_.u16());
+            put16(w, word());
             break;
         case 0x0F: {
             coils = true;
@@ -506,7 +630,7 @@ void Generator::stateful(Case& out, bool cross) {
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) put16(w, rng_.u16());
+            for (int i = 0; i < qty; ++i) put16(w, word());
             break;
         }
         case 0x17: {
@@ -515,24 +639,26 @@ void Generator::stateful(Case& out, bool cross) {
             const std::uint16_t rq =
                 static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwReadRegisters));
             put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
-            put16(w, std::min<std::uint16_t>(
-                         rq, static_cast<std::uint16_t>(kStateBase + kStateSpan - base - qty)));
+            const std::uint32_t end = std::min<std::uint32_t>(
+                0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
+            put16(w, static_cast<std::uint16_t>(std::max<std::uint32_t>(
+                         1, std::min<std::uint32_t>(rq, end - base - qty))));
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) put16(w, rng_.u16());
+            for (int i = 0; i < qty; ++i) put16(w, word());
             break;
         }
         default:  // 0x16: mask write after a plain write, so the old value is known
         {
             std::vector<std::uint8_t> pre{0x06};
             put16(pre, base);
-            put16(pre, rng_.u16());
+            put16(pre, word());
             out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
             out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
             put16(w, base);
-            put16(w, rng_.u16());
-            put16(w, rng_.u16());
+            put16(w, word());
+            put16(w, word());
             break;
         }
     }
@@ -548,12 +674,15 @@ void Generator::stateful(Case& out, bool cross) {
         // The mask write's result depends on the old value (written above): read it too.
         out.steps.back().bytes = frame(pdu5(0x03, base, 1), options_.unit);
     }
-    const std::uint16_t before =
-        static_cast<std::uint16_t>(base - std::min<std::uint16_t>(3, base - kStateBase));
+    const std::uint16_t before = static_cast<std::uint16_t>(
+        base - std::min<std::uint32_t>(3, base - std::min(base, options_.state.base)));
+    const std::uint16_t span = static_cast<std::uint16_t>(
+        std::min<std::uint32_t>({std::uint32_t{n} + 3, max, 0x10000u - before}));
     out.steps.push_back(Step{Op::Send, reader, 0, 0,
-                             frame(pdu5(coils ? 0x01 : 0x03, before,
-                                        static_cast<std::uint16_t>(std::min<int>(n + 3, max))),
-                                   options_.unit)});
+                             frame(pdu5(coils ? 0x01 : 0x03, before, span), options_.unit)});
+    // And the other connection reads the overlapping range too: every reader must see it.
+    out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
+                             frame(pdu5(coils ? 0x01 : 0x03, before, span), options_.unit)});
 }
 
 }  // namespace mbstorm::netfuzz

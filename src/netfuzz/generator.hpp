@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "netfuzz/case.hpp"
+#include "netfuzz/oracle.hpp"
 #include "netfuzz/rng.hpp"
 
 namespace mbstorm::netfuzz {
@@ -20,7 +21,16 @@ struct GeneratorOptions {
     // Transport and stateful cases need their own connections and round trips; this is the
     // share (per mille) of cases of those kinds.
     unsigned isolated_per_mille = 10;
+    StateRange state;  // where stateful cases write and read back
+    // The user's own dictionary (--dict): 16-bit words used as addresses and values, longer
+    // tokens spliced into requests.
+    std::vector<std::uint16_t> dict_words;
+    std::vector<std::vector<std::uint8_t>> dict_tokens;
 };
+
+// 16-bit values worth writing and reading back: boundaries, sign bits, all-ones patterns and
+// common sentinel words.
+const std::vector<std::uint16_t>& interesting_words();
 
 class Generator {
   public:
@@ -29,8 +39,6 @@ class Generator {
     void next(Case& out);
     // A class that crashed or hung the target is drawn 16 times less often from now on.
     void deprioritise(std::uint8_t function, MutationClass cls);
-    // Adds a request PDU the target answered normally to the mutation corpus.
-    void record_valid(const std::uint8_t* pdu, std::size_t size);
 
     // The structured request PDUs (limits of every function code), for tests.
     const std::vector<std::vector<std::uint8_t>>& seeds() const noexcept { return seeds_; }
@@ -41,6 +49,9 @@ class Generator {
     void isolated(Case& out);
     void mutate_recorded(Case& out);
     void stateful(Case& out, bool cross);
+    void burst_split(Case& out);
+    std::uint16_t word();  // an interesting or dictionary word
+    std::uint16_t state_address(std::uint16_t room);
     std::vector<std::uint8_t> frame(const std::vector<std::uint8_t>& pdu, std::uint8_t unit);
     const std::vector<std::uint8_t>& next_seed();
     const std::vector<std::uint8_t>& valid_seed();
@@ -51,9 +62,13 @@ class Generator {
     Rng rng_;
     std::vector<std::vector<std::uint8_t>> seeds_;  // shuffled structured PDUs
     std::vector<std::size_t> valid_seeds_;          // indexes of seeds the codec accepts
+    std::vector<std::size_t> invalid_seeds_;        // and of those it owes an exception
     std::vector<std::vector<std::uint8_t>> corpus_;
     std::size_t seed_cursor_ = 0;
     std::uint32_t split_cursor_ = 0;
+    std::uint32_t burst_cursor_ = 0;
+    std::uint32_t unit_cursor_ = 0;  // pairwise walk: unit-id classes x function codes
+    std::vector<std::vector<std::size_t>> seeds_by_function_;  // valid seed indexes per FC
     std::uint16_t tid_;
     std::array<std::uint32_t, 256 * static_cast<std::size_t>(MutationClass::Count) / 32 + 1>
         deprioritised_{};

@@ -108,7 +108,8 @@ void shorten_frames(Case& best, const Reproduces& reproduces, unsigned& budget) 
 
 }  // namespace
 
-Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned budget) {
+Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned budget,
+                   bool byte_level) {
     Case best = split_frames(original);
     if (best.steps.size() != original.steps.size()) {
         if (budget > 0 && reproduces(best)) {
@@ -119,7 +120,7 @@ Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned 
         }
     }
     drop_steps(best, reproduces, budget);
-    shorten_frames(best, reproduces, budget);
+    if (byte_level) shorten_frames(best, reproduces, budget);
     return best;
 }
 

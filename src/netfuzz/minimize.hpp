@@ -10,9 +10,11 @@
 
 namespace mbstorm::netfuzz {
 
-// `reproduces` runs a candidate against the target. At most `budget` runs.
+// `reproduces` runs a candidate against the target. At most `budget` runs. Without
+// `byte_level` only whole frames and steps are dropped (for crashes and hangs, where every try
+// costs a restart or a timeout).
 Case minimize_case(const Case& original, const std::function<bool(const Case&)>& reproduces,
-                   unsigned budget);
+                   unsigned budget, bool byte_level = true);
 
 // One step per complete MBAP frame for sends that hold several (others unchanged).
 Case split_frames(const Case& c);

@@ -27,18 +27,21 @@ std::string request_text(const RequestInfo& rq) {
                        rq.header.unit_id, rq.header.transaction_id, hex(rq.pdu, 24));
 }
 
-Verdict make(Oracle o, std::string summary, std::string expected, std::string seen) {
-    return Verdict{o, std::move(summary), std::move(expected), std::move(seen)};
+Verdict make(Oracle o, std::string rule, const RequestInfo& rq, std::string summary,
+             std::string expected, std::string seen) {
+    return Verdict{o,
+                   std::move(rule),
+                   rq.pdu.empty() ? -1 : rq.pdu[0],
+                   std::move(summary),
+                   std::move(expected),
+                   std::move(seen),
+                   rq.header.unit_id};
 }
 
 // Function codes whose sub-function (or object) support legitimately varies per device, so a
 // 01 answer is acceptable for any of their requests.
 bool sub_function_varies(std::uint8_t fc) noexcept {
     return fc == 0x08 || fc == 0x2B || fc == 0x14 || fc == 0x15;
-}
-
-bool is_write(std::uint8_t fc) noexcept {
-    return fc == 0x05 || fc == 0x06 || fc == 0x0F || fc == 0x10 || fc == 0x16 || fc == 0x17;
 }
 
 }  // namespace
@@ -70,6 +73,23 @@ std::string hex(codec::Bytes bytes, std::size_t max) {
     return s;
 }
 
+std::string_view request_kind(const RequestInfo& info) noexcept {
+    if (info.status.error == codec::CodecError::UnsupportedFunction) return "unknown-fc";
+    return info.status.ok() ? "valid" : "invalid";
+}
+
+std::string culprit_text(MutationClass cls, const RequestInfo* rq) {
+    if (is_transport_class(cls) || !rq || rq->pdu.empty()) return std::string(class_name(cls));
+    if (request_kind(*rq) == "unknown-fc") return "unknown-fc";
+    // The function code alone: one handler, whether this request was valid or not.
+    return fmt::format("fc{:02X}", rq->pdu[0]);
+}
+
+bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexcept {
+    if (info.pdu.empty()) return false;
+    return !info.status.ok() || profile.unsupported[info.pdu[0]];
+}
+
 void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept {
     info.header = codec::read_mbap_header(adu.data());
     info.pdu = adu.subspan(codec::limits::kMbapHeader);
@@ -90,24 +110,24 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     const codec::Bytes pdu = rsp.subspan(codec::limits::kMbapHeader);
     const std::string seen = hex(rsp);
     if (rq.expect == Expect::MustBeSilent) {
-        return make(Oracle::SpecDeviation,
+        return make(Oracle::SpecDeviation, "answers-nonzero-protocol-id", rq,
                     fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),
                     "no answer: frames with protocol id != 0 are discarded", seen);
     }
     if (h.protocol_id != 0) {
-        return make(Oracle::MalformedResponse,
+        return make(Oracle::MalformedResponse, "response-protocol-id", rq,
                     fmt::format("response carries protocol id {:04X}", h.protocol_id),
                     "protocol id 0000", seen);
     }
     if (h.unit_id != rq.header.unit_id) {
-        return make(Oracle::MalformedResponse,
+        return make(Oracle::MalformedResponse, "response-unit-id", rq,
                     fmt::format("response unit id {} for a request to unit {}", h.unit_id,
                                 rq.header.unit_id),
                     fmt::format("unit id {}", rq.header.unit_id), seen);
     }
     const std::uint8_t fc = rq.pdu.empty() ? 0 : rq.pdu[0];
     if (pdu.empty() || (pdu[0] & 0x7F) != (fc & 0x7F)) {
-        return make(Oracle::MalformedResponse,
+        return make(Oracle::MalformedResponse, "response-function", rq,
                     fmt::format("response function {:02X} for request function {:02X}",
                                 pdu.empty() ? 0 : pdu[0], fc),
                     fmt::format("function {:02X} or {:02X}", fc & 0x7F, (fc & 0x7F) | 0x80), seen);
@@ -118,7 +138,7 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
                                     : fmt::format("a normal response to {}", request_text(rq));
     if (pdu[0] & codec::kExceptionBit) {
         if (pdu.size() != 2) {
-            return make(Oracle::MalformedResponse,
+            return make(Oracle::MalformedResponse, "exception-response-length", rq,
                         fmt::format("exception response of {} bytes (MBAP length {})", pdu.size(),
                                     h.length),
                         "function|0x80 and one exception code byte", seen);
@@ -138,6 +158,12 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         }
         if (!ok) {
             return make(Oracle::SpecDeviation,
+                        owed == ExceptionCode::None
+                            ? fmt::format("exception-{:02X}-to-valid-request", code)
+                            : fmt::format("exception-{:02X}-where-{:02X}-owed({})", code,
+                                          static_cast<std::uint8_t>(owed),
+                                          codec::error_name(rq.status.error)),
+                        rq,
                         fmt::format("FC {:02X}: {} where {} is owed", fc, exception_text(code),
                                     owed == ExceptionCode::None
                                         ? std::string("a normal response")
@@ -148,6 +174,9 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     }
     if (owed != ExceptionCode::None && !profile.extended[fc]) {
         return make(Oracle::SpecDeviation,
+                    fmt::format("invalid-request-answered-normally({})",
+                                codec::error_name(rq.status.error)),
+                    rq,
                     fmt::format("FC {:02X}: invalid request answered normally ({} owed: {})", fc,
                                 exception_text(static_cast<std::uint8_t>(owed)),
                                 codec::error_name(rq.status.error)),
@@ -157,42 +186,46 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     codec::Response r;
     if (const auto err = codec::decode_response(pdu, r); err != codec::CodecError::Ok) {
         return make(Oracle::MalformedResponse,
+                    fmt::format("undecodable-response({})", codec::error_name(err)), rq,
                     fmt::format("FC {:02X}: response does not decode: {}", fc,
                                 codec::error_description(err)),
                     expected_text, seen);
     }
     const codec::Request& q = rq.request;
-    auto mismatch = [&](std::string what) {
-        return make(Oracle::MalformedResponse, fmt::format("FC {:02X}: {}", fc, what),
-                    expected_text, seen);
+    auto mismatch = [&](std::string_view rule, std::string what) {
+        return make(Oracle::MalformedResponse, std::string(rule), rq,
+                    fmt::format("FC {:02X}: {}", fc, what), expected_text, seen);
     };
     const int want = codec::expected_read_byte_count(q);
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
-        return mismatch(
-            fmt::format("{} data bytes for a request that needs {}", r.payload.size(), want));
+        return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
+                                                      r.payload.size(), want));
     switch (fc) {
         case 0x05:
         case 0x06:
             if (r.address != q.address || r.value != q.value)
-                return mismatch("echo differs from the request");
+                return mismatch("echo-differs", "echo differs from the request");
             break;
         case 0x0F:
         case 0x10:
             if (r.address != q.address || r.quantity != q.quantity)
-                return mismatch("echo of address/quantity differs from the request");
+                return mismatch("echo-differs",
+                                "echo of address/quantity differs from the request");
             break;
         case 0x16:
             if (r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask)
-                return mismatch("echo differs from the request");
+                return mismatch("echo-differs", "echo differs from the request");
             break;
         case 0x08:
-            if (r.sub_function != q.sub_function) return mismatch("sub-function not echoed");
+            if (r.sub_function != q.sub_function)
+                return mismatch("sub-function-not-echoed", "sub-function not echoed");
             if (q.sub_function == 0x0000 &&
                 !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
-                return mismatch("return-query-data did not echo the data");
+                return mismatch("query-data-not-echoed", "return-query-data did not echo the data");
             break;
         case 0x2B:
-            if (r.mei_type != q.mei_type) return mismatch("MEI type not echoed");
+            if (r.mei_type != q.mei_type)
+                return mismatch("mei-type-not-echoed", "MEI type not echoed");
             break;
         default:
             break;
@@ -200,11 +233,11 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     return {};
 }
 
-void relocate_writes(std::uint8_t* adu, std::size_t size) noexcept {
-    if (size < codec::limits::kMbapHeader + 5) return;
+void relocate_writes(std::uint8_t* adu, std::size_t size, const StateRange& state) noexcept {
+    if (size < codec::limits::kMbapHeader + 5 || state.whole_map()) return;
     std::uint8_t* p = adu + codec::limits::kMbapHeader;
     const std::uint8_t fc = p[0];
-    if (!is_write(fc)) return;
+    if (!codec::is_write_function(fc) || fc == 0x15 || fc == 0x08) return;
     // Address field: 17 writes at offset 5, the others at offset 1.
     const std::size_t at = fc == 0x17 ? 5 : 1;
     if (codec::limits::kMbapHeader + at + 2 > size) return;
@@ -214,9 +247,14 @@ void relocate_writes(std::uint8_t* adu, std::size_t size) noexcept {
         qty = load_be16(p + 3);
     if (fc == 0x17 && size >= codec::limits::kMbapHeader + 9) qty = load_be16(p + 7);
     const std::uint32_t end = std::uint32_t{a} + std::max<std::uint32_t>(qty, 1);
-    if (end > kStateBase && a < std::uint32_t{kStateBase} + kStateSpan) {
-        // Shift below the range (keeps the value's low bits, so limits near 0 survive).
-        codec::store_be16(p + at, static_cast<std::uint16_t>(a & 0x0FFF));
+    if (end > state.base && a < state.base + state.span) {
+        // Move it out of the range (keeps the value's low bits, so limits near 0 survive).
+        const std::uint32_t below = state.base ? a % state.base : 0;
+        const std::uint32_t moved =
+            state.base >= std::max<std::uint32_t>(qty, 1)
+                ? std::min(below, state.base - std::max<std::uint32_t>(qty, 1))
+                : state.base + state.span;
+        codec::store_be16(p + at, static_cast<std::uint16_t>(moved));
     }
 }
 
@@ -229,10 +267,6 @@ struct WriteRecord {
     std::int64_t sent = 0, acked = 0;                  // acked 0: no normal answer
     const RequestInfo* self = nullptr;
 };
-
-bool in_state(std::uint32_t a) noexcept {
-    return a >= kStateBase && a < kStateBase + kStateSpan;
-}
 
 // The values a write request stores (nullopt where they depend on unknown state).
 std::optional<WriteRecord> write_of(const RequestInfo& rq) {
@@ -278,7 +312,7 @@ std::optional<WriteRecord> write_of(const RequestInfo& rq) {
 
 }  // namespace
 
-Verdict Shadow::check(std::vector<Event>& events) {
+Verdict Shadow::check(std::vector<Event>& events, const StateRange& state) {
     std::vector<WriteRecord> writes;
     for (const Event& e : events) {
         auto w = write_of(*e.request);
@@ -304,7 +338,7 @@ Verdict Shadow::check(std::vector<Event>& events) {
         const codec::Bytes data = e.response_pdu.subspan(2);
         for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {
             const std::uint32_t a = start + i;
-            if (!in_state(a)) continue;
+            if (!state.contains(a)) continue;
             const WriteRecord* latest = nullptr;
             std::size_t latest_index = 0;
             bool ambiguous = false;
@@ -335,6 +369,9 @@ Verdict Shadow::check(std::vector<Event>& events) {
             }
             if (got != want) {
                 return make(Oracle::SpecDeviation,
+                            fmt::format("read-after-write-mismatch({})",
+                                        coils ? "coils" : "holding-registers"),
+                            *latest->self,
                             fmt::format("read-after-write mismatch: {} {:04X} wrote {:04X}, read "
                                         "back {:04X}",
                                         coils ? "coil" : "holding register", a, want, got),

@@ -12,6 +12,7 @@
 
 #include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
+#include "netfuzz/case.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -30,9 +31,15 @@ bool oracle_from_name(std::string_view name, Oracle& out) noexcept;
 
 struct Verdict {
     Oracle oracle = Oracle::None;
-    std::string summary;   // one line
-    std::string expected;  // what a conforming server does
-    std::string seen;      // what the target did
+    // What was violated, worded so that the same fault gives the same rule whatever the case
+    // (no transaction ids, addresses or values): with the oracle, a finding's root-cause
+    // identity. The function code is part of it only where the fault is tied to it.
+    std::string rule;
+    int culprit_fc = -1;    // function code of the request at fault (-1: none, or not framed)
+    std::string summary;    // one line
+    std::string expected;   // what a conforming server does
+    std::string seen;       // what the target did
+    int culprit_unit = -1;  // unit id of the request at fault
     explicit operator bool() const noexcept { return oracle != Oracle::None; }
 };
 
@@ -44,13 +51,25 @@ struct TargetProfile {
     // or answers normally although the codec does not know it (a vendor extension).
     std::array<bool, 256> unsupported{};
     std::array<bool, 256> extended{};
+    // It drops requests pipelined behind one it answers with an exception (libmodbus flushes
+    // its socket after an exception): such requests are sent only after that answer.
+    bool drops_after_exception = false;
 };
 
 // Addresses (holding registers and coils) that only stateful cases write; every other write
 // the fuzzer generates or mutates is moved out of this range (see relocate_writes), and
-// stateful cases run alone, so a read-back that differs is the target's fault.
+// stateful cases run alone, so a read-back that differs is the target's fault. The user may
+// give the whole address map (--state-range all): nothing is relocated then, and stateful
+// cases still run alone, between batches.
 inline constexpr std::uint16_t kStateBase = 0x6000;
 inline constexpr std::uint16_t kStateSpan = 0x1000;
+
+struct StateRange {
+    std::uint16_t base = kStateBase;
+    std::uint32_t span = kStateSpan;  // 0x10000: the whole map
+    bool contains(std::uint32_t a) const noexcept { return a >= base && a < base + span; }
+    bool whole_map() const noexcept { return base == 0 && span >= 0x10000; }
+};
 
 // What the fuzzer expects for one request frame it sent.
 enum class Expect : std::uint8_t {
@@ -67,6 +86,20 @@ struct RequestInfo {
     Expect expect = Expect::Answer;
 };
 
+// What kind of request a frame is, for root-cause rules: "valid", "invalid" (the codec owes
+// an exception) or "unknown-fc".
+std::string_view request_kind(const RequestInfo& info) noexcept;
+
+// The words a root-cause rule uses for the request at fault: "fc0F" (its handler, valid
+// request or not), "unknown-fc" (one default branch, whatever the code), or the class name for
+// transport mutations (the fault is in how bytes arrived, not in what was asked) and when
+// there is no request.
+std::string culprit_text(MutationClass cls, const RequestInfo* rq);
+
+// True when a conforming server owes this request an exception (or the target said it does
+// not support its function code).
+bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexcept;
+
 // Fills `info` for one complete, well-framed request ADU.
 void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept;
 
@@ -76,7 +109,7 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes response_adu,
 
 // Rewrites the address fields of a write request ADU (05, 06, 0F, 10, 16, 17) so that it
 // stays out of the stateful range. Works on raw bytes (mutated frames included).
-void relocate_writes(std::uint8_t* adu, std::size_t size) noexcept;
+void relocate_writes(std::uint8_t* adu, std::size_t size, const StateRange& state) noexcept;
 
 // Reads-after-writes checking for one case: remembers acknowledged writes in the stateful
 // range and compares later reads of the same addresses.
@@ -89,7 +122,7 @@ class Shadow {
         codec::Bytes response_pdu;
     };
     // Events in any order; returns the first mismatch.
-    static Verdict check(std::vector<Event>& events);
+    static Verdict check(std::vector<Event>& events, const StateRange& state);
 };
 
 std::string hex(codec::Bytes bytes, std::size_t max = 64);

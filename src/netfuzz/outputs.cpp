@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -25,8 +26,13 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
     for (const Finding& f : r.findings) {
         findings.push_back({{"id", f.id},
                             {"oracle", oracle_name(f.oracle())},
-                            {"function", f.fuzz_case.function},
+                            {"rule", f.verdict.rule},
+                            {"root_cause", f.key()},
+                            {"function", f.function() >= 0 ? json(f.function()) : json(nullptr)},
                             {"class", class_name(f.fuzz_case.cls)},
+                            {"hits", f.hits},
+                            {"variants", f.variants},
+                            {"minimize_note", f.minimize_note},
                             {"summary", f.verdict.summary},
                             {"expected", f.verdict.expected},
                             {"seen", f.verdict.seen},
@@ -56,7 +62,18 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"isolated_runs", r.isolated_runs},
         {"duplicates", r.duplicates},
         {"unconfirmed", r.unconfirmed},
+        {"skipped_known", r.skipped_known},
+        {"requeued", r.requeued},
         {"restarts", r.restarts},
+        {"deaths", r.deaths},
+        {"unattributed_deaths", r.unattributed_deaths},
+        {"answers", r.answers},
+        {"busy_answers", r.busy_answers},
+        {"slowed_for_busy", r.slowed_for_busy},
+        {"suspects_left", r.suspects_left},
+        {"findings_not_minimized", r.findings_not_minimized},
+        {"capacity_held", r.capacity_held},
+        {"drops_after_exception", r.profile.drops_after_exception},
         {"target_lost", r.target_lost},
         {"stop_reason", r.stop_reason},
         {"cases_by_class", classes},
@@ -122,8 +139,10 @@ std::string format_fuzz_sarif(const CampaignResult& r, const RunInfo& info) {
                            f.verdict.seen + (f.note.empty() ? "" : " | note: " + f.note)}}},
             {"partialFingerprints", {{"mbstormKey", f.key()}}},
             {"properties",
-             {{"function", f.fuzz_case.function},
+             {{"function", f.function()},
+              {"rule", f.verdict.rule},
               {"class", class_name(f.fuzz_case.cls)},
+              {"hits", f.hits},
               {"confirmed", f.confirmed}}}};
         if (!f.folder.empty())
             result["locations"] =
@@ -155,18 +174,55 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     s += fmt::format(
         "  time: {:.1f} s pipelined, {:.1f} s isolated (transport, stateful, suspects)\n",
         r.batch_seconds, r.isolated_seconds);
-    s += fmt::format("  target restarts: {}; duplicates suppressed: {}; unconfirmed suspects: {}\n",
-                     r.restarts, r.duplicates, r.unconfirmed);
+    s += fmt::format(
+        "  target deaths: {} ({} restarts, {} not repeatable alone); repeats of known root "
+        "causes: {}; cases skipped as known crash/hang: {}; unconfirmed suspects: {}\n",
+        r.deaths, r.restarts, r.unattributed_deaths, r.duplicates, r.skipped_known, r.unconfirmed);
+    if (r.profile.drops_after_exception)
+        s += "  the target drops requests pipelined behind an exception: those were sent one "
+             "at a time\n";
+    if (r.slowed_for_busy || (r.answers >= 16 && r.busy_answers * 4 > r.answers))
+        s += fmt::format(
+            "  WARNING: {} of {} pipelined answers were exception 06 (busy): those cases were "
+            "wasted; the lanes were thinned (fuzz with fewer --connections, or a quieter "
+            "target)\n",
+            r.busy_answers, r.answers);
+    if (r.capacity_held)
+        s += fmt::format("  capacity check: held {} connections\n", r.capacity_held);
+    if (r.suspects_left || r.findings_not_minimized)
+        s += fmt::format(
+            "  cut short by the deadline: {} suspect(s) not re-run, {} finding(s) not "
+            "minimised\n",
+            r.suspects_left, r.findings_not_minimized);
     s += fmt::format("  stopped: {}\n", r.stop_reason);
     if (r.findings.empty()) {
         s += "  no findings\n";
-    } else {
-        s += fmt::format("  {} finding(s):\n", r.findings.size());
-        for (const Finding& f : r.findings)
-            s += fmt::format("  #{} {:<18} {}\n      {}{}\n", f.id, oracle_name(f.oracle()),
-                             f.verdict.summary,
-                             f.note.empty() ? std::string() : "note: " + f.note + "\n      ",
-                             f.folder.empty() ? std::string("(not saved)") : f.folder);
+        return s;
+    }
+    // Root causes, worst first: crash, hang, close, malformed response, spec deviation.
+    std::vector<const Finding*> ranked;
+    for (const Finding& f : r.findings) ranked.push_back(&f);
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const Finding* a, const Finding* b) { return a->oracle() < b->oracle(); });
+    s += fmt::format("  {} root cause(s):\n", r.findings.size());
+    for (const Finding* f : ranked) {
+        s += fmt::format("  #{} {:<18} {}\n      rule {}; {} hit(s)", f->id,
+                         oracle_name(f->oracle()), f->verdict.summary, f->verdict.rule, f->hits);
+        std::string variants;
+        std::size_t shown = 0;
+        for (const auto& [v, n] : f->variants) {
+            if (shown++ == 6) {
+                variants += fmt::format(", ... {} more", f->variants.size() - 6);
+                break;
+            }
+            variants += fmt::format("{}{} x{}", variants.empty() ? "" : ", ", v, n);
+        }
+        if (!variants.empty()) s += " in " + variants;
+        s += "\n      ";
+        if (!f->note.empty()) s += "note: " + f->note + "\n      ";
+        if (!f->minimize_note.empty()) s += f->minimize_note + "\n      ";
+        s += f->folder.empty() ? std::string("(not saved)") : f->folder;
+        s += "\n";
     }
     return s;
 }

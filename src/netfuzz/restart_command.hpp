@@ -15,6 +15,8 @@ class RestartCommand {
     bool start(const std::string& command, std::string& error);
     // True once the command has returned (it is reaped then).
     bool returned();
+    // Started and not yet returned: starting another copy now would race it.
+    bool running() { return pid_ >= 0 && !returned(); }
     // A command still running is left running: it may be the target itself. Commands left
     // running earlier are reaped here once they end, so none stays a zombie.
     ~RestartCommand();

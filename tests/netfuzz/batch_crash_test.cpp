@@ -46,7 +46,10 @@ std::string read_text(const std::string& path) {
 // builds it: same seed, every case pipelinable (--transport-share 0), nothing deprioritised
 // before the crash. One entry per MBAP frame, in order.
 std::vector<std::vector<std::uint8_t>> batch_frames(std::uint64_t cases_before) {
-    nf::Generator gen(nf::GeneratorOptions{kSeed, 1, false, 0});
+    nf::GeneratorOptions options;
+    options.seed = kSeed;
+    options.isolated_per_mille = 0;
+    nf::Generator gen(options);
     nf::Case c;
     for (std::uint64_t i = 0; i < cases_before; ++i) gen.next(c);
     nf::Case all;
@@ -100,7 +103,8 @@ TEST(BatchCrash, LostTargetAfterPipelinedCrashIsReportedAsUnconfirmedBatchFindin
     EXPECT_EQ(saved.at("oracle"), "crash");
     EXPECT_FALSE(saved.at("confirmed").get<bool>());
     EXPECT_EQ(saved.at("note"), note);
-    const auto expected = batch_frames(f.at("case_number").get<std::uint64_t>());
+    // case_number is the batch's first case, counted from 1.
+    const auto expected = batch_frames(f.at("case_number").get<std::uint64_t>() - 1);
     const auto& steps = saved.at("case").at("steps");
     ASSERT_EQ(steps.size(), expected.size());
     ASSERT_GT(expected.size(), 1u);

@@ -30,8 +30,15 @@ TargetProfile profile() {
     return p;
 }
 
+GeneratorOptions options(std::uint64_t seed, unsigned isolated_per_mille) {
+    GeneratorOptions o;
+    o.seed = seed;
+    o.isolated_per_mille = isolated_per_mille;
+    return o;
+}
+
 TEST(Generator, SameSeedSameBytes) {
-    Generator a(GeneratorOptions{42, 1, false, 100}), b(GeneratorOptions{42, 1, false, 100});
+    Generator a(options(42, 100)), b(options(42, 100));
     Case x, y;
     for (int i = 0; i < 5000; ++i) {
         a.next(x);
@@ -59,7 +66,7 @@ TEST(Generator, StructuredSeedsCoverEveryFunctionCodeAndLimit) {
 }
 
 TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
-    Generator g(GeneratorOptions{1, 1, false, 200});
+    Generator g(options(1, 200));
     std::set<MutationClass> classes;
     Case c;
     for (int i = 0; i < 40000; ++i) {
@@ -121,17 +128,17 @@ TEST(Oracle, ShadowFindsReadAfterWriteMismatch) {
     const std::vector<std::uint8_t> wrsp = {0x06, 0x60, 0x10, 0x12, 0x34};
     const std::vector<std::uint8_t> good = {0x03, 0x02, 0x12, 0x34}, bad = {0x03, 0x02, 0x00, 0x00};
     std::vector<Shadow::Event> ev = {{&wi, 10, 20, wrsp}, {&ri, 30, 40, good}};
-    EXPECT_FALSE(Shadow::check(ev));
+    EXPECT_FALSE(Shadow::check(ev, StateRange{}));
     ev[1].response_pdu = bad;
-    EXPECT_EQ(Shadow::check(ev).oracle, Oracle::SpecDeviation);
+    EXPECT_EQ(Shadow::check(ev, StateRange{}).oracle, Oracle::SpecDeviation);
     // A read sent before the write was acknowledged proves nothing.
     ev[1].sent_ns = 15;
-    EXPECT_FALSE(Shadow::check(ev));
+    EXPECT_FALSE(Shadow::check(ev, StateRange{}));
 }
 
 TEST(Oracle, RelocateKeepsWritesOutOfTheStatefulRange) {
     auto f = adu(1, {0x10, 0x60, 0x00, 0x00, 0x01, 0x02, 0x00, 0x00});
-    relocate_writes(f.data(), f.size());
+    relocate_writes(f.data(), f.size(), StateRange{});
     const std::uint16_t a = codec::load_be16(f.data() + 8);
     EXPECT_TRUE(a < kStateBase || a >= kStateBase + kStateSpan);
 }
@@ -201,7 +208,10 @@ TEST(Minimize, LeavesDeliberatelyMisframedBytesAlone) {
 
 TEST(Finding, SaveLoadRoundTrip) {
     Finding f;
-    f.verdict = Verdict{Oracle::Hang, "no answer", "an answer", "silence"};
+    f.verdict =
+        Verdict{Oracle::Hang, "no-answer/fc03-valid", 0x03, "no answer", "an answer", "silence"};
+    f.hits = 7;
+    f.original_case.steps = {Step{Op::Send, 0, 0, 0, {9, 9}}};
     f.fuzz_case.cls = MutationClass::Split;
     f.fuzz_case.function = 0x03;
     f.fuzz_case.steps = {Step{Op::Send, 0, 0, 0, {1, 2, 3}}, Step{Op::Send, 0, 200, 0, {4, 5}},
@@ -216,6 +226,11 @@ TEST(Finding, SaveLoadRoundTrip) {
     Finding g;
     ASSERT_TRUE(load_finding(dir, g, err)) << err;
     EXPECT_EQ(g.oracle(), Oracle::Hang);
+    EXPECT_EQ(g.key(), "hang:no-answer/fc03-valid");
+    EXPECT_EQ(g.function(), 0x03);
+    EXPECT_EQ(g.hits, 7u);
+    ASSERT_EQ(g.original_case.steps.size(), 1u);
+    EXPECT_EQ(g.original_case.steps[0].bytes, (std::vector<std::uint8_t>{9, 9}));
     EXPECT_EQ(g.fuzz_case.cls, MutationClass::Split);
     ASSERT_EQ(g.fuzz_case.steps.size(), 3u);
     EXPECT_EQ(g.fuzz_case.steps[1].bytes, (std::vector<std::uint8_t>{4, 5}));

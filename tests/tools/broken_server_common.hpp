@@ -198,7 +198,10 @@ inline void forward_stop(int) {
     _exit(0);
 }
 
-inline int main_with(int argc, char** argv, const Faults& f) {
+using ServeFn = int (*)(int listen_fd, const Faults& f);
+
+// `serve_fn`: a server with its own loop (the multi-fault server) instead of serve().
+inline int main_with(int argc, char** argv, const Faults& f, ServeFn serve_fn = serve) {
     int port = 0, restart_delay_ms = 300, exit_after_s = 0;
     bool respawn = false;
     const char* pid_file = nullptr;
@@ -232,7 +235,7 @@ inline int main_with(int argc, char** argv, const Faults& f) {
         if (fd < 0) return 2;
         std::printf("PORT %u\n", port_of(fd));
         std::fflush(stdout);
-        return serve(fd, f);
+        return serve_fn(fd, f);
     }
     ::signal(SIGTERM, forward_stop);
     ::signal(SIGINT, forward_stop);
@@ -249,7 +252,7 @@ inline int main_with(int argc, char** argv, const Faults& f) {
             (void)!::write(fds[1], &p, sizeof p);
             ::close(fds[1]);
             if (fd < 0) _exit(2);
-            _exit(serve(fd, f));
+            _exit(serve_fn(fd, f));
         }
         g_child = child;
         ::close(fds[1]);

@@ -1,0 +1,182 @@
+#include "netfuzz/capacity.hpp"
+
+#include <fmt/format.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <vector>
+
+#include "codec/limits.hpp"
+#include "net/clock.hpp"
+#include "netfuzz/executor.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+namespace lim = codec::limits;
+
+enum class ConnState : std::uint8_t { Connecting, Waiting, Answered, Refused };
+
+struct Held {
+    net::UniqueFd fd;
+    ConnState state = ConnState::Connecting;
+    std::vector<std::uint8_t> in;
+};
+
+// Sends the probe on every connection of `conns[from..]` once connected and waits until each
+// is answered or refused, or the time is up. Returns the number left unanswered (silent).
+std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetProfile& profile,
+                      int timeout_ms, std::int64_t deadline_ns) {
+    const auto frame = probe_frame(profile, 0x0CA9);
+    std::int64_t until = net::now_ns() + std::int64_t{timeout_ms} * net::kNsPerMs;
+    if (deadline_ns) until = std::min(until, deadline_ns);
+    std::vector<pollfd> ps;
+    std::vector<std::size_t> idx;
+    std::uint8_t buf[512];
+    for (;;) {
+        ps.clear();
+        idx.clear();
+        for (std::size_t i = from; i < conns.size(); ++i) {
+            Held& h = conns[i];
+            if (h.state == ConnState::Connecting)
+                ps.push_back(pollfd{h.fd.get(), POLLOUT, 0});
+            else if (h.state == ConnState::Waiting)
+                ps.push_back(pollfd{h.fd.get(), POLLIN, 0});
+            else
+                continue;
+            idx.push_back(i);
+        }
+        if (ps.empty()) return 0;
+        const std::int64_t left = until - net::now_ns();
+        if (left <= 0) return ps.size();
+        ::poll(ps.data(), ps.size(), static_cast<int>(std::max<std::int64_t>(1, left / 1000000)));
+        for (std::size_t k = 0; k < ps.size(); ++k) {
+            Held& h = conns[idx[k]];
+            if (!ps[k].revents) continue;
+            if (h.state == ConnState::Connecting) {
+                if (net::socket_error(h.fd.get()) != 0 ||
+                    ::send(h.fd.get(), frame.data(), frame.size(), MSG_NOSIGNAL) !=
+                        static_cast<ssize_t>(frame.size())) {
+                    h.state = ConnState::Refused;
+                    h.fd.reset();
+                } else {
+                    h.state = ConnState::Waiting;
+                }
+                continue;
+            }
+            const ssize_t n = ::recv(h.fd.get(), buf, sizeof buf, 0);
+            if (n > 0) {
+                h.in.insert(h.in.end(), buf, buf + n);
+                if (h.in.size() >= lim::kMbapHeader &&
+                    h.in.size() >= 6u + codec::load_be16(h.in.data() + 4)) {
+                    h.state = ConnState::Answered;
+                    h.in.clear();
+                }
+            } else if (n == 0 || (errno != EAGAIN && errno != EINTR)) {
+                h.state = ConnState::Refused;  // closed: a limit, which is allowed
+                h.fd.reset();
+            }
+        }
+    }
+}
+
+}  // namespace
+
+std::uint32_t connection_budget() {
+    rlimit rl{};
+    if (::getrlimit(RLIMIT_NOFILE, &rl) != 0) return 256;
+    if (rl.rlim_cur < rl.rlim_max) {
+        rlimit raised = rl;
+        raised.rlim_cur = rl.rlim_max;
+        if (::setrlimit(RLIMIT_NOFILE, &raised) == 0) rl = raised;
+    }
+    const rlim_t margin = 64;
+    return rl.rlim_cur > margin
+               ? static_cast<std::uint32_t>(std::min<rlim_t>(rl.rlim_cur - margin, 1u << 20))
+               : 0;
+}
+
+CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& profile,
+                              std::uint32_t max_connections, int timeout_ms,
+                              std::int64_t deadline_ns) {
+    CapacityResult out;
+    max_connections = std::min(max_connections, connection_budget());
+    std::vector<Held> conns;
+    conns.reserve(max_connections);
+    auto out_of_time = [&] { return deadline_ns && net::now_ns() >= deadline_ns; };
+    for (std::uint32_t step = 16; !out_of_time();) {
+        const std::uint32_t goal = std::min(step, max_connections);
+        const std::size_t from = conns.size();
+        while (conns.size() < goal) {
+            Held h;
+            const int fd = net::connect_nonblocking(target);
+            if (fd < 0) {
+                h.state = ConnState::Refused;
+            } else {
+                h.fd.reset(fd);
+            }
+            conns.push_back(std::move(h));
+        }
+        const std::size_t silent = probe_all(conns, from, profile, timeout_ms, deadline_ns);
+        if (out_of_time()) break;
+        std::uint32_t refused = 0;
+        for (const Held& h : conns) refused += h.state == ConnState::Refused;
+        out.refused = refused;
+        if (silent > 0) {
+            out.verdict = Verdict{
+                Oracle::Hang,
+                "capacity/accepted-connections-unserved",
+                -1,
+                fmt::format("with {} connections open, {} newly accepted connection(s) got no "
+                            "answer within {} ms",
+                            conns.size(), silent, timeout_ms),
+                "every accepted connection is served (or refused, or closed, at a limit)",
+                fmt::format("{} of {} new connections silent", silent, conns.size() - from)};
+            break;
+        }
+        // The oldest connection that is still open must still answer.
+        std::size_t oldest = conns.size();
+        for (std::size_t i = 0; i < from; ++i)
+            if (conns[i].state == ConnState::Answered) {
+                oldest = i;
+                break;
+            }
+        if (oldest < conns.size()) {
+            conns[oldest].state = ConnState::Connecting;  // connected: sends the probe again
+            if (probe_all(conns, oldest, profile, timeout_ms, deadline_ns) > 0 &&
+                conns[oldest].state == ConnState::Waiting && !out_of_time()) {
+                out.verdict = Verdict{
+                    Oracle::Hang,
+                    "capacity/existing-connections-unserved",
+                    -1,
+                    fmt::format("with {} connections open, the oldest one stopped answering",
+                                conns.size()),
+                    "existing connections keep being served",
+                    fmt::format("no answer within {} ms", timeout_ms)};
+                break;
+            }
+        }
+        out.held = static_cast<std::uint32_t>(conns.size() - refused);
+        if (goal >= max_connections) break;
+        step *= 4;
+    }
+    conns.clear();
+    if (probe_target(target, profile, timeout_ms) == ProbeResult::ConnectFailed) {
+        out.target_down = true;
+        if (!out.verdict)
+            out.verdict = Verdict{Oracle::Crash,
+                                  "target-down/capacity",
+                                  -1,
+                                  fmt::format("target stopped accepting connections after "
+                                              "holding {} connections",
+                                              out.held),
+                                  "the target accepts and serves a fresh connection",
+                                  "connect failed"};
+    }
+    return out;
+}
+
+}  // namespace mbstorm::netfuzz
