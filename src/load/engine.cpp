@@ -44,6 +44,8 @@ class OutageWatch {
         if (!recorded && now - zero_since_ >= kTargetLostAfterNs)
             outages_.push_back({zero_since_, -1});
     }
+    // A stage that wants no connection: none open is no outage.
+    void none_wanted() { zero_since_ = -1; }
     const std::vector<Outage>& outages() const { return outages_; }
 
   private:
@@ -205,8 +207,15 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         // Only while the run is meant to go on: at its end the connections close anyway.
         if (const std::int64_t now = net::now_ns();
             now < end_ns && !abort.load() &&
-            !(options.stop && options.stop->load(std::memory_order_relaxed)))
-            outages.sample(open_now(), now);
+            !(options.stop && options.stop->load(std::memory_order_relaxed))) {
+            const bool wanted =
+                schedule.empty() ||
+                schedule.at(std::max<std::int64_t>(now - measure_start_ns, 0)).connections > 0;
+            if (wanted)
+                outages.sample(open_now(), now);
+            else
+                outages.none_wanted();
+        }
         if (const std::int64_t now = net::now_ns(); now >= measure_start_ns) {
             const auto index = static_cast<std::size_t>((now - measure_start_ns) / interval_ns);
             if (index < max_intervals) {

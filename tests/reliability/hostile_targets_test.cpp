@@ -145,6 +145,25 @@ TEST(HostileTargets, TargetThatComesBackIsANoteWithBothTimes) {
     expect_accounted(r);
 }
 
+// A stage that closes every connection on purpose is not a lost target.
+TEST(HostileTargets, AStageWithNoConnectionsIsNoOutage) {
+    HostileTarget target(HostileTarget::Mode::Honest);
+    Plan plan = plan_for(target.port());
+    Stage up, none, again;
+    up.duration = 300ms;
+    none.duration = 900ms;
+    none.target_connections = 0;
+    again.duration = 300ms;
+    again.target_connections = 2;
+    plan.stages = {up, none, again};
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_GT(r.run.counters.ok(), 0u);
+    EXPECT_FALSE(has_note(r, "target lost")) << testing::PrintToString(r.run.metadata.notes);
+    EXPECT_FALSE(r.target_lost_at_end);
+    expect_accounted(r);
+}
+
 // Before: a run shorter than the connect timeout against a silent address ended as "0
 // transactions", ok.
 TEST(HostileTargets, NoConnectionDuringAShortRunIsAnError) {
