@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
@@ -104,6 +105,13 @@ int run_fuzz(const FuzzOptions& o) {
         c.dict_tokens = std::move(d.tokens);
     }
     c.max_connections = o.max_connections;
+    // A summary that cannot be written must not cost a whole campaign first.
+    for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
+                                     {"--junit", o.junit},
+                                     {"--sarif", o.sarif}}) {
+        if (!path.empty() && path != "-" && !report::check_writable(path, error))
+            return usage(fmt::format("cannot write {} {}", flag, error));
+    }
     // The first line, always: this is not a read-only tool.
     fmt::print(
         "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "

@@ -61,7 +61,32 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
     write(files.json, report::format_json(result.run), "JSON summary");
     write(files.hdr, report::format_hgrm(result.run.latency), ".hgrm distribution");
     write(files.html, report::format_html(result.run), "HTML report");
+    if (code == kExitOk) code = judge_run(result);
     return code;
+}
+
+int judge_run(const load::LoadResult& result) {
+    const stats::OutcomeCounters& c = result.run.counters;
+    if (c.transactions_sent > 0 && c.ok() == 0) {
+        // Name the commonest failure, so the line alone says what went wrong.
+        stats::Outcome worst = stats::Outcome::Timeout;
+        for (std::size_t i = 1; i < stats::kOutcomeCount; ++i) {
+            const auto o = static_cast<stats::Outcome>(i);
+            if (!stats::is_stray(o) && c.count(o) > c.count(worst)) worst = o;
+        }
+        fmt::print(stderr,
+                   "mbstorm run: no transaction succeeded ({} sent, {} failed, most as {}, {} "
+                   "pending at the end)\n",
+                   c.transactions_sent, c.errors(), stats::outcome_name(worst),
+                   result.pending_at_end);
+        return kExitFailed;
+    }
+    if (result.target_lost_at_end) {
+        for (const auto& note : result.run.metadata.notes)
+            if (note.rfind("target lost", 0) == 0) fmt::print(stderr, "mbstorm run: {}\n", note);
+        return kExitFailed;
+    }
+    return kExitOk;
 }
 
 }  // namespace mbstorm::cli

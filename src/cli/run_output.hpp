@@ -33,7 +33,11 @@ class LiveProgress {
 };
 
 // Prints the final report and writes the requested files. Returns the exit code: 2 when the
-// run could not start, 0 otherwise (thresholds are the scenario layer's business).
+// run could not start or a file could not be written, 1 when the run failed (judge_run), 0
+// otherwise (thresholds are the scenario layer's business).
 int report_run(load::LoadResult& result, const OutputFiles& files);
+// 1 (with a line on stderr) when no transaction succeeded or the target was lost and did not
+// come back; 0 otherwise.
+int judge_run(const load::LoadResult& result);
 
 }  // namespace mbstorm::cli

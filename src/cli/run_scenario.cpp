@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <utility>
 
 #include "cli/commands.hpp"
 #include "report/files.hpp"
@@ -37,6 +38,16 @@ int print_flag_scenario(const load::Plan& plan, const std::string& target) {
 }
 
 int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
+    // A report that cannot be written must not cost a whole run first.
+    const std::pair<const char*, const std::string*> outputs[] = {{"--json", &request.outputs.json},
+                                                                  {"--hdr", &request.outputs.hdr},
+                                                                  {"--html", &request.outputs.html},
+                                                                  {"--junit", &request.junit}};
+    for (const auto& [flag, path] : outputs) {
+        std::string error;
+        if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
+            return usage_error(fmt::format("cannot write {} {}", flag, error));
+    }
     g_scenario_stop = false;
     signal(SIGINT, on_scenario_stop_signal);
     signal(SIGTERM, on_scenario_stop_signal);

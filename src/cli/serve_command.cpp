@@ -22,6 +22,7 @@ struct ServeOptions {
     std::string foreign_unit = "none";
     int only_unit = -1;
     std::uint64_t idle_timeout_ns = 0;
+    std::uint64_t frame_timeout_ns = 10'000'000'000;
     std::string delay_kind;  // fixed | uniform | exponential
     std::uint64_t delay_ns = 0, delay_max_ns = 0;
     std::uint64_t stall_ns = 0, stall_every_ns = 0;
@@ -76,6 +77,7 @@ int run_serve(ServeOptions& o) {
     c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse
                                               : server::FullPolicy::EvictOldestIdle;
     c.idle_timeout_ms = o.idle_timeout_ns / 1'000'000;
+    c.frame_timeout_ms = o.frame_timeout_ns / 1'000'000;
     if (o.only_unit >= 0) {
         c.only_unit = static_cast<std::uint8_t>(o.only_unit);
         c.foreign_unit = o.foreign_unit == "exception" ? server::ForeignUnitPolicy::GatewayException
@@ -88,6 +90,7 @@ int run_serve(ServeOptions& o) {
     if (!srv.start(&error)) return fail(error);
     fmt::print("mbstorm serve: listening on {} ({} thread{}, {}); Ctrl-C stops\n", srv.endpoint(),
                srv.threads(), srv.threads() == 1 ? "" : "s", srv.describe_io());
+    if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     std::fflush(stdout);
     server::RunOptions run;
@@ -119,6 +122,9 @@ void add_serve_command(CLI::App& app, Action& action) {
         ->capture_default_str();
     add_duration_option(cmd, "--idle-timeout", o->idle_timeout_ns,
                         "close connections idle this long (default: never)");
+    add_duration_option(cmd, "--frame-timeout", o->frame_timeout_ns,
+                        "close a connection whose started frame is not complete this long after "
+                        "its first byte (default 10s; 0: no bound)");
     cmd->add_option("--max-outstanding", o->config.max_outstanding,
                     "answer requests beyond this many unanswered ones per connection with "
                     "exception 06 (0: no cap)")

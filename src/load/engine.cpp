@@ -18,6 +18,47 @@
 namespace mbstorm::load {
 namespace {
 
+// No connection open for this long after one was: the target is lost (a reconnect after a
+// dropped connection takes far less).
+constexpr std::int64_t kTargetLostAfterNs = 500 * net::kNsPerMs;
+
+// When the target went away and came back (back_ns < 0: not back by the end).
+struct Outage {
+    std::int64_t lost_ns = 0;
+    std::int64_t back_ns = -1;
+};
+
+// Watches the open-connection count during the run for outages of the target.
+class OutageWatch {
+  public:
+    void sample(std::uint32_t open, std::int64_t now) {
+        if (open > 0) {
+            if (!outages_.empty() && outages_.back().back_ns < 0) outages_.back().back_ns = now;
+            seen_open_ = true;
+            zero_since_ = -1;
+            return;
+        }
+        if (!seen_open_) return;
+        if (zero_since_ < 0) zero_since_ = now;
+        const bool recorded = !outages_.empty() && outages_.back().back_ns < 0;
+        if (!recorded && now - zero_since_ >= kTargetLostAfterNs)
+            outages_.push_back({zero_since_, -1});
+    }
+    // A stage that wants no connection: none open is no outage.
+    void none_wanted() { zero_since_ = -1; }
+    const std::vector<Outage>& outages() const { return outages_; }
+
+  private:
+    bool seen_open_ = false;
+    std::int64_t zero_since_ = -1;
+    std::vector<Outage> outages_;
+};
+
+std::string offset_text(std::int64_t t, std::int64_t measure_start_ns) {
+    if (t < measure_start_ns) return "during warm-up";
+    return fmt::format("at {:.2f}s", static_cast<double>(t - measure_start_ns) / 1e9);
+}
+
 void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& workers,
                    LoadResult& result) {
     stats::RunResult& run = result.run;
@@ -160,8 +201,21 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);
         return open;
     };
+    OutageWatch outages;
     while (finished.load() < threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        // Only while the run is meant to go on: at its end the connections close anyway.
+        if (const std::int64_t now = net::now_ns();
+            now < end_ns && !abort.load() &&
+            !(options.stop && options.stop->load(std::memory_order_relaxed))) {
+            const bool wanted =
+                schedule.empty() ||
+                schedule.at(std::max<std::int64_t>(now - measure_start_ns, 0)).connections > 0;
+            if (wanted)
+                outages.sample(open_now(), now);
+            else
+                outages.none_wanted();
+        }
         if (const std::int64_t now = net::now_ns(); now >= measure_start_ns) {
             const auto index = static_cast<std::size_t>((now - measure_start_ns) / interval_ns);
             if (index < max_intervals) {
@@ -207,6 +261,15 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     for (auto& w : workers) {
         finished_ns = std::max(finished_ns, w->finished_ns);
         if (result.error.empty() && !w->fatal_error.empty()) result.error = w->fatal_error;
+    }
+    if (result.error.empty() && !any_connected.load()) {
+        // The run ended before a connect attempt even failed (a silent address and a run
+        // shorter than the connect timeout): still an unreachable target.
+        result.error = fmt::format(
+            "cannot connect to {}: no connection was established during the run ({:.3g}s; "
+            "connect timeout {:.3g}s)",
+            endpoint.to_string(), static_cast<double>(finished_ns - start_ns) / 1e9,
+            std::chrono::duration<double>(plan.connect_timeout).count());
     }
     result.ok = result.error.empty();
 
@@ -270,6 +333,19 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     // The last stage ends where measuring ended (a run stops a hair after its schedule).
     if (!result.run.stages.empty())
         result.run.stages.back().end_offset_ns = meta.measured_duration_ns;
+    for (const Outage& o : outages.outages()) {
+        if (o.back_ns >= 0) {
+            meta.notes.push_back(fmt::format(
+                "target lost {} (no connection open), back {} ({:.2f}s without a connection)",
+                offset_text(o.lost_ns, measure_start_ns), offset_text(o.back_ns, measure_start_ns),
+                static_cast<double>(o.back_ns - o.lost_ns) / 1e9));
+        } else {
+            result.target_lost_at_end = true;
+            meta.notes.push_back(fmt::format(
+                "target lost {} (no connection open) and not back by the end of the run",
+                offset_text(o.lost_ns, measure_start_ns)));
+        }
+    }
     if (!schedule.empty()) {
         meta.notes.push_back(fmt::format(
             "stages: {} stage{}, rate and connections changed live (connections stay open)",

@@ -59,6 +59,9 @@ struct LoadResult {
     std::uint64_t late_responses = 0;  // answers that arrived after their transaction timed out
     std::uint64_t framing_errors = 0;  // unrecoverable MBAP framing (connection was reset)
     std::uint64_t bad_protocol_frames = 0;  // frames with protocol id != 0 (discarded)
+    // The target went away during the run (no connection open for a while after one was) and
+    // had not come back when it ended; each outage is also a note in run.metadata.notes.
+    bool target_lost_at_end = false;
 };
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options = {});

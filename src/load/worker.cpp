@@ -29,7 +29,7 @@ constexpr std::uint16_t kBufferGroup = 0;
 
 bool has_response(stats::Outcome o) noexcept {
     return o != stats::Outcome::Timeout && o != stats::Outcome::ConnectionClosed &&
-           o != stats::Outcome::ConnectFailed;
+           o != stats::Outcome::ConnectFailed && o != stats::Outcome::FramingError;
 }
 
 using HeapEntry = std::pair<std::int64_t, std::uint32_t>;
@@ -477,9 +477,10 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         }
         buf_ring_.recycle(buffer_id);
         if (fatal) {
-            // The stream cannot be resynchronised: count it and start a fresh connection.
-            ++framing_errors;  // reported in LoadResult; the transactions end as closed
-            close_connection(index, now, stats::Outcome::ConnectionClosed);
+            // The stream cannot be resynchronised: count it and start a fresh connection. The
+            // transactions it carried end as framing errors, not as a peer's close.
+            ++framing_errors;
+            close_connection(index, now, stats::Outcome::FramingError);
             return;
         }
         if (!c.recv_armed) arm_recv(index);

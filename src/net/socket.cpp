@@ -1,6 +1,7 @@
 #include "net/socket.hpp"
 
 #include <arpa/inet.h>
+#include <dirent.h>
 #include <fcntl.h>
 #include <netdb.h>
 #include <netinet/tcp.h>
@@ -228,6 +229,21 @@ std::uint64_t raise_nofile_limit(std::uint64_t wanted, std::string* message) noe
         }
     }
     return want.rlim_cur;
+}
+
+std::uint64_t nofile_limit() noexcept {
+    rlimit lim{};
+    return getrlimit(RLIMIT_NOFILE, &lim) == 0 ? lim.rlim_cur : 0;
+}
+
+std::uint64_t open_descriptor_count() noexcept {
+    DIR* dir = opendir("/proc/self/fd");
+    if (dir == nullptr) return 0;
+    std::uint64_t count = 0;
+    while (const dirent* e = readdir(dir))
+        if (e->d_name[0] != '.') ++count;
+    closedir(dir);
+    return count > 0 ? count - 1 : 0;  // not the directory's own descriptor
 }
 
 }  // namespace mbstorm::net

@@ -81,5 +81,9 @@ int socket_error(int fd) noexcept;
 // resulting soft limit. When it stays below `wanted`, `message` explains what to do
 // (ulimit -n / limits.conf / CAP_SYS_RESOURCE).
 std::uint64_t raise_nofile_limit(std::uint64_t wanted, std::string* message = nullptr) noexcept;
+// The current soft RLIMIT_NOFILE (0 when unknown).
+std::uint64_t nofile_limit() noexcept;
+// Descriptors this process has open now (0 when /proc/self/fd cannot be read).
+std::uint64_t open_descriptor_count() noexcept;
 
 }  // namespace mbstorm::net

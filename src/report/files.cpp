@@ -1,5 +1,10 @@
 #include "report/files.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +25,30 @@ bool write_text_file(const std::string& path, std::string_view content, std::str
         return false;
     }
     return true;
+}
+
+bool check_writable(const std::string& path, std::string& error) {
+    auto fail = [&](int code) {
+        error = path + ": " + std::strerror(code);
+        return false;
+    };
+    const bool existed = ::access(path.c_str(), F_OK) == 0;
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY, 0666);
+    if (fd < 0) return fail(errno);
+    int problem = 0;
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+        problem = errno;
+    } else if (S_ISREG(st.st_mode)) {
+        struct statvfs vfs {};
+        if (::fstatvfs(fd, &vfs) == 0 && vfs.f_bavail == 0) problem = ENOSPC;
+    } else if (S_ISCHR(st.st_mode) && !::isatty(fd)) {
+        const char probe = '\n';
+        if (::write(fd, &probe, 1) != 1) problem = errno;
+    }
+    ::close(fd);
+    if (!existed) ::unlink(path.c_str());
+    return problem == 0 || fail(problem);
 }
 
 }  // namespace mbstorm::report

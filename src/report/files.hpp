@@ -9,4 +9,10 @@ namespace mbstorm::report {
 // Writes content to path (truncating). On failure returns false and sets error.
 bool write_text_file(const std::string& path, std::string_view content, std::string& error);
 
+// Checks, before a long run, that write_text_file(path) can succeed, changing nothing: the
+// path opens for writing (a missing file is created and removed again), its file system has
+// room, and a character device that is not a terminal takes a probe byte (/dev/full does
+// not). On failure returns false and sets error like write_text_file.
+bool check_writable(const std::string& path, std::string& error);
+
 }  // namespace mbstorm::report

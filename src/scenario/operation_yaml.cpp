@@ -6,6 +6,7 @@
 
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
+#include "scenario/scenario.hpp"
 
 namespace mbstorm::scenario {
 namespace {
@@ -165,6 +166,11 @@ load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
                 if (!v.IsSequence() || v.size() == 0) {
                     r.fail(v, "values.pattern must be a list of at least one value 0..65535");
                 }
+                if (v.size() > kMaxListEntries) {
+                    r.fail(v[kMaxListEntries],
+                           fmt::format("values.pattern has {} entries (at most {})", v.size(),
+                                       kMaxListEntries));
+                }
                 for (const auto& item : v) {
                     spec.pattern.push_back(static_cast<std::uint16_t>(
                         r.integer(item, "values.pattern entry", 0, 65535)));
@@ -212,6 +218,10 @@ Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::O
                        values_node = v;
                        if (!v.IsSequence() || v.size() == 0) {
                            r.fail(v, fmt::format("{} must be a list of values 0..{}", what, hi));
+                       }
+                       if (v.size() > kMaxListEntries) {
+                           r.fail(v[kMaxListEntries], fmt::format("{} has {} entries (at most {})",
+                                                                  what, v.size(), kMaxListEntries));
                        }
                        for (const auto& item : v) {
                            e.values.push_back(static_cast<std::uint16_t>(
@@ -390,6 +400,11 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
     if (thresholds_node) {
         if (!thresholds_node.node.IsSequence()) {
             r.fail(thresholds_node, "thresholds must be a list of expressions like \"p99 < 5ms\"");
+        }
+        if (thresholds_node.node.size() > kMaxThresholds) {
+            r.fail(thresholds_node.node[kMaxThresholds],
+                   fmt::format("too many thresholds: {} (at most {})", thresholds_node.node.size(),
+                               kMaxThresholds));
         }
         for (const auto& t : thresholds_node.node) {
             ThresholdSpec spec;

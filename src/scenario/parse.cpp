@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "scenario/operation_names.hpp"
 #include "scenario/operation_yaml.hpp"
 #include "scenario/scenario.hpp"
 #include "scenario/yaml_reader.hpp"
@@ -208,14 +209,20 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
         if (!ops_node.node.IsSequence() || ops_node.node.size() == 0) {
             r.fail(ops_node, "operations must be a list of at least one operation");
         }
-        std::set<std::string> names;
+        if (ops_node.node.size() > kMaxOperations) {
+            r.fail(ops_node.node[kMaxOperations],
+                   fmt::format("too many operations: {} (at most {})", ops_node.node.size(),
+                               kMaxOperations));
+        }
+        OperationNames names;
         std::vector<ParsedOperation> parsed;
+        parsed.reserve(ops_node.node.size());
         for (std::size_t i = 0; i < ops_node.node.size(); ++i) {
             parsed.push_back(parse_operation(r, ops_node.node[i], i));
         }
         // Explicit names must be unique; default names get a suffix when they collide.
         for (std::size_t i = 0; i < parsed.size(); ++i) {
-            if (parsed[i].named && !names.insert(parsed[i].operation.name).second) {
+            if (parsed[i].named && !names.add_explicit(parsed[i].operation.name)) {
                 r.fail(ops_node.node[i]["name"],
                        fmt::format("operation name '{}' is used twice (names "
                                    "must be unique)",
@@ -224,13 +231,7 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
         }
         for (std::size_t i = 0; i < parsed.size(); ++i) {
             auto& op = parsed[i].operation;
-            if (!parsed[i].named) {
-                std::string name = op.name;
-                for (int k = 2; names.count(name) != 0; ++k)
-                    name = fmt::format("{}_{}", op.name, k);
-                op.name = name;
-                names.insert(name);
-            }
+            if (!parsed[i].named) op.name = names.add_default(op.name);
             for (auto& t : parsed[i].thresholds) t.operation = op.name;
             p.operations.push_back(op);
             s.expectations.push_back(parsed[i].expect);
@@ -243,6 +244,11 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
             if (!thresholds_node.node.IsSequence()) {
                 r.fail(thresholds_node,
                        "thresholds must be a list of expressions like \"p99 < 5ms\"");
+            }
+            if (thresholds_node.node.size() > kMaxThresholds) {
+                r.fail(thresholds_node.node[kMaxThresholds],
+                       fmt::format("too many thresholds: {} (at most {})",
+                                   thresholds_node.node.size(), kMaxThresholds));
             }
             for (const auto& t : thresholds_node.node) {
                 ThresholdSpec spec;
@@ -263,10 +269,10 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                                    }
                                });
                     if (!expr) r.fail(t, "threshold: `check` is required (e.g. check: p99 < 5ms)");
-                    if (op_node && names.count(op_name) == 0) {
+                    if (op_node && !names.contains(op_name)) {
                         r.fail(op_node,
                                fmt::format("threshold: no operation is named '{}' (names: {})",
-                                           op_name, fmt::join(names, ", ")));
+                                           op_name, fmt::join(names.all(), ", ")));
                     }
                 }
                 if (!parse_threshold(r.scalar(expr, "threshold"), spec, error)) r.fail(expr, error);
@@ -279,6 +285,11 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
         if (stages_node) {
             if (!stages_node.node.IsSequence() || stages_node.node.size() == 0) {
                 r.fail(stages_node, "stages must be a list of at least one stage");
+            }
+            if (stages_node.node.size() > kMaxStages) {
+                r.fail(stages_node.node[kMaxStages],
+                       fmt::format("too many stages: {} (at most {})", stages_node.node.size(),
+                                   kMaxStages));
             }
             if (duration_node) {
                 r.fail(duration_node,
@@ -368,9 +379,18 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
 Scenario load_scenario_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw ScenarioError(path + ": cannot open the scenario file", 0, 0);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_scenario(text.str(), path);
+    // Read at most one chunk past the cap: a huge file is refused without being loaded.
+    std::string text;
+    char chunk[64 * 1024];
+    while (text.size() <= kMaxScenarioBytes && in.read(chunk, sizeof chunk).gcount() > 0)
+        text.append(chunk, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxScenarioBytes) {
+        throw ScenarioError(fmt::format("{}:1:1: the scenario file is larger than {} MiB (a "
+                                        "scenario is a few kilobytes; is this the right file?)",
+                                        path, kMaxScenarioBytes >> 20),
+                            1, 1);
+    }
+    return parse_scenario(text, path);
 }
 
 }  // namespace mbstorm::scenario

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -41,6 +42,14 @@ struct StageSpec {
     std::optional<std::uint32_t> connections;  // open or closed loop
     load::Ramp ramp = load::Ramp::Linear;
 };
+
+// Caps on what a scenario file may ask for, each refused with its file:line:column: a file
+// past them is a mistake or an attack (each operation costs histograms on every thread).
+inline constexpr std::size_t kMaxScenarioBytes = 4u << 20;
+inline constexpr std::size_t kMaxOperations = 1000;
+inline constexpr std::size_t kMaxStages = 1000;
+inline constexpr std::size_t kMaxThresholds = 1000;    // overall, and per operation
+inline constexpr std::size_t kMaxListEntries = 65536;  // values.pattern, expect.values
 
 inline constexpr std::uint32_t kDefaultConnections = 16;
 inline constexpr std::uint32_t kDefaultDepth = 16;

@@ -34,7 +34,14 @@ struct ServerConfig {
 
     std::uint32_t max_connections = 16384;  // across all threads; 0: unlimited
     FullPolicy full_policy = FullPolicy::EvictOldestIdle;
+    // Raise RLIMIT_NOFILE towards max_connections at start. Whether raised or not, a
+    // descriptor limit below what max_connections needs lowers the effective connection
+    // limit (see Server::warning()), so that eviction or refusal happens before accepts fail.
+    bool raise_nofile_limit = true;
     std::uint64_t idle_timeout_ms = 0;  // 0: never close idle connections
+    // A frame whose first bytes arrived must be complete within this time (a slow drip resets
+    // the idle timer with every byte, this does not). 0: no bound.
+    std::uint64_t frame_timeout_ms = 10000;
 
     // Backpressure: stop reading a connection while this much output waits to be sent.
     std::size_t max_pending_output = 64 * 1024;

@@ -27,12 +27,20 @@ struct Connection {
     bool paused = false;         // backpressure: not reading until output drains
     bool dirty = false;          // has new output, queued for the end-of-batch flush
     bool in_hold_list = false;
+    // The input is over: the peer half-closed (its stashed input is still served) or framing
+    // was lost (what follows is discarded). Once the answers have gone out, the connection closes.
+    bool peer_done = false;
+    bool framing_lost = false;
+    bool in_partial_list = false;
 
     // LRU list of open connections (least recently active at the head), for idle timeouts
     // and "evict the oldest idle connection".
     std::uint32_t lru_prev = kNoConn;
     std::uint32_t lru_next = kNoConn;
     std::int64_t last_active_ns = 0;
+    // When the frame the splitter holds in part began to arrive (0: none); a frame must be
+    // complete within the frame timeout, however slowly its bytes drip in.
+    std::int64_t frame_started_ns = 0;
 
     // Output from stream position hold_pos on waits until hold_until_ns (delay/stall faults).
     std::uint64_t hold_pos = kNoHold;

@@ -35,10 +35,7 @@ bool Server::start(std::string* error) {
     if (!net::parse_endpoint(config_.listen, ep, &parse_error, 5020)) return fail(parse_error);
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
-    if (config_.max_connections) {
-        // Not fatal: the server still runs, and accepts fail beyond the limit.
-        net::raise_nofile_limit(config_.max_connections + 64 + n * 8, &warning_);
-    }
+    if (config_.max_connections) fit_connection_limit_to_descriptors(n);
     if (config_.units) {
         model_ = &config_.units->model_at(0);
     } else if (config_.model) {
@@ -84,6 +81,31 @@ bool Server::start(std::string* error) {
             return fail(std::string("cannot set up io_uring: ") + strerror(-w->init_status()));
     }
     return true;
+}
+
+void Server::fit_connection_limit_to_descriptors(unsigned threads) {
+    // Each thread needs a few descriptors of its own (listener, ring, eventfds), and the
+    // process has some open already.
+    const std::uint64_t per_thread = 8, spare = 16;
+    const std::uint64_t wanted = config_.max_connections + 64 + threads * per_thread;
+    const std::uint64_t limit = config_.raise_nofile_limit
+                                    ? net::raise_nofile_limit(wanted, &warning_)
+                                    : net::nofile_limit();
+    if (limit == 0 || limit >= wanted) return;
+    // Past the descriptor limit accepts fail and nothing is evicted or refused: clients just
+    // hang. Below it, the connection limit does its work.
+    const std::uint64_t taken = net::open_descriptor_count() + threads * per_thread + spare;
+    const std::uint64_t usable = limit > taken ? limit - taken : 1;
+    if (usable >= config_.max_connections) return;
+    if (warning_.empty()) {
+        warning_ = "open-files limit is " + std::to_string(limit) + " but " +
+                   std::to_string(wanted) + " are needed";
+    }
+    warning_ += "; connection limit lowered from " + std::to_string(config_.max_connections) +
+                " to " + std::to_string(usable) + " so that the " +
+                (config_.full_policy == FullPolicy::Refuse ? "refusal" : "eviction") +
+                " of connections still works";
+    config_.max_connections = static_cast<std::uint32_t>(usable);
 }
 
 void Server::stop() noexcept {

@@ -45,6 +45,9 @@ class Server {
     static std::size_t bytes_per_connection() noexcept;
 
   private:
+    // Raises the descriptor limit, or lowers max_connections below it (with a warning).
+    void fit_connection_limit_to_descriptors(unsigned threads);
+
     ServerConfig config_;
     std::unique_ptr<slave::DataModel> owned_model_;
     slave::DataModel* model_ = nullptr;

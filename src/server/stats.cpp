@@ -21,6 +21,7 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     discarded_frames += o.discarded_frames;
     bad_framing_closes += o.bad_framing_closes;
     idle_closes += o.idle_closes;
+    frame_timeouts += o.frame_timeouts;
     evictions += o.evictions;
     refusals += o.refusals;
     accept_fd_exhausted += o.accept_fd_exhausted;
@@ -50,6 +51,7 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.discarded_frames = v(DiscardedFrames);
     s.bad_framing_closes = v(BadFramingCloses);
     s.idle_closes = v(IdleCloses);
+    s.frame_timeouts = v(FrameTimeouts);
     s.evictions = v(Evictions);
     s.refusals = v(Refusals);
     s.accept_fd_exhausted = v(AcceptFdExhausted);
@@ -83,13 +85,14 @@ std::string format_stats_line(const ServerStats& now, const ServerStats& before,
     const double dt = interval_s > 0 ? interval_s : 1.0;
     return fmt::format(
         "[{:7.1f}s] tps {:.0f} conns {} (total {}) in {:.2f} MB/s out {:.2f} MB/s exc {} "
-        "discarded {} bad-framing {} idle {} evicted {} refused {} out-of-fds {} pending {} B",
+        "discarded {} bad-framing {} idle {} slow-frame {} evicted {} refused {} out-of-fds {} "
+        "pending {} B",
         elapsed_s, static_cast<double>(now.transactions - before.transactions) / dt,
         now.connections_current, now.connections_total,
         static_cast<double>(now.bytes_in - before.bytes_in) / dt / 1e6,
         static_cast<double>(now.bytes_out - before.bytes_out) / dt / 1e6,
         now.exceptions_total() - before.exceptions_total(), now.discarded_frames,
-        now.bad_framing_closes, now.idle_closes, now.evictions, now.refusals,
+        now.bad_framing_closes, now.idle_closes, now.frame_timeouts, now.evictions, now.refusals,
         now.accept_fd_exhausted, now.pending_output);
 }
 
@@ -97,7 +100,8 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
     const double secs = elapsed_s > 0 ? elapsed_s : 1.0;
     return fmt::format(
         "summary: {:.1f}s, {} transactions ({:.0f}/s), {} requests\n"
-        "  connections: {} total, {} open, {} idle-closed, {} evicted, {} refused, "
+        "  connections: {} total, {} open, {} idle-closed, {} closed for a slow frame, {} evicted, "
+        "{} refused, "
         "{} accepts out of fds (EMFILE/ENFILE)\n"
         "  bytes: {} in, {} out\n"
         "  exceptions: {} ({})\n"
@@ -106,11 +110,11 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
         "  faults: {} delayed, {} dropped connections, {} unanswered\n"
         "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
         elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
-        t.connections_total, t.connections_current, t.idle_closes, t.evictions, t.refusals,
-        t.accept_fd_exhausted, t.bytes_in, t.bytes_out, t.exceptions_total(), exceptions_text(t),
-        t.discarded_frames, t.bad_framing_closes, t.busy_rejects, t.foreign_unit, t.fault_delayed,
-        t.fault_drops, t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak,
-        t.output_blocks);
+        t.connections_total, t.connections_current, t.idle_closes, t.frame_timeouts, t.evictions,
+        t.refusals, t.accept_fd_exhausted, t.bytes_in, t.bytes_out, t.exceptions_total(),
+        exceptions_text(t), t.discarded_frames, t.bad_framing_closes, t.busy_rejects,
+        t.foreign_unit, t.fault_delayed, t.fault_drops, t.fault_no_answer, t.backpressure_pauses,
+        t.pending_output_peak, t.output_blocks);
 }
 
 }  // namespace mbstorm::server

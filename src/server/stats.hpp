@@ -20,6 +20,7 @@ struct ServerStats {
     std::uint64_t discarded_frames = 0;    // protocol id != 0
     std::uint64_t bad_framing_closes = 0;  // MBAP length 0, 1 or > 254
     std::uint64_t idle_closes = 0;
+    std::uint64_t frame_timeouts = 0;  // closed: a started frame did not complete in time
     std::uint64_t evictions = 0;
     std::uint64_t refusals = 0;
     std::uint64_t accept_fd_exhausted = 0;  // accepts failed with EMFILE/ENFILE (then a pause)
@@ -49,6 +50,7 @@ class ServerCounters {
         DiscardedFrames,
         BadFramingCloses,
         IdleCloses,
+        FrameTimeouts,
         Evictions,
         Refusals,
         AcceptFdExhausted,

@@ -72,6 +72,7 @@ int Worker::setup() noexcept {
         dirty_.reserve(expect);
         rearm_.reserve(expect);
         held_.reserve(expect);
+        partial_.reserve(expect);
         pool_.prewarm(config_.prealloc_output_blocks);
         if (use_buf_ring_) {
             stash_next_.assign(config_.buf_ring_count, kNoBuffer);
@@ -337,6 +338,8 @@ void Worker::admit(int fd) noexcept {
     c.fd = fd;
     c.state = Connection::State::Open;
     c.recv_armed = c.send_inflight = c.paused = c.dirty = false;
+    c.peer_done = c.framing_lost = false;
+    c.frame_started_ns = 0;
     c.hold_pos = kNoHold;
     c.unanswered = 0;
     c.splitter.reset();
@@ -374,6 +377,7 @@ void Worker::maybe_release(std::uint32_t index) noexcept {
     c.out.clear(pool_);
     c.splitter.reset();
     c.hold_pos = kNoHold;
+    c.frame_started_ns = 0;
     c.state = Connection::State::Free;
     c.generation = net::next_generation(c.generation);
     free_slots_.push_back(index);  // capacity reserved; grows only past the expected maximum
@@ -393,7 +397,11 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
 
     bool keep_buffer = false;
     if (c.state == Connection::State::Open) {
-        if (cqe.res > 0) {
+        if (cqe.res > 0 && c.framing_lost) {
+            // Read and dropped (not left unread, which would turn the close into a reset that
+            // could destroy the answers still in flight); not activity either.
+            counters_.add(ServerCounters::BytesIn, static_cast<std::uint64_t>(cqe.res));
+        } else if (cqe.res > 0) {
             counters_.add(ServerCounters::BytesIn, static_cast<std::uint64_t>(cqe.res));
             touch(ud.index);
             if (has_buffer && (c.paused || c.stash_head != kNoBuffer)) {
@@ -404,20 +412,39 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
                 consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
             }
         } else if (cqe.res == 0) {
-            close_connection(ud.index);  // peer closed
+            // The peer half-closed (or closed): what it sent before is still answered.
+            c.peer_done = true;
+            c.frame_started_ns = 0;  // a partial frame can no longer complete: not timed
+            if (c.recv_armed) cancel_recv(ud.index);
         } else if (cqe.res != -ENOBUFS && cqe.res != -ECANCELED && cqe.res != -EINTR) {
             close_connection(ud.index);
         }
     }
     if (has_buffer && !keep_buffer) buf_ring_.recycle(bid);
 
-    if (c.state == Connection::State::Open && !check_backpressure(ud.index) && !c.recv_armed) {
+    if (c.state == Connection::State::Open && !c.peer_done && !check_backpressure(ud.index) &&
+        !c.recv_armed) {
         if (cqe.res == -ENOBUFS)
             rearm_.push_back(ud.index);  // after this batch has returned its buffers
         else
             arm_recv(ud.index);
     }
+    close_if_answered(ud.index);
     maybe_release(ud.index);
+}
+
+void Worker::close_if_answered(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    if (c.state != Connection::State::Open || !(c.peer_done || c.framing_lost)) return;
+    if (c.out.empty() && c.stash_head == kNoBuffer) close_connection(index);
+}
+
+void Worker::lose_framing(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    counters_.add(ServerCounters::BadFramingCloses);
+    c.framing_lost = true;
+    c.frame_started_ns = 0;
+    drop_stash(index);
 }
 
 bool Worker::check_backpressure(std::uint32_t index) noexcept {
@@ -444,7 +471,8 @@ void Worker::stash(std::uint32_t index, std::uint16_t bid, std::uint32_t size) n
 
 void Worker::drain_stash(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
-    while (c.stash_head != kNoBuffer && c.state == Connection::State::Open && !c.paused) {
+    while (c.stash_head != kNoBuffer && c.state == Connection::State::Open && !c.paused &&
+           !c.framing_lost) {
         const std::uint16_t bid = c.stash_head;
         c.stash_head = stash_next_[bid];
         if (c.stash_head == kNoBuffer) c.stash_tail = kNoBuffer;
@@ -469,22 +497,39 @@ void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
     Connection& c = conns_[index];
     c.splitter.feed(codec::Bytes(data, size));
     codec::TcpFrame frame;
+    bool completed = false;
     for (;;) {
         switch (c.splitter.next(frame)) {
             case codec::MbapSplitter::Status::NeedMore:
                 counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
+                note_partial_frame(c, index, completed);
                 return;
             case codec::MbapSplitter::Status::BadProtocolId:
                 counters_.add(ServerCounters::DiscardedFrames);
+                completed = true;
                 break;
             case codec::MbapSplitter::Status::Fatal:
-                counters_.add(ServerCounters::BadFramingCloses);
-                close_connection(index);
+                // The frames before this one are answered; the connection closes after that.
+                lose_framing(index);
                 return;
             case codec::MbapSplitter::Status::Frame:
                 if (!on_frame(c, index, frame)) return;
+                completed = true;
                 break;
         }
+    }
+}
+
+void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool completed) noexcept {
+    if (c.splitter.buffered() == 0) {
+        c.frame_started_ns = 0;
+        return;
+    }
+    if (c.frame_started_ns != 0 && !completed) return;  // the same frame, still arriving
+    c.frame_started_ns = now_;
+    if (config_.frame_timeout_ms != 0 && !c.in_partial_list) {
+        c.in_partial_list = true;
+        partial_.push_back(index);
     }
 }
 
@@ -634,11 +679,13 @@ void Worker::on_send(const io_uring_cqe& cqe) noexcept {
     if (c.out.empty()) c.unanswered = 0;
     if (c.paused && c.out.bytes() <= config_.max_pending_output / 2) {
         c.paused = false;
+        if (c.frame_started_ns != 0) c.frame_started_ns = now_;  // the pause does not count
         drain_stash(ud.index);
         if (c.state != Connection::State::Open) return;
-        if (!c.paused && !c.recv_armed) arm_recv(ud.index);
+        if (!c.paused && !c.recv_armed && !c.peer_done) arm_recv(ud.index);
     }
     flush(ud.index);
+    close_if_answered(ud.index);
 }
 
 void Worker::run_timers() noexcept {
@@ -662,6 +709,28 @@ void Worker::run_timers() noexcept {
         }
         held_.resize(keep);
     }
+    if (!partial_.empty()) {
+        const std::int64_t timeout =
+            static_cast<std::int64_t>(config_.frame_timeout_ms) * net::kNsPerMs;
+        std::size_t keep = 0;
+        for (std::size_t i = 0; i < partial_.size(); ++i) {
+            const std::uint32_t index = partial_[i];
+            Connection& c = conns_[index];
+            if (c.state != Connection::State::Open || c.frame_started_ns == 0) {
+                c.in_partial_list = false;
+                continue;
+            }
+            // Paused, the rest of the frame may wait in the stash for us, not for the client.
+            if (!c.paused && now_ - c.frame_started_ns >= timeout) {
+                c.in_partial_list = false;
+                counters_.add(ServerCounters::FrameTimeouts);
+                close_connection(index);
+                continue;
+            }
+            partial_[keep++] = index;
+        }
+        partial_.resize(keep);
+    }
     if (config_.idle_timeout_ms != 0) {
         const std::int64_t timeout =
             static_cast<std::int64_t>(config_.idle_timeout_ms) * net::kNsPerMs;
@@ -679,6 +748,14 @@ std::int64_t Worker::next_deadline() const noexcept {
         const Connection& c = conns_[index];
         if (c.hold_pos != kNoHold && (deadline < 0 || c.hold_until_ns < deadline))
             deadline = c.hold_until_ns;
+    }
+    for (std::uint32_t index : partial_) {
+        const Connection& c = conns_[index];
+        if (c.state != Connection::State::Open || c.frame_started_ns == 0 || c.paused) continue;
+        const std::int64_t due =
+            c.frame_started_ns +
+            static_cast<std::int64_t>(config_.frame_timeout_ms) * net::kNsPerMs;
+        if (deadline < 0 || due < deadline) deadline = due;
     }
     if (config_.idle_timeout_ms != 0 && lru_head_ != kNoConn) {
         const std::int64_t idle =

@@ -85,6 +85,12 @@ class Worker {
     // Pauses reading when the output queue is over the cap. True when paused.
     bool check_backpressure(std::uint32_t index) noexcept;
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
+    // Tracks when the partial frame the splitter holds began (frame timeout).
+    void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
+    // Framing was lost: answer what came before, read no more, close once answered.
+    void lose_framing(std::uint32_t index) noexcept;
+    // Closes a connection whose input is over once every answer has gone out.
+    void close_if_answered(std::uint32_t index) noexcept;
     // False when the connection was closed (fault drop).
     // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
     bool on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
@@ -130,6 +136,7 @@ class Worker {
     std::vector<std::uint32_t> dirty_;
     std::vector<std::uint32_t> rearm_;
     std::vector<std::uint32_t> held_;
+    std::vector<std::uint32_t> partial_;  // connections holding part of a frame
     std::uint32_t lru_head_ = kNoConn;
     std::uint32_t lru_tail_ = kNoConn;
     std::uint32_t open_here_ = 0;

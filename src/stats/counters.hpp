@@ -24,8 +24,10 @@ enum class Outcome : std::uint8_t {
     WrongUnitId,       // unit id differs from the request's
     WrongFunction,     // function code differs from the request's
     ValueMismatch,     // read-after-write check saw a different value
+    FramingError,      // the answer stream lost MBAP framing (length 0, 1 or > 254, garbage):
+                       // the connection was reset with the request outstanding
 };
-inline constexpr std::size_t kOutcomeCount = 11;
+inline constexpr std::size_t kOutcomeCount = 12;
 
 // snake_case name used in JSON and console output, e.g. "connection_closed".
 constexpr std::string_view outcome_name(Outcome outcome) noexcept {
@@ -39,7 +41,8 @@ constexpr std::string_view outcome_name(Outcome outcome) noexcept {
                                                                     "duplicate_id",
                                                                     "wrong_unit_id",
                                                                     "wrong_function",
-                                                                    "value_mismatch"};
+                                                                    "value_mismatch",
+                                                                    "framing_error"};
     const auto i = static_cast<std::size_t>(outcome);
     return i < kOutcomeCount ? kNames[i] : std::string_view{"unknown"};
 }
