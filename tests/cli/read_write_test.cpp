@@ -135,6 +135,15 @@ TEST(ReadWriteHelp, StatesTheAddressRuleLikeEveryCommand) {
     }
 }
 
+TEST(ReadWriteTarget, NoAnswerIsATimeoutWithExitOne) {
+    std::unique_ptr<Target> server;
+    const std::string target = start_reference_slave(server, {"--no-answer-rate", "100%"});
+    ASSERT_FALSE(target.empty());
+    auto r = run_mbstorm("read --target " + target + " --addr 0 --timeout 200ms --json", 30);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("\"error\":\"no answer within 200 ms\""));
+}
+
 TEST(ReadWriteTarget, UnreachableTargetIsOneLineExitTwo) {
     auto r = run_mbstorm("read --target 127.0.0.1:1 --addr 0", 30);
     EXPECT_EQ(r.exit_code, 2) << r.output;
