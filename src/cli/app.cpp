@@ -17,6 +17,8 @@ int run_cli(int argc, char** argv) {
     add_encode_command(app, action);
     add_fuzz_command(app, action);
     add_replay_command(app, action);
+    add_read_command(app, action);
+    add_write_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

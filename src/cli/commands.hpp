@@ -22,5 +22,7 @@ void add_serve_command(CLI::App& app, Action& action);
 void add_run_command(CLI::App& app, Action& action);
 void add_fuzz_command(CLI::App& app, Action& action);
 void add_replay_command(CLI::App& app, Action& action);
+void add_read_command(CLI::App& app, Action& action);
+void add_write_command(CLI::App& app, Action& action);
 
 }  // namespace mbstorm::cli

@@ -1,14 +1,17 @@
 // `mbstorm decode HEX`: prints a TCP, RTU or ASCII frame (or a bare PDU) field by field.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cli/commands.hpp"
 #include "cli/frame_describe.hpp"
 #include "codec/ascii.hpp"
+#include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "codec/rtu.hpp"
 #include "codec/values.hpp"
@@ -29,6 +32,18 @@ struct Decoded {
     std::vector<FieldRow> rows;
 };
 
+// One way of reading the bytes: the tables it shows, and what is wrong with it. Auto-detection
+// keeps the reading with the least doubt, so a frame with one bad field is still shown as
+// what it most likely is, with that field named.
+struct Reading {
+    std::string framing;  // "Modbus RTU", for the fault line
+    std::vector<Decoded> decoded;
+    std::string fault;  // empty: nothing wrong
+    int doubt = 0;      // 0 clean, 1 one fault in a fitting frame, 2 bad bare PDU, 3+ misfit
+};
+
+constexpr int kNoFit = 4;
+
 // Tries the directions the user allows; a frame may fit both (FC05/06 echo their request).
 std::vector<Direction> directions(const DecodeOptions& o) {
     if (o.request) return {Direction::Request};
@@ -40,29 +55,54 @@ const char* direction_name(Direction d) {
     return d == Direction::Request ? "request" : "response";
 }
 
-// Decodes the PDU in each allowed direction, wrapping it with the framing rows.
-bool describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
-                     const std::vector<FieldRow>& head, const std::vector<FieldRow>& tail,
-                     std::vector<Decoded>& out, std::string& last_error) {
-    bool any = false;
-    for (Direction d : directions(o)) {
+// When a PDU decodes in neither direction, the one it most likely was: an exception bit or a
+// read byte count that matches the length says response.
+Direction likely_direction(codec::Bytes pdu, const DecodeOptions& o) {
+    if (o.request || o.response) return o.request ? Direction::Request : Direction::Response;
+    if (pdu.empty()) return Direction::Request;
+    if (pdu[0] & codec::kExceptionBit) return Direction::Response;
+    bool counted_read = pdu[0] <= 0x04 || pdu[0] == 0x17;
+    if (counted_read && pdu.size() >= 2 && pdu[1] + 2u == pdu.size()) return Direction::Response;
+    return Direction::Request;
+}
+
+// Decodes the PDU in each allowed direction, wrapping it with the framing rows. When no
+// direction fits, shows the likelier one with its bad field marked and returns its fault.
+std::string describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
+                            const std::vector<FieldRow>& head, const std::vector<FieldRow>& tail,
+                            std::vector<Decoded>& out) {
+    auto table = [&](Direction d, std::string& err) {
         Decoded dec;
         dec.rows = head;
-        std::string err;
-        if (!describe_pdu(pdu, d, dec.rows, err)) {
-            last_error = fmt::format("{} as {}: {}", what, direction_name(d), err);
-            continue;
-        }
+        bool ok = describe_pdu(pdu, d, dec.rows, err);
         dec.rows.insert(dec.rows.end(), tail.begin(), tail.end());
         dec.title = fmt::format("{} {}", what, direction_name(d));
+        return std::pair{ok, std::move(dec)};
+    };
+    bool any = false;
+    for (Direction d : directions(o)) {
+        std::string err;
+        auto [ok, dec] = table(d, err);
+        if (!ok) continue;
         out.push_back(std::move(dec));
         any = true;
     }
-    return any;
+    if (any) return {};
+    std::string err;
+    out.push_back(table(likely_direction(pdu, o), err).second);
+    return err;
 }
 
-bool decode_tcp(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>& out,
-                std::string& error) {
+Reading decode_tcp(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading reading{"Modbus TCP", {}, {}, 0};
+    if (bytes.size() >= 4) {
+        std::uint16_t protocol_id = codec::load_be16(bytes.data() + 2);
+        if (protocol_id != 0) {
+            reading.fault = fmt::format("protocol identifier {} (0x{:04X}): Modbus is 0",
+                                        protocol_id, protocol_id);
+            reading.doubt = 3;
+        }
+    }
     // The splitter lets one input hold several pipelined ADUs.
     codec::MbapSplitter splitter;
     splitter.feed(bytes);
@@ -72,8 +112,10 @@ bool decode_tcp(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>
         auto status = splitter.next(frame);
         if (status == codec::MbapSplitter::Status::NeedMore) break;
         if (status == codec::MbapSplitter::Status::Fatal) {
-            error = fmt::format("bad MBAP header: {}", codec::error_description(splitter.error()));
-            return false;
+            reading.fault =
+                fmt::format("bad MBAP header: {}", codec::error_description(splitter.error()));
+            reading.doubt = kNoFit;
+            return reading;
         }
         ++index;
         const auto& h = frame.header;
@@ -92,73 +134,127 @@ bool decode_tcp(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>
         std::string what = fmt::format(
             "Modbus TCP ADU{} ({} bytes)",
             index > 1 || splitter.pending() ? fmt::format(" #{}", index) : "", frame.adu.size());
-        if (!describe_framed(frame.pdu, o, what, head, {}, out, error)) return false;
+        std::string fault = describe_framed(frame.pdu, o, what, head, {}, reading.decoded);
+        if (!fault.empty() && reading.fault.empty()) {
+            reading.fault = index > 1 ? fmt::format("ADU #{}: {}", index, fault) : fault;
+            reading.doubt = 1;
+        }
     }
     if (index == 0 || splitter.buffered() != 0) {
-        error =
-            fmt::format("truncated Modbus TCP frame: {} bytes left over after {} complete frame(s)",
-                        splitter.buffered(), index);
-        return false;
+        std::string left = index == 0 && bytes.size() >= 6
+                               ? fmt::format("the length field says {} bytes follow it, {} do",
+                                             codec::load_be16(bytes.data() + 4), bytes.size() - 6)
+                               : fmt::format("{} bytes left over after {} complete frame(s)",
+                                             splitter.buffered(), index);
+        reading.fault = "truncated Modbus TCP frame: " + left;
+        // A sound MBAP header whose bytes run short is a better guess than a PDU that fails.
+        const bool header_fits =
+            bytes.size() >= 7 && codec::load_be16(bytes.data() + 2) == 0 &&
+            codec::load_be16(bytes.data() + 4) >= 2 &&
+            codec::load_be16(bytes.data() + 4) <= codec::limits::kMaxMbapLength;
+        reading.doubt = index > 0 ? 3 : header_fits ? 2 : kNoFit;
     }
-    return true;
+    return reading;
 }
 
-bool decode_rtu(codec::Bytes bytes, const DecodeOptions& o, std::vector<Decoded>& out,
-                std::string& error) {
+Reading decode_rtu(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading reading{"Modbus RTU", {}, {}, 0};
     if (bytes.size() < 4) {
-        error = fmt::format("RTU frame too short: {} bytes (address, function, CRC need 4)",
-                            bytes.size());
-        return false;
+        reading.fault = fmt::format("RTU frame too short: {} bytes (address, function, CRC need 4)",
+                                    bytes.size());
+        reading.doubt = kNoFit;
+        return reading;
     }
     std::uint16_t computed = codec::crc16(bytes.first(bytes.size() - 2));
     std::uint16_t carried =
         static_cast<std::uint16_t>(bytes[bytes.size() - 2] | (bytes[bytes.size() - 1] << 8));
-    std::string crc_meaning = computed == carried
-                                  ? fmt::format("0x{:04X} correct (low byte first)", carried)
-                                  : fmt::format("0x{:04X} WRONG: expected {:02X} {:02X}", carried,
-                                                computed & 0xFF, computed >> 8);
+    bool crc_ok = computed == carried;
+    std::string crc_meaning = crc_ok ? fmt::format("0x{:04X} correct (low byte first)", carried)
+                                     : fmt::format("0x{:04X} WRONG: expected {:02X} {:02X}",
+                                                   carried, computed & 0xFF, computed >> 8);
     std::vector<FieldRow> head{{"Slave address", codec::format_hex(bytes.first(1)),
                                 bytes[0] == 0 ? "0 (broadcast)" : std::to_string(bytes[0])}};
     std::vector<FieldRow> tail{{"CRC", codec::format_hex(bytes.last(2)), crc_meaning}};
     auto pdu = bytes.subspan(1, bytes.size() - 3);
-    std::string what = fmt::format("Modbus RTU frame ({} bytes, CRC {})", bytes.size(),
-                                   computed == carried ? "ok" : "BAD");
-    return describe_framed(pdu, o, what, head, tail, out, error);
+    std::string what =
+        fmt::format("Modbus RTU frame ({} bytes, CRC {})", bytes.size(), crc_ok ? "ok" : "BAD");
+    std::string pdu_fault = describe_framed(pdu, o, what, head, tail, reading.decoded);
+    if (!crc_ok) {
+        reading.fault =
+            fmt::format("CRC wrong: expected {:02X} {:02X}, the frame carries {}", computed & 0xFF,
+                        computed >> 8, codec::format_hex(bytes.last(2)));
+        if (!pdu_fault.empty()) reading.fault += "; and " + pdu_fault;
+        reading.doubt = pdu_fault.empty() ? 1 : 3;
+    } else if (!pdu_fault.empty()) {
+        reading.fault = pdu_fault;
+        reading.doubt = 1;
+    }
+    return reading;
 }
 
-bool decode_ascii(std::string text, const DecodeOptions& o, std::vector<Decoded>& out,
-                  std::string& error) {
+Reading decode_bare_pdu(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading reading{"a bare PDU", {}, {}, 0};
+    if (bytes.empty()) {
+        reading.fault = "no bytes to decode";
+        reading.doubt = kNoFit;
+        return reading;
+    }
+    reading.fault = describe_framed(bytes, o, fmt::format("Modbus PDU ({} bytes)", bytes.size()),
+                                    {}, {}, reading.decoded);
+    reading.doubt = reading.fault.empty() ? 0 : 2;
+    return reading;
+}
+
+Reading decode_ascii(std::string text, const DecodeOptions& o) {
+    Reading reading{"Modbus ASCII", {}, {}, 0};
     // Shells eat the CR LF; accept a frame without it.
     if (text.size() < 2 || text.substr(text.size() - 2) != "\r\n") text += "\r\n";
     std::array<std::uint8_t, codec::limits::kMaxAsciiAdu> buf{};
     codec::AsciiFrame frame;
     auto err = codec::decode_ascii_frame(std::string_view(text), buf, frame);
-    if (err != codec::CodecError::Ok) {
-        error = fmt::format("bad ASCII frame: {}", codec::error_description(err));
-        return false;
+    std::string lrc_meaning = "correct";
+    if (err == codec::CodecError::BadLrc) {
+        // Everything else is sound: show it, with the LRC it should carry.
+        auto parsed = codec::parse_hex(std::string_view(text).substr(1, text.size() - 3), buf);
+        codec::Bytes binary(buf.data(), parsed.size);
+        std::uint8_t expected = codec::lrc(binary.first(binary.size() - 1));
+        frame.address = binary[0];
+        frame.binary = binary;
+        frame.pdu = binary.subspan(1, binary.size() - 2);
+        lrc_meaning = fmt::format("WRONG: expected {:02X}", expected);
+        reading.fault = fmt::format("LRC wrong: expected {:02X}, the frame carries {:02X}",
+                                    expected, binary.back());
+        reading.doubt = 1;
+    } else if (err != codec::CodecError::Ok) {
+        reading.fault = fmt::format("bad ASCII frame: {}", codec::error_description(err));
+        reading.doubt = kNoFit;
+        return reading;
     }
     std::vector<FieldRow> head{
         {"Start", ":", "frame start"},
         {"Slave address", codec::format_hex(frame.binary.first(1)), std::to_string(frame.address)}};
-    std::vector<FieldRow> tail{{"LRC", codec::format_hex(frame.binary.last(1)), "correct"},
+    std::vector<FieldRow> tail{{"LRC", codec::format_hex(frame.binary.last(1)), lrc_meaning},
                                {"End", "CR LF", "frame end"}};
-    return describe_framed(frame.pdu, o,
-                           fmt::format("Modbus ASCII frame ({} characters)", text.size()), head,
-                           tail, out, error);
+    std::string pdu_fault = describe_framed(
+        frame.pdu, o, fmt::format("Modbus ASCII frame ({} characters)", text.size()), head, tail,
+        reading.decoded);
+    if (!pdu_fault.empty()) {
+        reading.fault += (reading.fault.empty() ? "" : "; and ") + pdu_fault;
+        reading.doubt = std::max(reading.doubt, 1);
+    }
+    return reading;
 }
 
-Framing guess_framing(codec::Bytes bytes) {
-    if (bytes.size() >= 8) {
-        auto h = codec::read_mbap_header(bytes.data());
-        if (h.protocol_id == 0 && h.length >= 2 && h.length + 6u <= bytes.size())
-            return Framing::Tcp;
+// Reads the bytes every way they could be framed and keeps the most plausible reading; on a
+// tie, TCP before RTU before a bare PDU.
+Reading decode_guessing(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading best = decode_tcp(bytes, o);
+    for (auto* decode : {&decode_rtu, &decode_bare_pdu}) {
+        if (best.doubt == 0) break;
+        Reading next = (*decode)(bytes, o);
+        if (next.doubt < best.doubt) best = std::move(next);
     }
-    if (bytes.size() >= 4) {
-        std::uint16_t crc = codec::crc16(bytes.first(bytes.size() - 2));
-        if ((crc & 0xFF) == bytes[bytes.size() - 2] && (crc >> 8) == bytes[bytes.size() - 1])
-            return Framing::Rtu;
-    }
-    return Framing::Pdu;
+    return best;
 }
 
 int run_decode(const DecodeOptions& o) {
@@ -171,11 +267,9 @@ int run_decode(const DecodeOptions& o) {
                                 : Framing::Auto;
     if (framing == Framing::Auto && !text.empty() && text.front() == ':') framing = Framing::Ascii;
 
-    std::vector<Decoded> decoded;
-    std::string error;
-    bool ok = false;
+    Reading reading;
     if (framing == Framing::Ascii) {
-        ok = decode_ascii(text, o, decoded, error);
+        reading = decode_ascii(text, o);
     } else {
         std::array<std::uint8_t, 4096> buf{};
         auto parsed = codec::parse_hex(text, buf);
@@ -186,27 +280,33 @@ int run_decode(const DecodeOptions& o) {
             return kExitUsage;
         }
         codec::Bytes bytes(buf.data(), parsed.size);
-        if (framing == Framing::Auto) framing = guess_framing(bytes);
         switch (framing) {
             case Framing::Tcp:
-                ok = decode_tcp(bytes, o, decoded, error);
+                reading = decode_tcp(bytes, o);
                 break;
             case Framing::Rtu:
-                ok = decode_rtu(bytes, o, decoded, error);
+                reading = decode_rtu(bytes, o);
+                break;
+            case Framing::Pdu:
+                reading = decode_bare_pdu(bytes, o);
                 break;
             default:
-                ok = describe_framed(bytes, o, fmt::format("Modbus PDU ({} bytes)", bytes.size()),
-                                     {}, {}, decoded, error);
+                reading = decode_guessing(bytes, o);
         }
     }
-    if (!ok) {
-        fmt::print(stderr, "mbstorm decode: {}\n", error);
+    for (std::size_t i = 0; i < reading.decoded.size(); ++i) {
+        fmt::print("{}{}:\n{}", i ? "\n" : "", reading.decoded[i].title,
+                   render_rows(reading.decoded[i].rows));
+    }
+    if (reading.fault.empty()) return kExitOk;
+    std::fflush(stdout);
+    if (reading.decoded.empty()) {
+        fmt::print(stderr, "mbstorm decode: {}\n", reading.fault);
         return kExitUsage;
     }
-    for (std::size_t i = 0; i < decoded.size(); ++i) {
-        fmt::print("{}{}:\n{}", i ? "\n" : "", decoded[i].title, render_rows(decoded[i].rows));
-    }
-    return kExitOk;
+    fmt::print(stderr, "mbstorm decode: {}{}: {}\n", framing == Framing::Auto ? "read as " : "",
+               reading.framing, reading.fault);
+    return kExitFailed;
 }
 
 }  // namespace

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/frame_describe.hpp"
+#include "codec/address.hpp"
 #include "codec/ascii.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
@@ -21,12 +23,12 @@ namespace {
 struct EncodeOptions {
     std::string function;   // number or name
     std::string reference;  // e.g. 40001: sets function table and address
-    int address = 0;
+    std::string address = "0";
     int count = 1;
     int value = 0;
     std::vector<int> values;
     int and_mask = 0xFFFF, or_mask = 0;
-    int write_address = 0;
+    std::string write_address = "0";
     int sub_function = 0;
     int file = 1, record = 0;
     int device_id_code = 1, object_id = 0;
@@ -35,6 +37,11 @@ struct EncodeOptions {
     int exception = 0;
     bool rtu = false, ascii = false, pdu = false;
 };
+
+// The public function codes this tool encodes, for refusals.
+constexpr const char* kValidFunctions =
+    "valid: 0x01..0x08, 0x0B, 0x0C, 0x0F..0x11, 0x14..0x18, 0x2B (decimal 1..8, 11, 12, 15..17, "
+    "20..24, 43) or a name like read_holding_registers";
 
 bool parse_function(const std::string& text, std::uint8_t& fc) {
     if (codec::function_from_name(text, fc)) return true;
@@ -49,6 +56,50 @@ bool parse_function(const std::string& text, std::uint8_t& fc) {
     }
 }
 
+std::string function_text(std::uint8_t fc) {
+    return fmt::format("0x{:02X} {}", fc, codec::function_name(fc));
+}
+
+// Counts given as --values must fit the function's quantity range before they are packed.
+std::string values_fault(std::uint8_t fc, std::size_t given) {
+    std::uint16_t max = 0;
+    switch (fc) {
+        case 0x0F:
+            max = codec::limits::kMaxWriteCoils;
+            break;
+        case 0x10:
+            max = codec::limits::kMaxWriteRegisters;
+            break;
+        case 0x17:
+            max = codec::limits::kMaxRwWriteRegisters;
+            break;
+        case 0x15:  // one sub-request: 7 header bytes + 2 per register within the byte count
+            max = (codec::limits::kMaxFileWriteBytes - 7) / 2;
+            break;
+        default:
+            return {};
+    }
+    if (given >= 1 && given <= max) return {};
+    return fmt::format("--values holds {} value(s): valid 1..{} for {}", given, max,
+                       function_text(fc));
+}
+
+// FC14/15 build one sub-request from --file, --record and the record length.
+std::string file_fault(std::uint8_t fc, int file, int record, std::size_t length) {
+    if (fc != 0x14 && fc != 0x15) return {};
+    // FC14: each sub-response takes 2 bytes + 2 per register within the response's byte count.
+    const std::size_t max_read = (codec::limits::kMaxFileResponseBytes - 2) / 2;
+    if (fc == 0x14 && (length < 1 || length > max_read))
+        return fmt::format("--count {} (record length): valid 1..{} for {}", length, max_read,
+                           function_text(fc));
+    if (file < codec::limits::kMinFileNumber)
+        return fmt::format("--file {}: valid 1..65535 for {}", file, function_text(fc));
+    if (record + length > codec::limits::kMaxFileRecordNumber + 1u)
+        return fmt::format("--record {} + record length {} runs past record {}", record, length,
+                           codec::limits::kMaxFileRecordNumber);
+    return {};
+}
+
 int fail(const std::string& msg) {
     fmt::print(stderr, "mbstorm encode: {}\n", msg);
     return kExitUsage;
@@ -56,23 +107,56 @@ int fail(const std::string& msg) {
 
 int run_encode(EncodeOptions o) {
     std::uint8_t fc = 0;
+    // A reference number in --addr without --fc picks the read function, as --ref does.
+    if (codec::Reference ref;
+        o.function.empty() && o.reference.empty() && codec::parse_reference(o.address, ref))
+        o.reference = o.address;
+    std::uint16_t address = 0;
     if (!o.reference.empty()) {
         codec::Reference ref;
         if (!codec::parse_reference(o.reference, ref))
             return fail(
                 fmt::format("bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)",
                             o.reference));
-        o.address = ref.offset;
         if (o.function.empty()) {
             static constexpr std::uint8_t read_fc[] = {1, 2, 4, 3};
             fc = read_fc[static_cast<int>(ref.table)];
         }
     }
     if (!o.function.empty() && !parse_function(o.function, fc))
-        return fail(fmt::format(
-            "unknown function '{}' (a number 1..127 or a name like read_holding_registers)",
-            o.function));
+        return fail(fmt::format("function '{}': {}", o.function, kValidFunctions));
     if (fc == 0) return fail("--fc (or --ref) is required");
+    if (!o.exception && !codec::is_supported_function(fc))
+        return fail(fmt::format("function code {} (0x{:02X}): not a public Modbus function; {}",
+                                o.function, fc, kValidFunctions));
+    {
+        // --ref and --addr follow the one address rule; a reference must suit the function.
+        const std::string& text = o.reference.empty() ? o.address : o.reference;
+        codec::AddressRange range;
+        auto error = codec::parse_address_range(text, codec::function_table(fc), range);
+        if (error.empty() && range.is_range) error = "'" + text + "' is a range: give one";
+        if (!error.empty()) return fail((o.reference.empty() ? "--addr " : "--ref ") + error);
+        address = range.first;
+    }
+    std::uint16_t write_address = 0;
+    if (fc == 0x17) {
+        codec::AddressRange range;
+        auto error =
+            codec::parse_address_range(o.write_address, codec::Table::HoldingRegisters, range);
+        if (error.empty() && range.is_range) error = "'" + o.write_address + "' is a range";
+        if (!error.empty()) return fail("--write-addr " + error);
+        write_address = range.first;
+    }
+    if (!o.exception) {
+        if (auto fault = values_fault(fc, o.values.size()); !fault.empty()) return fail(fault);
+        const std::size_t file_length =
+            fc == 0x15 ? o.values.size() : static_cast<std::size_t>(o.count);
+        if (auto fault = file_fault(fc, o.file, o.record, file_length); !fault.empty())
+            return fail(fault);
+        if (fc == 0x05 && o.value != 0 && o.value != 1 && o.value != codec::limits::kCoilOn)
+            return fail(fmt::format("--value {} for {}: valid 0 (OFF) or 1 (ON)", o.value,
+                                    function_text(fc)));
+    }
 
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload{};
     std::array<std::uint8_t, codec::limits::kMaxPdu> pdu{};
@@ -82,7 +166,7 @@ int run_encode(EncodeOptions o) {
     } else {
         codec::Request r;
         r.function = fc;
-        r.address = static_cast<std::uint16_t>(o.address);
+        r.address = address;
         r.quantity = static_cast<std::uint16_t>(o.count);
         r.value = static_cast<std::uint16_t>(o.value);
         r.and_mask = static_cast<std::uint16_t>(o.and_mask);
@@ -116,7 +200,7 @@ int run_encode(EncodeOptions o) {
                 if (fc == codec::to_byte(FC::WriteMultipleRegisters))
                     r.quantity = static_cast<std::uint16_t>(o.values.size());
                 if (fc == codec::to_byte(FC::ReadWriteMultipleRegisters)) {
-                    r.write_address = static_cast<std::uint16_t>(o.write_address);
+                    r.write_address = write_address;
                     r.write_quantity = static_cast<std::uint16_t>(o.values.size());
                 }
                 break;
@@ -143,12 +227,12 @@ int run_encode(EncodeOptions o) {
                 break;
         }
         r.payload = codec::Bytes(payload.data(), n);
-        enc = codec::encode_request(r, pdu);
-        if (enc.error == codec::CodecError::InvalidArgument)
-            return fail(
-                fmt::format("these fields do not form a valid {} request (check the quantity "
-                            "limits of the Modbus specification)",
-                            codec::function_name(fc)));
+        // Built without checks, then judged by the decoder, so the refusal names the field.
+        enc = codec::encode_request(r, pdu, /*allow_invalid=*/true);
+        if (enc.ok()) {
+            auto fault = request_fault(codec::Bytes(pdu.data(), enc.size));
+            if (!fault.empty()) return fail(fault);
+        }
     }
     if (!enc.ok()) return fail(std::string(codec::error_description(enc.error)));
 
@@ -187,8 +271,8 @@ void add_encode_command(CLI::App& app, Action& action) {
                     "function code (number) or name, e.g. 3 or read_holding_registers");
     cmd->add_option("--ref", o->reference,
                     "reference number (40001 = holding register 0); picks the read function");
-    cmd->add_option("--addr,-a", o->address, "starting address (0-based)")
-        ->check(CLI::Range(0, 65535));
+    cmd->add_option("--addr,-a", o->address,
+                    "starting address: " + std::string(codec::kAddressRuleHelp));
     cmd->add_option("--count,-n", o->count, "quantity (bits or registers)")
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--value", o->value, "value for FC05 (0/1) and FC06")
@@ -198,8 +282,8 @@ void add_encode_command(CLI::App& app, Action& action) {
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--and", o->and_mask, "AND mask for FC16")->check(CLI::Range(0, 65535));
     cmd->add_option("--or", o->or_mask, "OR mask for FC16")->check(CLI::Range(0, 65535));
-    cmd->add_option("--write-addr", o->write_address, "write address for FC17")
-        ->check(CLI::Range(0, 65535));
+    cmd->add_option("--write-addr", o->write_address,
+                    "write address for FC17 (same rule as --addr)");
     cmd->add_option("--sub", o->sub_function, "FC08 sub-function")->check(CLI::Range(0, 65535));
     cmd->add_option("--file", o->file, "file number for FC14/15")->check(CLI::Range(0, 65535));
     cmd->add_option("--record", o->record, "record number for FC14/15")->check(CLI::Range(0, 9999));

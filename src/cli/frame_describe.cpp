@@ -6,6 +6,7 @@
 
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
+#include "codec/limits.hpp"
 #include "codec/pdu.hpp"
 #include "codec/values.hpp"
 
@@ -74,6 +75,12 @@ class RowWriter {
     std::size_t pos_ = 0;
 };
 
+const char* coil_meaning(std::uint16_t value) {
+    if (value == 0xFF00) return "ON";
+    if (value == 0x0000) return "OFF";
+    return "(neither ON nor OFF)";
+}
+
 std::string function_label(std::uint8_t fc) {
     auto name = codec::function_name(fc);
     return name.empty() ? std::string("(unsupported)") : std::string(name);
@@ -108,7 +115,7 @@ void describe_request_fields(const codec::Request& r, RowWriter& w) {
             break;
         case FC::WriteSingleCoil:
             w.u16("Output address");
-            w.u16("Output value", r.value == 0xFF00 ? "ON" : "OFF");
+            w.u16("Output value", coil_meaning(r.value));
             break;
         case FC::WriteSingleRegister:
             w.u16("Register address");
@@ -179,7 +186,7 @@ void describe_response_fields(const codec::Response& r, RowWriter& w, Bytes pdu)
             break;
         case FC::WriteSingleCoil:
             w.u16("Output address");
-            w.u16("Output value", r.value == 0xFF00 ? "ON" : "OFF");
+            w.u16("Output value", coil_meaning(r.value));
             break;
         case FC::WriteSingleRegister:
             w.u16("Register address");
@@ -260,6 +267,263 @@ void describe_response_fields(const codec::Response& r, RowWriter& w, Bytes pdu)
     w.rest("Unparsed bytes");
 }
 
+// "0x03 read_holding_registers", the way faults name a function.
+std::string function_text(std::uint8_t fc) {
+    auto name = codec::function_name(fc);
+    return fmt::format("0x{:02X} {}", fc, name.empty() ? "(unsupported)" : name);
+}
+
+std::uint16_t be16_at(Bytes pdu, std::size_t at) {
+    return at + 2 <= pdu.size() ? codec::load_be16(pdu.data() + at) : 0;
+}
+Bytes bytes_from(Bytes pdu, std::size_t at) {
+    return at < pdu.size() ? pdu.subspan(at) : Bytes{};
+}
+
+// The fields of a request read straight from the bytes, without any validation, so a PDU the
+// decoder refuses can still be shown field by field.
+codec::Request raw_request(Bytes pdu) {
+    codec::Request r;
+    r.function = pdu[0];
+    r.address = be16_at(pdu, 1);
+    r.quantity = be16_at(pdu, 3);
+    r.value = be16_at(pdu, 3);
+    r.write_address = be16_at(pdu, 5);
+    r.write_quantity = be16_at(pdu, 7);
+    r.mei_type = pdu.size() > 1 ? pdu[1] : 0;
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(r.function)) {
+        case FC::WriteMultipleCoils:
+            r.payload = bytes_from(pdu, 6);
+            break;
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord:
+            r.payload = bytes_from(pdu, 2);
+            break;
+        default:
+            break;
+    }
+    return r;
+}
+
+codec::Response raw_response(Bytes pdu) {
+    codec::Response r;
+    r.function = pdu[0] & ~codec::kExceptionBit;
+    if (pdu[0] & codec::kExceptionBit) r.exception = codec::ExceptionCode::IllegalFunction;
+    r.value = be16_at(pdu, 3);
+    r.fifo_count = be16_at(pdu, 3);
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(r.function)) {
+        case FC::ReadCoils:
+        case FC::ReadDiscreteInputs:
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+        case FC::ReadWriteMultipleRegisters:
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord:
+            r.payload = bytes_from(pdu, 2);
+            break;
+        default:
+            break;
+    }
+    return r;
+}
+
+// How many bytes a PDU of this function needs, from its fixed layout or its own byte count;
+// 0 when that cannot be told.
+std::size_t needed_size(Bytes pdu, Direction dir) {
+    std::uint8_t fc = pdu[0];
+    auto counted = [&](std::size_t count_at, std::size_t extra) -> std::size_t {
+        return count_at < pdu.size() ? extra + pdu[count_at] : 0;
+    };
+    if (dir == Direction::Response) {
+        if (fc & codec::kExceptionBit) return 2;
+        switch (fc) {
+            case 0x01:
+            case 0x02:
+            case 0x03:
+            case 0x04:
+            case 0x0C:
+            case 0x11:
+            case 0x14:
+            case 0x15:
+            case 0x17:
+                return counted(1, 2);
+            case 0x05:
+            case 0x06:
+            case 0x0B:
+            case 0x0F:
+            case 0x10:
+                return 5;
+            case 0x07:
+                return 2;
+            case 0x16:
+                return 7;
+            case 0x18:
+                return pdu.size() >= 3 ? 3u + be16_at(pdu, 1) : 0;
+            default:
+                return 0;
+        }
+    }
+    switch (fc) {
+        case 0x01:
+        case 0x02:
+        case 0x03:
+        case 0x04:
+        case 0x05:
+        case 0x06:
+            return 5;
+        case 0x07:
+        case 0x0B:
+        case 0x0C:
+        case 0x11:
+            return 1;
+        case 0x0F:
+        case 0x10:
+            return counted(5, 6);
+        case 0x14:
+        case 0x15:
+            return counted(1, 2);
+        case 0x16:
+            return 7;
+        case 0x17:
+            return counted(9, 10);
+        case 0x18:
+            return 3;
+        case 0x2B:
+            return 4;
+        default:
+            return 0;
+    }
+}
+
+// A quantity field of a request and the range the specification allows it.
+struct QuantityField {
+    const char* row;
+    std::size_t offset;
+    codec::limits::QuantityRange range;
+};
+std::vector<QuantityField> quantity_fields(std::uint8_t fc) {
+    using codec::limits::quantity_range;
+    switch (fc) {
+        case 0x01:
+        case 0x02:
+            return {{"Quantity of bits", 3, quantity_range(fc)}};
+        case 0x03:
+        case 0x04:
+        case 0x10:
+            return {{"Quantity of registers", 3, quantity_range(fc)}};
+        case 0x0F:
+            return {{"Quantity of outputs", 3, quantity_range(fc)}};
+        case 0x17:
+            return {{"Quantity to read", 3, quantity_range(fc)},
+                    {"Quantity to write", 7, {1, codec::limits::kMaxRwWriteRegisters}}};
+        default:
+            return {};
+    }
+}
+
+// Appends the marker to the first row (from `first` on) whose name starts with `prefix` or
+// contains it; false when no row matches.
+bool mark_row(std::vector<FieldRow>& rows, std::size_t first, std::string_view name,
+              const std::string& why) {
+    for (std::size_t i = first; i < rows.size(); ++i) {
+        if (rows[i].field.find(name) == std::string::npos) continue;
+        rows[i].meaning += "  <-- BAD: " + why;
+        return true;
+    }
+    return false;
+}
+
+// Names what is wrong with a PDU the decoder refused, and marks the field that holds it (or
+// adds a row saying where the bytes run out). Returns the fault as one phrase.
+std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
+                      std::vector<FieldRow>& rows, std::size_t first) {
+    using codec::CodecError;
+    const std::uint8_t fc = pdu[0] & ~codec::kExceptionBit;
+    const std::string fc_text = function_text(fc);
+    std::string why;
+    std::string_view row;
+    switch (error) {
+        case CodecError::UnsupportedFunction:
+            row = "Function code";
+            why = fmt::format("function code 0x{:02X} is not one this tool knows", pdu[0]);
+            break;
+        case CodecError::Truncated: {
+            std::size_t need = needed_size(pdu, dir);
+            why = need ? fmt::format("{} bytes: {} needs {}", pdu.size(), fc_text, need)
+                       : fmt::format("{} bytes: fewer than {} needs", pdu.size(), fc_text);
+            rows.push_back({"(end of bytes)", "", "<-- BAD: " + why});
+            return "truncated: " + why;
+        }
+        case CodecError::TrailingBytes: {
+            row = "Unparsed bytes";
+            std::size_t need = needed_size(pdu, dir);
+            why = need ? fmt::format("{} bytes: {} needs {}", pdu.size(), fc_text, need)
+                       : fmt::format("{} bytes: more than {} needs", pdu.size(), fc_text);
+            break;
+        }
+        case CodecError::QuantityOutOfRange:
+            for (const auto& q : quantity_fields(fc)) {
+                std::uint16_t v = be16_at(pdu, q.offset);
+                if (dir == Direction::Request && (v < q.range.min || v > q.range.max)) {
+                    row = q.row;
+                    why = fmt::format("quantity {}: valid {}..{} for {}", v, q.range.min,
+                                      q.range.max, fc_text);
+                    break;
+                }
+            }
+            if (row.empty()) {
+                row = fc == 0x18 ? "FIFO count" : "Quantity";
+                why = fmt::format("{} for {}", codec::error_description(error), fc_text);
+            }
+            break;
+        case CodecError::ByteCountMismatch:
+            row = "yte count";
+            why = fmt::format("{} (PDU is {} bytes)", codec::error_description(error), pdu.size());
+            break;
+        case CodecError::AddressOverflow:
+            row = "Quantity";
+            why = fmt::format("address {} + quantity {} runs past 65535", be16_at(pdu, 1),
+                              be16_at(pdu, 3));
+            break;
+        case CodecError::InvalidCoilValue:
+            row = "Output value";
+            why = fmt::format("0x{:04X}: valid 0xFF00 (ON) or 0x0000 (OFF)", be16_at(pdu, 3));
+            break;
+        case CodecError::UnsupportedSubFunction:
+            if (fc == 0x2B) {
+                row = "MEI type";
+                why = fmt::format("MEI type 0x{:02X}: valid 0x0E (read device identification)",
+                                  pdu.size() > 1 ? pdu[1] : 0);
+            } else {
+                row = "Sub-function";
+                why = fmt::format(
+                    "sub-function 0x{:04X}: valid 0x0000..0x0004, 0x000A..0x0012, 0x0014",
+                    be16_at(pdu, 1));
+            }
+            break;
+        case CodecError::InvalidReferenceType:
+            row = "reference type";
+            why = "file reference type must be 6";
+            break;
+        case CodecError::InvalidDeviceIdCode:
+            row = "Read device id code";
+            why = "read device id code: valid 1..4";
+            break;
+        case CodecError::InvalidExceptionCode:
+            row = "Exception code";
+            why = "exception code 0 does not exist";
+            break;
+        default:
+            why = std::string(codec::error_description(error));
+            break;
+    }
+    if (row.empty() || !mark_row(rows, first, row, why))
+        rows.push_back({"(fault)", "", "<-- BAD: " + why});
+    return why;
+}
+
 }  // namespace
 
 bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::string& error) {
@@ -267,14 +531,19 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
         error = "empty PDU: no function code";
         return false;
     }
+    const std::size_t first = rows.size();
     RowWriter w(pdu, rows);
     if (dir == Direction::Request) {
         codec::Request req;
         auto status = codec::decode_request(pdu, req);
         if (!status.ok()) {
+            // Still shown field by field, read straight from the bytes, with the bad field marked.
+            codec::Request raw = raw_request(pdu);
+            w.u8("Function code", function_label(raw.function));
+            describe_request_fields(raw, w);
+            std::string fault = pdu_fault(pdu, Direction::Request, status.error, rows, first);
             error = fmt::format("not a valid request: {} (a server answers exception {:02X} {})",
-                                codec::error_description(status.error),
-                                static_cast<int>(status.exception),
+                                fault, static_cast<int>(status.exception),
                                 codec::exception_name(status.exception));
             return false;
         }
@@ -285,7 +554,18 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
     codec::Response rsp;
     auto err = codec::decode_response(pdu, rsp);
     if (err != codec::CodecError::Ok) {
-        error = fmt::format("not a valid response: {}", codec::error_description(err));
+        codec::Response raw = raw_response(pdu);
+        if (raw.exception != codec::ExceptionCode::None) {
+            w.u8("Function code", fmt::format("= 0x{:02X} | 0x80: exception to {}", raw.function,
+                                              function_label(raw.function)));
+            w.u8("Exception code");
+            w.rest("Unparsed bytes");
+        } else {
+            w.u8("Function code", function_label(raw.function));
+            describe_response_fields(raw, w, pdu);
+        }
+        error = fmt::format("not a valid response: {}",
+                            pdu_fault(pdu, Direction::Response, err, rows, first));
         return false;
     }
     if (rsp.exception != codec::ExceptionCode::None) {
@@ -298,6 +578,19 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
     w.u8("Function code", function_label(rsp.function));
     describe_response_fields(rsp, w, pdu);
     return true;
+}
+
+std::string request_fault(Bytes pdu) {
+    std::vector<FieldRow> rows;
+    if (pdu.empty()) return "empty PDU: no function code";
+    codec::Request req;
+    auto status = codec::decode_request(pdu, req);
+    if (status.ok()) return {};
+    RowWriter w(pdu, rows);
+    codec::Request raw = raw_request(pdu);
+    w.u8("Function code", function_label(raw.function));
+    describe_request_fields(raw, w);
+    return pdu_fault(pdu, Direction::Request, status.error, rows, 0);
 }
 
 std::string render_rows(const std::vector<FieldRow>& rows) {

@@ -21,6 +21,10 @@ enum class Direction { Request, Response };
 // decode in that direction.
 bool describe_pdu(codec::Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::string& error);
 
+// What is wrong with a request PDU, as one phrase naming the field, its value and the valid
+// range ("quantity 200: valid 1..125 for 0x03 read_holding_registers"); "" when it is valid.
+std::string request_fault(codec::Bytes pdu);
+
 // Renders rows as an aligned three-column table.
 std::string render_rows(const std::vector<FieldRow>& rows);
 

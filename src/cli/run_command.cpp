@@ -8,6 +8,7 @@
 #include "cli/duration_option.hpp"
 #include "cli/run_output.hpp"
 #include "cli/run_scenario.hpp"
+#include "codec/address.hpp"
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
 #include "load/plan.hpp"
@@ -60,33 +61,14 @@ std::string build_plan(RunOptions& o) {
                 o.function);
         }
     }
-    // --addr takes "N", "FIRST-LAST", or reference numbers "40001-40100".
-    auto parse_one = [](const std::string& text, std::uint16_t& out) {
-        codec::Reference ref;
-        if (text.size() >= 5 && codec::parse_reference(text, ref)) {
-            out = ref.offset;
-            return true;
-        }
-        try {
-            std::size_t used = 0;
-            long v = std::stol(text, &used, 0);
-            if (used != text.size() || v < 0 || v > 65535) return false;
-            out = static_cast<std::uint16_t>(v);
-            return true;
-        } catch (...) {
-            return false;
-        }
-    };
-    auto dash = o.address.find('-');
-    std::uint16_t first = 0, last = 0;
-    if (!parse_one(o.address.substr(0, dash), first) ||
-        (dash != std::string::npos && !parse_one(o.address.substr(dash + 1), last)))
-        return fmt::format(
-            "--addr '{}' is not an address 0..65535, a range FIRST-LAST or reference "
-            "numbers like 40001-40100",
-            o.address);
-    op.first_address = first;
-    if (dash != std::string::npos) op.last_address = last;
+    // One address rule for every subcommand: codec/address.hpp.
+    codec::AddressRange range;
+    if (auto error =
+            codec::parse_address_range(o.address, codec::function_table(op.function), range);
+        !error.empty())
+        return fmt::format("--addr {}", error);
+    op.first_address = range.first;
+    if (range.is_range) op.last_address = range.last;
     if (o.addr_mode == "uniform")
         op.address_mode = load::AddressMode::Uniform;
     else if (o.addr_mode == "zipf")
@@ -219,8 +201,7 @@ void add_run_command(CLI::App& app, Action& action) {
         ->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function,
                     "function code or name (default 3, read_holding_registers)");
-    cmd->add_option("--addr", o->address,
-                    "start address, range FIRST-LAST, or reference numbers 40001-40100");
+    cmd->add_option("--addr", o->address, std::string(codec::kAddressRuleHelp));
     cmd->add_option("--count", o->count, "quantity per request (default 10; 1 for FC05/06/16)")
         ->check(CLI::Range(1, 2000));
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "codec/address.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
 #include "scenario/scenario.hpp"
@@ -39,92 +40,15 @@ std::uint8_t parse_function(const YamlReader& r, const YAML::Node& n) {
     return fc;
 }
 
-char table_digit(codec::Table t) {
-    switch (t) {
-        case codec::Table::Coils:
-            return '0';
-        case codec::Table::DiscreteInputs:
-            return '1';
-        case codec::Table::InputRegisters:
-            return '3';
-        case codec::Table::HoldingRegisters:
-            return '4';
-    }
-    return '?';
-}
-
-// One side of an address: a 0-based address (decimal or hex), or a Modicon reference number
-// (5 or 6 digits whose leading digit names the function's table: "40001" = holding register 0).
-struct AddressPart {
-    std::uint16_t address = 0;
-    bool reference = false;
-};
-
-// False with `error` set when the text is a reference number that does not fit; false with
-// `error` empty when it is not an address at all.
-bool parse_address_part(std::string_view text, std::optional<codec::Table> table, AddressPart& out,
-                        std::string& error) {
-    const bool all_digits = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
-        return c >= '0' && c <= '9';
-    });
-    const bool reference_like = all_digits && (text.size() == 5 || text.size() == 6) &&
-                                std::string_view("0134").find(text.front()) != std::string::npos;
-    if (table && reference_like) {
-        codec::Reference ref;
-        if (!codec::parse_reference(text, ref)) {
-            error = fmt::format(
-                "'{}' is not a valid reference number ({}xxxx with xxxx 0001..9999, "
-                "or {}xxxxx with 00001..65536)",
-                text, text.front(), text.front());
-            return false;
-        }
-        if (ref.table != *table) {
-            error = fmt::format(
-                "'{}' is a {} reference ({}xxxx) but this function uses {} ({}xxxx); "
-                "write a 0-based address of 10000 or more in hex (e.g. 0x{:X})",
-                text, codec::table_name(ref.table), table_digit(ref.table),
-                codec::table_name(*table), table_digit(*table), std::stoul(std::string(text)));
-            return false;
-        }
-        out = {ref.offset, true};
-        return true;
-    }
-    std::int64_t v = 0;
-    if (!YamlReader::parse_integer(text, v) || v < 0 || v > 65535) return false;
-    out = {static_cast<std::uint16_t>(v), false};
-    return true;
-}
-
+// One rule for addresses everywhere: codec/address.hpp.
 void parse_address(const YamlReader& r, const YAML::Node& n, load::Operation& op) {
     const std::string text = r.scalar(n, "address");
-    const auto table = function_table(op.function);
-    const std::string help =
-        table ? fmt::format(
-                    "give a 0-based address 0..65535, a range FIRST-LAST like 0-99, or "
-                    "{} reference numbers like {}0001-{}0100",
-                    codec::table_name(*table), table_digit(*table), table_digit(*table))
-              : std::string("give a 0-based address 0..65535 or a range FIRST-LAST");
-    const auto dash = text.find('-', 1);
-    AddressPart first, last;
-    std::string error;
-    if (!parse_address_part(std::string_view(text).substr(0, dash), table, first, error) ||
-        (dash != std::string::npos &&
-         !parse_address_part(std::string_view(text).substr(dash + 1), table, last, error))) {
-        if (!error.empty()) r.fail(n, fmt::format("address: {}", error));
-        r.fail(n, fmt::format("address '{}' is not an address ({})", text, help));
-    }
-    op.first_address = first.address;
+    codec::AddressRange range;
+    const std::string error = codec::parse_address_range(text, function_table(op.function), range);
+    if (!error.empty()) r.fail(n, fmt::format("address {}", error));
+    op.first_address = range.first;
     op.last_address.reset();
-    if (dash == std::string::npos) return;
-    if (first.reference != last.reference) {
-        r.fail(n, fmt::format("address '{}' mixes a reference number and a 0-based address ({})",
-                              text, help));
-    }
-    if (last.address < first.address) {
-        r.fail(n, fmt::format("address range '{}' ends before it starts (FIRST must be <= LAST)",
-                              text));
-    }
-    op.last_address = last.address;
+    if (range.is_range) op.last_address = range.last;
 }
 
 load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
@@ -251,25 +175,7 @@ Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::O
 }  // namespace
 
 std::optional<codec::Table> function_table(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x05:
-        case 0x0F:
-            return codec::Table::Coils;
-        case 0x02:
-            return codec::Table::DiscreteInputs;
-        case 0x04:
-            return codec::Table::InputRegisters;
-        case 0x03:
-        case 0x06:
-        case 0x10:
-        case 0x16:
-        case 0x17:
-        case 0x18:
-            return codec::Table::HoldingRegisters;
-        default:
-            return std::nullopt;
-    }
+    return codec::function_table(fc);
 }
 
 QuantityLimits quantity_limits(std::uint8_t fc) noexcept {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "codec/address.hpp"
 #include "codec/function_code.hpp"
 #include "scenario/operation_yaml.hpp"
 #include "scenario/yaml_reader.hpp"
@@ -48,9 +49,8 @@ void emit_operation(YAML::Emitter& out, const load::Operation& op, const Expecta
     out << YAML::Key << "function" << YAML::Value << std::string(codec::function_name(op.function));
     out << YAML::Key << "unit" << YAML::Value << static_cast<int>(op.unit_id);
     if (function_table(op.function)) {
-        const std::string address = op.last_address
-                                        ? fmt::format("{}-{}", op.first_address, *op.last_address)
-                                        : fmt::format("{}", op.first_address);
+        std::string address = codec::format_protocol_address(op.first_address);
+        if (op.last_address) address += "-" + codec::format_protocol_address(*op.last_address);
         out << YAML::Key << "address" << YAML::Value << address << YAML::Comment("0-based");
     }
     if (quantity_limits(op.function).max != 0) {

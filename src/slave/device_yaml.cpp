@@ -11,11 +11,28 @@
 #include <optional>
 #include <sstream>
 
+#include "codec/address.hpp"
+
 namespace mbstorm::slave {
 
 namespace {
 
 using OptNode = std::optional<YAML::Node>;
+
+// The slave's tables in the codec's terms, for the address rule.
+codec::Table codec_table(Table table) {
+    switch (table) {
+        case Table::Coils:
+            return codec::Table::Coils;
+        case Table::DiscreteInputs:
+            return codec::Table::DiscreteInputs;
+        case Table::InputRegisters:
+            return codec::Table::InputRegisters;
+        case Table::HoldingRegisters:
+            break;
+    }
+    return codec::Table::HoldingRegisters;
+}
 
 // Carries the source name so every error can say where it happened.
 class Parser {
@@ -61,6 +78,17 @@ class Parser {
                         std::to_string(hi) + " (got " + s + ")");
         }
         return v;
+    }
+
+    // The one address rule of every subcommand (codec/address.hpp): a protocol address or a
+    // reference number of `table`.
+    std::uint16_t address(const YAML::Node& n, Table table) const {
+        const std::string s = scalar(n, "address");
+        codec::AddressRange range;
+        std::string error = codec::parse_address_range(s, codec_table(table), range);
+        if (error.empty() && range.is_range) error = "'" + s + "' is a range: give one address";
+        if (!error.empty()) fail(n, "address " + error);
+        return range.first;
     }
 
     double number(const YAML::Node& n, std::string_view what) const {
@@ -329,7 +357,7 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
         if (!table) p.fail(e, "init entry needs 'table'");
         if (!address) p.fail(e, "init entry needs 'address'");
         r.table = parse_table(p, *table);
-        r.address = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        r.address = p.address(*address, r.table);
         const ValueType vt = type ? parse_type(p, *type) : ValueType::UInt16;
         if (type && is_bit_table(r.table)) p.fail(*type, "bit tables take no 'type'");
         const int sources = (values ? 1 : 0) + (value ? 1 : 0) + (random ? 1 : 0);
@@ -410,7 +438,7 @@ void parse_counters(const Parser& p, const YAML::Node& list, const Layout& layou
         const Table t = table ? parse_table(p, *table) : Table::InputRegisters;
         if (is_bit_table(t))
             p.fail(*table, "counters live in input_registers or holding_registers");
-        const auto addr = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        const auto addr = p.address(*address, t);
         const std::string m = mode ? p.scalar(*mode, "mode") : std::string("read");
         if (m == "read") {
             if (interval) p.fail(*interval, "'interval_ms' needs mode: interval");
@@ -486,7 +514,7 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
         if (!wave) p.fail(e, "simulated input needs 'wave'");
         if (!period) p.fail(e, "simulated input needs 'period_ms'");
         s.table = parse_table(p, *table);
-        s.address = static_cast<std::uint16_t>(p.integer(*address, "address", 0, 65535));
+        s.address = p.address(*address, s.table);
         const std::string w = p.scalar(*wave, "wave");
         if (w == "ramp")
             s.wave = Waveform::Ramp;

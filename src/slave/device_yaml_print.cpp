@@ -6,6 +6,8 @@
 #include <charconv>
 #include <cstdio>
 
+#include "codec/address.hpp"
+
 namespace mbstorm::slave {
 
 namespace {
@@ -151,7 +153,7 @@ void emit_init(YAML::Emitter& out, const std::vector<InitRange>& init) {
     for (const InitRange& r : init) {
         out << YAML::Flow << YAML::BeginMap;
         out << YAML::Key << "table" << YAML::Value << table_name(r.table);
-        out << YAML::Key << "address" << YAML::Value << r.address;
+        out << YAML::Key << "address" << YAML::Value << codec::format_protocol_address(r.address);
         const bool repeated =
             r.words.size() > 1 && std::all_of(r.words.begin(), r.words.end(),
                                               [&](std::uint16_t w) { return w == r.words[0]; });
@@ -177,7 +179,7 @@ void emit_counters(YAML::Emitter& out, const DeviceDescription& d) {
     for (const ReadCounterSpec& c : d.read_counters) {
         out << YAML::Flow << YAML::BeginMap;
         out << YAML::Key << "table" << YAML::Value << table_name(c.table);
-        out << YAML::Key << "address" << YAML::Value << c.address;
+        out << YAML::Key << "address" << YAML::Value << codec::format_protocol_address(c.address);
         out << YAML::Key << "mode" << YAML::Value << "read";
         // Steps wrap at 16 bits; written signed so a countdown reads as one (65533 -> -3).
         out << YAML::Key << "step" << YAML::Value << static_cast<std::int16_t>(c.step);
@@ -189,7 +191,7 @@ void emit_counters(YAML::Emitter& out, const DeviceDescription& d) {
         if (s.wave != Waveform::Counter) continue;
         out << YAML::Flow << YAML::BeginMap;
         out << YAML::Key << "table" << YAML::Value << table_name(s.table);
-        out << YAML::Key << "address" << YAML::Value << s.address;
+        out << YAML::Key << "address" << YAML::Value << codec::format_protocol_address(s.address);
         out << YAML::Key << "mode" << YAML::Value << "interval";
         out << YAML::Key << "interval_ms" << YAML::Value << millis_text(s.period_ns);
         out << YAML::Key << "type" << YAML::Value << type_name(s.type);
@@ -209,7 +211,7 @@ void emit_simulate(YAML::Emitter& out, const std::vector<SimulatedInput>& inputs
         if (s.wave == Waveform::Counter) continue;
         out << YAML::Flow << YAML::BeginMap;
         out << YAML::Key << "table" << YAML::Value << table_name(s.table);
-        out << YAML::Key << "address" << YAML::Value << s.address;
+        out << YAML::Key << "address" << YAML::Value << codec::format_protocol_address(s.address);
         if (!is_bit_table(s.table)) out << YAML::Key << "type" << YAML::Value << type_name(s.type);
         out << YAML::Key << "wave" << YAML::Value << wave_name(s.wave);
         out << YAML::Key << "period_ms" << YAML::Value << millis_text(s.period_ns);

@@ -18,9 +18,62 @@ TEST(DecodeCommand, RtuRequestShowsFieldsAndCorrectCrc) {
 }
 
 TEST(DecodeCommand, RtuWrongCrcIsReported) {
+    // Shown field by field, and the fault makes the exit code 1 (scripts can tell).
     auto r = run_mbstorm("decode --rtu 01 03 00 00 00 0A C5 CE");
-    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_THAT(r.output, HasSubstr("WRONG: expected C5 CD"));
+    EXPECT_THAT(r.output, HasSubstr("Quantity of registers"));
+}
+
+TEST(DecodeCommand, AutoDetectionNamesTheMostPlausibleFramingAndItsFault) {
+    // A read request in RTU framing with its CRC off by one: not "more bytes than needed".
+    auto r = run_mbstorm("decode 11 03 00 6B 00 03 76 88");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Modbus RTU frame (8 bytes, CRC BAD) request"));
+    EXPECT_THAT(r.output, HasSubstr("read_holding_registers"));
+    EXPECT_THAT(r.output,
+                HasSubstr("mbstorm decode: read as Modbus RTU: CRC wrong: expected 76 87"));
+    EXPECT_EQ(r.output.find("more bytes than"), std::string::npos) << r.output;
+}
+
+TEST(DecodeCommand, InvalidPduIsShownFieldByFieldWithTheBadFieldMarked) {
+    auto r = run_mbstorm("decode --pdu --request 03 00 00 00 C8");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Starting address"));
+    EXPECT_THAT(r.output, HasSubstr("Quantity of registers  00 C8  200 (0x00C8)  <-- BAD: quantity "
+                                    "200: valid 1..125 for 0x03 read_holding_registers"));
+    // Auto-detection: the same bytes read as a bare PDU with the bad field named.
+    auto guessed = run_mbstorm("decode 03 00 00 00 C8");
+    EXPECT_EQ(guessed.exit_code, 1) << guessed.output;
+    EXPECT_THAT(guessed.output, HasSubstr("read as a bare PDU: not a valid request: quantity 200"));
+    auto coil = run_mbstorm("decode --pdu 05 00 01 12 34");
+    EXPECT_THAT(coil.output, HasSubstr("<-- BAD: 0x1234: valid 0xFF00 (ON) or 0x0000 (OFF)"));
+    auto tail = run_mbstorm("decode --pdu --request 03 00 00 00 01 FF");
+    EXPECT_THAT(tail.output, HasSubstr("<-- BAD: 6 bytes: 0x03 read_holding_registers needs 5"));
+    auto cut = run_mbstorm("decode --pdu --request 03 00 00");
+    EXPECT_THAT(cut.output, HasSubstr("(end of bytes)"));
+    EXPECT_THAT(cut.output, HasSubstr("3 bytes: 0x03 read_holding_registers needs 5"));
+}
+
+TEST(DecodeCommand, AsciiWrongLrcNamesTheExpectedOne) {
+    auto r = run_mbstorm("decode :010300000001FC");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("WRONG: expected FB"));
+    EXPECT_THAT(r.output, HasSubstr("LRC wrong: expected FB, the frame carries FC"));
+}
+
+TEST(DecodeCommand, TruncatedTcpFrameIsNamedRatherThanABadPdu) {
+    // Used to be read as a bare PDU with function code 0x00.
+    auto r = run_mbstorm("decode 00 01 00 00 00 06 01 03 00 00");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("truncated Modbus TCP frame: the length field says 6 bytes "
+                                    "follow it, 4 do"));
+}
+
+TEST(DecodeCommand, TcpLengthThatDisagreesIsNamed) {
+    auto r = run_mbstorm("decode --tcp 00 01 00 00 00 09 01 03 00 00 00 0A");
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("the length field says 9 bytes follow it, 6 do"));
 }
 
 TEST(DecodeCommand, HexWithoutSpacesAndTcpDetected) {
@@ -63,8 +116,8 @@ TEST(DecodeCommand, PipelinedTcpFramesAreAllShown) {
 }
 
 TEST(DecodeCommand, BadInputIsOneLineAndExitTwo) {
-    for (const char* args : {"decode ZZ", "decode 0", "decode --tcp 00 01 00 00 00 00 01",
-                             "decode --rtu 01 03 00", "decode --pdu --request 03 00 00 00 00"}) {
+    for (const char* args :
+         {"decode ZZ", "decode 0", "decode --tcp 00 01 00 00 00 00 01", "decode --rtu 01 03 00"}) {
         auto r = run_mbstorm(args);
         EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
         EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n"
@@ -74,8 +127,9 @@ TEST(DecodeCommand, BadInputIsOneLineAndExitTwo) {
 
 TEST(DecodeCommand, NonModbusProtocolIdIsShownAndFlagged) {
     auto r = run_mbstorm("decode --tcp 00 01 00 05 00 06 01 03 00 00 00 0A");
-    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_THAT(r.output, HasSubstr("not Modbus"));
+    EXPECT_THAT(r.output, HasSubstr("protocol identifier 5 (0x0005): Modbus is 0"));
 }
 
 TEST(EncodeCommand, BuildsFramesInEveryFraming) {
@@ -100,6 +154,38 @@ TEST(EncodeCommand, OutOfSpecFieldsAreRejected) {
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_THAT(r.output, HasSubstr("quantity"));
     EXPECT_EQ(run_mbstorm("encode --fc nonsense").exit_code, 2);
+}
+
+// Every refusal names the field, the value and the valid range, in one line.
+TEST(EncodeCommand, RefusalsNameFieldValueAndRange) {
+    const std::pair<const char*, const char*> cases[] = {
+        {"encode --fc 3 -n 200", "quantity 200: valid 1..125 for 0x03 read_holding_registers"},
+        {"encode --fc 99",
+         "function code 99 (0x63): not a public Modbus function; valid: 0x01..0x08, 0x0B"},
+        {"encode --fc nonsense", "function 'nonsense': valid: 0x01..0x08"},
+        {"encode --fc 1 -n 0", "quantity 0: valid 1..2000 for 0x01 read_coils"},
+        {"encode --fc 3 --addr 0xFFFF -n 2", "address 65535 + quantity 2 runs past 65535"},
+        {"encode --fc 16 --addr 0", "--values holds 0 value(s): valid 1..123 for 0x10"},
+        {"encode --fc 5 --value 7", "--value 7 for 0x05 write_single_coil: valid 0 (OFF) or 1"},
+        {"encode --fc 8 --sub 19", "sub-function 0x0013: valid 0x0000..0x0004"},
+        {"encode --fc 0x17 -n 126 --values 1", "quantity 126: valid 1..125 for 0x17"},
+        {"encode --fc 20 --count 200",
+         "--count 200 (record length): valid 1..121 for 0x14 read_file_record"},
+        {"encode --fc 21 --values 1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,"
+         "25,26,27,28,29,30,31,32,33,34,35,36,37,38,39,40,41,42,43,44,45,46,47,48,49,50,51,52,53,"
+         "54,55,56,57,58,59,60,61,62,63,64,65,66,67,68,69,70,71,72,73,74,75,76,77,78,79,80,81,82,"
+         "83,84,85,86,87,88,89,90,91,92,93,94,95,96,97,98,99,100,101,102,103,104,105,106,107,108,"
+         "109,110,111,112,113,114,115,116,117,118,119,120,121,122,123",
+         "--values holds 123 value(s): valid 1..122 for 0x15 write_file_record"},
+        {"encode --fc 20 --record 9999 --count 2", "--record 9999 + record length 2 runs past"},
+    };
+    for (const auto& [args, message] : cases) {
+        auto r = run_mbstorm(args);
+        EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+        EXPECT_THAT(r.output, HasSubstr(message)) << args;
+        EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n"
+                                                                         << r.output;
+    }
 }
 
 TEST(Cli, UnknownSubcommandIsUsageError) {

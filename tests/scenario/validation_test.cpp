@@ -94,18 +94,18 @@ const BadCase kCases[] = {
     {"address on FC11", "operations:\n  - {function: 0x11, address: 2}\n",
      "address does not apply to report_server_id", 2, 22},
     {"address garbage", "operations:\n  - {function: 3, address: here}\n",
-     "address 'here' is not an address (give a 0-based address 0..65535, a range FIRST-LAST like "
-     "0-99, or holding_registers reference numbers like 40001-40100)",
+     "address 'here' is not an address: give a 0-based protocol address 0..65535 (decimal, or 0x "
+     "hex), a range FIRST-LAST, or reference numbers like 40001-40100",
      2, 28},
     {"address too big", "operations:\n  - {function: 3, address: 70000}\n", "is not an address", 2,
      28},
     {"address reversed", "operations:\n  - {function: 3, address: 99-0}\n", "ends before it starts",
      2, 28},
     {"address mixed forms", "operations:\n  - {function: 3, address: 40001-99}\n",
-     "mixes a reference number and a 0-based address", 2, 28},
+     "mixes a reference number and a protocol address", 2, 28},
     {"reference wrong table", "operations:\n  - {function: 3, address: 30001-30010}\n",
-     "'30001' is a input_registers reference (3xxxx) but this function uses holding_registers "
-     "(4xxxx)",
+     "'30001' is an input register reference: read it with 0x04 read_input_registers; for "
+     "protocol address 30001 write 0x7531",
      2, 28},
     {"reference invalid", "operations:\n  - {function: 3, address: 40000}\n",
      "'40000' is not a valid reference number", 2, 28},

@@ -127,6 +127,28 @@ TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
     }
 }
 
+// Device files follow the address rule of every subcommand (codec/address.hpp).
+TEST(DeviceYaml, AddressesFollowTheOneRule) {
+    const DeviceDescription d = parse_device_yaml(
+        "init:\n"
+        "  - {table: holding_registers, address: 40101, value: 1}\n"
+        "  - {table: holding_registers, address: 0x9C41, value: 2}\n"
+        "counters: [{table: input_registers, address: 30011}]\n",
+        "dev.yaml");
+    ASSERT_EQ(d.init.size(), 2u);
+    EXPECT_EQ(d.init[0].address, 100);
+    EXPECT_EQ(d.init[1].address, 0x9C41);
+    ASSERT_EQ(d.read_counters.size(), 1u);
+    EXPECT_EQ(d.read_counters[0].address, 10);
+    // Used to store at holding register 30001.
+    EXPECT_NE(error_of("init: [{table: holding_registers, address: 30001, value: 1}]")
+                  .find("'30001' is an input register reference: read it with 0x04 "
+                        "read_input_registers"),
+              std::string::npos);
+    EXPECT_NE(error_of("init: [{table: coils, address: 0-3, value: 1}]").find("is a range"),
+              std::string::npos);
+}
+
 TEST(DeviceYaml, RangeAndConsistencyErrors) {
     EXPECT_NE(error_of("tables: {holding_registers: 10}\ninit: [{table: holding_registers, "
                        "address: 8, values: [1, 2, 3]}]")

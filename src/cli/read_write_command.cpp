@@ -1,0 +1,385 @@
+// `mbstorm read` and `mbstorm write`: one range, once or every --interval, values typed as
+// asked. Two commands rather than one `poll`: a write changes a device, and its name on the
+// command line says so (and it alone takes --allow-writes).
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "cli/duration_option.hpp"
+#include "cli/frame_describe.hpp"
+#include "cli/modbus_client.hpp"
+#include "cli/typed_values.hpp"
+#include "codec/address.hpp"
+#include "codec/exception_code.hpp"
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+#include "codec/pdu.hpp"
+#include "load/plan.hpp"
+#include "load/preflight.hpp"
+#include "load/write_safety.hpp"
+#include "net/socket.hpp"
+
+namespace mbstorm::cli {
+namespace {
+
+struct IoOptions {
+    bool write = false;
+    std::string target;
+    int unit = 1;
+    std::string address = "0";
+    std::string table;
+    std::string type;
+    std::string order = "ABCD";
+    int quantity = 1;  // read: values of --type
+    std::vector<std::string> values;
+    std::string function;  // write: force 05/06/0F/10
+    std::uint64_t count = 1;
+    std::uint64_t interval_ns = 1'000'000'000ULL;
+    std::uint64_t timeout_ns = 1'000'000'000ULL;
+    bool json = false;
+    bool allow_writes = false;
+};
+
+// What the options resolve to before anything is sent.
+struct IoPlan {
+    net::Endpoint target;
+    codec::Table table = codec::Table::HoldingRegisters;
+    std::uint16_t address = 0;
+    ValueType type = ValueType::U16;
+    codec::WordOrder order = codec::WordOrder::ABCD;
+    codec::Request request;
+    std::vector<std::uint8_t> payload;     // write data the request points at
+    std::vector<std::uint16_t> registers;  // write: the registers (or bits) written
+    std::uint16_t items = 0;               // registers or bits read or written
+};
+
+std::string function_text(std::uint8_t fc) {
+    return fmt::format("0x{:02X} {}", fc, codec::function_name(fc));
+}
+
+bool table_from_text(const std::string& text, codec::Table& out) {
+    if (codec::table_from_name(text, out)) return true;
+    static constexpr std::pair<std::string_view, codec::Table> kShort[] = {
+        {"coil", codec::Table::Coils},
+        {"discrete", codec::Table::DiscreteInputs},
+        {"input", codec::Table::InputRegisters},
+        {"holding", codec::Table::HoldingRegisters}};
+    for (auto [name, table] : kShort) {
+        if (text == name) {
+            out = table;
+            return true;
+        }
+    }
+    return false;
+}
+
+std::string build_request(const IoOptions& o, IoPlan& p) {
+    // The table: --table, or the reference number's, or holding registers.
+    std::optional<codec::Table> table;
+    if (!o.table.empty()) {
+        codec::Table t;
+        if (!table_from_text(o.table, t))
+            return fmt::format(
+                "--table '{}': valid coils, discrete_inputs, input_registers, holding_registers "
+                "(or coil, discrete, input, holding)",
+                o.table);
+        table = t;
+    }
+    if (codec::Reference ref; !table && codec::parse_reference(o.address, ref)) table = ref.table;
+    p.table = table.value_or(codec::Table::HoldingRegisters);
+    codec::AddressRange range;
+    if (auto error = codec::parse_address_range(o.address, p.table, range); !error.empty())
+        return "--addr " + error;
+    if (range.is_range)
+        return fmt::format("--addr '{}' is a range: give the first address and --quantity",
+                           o.address);
+    p.address = range.first;
+
+    const bool bit_table = codec::is_bit_table(p.table);
+    if (!o.type.empty() && !value_type_from_name(o.type, p.type))
+        return fmt::format("--type '{}': valid {}", o.type, kValueTypeNames);
+    if (bit_table) {
+        if (!o.type.empty() && p.type != ValueType::Bits)
+            return fmt::format("--type {}: {} hold single bits; use --type bits (the default)",
+                               o.type, codec::table_name(p.table));
+        p.type = ValueType::Bits;
+    }
+    if (!codec::word_order_from_name(o.order, p.order))
+        return fmt::format("--order '{}': valid ABCD, CDAB, BADC, DCBA", o.order);
+
+    auto& r = p.request;
+    r.address = p.address;
+    if (!o.write) {
+        static constexpr std::uint8_t kReadFunction[] = {0x01, 0x02, 0x04, 0x03};
+        r.function = kReadFunction[static_cast<int>(p.table)];
+        std::size_t items =
+            bit_table ? static_cast<std::size_t>(o.quantity)
+            : p.type == ValueType::String
+                ? (static_cast<std::size_t>(o.quantity) + 1) / 2
+                : static_cast<std::size_t>(o.quantity) * registers_per_value(p.type);
+        if (items > 0xFFFF) items = 0xFFFF;
+        r.quantity = static_cast<std::uint16_t>(items);
+        p.items = r.quantity;
+        return {};
+    }
+
+    if (p.table == codec::Table::InputRegisters || p.table == codec::Table::DiscreteInputs)
+        return fmt::format("{} are read-only: {}", codec::table_name(p.table),
+                           codec::table_functions(p.table));
+    if (o.values.empty()) return "give the values to write after the options";
+    if (bit_table) {
+        for (const auto& v : o.values) {
+            bool bit = false;
+            if (!parse_bit(v, bit))
+                return fmt::format("value '{}': a coil takes 1/0, on/off or true/false", v);
+            p.registers.push_back(bit ? 1 : 0);
+        }
+    } else if (auto error = registers_from_text(o.values, p.type, p.order, p.registers);
+               !error.empty()) {
+        return error;
+    }
+    if (p.registers.size() > 0xFFFF) return "too many values";
+    p.items = static_cast<std::uint16_t>(p.registers.size());
+    const bool one = p.registers.size() == 1;
+    r.function = bit_table ? (one ? 0x05 : 0x0F) : (one ? 0x06 : 0x10);
+    if (!o.function.empty()) {
+        std::uint8_t fc = 0;
+        if (!codec::function_from_name(o.function, fc)) {
+            try {
+                std::size_t used = 0;
+                int v = std::stoi(o.function, &used, 0);
+                if (used == o.function.size() && v >= 1 && v <= 127)
+                    fc = static_cast<std::uint8_t>(v);
+            } catch (...) {
+            }
+        }
+        const bool fits =
+            bit_table ? (fc == 0x0F || (fc == 0x05 && one)) : (fc == 0x10 || (fc == 0x06 && one));
+        if (!fits)
+            return fmt::format(
+                "--fc '{}' cannot write {} value(s) to {}: valid {}", o.function,
+                p.registers.size(), codec::table_name(p.table),
+                bit_table ? "0x05 write_single_coil (one value) or 0x0F write_multiple_coils"
+                          : "0x06 write_single_register (one register) or 0x10 "
+                            "write_multiple_registers");
+        r.function = fc;
+    }
+    switch (r.function) {
+        case 0x05:
+            r.value = p.registers[0] ? codec::limits::kCoilOn : codec::limits::kCoilOff;
+            break;
+        case 0x06:
+            r.value = p.registers[0];
+            break;
+        case 0x0F: {
+            std::vector<std::uint8_t> bits(p.registers.begin(), p.registers.end());
+            p.payload.assign(codec::packed_bit_bytes(bits.size()), 0);
+            codec::pack_bit_bytes(bits, p.payload);
+            r.quantity = p.items;
+            break;
+        }
+        default:
+            for (std::uint16_t w : p.registers) {
+                p.payload.push_back(static_cast<std::uint8_t>(w >> 8));
+                p.payload.push_back(static_cast<std::uint8_t>(w & 0xFF));
+            }
+            r.quantity = p.items;
+            break;
+    }
+    return {};
+}
+
+// One transaction's outcome, printed as text or one JSON line.
+int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::string& error,
+           const codec::Response& rsp) {
+    nlohmann::json j;
+    if (o.json) {
+        j["target"] = p.target.to_string();
+        j["unit"] = o.unit;
+        j["function"] = function_text(p.request.function);
+        j["table"] = std::string(codec::table_name(p.table));
+        j["address"] = p.address;
+        if (o.count != 1) j["poll"] = poll;
+    }
+    auto emit_json = [&] { fmt::print("{}\n", j.dump()); };
+    if (!error.empty()) {
+        if (o.json) {
+            j["error"] = error;
+            emit_json();
+        }
+        fmt::print(stderr, "mbstorm {}: {} ({} to unit {} at {}): {}\n", o.write ? "write" : "read",
+                   p.target.to_string(), function_text(p.request.function), o.unit, p.address,
+                   error);
+        return kExitFailed;
+    }
+    if (rsp.exception != codec::ExceptionCode::None) {
+        const auto code = static_cast<int>(rsp.exception);
+        if (o.json) {
+            j["exception"] = {{"code", code},
+                              {"name", std::string(codec::exception_name(rsp.exception))}};
+            emit_json();
+        }
+        fmt::print(stderr, "mbstorm {}: unit {} answered exception {:02X} {} to {} at address {}\n",
+                   o.write ? "write" : "read", o.unit, code, codec::exception_name(rsp.exception),
+                   function_text(p.request.function), p.address);
+        return kExitFailed;
+    }
+    if (o.write) {
+        if (o.json) {
+            j["written"] = p.registers;
+            j["type"] = std::string(value_type_name(p.type));
+            j["order"] = std::string(codec::word_order_name(p.order));
+            emit_json();
+        } else {
+            fmt::print("wrote {} {} at address {} of unit {} ({})\n", p.items,
+                       codec::is_bit_table(p.table) ? "bit(s)" : "register(s)", p.address, o.unit,
+                       function_text(p.request.function));
+        }
+        return kExitOk;
+    }
+    std::vector<TypedValue> values;
+    std::vector<std::uint16_t> regs;
+    if (codec::is_bit_table(p.table)) {
+        for (std::uint16_t i = 0; i < p.items && i / 8u < rsp.payload.size(); ++i) {
+            const bool bit = codec::bit_at(rsp.payload, i);
+            regs.push_back(bit);
+            values.push_back({static_cast<std::uint16_t>(p.address + i), bit ? "1" : "0",
+                              bit ? 1.0 : 0.0, true});
+        }
+    } else {
+        for (std::size_t i = 0; i + 1 < rsp.payload.size(); i += 2)
+            regs.push_back(codec::load_be16(rsp.payload.data() + i));
+        values = values_from_registers(regs, p.address, p.type, p.order);
+    }
+    if (o.json) {
+        j["type"] = std::string(value_type_name(p.type));
+        j["order"] = std::string(codec::word_order_name(p.order));
+        j["registers"] = regs;
+        auto& out = j["values"] = nlohmann::json::array();
+        for (const auto& v : values) {
+            nlohmann::json item{{"address", v.address}};
+            const bool floating = p.type == ValueType::F32 || p.type == ValueType::F64;
+            if (!v.is_number)
+                item["value"] = v.text;
+            else if (floating)
+                item["value"] = v.number;
+            else
+                item["value"] = nlohmann::json::parse(v.text);  // integers exactly, not via double
+            out.push_back(item);
+        }
+        emit_json();
+    } else {
+        if (o.count != 1 && poll > 1) fmt::print("\n");
+        for (const auto& v : values) fmt::print("[{}]: {}\n", v.address, v.text);
+    }
+    std::fflush(stdout);
+    return kExitOk;
+}
+
+int run_io(const IoOptions& o) {
+    const char* name = o.write ? "write" : "read";
+    auto usage = [&](const std::string& msg) {
+        fmt::print(stderr, "mbstorm {}: {}\n", name, msg);
+        return kExitUsage;
+    };
+    IoPlan p;
+    if (auto error = build_request(o, p); !error.empty()) return usage(error);
+    p.request.payload = codec::Bytes(p.payload.data(), p.payload.size());
+    std::array<std::uint8_t, codec::limits::kMaxPdu> pdu{};
+    auto enc = codec::encode_request(p.request, pdu, /*allow_invalid=*/true);
+    if (!enc.ok()) return usage(std::string(codec::error_description(enc.error)));
+    if (auto fault = request_fault(codec::Bytes(pdu.data(), enc.size)); !fault.empty())
+        return usage(fault);
+
+    std::string error;
+    if (!net::parse_endpoint(o.target, p.target, &error, 502))
+        return usage(fmt::format("--target '{}': {}", o.target, error));
+    if (o.write) {
+        load::Operation op;
+        op.function = p.request.function;
+        auto verdict =
+            load::check_write_safety({op}, load::numeric_address(p.target), o.allow_writes);
+        if (!verdict.allowed) return usage(verdict.message);
+    }
+    const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
+    ModbusClient client;
+    if (auto why = client.connect(p.target, timeout_ms); !why.empty())
+        return usage(fmt::format("cannot connect to {}: {}", p.target.to_string(), why));
+
+    int exit_code = kExitOk;
+    const auto interval = std::chrono::nanoseconds(o.interval_ns);
+    auto next = std::chrono::steady_clock::now();
+    for (std::uint64_t poll = 1; o.count == 0 || poll <= o.count; ++poll) {
+        codec::Response rsp;
+        std::string why = client.transact(static_cast<std::uint8_t>(o.unit),
+                                          codec::Bytes(pdu.data(), enc.size), timeout_ms, rsp);
+        if (report(o, p, poll, why, rsp) != kExitOk) exit_code = kExitFailed;
+        if (why == "the target closed the connection") break;
+        if (o.count != 0 && poll == o.count) break;
+        next += interval;
+        std::this_thread::sleep_until(next);
+    }
+    return exit_code;
+}
+
+void add_common_options(CLI::App* cmd, IoOptions& o) {
+    cmd->add_option("--target", o.target, "HOST[:PORT] of the device (port 502 by default)")
+        ->required();
+    cmd->add_option("--unit,-u", o.unit, "unit id (default 1)")->check(CLI::Range(0, 255));
+    cmd->add_option("--addr,-a", o.address,
+                    "first address: " + std::string(codec::kAddressRuleHelp));
+    cmd->add_option("--table", o.table,
+                    "coils, discrete_inputs, input_registers or holding_registers (default: the "
+                    "reference number's table, else holding_registers)");
+    cmd->add_option("--type,-t", o.type,
+                    "value type: " + std::string(kValueTypeNames) +
+                        " (default u16; bits on coils and discrete inputs)");
+    cmd->add_option("--order", o.order,
+                    "word/byte order of multi-register values: ABCD (default), CDAB, BADC, DCBA");
+    cmd->add_option("--count,-n", o.count, "how many times (default 1; 0: until interrupted)");
+    add_duration_option(cmd, "--interval", o.interval_ns,
+                        "time between the starts of two transactions (default 1s)");
+    add_duration_option(cmd, "--timeout", o.timeout_ns, "connect and answer timeout (default 1s)");
+    cmd->add_flag("--json", o.json, "one JSON object per transaction on stdout");
+}
+
+}  // namespace
+
+void add_read_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<IoOptions>();
+    auto* cmd = app.add_subcommand(
+        "read", "Read one range of a device once or every --interval, as typed values");
+    add_common_options(cmd, *o);
+    cmd->add_option("--quantity,-q", o->quantity,
+                    "how many values of --type (string: characters; default 1)")
+        ->check(CLI::Range(1, 65535));
+    cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });
+}
+
+void add_write_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<IoOptions>();
+    o->write = true;
+    auto* cmd = app.add_subcommand(
+        "write", "Write values to one range of a device once or every --interval");
+    add_common_options(cmd, *o);
+    cmd->add_option("values", o->values, "values to write, as --type says")->required();
+    cmd->add_option("--fc", o->function,
+                    "force the function: 0x05/0x06 (one value) or 0x0F/0x10 (default: single "
+                    "for one value, multiple otherwise)");
+    cmd->add_flag("--allow-writes", o->allow_writes,
+                  "allow writing to a target outside loopback (127.0.0.0/8, ::1)");
+    cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });
+}
+
+}  // namespace mbstorm::cli
