@@ -110,6 +110,18 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
     }
 }
 
+// "9,326": counts in shortfall texts read like the rest of the report.
+std::string grouped(double value) {
+    const std::string digits = fmt::format("{:.0f}", value);
+    std::string out;
+    out.reserve(digits.size() + digits.size() / 3);
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i != 0 && (digits.size() - i) % 3 == 0) out.push_back(',');
+        out.push_back(digits[i]);
+    }
+    return out;
+}
+
 // What the plan asked for and the run did not do, each said plainly (see PlanShortfall).
 void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopped,
                      stats::RunResult& run) {
@@ -133,7 +145,9 @@ void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopp
     if (run.connections.peak_open < m.connections) {
         add("connections", m.connections, static_cast<double>(run.connections.peak_open),
             fmt::format("connections: {} of {} opened ({} connect attempts failed)",
-                        run.connections.peak_open, m.connections, run.connections.failed));
+                        grouped(static_cast<double>(run.connections.peak_open)),
+                        grouped(m.connections),
+                        grouped(static_cast<double>(run.connections.failed))));
     }
     if (plan.model == LoadModel::OpenLoop) {
         const auto window = static_cast<std::int64_t>(std::min(
@@ -145,9 +159,10 @@ void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopp
         if (scheduled >= 20.0 && sent < 0.95 * scheduled) {
             const double span = seconds(static_cast<std::uint64_t>(window));
             add("rate", scheduled / span, sent / span,
-                fmt::format("rate: {:.0f} of the {:.0f} transactions the schedule asked for were "
-                            "sent ({:.0f} of {:.0f} req/s)",
-                            sent, scheduled, sent / span, scheduled / span));
+                fmt::format("rate: {} of the {} transactions the schedule asked for were sent "
+                            "({} of {} req/s)",
+                            grouped(sent), grouped(scheduled), grouped(sent / span),
+                            grouped(scheduled / span)));
         }
     }
 }
