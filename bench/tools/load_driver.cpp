@@ -134,8 +134,10 @@ int main(int argc, char** argv) {
                    k.outcomes[i]);
     }
     if (plan.model == load::LoadModel::OpenLoop) {
-        fmt::print("late sends {} (max lag {:.1f} us)\n", r.run.schedule_lag.late_sends,
-                   r.run.schedule_lag.max_lag_ns / 1e3);
+        const auto& lag = r.run.schedule_lag;
+        fmt::print("late sends {} (max lag {:.1f} us): engine {}, target {}\n",
+                   lag.total().late_sends, lag.total().max_lag_ns / 1e3, lag.engine.late_sends,
+                   lag.target.late_sends);
     }
     return r.ok ? 0 : 1;
 }

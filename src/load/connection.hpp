@@ -43,6 +43,10 @@ struct Connection {
     bool ever_opened = false;
     bool connect_queued = false;  // in the worker's connect heap
 
+    // One past the newest transaction sequence answered: an older one that times out was
+    // skipped by the target (see stats::PipeliningSigns).
+    std::uint64_t answered_up_to = 0;
+
     std::int64_t backoff_ns = 0;
     std::int64_t connect_started_ns = 0;
 };

@@ -77,14 +77,14 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
     }
     for (auto& w : workers) {
         run.counters.add(w->stray);
-        run.schedule_lag.late_sends += w->schedule_lag.late_sends;
-        run.schedule_lag.total_lag_ns += w->schedule_lag.total_lag_ns;
-        run.schedule_lag.max_lag_ns =
-            std::max(run.schedule_lag.max_lag_ns, w->schedule_lag.max_lag_ns);
+        run.schedule_lag.engine.add(w->schedule_lag.engine);
+        run.schedule_lag.target.add(w->schedule_lag.target);
         run.connections.opened += w->connection_stats.opened;
         run.connections.failed += w->connection_stats.failed;
         run.connections.reconnects += w->connection_stats.reconnects;
         run.connections.closed_by_peer += w->connection_stats.closed_by_peer;
+        run.connections.peak_open += w->connection_stats.peak_open;
+        run.pipelining.skipped_requests += w->skipped_requests;
         for (std::size_t i = 0; i < w->stages.size(); ++i) {
             stats::StageResult& into = run.stages[i];
             const stats::StageResult& from = w->stages[i];
@@ -107,6 +107,63 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         result.late_responses += w->late_responses;
         result.framing_errors += w->framing_errors;
         result.bad_protocol_frames += w->bad_protocol_frames;
+    }
+}
+
+// "9,326": counts in shortfall texts read like the rest of the report.
+std::string grouped(double value) {
+    const std::string digits = fmt::format("{:.0f}", value);
+    std::string out;
+    out.reserve(digits.size() + digits.size() / 3);
+    for (std::size_t i = 0; i < digits.size(); ++i) {
+        if (i != 0 && (digits.size() - i) % 3 == 0) out.push_back(',');
+        out.push_back(digits[i]);
+    }
+    return out;
+}
+
+// What the plan asked for and the run did not do, each said plainly (see PlanShortfall).
+void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopped,
+                     stats::RunResult& run) {
+    const stats::RunMetadata& m = run.metadata;
+    // A transaction count that was reached ends the run as planned: nothing was cut short.
+    const bool count_reached =
+        plan.transactions != 0 && run.counters.transactions_sent >= plan.transactions;
+    if (count_reached) return;
+    auto add = [&run](std::string what, double planned, double achieved, std::string text) {
+        run.shortfalls.push_back({std::move(what), planned, achieved, std::move(text)});
+    };
+    const auto seconds = [](std::uint64_t ns) { return static_cast<double>(ns) / 1e9; };
+    // The loop ends at or after the planned end; 1 ms of slack for clock granularity.
+    if (m.requested_duration_ns != 0 &&
+        m.measured_duration_ns + 1'000'000 < m.requested_duration_ns) {
+        add("duration", seconds(m.requested_duration_ns), seconds(m.measured_duration_ns),
+            fmt::format("duration: {:.3g}s measured of {:.3g}s planned ({})",
+                        seconds(m.measured_duration_ns), seconds(m.requested_duration_ns),
+                        stopped ? "stopped early" : "the run ended early"));
+    }
+    if (run.connections.peak_open < m.connections) {
+        add("connections", m.connections, static_cast<double>(run.connections.peak_open),
+            fmt::format("connections: {} of {} opened ({} connect attempts failed)",
+                        grouped(static_cast<double>(run.connections.peak_open)),
+                        grouped(m.connections),
+                        grouped(static_cast<double>(run.connections.failed))));
+    }
+    if (plan.model == LoadModel::OpenLoop) {
+        const auto window = static_cast<std::int64_t>(std::min(
+            m.measured_duration_ns,
+            m.requested_duration_ns == 0 ? m.measured_duration_ns : m.requested_duration_ns));
+        const double scheduled = schedule.scheduled_transactions(window);
+        const auto sent = static_cast<double>(run.counters.transactions_sent);
+        // 5% of slack: the schedule starts with the first connection, a hair after the run.
+        if (scheduled >= 20.0 && sent < 0.95 * scheduled) {
+            const double span = seconds(static_cast<std::uint64_t>(window));
+            add("rate", scheduled / span, sent / span,
+                fmt::format("rate: {} of the {} transactions the schedule asked for were sent "
+                            "({} of {} req/s)",
+                            grouped(sent), grouped(scheduled), grouped(sent / span),
+                            grouped(scheduled / span)));
+        }
     }
 }
 
@@ -139,8 +196,9 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     }
 
     const std::int64_t interval_ns = std::max<std::int64_t>(options.progress_interval_ns, 1000);
-    const std::int64_t run_ns =
-        schedule.empty() ? plan.duration.count() : plan.warmup.count() + schedule.total_ns();
+    // The warm-up comes on top of the measured time, for flag runs and stages alike.
+    const std::int64_t measured_ns = schedule.empty() ? plan.duration.count() : schedule.total_ns();
+    const std::int64_t run_ns = measured_ns > 0 ? plan.warmup.count() + measured_ns : 0;
     const std::size_t max_intervals =
         run_ns > 0 ? static_cast<std::size_t>(run_ns / interval_ns) + 16 : 86400;
     stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads,
@@ -254,6 +312,12 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
             stage.index = static_cast<std::uint32_t>(i + 1);
             stage.name =
                 plan.stages[i].name.empty() ? fmt::format("stage {}", i + 1) : plan.stages[i].name;
+            const StageTargets from = schedule.stage_from(i);
+            const StageTargets to = schedule.stage_to(i);
+            stage.rate_from = from.rate;
+            stage.rate_to = to.rate;
+            stage.connections_from = from.connections;
+            stage.connections_to = to.connections;
         }
     }
     merge_results(plan, workers, result);
@@ -351,6 +415,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
             "stages: {} stage{}, rate and connections changed live (connections stay open)",
             schedule.stages(), schedule.stages() == 1 ? "" : "s"));
     }
+    note_shortfalls(plan, schedule, options.stop != nullptr && options.stop->load(), result.run);
     if (!verdict.write_operations.empty()) {
         result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
                                               fmt::join(verdict.write_operations, ", ")));

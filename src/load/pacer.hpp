@@ -8,6 +8,7 @@
 
 #include "load/plan.hpp"
 #include "load/rng.hpp"
+#include "stats/run_result.hpp"
 
 namespace mbstorm::load {
 
@@ -46,27 +47,38 @@ class Pacer {
     std::int64_t next_ns_ = 0;
 };
 
+// Counts late sends by cause. A send is blamed on the target when, since the last send that
+// left on time, the schedule was found due with no connection able to take it (every in-flight
+// window full, or none open); otherwise on the engine.
 class LagTracker {
   public:
     explicit LagTracker(std::int64_t threshold_ns = 1'000'000) noexcept
         : threshold_(threshold_ns) {}
-    void record(std::int64_t intended_ns, std::int64_t actual_ns) noexcept {
+    // A send was due but no connection had room for it.
+    void note_window_full() noexcept { waiting_for_target_ = true; }
+    // measured: false during warm-up (the cause is still tracked, nothing is counted).
+    void record(std::int64_t intended_ns, std::int64_t actual_ns, bool measured = true) noexcept {
         const std::int64_t lag = actual_ns - intended_ns;
-        if (lag <= threshold_) return;
-        ++late_sends_;
-        total_lag_ns_ += static_cast<std::uint64_t>(lag);
-        if (static_cast<std::uint64_t>(lag) > max_lag_ns_)
-            max_lag_ns_ = static_cast<std::uint64_t>(lag);
+        if (lag <= threshold_) {
+            waiting_for_target_ = false;
+            return;
+        }
+        if (!measured) return;
+        stats::LagCounts& into = waiting_for_target_ ? lag_.target : lag_.engine;
+        ++into.late_sends;
+        into.total_lag_ns += static_cast<std::uint64_t>(lag);
+        if (static_cast<std::uint64_t>(lag) > into.max_lag_ns)
+            into.max_lag_ns = static_cast<std::uint64_t>(lag);
     }
-    std::uint64_t late_sends() const noexcept { return late_sends_; }
-    std::uint64_t max_lag_ns() const noexcept { return max_lag_ns_; }
-    std::uint64_t total_lag_ns() const noexcept { return total_lag_ns_; }
+    const stats::ScheduleLag& lag() const noexcept { return lag_; }
+    std::uint64_t late_sends() const noexcept { return lag_.total().late_sends; }
+    std::uint64_t max_lag_ns() const noexcept { return lag_.total().max_lag_ns; }
+    std::uint64_t total_lag_ns() const noexcept { return lag_.total().total_lag_ns; }
 
   private:
     std::int64_t threshold_;
-    std::uint64_t late_sends_ = 0;
-    std::uint64_t max_lag_ns_ = 0;
-    std::uint64_t total_lag_ns_ = 0;
+    bool waiting_for_target_ = false;
+    stats::ScheduleLag lag_;
 };
 
 }  // namespace mbstorm::load

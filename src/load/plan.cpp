@@ -208,12 +208,6 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     }
     if (plan.warmup < Duration::zero()) {
         fail(fmt::format("warmup: {} is negative (valid >= 0s)", seconds_text(plan.warmup)));
-    } else if (plan.stages.empty() && plan.duration > Duration::zero() &&
-               plan.warmup >= plan.duration) {
-        fail(
-            fmt::format("warmup: {} leaves nothing to measure (valid 0s..{} exclusive, the "
-                        "duration)",
-                        seconds_text(plan.warmup), seconds_text(plan.duration)));
     }
     if (plan.late_threshold < Duration::zero()) {
         fail("late_threshold: negative (valid >= 0s)");

@@ -50,6 +50,36 @@ std::int64_t StageSchedule::next_boundary_ns(std::int64_t offset_ns) const noexc
     return INT64_MAX;
 }
 
+StageTargets StageSchedule::stage_from(std::size_t stage) const noexcept {
+    const Span& s = spans_[stage];
+    return {stage, s.from_rate, static_cast<std::uint32_t>(std::llround(s.from_connections))};
+}
+
+StageTargets StageSchedule::stage_to(std::size_t stage) const noexcept {
+    const Span& s = spans_[stage];
+    return {stage, s.to_rate, static_cast<std::uint32_t>(std::llround(s.to_connections))};
+}
+
+double StageSchedule::scheduled_transactions(std::int64_t offset_ns) const noexcept {
+    if (offset_ns <= 0) return 0.0;
+    if (spans_.empty()) return initial_rate_ * static_cast<double>(offset_ns) / 1e9;
+    double total = 0.0;
+    for (const Span& s : spans_) {
+        if (offset_ns <= s.start_ns) break;
+        const std::int64_t length = s.end_ns - s.start_ns;
+        const std::int64_t covered = std::min(offset_ns, s.end_ns) - s.start_ns;
+        if (length <= 0 || covered <= 0) continue;
+        // Linear in time: the mean of the rates at both ends of the covered part.
+        const double progress = static_cast<double>(covered) / static_cast<double>(length);
+        const double rate_end = s.from_rate + (s.to_rate - s.from_rate) * progress;
+        total += (s.from_rate + rate_end) / 2.0 * static_cast<double>(covered) / 1e9;
+    }
+    // Past the last stage the final rate holds.
+    if (offset_ns > total_ns_)
+        total += spans_.back().to_rate * static_cast<double>(offset_ns - total_ns_) / 1e9;
+    return total;
+}
+
 StageTargets StageSchedule::at(std::int64_t offset_ns) const noexcept {
     if (spans_.empty()) return {0, initial_rate_, initial_connections_};
     const std::size_t i = stage_at(offset_ns);

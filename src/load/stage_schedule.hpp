@@ -39,6 +39,13 @@ class StageSchedule {
     // The stage `offset_ns` falls in (clamped to the first and last stage).
     std::size_t stage_at(std::int64_t offset_ns) const noexcept;
 
+    // What a stage asks for at its start and at its end (equal unless it ramps).
+    StageTargets stage_from(std::size_t stage) const noexcept;
+    StageTargets stage_to(std::size_t stage) const noexcept;
+    // Transactions the open-loop schedule asks for in [0, offset_ns) (0 in a closed loop):
+    // the integral of the rate.
+    double scheduled_transactions(std::int64_t offset_ns) const noexcept;
+
     std::uint32_t peak_connections() const noexcept { return peak_connections_; }
     double peak_rate() const noexcept { return peak_rate_; }
 

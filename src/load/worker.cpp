@@ -104,9 +104,7 @@ void Worker::run() noexcept {
     } else {
         setup_.abort->store(true);
     }
-    schedule_lag.late_sends = lag_.late_sends();
-    schedule_lag.max_lag_ns = lag_.max_lag_ns();
-    schedule_lag.total_lag_ns = lag_.total_lag_ns();
+    schedule_lag = lag_.lag();
     if (finished_ns == 0) finished_ns = net::now_ns();
 }
 
@@ -337,7 +335,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         if (c.ever_opened) ++connection_stats.reconnects;
         c.ever_opened = true;
         setup_.any_connected->store(true, std::memory_order_relaxed);
-        open_connections.fetch_add(1, std::memory_order_relaxed);
+        const std::uint32_t open = open_connections.fetch_add(1, std::memory_order_relaxed) + 1;
+        connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
         c.splitter.reset();
         arm_recv(index);
         if (open_loop_ && !pacer_started_) {
@@ -453,7 +452,6 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (!more) c.recv_armed = false;
 
     if (cqe.res > 0 && has_buffer) {
-        stray.bytes_received += static_cast<std::uint64_t>(cqe.res);
         c.splitter.feed(
             codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
         codec::TcpFrame frame;
@@ -503,16 +501,33 @@ bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t 
         case MatchResult::Matched:
             break;
         case MatchResult::Unknown:
-            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::UnknownId);
+            if (now >= setup_.measure_start_ns) {
+                stray.record(stats::Outcome::UnknownId);
+                stray.bytes_received += frame.adu.size();
+            }
             return false;
         case MatchResult::Duplicate:
-            if (now >= setup_.measure_start_ns) stray.record(stats::Outcome::DuplicateId);
+            if (now >= setup_.measure_start_ns) {
+                stray.record(stats::Outcome::DuplicateId);
+                stray.bytes_received += frame.adu.size();
+            }
             return false;
         case MatchResult::Late:
             ++late_responses;
             return false;
     }
     --outstanding_;
+    c.answered_up_to = std::max(c.answered_up_to, t->sequence + 1);
+    if (t->sent_ns >= setup_.measure_start_ns) {
+        operations[t->request.op_index].counters.bytes_received += frame.adu.size();
+        if (setup_.schedule != nullptr) {
+            stats::StageResult& stage = stages[setup_.schedule->stage_at(
+                (open_loop_ ? t->intended_ns : t->sent_ns) - setup_.measure_start_ns)];
+            stage.counters.bytes_received += frame.adu.size();
+            if (!stage.operations.empty())
+                stage.operations[t->request.op_index].counters.bytes_received += frame.adu.size();
+        }
+    }
     stats::Outcome outcome = check_response(t->request, frame, response_scratch_);
     if (outcome == stats::Outcome::Ok && setup_.verifier.check != nullptr &&
         !setup_.verifier.check(setup_.verifier.context, t->request, response_scratch_)) {
@@ -540,7 +555,6 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         close_connection(index, now, stats::Outcome::ConnectionClosed);
         return;
     }
-    stray.bytes_sent += static_cast<std::uint64_t>(cqe.res);
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
         io_uring_sqe* sqe = ring_.sqe();
@@ -572,13 +586,18 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
     ++outstanding_;
     if (now >= setup_.measure_start_ns) {
         ++measured_sent_;
-        ++operations[t->request.op_index].counters.transactions_sent;
+        stats::OutcomeCounters& op = operations[t->request.op_index].counters;
+        ++op.transactions_sent;
+        op.bytes_sent += size;
         if (setup_.schedule != nullptr) {
             stats::StageResult& stage =
                 stages[setup_.schedule->stage_at(intended - setup_.measure_start_ns)];
             ++stage.counters.transactions_sent;
-            if (!stage.operations.empty())
+            stage.counters.bytes_sent += size;
+            if (!stage.operations.empty()) {
                 ++stage.operations[t->request.op_index].counters.transactions_sent;
+                stage.operations[t->request.op_index].counters.bytes_sent += size;
+            }
         }
     }
     if (!c.dirty) {
@@ -620,9 +639,13 @@ void Worker::issue_open_loop(std::int64_t now) noexcept {
             continue;
         const std::int64_t intended = pacer_.next_intended_ns();
         if (!enqueue(index, now, intended)) continue;
-        if (now >= setup_.measure_start_ns) lag_.record(intended, now);
+        lag_.record(intended, now, now >= setup_.measure_start_ns);
         pacer_.advance();
         push_ready(index);
+    }
+    // Due, allowed, and no connection can take it: the send waits for the target.
+    if (ready_size_ == 0 && pacer_.due(now) && may_send() && !pacer_.paused()) {
+        lag_.note_window_full();
     }
 }
 
@@ -652,6 +675,8 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
         if (c.state != Connection::State::Open || c.table.outstanding() == 0) continue;
         const std::uint32_t expired = c.table.expire(deadline, [&](const Transaction& t) {
             --outstanding_;
+            if (t.sequence + 1 < c.answered_up_to && t.sent_ns >= setup_.measure_start_ns)
+                ++skipped_requests;
             record(t, stats::Outcome::Timeout, 0, now);
         });
         if (expired == 0) continue;

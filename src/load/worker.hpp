@@ -52,13 +52,14 @@ class Worker {
     // Results, valid after run() returned.
     std::vector<stats::OperationResult> operations;
     std::vector<stats::StageResult> stages;  // staged runs: by the stage a transaction was sent in
-    stats::OutcomeCounters stray;            // UnknownId / DuplicateId and traffic totals
+    stats::OutcomeCounters stray;            // UnknownId / DuplicateId and their bytes
     stats::ScheduleLag schedule_lag;
     stats::ConnectionStats connection_stats;
     std::uint64_t pending_at_end = 0;
     std::uint64_t late_responses = 0;
     std::uint64_t framing_errors = 0;
     std::uint64_t bad_protocol_frames = 0;
+    std::uint64_t skipped_requests = 0;  // see stats::PipeliningSigns
     std::int64_t finished_ns = 0;
     std::string fatal_error;
     std::atomic<std::uint32_t> open_connections{0};

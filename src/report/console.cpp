@@ -8,6 +8,8 @@
 #include <string_view>
 #include <utility>
 
+#include "report/explain.hpp"
+
 namespace mbstorm::report {
 namespace {
 
@@ -62,21 +64,27 @@ double percent(std::uint64_t part, std::uint64_t whole) {
     return whole == 0 ? 0.0 : 100.0 * static_cast<double>(part) / static_cast<double>(whole);
 }
 
-// The first column is as wide as its longest label (at least 33): names are never cut.
-void append_row_header(std::string& out, const char* first, std::size_t width) {
-    out += fmt::format("  {:<{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", first, width,
+// The first column is as wide as its longest label (at least 33): names are never cut. The
+// per-stage table has a second one, the rate the schedule asked for (`target`; empty: none).
+constexpr std::size_t kTargetWidth = 16;
+
+void append_row_header(std::string& out, const char* first, std::size_t width,
+                       bool with_target = false) {
+    out += fmt::format("  {:<{}}{:>{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", first,
+                       width, with_target ? "target/s" : "", with_target ? kTargetWidth : 0,
                        "count", "tx/s", "errors", "p50", "p90", "p99", "p99.9", "max");
 }
 
 void append_row(std::string& out, std::size_t width, const std::string& name, const Histogram& h,
-                const OutcomeCounters& c, double seconds) {
+                const OutcomeCounters& c, double seconds, const std::string* target = nullptr) {
     const double rate = seconds > 0.0 ? static_cast<double>(c.completed()) / seconds : 0.0;
-    out += fmt::format("  {:<{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", name, width,
-                       format_count(c.completed()), format_rate(rate), format_count(c.errors()),
-                       format_latency(h.value_at_percentile(50)),
-                       format_latency(h.value_at_percentile(90)),
-                       format_latency(h.value_at_percentile(99)),
-                       format_latency(h.value_at_percentile(99.9)), format_latency(h.max()));
+    out += fmt::format(
+        "  {:<{}}{:>{}}{:>12}{:>10}{:>9}{:>10}{:>10}{:>10}{:>10}{:>10}\n", name, width,
+        target != nullptr ? *target : std::string(), target != nullptr ? kTargetWidth : 0,
+        format_count(c.completed()), format_rate(rate), format_count(c.errors()),
+        format_latency(h.value_at_percentile(50)), format_latency(h.value_at_percentile(90)),
+        format_latency(h.value_at_percentile(99)), format_latency(h.value_at_percentile(99.9)),
+        format_latency(h.max()));
 }
 
 std::string operation_label(const stats::OperationResult& op) {
@@ -111,8 +119,7 @@ std::string format_console_report(const stats::RunResult& r) {
                        m.tool_version.empty() ? "mbstorm" : m.tool_version,
                        stats::load_model_name(m.model), m.target);
     out += fmt::format("  threads {}, connections {}, depth {}", m.threads, m.connections, m.depth);
-    if (m.model == stats::LoadModel::Open)
-        out += fmt::format(", rate {}/s", format_rate(m.rate_per_second));
+    if (m.model == stats::LoadModel::Open) out += fmt::format(", {}", load_model_text(r));
     out += fmt::format(", duration {} (warm-up {})\n", format_duration(m.measured_duration_ns),
                        format_duration(m.warmup_ns));
     if (const auto start = format_utc(m.start_time); !start.empty()) {
@@ -131,17 +138,10 @@ std::string format_console_report(const stats::RunResult& r) {
                        format_count(r.connections.opened), format_count(r.connections.failed),
                        format_count(r.connections.reconnects),
                        format_count(r.connections.closed_by_peer));
-    if (m.model == stats::LoadModel::Open) {
-        const auto& lag = r.schedule_lag;
-        if (lag.late_sends == 0) {
-            out += "Schedule    kept (no late sends)\n";
-        } else {
-            out += fmt::format(
-                "Schedule    engine fell behind: {} late sends, max lag {}, mean lag {}\n",
-                format_count(lag.late_sends), format_latency(lag.max_lag_ns),
-                format_latency(static_cast<double>(lag.total_lag_ns) /
-                               static_cast<double>(lag.late_sends)));
-        }
+    for (const auto& line : schedule_lines(r)) out += fmt::format("Schedule    {}\n", line);
+    if (!r.shortfalls.empty()) {
+        out += "Plan        NOT carried out:\n";
+        for (const auto& s : r.shortfalls) out += fmt::format("  {}\n", s.text);
     }
 
     out += fmt::format("\nLatency ({} samples)\n", format_count(r.latency.total_count()));
@@ -157,6 +157,7 @@ std::string format_console_report(const stats::RunResult& r) {
             format_count(c.stray_responses()), format_count(c.count(stats::Outcome::UnknownId)),
             format_count(c.count(stats::Outcome::DuplicateId)));
     }
+    for (const auto& hint : hint_lines(r)) out += fmt::format("Hint        {}\n", hint);
 
     const std::size_t width = label_width(r);
     if (!r.operations.empty()) {
@@ -169,14 +170,18 @@ std::string format_console_report(const stats::RunResult& r) {
 
     if (!r.stages.empty()) {
         out += "\nPer stage\n";
-        append_row_header(out, "stage", width);
+        const bool open = m.model == stats::LoadModel::Open;
+        append_row_header(out, "stage", width, open);
+        const std::string no_target;
         for (const auto& st : r.stages) {
             const double stage_seconds =
                 static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
-            append_row(out, width, stage_label(st), st.latency, st.counters, stage_seconds);
+            const std::string target = stage_rate_text(st, m.model);
+            append_row(out, width, stage_label(st), st.latency, st.counters, stage_seconds,
+                       open ? &target : nullptr);
             for (const auto& op : st.operations) {
                 append_row(out, width, std::string(kStageOperationIndent) + operation_label(op),
-                           op.latency, op.counters, stage_seconds);
+                           op.latency, op.counters, stage_seconds, open ? &no_target : nullptr);
             }
         }
     }

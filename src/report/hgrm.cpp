@@ -30,8 +30,8 @@ std::string format_hgrm(const stats::Histogram& histogram, double value_unit_sca
                       static_cast<double>(point.value) / scale, fraction, point.total_count,
                       1.0 / (1.0 - fraction));
     }
-    const std::uint64_t max =
-        histogram.max() == 0 ? 0 : stats::Histogram::highest_equivalent(histogram.max());
+    // The exact max, not its bucket's upper edge: no row or footer exceeds what was recorded.
+    const std::uint64_t max = histogram.max();
     append_printf(out, "#[Mean    = %12.3f, StdDeviation   = %12.3f]\n", histogram.mean() / scale,
                   histogram.stddev() / scale);
     append_printf(out, "#[Max     = %12.3f, Total count    = %12" PRIu64 "]\n",

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "report/explain.hpp"
 #include "report/units.hpp"
 #include "report/xml_escape.hpp"
 
@@ -66,6 +67,14 @@ std::string trim_number(double v) {
     while (!s.empty() && s.back() == '0') s.pop_back();
     if (!s.empty() && s.back() == '.') s.pop_back();
     return s;
+}
+
+// Time axis 0..end: nice ticks up to the run's end, which is where the axis ends (a 3 s run
+// is not drawn to 4 s).
+double time_ticks(double end, std::vector<Tick>& ticks) {
+    const double step = nice_step(end, 5);
+    for (double v = 0.0; v <= end + step * 1e-6; v += step) ticks.push_back({v, trim_number(v)});
+    return end;
 }
 
 // Linear 0..max axis with nice ticks; returns the rounded-up max.
@@ -257,7 +266,7 @@ std::string throughput_chart(const stats::RunResult& r) {
     c.series.push_back(std::move(errors));
     // Open loop: the offered rate next to what was achieved shows where the target fell behind.
     if (r.metadata.model == stats::LoadModel::Open) c.series.push_back(std::move(target));
-    c.x_max = linear_ticks(timeline_end_seconds(r), c.x_ticks);
+    c.x_max = time_ticks(timeline_end_seconds(r), c.x_ticks);
     c.y_max = linear_ticks(max_rate, c.y_ticks);
     add_stage_markers(r, c);
     return render_chart(c);
@@ -277,7 +286,7 @@ std::string connections_chart(const stats::RunResult& r) {
         max_open = std::max(max_open, static_cast<double>(i.open_connections));
     }
     c.series.push_back(std::move(open));
-    c.x_max = linear_ticks(timeline_end_seconds(r), c.x_ticks);
+    c.x_max = time_ticks(timeline_end_seconds(r), c.x_ticks);
     c.y_max = linear_ticks(std::max(max_open, 1.0), c.y_ticks);
     add_stage_markers(r, c);
     return render_chart(c);
@@ -303,7 +312,7 @@ std::string latency_over_time_chart(const stats::RunResult& r) {
     c.series.push_back(std::move(p50));
     c.series.push_back(std::move(p99));
     c.series.push_back(std::move(max));
-    c.x_max = linear_ticks(timeline_end_seconds(r), c.x_ticks);
+    c.x_max = time_ticks(timeline_end_seconds(r), c.x_ticks);
     c.y_max = linear_ticks(max_ns / unit.divisor, c.y_ticks);
     add_stage_markers(r, c);
     return render_chart(c);
@@ -311,7 +320,7 @@ std::string latency_over_time_chart(const stats::RunResult& r) {
 
 // ---------------------------------------------------------------- tables
 
-void row(std::string& out, std::initializer_list<std::string> cells, bool header = false) {
+void row(std::string& out, const std::vector<std::string>& cells, bool header = false) {
     out += "<tr>";
     bool first = true;
     for (const auto& cell : cells) {
@@ -327,9 +336,7 @@ std::string run_table(const stats::RunResult& r) {
     std::string t = "<table class=\"kv\">\n";
     auto kv = [&](const char* k, const std::string& v) { row(t, {k, escape(v)}); };
     kv("Target", m.target);
-    kv("Load model", m.model == stats::LoadModel::Open
-                         ? fmt::format("open loop, {} req/s", format_rate(m.rate_per_second))
-                         : std::string("closed loop"));
+    kv("Load model", load_model_text(r));
     kv("Threads / connections / depth",
        fmt::format("{} / {} / {}", m.threads, m.connections, m.depth));
     kv("Duration",
@@ -360,33 +367,38 @@ std::string summary_table(const stats::RunResult& r) {
     kv("Connections",
        fmt::format("opened {}, failed {}, reconnects {}, closed by peer {}", r.connections.opened,
                    r.connections.failed, r.connections.reconnects, r.connections.closed_by_peer));
-    if (r.metadata.model == stats::LoadModel::Open) {
-        const auto& lag = r.schedule_lag;
-        kv("Schedule", lag.late_sends == 0 ? std::string("kept (no late sends)")
-                                           : fmt::format("fell behind: {} late sends, max lag {}",
-                                                         format_count(lag.late_sends),
-                                                         format_latency(lag.max_lag_ns)));
+    for (const auto& line : schedule_lines(r)) kv("Schedule", line);
+    for (const auto& s : r.shortfalls) {
+        row(t, {"Plan", "<span class=\"bad\">NOT carried out</span>: " + escape(s.text)});
     }
+    for (const auto& hint : hint_lines(r)) kv("Hint", hint);
     t += "</table>\n";
     return t;
 }
 
+// `target`: the per-stage table's scheduled rate column (absent elsewhere).
 void latency_row(std::string& t, const std::string& name, const Histogram& h,
-                 std::uint64_t completed, double seconds) {
+                 std::uint64_t completed, double seconds, const std::string* target = nullptr) {
     const double rate = seconds > 0.0 ? static_cast<double>(completed) / seconds : 0.0;
     auto p = [&](double q) {
         return h.empty() ? std::string("-") : format_latency(h.value_at_percentile(q));
     };
-    row(t, {escape(name), format_count(completed), format_rate(rate), p(50), p(75), p(90), p(99),
-            p(99.9), p(99.99), p(99.999), h.empty() ? "-" : format_latency(h.max()),
-            h.empty() ? "-" : format_latency(h.mean())});
+    std::vector<std::string> cells = {escape(name)};
+    if (target != nullptr) cells.push_back(escape(*target));
+    for (auto& cell : {format_count(completed), format_rate(rate), p(50), p(75), p(90), p(99),
+                       p(99.9), p(99.99), p(99.999), h.empty() ? "-" : format_latency(h.max()),
+                       h.empty() ? "-" : format_latency(h.mean())})
+        cells.push_back(cell);
+    row(t, cells);
 }
 
-void latency_header(std::string& t, const char* first) {
-    row(t,
-        {first, "count", "tx/s", "p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max",
-         "mean"},
-        true);
+void latency_header(std::string& t, const char* first, bool with_target = false) {
+    std::vector<std::string> cells = {first};
+    if (with_target) cells.emplace_back("target/s");
+    for (const char* cell :
+         {"count", "tx/s", "p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max", "mean"})
+        cells.emplace_back(cell);
+    row(t, cells, true);
 }
 
 std::string latency_table(const stats::RunResult& r) {
@@ -434,16 +446,20 @@ std::string errors_table(const stats::RunResult& r) {
 
 std::string stages_table(const stats::RunResult& r) {
     std::string t = "<div class=\"scroll\"><table>\n";
-    latency_header(t, "stage");
+    const bool open = r.metadata.model == stats::LoadModel::Open;
+    latency_header(t, "stage", open);
+    const std::string no_target;
     for (const auto& st : r.stages) {
         const double seconds = static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
+        const std::string target = stage_rate_text(st, r.metadata.model);
         latency_row(t,
                     fmt::format("{}. {} ({:.1f}s–{:.1f}s)", st.index, st.name,
                                 static_cast<double>(st.start_offset_ns) / 1e9,
                                 static_cast<double>(st.end_offset_ns) / 1e9),
-                    st.latency, st.counters.completed(), seconds);
+                    st.latency, st.counters.completed(), seconds, open ? &target : nullptr);
         for (const auto& op : st.operations) {
-            latency_row(t, "    " + op.name, op.latency, op.counters.completed(), seconds);
+            latency_row(t, "    " + op.name, op.latency, op.counters.completed(), seconds,
+                        open ? &no_target : nullptr);
         }
     }
     t += "</table></div>\n";

@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "report/explain.hpp"
 #include "report/units.hpp"
 
 namespace mbstorm::report {
@@ -35,6 +36,12 @@ json latency_json(const stats::Histogram& h) {
             {"stddev_ns", h.stddev()},
             {"saturated", h.saturated_count()},
             {"percentiles_ns", percentiles}};
+}
+
+json lag_json(const stats::LagCounts& lag) {
+    return {{"late_sends", lag.late_sends},
+            {"max_lag_ns", lag.max_lag_ns},
+            {"mean_lag_ns", lag.mean_lag_ns()}};
 }
 
 json outcomes_json(const stats::OutcomeCounters& c) {
@@ -88,6 +95,7 @@ std::string format_json(const stats::RunResult& r, int indent) {
                 {"depth", m.depth},
                 {"model", stats::load_model_name(m.model)},
                 {"rate_per_second", m.rate_per_second},
+                {"rate_schedule_per_s", rate_schedule(r)},
                 {"requested_duration_s", seconds(m.requested_duration_ns)},
                 {"measured_duration_s", seconds(m.measured_duration_ns)},
                 {"warmup_s", seconds(m.warmup_ns)},
@@ -108,6 +116,10 @@ std::string format_json(const stats::RunResult& r, int indent) {
                           {"name", st.name},
                           {"start_offset_s", seconds(st.start_offset_ns)},
                           {"end_offset_s", seconds(st.end_offset_ns)},
+                          {"target_rate_from_per_s", st.rate_from},
+                          {"target_rate_to_per_s", st.rate_to},
+                          {"target_connections_from", st.connections_from},
+                          {"target_connections_to", st.connections_to},
                           {"totals", totals_json(st.counters, span)},
                           {"latency", latency_json(st.latency)},
                           {"outcomes", outcomes_json(st.counters)},
@@ -140,7 +152,14 @@ std::string format_json(const stats::RunResult& r, int indent) {
                               {"passed", t.passed}});
     }
 
+    json shortfalls = json::array();
+    for (const auto& s : r.shortfalls) {
+        shortfalls.push_back(
+            {{"what", s.what}, {"planned", s.planned}, {"achieved", s.achieved}, {"text", s.text}});
+    }
+
     const auto& lag = r.schedule_lag;
+    const stats::LagCounts all_lag = lag.total();
     json doc = {
         {"schema_version", kJsonSchemaVersion},
         {"tool", m.tool_version},
@@ -153,16 +172,22 @@ std::string format_json(const stats::RunResult& r, int indent) {
         {"stages", stages},
         {"timeline", {{"interval_s", seconds(r.timeline_interval_ns)}, {"intervals", intervals}}},
         {"schedule_lag",
-         {{"late_sends", lag.late_sends},
-          {"max_lag_ns", lag.max_lag_ns},
-          {"mean_lag_ns", lag.late_sends == 0 ? 0.0
-                                              : static_cast<double>(lag.total_lag_ns) /
-                                                    static_cast<double>(lag.late_sends)}}},
+         {{"late_sends", all_lag.late_sends},
+          {"max_lag_ns", all_lag.max_lag_ns},
+          {"mean_lag_ns", all_lag.mean_lag_ns()},
+          {"cause", schedule_lag_cause(lag)},
+          {"engine", lag_json(lag.engine)},
+          {"target", lag_json(lag.target)}}},
         {"connections",
          {{"opened", r.connections.opened},
           {"failed", r.connections.failed},
           {"reconnects", r.connections.reconnects},
-          {"closed_by_peer", r.connections.closed_by_peer}}},
+          {"closed_by_peer", r.connections.closed_by_peer},
+          {"peak_open", r.connections.peak_open}}},
+        {"plan_carried_out", r.shortfalls.empty()},
+        {"plan_shortfalls", shortfalls},
+        {"pipelining", {{"skipped_requests", r.pipelining.skipped_requests}}},
+        {"hints", hint_lines(r)},
         {"thresholds", thresholds},
         {"thresholds_passed", r.thresholds_passed()}};
     // Replace invalid UTF-8 in user-supplied names instead of throwing.

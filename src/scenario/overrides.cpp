@@ -66,8 +66,6 @@ std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
             }
             p.duration = s.total_duration();
         }
-        // A warm-up longer than the new run would leave nothing to measure.
-        if (!o.warmup && p.warmup >= p.duration) p.warmup = load::Duration::zero();
     }
     if (o.warmup) p.warmup = *o.warmup;
     if (o.connections) {

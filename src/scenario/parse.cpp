@@ -116,8 +116,8 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
     p.depth = kDefaultDepth;
     p.operations.clear();
 
-    NodeSlot target_node, slave_node, duration_node, warmup_node, stages_node, ops_node,
-        thresholds_node, model_node, rate_node, transactions_node, backoff_node;
+    NodeSlot target_node, slave_node, duration_node, stages_node, ops_node, thresholds_node,
+        model_node, rate_node, transactions_node, backoff_node;
     try {
         r.each_key(
             root, "the scenario", {"name",           "description",
@@ -173,7 +173,6 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
                     p.transactions = static_cast<std::uint64_t>(
                         r.integer(v, "transactions", 0, std::int64_t{1} << 62));
                 } else if (key == "warmup") {
-                    warmup_node = v;
                     p.warmup = r.duration(v, "warmup", 0s, kMaxRunTime);
                 } else if (key == "timeout")
                     p.transaction_timeout = r.duration(v, "timeout", 1ms, 1h);
@@ -336,12 +335,6 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
         if (s.stages.empty() && p.duration == load::Duration::zero() && p.transactions == 0) {
             r.fail(duration_node,
                    "duration: 0s never ends the run (valid > 0s, or 0s with transactions >= 1)");
-        }
-        if (warmup_node && p.duration > load::Duration::zero() && p.warmup >= p.duration &&
-            s.stages.empty()) {
-            r.fail(warmup_node, fmt::format("warmup: {} leaves nothing to measure (valid 0s up to, "
-                                            "not including, the duration {})",
-                                            duration_text(p.warmup), duration_text(p.duration)));
         }
         if (backoff_node && p.reconnect_backoff_max < p.reconnect_backoff_min) {
             r.fail(backoff_node,

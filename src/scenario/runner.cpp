@@ -32,6 +32,18 @@ load::Plan engine_plan(const Scenario& s) {
 void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
     run.thresholds.clear();
     for (const auto& spec : s.thresholds) run.thresholds.push_back(evaluate_threshold(spec, run));
+    // Thresholds judge the load the plan describes: on a run that fell short of it (fewer
+    // connections, a lower rate, a shorter time) a pass would be a verdict on another test.
+    if (!run.thresholds.empty() && !run.shortfalls.empty()) {
+        stats::ThresholdResult carried_out;
+        carried_out.expression = "plan carried out";
+        carried_out.observed = static_cast<double>(run.shortfalls.size());
+        for (const auto& shortfall : run.shortfalls) {
+            if (!carried_out.observed_text.empty()) carried_out.observed_text += "; ";
+            carried_out.observed_text += shortfall.text;
+        }
+        run.thresholds.push_back(std::move(carried_out));
+    }
 }
 
 load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {

@@ -227,7 +227,7 @@ bool parse_threshold(std::string_view text, ThresholdSpec& out, std::string& err
 std::string format_metric_value(Metric metric, double value) {
     if (is_latency(metric)) {
         if (value < 1e3) return fmt::format("{:.0f}ns", value);
-        if (value < 1e6) return fmt::format("{:.3g}us", value / 1e3);
+        if (value < 1e6) return fmt::format("{:.3g}µs", value / 1e3);  // as every report prints it
         if (value < 1e9) return fmt::format("{:.3g}ms", value / 1e6);
         return fmt::format("{:.3g}s", value / 1e9);
     }

@@ -180,9 +180,13 @@ std::uint64_t Histogram::value_at_percentile(double percentile) const noexcept {
     std::uint64_t cumulative = 0;
     for (std::size_t i = 0; i < counts_length_; ++i) {
         cumulative += counts_[i];
-        if (cumulative >= rank) return highest_equivalent(value_at_index(i));
+        if (cumulative >= rank) return within_recorded(highest_equivalent(value_at_index(i)));
     }
-    return highest_equivalent(max_);
+    return max_;
+}
+
+std::uint64_t Histogram::within_recorded(std::uint64_t value) const noexcept {
+    return std::clamp(value, min(), max());
 }
 
 PercentileIterator::PercentileIterator(const Histogram& histogram,
@@ -210,7 +214,8 @@ bool PercentileIterator::next(PercentilePoint& out) noexcept {
         const double current =
             100.0 * static_cast<double>(cumulative_) / static_cast<double>(total);
         if (histogram_.count_at_index(index_) != 0 && level_to_iterate_to_ <= current) {
-            last_value_ = Histogram::highest_equivalent(Histogram::value_at_index(index_));
+            last_value_ = histogram_.within_recorded(
+                Histogram::highest_equivalent(Histogram::value_at_index(index_)));
             out = {last_value_, level_to_iterate_to_, cumulative_};
             // Halve the remaining distance to 100% every ticks_per_half_distance steps.
             const double remaining = 100.0 - level_to_iterate_to_;

@@ -71,9 +71,13 @@ class Histogram {
     double mean() const noexcept;
     double stddev() const noexcept;
     // HdrHistogram semantics: the highest-equivalent value of the smallest recorded value
-    // whose cumulative count reaches ceil(p/100 * total) (nearest rank, at least 1).
+    // whose cumulative count reaches ceil(p/100 * total) (nearest rank, at least 1), kept
+    // within [min(), max()]: a bucket's upper edge may lie above the largest value recorded,
+    // and a percentile above the max would be a number nobody measured.
     // p is clamped to [0, 100]; 0 when empty.
     std::uint64_t value_at_percentile(double percentile) const noexcept;
+    // value clamped to [min(), max()] (the exact recorded extremes).
+    std::uint64_t within_recorded(std::uint64_t value) const noexcept;
 
     std::uint64_t highest_trackable() const noexcept { return highest_trackable_; }
     std::uint32_t bucket_count() const noexcept { return bucket_count_; }
@@ -114,7 +118,7 @@ class Histogram {
 
 // One step of HdrHistogram's percentile iteration.
 struct PercentilePoint {
-    std::uint64_t value = 0;        // highest-equivalent value reached (ns)
+    std::uint64_t value = 0;        // highest-equivalent value reached, within [min, max] (ns)
     double percentile = 0.0;        // percentile level iterated to, 0..100
     std::uint64_t total_count = 0;  // cumulative count up to and including value
 };

@@ -55,13 +55,46 @@ struct StageResult {
     Histogram latency;
     OutcomeCounters counters;
     std::vector<OperationResult> operations;  // optional per-stage, per-operation breakdown
+    // The schedule the stage asked for, at its start and its end (equal unless it ramps):
+    // open-loop rate (0 in a closed loop) and connections, both over all threads.
+    double rate_from = 0.0;
+    double rate_to = 0.0;
+    std::uint32_t connections_from = 0;
+    std::uint32_t connections_to = 0;
 };
 
-// Open loop only: how often the engine could not send on schedule.
-struct ScheduleLag {
-    std::uint64_t late_sends = 0;  // sends that went out later than their slot + tolerance
+// Sends that went out later than their slot + tolerance.
+struct LagCounts {
+    std::uint64_t late_sends = 0;
     std::uint64_t max_lag_ns = 0;
     std::uint64_t total_lag_ns = 0;  // sum over late sends (mean = total / late_sends)
+
+    void add(const LagCounts& other) noexcept {
+        late_sends += other.late_sends;
+        total_lag_ns += other.total_lag_ns;
+        max_lag_ns = other.max_lag_ns > max_lag_ns ? other.max_lag_ns : max_lag_ns;
+    }
+    double mean_lag_ns() const noexcept {
+        return late_sends == 0
+                   ? 0.0
+                   : static_cast<double>(total_lag_ns) / static_cast<double>(late_sends);
+    }
+};
+
+// Open loop only: how often a send missed its slot, and why. Two causes look alike from the
+// schedule alone and call for opposite remedies, so they are counted apart.
+struct ScheduleLag {
+    // The engine itself was late (its CPU, scheduling): a connection had room to send.
+    LagCounts engine;
+    // The target was not keeping up: every open connection had its in-flight window full
+    // (depth requests waiting for answers), or none was open, so the send waited.
+    LagCounts target;
+
+    LagCounts total() const noexcept {
+        LagCounts all = engine;
+        all.add(target);
+        return all;
+    }
 };
 
 struct ConnectionStats {
@@ -69,6 +102,24 @@ struct ConnectionStats {
     std::uint64_t failed = 0;      // connect attempts that failed
     std::uint64_t reconnects = 0;  // connects after a connection was lost
     std::uint64_t closed_by_peer = 0;
+    std::uint64_t peak_open = 0;  // most open at once (summed over threads' own peaks)
+};
+
+// A part of the plan the run could not carry out: every report says so, and thresholds
+// judged on such a run fail (see scenario/threshold.hpp).
+struct PlanShortfall {
+    std::string what;  // "connections", "rate" or "duration"
+    double planned = 0.0;
+    double achieved = 0.0;
+    std::string text;  // e.g. "connections: 9,326 of 10,000 opened (674 connect attempts failed)"
+};
+
+// Hints that pipelining hurt: a target that answers one request at a time loses the requests
+// queued behind the first, and they time out.
+struct PipeliningSigns {
+    // Requests that timed out although a request sent after them on the same connection was
+    // answered: the target skipped them.
+    std::uint64_t skipped_requests = 0;
 };
 
 // A pass/fail check, e.g. "p99 < 5ms"; filled by the scenario layer.
@@ -89,6 +140,8 @@ struct RunResult {
     std::vector<StageResult> stages;  // empty unless a scenario had stages
     ScheduleLag schedule_lag;
     ConnectionStats connections;
+    std::vector<PlanShortfall> shortfalls;  // empty when the plan was carried out
+    PipeliningSigns pipelining;
     std::vector<ThresholdResult> thresholds;
 
     // Completed transactions per second over the measured duration.

@@ -104,8 +104,37 @@ TEST(EngineE2E, FixedTwoMillisecondDelayShowsInTheMedianInBothModels) {
     ASSERT_TRUE(o.ok) << o.error;
     EXPECT_GE(p50_us(o), 2000u);
     EXPECT_LE(p50_us(o), 3000u);
-    // 1.2 s measured at 1000/s.
-    EXPECT_NEAR(static_cast<double>(o.run.counters.ok()), 1200.0, 200.0);
+    // 1.5 s measured at 1000/s (the warm-up comes on top).
+    EXPECT_NEAR(static_cast<double>(o.run.counters.ok()), 1500.0, 200.0);
+}
+
+// `--warmup 300ms -d 600ms` measures 600 ms, as the README says, the warm-up coming on top; a
+// staged run the same. It used to measure 300 ms in a flag run.
+TEST(EngineE2E, WarmupComesOnTopOfTheDurationWithAndWithoutStages) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 2;
+    plan.duration = 600ms;
+    plan.warmup = 300ms;
+    const auto started = std::chrono::steady_clock::now();
+    const LoadResult flat = run_load(plan);
+    const auto took = std::chrono::steady_clock::now() - started;
+    ASSERT_TRUE(flat.ok) << flat.error;
+    EXPECT_EQ(flat.run.metadata.requested_duration_ns, 600'000'000u);
+    EXPECT_GE(flat.run.metadata.measured_duration_ns, 600'000'000u);
+    EXPECT_LT(flat.run.metadata.measured_duration_ns, 800'000'000u);
+    EXPECT_EQ(flat.run.metadata.warmup_ns, 300'000'000u);
+    EXPECT_GE(took, 900ms);
+
+    Plan staged = plan;
+    staged.stages.resize(2);
+    staged.stages[0].duration = 200ms;
+    staged.stages[1].duration = 400ms;
+    const LoadResult st = run_load(staged);
+    ASSERT_TRUE(st.ok) << st.error;
+    EXPECT_EQ(st.run.metadata.requested_duration_ns, 600'000'000u);
+    EXPECT_GE(st.run.metadata.measured_duration_ns, 600'000'000u);
+    EXPECT_LT(st.run.metadata.measured_duration_ns, 800'000'000u);
 }
 
 TEST(EngineE2E, OpenLoopSeesAPeriodicStallThatClosedLoopHides) {

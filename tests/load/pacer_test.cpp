@@ -73,5 +73,27 @@ TEST(LagTracker, CountsOnlySendsLaterThanTheThreshold) {
     EXPECT_EQ(lag.total_lag_ns(), 5'000'000u);
 }
 
+// Late sends after the schedule found every window full are the target's; the first send on
+// time clears that, and later late sends are the engine's again.
+TEST(LagTracker, BlamesTheTargetOnlyWhileSendsWaitedForAFreeWindow) {
+    LagTracker lag(1'000'000);
+    lag.record(0, 5'000'000);
+    EXPECT_EQ(lag.lag().engine.late_sends, 1u);
+    lag.note_window_full();
+    lag.record(0, 7'000'000);
+    lag.record(0, 9'000'000);
+    EXPECT_EQ(lag.lag().target.late_sends, 2u);
+    EXPECT_EQ(lag.lag().target.max_lag_ns, 9'000'000u);
+    lag.record(0, 500'000);  // on time: the window had room again
+    lag.record(0, 4'000'000);
+    EXPECT_EQ(lag.lag().engine.late_sends, 2u);
+    EXPECT_EQ(lag.lag().target.late_sends, 2u);
+    EXPECT_EQ(lag.late_sends(), 4u);
+    // Warm-up: the cause is tracked, nothing is counted.
+    lag.note_window_full();
+    lag.record(0, 8'000'000, false);
+    EXPECT_EQ(lag.late_sends(), 4u);
+}
+
 }  // namespace
 }  // namespace mbstorm::load

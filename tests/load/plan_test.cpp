@@ -110,7 +110,9 @@ TEST(PlanValidation, DurationWarmupAndEmptyMix) {
     plan.transactions = 100;
     EXPECT_TRUE(validate_plan(plan).empty());
     plan = valid_plan();
-    plan.warmup = plan.duration;
+    plan.warmup = plan.duration;  // comes on top of the duration: nothing is cut
+    EXPECT_TRUE(validate_plan(plan).empty());
+    plan.warmup = -plan.duration;
     EXPECT_TRUE(any_contains(validate_plan(plan), "warmup"));
     plan = valid_plan();
     plan.operations.clear();

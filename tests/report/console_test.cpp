@@ -164,5 +164,68 @@ TEST(Progress, PrinterRewritesInPlaceOnTtyAndPrintsLinesOtherwise) {
     EXPECT_EQ(std::count(plain.begin(), plain.end(), '\n'), 2);
 }
 
+// A saturated target used to be reported as the engine falling behind.
+TEST(ConsoleReport, LateSendsAreBlamedOnTheEngineOrTheTarget) {
+    auto result = testing::make_sample_result();
+    result.schedule_lag = {};
+    EXPECT_TRUE(contains(format_console_report(result), "Schedule    kept (no late sends)"));
+    result.schedule_lag.target = {72'227, 1'570'000'000, 72'227ull * 800'000'000};
+    std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text,
+                         "Schedule    target not keeping up: 72,227 late sends waited for answers "
+                         "(in-flight window full: 16 connections x depth 4), max lag 1.57s"))
+        << text;
+    EXPECT_FALSE(contains(text, "engine fell behind")) << text;
+    result.schedule_lag.engine = {3, 2'000'000, 4'500'000};
+    text = format_console_report(result);
+    EXPECT_TRUE(contains(text, "Schedule    engine fell behind: 3 late sends (mbstorm's own CPU"))
+        << text;
+    EXPECT_TRUE(contains(text, "target not keeping up")) << text;
+}
+
+// A ramp 500 -> 2,000/s used to be shown as "rate 2.00k/s", and stages had no target column.
+TEST(ConsoleReport, ARampIsShownAsTheScheduleItWas) {
+    auto result = testing::make_sample_result();
+    const std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text, "depth 4, open loop, stages 500 → 2.00k req/s, duration")) << text;
+    const auto header = text.find("  stage ");
+    ASSERT_NE(header, std::string::npos) << text;
+    EXPECT_NE(text.find("target/s", header), std::string::npos) << text;
+    EXPECT_NE(text.find("1. warm"), std::string::npos);
+    const auto warm = text.find("1. warm");
+    EXPECT_NE(text.substr(warm, text.find('\n', warm) - warm).find("500 → 2.00k"),
+              std::string::npos)
+        << text;
+    const auto steady = text.find("2. steady");
+    EXPECT_NE(text.substr(steady, text.find('\n', steady) - steady).find(" 2.00k "),
+              std::string::npos)
+        << text;
+    // A flat run: one rate.
+    auto flat = testing::make_sample_result(10, false);
+    EXPECT_TRUE(contains(format_console_report(flat), "open loop, 2.00k req/s")) << text;
+}
+
+TEST(ConsoleReport, APlanNotCarriedOutIsSaidAndDepthHintsAreGiven) {
+    auto result = testing::make_sample_result();
+    EXPECT_FALSE(contains(format_console_report(result), "NOT carried out"));
+    result.shortfalls.push_back(
+        {"connections", 10000, 9326,
+         "connections: 9326 of 10000 opened (674 connect attempts failed)"});
+    std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text, "Plan        NOT carried out:\n  connections: 9326 of 10000 opened"))
+        << text;
+    // Timeouts at depth 4: a hedged hint; skipped requests: a firm one.
+    EXPECT_TRUE(contains(text, "Hint        ")) << text;
+    EXPECT_TRUE(contains(text, "if yours is one, use --depth 1")) << text;
+    result.pipelining.skipped_requests = 375;
+    text = format_console_report(result);
+    EXPECT_TRUE(contains(text,
+                         "Hint        375 requests timed out while later ones on the same "
+                         "connection were answered"))
+        << text;
+    result.metadata.depth = 1;
+    EXPECT_FALSE(contains(format_console_report(result), "Hint"));
+}
+
 }  // namespace
 }  // namespace mbstorm::report

@@ -80,6 +80,34 @@ TEST(Html, StrayResponsesAreShownApartFromTransactions) {
     EXPECT_NE(html.find("duplicate_id (stray response)"), std::string::npos);
 }
 
+// A 3.002 s run used to be drawn on axes running to 4 s.
+TEST(Html, TimeAxesEndAtTheRunsLength) {
+    auto result = testing::make_sample_result(3, false);
+    result.metadata.measured_duration_ns = 3'002'000'000;
+    const std::string html = format_html(result);
+    expect_well_formed(html);
+    EXPECT_EQ(count(html, "class=\"xlab\">3</text>"), 2u);  // throughput and latency over time
+    EXPECT_EQ(html.find("class=\"xlab\">4</text>"), std::string::npos);
+}
+
+// The schedule as it was: the ramp in the run table, each stage's target rate in its row; why
+// sends were late; what the plan did not get; what to change.
+TEST(Html, ScheduleCausesShortfallsAndHints) {
+    auto result = testing::make_sample_result();
+    result.schedule_lag.target = {12, 1'570'000'000, 12 * 900'000'000ull};
+    result.shortfalls.push_back({"connections", 16, 9, "connections: 9 of 16 opened"});
+    result.pipelining.skipped_requests = 5;
+    const std::string html = format_html(result);
+    expect_well_formed(html);
+    EXPECT_NE(html.find("open loop, stages 500 → 2.00k req/s"), std::string::npos);
+    EXPECT_NE(html.find("<th>target/s</th>"), std::string::npos);
+    EXPECT_NE(html.find("<td>500 → 2.00k</td>"), std::string::npos);
+    EXPECT_NE(html.find("target not keeping up: 12 late sends"), std::string::npos);
+    EXPECT_NE(html.find("engine fell behind: 37 late sends"), std::string::npos);
+    EXPECT_NE(html.find("NOT carried out</span>: connections: 9 of 16 opened"), std::string::npos);
+    EXPECT_NE(html.find("use --depth 1"), std::string::npos);
+}
+
 TEST(Html, EmptyRunStillRenders) {
     const std::string html = format_html(stats::RunResult{});
     expect_well_formed(html);

@@ -77,6 +77,38 @@ TEST(Json, ValuesMatchTheRunResult) {
     EXPECT_EQ(doc["timeline"]["intervals"].size(), r.timeline.size());
     EXPECT_EQ(doc["thresholds_passed"], false);
     EXPECT_EQ(doc["schedule_lag"]["late_sends"], 37);
+    EXPECT_EQ(doc["schedule_lag"]["cause"], "engine");
+    EXPECT_EQ(doc["schedule_lag"]["engine"]["late_sends"], 37);
+    EXPECT_EQ(doc["schedule_lag"]["target"]["late_sends"], 0);
+    EXPECT_EQ(doc["run"]["rate_schedule_per_s"], json::array({500.0, 2000.0}));
+    EXPECT_EQ(doc["stages"][0]["target_rate_from_per_s"], 500.0);
+    EXPECT_EQ(doc["stages"][0]["target_rate_to_per_s"], 2000.0);
+    EXPECT_EQ(doc["stages"][2]["target_rate_from_per_s"], 2000.0);
+    EXPECT_EQ(doc["stages"][2]["target_connections_to"], 16);
+    EXPECT_EQ(doc["plan_carried_out"], true);
+    EXPECT_TRUE(doc["plan_shortfalls"].empty());
+    // Per-operation traffic is filled (it used to be 0).
+    EXPECT_EQ(doc["operations"][0]["totals"]["bytes_sent"], r.operations[0].counters.bytes_sent);
+    EXPECT_GT(r.operations[0].counters.bytes_sent, 0u);
+}
+
+TEST(Json, ShortfallsCausesAndHints) {
+    auto r = testing::make_sample_result();
+    r.schedule_lag.target = {5, 10'000'000, 20'000'000};
+    r.shortfalls.push_back({"rate", 8000, 5000, "rate: ..."});
+    r.pipelining.skipped_requests = 7;
+    const json doc = json::parse(format_json(r));
+    EXPECT_EQ(doc["schedule_lag"]["cause"], "engine_and_target");
+    EXPECT_EQ(doc["schedule_lag"]["late_sends"], 42);
+    EXPECT_EQ(doc["schedule_lag"]["target"]["mean_lag_ns"], 4'000'000.0);
+    EXPECT_EQ(doc["plan_carried_out"], false);
+    ASSERT_EQ(doc["plan_shortfalls"].size(), 1u);
+    EXPECT_EQ(doc["plan_shortfalls"][0]["what"], "rate");
+    EXPECT_EQ(doc["plan_shortfalls"][0]["planned"], 8000.0);
+    EXPECT_EQ(doc["plan_shortfalls"][0]["achieved"], 5000.0);
+    EXPECT_EQ(doc["pipelining"]["skipped_requests"], 7);
+    ASSERT_EQ(doc["hints"].size(), 1u);
+    EXPECT_NE(doc["hints"][0].get<std::string>().find("--depth 1"), std::string::npos);
 }
 
 TEST(Json, EmptyRunAndCompactForm) {

@@ -38,6 +38,10 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
             st.index = i + 1;
             st.start_offset_ns = i * stage_len * kS;
             st.end_offset_ns = (i == 2 ? seconds : (i + 1) * stage_len) * kS;
+            // The first stage ramps the rate up from 500/s; the others hold 2,000/s.
+            st.rate_from = i == 0 ? 500.0 : 2000.0;
+            st.rate_to = 2000.0;
+            st.connections_from = st.connections_to = 16;
             r.stages.push_back(std::move(st));
         }
     }
@@ -109,8 +113,8 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
         iv.open_connections = 16;
     }
     r.timeline_interval_ns = kS;
-    r.schedule_lag = {37, 2'400'000, 37 * 600'000};
-    r.connections = {16, 0, 1, 1};
+    r.schedule_lag.engine = {37, 2'400'000, 37 * 600'000};
+    r.connections = {16, 0, 1, 1, 16};
     r.thresholds.push_back({"p99 < 5ms", 3.1e6, "3.10ms", true});
     r.thresholds.push_back({"error_rate < 0.1%", 0.0021, "0.21%", false});
     return r;

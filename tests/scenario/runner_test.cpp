@@ -119,6 +119,39 @@ operations: [{function: 3, quantity: 2}]
     EXPECT_NEAR(r.run.timeline[1].target_rate, 1800, 1);
     EXPECT_EQ(r.run.timeline[0].open_connections, 4U);
     EXPECT_DOUBLE_EQ(r.run.metadata.rate_per_second, 1800);
+    // The schedule as it was, stage by stage.
+    EXPECT_DOUBLE_EQ(r.run.stages[0].rate_from, 200);
+    EXPECT_DOUBLE_EQ(r.run.stages[0].rate_to, 1800);
+    EXPECT_DOUBLE_EQ(r.run.stages[1].rate_from, 1800);
+    EXPECT_DOUBLE_EQ(r.run.stages[1].rate_to, 1800);
+    EXPECT_EQ(r.run.stages[1].connections_to, 4U);
+}
+
+// Connections opened at 4/s cannot reach 6 in 400 ms: every threshold may pass on the load
+// that was there, but the load the scenario describes never was, and the run fails.
+TEST(RunScenario, ThresholdsFailWhenThePlanWasNotCarriedOut) {
+    Scenario s = parse_scenario(R"(
+connections: 6
+connect_rate: 4
+depth: 1
+slave_threads: 1
+threads: 1
+duration: 400ms
+operations: [{function: 3}]
+thresholds:
+  - error_rate == 0
+)",
+                                "short.yaml");
+    const load::LoadResult r = run_scenario(s);
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_FALSE(r.run.shortfalls.empty());
+    ASSERT_EQ(r.run.thresholds.size(), 2U);
+    EXPECT_TRUE(r.run.thresholds[0].passed);
+    EXPECT_EQ(r.run.thresholds[1].expression, "plan carried out");
+    EXPECT_FALSE(r.run.thresholds[1].passed);
+    EXPECT_NE(r.run.thresholds[1].observed_text.find("of 6 opened"), std::string::npos)
+        << r.run.thresholds[1].observed_text;
+    EXPECT_FALSE(r.run.thresholds_passed());
 }
 
 TEST(RunScenario, ExpectCountsMismatchesAgainstTheEmbeddedSlave) {

@@ -77,6 +77,13 @@ TEST(Threshold, EvaluatesOverallAndPerOperation) {
     EXPECT_FALSE(eval("errors == 0", "missing").passed);
 }
 
+// Observed latencies print µs like every report (they printed "405us").
+TEST(Threshold, ObservedMicrosecondsPrintAsEverywhereElse) {
+    EXPECT_EQ(format_metric_value(Metric::Percentile, 405e3), "405µs");
+    EXPECT_EQ(format_metric_value(Metric::Max, 3.1e6), "3.1ms");
+    EXPECT_EQ(format_metric_value(Metric::Mean, 850), "850ns");
+}
+
 TEST(Threshold, StrayResponsesFailAnErrorCountButAreNoTransactions) {
     stats::RunResult run = sample_run();
     run.counters.record(stats::Outcome::UnknownId);

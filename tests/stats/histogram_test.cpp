@@ -36,8 +36,9 @@ void expect_matches_samples(std::vector<std::uint64_t> samples, const char* what
          {0.0, 1.0, 10.0, 25.0, 50.0, 75.0, 90.0, 95.0, 99.0, 99.9, 99.99, 99.999, 100.0}) {
         const std::uint64_t exact = exact_percentile(samples, p);
         const std::uint64_t got = h.value_at_percentile(p);
-        // HdrHistogram semantics: the highest value equivalent to the exact sample...
-        EXPECT_EQ(got, Histogram::highest_equivalent(exact)) << "p" << p;
+        // HdrHistogram semantics: the highest value equivalent to the exact sample, but never
+        // above the recorded max...
+        EXPECT_EQ(got, std::min(Histogram::highest_equivalent(exact), samples.back())) << "p" << p;
         // ...which is within 3 significant digits of it.
         ASSERT_GE(got, exact) << "p" << p;
         EXPECT_LE(static_cast<double>(got - exact), 0.001 * static_cast<double>(exact))
@@ -141,7 +142,30 @@ TEST(Histogram, ClampsAndCountsSaturatedValues) {
     EXPECT_EQ(h.total_count(), 2u);
     EXPECT_EQ(h.saturated_count(), 1u);
     EXPECT_EQ(h.max(), kS);
-    EXPECT_EQ(h.value_at_percentile(100), Histogram::highest_equivalent(kS));
+    EXPECT_EQ(h.value_at_percentile(100), kS);
+}
+
+// 41 ms sits in a 32.768-us-wide bucket whose upper edge is 41.025 ms: the bucket edge used to
+// be reported as p99.999 and p100, above the max of 41.000 ms.
+TEST(Histogram, PercentilesStayWithinMinAndMax) {
+    Histogram h;
+    for (int i = 0; i < 1000; ++i) h.record(3 * kMs + 1);
+    h.record(41 * kMs);
+    ASSERT_GT(Histogram::highest_equivalent(41 * kMs), 41 * kMs);
+    for (double p : {0.0, 50.0, 99.9, 99.99, 99.999, 100.0}) {
+        EXPECT_LE(h.value_at_percentile(p), h.max()) << "p" << p;
+        EXPECT_GE(h.value_at_percentile(p), h.min()) << "p" << p;
+    }
+    EXPECT_EQ(h.value_at_percentile(100), 41 * kMs);
+    for (const auto& point : percentile_distribution(h)) {
+        EXPECT_LE(point.value, h.max()) << "percentile " << point.percentile;
+        EXPECT_GE(point.value, h.min()) << "percentile " << point.percentile;
+    }
+    // A single sample: every percentile is that sample, exactly.
+    Histogram one;
+    one.record(41 * kMs);
+    EXPECT_EQ(one.value_at_percentile(50), 41 * kMs);
+    EXPECT_EQ(one.value_at_percentile(99.999), 41 * kMs);
 }
 
 TEST(Histogram, EmptyHistogram) {
@@ -294,7 +318,7 @@ TEST(PercentileIterator, FollowsHdrHistogramTicks) {
     }
     EXPECT_EQ(points.back().percentile, 100.0);
     EXPECT_EQ(points.back().total_count, 10000u);
-    EXPECT_EQ(points.back().value, Histogram::highest_equivalent(10000 * kUs));
+    EXPECT_EQ(points.back().value, 10000 * kUs);  // the max, not its bucket's upper edge
 }
 
 TEST(PercentileIterator, SingleValue) {
