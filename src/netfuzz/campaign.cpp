@@ -260,6 +260,7 @@ class Campaign {
     bool up_ = true;
     bool capacity_checked_ = false;
     Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
+    std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
 };
 
@@ -370,7 +371,8 @@ Campaign::Outcome Campaign::isolate(Case c) {
     }
     if (!ex.verdict) return Outcome::Clean;
     last_oracle_ = ex.verdict.oracle;
-    std::string key = root_cause_key(ex.verdict);
+    last_key_ = root_cause_key(ex.verdict);
+    std::string key = last_key_;
     if (Finding* f = known(ex.verdict)) {
         hit(*f, ex.verdict, c);
         if (ex.target_down) {
@@ -783,12 +785,12 @@ CampaignResult Campaign::run() {
         }
         std::sort(suspects.begin(), suspects.end());
         suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-        bool lost = false, whole_target = false;
+        bool lost = false, whole_target = false, died = false;
         if (br.connect_failed || br.lane_lost) {
             batch_->close_all();
             const ProbeResult pr = probe_target(o_.target, r_.profile, o_.timeout_ms);
             if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
-                whole_target = true;
+                whole_target = died = true;
                 ++r_.deaths;
                 if (!recover("")) {
                     // Nothing can be re-run: the batch is all there is to show for it.
@@ -841,6 +843,8 @@ CampaignResult Campaign::run() {
                 // A crash or hang explains the batch; anything else keeps looking.
                 found = out == Outcome::Fired &&
                         (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
+                // The batch's death was this crash's doing.
+                if (found && died) ++restarts_by_cause_[last_key_];
             }
         } else {
             later = br.requeue;
@@ -876,6 +880,11 @@ CampaignResult Campaign::run() {
         r_.stop_reason = stopped()                                    ? "interrupted"
                          : (o_.max_cases && r_.cases >= o_.max_cases) ? "case limit reached"
                                                                       : "time limit reached";
+    }
+    // Restarts per root cause, including those charged to a guise it had before minimising.
+    for (const auto& [key, n] : restarts_by_cause_) {
+        const auto it = by_key_.find(key);
+        if (it != by_key_.end()) r_.findings[it->second].restarts += n;
     }
     r_.seconds = elapsed();
     progress(true);

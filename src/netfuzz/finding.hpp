@@ -38,6 +38,8 @@ struct Finding {
     std::uint64_t hits = 1;
     std::map<std::string, std::uint64_t> variants;
     std::string minimize_note;  // why it was not (fully) minimised, if it was not
+    unsigned restarts = 0;      // target restarts this root cause cost (finding, confirming,
+                                // minimising it)
     int timeout_ms = 1000;
     std::string folder;  // where it was saved ("" if not saved)
 

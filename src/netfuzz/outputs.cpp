@@ -33,6 +33,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
                             {"hits", f.hits},
                             {"variants", f.variants},
                             {"minimize_note", f.minimize_note},
+                            {"restarts", f.restarts},
                             {"summary", f.verdict.summary},
                             {"expected", f.verdict.expected},
                             {"seen", f.verdict.seen},

@@ -32,49 +32,7 @@ CommandResult run_mbstorm_bounded(const std::string& args) {
     return run_mbstorm(args, kRunLimitSeconds);
 }
 
-// Servers the restart command started in the background: their parent shell exits at once,
-// so without a subreaper they would be re-parented to PID 1 (which in a container may never
-// reap them). While this object lives, this test process adopts them instead, so it can stop
-// and reap every one.
-class RestartedServers {
-  public:
-    explicit RestartedServers(std::string pid_file) : pid_file_(std::move(pid_file)) {
-        ::prctl(PR_SET_CHILD_SUBREAPER, 1);
-    }
-    ~RestartedServers() {
-        stop_all();
-        ::prctl(PR_SET_CHILD_SUBREAPER, 0);
-    }
-    RestartedServers(const RestartedServers&) = delete;
-    RestartedServers& operator=(const RestartedServers&) = delete;
-
-    std::vector<pid_t> pids() const {
-        std::vector<pid_t> out;
-        std::ifstream in(pid_file_);
-        for (int pid = 0; in >> pid;)
-            if (pid > 1) out.push_back(pid);
-        return out;
-    }
-    // SIGKILL and reap each one (the ones that crashed are zombies already). True when none
-    // is left.
-    bool stop_all() {
-        bool all_gone = true;
-        for (pid_t pid : pids()) {
-            if (reaped_.count(pid)) continue;
-            ::kill(pid, SIGKILL);
-            // While this process is their subreaper they stay our (zombie) children until
-            // reaped here, so a pid from the file cannot have been reused by then.
-            const pid_t waited = ::waitpid(pid, nullptr, 0);
-            if (waited == pid || (waited < 0 && errno == ECHILD)) reaped_.insert(pid);
-            if (::kill(pid, 0) == 0) all_gone = false;
-        }
-        return all_gone;
-    }
-
-  private:
-    std::string pid_file_;
-    std::set<pid_t> reaped_;
-};
+using mbstorm::test::RestartedServers;
 
 const nlohmann::json* find_crash(const nlohmann::json& summary) {
     for (const auto& f : summary.at("findings"))

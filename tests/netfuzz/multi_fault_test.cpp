@@ -1,0 +1,76 @@
+// The fuzzer's precision and budget on a target with many bugs at once
+// (tests/tools/multi_fault_server.cpp: 11 planted bugs, crashes among them, restarted by the
+// fuzzer's --restart-cmd): with a fixed seed every bug is found, each exactly once, no crash
+// costs more than 3 restarts, and the run keeps its deadline.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "fuzz_test_support.hpp"
+
+namespace {
+
+using mbstorm::test::RestartedServers;
+using mbstorm::test::run_mbstorm;
+using mbstorm::test::tool_path;
+
+constexpr int kSeconds = 120;
+constexpr int kServerLifetimeSeconds = 400;
+
+// One root cause per planted bug (see the server's header comment for the numbers).
+const std::set<std::string> kPlanted = {
+    "crash:target-down/fc0F",                                            // 1
+    "crash:target-down/fc16",                                            // 2
+    "crash:target-down/fc2B",                                            // 3
+    "hang:whole-server-hang/fc14",                                       // 4
+    "spec-deviation:answers-nonzero-protocol-id",                        // 5
+    "spec-deviation:exception-02-where-03-owed(quantity_out_of_range)",  // 6
+    "hang:no-answer/fc07",                                               // 7
+    "spec-deviation:read-after-write-mismatch(holding-registers)",       // 8
+    "hang:stalls-other-connections(partial-frame)",                      // 9
+    "hang:capacity/accepted-connections-unserved",                       // 10
+    "unexpected-close:drops-answers-on-half-close",                      // 11
+};
+
+TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
+    int port = 0;
+    auto first = mbstorm::test::start_fixed_port_server("multi_fault_server", port, 7,
+                                                        kServerLifetimeSeconds);
+    ASSERT_TRUE(first) << "multi_fault_server did not start";
+    const std::string dir = mbstorm::test::temp_dir("multi-fault");
+    RestartedServers restarted(dir + "/restarted.pids");
+    const std::string restart_cmd =
+        tool_path("multi_fault_server") + " --port " + std::to_string(port) + " --pid-file " + dir +
+        "/restarted.pids --exit-after-s " + std::to_string(kServerLifetimeSeconds) +
+        " </dev/null >/dev/null 2>&1 &";
+    const auto run =
+        run_mbstorm("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed 1 --seconds " +
+                        std::to_string(kSeconds) + " -q --out " + dir + "/findings --json " + dir +
+                        "/summary.json --restart-cmd '" + restart_cmd + "'",
+                    kSeconds + 60);
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    std::ifstream in(dir + "/summary.json");
+    const auto s = nlohmann::json::parse(in, nullptr, false);
+    ASSERT_FALSE(s.is_discarded()) << run.output;
+    // The deadline: --seconds bounds everything, restarts and minimisation included.
+    EXPECT_LE(s.at("seconds").get<double>(), kSeconds + 5.0) << run.output;
+    std::map<std::string, int> found;
+    for (const auto& f : s.at("findings")) {
+        ++found[f.at("root_cause").get<std::string>()];
+        EXPECT_LE(f.at("restarts").get<unsigned>(), 3u) << f.dump(2);
+        EXPECT_TRUE(std::filesystem::exists(f.at("folder").get<std::string>() + "/finding.json"));
+    }
+    for (const std::string& bug : kPlanted) EXPECT_EQ(found[bug], 1) << bug << "\n" << run.output;
+    EXPECT_EQ(s.at("findings").size(), kPlanted.size()) << run.output;
+    // Three crashes: each may cost at most three restarts.
+    EXPECT_LE(s.at("restarts").get<unsigned>(), 3u * 3u) << run.output;
+    EXPECT_TRUE(restarted.stop_all());
+    first.reset();
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
