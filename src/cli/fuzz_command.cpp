@@ -30,7 +30,7 @@ struct FuzzOptions {
     bool allow_remote = false;
     int unit = 1;
     std::uint64_t seed = 1;
-    double seconds = 0;
+    std::uint64_t duration_ns = 0;
     std::uint64_t cases = 0;
     std::uint64_t timeout_ns = 1'000'000'000;
     unsigned lanes = 4;
@@ -96,7 +96,8 @@ int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
     if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
-    if (o.seconds <= 0 && o.cases == 0) return usage("bound the run with --seconds N or --cases N");
+    if (o.duration_ns == 0 && o.cases == 0)
+        return usage("bound the run with --seconds DURATION or --cases N");
     if (!parse_state_range(o.state_range, c.state, error)) return usage(error);
     if (!o.dict.empty()) {
         netfuzz::Dictionary d;
@@ -122,7 +123,7 @@ int run_fuzz(const FuzzOptions& o) {
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;
     c.max_cases = o.cases;
-    c.max_seconds = o.seconds;
+    c.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
     c.timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     c.lanes = o.lanes;
     c.isolated_per_mille = o.isolated_per_mille;
@@ -182,9 +183,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->add_option("--seed", o->seed,
                     "seed: the same seed against the same target gives the same cases")
         ->capture_default_str();
-    cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--cases", o->cases, "stop after this many cases")->check(CLI::PositiveNumber);
+    add_duration_option(cmd, "--seconds,--duration,-d", o->duration_ns,
+                        "stop after this long (60, 2s, 1m30s; a bare number is seconds)");
+    add_count_option(cmd, "--cases", o->cases, "stop after this many cases");
     add_duration_option(cmd, "--timeout", o->timeout_ns,
                         "answer timeout: longer is a hang (default 1s)");
     cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")

@@ -193,10 +193,9 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--model", o->model,
                     "closed loop (keep --depth outstanding) or open loop (--rate)")
         ->check(CLI::IsMember({"closed", "open"}));
-    cmd->add_option("-R,--rate", p.rate,
-                    "open loop: total transactions per second; latency is measured from each "
-                    "transaction's intended send time (coordinated-omission corrected)")
-        ->check(CLI::Range(0.0, load::kMaxRate));
+    add_number_option(cmd, "-R,--rate", p.rate, 0.0, load::kMaxRate,
+                      "open loop: total transactions per second; latency is measured from each "
+                      "transaction's intended send time (coordinated-omission corrected)");
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function,
@@ -207,15 +206,15 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
-    cmd->add_option("--zipf", p.operations[0].zipf_exponent, "zipf exponent")
-        ->check(CLI::Range(0.0, load::kMaxZipfExponent));
+    add_number_option(cmd, "--zipf", p.operations[0].zipf_exponent, 0.0, load::kMaxZipfExponent,
+                      "zipf exponent");
     cmd->add_option("--value", o->value, "value written by write operations")
         ->check(CLI::Range(0, 65535));
     add_duration_option(cmd, "--timeout", o->timeout_ns, "per-transaction timeout (default 1s)");
     add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns,
                         "connect timeout (default 3s)");
-    cmd->add_option("--connect-rate", p.connect_rate, "new connections per second")
-        ->check(CLI::Range(1.0, 1e7));
+    add_number_option(cmd, "--connect-rate", p.connect_rate, 1.0, 1e7,
+                      "new connections per second");
     cmd->add_flag("--allow-writes", p.allow_writes,
                   "allow write function codes to a target outside loopback");
     cmd->add_option("--seed", p.seed, "seed for address and value generators");

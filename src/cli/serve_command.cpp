@@ -112,7 +112,7 @@ void add_serve_command(CLI::App& app, Action& action) {
     cmd->add_option("--device", o->device_file,
                     "YAML device description: tables, initial data, simulated inputs, faults");
     cmd->add_flag("--stats", o->stats, "print a line of statistics every second");
-    add_duration_option(cmd, "--duration", o->duration_ns,
+    add_duration_option(cmd, "--duration,-d", o->duration_ns,
                         "stop by itself after this long (default: until Ctrl-C)");
     cmd->add_option("--max-connections", o->config.max_connections, "connection limit (0: none)")
         ->capture_default_str();
