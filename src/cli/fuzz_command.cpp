@@ -173,8 +173,10 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<FuzzOptions>();
     auto* cmd = app.add_subcommand(
         "fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
-    cmd->add_option("--target", o->target,
-                    "HOST:PORT of the server to fuzz (required; loopback unless --allow-remote)")
+    cmd->add_option(
+           "--target", o->target,
+           "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted "
+           "(required; loopback unless --allow-remote)")
         ->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     cmd->add_option("--unit", o->unit, "unit id the target answers")

@@ -172,7 +172,8 @@ void add_run_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
     cmd->add_option("--target", o->target,
-                    "server to test, HOST:PORT or [IPv6]:PORT (default: start the embedded slave)");
+                    "server to test: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if "
+                    "omitted (default: start the embedded slave)");
     cmd->add_option("-c,--connections", p.connections, "connections")
         ->check(CLI::Range(1u, load::kMaxConnections))
         ->capture_default_str();

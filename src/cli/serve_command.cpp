@@ -104,7 +104,9 @@ int run_serve(ServeOptions& o) {
 void add_serve_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<ServeOptions>();
     auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
-    cmd->add_option("--listen,-l", o->config.listen, "address to listen on, host:port or [v6]:port")
+    cmd->add_option("--listen,-l", o->config.listen,
+                    "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
+                    "port 502 if omitted")
         ->capture_default_str();
     cmd->add_option("--threads,-t", o->config.threads,
                     "worker threads, each with its own ring (0: one per core)")
