@@ -82,10 +82,6 @@ int usage(const std::string& msg) {
 }
 
 bool write_output(const std::string& path, const std::string& text) {
-    if (path == "-") {
-        std::fwrite(text.data(), 1, text.size(), stdout);
-        return true;
-    }
     std::string error;
     if (report::write_text_file(path, text, error)) return true;
     fmt::print(stderr, "mbstorm fuzz: {}\n", error);
@@ -113,12 +109,13 @@ int run_fuzz(const FuzzOptions& o) {
         if (!path.empty() && path != "-" && !report::check_writable(path, error))
             return usage(fmt::format("cannot write {} {}", flag, error));
     }
+    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
+    if (on_stdout > 1) return usage("only one of --json, --junit and --sarif can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
-    fmt::print(
-        "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
-        "and malformed frames); only fuzz devices you may change\n",
-        c.target.to_string());
-    std::fflush(stdout);
+    fmt::print(stderr,
+               "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 "
+               "16 17 and malformed frames); only fuzz devices you may change\n",
+               c.target.to_string());
     c.target_text = c.target.to_string();
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;
@@ -139,16 +136,15 @@ int run_fuzz(const FuzzOptions& o) {
     const bool quiet = o.quiet;
     auto progress = [quiet](const netfuzz::Progress& p) {
         if (quiet) return;
-        fmt::print("[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n", p.seconds,
-                   p.cases, p.cases_per_second, p.findings, p.target_up ? "up" : "DOWN (waiting)",
+        fmt::print(stderr, "[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n",
+                   p.seconds, p.cases, p.cases_per_second, p.findings,
+                   p.target_up ? "up" : "DOWN (waiting)",
                    p.restarts ? fmt::format(", {} restart(s)", p.restarts) : std::string());
-        std::fflush(stdout);
     };
     auto finding = [](const netfuzz::Finding& f) {
-        fmt::print("FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()),
+        fmt::print(stderr, "FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()),
                    f.verdict.summary);
-        if (!f.folder.empty()) fmt::print("  saved to {}\n", f.folder);
-        std::fflush(stdout);
+        if (!f.folder.empty()) fmt::print(stderr, "  saved to {}\n", f.folder);
     };
     const netfuzz::CampaignResult r = netfuzz::run_campaign(c, progress, finding);
     std::signal(SIGINT, SIG_DFL);
@@ -158,7 +154,9 @@ int run_fuzz(const FuzzOptions& o) {
         return kExitUsage;
     }
     const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};
-    fmt::print("{}", netfuzz::format_fuzz_summary(r, info));
+    // The summary is the result: stdout, unless a report file takes stdout.
+    fmt::print(on_stdout ? stderr : stdout, "{}", netfuzz::format_fuzz_summary(r, info));
+    std::fflush(on_stdout ? stderr : stdout);
     bool ok = true;
     if (!o.json.empty()) ok &= write_output(o.json, netfuzz::format_fuzz_json(r, info));
     if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
@@ -204,8 +202,8 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
-    cmd->add_option("--junit", o->junit, "write JUnit XML to this file");
-    cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file");
+    cmd->add_option("--junit", o->junit, "write JUnit XML to this file ('-': stdout)");
+    cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file ('-': stdout)");
     cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
     cmd->add_flag("--naive", o->naive,
                   "baseline: random PDU bytes instead of the structure-aware generator");

@@ -36,7 +36,7 @@ int run_replay(const ReplayOptions& o) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
-    fmt::print("mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
+    fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
     if (!f.note.empty()) fmt::print("note: {}\n", f.note);
     netfuzz::ExecOptions ex;

@@ -110,7 +110,7 @@ int run_load_test(RunOptions& o) {
     s.name.clear();
     s.slave_threads = o.slave_threads;
     fmt::print(
-        "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
+        stderr, "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
         o.target.empty() ? std::string("the embedded reference slave (no --target given)")
                          : o.target,
         plan.connections, plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
@@ -118,7 +118,6 @@ int run_load_test(RunOptions& o) {
                                                 : std::string("closed loop"),
         plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
                               : fmt::format("for {} transactions", plan.transactions));
-    std::fflush(stdout);
     ScenarioRunRequest request;
     request.quiet = o.quiet;
     request.outputs = o.outputs;
@@ -229,6 +228,9 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--junit", o->junit, "write the scenario's thresholds as JUnit XML test cases");
     cmd->callback([o, cmd, &action] {
         action = [o, cmd] {
+            OutputFiles outputs = o->outputs;
+            outputs.junit = o->junit;
+            if (std::string e = stdout_conflict(outputs); !e.empty()) return fail(e);
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

@@ -56,17 +56,16 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.stop = &g_scenario_stop;
     hooks.tool_version = "mbstorm 0.1.0";
     hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
-    hooks.on_message = [](const std::string& m) {
-        fmt::print("mbstorm run: {}\n", m);
-        std::fflush(stdout);
-    };
+    hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
     load::LoadResult result = scenario::run_scenario(s, hooks);
     progress.finish();
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
     if (g_scenario_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
 
-    int code = report_run(result, request.outputs);
+    OutputFiles files = request.outputs;
+    files.junit = request.junit;
+    int code = report_run(result, files);
     if (!request.junit.empty()) {
         std::string error;
         const std::string xml =
@@ -76,7 +75,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                        error);
             code = kExitUsage;
         } else {
-            fmt::print("wrote JUnit XML {}\n", request.junit);
+            fmt::print(stderr, "wrote JUnit XML {}\n",
+                       request.junit == "-" ? "to stdout" : request.junit);
         }
     }
     if (code == kExitOk && !result.run.thresholds_passed()) {
@@ -106,17 +106,16 @@ int run_scenario_file(const ScenarioRunRequest& request) {
     }
 
     const auto& plan = s.plan;
-    fmt::print(
-        "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
-        "{}{}\n",
-        s.name, request.file,
-        s.target.empty() ? " against the embedded reference slave (no target given)" : "",
-        plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
-        plan.connections == 1 ? "" : "s", plan.depth,
-        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
-        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
-        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
-    std::fflush(stdout);
+    fmt::print(stderr,
+               "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
+               "{}{}\n",
+               s.name, request.file,
+               s.target.empty() ? " against the embedded reference slave (no target given)" : "",
+               plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
+               plan.connections == 1 ? "" : "s", plan.depth,
+               plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
+               s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
+               fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
 
     return run_resolved_scenario(s, request);
 }
