@@ -21,7 +21,9 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-void on_fuzz_stop_signal(int) {
+std::atomic<int> g_stop_signal{0};  // which signal stopped the campaign
+void on_fuzz_stop_signal(int signal_number) {
+    g_stop_signal.store(signal_number);
     g_stop.store(true);
 }
 
@@ -162,6 +164,11 @@ int run_fuzz(const FuzzOptions& o) {
     if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
     if (!o.sarif.empty()) ok &= write_output(o.sarif, netfuzz::format_fuzz_sarif(r, info));
     if (!ok) return kExitUsage;
+    if (const int sig = g_stop_signal.load(); sig != 0) {
+        fmt::print(stderr, "mbstorm fuzz: interrupted by {}: exit code {}\n", signal_name(sig),
+                   exit_code_for_signal(sig));
+        return exit_code_for_signal(sig);
+    }
     return r.findings.empty() && !r.target_lost ? kExitOk : kExitFailed;
 }
 

@@ -17,8 +17,10 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_scenario_stop{false};
+std::atomic<int> g_scenario_signal{0};  // which signal stopped the run
 
-extern "C" void on_scenario_stop_signal(int) {
+extern "C" void on_scenario_stop_signal(int signal_number) {
+    g_scenario_signal.store(signal_number, std::memory_order_relaxed);
     g_scenario_stop.store(true, std::memory_order_relaxed);
     // A second Ctrl-C ends the process at once.
     signal(SIGINT, SIG_DFL);
@@ -49,6 +51,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
             return usage_error(fmt::format("cannot write {} {}", flag, error));
     }
     g_scenario_stop = false;
+    g_scenario_signal = 0;
     signal(SIGINT, on_scenario_stop_signal);
     signal(SIGTERM, on_scenario_stop_signal);
     LiveProgress progress(stderr, request.quiet);
@@ -61,7 +64,10 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     progress.finish();
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
-    if (g_scenario_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
+    const int stopped_by = g_scenario_signal.load();
+    if (stopped_by != 0)
+        result.run.metadata.notes.push_back(
+            fmt::format("interrupted by {}", signal_name(stopped_by)));
 
     OutputFiles files = request.outputs;
     files.junit = request.junit;
@@ -85,6 +91,12 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
                    result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
         code = kExitFailed;
+    }
+    if (stopped_by != 0) {
+        // Reports are written above; the exit code says the run did not finish.
+        fmt::print(stderr, "mbstorm run: interrupted by {}: exit code {}\n",
+                   signal_name(stopped_by), exit_code_for_signal(stopped_by));
+        if (code != kExitUsage) code = exit_code_for_signal(stopped_by);
     }
     return code;
 }
