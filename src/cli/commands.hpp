@@ -13,6 +13,15 @@ namespace mbstorm::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailed = 1;  // thresholds breached, findings present
 inline constexpr int kExitUsage = 2;   // bad input, bad flags, unreachable target
+// A run or fuzz campaign interrupted by a signal exits 128 + the signal's number, the shell's
+// convention (130 for SIGINT, 143 for SIGTERM), after writing every report.
+inline int exit_code_for_signal(int signal_number) {
+    return 128 + signal_number;
+}
+// "SIGINT", "SIGTERM" (the two signals run and fuzz stop on).
+inline const char* signal_name(int signal_number) {
+    return signal_number == 2 ? "SIGINT" : signal_number == 15 ? "SIGTERM" : "a signal";
+}
 
 using Action = std::function<int()>;
 

@@ -21,7 +21,9 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_stop{false};
-void on_fuzz_stop_signal(int) {
+std::atomic<int> g_stop_signal{0};  // which signal stopped the campaign
+void on_fuzz_stop_signal(int signal_number) {
+    g_stop_signal.store(signal_number);
     g_stop.store(true);
 }
 
@@ -30,7 +32,7 @@ struct FuzzOptions {
     bool allow_remote = false;
     int unit = 1;
     std::uint64_t seed = 1;
-    double seconds = 0;
+    std::uint64_t duration_ns = 0;
     std::uint64_t cases = 0;
     std::uint64_t timeout_ns = 1'000'000'000;
     unsigned lanes = 4;
@@ -82,10 +84,6 @@ int usage(const std::string& msg) {
 }
 
 bool write_output(const std::string& path, const std::string& text) {
-    if (path == "-") {
-        std::fwrite(text.data(), 1, text.size(), stdout);
-        return true;
-    }
     std::string error;
     if (report::write_text_file(path, text, error)) return true;
     fmt::print(stderr, "mbstorm fuzz: {}\n", error);
@@ -96,7 +94,8 @@ int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
     if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
-    if (o.seconds <= 0 && o.cases == 0) return usage("bound the run with --seconds N or --cases N");
+    if (o.duration_ns == 0 && o.cases == 0)
+        return usage("bound the run with --seconds DURATION or --cases N");
     if (!parse_state_range(o.state_range, c.state, error)) return usage(error);
     if (!o.dict.empty()) {
         netfuzz::Dictionary d;
@@ -112,17 +111,18 @@ int run_fuzz(const FuzzOptions& o) {
         if (!path.empty() && path != "-" && !report::check_writable(path, error))
             return usage(fmt::format("cannot write {} {}", flag, error));
     }
+    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
+    if (on_stdout > 1) return usage("only one of --json, --junit and --sarif can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
-    fmt::print(
-        "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 16 17 "
-        "and malformed frames); only fuzz devices you may change\n",
-        c.target.to_string());
-    std::fflush(stdout);
+    fmt::print(stderr,
+               "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 "
+               "16 17 and malformed frames); only fuzz devices you may change\n",
+               c.target.to_string());
     c.target_text = c.target.to_string();
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;
     c.max_cases = o.cases;
-    c.max_seconds = o.seconds;
+    c.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
     c.timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     c.lanes = o.lanes;
     c.isolated_per_mille = o.isolated_per_mille;
@@ -138,16 +138,15 @@ int run_fuzz(const FuzzOptions& o) {
     const bool quiet = o.quiet;
     auto progress = [quiet](const netfuzz::Progress& p) {
         if (quiet) return;
-        fmt::print("[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n", p.seconds,
-                   p.cases, p.cases_per_second, p.findings, p.target_up ? "up" : "DOWN (waiting)",
+        fmt::print(stderr, "[{:7.1f}s] {} cases, {:.0f} cases/s, {} finding(s), target {}{}\n",
+                   p.seconds, p.cases, p.cases_per_second, p.findings,
+                   p.target_up ? "up" : "DOWN (waiting)",
                    p.restarts ? fmt::format(", {} restart(s)", p.restarts) : std::string());
-        std::fflush(stdout);
     };
     auto finding = [](const netfuzz::Finding& f) {
-        fmt::print("FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()),
+        fmt::print(stderr, "FINDING #{} {}: {}\n", f.id, netfuzz::oracle_name(f.oracle()),
                    f.verdict.summary);
-        if (!f.folder.empty()) fmt::print("  saved to {}\n", f.folder);
-        std::fflush(stdout);
+        if (!f.folder.empty()) fmt::print(stderr, "  saved to {}\n", f.folder);
     };
     const netfuzz::CampaignResult r = netfuzz::run_campaign(c, progress, finding);
     std::signal(SIGINT, SIG_DFL);
@@ -157,12 +156,19 @@ int run_fuzz(const FuzzOptions& o) {
         return kExitUsage;
     }
     const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};
-    fmt::print("{}", netfuzz::format_fuzz_summary(r, info));
+    // The summary is the result: stdout, unless a report file takes stdout.
+    fmt::print(on_stdout ? stderr : stdout, "{}", netfuzz::format_fuzz_summary(r, info));
+    std::fflush(on_stdout ? stderr : stdout);
     bool ok = true;
     if (!o.json.empty()) ok &= write_output(o.json, netfuzz::format_fuzz_json(r, info));
     if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
     if (!o.sarif.empty()) ok &= write_output(o.sarif, netfuzz::format_fuzz_sarif(r, info));
     if (!ok) return kExitUsage;
+    if (const int sig = g_stop_signal.load(); sig != 0) {
+        fmt::print(stderr, "mbstorm fuzz: interrupted by {}: exit code {}\n", signal_name(sig),
+                   exit_code_for_signal(sig));
+        return exit_code_for_signal(sig);
+    }
     return r.findings.empty() && !r.target_lost ? kExitOk : kExitFailed;
 }
 
@@ -172,8 +178,10 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<FuzzOptions>();
     auto* cmd = app.add_subcommand(
         "fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
-    cmd->add_option("--target", o->target,
-                    "HOST:PORT of the server to fuzz (required; loopback unless --allow-remote)")
+    cmd->add_option(
+           "--target", o->target,
+           "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted "
+           "(required; loopback unless --allow-remote)")
         ->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     cmd->add_option("--unit", o->unit, "unit id the target answers")
@@ -182,9 +190,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->add_option("--seed", o->seed,
                     "seed: the same seed against the same target gives the same cases")
         ->capture_default_str();
-    cmd->add_option("--seconds", o->seconds, "stop after this many seconds")
-        ->check(CLI::PositiveNumber);
-    cmd->add_option("--cases", o->cases, "stop after this many cases")->check(CLI::PositiveNumber);
+    add_duration_option(cmd, "--seconds,--duration,-d", o->duration_ns,
+                        "stop after this long (60, 2s, 1m30s; a bare number is seconds)");
+    add_count_option(cmd, "--cases", o->cases, "stop after this many cases");
     add_duration_option(cmd, "--timeout", o->timeout_ns,
                         "answer timeout: longer is a hang (default 1s)");
     cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")
@@ -201,8 +209,8 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
-    cmd->add_option("--junit", o->junit, "write JUnit XML to this file");
-    cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file");
+    cmd->add_option("--junit", o->junit, "write JUnit XML to this file ('-': stdout)");
+    cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file ('-': stdout)");
     cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
     cmd->add_flag("--naive", o->naive,
                   "baseline: random PDU bytes instead of the structure-aware generator");

@@ -36,7 +36,7 @@ int run_replay(const ReplayOptions& o) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
-    fmt::print("mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
+    fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
     if (!f.note.empty()) fmt::print("note: {}\n", f.note);
     netfuzz::ExecOptions ex;
@@ -84,7 +84,10 @@ void add_replay_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "replay", "Re-send a saved fuzz finding and say whether it still reproduces");
     cmd->add_option("finding", o->finding, "finding folder (or its finding.json)")->required();
-    cmd->add_option("--target", o->target, "HOST:PORT to replay against (required)")->required();
+    cmd->add_option("--target", o->target,
+                    "server to replay against: HOST[:PORT], [IPv6]:PORT or an IPv6 "
+                    "address, port 502 if omitted (required)")
+        ->required();
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout (default: the finding's)");
     cmd->add_option("--runs", o->runs, "replay this many times and report k of n")

@@ -110,7 +110,7 @@ int run_load_test(RunOptions& o) {
     s.name.clear();
     s.slave_threads = o.slave_threads;
     fmt::print(
-        "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
+        stderr, "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
         o.target.empty() ? std::string("the embedded reference slave (no --target given)")
                          : o.target,
         plan.connections, plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
@@ -118,7 +118,6 @@ int run_load_test(RunOptions& o) {
                                                 : std::string("closed loop"),
         plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
                               : fmt::format("for {} transactions", plan.transactions));
-    std::fflush(stdout);
     ScenarioRunRequest request;
     request.quiet = o.quiet;
     request.outputs = o.outputs;
@@ -172,7 +171,8 @@ void add_run_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
     cmd->add_option("--target", o->target,
-                    "server to test, HOST:PORT or [IPv6]:PORT (default: start the embedded slave)");
+                    "server to test: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if "
+                    "omitted (default: start the embedded slave)");
     cmd->add_option("-c,--connections", p.connections, "connections")
         ->check(CLI::Range(1u, load::kMaxConnections))
         ->capture_default_str();
@@ -193,10 +193,9 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--model", o->model,
                     "closed loop (keep --depth outstanding) or open loop (--rate)")
         ->check(CLI::IsMember({"closed", "open"}));
-    cmd->add_option("-R,--rate", p.rate,
-                    "open loop: total transactions per second; latency is measured from each "
-                    "transaction's intended send time (coordinated-omission corrected)")
-        ->check(CLI::Range(0.0, load::kMaxRate));
+    add_number_option(cmd, "-R,--rate", p.rate, 0.0, load::kMaxRate,
+                      "open loop: total transactions per second; latency is measured from each "
+                      "transaction's intended send time (coordinated-omission corrected)");
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function,
@@ -207,15 +206,15 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
-    cmd->add_option("--zipf", p.operations[0].zipf_exponent, "zipf exponent")
-        ->check(CLI::Range(0.0, load::kMaxZipfExponent));
+    add_number_option(cmd, "--zipf", p.operations[0].zipf_exponent, 0.0, load::kMaxZipfExponent,
+                      "zipf exponent");
     cmd->add_option("--value", o->value, "value written by write operations")
         ->check(CLI::Range(0, 65535));
     add_duration_option(cmd, "--timeout", o->timeout_ns, "per-transaction timeout (default 1s)");
     add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns,
                         "connect timeout (default 3s)");
-    cmd->add_option("--connect-rate", p.connect_rate, "new connections per second")
-        ->check(CLI::Range(1.0, 1e7));
+    add_number_option(cmd, "--connect-rate", p.connect_rate, 1.0, 1e7,
+                      "new connections per second");
     cmd->add_flag("--allow-writes", p.allow_writes,
                   "allow write function codes to a target outside loopback");
     cmd->add_option("--seed", p.seed, "seed for address and value generators");
@@ -229,6 +228,9 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--junit", o->junit, "write the scenario's thresholds as JUnit XML test cases");
     cmd->callback([o, cmd, &action] {
         action = [o, cmd] {
+            OutputFiles outputs = o->outputs;
+            outputs.junit = o->junit;
+            if (std::string e = stdout_conflict(outputs); !e.empty()) return fail(e);
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

@@ -12,10 +12,18 @@ namespace mbstorm::cli {
 
 void add_output_options(CLI::App* cmd, OutputFiles& files) {
     cmd->add_option("--json", files.json,
-                    "write a machine-readable summary (schema: docs/json-schema.md)");
+                    "write a machine-readable summary (schema: docs/json-schema.md; '-': stdout)");
     cmd->add_option("--hdr", files.hdr,
-                    "write the latency distribution in HdrHistogram's .hgrm format");
-    cmd->add_option("--html", files.html, "write a self-contained HTML report with plots");
+                    "write the latency distribution in HdrHistogram's .hgrm format ('-': stdout)");
+    cmd->add_option("--html", files.html,
+                    "write a self-contained HTML report with plots ('-': stdout)");
+}
+
+std::string stdout_conflict(const OutputFiles& files) {
+    int n = 0;
+    for (const std::string* f : {&files.json, &files.hdr, &files.html, &files.junit})
+        n += *f == "-" ? 1 : 0;
+    return n > 1 ? "only one of --json, --hdr, --html and --junit can be '-' (stdout)" : "";
 }
 
 void LiveProgress::update(const load::ProgressSnapshot& s) {
@@ -43,10 +51,14 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
         return kExitUsage;
     }
     if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
-    // Everything measured is reported, even after an early end.
-    fmt::print("{}", report::format_console_report(result.run));
+    // Everything measured is reported, even after an early end; on stderr when a report file
+    // takes stdout.
+    std::FILE* out = files.uses_stdout() ? stderr : stdout;
+    fmt::print(out, "{}", report::format_console_report(result.run));
     if (result.pending_at_end)
-        fmt::print("  {} transaction(s) still pending when the run ended\n", result.pending_at_end);
+        fmt::print(out, "  {} transaction(s) still pending when the run ended\n",
+                   result.pending_at_end);
+    std::fflush(out);
     int code = kExitOk;
     auto write = [&code](const std::string& path, const std::string& content, const char* what) {
         if (path.empty()) return;
@@ -55,7 +67,7 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
             fmt::print(stderr, "mbstorm run: cannot write {} {}: {}\n", what, path, error);
             code = kExitUsage;
         } else {
-            fmt::print("wrote {} {}\n", what, path);
+            fmt::print(stderr, "wrote {} {}\n", what, path == "-" ? "to stdout" : path);
         }
     };
     write(files.json, report::format_json(result.run), "JSON summary");

@@ -11,9 +11,16 @@
 
 namespace mbstorm::cli {
 
+// Report files; "-" is standard output. At most one of them (with a scenario's JUnit XML) may
+// be "-", and then the console report goes to stderr so that stdout holds only that file.
 struct OutputFiles {
     std::string json, hdr, html;
+    std::string junit;  // not a flag of add_output_options: set from the scenario request
+    bool uses_stdout() const { return json == "-" || hdr == "-" || html == "-" || junit == "-"; }
 };
+
+// Empty, or the usage error for more than one output on stdout.
+std::string stdout_conflict(const OutputFiles& files);
 
 void add_output_options(CLI::App* cmd, OutputFiles& files);
 

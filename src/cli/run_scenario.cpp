@@ -17,8 +17,10 @@ namespace mbstorm::cli {
 namespace {
 
 std::atomic<bool> g_scenario_stop{false};
+std::atomic<int> g_scenario_signal{0};  // which signal stopped the run
 
-extern "C" void on_scenario_stop_signal(int) {
+extern "C" void on_scenario_stop_signal(int signal_number) {
+    g_scenario_signal.store(signal_number, std::memory_order_relaxed);
     g_scenario_stop.store(true, std::memory_order_relaxed);
     // A second Ctrl-C ends the process at once.
     signal(SIGINT, SIG_DFL);
@@ -49,6 +51,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
             return usage_error(fmt::format("cannot write {} {}", flag, error));
     }
     g_scenario_stop = false;
+    g_scenario_signal = 0;
     signal(SIGINT, on_scenario_stop_signal);
     signal(SIGTERM, on_scenario_stop_signal);
     LiveProgress progress(stderr, request.quiet);
@@ -56,17 +59,19 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.stop = &g_scenario_stop;
     hooks.tool_version = "mbstorm 0.1.0";
     hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
-    hooks.on_message = [](const std::string& m) {
-        fmt::print("mbstorm run: {}\n", m);
-        std::fflush(stdout);
-    };
+    hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
     load::LoadResult result = scenario::run_scenario(s, hooks);
     progress.finish();
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
-    if (g_scenario_stop) result.run.metadata.notes.push_back("stopped early by a signal (Ctrl-C)");
+    const int stopped_by = g_scenario_signal.load();
+    if (stopped_by != 0)
+        result.run.metadata.notes.push_back(
+            fmt::format("interrupted by {}", signal_name(stopped_by)));
 
-    int code = report_run(result, request.outputs);
+    OutputFiles files = request.outputs;
+    files.junit = request.junit;
+    int code = report_run(result, files);
     if (!request.junit.empty()) {
         std::string error;
         const std::string xml =
@@ -76,7 +81,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                        error);
             code = kExitUsage;
         } else {
-            fmt::print("wrote JUnit XML {}\n", request.junit);
+            fmt::print(stderr, "wrote JUnit XML {}\n",
+                       request.junit == "-" ? "to stdout" : request.junit);
         }
     }
     if (code == kExitOk && !result.run.thresholds_passed()) {
@@ -85,6 +91,12 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
                    result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
         code = kExitFailed;
+    }
+    if (stopped_by != 0) {
+        // Reports are written above; the exit code says the run did not finish.
+        fmt::print(stderr, "mbstorm run: interrupted by {}: exit code {}\n",
+                   signal_name(stopped_by), exit_code_for_signal(stopped_by));
+        if (code != kExitUsage) code = exit_code_for_signal(stopped_by);
     }
     return code;
 }
@@ -106,17 +118,16 @@ int run_scenario_file(const ScenarioRunRequest& request) {
     }
 
     const auto& plan = s.plan;
-    fmt::print(
-        "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
-        "{}{}\n",
-        s.name, request.file,
-        s.target.empty() ? " against the embedded reference slave (no target given)" : "",
-        plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
-        plan.connections == 1 ? "" : "s", plan.depth,
-        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
-        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
-        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
-    std::fflush(stdout);
+    fmt::print(stderr,
+               "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
+               "{}{}\n",
+               s.name, request.file,
+               s.target.empty() ? " against the embedded reference slave (no target given)" : "",
+               plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
+               plan.connections == 1 ? "" : "s", plan.depth,
+               plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
+               s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
+               fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
 
     return run_resolved_scenario(s, request);
 }

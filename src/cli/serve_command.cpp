@@ -104,7 +104,9 @@ int run_serve(ServeOptions& o) {
 void add_serve_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<ServeOptions>();
     auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
-    cmd->add_option("--listen,-l", o->config.listen, "address to listen on, host:port or [v6]:port")
+    cmd->add_option("--listen,-l", o->config.listen,
+                    "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
+                    "port 502 if omitted")
         ->capture_default_str();
     cmd->add_option("--threads,-t", o->config.threads,
                     "worker threads, each with its own ring (0: one per core)")
@@ -112,7 +114,7 @@ void add_serve_command(CLI::App& app, Action& action) {
     cmd->add_option("--device", o->device_file,
                     "YAML device description: tables, initial data, simulated inputs, faults");
     cmd->add_flag("--stats", o->stats, "print a line of statistics every second");
-    add_duration_option(cmd, "--duration", o->duration_ns,
+    add_duration_option(cmd, "--duration,-d", o->duration_ns,
                         "stop by itself after this long (default: until Ctrl-C)");
     cmd->add_option("--max-connections", o->config.max_connections, "connection limit (0: none)")
         ->capture_default_str();

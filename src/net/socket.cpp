@@ -106,36 +106,40 @@ bool resolve_host(const std::string& host, std::uint16_t port, Endpoint& out, st
 
 }  // namespace
 
-bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error,
-                    std::uint16_t default_port) {
-    std::string host;
-    std::uint16_t port = default_port;
+bool split_host_port(std::string_view text, std::string& host, std::uint16_t& port,
+                     std::string* error) {
     if (!text.empty() && text.front() == '[') {
-        auto close = text.find(']');
+        const auto close = text.find(']');
         if (close == std::string_view::npos) {
             set_error(error, "missing ']' in '" + std::string(text) + "'");
             return false;
         }
+        const auto rest = text.substr(close + 1);
+        if (!rest.empty() && (rest.front() != ':' || !parse_port(rest.substr(1), port))) {
+            set_error(error, "bad port in '" + std::string(text) + "' (0..65535)");
+            return false;
+        }
         host = std::string(text.substr(1, close - 1));
-        auto rest = text.substr(close + 1);
-        if (!rest.empty()) {
-            if (rest.front() != ':' || !parse_port(rest.substr(1), port)) {
-                set_error(error, "bad port in '" + std::string(text) + "'");
-                return false;
-            }
-        }
-    } else {
-        auto colon = text.rfind(':');
-        if (colon != std::string_view::npos && text.find(':') == colon) {
-            host = std::string(text.substr(0, colon));
-            if (!parse_port(text.substr(colon + 1), port)) {
-                set_error(error, "bad port in '" + std::string(text) + "'");
-                return false;
-            }
-        } else {
-            host = std::string(text);  // no port, or a bare IPv6 address
-        }
+        return true;
     }
+    const auto colon = text.find(':');
+    if (colon != std::string_view::npos && text.rfind(':') == colon) {
+        if (!parse_port(text.substr(colon + 1), port)) {
+            set_error(error, "bad port in '" + std::string(text) + "' (0..65535)");
+            return false;
+        }
+        host = std::string(text.substr(0, colon));
+        return true;
+    }
+    host = std::string(text);  // no port, or a bare IPv6 literal
+    return true;
+}
+
+bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error,
+                    std::uint16_t default_port) {
+    std::string host;
+    std::uint16_t port = default_port;
+    if (!split_host_port(text, host, port, error)) return false;
     return resolve_host(host, port, out, error);
 }
 

@@ -22,9 +22,15 @@ struct Endpoint {
     std::string to_string() const;  // "127.0.0.1:5020" or "[::1]:5020"
 };
 
-// Accepts "host:port", "[v6addr]:port", "v6addr" is NOT accepted without brackets when a port
-// follows. Host may be a name (resolved with getaddrinfo, first result). When the text has no
-// port, `default_port` is used. Returns false and fills `error` on failure.
+// The one target syntax of every subcommand: "host", "host:port", "[v6addr]", "[v6addr]:port"
+// or a bare IPv6 literal ("::1", "fe80::1"; no port then). Splits without resolving; `port` is
+// left as given (the caller's default) when the text has none. Port 0 is accepted here (a
+// listener's "any port"); callers that connect refuse it. False with `error` set on bad text.
+bool split_host_port(std::string_view text, std::string& host, std::uint16_t& port,
+                     std::string* error = nullptr);
+
+// split_host_port, then the host resolved (a name with getaddrinfo, first result; an empty
+// host or "*" is every address). When the text has no port, `default_port` is used.
 bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error = nullptr,
                     std::uint16_t default_port = 502);
 

@@ -12,6 +12,14 @@
 namespace mbstorm::report {
 
 bool write_text_file(const std::string& path, std::string_view content, std::string& error) {
+    if (path == "-") {
+        if (std::fwrite(content.data(), 1, content.size(), stdout) != content.size() ||
+            std::fflush(stdout) != 0) {
+            error = std::string("standard output: ") + std::strerror(errno);
+            return false;
+        }
+        return true;
+    }
     std::FILE* f = std::fopen(path.c_str(), "wb");
     if (f == nullptr) {
         error = path + ": " + std::strerror(errno);

@@ -6,7 +6,8 @@
 
 namespace mbstorm::report {
 
-// Writes content to path (truncating). On failure returns false and sets error.
+// Writes content to path (truncating); the path "-" is standard output. On failure returns false
+// and sets error.
 bool write_text_file(const std::string& path, std::string_view content, std::string& error);
 
 // Checks, before a long run, that write_text_file(path) can succeed, changing nothing: the

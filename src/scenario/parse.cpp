@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "net/socket.hpp"
 #include "scenario/operation_names.hpp"
 #include "scenario/operation_yaml.hpp"
 #include "scenario/scenario.hpp"
@@ -70,27 +71,24 @@ load::Duration Scenario::total_duration() const noexcept {
 
 bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
                   std::string& error) {
-    const auto colon = text.rfind(':');
-    if (colon == std::string::npos || colon + 1 == text.size() ||
-        (text.front() != '[' && text.find(':') != colon)) {
-        error =
-            fmt::format("'{}' needs a port: HOST:PORT or [IPv6]:PORT (e.g. 127.0.0.1:502)", text);
+    const std::string forms =
+        "HOST, HOST:PORT, [IPv6]:PORT or an IPv6 address; port 502 if omitted";
+    std::uint16_t p = 502;
+    std::string why;
+    const bool split = net::split_host_port(text, host, p, &why);
+    if (!split && why.rfind("bad port", 0) != 0) {
+        error = fmt::format("{} ({})", why, forms);
         return false;
     }
-    host = text.substr(0, colon);
-    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-        host = host.substr(1, host.size() - 2);
-    }
-    std::int64_t p = 0;
-    if (!YamlReader::parse_integer(text.substr(colon + 1), p) || p < 1 || p > 65535) {
-        error = fmt::format("'{}': the port must be 1..65535", text);
+    if (!split || p == 0) {
+        error = fmt::format("'{}': the port must be 1..65535 ({})", text, forms);
         return false;
     }
     if (host.empty()) {
-        error = fmt::format("'{}': the host is empty", text);
+        error = fmt::format("'{}': the host is empty ({})", text, forms);
         return false;
     }
-    port = static_cast<std::uint16_t>(p);
+    port = p;
     return true;
 }
 

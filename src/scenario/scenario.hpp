@@ -111,7 +111,8 @@ std::vector<std::string> validate_scenario(const Scenario& scenario);
 // Builds the scenario a flag-only `mbstorm run` amounts to (for --print-scenario).
 Scenario scenario_from_plan(const load::Plan& plan, const std::string& target);
 
-// Parses "host:port" / "[v6]:port" into host and port; false with a message.
+// Parses a target (net::split_host_port's syntax; port 502 when omitted) into host and port;
+// false with a message naming the accepted forms.
 bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
                   std::string& error);
 

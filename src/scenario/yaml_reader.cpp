@@ -119,7 +119,7 @@ load::Duration YamlReader::duration(const YAML::Node& n, std::string_view what, 
                        : fmt::format("valid {} {}", lo_exclusive ? ">" : ">=", duration_text(lo));
     std::uint64_t ns = 0;
     if (!stats::parse_duration_ns(s, ns) || ns > static_cast<std::uint64_t>(INT64_MAX)) {
-        fail(n, fmt::format("{}: '{}' is not a duration (e.g. 500ms, 10s, 2m; a bare number is "
+        fail(n, fmt::format("{}: '{}' is not a duration (e.g. 500ms, 10s, 1m30s; a bare number is "
                             "seconds; {})",
                             what, s, range));
     }

@@ -40,6 +40,30 @@ TEST(Endpoint, ParsesIpv4Ipv6AndDefaults) {
     EXPECT_EQ(ep.port(), 7);
 }
 
+TEST(Endpoint, OneTargetSyntaxSplitsWithoutResolving) {
+    struct Case {
+        const char* text;
+        const char* host;
+        std::uint16_t port;
+    };
+    for (const Case& c :
+         {Case{"plc.example", "plc.example", 502}, Case{"10.0.0.1:1502", "10.0.0.1", 1502},
+          Case{"[fe80::1]:5020", "fe80::1", 5020}, Case{"[::1]", "::1", 502},
+          Case{"::1", "::1", 502}, Case{"2001:db8::7", "2001:db8::7", 502}}) {
+        std::string host;
+        std::uint16_t port = 502;
+        ASSERT_TRUE(split_host_port(c.text, host, port)) << c.text;
+        EXPECT_EQ(host, c.host) << c.text;
+        EXPECT_EQ(port, c.port) << c.text;
+    }
+    std::string host, err;
+    std::uint16_t port = 502;
+    EXPECT_FALSE(split_host_port("host:", host, port, &err));
+    EXPECT_FALSE(split_host_port("host:70000", host, port, &err));
+    EXPECT_NE(err.find("0..65535"), std::string::npos) << err;
+    EXPECT_FALSE(split_host_port("[::1]502", host, port, &err));
+}
+
 TEST(Endpoint, RejectsBadText) {
     Endpoint ep;
     std::string err;

@@ -114,9 +114,10 @@ TEST(CliScenario, UsageErrorsExitTwo) {
     EXPECT_EQ(run_mbstorm("run " + kLibrary + "quickstart.yaml --fc 4").exit_code, 2);
     EXPECT_EQ(run_mbstorm("run --junit x.xml -d 1s").exit_code, 2);
     EXPECT_EQ(run_mbstorm("run /nonexistent/scenario.yaml").exit_code, 2);
-    const auto bad_target = run_mbstorm("run " + kLibrary + "quickstart.yaml --target nowhere");
+    const auto bad_target = run_mbstorm("run " + kLibrary + "quickstart.yaml --target nowhere:");
     EXPECT_EQ(bad_target.exit_code, 2);
-    EXPECT_NE(bad_target.output.find("needs a port"), std::string::npos) << bad_target.output;
+    EXPECT_NE(bad_target.output.find("port 502 if omitted"), std::string::npos)
+        << bad_target.output;
 }
 
 TEST(CliScenario, StagedRunReportsStagesInJson) {

@@ -286,10 +286,10 @@ TEST(ScenarioOverrides, RateSwitchesToOpenLoopAndBadValuesAreReported) {
     EXPECT_EQ(s.plan.model, load::LoadModel::OpenLoop);
 
     Overrides bad_target;
-    bad_target.target = "nowhere";
+    bad_target.target = "nowhere:";
     auto problems = apply_overrides(s, bad_target);
     ASSERT_EQ(problems.size(), 1U);
-    EXPECT_NE(problems[0].find("needs a port"), std::string::npos);
+    EXPECT_NE(problems[0].find("port 502 if omitted"), std::string::npos);
 
     Overrides zero;
     zero.duration = 0s;

@@ -63,7 +63,7 @@ const BadCase kCases[] = {
      2, 7},
     {"open loop without rate", "model: open\n" OPS, "an open-loop run needs a rate > 0", 1, 8},
     // --- target and slave
-    {"target without port", "target: 127.0.0.1\n" OPS, "needs a port: HOST:PORT", 1, 9},
+    {"target empty port", "target: '127.0.0.1:'\n" OPS, "port 502 if omitted", 1, 9},
     {"target port range", "target: 127.0.0.1:70000\n" OPS, "the port must be 1..65535", 1, 9},
     {"target empty host", "target: ':502'\n" OPS, "the host is empty", 1, 9},
     {"slave with target", "target: 127.0.0.1:502\nslave: {}\n" OPS,

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# `cmake --install <build> --prefix X` puts a working mbstorm in X/bin and its documentation
+# and example scenarios in X/share/doc/mbstorm.
+set -euo pipefail
+build=$(cd "$(dirname "$1")" && pwd)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+cmake --install "$build" --prefix "$work/prefix" >"$work/install.log"
+[ -x "$work/prefix/bin/mbstorm" ] || { echo "FAIL no $work/prefix/bin/mbstorm after cmake --install:" >&2; cat "$work/install.log" >&2; exit 1; }
+version=$("$work/prefix/bin/mbstorm" --version)
+[[ "$version" == "mbstorm "[0-9]* ]] || { echo "FAIL installed mbstorm --version printed '$version'" >&2; exit 1; }
+"$work/prefix/bin/mbstorm" run --help | grep -q -- '--target' || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
+for f in README.md docs/json-schema.md scenarios/ci-gate.yaml; do
+  [ -f "$work/prefix/share/doc/mbstorm/$f" ] || { echo "FAIL share/doc/mbstorm/$f not installed" >&2; exit 1; }
+done
+echo "ok   installed: $version, its docs and scenarios"
