@@ -61,7 +61,7 @@ int run_replay(const ReplayOptions& o) {
         // The same root cause (oracle and rule); findings saved before rules existed compare
         // by oracle.
         const bool same = f.verdict.rule.empty() ? e.verdict.oracle == f.oracle()
-                                                 : netfuzz::root_cause_key(e.verdict) == f.key();
+                                                 : netfuzz::same_fault(e.verdict, f.verdict);
         reproduced += same;
         fmt::print("run {}: {}{}\n", i + 1, same ? "REPRODUCES: " : "does not reproduce",
                    e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")")

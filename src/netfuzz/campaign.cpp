@@ -162,7 +162,7 @@ bool reassemble(const Case& c, Case& plain) {
 // (whose frames, once delivered, may be at fault as well as the way they arrived).
 std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
     std::vector<std::string> out;
-    if (is_transport_class(c.cls)) out.emplace_back(class_name(c.cls));
+    if (is_transport_class(c.cls)) out.push_back(culprit_text(c.cls, nullptr));
     Case plain;
     const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
     if (&framed == &c && is_transport_class(c.cls)) return out;
@@ -178,18 +178,8 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
             off += size;
         }
     }
-    if (out.empty()) out.emplace_back(class_name(c.cls));
+    if (out.empty()) out.push_back(culprit_text(c.cls, nullptr));
     return out;
-}
-
-// The part of a rule minimisation must keep: all of it but the detail that names the request
-// (a codec error in brackets, a culprit after '/'): "exception-02-where-03-owed(trailing_bytes)"
-// may shrink to "...(quantity_out_of_range)", and a whole-server hang by a burst of frames to
-// the one frame that does it ("whole-server-hang/fc02" to "whole-server-hang/fc14"). The
-// minimised reproducer then says which root cause it is.
-std::string rule_stem(const std::string& rule) {
-    const auto cut = rule.find_first_of("(/");
-    return cut == std::string::npos ? rule : rule.substr(0, cut);
 }
 
 bool whole_server_hang(const Verdict& v) {
@@ -301,8 +291,6 @@ void Campaign::set_drops_after_exception() {
 }
 
 bool Campaign::recover(const std::string& cause) {
-    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
-        fmt::print(stderr, "[{:.2f}] recover (cause '{}')\n", elapsed(), cause);
     up_ = false;
     progress(true);
     std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
@@ -351,12 +339,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
         return Outcome::Skipped;
     }
     ++r_.isolated_runs;
-    const std::int64_t t_debug = net::now_ns();
     Execution ex = execute_case(c, o_.target, r_.profile, exec_);
-    if (std::getenv("MBSTORM_FUZZ_DEBUG"))
-        fmt::print(stderr, "[{:.2f}] isolate #{} {} fc{:02X}: {} ms, {}\n", elapsed(), c.number,
-                   class_name(c.cls), c.function, (net::now_ns() - t_debug) / 1000000,
-                   ex.verdict ? root_cause_key(ex.verdict) : std::string("clean"));
     if (ex.down_before) {
         // Down before this case began: whatever did it is not this case.
         ++r_.deaths;
@@ -386,7 +369,8 @@ Campaign::Outcome Campaign::isolate(Case c) {
     // A transport case that crashed or hung the target: were the frames it delivered the
     // culprit, rather than the way they arrived? Sent whole, do they do the same?
     Case plain;
-    if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang) &&
+    if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang ||
+         ex.verdict.oracle == Oracle::UnexpectedClose) &&
         is_transport_class(c.cls) && reassemble(c, plain)) {
         if (ex.target_down) {
             ++r_.deaths;
@@ -538,6 +522,7 @@ void Campaign::record(const Case& c, Execution ex) {
             ++r_.isolated_runs;
             Execution e = execute_case(candidate, o_.target, r_.profile, exec_);
             // The same fault, not merely the same oracle: else it drifted to another bug.
+            // (the detail naming the request may change as the case shrinks: see same_fault)
             const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
             if (e.down_before || e.target_down) {
                 ++r_.deaths;
@@ -718,7 +703,14 @@ CampaignResult Campaign::run() {
         if (o_.max_cases) n = std::min<std::uint64_t>(n, o_.max_cases - r_.cases);
         piped.clear();
         alone.clear();
-        for (Case& c : requeue) (c.pipelinable ? piped : alone).push_back(std::move(c));
+        for (Case& c : requeue) {
+            // Queued before a crash or hang became known: it may carry that culprit.
+            if (would_retrigger(c)) {
+                ++r_.skipped_known;
+                continue;
+            }
+            (c.pipelinable ? piped : alone).push_back(std::move(c));
+        }
         requeue.clear();
         std::size_t fresh = 0;
         for (std::size_t tries = 0; piped.size() + alone.size() < n && tries < 8 * n; ++tries) {
@@ -746,13 +738,6 @@ CampaignResult Campaign::run() {
             lane_depth_ = std::max(1u, lane_depth_ / 2);
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }
-        if (std::getenv("MBSTORM_FUZZ_DEBUG"))
-            fmt::print(stderr,
-                       "[{:.2f}] batch {} cases: {} ms, {} answers, {} verdicts, {} breaks, {} "
-                       "suspects, {} requeued{}\n",
-                       elapsed(), piped.size(), (t1 - t0) / 1000000, br.answers, br.verdicts.size(),
-                       br.breaks.size(), br.suspects.size(), br.requeue.size(),
-                       br.lane_lost ? " LANE LOST" : "");
         std::vector<std::size_t> suspects = br.suspects;
         for (auto& [ci, v] : br.verdicts) {
             if (Finding* f = known(v))

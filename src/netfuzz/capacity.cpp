@@ -120,7 +120,10 @@ CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& 
             }
             conns.push_back(std::move(h));
         }
-        const std::size_t silent = probe_all(conns, from, profile, timeout_ms, deadline_ns);
+        // A slow target gets three timeouts, and 2 ms more per new connection, to answer a
+        // whole step: slow is not unserved.
+        const int wait_ms = 3 * timeout_ms + 2 * static_cast<int>(conns.size() - from);
+        const std::size_t silent = probe_all(conns, from, profile, wait_ms, deadline_ns);
         if (out_of_time()) break;
         std::uint32_t refused = 0;
         for (const Held& h : conns) refused += h.state == ConnState::Refused;
@@ -132,7 +135,7 @@ CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& 
                 -1,
                 fmt::format("with {} connections open, {} newly accepted connection(s) got no "
                             "answer within {} ms",
-                            conns.size(), silent, timeout_ms),
+                            conns.size(), silent, wait_ms),
                 "every accepted connection is served (or refused, or closed, at a limit)",
                 fmt::format("{} of {} new connections silent", silent, conns.size() - from)};
             break;

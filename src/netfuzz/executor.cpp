@@ -307,7 +307,16 @@ void Runner::judge(const Case& c) {
             std::string tids;
             for (const Pending& pd : cn.pending)
                 tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
-            consider(Verdict{Oracle::MalformedResponse, "unmatched-transaction-id", -1,
+            // Whose answer it most likely is: an unanswered request of the same function.
+            int fc = -1;
+            if (size > lim::kMbapHeader) {
+                const std::uint8_t rfc = cn.received[off + lim::kMbapHeader] & 0x7F;
+                for (const Pending& pd : cn.pending)
+                    if (!pd.answered_ns && pd.size > lim::kMbapHeader &&
+                        cn.sent[pd.offset + lim::kMbapHeader] == rfc)
+                        fc = rfc;
+            }
+            consider(Verdict{Oracle::MalformedResponse, "unmatched-transaction-id", fc,
                              fmt::format("response with transaction id {:04X} matches no request",
                                          codec::load_be16(cn.received.data() + off)),
                              fmt::format("transaction ids {}", tids),
@@ -362,6 +371,10 @@ void Runner::judge(const Case& c) {
             } else if (before && before_exception) {
                 rule = closed ? "closes-after-exception" : "drops-requests-after-exception";
                 blamed = before;
+            } else if (closed && !pd.probe && request_kind(info) != "valid") {
+                // Closing on a request it cannot use is one policy of the server's framing,
+                // whatever the function code.
+                rule = "close-with-request-pending/invalid-request";
             } else if (!pd.probe || !before) {
                 rule = fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
                                    culprit_text(c, pd.probe ? nullptr : &info));
@@ -406,10 +419,11 @@ void Runner::judge(const Case& c) {
     if (need_fresh_probe) {
         ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
-        if (r == ProbeResult::Closed) {
-            // A process that is dying may still complete a connect from its backlog: look
-            // again a moment later before calling it.
-            ::usleep(50000);
+        if (r == ProbeResult::Closed || r == ProbeResult::ConnectFailed) {
+            // A process that is dying may still complete a connect from its backlog, and a
+            // busy one may let a connect wait out a full backlog: look again a moment later
+            // before calling it a crash.
+            ::usleep(r == ProbeResult::Closed ? 50000 : 200000);
             r = probe_target(target_, profile_, options_.timeout_ms);
             event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
         }

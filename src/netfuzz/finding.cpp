@@ -64,6 +64,15 @@ std::string root_cause_key(const Verdict& v) {
     return fmt::format("{}:{}", oracle_name(v.oracle), v.rule);
 }
 
+std::string rule_stem(const std::string& rule) {
+    const auto cut = rule.find_first_of("(/");
+    return cut == std::string::npos ? rule : rule.substr(0, cut);
+}
+
+bool same_fault(const Verdict& a, const Verdict& b) {
+    return a.oracle == b.oracle && rule_stem(a.rule) == rule_stem(b.rule);
+}
+
 std::string to_hex(const std::vector<std::uint8_t>& bytes) {
     std::string s;
     s.reserve(bytes.size() * 2);

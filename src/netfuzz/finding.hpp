@@ -16,6 +16,13 @@ namespace mbstorm::netfuzz {
 // A finding's root-cause identity: the oracle and the rule its verdict violates.
 std::string root_cause_key(const Verdict& v);
 
+// The part of a rule a smaller or replayed case must keep: all of it but the detail that
+// names the request (a codec reason in brackets, a culprit after '/').
+std::string rule_stem(const std::string& rule);
+
+// The same fault: the same oracle and rule stem (what minimisation and replay ask for).
+bool same_fault(const Verdict& a, const Verdict& b);
+
 struct Finding {
     std::size_t id = 0;
     Verdict verdict;

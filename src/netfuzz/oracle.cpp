@@ -79,6 +79,11 @@ std::string_view request_kind(const RequestInfo& info) noexcept {
 }
 
 std::string culprit_text(MutationClass cls, const RequestInfo* rq) {
+    // Every mutation that delivers a frame in pieces meets the same code: the target's
+    // reassembly of a started frame.
+    if (cls == MutationClass::Split || cls == MutationClass::BurstSplit ||
+        cls == MutationClass::PartialHold || cls == MutationClass::Drip)
+        return "partial-frame";
     if (is_transport_class(cls) || !rq || rq->pdu.empty()) return std::string(class_name(cls));
     if (request_kind(*rq) == "unknown-fc") return "unknown-fc";
     // The function code alone: one handler, whether this request was valid or not.
@@ -158,11 +163,12 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         }
         if (!ok) {
             return make(Oracle::SpecDeviation,
+                        // The codec's reason is left out: one wrong check order shows
+                        // under every reason that owes the same exception.
                         owed == ExceptionCode::None
                             ? fmt::format("exception-{:02X}-to-valid-request", code)
-                            : fmt::format("exception-{:02X}-where-{:02X}-owed({})", code,
-                                          static_cast<std::uint8_t>(owed),
-                                          codec::error_name(rq.status.error)),
+                            : fmt::format("exception-{:02X}-where-{:02X}-owed", code,
+                                          static_cast<std::uint8_t>(owed)),
                         rq,
                         fmt::format("FC {:02X}: {} where {} is owed", fc, exception_text(code),
                                     owed == ExceptionCode::None

@@ -60,7 +60,12 @@ INSTANTIATE_TEST_SUITE_P(
                       Planted{"broken_server_hang", {"hang"}, {0x2B}, {}},
                       Planted{"broken_server_exception", {"spec-deviation"}, {0x03, 0x04}, {}},
                       Planted{"broken_server_tid", {"malformed-response"}, {0x17}, {}},
-                      Planted{"broken_server_split", {"hang", "unexpected-close"}, {}, {"split"}},
+                      // Every mutation that delivers a frame in pieces meets the
+                      // planted bug: one root cause, found by whichever comes first.
+                      Planted{"broken_server_split",
+                              {"hang", "unexpected-close"},
+                              {},
+                              {"split", "partial-hold", "burst-split", "drip"}},
                       Planted{"broken_server_protocol", {"spec-deviation"}, {}, {"protocol-id"}},
                       Planted{"broken_server_lostwrite",
                               {"spec-deviation"},
