@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The fuzzer against servers it did not write, as a user would run it in CI: pymodbus 3.0's
+# asyncio server (Debian, /usr/bin/python3) and a libmodbus server. Each run must keep its
+# deadline (--seconds + 5 s, restarts and minimisation included) and every finding must be one
+# of the deviations these servers really have (triaged by hand: bench/README.md), each once.
+#   bash fuzz_peers.sh <mbstorm-binary> <scripts-dir>
+set -u
+mbstorm=$1
+scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
+bin_dir=$(cd "$(dirname "$mbstorm")" && pwd)
+pymodbus_server="$scripts/../../bench/peers/pymodbus_server.py"
+libmodbus_server="$bin_dir/tests/libmodbus_test_server"
+seconds=15
+
+source "$scripts/lib/peer.bash"
+work=$(mktemp -d)
+trap 'stop_server; rm -rf "$work"' EXIT
+
+fail=0
+# fuzz_peer NAME ALLOWED-RULE-STEMS...: fuzzes $port, checks the deadline and the findings.
+fuzz_peer() {
+  local name=$1; shift
+  local t0=$SECONDS
+  "$mbstorm" fuzz --target "127.0.0.1:$port" --seconds "$seconds" --seed 1 -q \
+    --out "$work/$name" --json "$work/$name.json" >"$work/$name.log" 2>&1
+  local rc=$? wall=$((SECONDS - t0))
+  if [ "$rc" -ne 0 ] && [ "$rc" -ne 1 ]; then echo "FAIL $name: exit $rc"; sed 's/^/  /' "$work/$name.log" | tail -20; fail=1; return; fi
+  if [ "$wall" -gt $((seconds + 5)) ]; then echo "FAIL $name: ran $wall s for --seconds $seconds"; fail=1; fi
+  /usr/bin/python3 - "$work/$name.json" "$@" <<'PY' || fail=1
+import json, sys
+j = json.load(open(sys.argv[1]))
+allowed = set(sys.argv[2:])
+bad = [f["root_cause"] for f in j["findings"]
+       if f["oracle"] + ":" + f["rule"].split("(")[0].split("/")[0] not in allowed]
+keys = [f["root_cause"] for f in j["findings"]]
+dups = sorted({k for k in keys if keys.count(k) > 1})
+ok = not bad and not dups
+print(f"{'ok  ' if ok else 'FAIL'} {j['target']}: {len(keys)} root causes in {j['seconds']:.1f} s"
+      + (f"; not a known deviation of this server: {bad}" if bad else "")
+      + (f"; reported twice: {dups}" if dups else ""))
+sys.exit(0 if ok else 1)
+PY
+}
+
+if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/dev/null; then
+  if start_server "$work/py.out" /usr/bin/python3 "$pymodbus_server" --seconds 120; then
+    fuzz_peer pymodbus \
+      spec-deviation:answers-nonzero-protocol-id spec-deviation:invalid-request-answered-normally \
+      spec-deviation:exception-02-where-03-owed spec-deviation:exception-04-where-01-owed \
+      spec-deviation:exception-03-where-01-owed spec-deviation:exception-04-where-03-owed \
+      spec-deviation:exception-04-where-02-owed \
+      unexpected-close:close-with-request-pending unexpected-close:closes-after-exception \
+      malformed-response:undecodable-response malformed-response:unmatched-transaction-id \
+      hang:capacity
+  else echo "FAIL pymodbus server did not start"; fail=1; fi
+  stop_server
+else
+  echo "pymodbus not available: skipped that peer"
+fi
+
+if [ -x "$libmodbus_server" ]; then
+  if start_server "$work/lm.out" "$libmodbus_server" --seconds 120; then
+    fuzz_peer libmodbus \
+      spec-deviation:answers-nonzero-protocol-id spec-deviation:exception-02-where-03-owed \
+      unexpected-close:close-with-request-pending hang:drops-requests-after-exception \
+      hang:drops-requests-after hang:no-answer malformed-response:unmatched-transaction-id \
+      hang:capacity hang:stalls-other-connections
+  else echo "FAIL libmodbus server did not start"; fail=1; fi
+  stop_server
+else
+  echo "libmodbus server not built (libmodbus-dev missing): skipped that peer"
+fi
+exit $fail
