@@ -43,23 +43,6 @@ constexpr const char* kValidFunctions =
     "valid: 0x01..0x08, 0x0B, 0x0C, 0x0F..0x11, 0x14..0x18, 0x2B (decimal 1..8, 11, 12, 15..17, "
     "20..24, 43) or a name like read_holding_registers";
 
-bool parse_function(const std::string& text, std::uint8_t& fc) {
-    if (codec::function_from_name(text, fc)) return true;
-    try {
-        std::size_t used = 0;
-        int v = std::stoi(text, &used, 0);
-        if (used != text.size() || v < 1 || v > 127) return false;
-        fc = static_cast<std::uint8_t>(v);
-        return true;
-    } catch (...) {
-        return false;
-    }
-}
-
-std::string function_text(std::uint8_t fc) {
-    return fmt::format("0x{:02X} {}", fc, codec::function_name(fc));
-}
-
 // Counts given as --values must fit the function's quantity range before they are packed.
 std::string values_fault(std::uint8_t fc, std::size_t given) {
     std::uint16_t max = 0;
@@ -81,7 +64,7 @@ std::string values_fault(std::uint8_t fc, std::size_t given) {
     }
     if (given >= 1 && given <= max) return {};
     return fmt::format("--values holds {} value(s): valid 1..{} for {}", given, max,
-                       function_text(fc));
+                       codec::function_label(fc));
 }
 
 // FC14/15 build one sub-request from --file, --record and the record length.
@@ -91,9 +74,9 @@ std::string file_fault(std::uint8_t fc, int file, int record, std::size_t length
     const std::size_t max_read = (codec::limits::kMaxFileResponseBytes - 2) / 2;
     if (fc == 0x14 && (length < 1 || length > max_read))
         return fmt::format("--count {} (record length): valid 1..{} for {}", length, max_read,
-                           function_text(fc));
+                           codec::function_label(fc));
     if (file < codec::limits::kMinFileNumber)
-        return fmt::format("--file {}: valid 1..65535 for {}", file, function_text(fc));
+        return fmt::format("--file {}: valid 1..65535 for {}", file, codec::function_label(fc));
     if (record + length > codec::limits::kMaxFileRecordNumber + 1u)
         return fmt::format("--record {} + record length {} runs past record {}", record, length,
                            codec::limits::kMaxFileRecordNumber);
@@ -123,12 +106,14 @@ int run_encode(EncodeOptions o) {
             fc = read_fc[static_cast<int>(ref.table)];
         }
     }
-    if (!o.function.empty() && !parse_function(o.function, fc))
-        return fail(fmt::format("function '{}': {}", o.function, kValidFunctions));
+    if (!o.function.empty()) {
+        if (auto error = codec::parse_function_code(o.function, fc); !error.empty())
+            return fail("--fc: " + error);
+    }
     if (fc == 0) return fail("--fc (or --ref) is required");
     if (!o.exception && !codec::is_supported_function(fc))
-        return fail(fmt::format("function code {} (0x{:02X}): not a public Modbus function; {}",
-                                o.function, fc, kValidFunctions));
+        return fail(fmt::format("function code {} ({}): not a public Modbus function; {}",
+                                o.function, codec::function_label(fc), kValidFunctions));
     {
         // --ref and --addr follow the one address rule; a reference must suit the function.
         const std::string& text = o.reference.empty() ? o.address : o.reference;
@@ -155,7 +140,7 @@ int run_encode(EncodeOptions o) {
             return fail(fault);
         if (fc == 0x05 && o.value != 0 && o.value != 1 && o.value != codec::limits::kCoilOn)
             return fail(fmt::format("--value {} for {}: valid 0 (OFF) or 1 (ON)", o.value,
-                                    function_text(fc)));
+                                    codec::function_label(fc)));
     }
 
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload{};
@@ -268,7 +253,7 @@ void add_encode_command(CLI::App& app, Action& action) {
     auto* cmd =
         app.add_subcommand("encode", "Build a request frame from fields and print it as hex");
     cmd->add_option("--fc,-f", o->function,
-                    "function code (number) or name, e.g. 3 or read_holding_registers");
+                    "function code: " + std::string(codec::kFunctionCodeForms));
     cmd->add_option("--ref", o->reference,
                     "reference number (40001 = holding register 0); picks the read function");
     cmd->add_option("--addr,-a", o->address,

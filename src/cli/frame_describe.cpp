@@ -81,11 +81,6 @@ const char* coil_meaning(std::uint16_t value) {
     return "(neither ON nor OFF)";
 }
 
-std::string function_label(std::uint8_t fc) {
-    auto name = codec::function_name(fc);
-    return name.empty() ? std::string("(unsupported)") : std::string(name);
-}
-
 // FC14 and FC15 requests and the FC15 response: a byte count, then sub-requests.
 void describe_file_sub_requests(Bytes payload, bool with_data, RowWriter& w) {
     w.u8("Byte count");
@@ -267,12 +262,6 @@ void describe_response_fields(const codec::Response& r, RowWriter& w, Bytes pdu)
     w.rest("Unparsed bytes");
 }
 
-// "0x03 read_holding_registers", the way faults name a function.
-std::string function_text(std::uint8_t fc) {
-    auto name = codec::function_name(fc);
-    return fmt::format("0x{:02X} {}", fc, name.empty() ? "(unsupported)" : name);
-}
-
 std::uint16_t be16_at(Bytes pdu, std::size_t at) {
     return at + 2 <= pdu.size() ? codec::load_be16(pdu.data() + at) : 0;
 }
@@ -441,7 +430,7 @@ std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
                       std::vector<FieldRow>& rows, std::size_t first) {
     using codec::CodecError;
     const std::uint8_t fc = pdu[0] & ~codec::kExceptionBit;
-    const std::string fc_text = function_text(fc);
+    const std::string fc_text = codec::function_label(fc);
     std::string why;
     std::string_view row;
     switch (error) {
@@ -539,7 +528,7 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
         if (!status.ok()) {
             // Still shown field by field, read straight from the bytes, with the bad field marked.
             codec::Request raw = raw_request(pdu);
-            w.u8("Function code", function_label(raw.function));
+            w.field("Function code", 1, codec::function_label(raw.function));
             describe_request_fields(raw, w);
             std::string fault = pdu_fault(pdu, Direction::Request, status.error, rows, first);
             error = fmt::format("not a valid request: {} (a server answers exception {:02X} {})",
@@ -547,7 +536,7 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
                                 codec::exception_name(status.exception));
             return false;
         }
-        w.u8("Function code", function_label(req.function));
+        w.field("Function code", 1, codec::function_label(req.function));
         describe_request_fields(req, w);
         return true;
     }
@@ -556,12 +545,14 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
     if (err != codec::CodecError::Ok) {
         codec::Response raw = raw_response(pdu);
         if (raw.exception != codec::ExceptionCode::None) {
-            w.u8("Function code", fmt::format("= 0x{:02X} | 0x80: exception to {}", raw.function,
-                                              function_label(raw.function)));
+            w.field(
+                "Function code", 1,
+                fmt::format("0x{:02X} = 0x80 | {}: exception", raw.function | codec::kExceptionBit,
+                            codec::function_label(raw.function)));
             w.u8("Exception code");
             w.rest("Unparsed bytes");
         } else {
-            w.u8("Function code", function_label(raw.function));
+            w.field("Function code", 1, codec::function_label(raw.function));
             describe_response_fields(raw, w, pdu);
         }
         error = fmt::format("not a valid response: {}",
@@ -569,13 +560,14 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
         return false;
     }
     if (rsp.exception != codec::ExceptionCode::None) {
-        w.u8("Function code", fmt::format("= 0x{:02X} | 0x80: exception to {}", rsp.function,
-                                          function_label(rsp.function)));
+        w.field("Function code", 1,
+                fmt::format("0x{:02X} = 0x80 | {}: exception", rsp.function | codec::kExceptionBit,
+                            codec::function_label(rsp.function)));
         w.u8("Exception code", std::string(codec::exception_name(rsp.exception)));
         w.rest("Unparsed bytes");
         return true;
     }
-    w.u8("Function code", function_label(rsp.function));
+    w.field("Function code", 1, codec::function_label(rsp.function));
     describe_response_fields(rsp, w, pdu);
     return true;
 }
@@ -588,7 +580,7 @@ std::string request_fault(Bytes pdu) {
     if (status.ok()) return {};
     RowWriter w(pdu, rows);
     codec::Request raw = raw_request(pdu);
-    w.u8("Function code", function_label(raw.function));
+    w.field("Function code", 1, codec::function_label(raw.function));
     describe_request_fields(raw, w);
     return pdu_fault(pdu, Direction::Request, status.error, rows, 0);
 }

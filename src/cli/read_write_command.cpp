@@ -64,10 +64,6 @@ struct IoPlan {
     std::uint16_t items = 0;               // registers or bits read or written
 };
 
-std::string function_text(std::uint8_t fc) {
-    return fmt::format("0x{:02X} {}", fc, codec::function_name(fc));
-}
-
 bool table_from_text(const std::string& text, codec::Table& out) {
     if (codec::table_from_name(text, out)) return true;
     static constexpr std::pair<std::string_view, codec::Table> kShort[] = {
@@ -155,15 +151,8 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     r.function = bit_table ? (one ? 0x05 : 0x0F) : (one ? 0x06 : 0x10);
     if (!o.function.empty()) {
         std::uint8_t fc = 0;
-        if (!codec::function_from_name(o.function, fc)) {
-            try {
-                std::size_t used = 0;
-                int v = std::stoi(o.function, &used, 0);
-                if (used == o.function.size() && v >= 1 && v <= 127)
-                    fc = static_cast<std::uint8_t>(v);
-            } catch (...) {
-            }
-        }
+        if (auto error = codec::parse_function_code(o.function, fc); !error.empty())
+            return "--fc: " + error;
         const bool fits =
             bit_table ? (fc == 0x0F || (fc == 0x05 && one)) : (fc == 0x10 || (fc == 0x06 && one));
         if (!fits)
@@ -207,7 +196,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
     if (o.json) {
         j["target"] = p.target.to_string();
         j["unit"] = o.unit;
-        j["function"] = function_text(p.request.function);
+        j["function"] = codec::function_label(p.request.function);
         j["table"] = std::string(codec::table_name(p.table));
         j["address"] = p.address;
         if (o.count != 1) j["poll"] = poll;
@@ -219,8 +208,8 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
             emit_json();
         }
         fmt::print(stderr, "mbstorm {}: {} ({} to unit {} at {}): {}\n", o.write ? "write" : "read",
-                   p.target.to_string(), function_text(p.request.function), o.unit, p.address,
-                   error);
+                   p.target.to_string(), codec::function_label(p.request.function), o.unit,
+                   p.address, error);
         return kExitFailed;
     }
     if (rsp.exception != codec::ExceptionCode::None) {
@@ -232,7 +221,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         }
         fmt::print(stderr, "mbstorm {}: unit {} answered exception {:02X} {} to {} at address {}\n",
                    o.write ? "write" : "read", o.unit, code, codec::exception_name(rsp.exception),
-                   function_text(p.request.function), p.address);
+                   codec::function_label(p.request.function), p.address);
         return kExitFailed;
     }
     if (o.write) {
@@ -244,7 +233,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         } else {
             fmt::print("wrote {} {} at address {} of unit {} ({})\n", p.items,
                        codec::is_bit_table(p.table) ? "bit(s)" : "register(s)", p.address, o.unit,
-                       function_text(p.request.function));
+                       codec::function_label(p.request.function));
         }
         return kExitOk;
     }
@@ -375,8 +364,10 @@ void add_write_command(CLI::App& app, Action& action) {
     add_common_options(cmd, *o);
     cmd->add_option("values", o->values, "values to write, as --type says")->required();
     cmd->add_option("--fc", o->function,
-                    "force the function: 0x05/0x06 (one value) or 0x0F/0x10 (default: single "
-                    "for one value, multiple otherwise)");
+                    "force the function: 0x05 write_single_coil or 0x06 write_single_register "
+                    "(one value), 0x0F write_multiple_coils or 0x10 write_multiple_registers "
+                    "(default: single for one value, multiple otherwise); " +
+                        std::string(codec::kFunctionCodeForms));
     cmd->add_flag("--allow-writes", o->allow_writes,
                   "allow writing to a target outside loopback (127.0.0.0/8, ::1)");
     cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });

@@ -48,19 +48,8 @@ std::string build_plan(RunOptions& o) {
     auto& p = o.plan;
     // Starts from the operation the flags filled (--unit, --zipf).
     load::Operation op = p.operations.at(0);
-    if (!codec::function_from_name(o.function, op.function)) {
-        try {
-            std::size_t used = 0;
-            int fc = std::stoi(o.function, &used, 0);
-            if (used != o.function.size() || fc < 1 || fc > 127) throw std::invalid_argument("fc");
-            op.function = static_cast<std::uint8_t>(fc);
-        } catch (...) {
-            return fmt::format(
-                "--fc '{}' is neither a function code (1..127) nor a name like "
-                "read_holding_registers",
-                o.function);
-        }
-    }
+    if (auto error = codec::parse_function_code(o.function, op.function); !error.empty())
+        return "--fc: " + error;
     // One address rule for every subcommand: codec/address.hpp.
     codec::AddressRange range;
     if (auto error =
@@ -199,9 +188,12 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function,
-                    "function code or name (default 3, read_holding_registers)");
+                    "function code (default 0x03 read_holding_registers): " +
+                        std::string(codec::kFunctionCodeForms));
     cmd->add_option("--addr", o->address, std::string(codec::kAddressRuleHelp));
-    cmd->add_option("--count", o->count, "quantity per request (default 10; 1 for FC05/06/16)")
+    cmd->add_option("--count", o->count,
+                    "quantity per request (default 10; 1 for 0x05 write_single_coil, 0x06 "
+                    "write_single_register and 0x16 mask_write_register)")
         ->check(CLI::Range(1, 2000));
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")

@@ -21,12 +21,6 @@ std::string hex4(std::uint32_t v) {
     return s;
 }
 
-std::string function_text(std::uint8_t fc) {
-    std::string s = hex4(fc);
-    if (s.size() == 3) s.insert(2, "0");
-    return s + " " + std::string(function_name(fc));
-}
-
 std::string_view table_noun(Table table) noexcept {
     switch (table) {
         case Table::Coils:
@@ -143,16 +137,16 @@ std::optional<Table> function_table(std::uint8_t fc) noexcept {
 std::string table_functions(Table table) {
     switch (table) {
         case Table::Coils:
-            return "read it with " + function_text(0x01) + ", write it with " +
-                   function_text(0x05) + " or " + function_text(0x0F);
+            return "read it with " + function_label(0x01) + ", write it with " +
+                   function_label(0x05) + " or " + function_label(0x0F);
         case Table::DiscreteInputs:
-            return "read it with " + function_text(0x02);
+            return "read it with " + function_label(0x02);
         case Table::InputRegisters:
-            return "read it with " + function_text(0x04);
+            return "read it with " + function_label(0x04);
         case Table::HoldingRegisters:
-            return "read it with " + function_text(0x03) + " or " + function_text(0x17) +
-                   ", write it with " + function_text(0x06) + ", " + function_text(0x10) + " or " +
-                   function_text(0x16);
+            return "read it with " + function_label(0x03) + " or " + function_label(0x17) +
+                   ", write it with " + function_label(0x06) + ", " + function_label(0x10) +
+                   " or " + function_label(0x16);
     }
     return {};
 }

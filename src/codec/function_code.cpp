@@ -68,4 +68,47 @@ bool function_from_name(std::string_view name, std::uint8_t& fc) noexcept {
     return false;
 }
 
+std::string function_label(std::uint8_t fc) {
+    constexpr char kDigits[] = "0123456789ABCDEF";
+    std::string s = {'0', 'x', kDigits[fc >> 4], kDigits[fc & 0xFu]};
+    const std::string_view name = function_name(fc);
+    if (!name.empty()) {
+        s += ' ';
+        s += name;
+    }
+    return s;
+}
+
+std::string parse_function_code(std::string_view text, std::uint8_t& fc) {
+    if (function_from_name(text, fc)) return {};
+    std::string_view digits = text;
+    unsigned base = 10;
+    if (digits.size() > 2 && digits[0] == '0' && (digits[1] == 'x' || digits[1] == 'X')) {
+        base = 16;
+        digits.remove_prefix(2);
+    }
+    // At most 3 significant digits keep the value far from overflow; leading zeros are fine.
+    while (digits.size() > 1 && digits.front() == '0') digits.remove_prefix(1);
+    bool valid = !digits.empty() && digits.size() <= 3;
+    unsigned value = 0;
+    for (char c : digits) {
+        unsigned d = 16;
+        if (c >= '0' && c <= '9') d = static_cast<unsigned>(c - '0');
+        if (base == 16 && c >= 'a' && c <= 'f') d = static_cast<unsigned>(c - 'a' + 10);
+        if (base == 16 && c >= 'A' && c <= 'F') d = static_cast<unsigned>(c - 'A' + 10);
+        if (d >= base) {
+            valid = false;
+            break;
+        }
+        value = value * base + d;
+    }
+    if (valid && value >= 1 && value <= 0x7F) {
+        fc = static_cast<std::uint8_t>(value);
+        return {};
+    }
+    std::string why = valid ? " is out of range 1..127 (0x01..0x7F)" : " is not a function code";
+    return "function '" + std::string(text) + "'" + why + "; write " +
+           std::string(kFunctionCodeForms);
+}
+
 }  // namespace mbstorm::codec

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 namespace mbstorm::codec {
@@ -43,6 +44,19 @@ bool is_write_function(std::uint8_t fc) noexcept;
 std::string_view function_name(std::uint8_t fc) noexcept;
 // Inverse of function_name; returns false when the name is unknown.
 bool function_from_name(std::string_view name, std::uint8_t& fc) noexcept;
+
+// How every output names a function code: "0x10 write_multiple_registers"; "0x41" for codes
+// without a name. Hex with a prefix, so 0x16 never reads as sixteen.
+std::string function_label(std::uint8_t fc);
+
+// The forms a user may write a function code in, for --help texts and documentation.
+inline constexpr std::string_view kFunctionCodeForms =
+    "a name (write_multiple_registers), hex with 0x (0x10) or decimal (16)";
+
+// Reads a function code the way a user writes it (see kFunctionCodeForms), 1..127. Returns ""
+// on success, else one line naming the value and the forms accepted. Does not check that the
+// code is supported: callers that need that say so themselves.
+std::string parse_function_code(std::string_view text, std::uint8_t& fc);
 
 // Diagnostics (FC 08) sub-functions the codec knows.
 enum class DiagnosticSubFunction : std::uint16_t {

@@ -88,7 +88,7 @@ void append_row(std::string& out, std::size_t width, const std::string& name, co
 }
 
 std::string operation_label(const stats::OperationResult& op) {
-    return fmt::format("{} ({:02X})", op.name, op.function_code);
+    return format_operation(op.name, op.function_code);
 }
 
 std::string stage_label(const stats::StageResult& st) {
@@ -162,7 +162,7 @@ std::string format_console_report(const stats::RunResult& r) {
     const std::size_t width = label_width(r);
     if (!r.operations.empty()) {
         out += "\nPer operation\n";
-        append_row_header(out, "operation (fc)", width);
+        append_row_header(out, "operation (function)", width);
         for (const auto& op : r.operations) {
             append_row(out, width, operation_label(op), op.latency, op.counters, seconds);
         }

@@ -407,8 +407,8 @@ std::string latency_table(const stats::RunResult& r) {
     latency_header(t, "operation");
     latency_row(t, "all operations", r.latency, r.counters.completed(), seconds);
     for (const auto& op : r.operations) {
-        latency_row(t, fmt::format("{} ({})", op.name, format_hex_byte(op.function_code)),
-                    op.latency, op.counters.completed(), seconds);
+        latency_row(t, format_operation(op.name, op.function_code), op.latency,
+                    op.counters.completed(), seconds);
     }
     t += "</table></div>\n";
     return t;
@@ -458,8 +458,8 @@ std::string stages_table(const stats::RunResult& r) {
                                 static_cast<double>(st.end_offset_ns) / 1e9),
                     st.latency, st.counters.completed(), seconds, open ? &target : nullptr);
         for (const auto& op : st.operations) {
-            latency_row(t, "    " + op.name, op.latency, op.counters.completed(), seconds,
-                        open ? &no_target : nullptr);
+            latency_row(t, "    " + format_operation(op.name, op.function_code), op.latency,
+                        op.counters.completed(), seconds, open ? &no_target : nullptr);
         }
     }
     t += "</table></div>\n";

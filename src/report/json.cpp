@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "codec/function_code.hpp"
 #include "report/explain.hpp"
 #include "report/units.hpp"
 
@@ -79,6 +80,7 @@ json totals_json(const stats::OutcomeCounters& c, std::uint64_t duration_ns) {
 json operation_json(const stats::OperationResult& op, std::uint64_t duration_ns) {
     return {{"name", op.name},
             {"function_code", op.function_code},
+            {"function", codec::function_label(op.function_code)},
             {"totals", totals_json(op.counters, duration_ns)},
             {"latency", latency_json(op.latency)},
             {"outcomes", outcomes_json(op.counters)},

@@ -1,6 +1,7 @@
 #include "report/units.hpp"
 
 #include "codec/exception_code.hpp"
+#include "codec/function_code.hpp"
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
@@ -78,6 +79,12 @@ std::string format_exception_code(std::uint8_t code) {
     if (!codec::is_known_exception(code)) return format_hex_byte(code);
     return fmt::format("0x{:02X} {}", code,
                        codec::exception_name(static_cast<codec::ExceptionCode>(code)));
+}
+
+std::string format_operation(const std::string& name, std::uint8_t function_code) {
+    std::string label = codec::function_label(function_code);
+    if (name.empty() || name == codec::function_name(function_code)) return label;
+    return fmt::format("{} ({})", name, label);
 }
 
 std::string format_hex_byte(std::uint8_t b) {

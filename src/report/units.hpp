@@ -23,6 +23,9 @@ std::string format_count(std::uint64_t n);
 std::string format_utc(std::chrono::system_clock::time_point t);
 // "0x02".
 std::string format_hex_byte(std::uint8_t b);
+// How reports name an operation: "poll (0x03 read_holding_registers)", or only the function
+// label when the operation is named after its function.
+std::string format_operation(const std::string& name, std::uint8_t function_code);
 // "0x02 ILLEGAL DATA ADDRESS" for the codes the specification names, else "0x2A".
 std::string format_exception_code(std::uint8_t code);
 

@@ -15,27 +15,21 @@ namespace {
 namespace lim = codec::limits;
 
 constexpr const char* kGeneratable =
-    "read_coils (1), read_discrete_inputs (2), read_holding_registers (3), "
-    "read_input_registers (4), write_single_coil (5), write_single_register (6), "
-    "read_exception_status (7), diagnostics (8), get_comm_event_counter (0x0B), "
-    "get_comm_event_log (0x0C), write_multiple_coils (0x0F), write_multiple_registers (0x10), "
-    "report_server_id (0x11), mask_write_register (0x16), read_write_multiple_registers (0x17), "
-    "read_fifo_queue (0x18), encapsulated_interface (0x2B)";
+    "0x01 read_coils, 0x02 read_discrete_inputs, 0x03 read_holding_registers, "
+    "0x04 read_input_registers, 0x05 write_single_coil, 0x06 write_single_register, "
+    "0x07 read_exception_status, 0x08 diagnostics, 0x0B get_comm_event_counter, "
+    "0x0C get_comm_event_log, 0x0F write_multiple_coils, 0x10 write_multiple_registers, "
+    "0x11 report_server_id, 0x16 mask_write_register, 0x17 read_write_multiple_registers, "
+    "0x18 read_fifo_queue, 0x2B encapsulated_interface";
 
 std::uint8_t parse_function(const YamlReader& r, const YAML::Node& n) {
     const std::string text = r.scalar(n, "function");
     std::uint8_t fc = 0;
-    if (!codec::function_from_name(text, fc)) {
-        std::int64_t number = 0;
-        if (!YamlReader::parse_integer(text, number) || number < 1 || number > 127) {
-            r.fail(n, fmt::format("function '{}' is unknown (give a number or a name: {})", text,
-                                  kGeneratable));
-        }
-        fc = static_cast<std::uint8_t>(number);
-    }
+    if (auto error = codec::parse_function_code(text, fc); !error.empty())
+        r.fail(n, fmt::format("{} (generated: {})", error, kGeneratable));
     if (!load::is_generatable_function(fc)) {
-        r.fail(n,
-               fmt::format("function 0x{:02X} cannot be generated (valid: {})", fc, kGeneratable));
+        r.fail(n, fmt::format("function {} cannot be generated (valid: {})",
+                              codec::function_label(fc), kGeneratable));
     }
     return fc;
 }
@@ -119,9 +113,10 @@ load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
 
 Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::Operation& op) {
     if (!can_expect(op.function)) {
-        r.fail(n, fmt::format("expect: {} returns no values to check (valid for functions 1, 2, 3, "
-                              "4 and 0x17)",
-                              codec::function_name(op.function)));
+        r.fail(n, fmt::format("expect: {} returns no values to check (valid for 0x01 read_coils, "
+                              "0x02 read_discrete_inputs, 0x03 read_holding_registers, 0x04 "
+                              "read_input_registers and 0x17 read_write_multiple_registers)",
+                              codec::function_label(op.function)));
     }
     const bool bits = op.function == 0x01 || op.function == 0x02;
     const std::int64_t hi = bits ? 1 : 65535;
@@ -211,7 +206,7 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
     }
     const QuantityLimits q = quantity_limits(op.function);
     op.quantity = q.max == 1 ? 1 : 10;
-    const std::string fname(codec::function_name(op.function));
+    const std::string fname = codec::function_label(op.function);
 
     NodeSlot address_node, quantity_node, expect_node, thresholds_node, zipf_node;
     r.each_key(
@@ -236,10 +231,11 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
                 op.unit_id = static_cast<std::uint8_t>(r.integer(v, "unit", 0, 255));
             } else if (key == "address") {
                 only_for(function_table(op.function).has_value(),
-                         "functions with an address: 1-6, 0x0F, 0x10, 0x16, 0x17, 0x18");
+                         "functions with an address: 0x01-0x06, 0x0F, 0x10, 0x16, 0x17, 0x18");
                 address_node = v;
             } else if (key == "quantity") {
-                only_for(q.max != 0, "functions with a quantity: 1-6, 0x0F, 0x10, 0x16, 0x17");
+                only_for(q.max != 0,
+                         "functions with a quantity: 0x01-0x06, 0x0F, 0x10, 0x16, 0x17");
                 quantity_node = v;
                 op.quantity = static_cast<std::uint16_t>(
                     r.integer(v, fmt::format("quantity for {}", fname), q.min, q.max));
@@ -258,19 +254,19 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
                                        load::kMaxZipfExponent));
                 }
             } else if (key == "values") {
-                only_for(takes_values(op.function), "writes: 5, 6, 0x0F, 0x10, 0x16, 0x17");
+                only_for(takes_values(op.function), "writes: 0x05, 0x06, 0x0F, 0x10, 0x16, 0x17");
                 op.values = parse_values(r, v);
             } else if (key == "weight") {
                 op.weight = static_cast<std::uint32_t>(r.integer(v, "weight", 1, 4294967295LL));
             } else if (key == "write_quantity") {
-                only_for(op.function == 0x17, "read_write_multiple_registers (0x17)");
+                only_for(op.function == 0x17, "0x17 read_write_multiple_registers");
                 op.write_quantity = static_cast<std::uint16_t>(
                     r.integer(v, "write_quantity", 1, lim::kMaxRwWriteRegisters));
             } else if (key == "and_mask") {
-                only_for(op.function == 0x16, "mask_write_register (0x16)");
+                only_for(op.function == 0x16, "0x16 mask_write_register");
                 op.and_mask = static_cast<std::uint16_t>(r.integer(v, "and_mask", 0, 65535));
             } else if (key == "device_id_code") {
-                only_for(op.function == 0x2B, "encapsulated_interface (0x2B)");
+                only_for(op.function == 0x2B, "0x2B encapsulated_interface");
                 op.device_id_code = static_cast<std::uint8_t>(
                     r.integer(v, "device_id_code", lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
             } else if (key == "expect") {
@@ -301,7 +297,7 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
                                    *op.last_address - op.first_address + 1, span));
         }
     }
-    if (op.name.empty()) op.name = fname;
+    if (op.name.empty()) op.name = std::string(codec::function_name(op.function));
     if (expect_node) out.expect = parse_expect(r, expect_node, op);
     if (thresholds_node) {
         if (!thresholds_node.node.IsSequence()) {

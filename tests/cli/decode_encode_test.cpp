@@ -162,7 +162,7 @@ TEST(EncodeCommand, RefusalsNameFieldValueAndRange) {
         {"encode --fc 3 -n 200", "quantity 200: valid 1..125 for 0x03 read_holding_registers"},
         {"encode --fc 99",
          "function code 99 (0x63): not a public Modbus function; valid: 0x01..0x08, 0x0B"},
-        {"encode --fc nonsense", "function 'nonsense': valid: 0x01..0x08"},
+        {"encode --fc nonsense", "function 'nonsense' is not a function code; write a name"},
         {"encode --fc 1 -n 0", "quantity 0: valid 1..2000 for 0x01 read_coils"},
         {"encode --fc 3 --addr 0xFFFF -n 2", "address 65535 + quantity 2 runs past 65535"},
         {"encode --fc 16 --addr 0", "--values holds 0 value(s): valid 1..123 for 0x10"},

@@ -57,8 +57,11 @@ TEST(ConsoleReport, ContainsPercentileTableErrorsOperationsStagesThresholds) {
     EXPECT_TRUE(contains(text, "timeout"));
     EXPECT_TRUE(contains(text, "0x02 ILLEGAL DATA ADDRESS"));
     EXPECT_TRUE(contains(text, "Per operation"));
-    EXPECT_TRUE(contains(text, "read_holding_registers (03)"));
-    EXPECT_TRUE(contains(text, "write_single_register (06)"));
+    // Function codes as hex with a prefix and the name; an operation named after its function
+    // is not named twice.
+    EXPECT_TRUE(contains(text, "  0x03 read_holding_registers "));
+    EXPECT_TRUE(contains(text, "  0x06 write_single_register "));
+    EXPECT_FALSE(contains(text, "(03)"));
     EXPECT_TRUE(contains(text, "Per stage"));
     EXPECT_TRUE(contains(text, "3. spike"));
     EXPECT_TRUE(contains(text, "FAIL  error_rate < 0.1%"));
@@ -72,12 +75,13 @@ TEST(ConsoleReport, LongOperationNamesAreNotCutAndColumnsStayAligned) {
     auto result = testing::make_sample_result();
     result.operations[0].name = "read_write_multiple_registers_of_the_second_boiler";
     const std::string text = format_console_report(result);
-    const std::string label = result.operations[0].name + " (" +
-                              fmt::format("{:02X}", result.operations[0].function_code) + ")";
+    const std::string label = result.operations[0].name + " (0x" +
+                              fmt::format("{:02X}", result.operations[0].function_code) + " " +
+                              "read_holding_registers)";
     const auto row = text.find("  " + label + " ");
     ASSERT_NE(row, std::string::npos) << text;
     // The header's "count" column ends where the row's count ends.
-    const auto header = text.rfind("\n", text.find("operation (fc)")) + 1;
+    const auto header = text.rfind("\n", text.find("operation (function)")) + 1;
     const auto header_end = text.find('\n', header);
     const auto row_end = text.find('\n', row);
     const std::string header_line = text.substr(header, header_end - header);
@@ -89,6 +93,21 @@ TEST(ConsoleReport, LongOperationNamesAreNotCutAndColumnsStayAligned) {
         });
     };
     EXPECT_EQ(columns(header_line), columns(row_line)) << header_line << "\n" << row_line;
+}
+
+TEST(ConsoleReport, OperationsShowTheirFunctionCodeInHexWithItsName) {
+    // 0x16 used to print as "mask (16)", next to a --fc that reads 16 as 0x10.
+    auto result = testing::make_sample_result();
+    result.operations[0].name = "mask";
+    result.operations[0].function_code = 0x16;
+    result.operations[1].name = "odd";
+    result.operations[1].function_code = 0x41;
+    const std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text, "  mask (0x16 mask_write_register) ")) << text;
+    EXPECT_TRUE(contains(text, "  odd (0x41) ")) << text;
+    EXPECT_FALSE(contains(text, "mask (16)")) << text;
+    EXPECT_EQ(format_operation("read_coils", 0x01), "0x01 read_coils");
+    EXPECT_EQ(format_operation("", 0x10), "0x10 write_multiple_registers");
 }
 
 TEST(ConsoleReport, StrayResponsesHaveTheirOwnLineOutsideTheErrors) {

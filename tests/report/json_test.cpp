@@ -72,6 +72,7 @@ TEST(Json, ValuesMatchTheRunResult) {
     ASSERT_EQ(doc["operations"].size(), 2u);
     EXPECT_EQ(doc["operations"][1]["name"], "write_single_register");
     EXPECT_EQ(doc["operations"][1]["function_code"], 6);
+    EXPECT_EQ(doc["operations"][1]["function"], "0x06 write_single_register");
     ASSERT_EQ(doc["stages"].size(), 3u);
     EXPECT_EQ(doc["stages"][2]["name"], "spike");
     EXPECT_EQ(doc["timeline"]["intervals"].size(), r.timeline.size());

@@ -62,7 +62,7 @@ TEST(CliScenario, InvalidFileExitsTwoWithPosition) {
         write_temp("invalid.yaml", "operations:\n  - {function: 3, quantity: 200}\n");
     const auto r = run_mbstorm("run " + file);
     EXPECT_EQ(r.exit_code, 2) << r.output;
-    EXPECT_NE(r.output.find(file + ":2:29: quantity for read_holding_registers: 200 is out of "
+    EXPECT_NE(r.output.find(file + ":2:29: quantity for 0x03 read_holding_registers: 200 is out of "
                                    "range (valid 1..125)"),
               std::string::npos)
         << r.output;
