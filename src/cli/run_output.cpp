@@ -7,6 +7,7 @@
 #include "report/hgrm.hpp"
 #include "report/html.hpp"
 #include "report/json.hpp"
+#include "report/junit.hpp"
 
 namespace mbstorm::cli {
 
@@ -45,20 +46,6 @@ void LiveProgress::update(const load::ProgressSnapshot& s) {
 }
 
 int report_run(load::LoadResult& result, const OutputFiles& files) {
-    for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
-    if (!result.ok && result.run.counters.transactions_sent == 0) {
-        fmt::print(stderr, "mbstorm run: {}\n", result.error);
-        return kExitUsage;
-    }
-    if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
-    // Everything measured is reported, even after an early end; on stderr when a report file
-    // takes stdout.
-    std::FILE* out = files.uses_stdout() ? stderr : stdout;
-    fmt::print(out, "{}", report::format_console_report(result.run));
-    if (result.pending_at_end)
-        fmt::print(out, "  {} transaction(s) still pending when the run ended\n",
-                   result.pending_at_end);
-    std::fflush(out);
     int code = kExitOk;
     auto write = [&code](const std::string& path, const std::string& content, const char* what) {
         if (path.empty()) return;
@@ -70,9 +57,31 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
             fmt::print(stderr, "wrote {} {}\n", what, path == "-" ? "to stdout" : path);
         }
     };
+    auto write_junit = [&] {
+        if (files.junit.empty()) return;
+        write(files.junit,
+              report::format_junit(result.run, files.junit_suite, result.ok ? "" : result.error),
+              "JUnit XML");
+    };
+    for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
+    if (!result.ok && result.run.counters.transactions_sent == 0) {
+        fmt::print(stderr, "mbstorm run: {}\n", result.error);
+        write_junit();
+        return kExitUsage;
+    }
+    if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
+    // Everything measured is reported, even after an early end; on stderr when a report file
+    // takes stdout.
+    std::FILE* out = files.uses_stdout() ? stderr : stdout;
+    fmt::print(out, "{}", report::format_console_report(result.run));
+    if (result.pending_at_end)
+        fmt::print(out, "  {} transaction(s) still pending when the run ended\n",
+                   result.pending_at_end);
+    std::fflush(out);
     write(files.json, report::format_json(result.run), "JSON summary");
     write(files.hdr, report::format_hgrm(result.run.latency), ".hgrm distribution");
     write(files.html, report::format_html(result.run), "HTML report");
+    write_junit();
     if (code == kExitOk) code = judge_run(result);
     return code;
 }

@@ -15,7 +15,10 @@ namespace mbstorm::cli {
 // be "-", and then the console report goes to stderr so that stdout holds only that file.
 struct OutputFiles {
     std::string json, hdr, html;
-    std::string junit;  // not a flag of add_output_options: set from the scenario request
+    // JUnit XML of a scenario's thresholds: not a flag of add_output_options, set from the
+    // scenario request with the scenario's name as the suite.
+    std::string junit;
+    std::string junit_suite;
     bool uses_stdout() const { return json == "-" || hdr == "-" || html == "-" || junit == "-"; }
 };
 
@@ -39,9 +42,11 @@ class LiveProgress {
     stats::IntervalSummary last_{};
 };
 
-// Prints the final report and writes the requested files. Returns the exit code: 2 when the
-// run could not start or a file could not be written, 1 when the run failed (judge_run), 0
-// otherwise (thresholds are the scenario layer's business).
+// Prints the final report and writes the requested files (the formats are report/'s; this is
+// the one place that writes run's files). Returns the exit code: 2 when the run could not start
+// or a file could not be written, 1 when the run failed (judge_run), 0 otherwise (thresholds
+// are the scenario layer's business). The JUnit XML is written even when the run could not
+// start, so that CI shows the failure.
 int report_run(load::LoadResult& result, const OutputFiles& files);
 // 1 (with a line on stderr) when no transaction succeeded or the target was lost and did not
 // come back; 0 otherwise.

@@ -9,7 +9,6 @@
 
 #include "cli/commands.hpp"
 #include "report/files.hpp"
-#include "report/junit.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -71,20 +70,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
 
     OutputFiles files = request.outputs;
     files.junit = request.junit;
+    files.junit_suite = s.name;
     int code = report_run(result, files);
-    if (!request.junit.empty()) {
-        std::string error;
-        const std::string xml =
-            report::format_junit(result.run, s.name, result.ok ? "" : result.error);
-        if (!report::write_text_file(request.junit, xml, error)) {
-            fmt::print(stderr, "mbstorm run: cannot write JUnit XML {}: {}\n", request.junit,
-                       error);
-            code = kExitUsage;
-        } else {
-            fmt::print(stderr, "wrote JUnit XML {}\n",
-                       request.junit == "-" ? "to stdout" : request.junit);
-        }
-    }
     if (code == kExitOk && !result.run.thresholds_passed()) {
         std::size_t failed = 0;
         for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;

@@ -1,16 +1,15 @@
-// Typed reads of YAML nodes that fail with "<source>:<line>:<column>: <what>" and the valid
-// range. Shared by the scenario parser's pieces; not on any hot path (throws ScenarioError).
+// The scenario parser's YAML reader: the shared one (yaml/reader.hpp) throwing ScenarioError,
+// with durations added. Not on any hot path.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
-#include <functional>
-#include <initializer_list>
 #include <string>
 #include <string_view>
 
 #include "load/plan.hpp"
+#include "yaml/reader.hpp"
 
 namespace mbstorm::scenario {
 
@@ -29,41 +28,14 @@ struct NodeSlot {
     operator const YAML::Node&() const noexcept { return node; }  // NOLINT: implicit on purpose
 };
 
-class YamlReader {
+// The shared YAML reader (yaml/reader.hpp) raising ScenarioError, plus durations.
+class YamlReader : public yaml::Reader {
   public:
-    explicit YamlReader(std::string source) : source_(std::move(source)) {}
-    const std::string& source() const noexcept { return source_; }
+    explicit YamlReader(std::string source);
 
-    [[noreturn]] void fail(const YAML::Mark& mark, const std::string& message) const;
-    [[noreturn]] void fail(const YAML::Node& node, const std::string& message) const {
-        fail(node.Mark(), message);
-    }
-    std::string where(const YAML::Node& node) const;  // "file:line:column"
-
-    // Calls f(key, key node, value) for each entry; unknown keys (not in `known`) and
-    // duplicates fail, naming the valid keys.
-    void each_key(
-        const YAML::Node& map, std::string_view what, std::initializer_list<std::string_view> known,
-        const std::function<void(const std::string&, const YAML::Node&, const YAML::Node&)>& f)
-        const;
-
-    std::string scalar(const YAML::Node& n, std::string_view what) const;
-    // Decimal or 0x hex; must lie in [lo, hi].
-    std::int64_t integer(const YAML::Node& n, std::string_view what, std::int64_t lo,
-                         std::int64_t hi) const;
-    double number(const YAML::Node& n, std::string_view what, double lo, double hi) const;
-    bool boolean(const YAML::Node& n, std::string_view what) const;
     // "500ms", "10s", "2m"; a bare number is seconds. Must lie in [lo, hi] (hi 0: no limit).
     load::Duration duration(const YAML::Node& n, std::string_view what, load::Duration lo,
                             load::Duration hi, bool lo_exclusive = false) const;
-    // One of `choices`.
-    std::string choice(const YAML::Node& n, std::string_view what,
-                       std::initializer_list<std::string_view> choices) const;
-
-    static bool parse_integer(std::string_view s, std::int64_t& out);
-
-  private:
-    std::string source_;
 };
 
 // "10s", "250ms", "1.5s" — the shortest exact text for a duration (re-parses to the same).

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "codec/address.hpp"
+#include "yaml/reader.hpp"
 
 namespace mbstorm::slave {
 
@@ -34,50 +35,32 @@ codec::Table codec_table(Table table) {
     return codec::Table::HoldingRegisters;
 }
 
-// Carries the source name so every error can say where it happened.
-class Parser {
+[[noreturn]] void raise_device_error(const std::string& message, int line, int column) {
+    throw DeviceYamlError(message, line, column);
+}
+
+// The shared YAML reader (yaml/reader.hpp) raising DeviceYamlError, plus the device's units.
+class Parser : public yaml::Reader {
   public:
-    explicit Parser(std::string_view source) : source_(source) {}
+    explicit Parser(std::string_view source)
+        : yaml::Reader(std::string(source), &raise_device_error) {}
 
-    [[noreturn]] void fail(const YAML::Mark& mark, const std::string& message) const {
-        const int line = mark.is_null() ? 0 : mark.line + 1;
-        const int column = mark.is_null() ? 0 : mark.column + 1;
-        std::string text = source_;
-        if (line > 0) text += ":" + std::to_string(line) + ":" + std::to_string(column);
-        throw DeviceYamlError(text + ": " + message, line, column);
-    }
-    [[noreturn]] void fail(const YAML::Node& node, const std::string& message) const {
-        fail(node.Mark(), message);
-    }
-
-    // Calls f(key, value) for each entry of a mapping; f returns false for unknown keys.
+    // Calls f(key, value) for each entry of a mapping; keys not in `known` and duplicates
+    // fail. f returns false for a key it does not handle, which fails the same way (a key
+    // listed but not handled is caught by the tests).
     template <class F>
-    void each_key(const YAML::Node& map, std::string_view what, F&& f) const {
-        if (!map.IsMap()) fail(map, std::string(what) + " must be a mapping");
-        for (const auto& kv : map) {
-            const std::string key = kv.first.Scalar();
-            if (!f(key, kv.second)) {
-                fail(kv.first, "unknown key '" + key + "' in " + std::string(what));
-            }
-        }
+    void each_key(const YAML::Node& map, std::string_view what,
+                  std::span<const std::string_view> known, F&& f) const {
+        yaml::Reader::each_key(
+            map, what, known,
+            [&](const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
+                if (!f(key, v)) fail(key_node, "unknown key '" + key + "' in " + std::string(what));
+            });
     }
-
-    std::string scalar(const YAML::Node& n, std::string_view what) const {
-        if (!n.IsScalar()) fail(n, std::string(what) + " must be a single value");
-        return n.Scalar();
-    }
-
-    // Integers: decimal, 0x hex or 0b binary, optionally negative; must lie in [lo, hi].
-    std::int64_t integer(const YAML::Node& n, std::string_view what, std::int64_t lo,
-                         std::int64_t hi) const {
-        const std::string s = scalar(n, what);
-        std::int64_t v = 0;
-        if (!parse_integer(s, v)) fail(n, std::string(what) + ": '" + s + "' is not an integer");
-        if (v < lo || v > hi) {
-            fail(n, std::string(what) + " must be between " + std::to_string(lo) + " and " +
-                        std::to_string(hi) + " (got " + s + ")");
-        }
-        return v;
+    template <class F>
+    void each_key(const YAML::Node& map, std::string_view what,
+                  std::initializer_list<std::string_view> known, F&& f) const {
+        each_key(map, what, std::span<const std::string_view>(known.begin(), known.size()), f);
     }
 
     // The one address rule of every subcommand (codec/address.hpp): a protocol address or a
@@ -89,30 +72,6 @@ class Parser {
         if (error.empty() && range.is_range) error = "'" + s + "' is a range: give one address";
         if (!error.empty()) fail(n, "address " + error);
         return range.first;
-    }
-
-    double number(const YAML::Node& n, std::string_view what) const {
-        const std::string s = scalar(n, what);
-        std::int64_t i = 0;
-        if (parse_integer(s, i)) return static_cast<double>(i);
-        const char* first = s.data();
-        const char* last = s.data() + s.size();
-        if (first != last && *first == '+') ++first;
-        double v = 0.0;
-        const auto [ptr, ec] = std::from_chars(first, last, v);
-        if (ec != std::errc() || ptr != last || s.empty() || !std::isfinite(v)) {
-            fail(n, std::string(what) + ": '" + s + "' is not a number");
-        }
-        return v;
-    }
-
-    bool boolean(const YAML::Node& n, std::string_view what) const {
-        std::string s = scalar(n, what);
-        std::transform(s.begin(), s.end(), s.begin(),
-                       [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-        if (s == "true" || s == "yes" || s == "on") return true;
-        if (s == "false" || s == "no" || s == "off") return false;
-        fail(n, std::string(what) + " must be true or false");
     }
 
     // Milliseconds (fractions allowed) -> nanoseconds.
@@ -127,31 +86,6 @@ class Parser {
         if (r < 0.0 || r > 1.0) fail(n, std::string(what) + " must be between 0 and 1");
         return r;
     }
-
-  private:
-    static bool parse_integer(const std::string& s, std::int64_t& out) {
-        const char* p = s.data();
-        const char* end = p + s.size();
-        bool negative = false;
-        if (p != end && (*p == '-' || *p == '+')) negative = *p++ == '-';
-        int base = 10;
-        if (end - p > 2 && p[0] == '0' && (p[1] == 'x' || p[1] == 'X')) {
-            base = 16;
-            p += 2;
-        } else if (end - p > 2 && p[0] == '0' && (p[1] == 'b' || p[1] == 'B')) {
-            base = 2;
-            p += 2;
-        }
-        if (p == end) return false;
-        std::uint64_t magnitude = 0;
-        const auto [ptr, ec] = std::from_chars(p, end, magnitude, base);
-        if (ec != std::errc() || ptr != end || magnitude > (1ULL << 62)) return false;
-        out =
-            negative ? -static_cast<std::int64_t>(magnitude) : static_cast<std::int64_t>(magnitude);
-        return true;
-    }
-
-    std::string source_;
 };
 
 Table parse_table(const Parser& p, const YAML::Node& n) {
@@ -268,25 +202,26 @@ std::vector<std::uint8_t> parse_entry_units(const Parser& p, const YAML::Node& n
 }
 
 void parse_tables(const Parser& p, const YAML::Node& n, TableSizes& sizes) {
-    p.each_key(n, "tables", [&](const std::string& key, const YAML::Node& v) {
-        const auto size = static_cast<std::uint32_t>(p.integer(v, key, 0, kFullTable));
-        if (key == "coils") {
-            sizes.coils = size;
-        } else if (key == "discrete_inputs") {
-            sizes.discrete_inputs = size;
-        } else if (key == "input_registers") {
-            sizes.input_registers = size;
-        } else if (key == "holding_registers") {
-            sizes.holding_registers = size;
-        } else {
-            return false;
-        }
-        return true;
-    });
+    p.each_key(n, "tables", {"coils", "discrete_inputs", "input_registers", "holding_registers"},
+               [&](const std::string& key, const YAML::Node& v) {
+                   const auto size = static_cast<std::uint32_t>(p.integer(v, key, 0, kFullTable));
+                   if (key == "coils") {
+                       sizes.coils = size;
+                   } else if (key == "discrete_inputs") {
+                       sizes.discrete_inputs = size;
+                   } else if (key == "input_registers") {
+                       sizes.input_registers = size;
+                   } else if (key == "holding_registers") {
+                       sizes.holding_registers = size;
+                   } else {
+                       return false;
+                   }
+                   return true;
+               });
 }
 
 void parse_files(const Parser& p, const YAML::Node& n, ModelConfig& m) {
-    p.each_key(n, "files", [&](const std::string& key, const YAML::Node& v) {
+    p.each_key(n, "files", {"count", "records"}, [&](const std::string& key, const YAML::Node& v) {
         if (key == "count") {
             m.file_count = static_cast<std::uint16_t>(p.integer(v, "files.count", 0, 65535));
         } else if (key == "records") {
@@ -310,7 +245,10 @@ void parse_identification(const Parser& p, const YAML::Node& n, DeviceIdentity& 
         }
         ident.set(id, std::move(value));
     };
-    p.each_key(n, "identification", [&](const std::string& key, const YAML::Node& v) {
+    std::vector<std::string_view> keys;
+    for (const IdentificationKey& named : identification_keys()) keys.push_back(named.key);
+    keys.push_back("extended");
+    p.each_key(n, "identification", keys, [&](const std::string& key, const YAML::Node& v) {
         for (const IdentificationKey& named : identification_keys()) {
             if (key == named.key) {
                 set(v, named.object_id);
@@ -333,27 +271,29 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
     for (const auto& e : list) {
         InitRange r;
         OptNode table, address, values, value, count, random, type;
-        p.each_key(e, "init entry", [&](const std::string& key, const YAML::Node& v) {
-            if (key == "table")
-                table.emplace(v);
-            else if (key == "address")
-                address.emplace(v);
-            else if (key == "values")
-                values.emplace(v);
-            else if (key == "value")
-                value.emplace(v);
-            else if (key == "count")
-                count.emplace(v);
-            else if (key == "random")
-                random.emplace(v);
-            else if (key == "type")
-                type.emplace(v);
-            else if (key == "units")
-                r.units = parse_entry_units(p, v, layout);
-            else
-                return false;
-            return true;
-        });
+        p.each_key(e, "init entry",
+                   {"table", "address", "values", "value", "count", "random", "type", "units"},
+                   [&](const std::string& key, const YAML::Node& v) {
+                       if (key == "table")
+                           table.emplace(v);
+                       else if (key == "address")
+                           address.emplace(v);
+                       else if (key == "values")
+                           values.emplace(v);
+                       else if (key == "value")
+                           value.emplace(v);
+                       else if (key == "count")
+                           count.emplace(v);
+                       else if (key == "random")
+                           random.emplace(v);
+                       else if (key == "type")
+                           type.emplace(v);
+                       else if (key == "units")
+                           r.units = parse_entry_units(p, v, layout);
+                       else
+                           return false;
+                       return true;
+                   });
         if (!table) p.fail(e, "init entry needs 'table'");
         if (!address) p.fail(e, "init entry needs 'address'");
         r.table = parse_table(p, *table);
@@ -375,17 +315,19 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
         } else {
             double lo = 0, hi = is_bit_table(r.table) ? 1 : 65535;
             std::uint64_t seed = 1;
-            p.each_key(*random, "random", [&](const std::string& key, const YAML::Node& v) {
-                if (key == "min")
-                    lo = p.number(v, "random.min");
-                else if (key == "max")
-                    hi = p.number(v, "random.max");
-                else if (key == "seed")
-                    seed = static_cast<std::uint64_t>(p.integer(v, "random.seed", 0, INT64_MAX));
-                else
-                    return false;
-                return true;
-            });
+            p.each_key(*random, "random", {"min", "max", "seed"},
+                       [&](const std::string& key, const YAML::Node& v) {
+                           if (key == "min")
+                               lo = p.number(v, "random.min");
+                           else if (key == "max")
+                               hi = p.number(v, "random.max");
+                           else if (key == "seed")
+                               seed = static_cast<std::uint64_t>(
+                                   p.integer(v, "random.seed", 0, INT64_MAX));
+                           else
+                               return false;
+                           return true;
+                       });
             if (lo > hi) p.fail(*random, "random.min must not exceed random.max");
             SimulatedInput gen;
             gen.wave = Waveform::Random;
@@ -413,27 +355,29 @@ void parse_counters(const Parser& p, const YAML::Node& list, const Layout& layou
     for (const auto& e : list) {
         OptNode table, address, mode, step, start, interval, type;
         std::vector<std::uint8_t> units;
-        p.each_key(e, "counter", [&](const std::string& key, const YAML::Node& v) {
-            if (key == "table")
-                table.emplace(v);
-            else if (key == "address")
-                address.emplace(v);
-            else if (key == "mode")
-                mode.emplace(v);
-            else if (key == "step")
-                step.emplace(v);
-            else if (key == "start")
-                start.emplace(v);
-            else if (key == "interval_ms")
-                interval.emplace(v);
-            else if (key == "type")
-                type.emplace(v);
-            else if (key == "units")
-                units = parse_entry_units(p, v, layout);
-            else
-                return false;
-            return true;
-        });
+        p.each_key(e, "counter",
+                   {"table", "address", "mode", "step", "start", "interval_ms", "type", "units"},
+                   [&](const std::string& key, const YAML::Node& v) {
+                       if (key == "table")
+                           table.emplace(v);
+                       else if (key == "address")
+                           address.emplace(v);
+                       else if (key == "mode")
+                           mode.emplace(v);
+                       else if (key == "step")
+                           step.emplace(v);
+                       else if (key == "start")
+                           start.emplace(v);
+                       else if (key == "interval_ms")
+                           interval.emplace(v);
+                       else if (key == "type")
+                           type.emplace(v);
+                       else if (key == "units")
+                           units = parse_entry_units(p, v, layout);
+                       else
+                           return false;
+                       return true;
+                   });
         if (!address) p.fail(e, "counter needs 'address'");
         const Table t = table ? parse_table(p, *table) : Table::InputRegisters;
         if (is_bit_table(t))
@@ -478,37 +422,40 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
     for (const auto& e : list) {
         SimulatedInput s;
         OptNode table, address, wave, period, type;
-        p.each_key(e, "simulated input", [&](const std::string& key, const YAML::Node& v) {
-            if (key == "table")
-                table.emplace(v);
-            else if (key == "address")
-                address.emplace(v);
-            else if (key == "wave")
-                wave.emplace(v);
-            else if (key == "period_ms")
-                period.emplace(v);
-            else if (key == "type")
-                type.emplace(v);
-            else if (key == "amplitude")
-                s.amplitude = p.number(v, key);
-            else if (key == "offset")
-                s.offset = p.number(v, key);
-            else if (key == "phase")
-                s.phase = p.number(v, key);
-            else if (key == "duty")
-                s.duty = p.rate(v, key);
-            else if (key == "min")
-                s.min = p.number(v, key);
-            else if (key == "max")
-                s.max = p.number(v, key);
-            else if (key == "seed")
-                s.seed = static_cast<std::uint64_t>(p.integer(v, key, 0, INT64_MAX));
-            else if (key == "units")
-                s.units = parse_entry_units(p, v, layout);
-            else
-                return false;
-            return true;
-        });
+        p.each_key(e, "simulated input",
+                   {"table", "address", "wave", "period_ms", "type", "amplitude", "offset", "phase",
+                    "duty", "min", "max", "seed", "units"},
+                   [&](const std::string& key, const YAML::Node& v) {
+                       if (key == "table")
+                           table.emplace(v);
+                       else if (key == "address")
+                           address.emplace(v);
+                       else if (key == "wave")
+                           wave.emplace(v);
+                       else if (key == "period_ms")
+                           period.emplace(v);
+                       else if (key == "type")
+                           type.emplace(v);
+                       else if (key == "amplitude")
+                           s.amplitude = p.number(v, key);
+                       else if (key == "offset")
+                           s.offset = p.number(v, key);
+                       else if (key == "phase")
+                           s.phase = p.number(v, key);
+                       else if (key == "duty")
+                           s.duty = p.rate(v, key);
+                       else if (key == "min")
+                           s.min = p.number(v, key);
+                       else if (key == "max")
+                           s.max = p.number(v, key);
+                       else if (key == "seed")
+                           s.seed = static_cast<std::uint64_t>(p.integer(v, key, 0, INT64_MAX));
+                       else if (key == "units")
+                           s.units = parse_entry_units(p, v, layout);
+                       else
+                           return false;
+                       return true;
+                   });
         if (!table) p.fail(e, "simulated input needs 'table'");
         if (!address) p.fail(e, "simulated input needs 'address'");
         if (!wave) p.fail(e, "simulated input needs 'wave'");
@@ -539,70 +486,77 @@ void parse_simulate(const Parser& p, const YAML::Node& list, const Layout& layou
 }
 
 void parse_faults(const Parser& p, const YAML::Node& n, FaultConfig& f) {
-    p.each_key(n, "faults", [&](const std::string& key, const YAML::Node& v) {
-        if (key == "delay") {
-            // `none` is the default written out (what --print-scenario shows).
-            if (v.IsScalar() && v.Scalar() == "none") {
-                f.delay = DelayConfig{};
-                return true;
-            }
-            int kinds = 0;
-            p.each_key(v, "faults.delay", [&](const std::string& k, const YAML::Node& x) {
-                ++kinds;
-                if (k == "fixed_ms") {
-                    f.delay.kind = DelayConfig::Kind::Fixed;
-                    f.delay.fixed_ns = p.millis(x, k);
-                } else if (k == "uniform_ms") {
-                    if (!x.IsSequence() || x.size() != 2)
-                        p.fail(x, "uniform_ms must be [min, max]");
-                    f.delay.kind = DelayConfig::Kind::Uniform;
-                    f.delay.min_ns = p.millis(x[0], "uniform_ms min");
-                    f.delay.max_ns = p.millis(x[1], "uniform_ms max");
-                    if (f.delay.min_ns > f.delay.max_ns) p.fail(x, "uniform_ms needs min <= max");
-                } else if (k == "exponential_mean_ms") {
-                    f.delay.kind = DelayConfig::Kind::Exponential;
-                    f.delay.mean_ns = p.millis(x, k);
-                } else {
-                    return false;
+    p.each_key(
+        n, "faults", {"delay", "stall", "exception", "drop_rate", "no_answer_rate", "seed"},
+        [&](const std::string& key, const YAML::Node& v) {
+            if (key == "delay") {
+                // `none` is the default written out (what --print-scenario shows).
+                if (v.IsScalar() && v.Scalar() == "none") {
+                    f.delay = DelayConfig{};
+                    return true;
                 }
-                return true;
-            });
-            if (kinds != 1)
-                p.fail(v,
-                       "delay needs exactly one of fixed_ms, uniform_ms, exponential_mean_ms (or "
-                       "delay: none)");
-        } else if (key == "stall") {
-            p.each_key(v, "faults.stall", [&](const std::string& k, const YAML::Node& x) {
-                if (k == "duration_ms")
-                    f.stall.duration_ns = p.millis(x, k);
-                else if (k == "every_ms")
-                    f.stall.period_ns = p.millis(x, k);
-                else
-                    return false;
-                return true;
-            });
-        } else if (key == "exception") {
-            p.each_key(v, "faults.exception", [&](const std::string& k, const YAML::Node& x) {
-                if (k == "rate")
-                    f.exception_rate = p.rate(x, "exception rate");
-                else if (k == "code")
-                    f.exception_code =
-                        static_cast<codec::ExceptionCode>(p.integer(x, "exception code", 1, 127));
-                else
-                    return false;
-                return true;
-            });
-        } else if (key == "drop_rate") {
-            f.drop_rate = p.rate(v, key);
-        } else if (key == "no_answer_rate") {
-            f.no_answer_rate = p.rate(v, key);
-        } else if (key == "seed") {
-            f.seed = static_cast<std::uint64_t>(p.integer(v, key, 0, INT64_MAX));
-        } else {
-            return false;
-        }
-        return true;
-    });
+                int kinds = 0;
+                p.each_key(v, "faults.delay", {"fixed_ms", "uniform_ms", "exponential_mean_ms"},
+                           [&](const std::string& k, const YAML::Node& x) {
+                               ++kinds;
+                               if (k == "fixed_ms") {
+                                   f.delay.kind = DelayConfig::Kind::Fixed;
+                                   f.delay.fixed_ns = p.millis(x, k);
+                               } else if (k == "uniform_ms") {
+                                   if (!x.IsSequence() || x.size() != 2)
+                                       p.fail(x, "uniform_ms must be [min, max]");
+                                   f.delay.kind = DelayConfig::Kind::Uniform;
+                                   f.delay.min_ns = p.millis(x[0], "uniform_ms min");
+                                   f.delay.max_ns = p.millis(x[1], "uniform_ms max");
+                                   if (f.delay.min_ns > f.delay.max_ns)
+                                       p.fail(x, "uniform_ms needs min <= max");
+                               } else if (k == "exponential_mean_ms") {
+                                   f.delay.kind = DelayConfig::Kind::Exponential;
+                                   f.delay.mean_ns = p.millis(x, k);
+                               } else {
+                                   return false;
+                               }
+                               return true;
+                           });
+                if (kinds != 1)
+                    p.fail(
+                        v,
+                        "delay needs exactly one of fixed_ms, uniform_ms, exponential_mean_ms (or "
+                        "delay: none)");
+            } else if (key == "stall") {
+                p.each_key(v, "faults.stall", {"duration_ms", "every_ms"},
+                           [&](const std::string& k, const YAML::Node& x) {
+                               if (k == "duration_ms")
+                                   f.stall.duration_ns = p.millis(x, k);
+                               else if (k == "every_ms")
+                                   f.stall.period_ns = p.millis(x, k);
+                               else
+                                   return false;
+                               return true;
+                           });
+            } else if (key == "exception") {
+                p.each_key(v, "faults.exception", {"rate", "code"},
+                           [&](const std::string& k, const YAML::Node& x) {
+                               if (k == "rate")
+                                   f.exception_rate = p.rate(x, "exception rate");
+                               else if (k == "code")
+                                   f.exception_code = static_cast<codec::ExceptionCode>(
+                                       p.integer(x, "exception code", 1, 127));
+                               else
+                                   return false;
+                               return true;
+                           });
+            } else if (key == "drop_rate") {
+                f.drop_rate = p.rate(v, key);
+            } else if (key == "no_answer_rate") {
+                f.no_answer_rate = p.rate(v, key);
+            } else if (key == "seed") {
+                f.seed = static_cast<std::uint64_t>(p.integer(v, key, 0, INT64_MAX));
+            } else {
+                return false;
+            }
+            return true;
+        });
     if (const std::string problem = validate(f); !problem.empty()) p.fail(n, problem);
 }
 
@@ -610,25 +564,25 @@ DeviceDescription parse_document(const Parser& p, const YAML::Node& root) {
     DeviceDescription d;
     if (root.IsNull()) return d;  // an empty document is the default device
     std::map<std::string, YAML::Node> keys;
-    static const char* const kKnown[] = {"tables",
-                                         "units",
-                                         "unknown_unit",
-                                         "broadcast_unit_zero",
-                                         "diagnostics",
-                                         "files",
-                                         "exception_status",
-                                         "server_id",
-                                         "run_indicator",
-                                         "identification",
-                                         "init",
-                                         "counters",
-                                         "simulate",
-                                         "faults"};
-    p.each_key(root, "device description", [&](const std::string& key, const YAML::Node& v) {
-        if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) return false;
-        keys[key] = v;
-        return true;
-    });
+    static constexpr std::string_view kKnown[] = {"tables",
+                                                  "units",
+                                                  "unknown_unit",
+                                                  "broadcast_unit_zero",
+                                                  "diagnostics",
+                                                  "files",
+                                                  "exception_status",
+                                                  "server_id",
+                                                  "run_indicator",
+                                                  "identification",
+                                                  "init",
+                                                  "counters",
+                                                  "simulate",
+                                                  "faults"};
+    p.each_key(root, "device description", kKnown,
+               [&](const std::string& key, const YAML::Node& v) {
+                   keys[key] = v;
+                   return true;
+               });
     auto has = [&](const char* k) { return keys.count(k) != 0; };
 
     Layout layout;

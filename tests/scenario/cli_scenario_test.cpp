@@ -57,6 +57,19 @@ thresholds:
     EXPECT_NE(xml.find("name=\"throughput &gt; 1000M/s\""), std::string::npos) << xml;
 }
 
+TEST(CliScenario, JunitIsWrittenWhenTheRunCannotStart) {
+    // Port 1 on loopback refuses: no transaction is ever sent, and CI still gets a JUnit file
+    // whose failing case says why.
+    const std::string junit = ::testing::TempDir() + "/refused.xml";
+    std::remove(junit.c_str());
+    const auto r = run_mbstorm("run " + kLibrary + "quickstart.yaml --target 127.0.0.1:1" + kSmall +
+                               "-d 500ms --junit " + junit);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("wrote JUnit XML " + junit), std::string::npos) << r.output;
+    const std::string xml = read_file(junit);
+    EXPECT_NE(xml.find("<failure"), std::string::npos) << xml;
+}
+
 TEST(CliScenario, InvalidFileExitsTwoWithPosition) {
     const std::string file =
         write_temp("invalid.yaml", "operations:\n  - {function: 3, quantity: 200}\n");

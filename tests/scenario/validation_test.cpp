@@ -28,6 +28,8 @@ const BadCase kCases[] = {
     {"unknown top key", "conections: 4\n" OPS,
      "unknown key 'conections' in the scenario (valid keys:", 1, 1},
     {"duplicate key", "depth: 2\ndepth: 3\n" OPS, "duplicate key 'depth'", 2, 1},
+    {"binary out of range", "depth: 0b1000000000000001\n" OPS,
+     "depth: 0b1000000000000001 is out of range (valid 1..32768)", 1, 8},
     {"non-scalar key", "? [a, b]\n: 1\n" OPS, "keys must be plain words", 1, 3},
     // --- top-level values
     {"connections zero", "connections: 0\n" OPS, "connections: 0 is out of range (valid 1..100000)",

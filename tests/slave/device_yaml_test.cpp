@@ -106,6 +106,22 @@ faults:
               5'000'000u);
 }
 
+TEST(DeviceYaml, DuplicateKeysAreRejectedAndUnknownKeysListTheValidOnes) {
+    std::string e = error_of("tables:\n  coils: 10\n  coils: 20\n");
+    EXPECT_NE(e.find("dev.yaml:3:3: duplicate key 'coils' in tables"), std::string::npos) << e;
+    e = error_of("faults: {stall: {duration_ms: 1, every: 2}}\n");
+    EXPECT_NE(e.find("unknown key 'every' in faults.stall (valid keys: duration_ms, every_ms)"),
+              std::string::npos)
+        << e;
+    e = error_of("identification: {vendor: x}\n");
+    EXPECT_NE(e.find("valid keys: vendor_name, "), std::string::npos) << e;
+    EXPECT_NE(e.find(", extended)"), std::string::npos) << e;
+}
+
+TEST(DeviceYaml, IntegersMayBeBinary) {
+    EXPECT_EQ(parse_device_yaml("exception_status: 0b1010").model.exception_status, 10);
+}
+
 TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
     // Unknown key: line 4, column 20 (where "adress" starts).
     std::string e =
@@ -113,7 +129,7 @@ TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
     EXPECT_NE(e.find("dev.yaml:4:20: unknown key 'adress' in init entry"), std::string::npos) << e;
     e = error_of("tables:\n  coils: 70000\n");
     EXPECT_NE(e.find("dev.yaml:2:10:"), std::string::npos) << e;
-    EXPECT_NE(e.find("between 0 and 65536"), std::string::npos) << e;
+    EXPECT_NE(e.find("out of range (valid 0..65536)"), std::string::npos) << e;
     // YAML syntax errors come from yaml-cpp's own marks.
     e = error_of("tables: {coils: 10\n");
     EXPECT_EQ(e.rfind("dev.yaml:", 0), 0u) << e;
