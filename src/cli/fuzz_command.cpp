@@ -114,10 +114,11 @@ int run_fuzz(const FuzzOptions& o) {
     const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
     if (on_stdout > 1) return usage("only one of --json, --junit and --sarif can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
-    fmt::print(stderr,
-               "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 05 06 0F 10 15 "
-               "16 17 and malformed frames); only fuzz devices you may change\n",
-               c.target.to_string());
+    fmt::print(
+        stderr,
+        "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 0x05 0x06 0x0F 0x10 0x15 "
+        "0x16 0x17 and malformed frames); only fuzz devices you may change\n",
+        c.target.to_string());
     c.target_text = c.target.to_string();
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;

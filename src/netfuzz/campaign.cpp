@@ -118,7 +118,9 @@ std::string slug(std::string_view rule) {
 
 // Where a root cause showed up: "fc03 invalid-values unit 1".
 std::string variant_of(const Verdict& v, const Case& c) {
-    std::string s = v.culprit_fc >= 0 ? fmt::format("fc{:02X} ", v.culprit_fc) : std::string();
+    std::string s = v.culprit_fc >= 0
+                        ? codec::function_label(static_cast<std::uint8_t>(v.culprit_fc)) + " "
+                        : std::string();
     s += class_name(c.cls);
     if (v.culprit_unit >= 0) s += fmt::format(" unit {}", v.culprit_unit);
     return s;
@@ -902,8 +904,9 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
         }
     }
     if (profile.probe_pdu.empty()) {
-        error = fmt::format("the target does not answer unit {} (tried FC 03, 04, 01, 02, 11, 08)",
-                            unit);
+        error = fmt::format(
+            "the target does not answer unit {} (tried 0x03, 0x04, 0x01, 0x02, 0x11 and 0x08)",
+            unit);
         return false;
     }
     // Canonical valid requests of every function code the codec knows, and every other code

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "codec/function_code.hpp"
 #include "codec/limits.hpp"
 #include "net/clock.hpp"
 
@@ -436,10 +437,12 @@ void Runner::judge(const Case& c) {
         }
     }
     if (candidate)
-        candidate.summary = candidate.culprit_fc >= 0
-                                ? fmt::format("{} [{} FC {:02X}]", candidate.summary,
-                                              class_name(c.cls), candidate.culprit_fc)
-                                : fmt::format("{} [{}]", candidate.summary, class_name(c.cls));
+        candidate.summary =
+            candidate.culprit_fc >= 0
+                ? fmt::format(
+                      "{} [{} {}]", candidate.summary, class_name(c.cls),
+                      codec::function_label(static_cast<std::uint8_t>(candidate.culprit_fc)))
+                : fmt::format("{} [{}]", candidate.summary, class_name(c.cls));
     out_.verdict = std::move(candidate);
 }
 

@@ -23,8 +23,9 @@ std::string exception_text(std::uint8_t code) {
 }
 
 std::string request_text(const RequestInfo& rq) {
-    return fmt::format("FC {:02X} unit {} tid {:04X}: {}", rq.pdu.empty() ? 0 : rq.pdu[0],
-                       rq.header.unit_id, rq.header.transaction_id, hex(rq.pdu, 24));
+    return fmt::format("{} unit {} tid {:04X}: {}",
+                       codec::function_label(rq.pdu.empty() ? 0 : rq.pdu[0]), rq.header.unit_id,
+                       rq.header.transaction_id, hex(rq.pdu, 24));
 }
 
 Verdict make(Oracle o, std::string rule, const RequestInfo& rq, std::string summary,
@@ -133,9 +134,10 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     const std::uint8_t fc = rq.pdu.empty() ? 0 : rq.pdu[0];
     if (pdu.empty() || (pdu[0] & 0x7F) != (fc & 0x7F)) {
         return make(Oracle::MalformedResponse, "response-function", rq,
-                    fmt::format("response function {:02X} for request function {:02X}",
-                                pdu.empty() ? 0 : pdu[0], fc),
-                    fmt::format("function {:02X} or {:02X}", fc & 0x7F, (fc & 0x7F) | 0x80), seen);
+                    fmt::format("response function 0x{:02X} for request {}",
+                                pdu.empty() ? 0 : pdu[0], codec::function_label(fc)),
+                    fmt::format("function 0x{:02X} or 0x{:02X}", fc & 0x7F, (fc & 0x7F) | 0x80),
+                    seen);
     }
     const auto owed = rq.status.exception;
     const std::string expected_text =
@@ -162,45 +164,46 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
                  (code == 0x03 && fc > 0x04);
         }
         if (!ok) {
-            return make(Oracle::SpecDeviation,
-                        // The codec's reason is left out: one wrong check order shows
-                        // under every reason that owes the same exception.
-                        owed == ExceptionCode::None
-                            ? fmt::format("exception-{:02X}-to-valid-request", code)
-                            : fmt::format("exception-{:02X}-where-{:02X}-owed", code,
-                                          static_cast<std::uint8_t>(owed)),
-                        rq,
-                        fmt::format("FC {:02X}: {} where {} is owed", fc, exception_text(code),
-                                    owed == ExceptionCode::None
-                                        ? std::string("a normal response")
-                                        : exception_text(static_cast<std::uint8_t>(owed))),
-                        expected_text, seen);
+            return make(
+                Oracle::SpecDeviation,
+                // The codec's reason is left out: one wrong check order shows
+                // under every reason that owes the same exception.
+                owed == ExceptionCode::None ? fmt::format("exception-{:02X}-to-valid-request", code)
+                                            : fmt::format("exception-{:02X}-where-{:02X}-owed",
+                                                          code, static_cast<std::uint8_t>(owed)),
+                rq,
+                fmt::format(
+                    "{}: {} where {} is owed", codec::function_label(fc), exception_text(code),
+                    owed == ExceptionCode::None ? std::string("a normal response")
+                                                : exception_text(static_cast<std::uint8_t>(owed))),
+                expected_text, seen);
         }
         return {};
     }
     if (owed != ExceptionCode::None && !profile.extended[fc]) {
-        return make(Oracle::SpecDeviation,
-                    fmt::format("invalid-request-answered-normally({})",
-                                codec::error_name(rq.status.error)),
-                    rq,
-                    fmt::format("FC {:02X}: invalid request answered normally ({} owed: {})", fc,
-                                exception_text(static_cast<std::uint8_t>(owed)),
-                                codec::error_name(rq.status.error)),
-                    expected_text, seen);
+        return make(
+            Oracle::SpecDeviation,
+            fmt::format("invalid-request-answered-normally({})",
+                        codec::error_name(rq.status.error)),
+            rq,
+            fmt::format("{}: invalid request answered normally ({} owed: {})",
+                        codec::function_label(fc), exception_text(static_cast<std::uint8_t>(owed)),
+                        codec::error_name(rq.status.error)),
+            expected_text, seen);
     }
     if (profile.extended[fc]) return {};
     codec::Response r;
     if (const auto err = codec::decode_response(pdu, r); err != codec::CodecError::Ok) {
         return make(Oracle::MalformedResponse,
                     fmt::format("undecodable-response({})", codec::error_name(err)), rq,
-                    fmt::format("FC {:02X}: response does not decode: {}", fc,
+                    fmt::format("{}: response does not decode: {}", codec::function_label(fc),
                                 codec::error_description(err)),
                     expected_text, seen);
     }
     const codec::Request& q = rq.request;
     auto mismatch = [&](std::string_view rule, std::string what) {
         return make(Oracle::MalformedResponse, std::string(rule), rq,
-                    fmt::format("FC {:02X}: {}", fc, what), expected_text, seen);
+                    fmt::format("{}: {}", codec::function_label(fc), what), expected_text, seen);
     };
     const int want = codec::expected_read_byte_count(q);
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
@@ -381,8 +384,8 @@ Verdict Shadow::check(std::vector<Event>& events, const StateRange& state) {
                             fmt::format("read-after-write mismatch: {} {:04X} wrote {:04X}, read "
                                         "back {:04X}",
                                         coils ? "coil" : "holding register", a, want, got),
-                            fmt::format("{:04X} (written by FC {:02X}, acknowledged)", want,
-                                        latest->self->request.function),
+                            fmt::format("{:04X} (written by {}, acknowledged)", want,
+                                        codec::function_label(latest->self->request.function)),
                             fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
             }
         }
