@@ -64,7 +64,9 @@ int run_replay(const ReplayOptions& o) {
                                                  : netfuzz::same_fault(e.verdict, f.verdict);
         reproduced += same;
         fmt::print("run {}: {}{}\n", i + 1, same ? "REPRODUCES: " : "does not reproduce",
-                   e.verdict ? (same ? e.verdict.summary : " (saw: " + e.verdict.summary + ")")
+                   e.verdict ? (same ? e.verdict.summary
+                                     : " (saw: " + e.verdict.summary + "; root cause " +
+                                           netfuzz::root_cause_key(e.verdict) + ")")
                              : std::string());
         if (same)
             fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
