@@ -198,6 +198,17 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         polled.clear();
         const std::int64_t now = net::now_ns();
         std::int64_t wait_ns = options_.timeout_ms * net::kNsPerMs;
+        if (options_.deadline_ns && now >= options_.deadline_ns) {
+            // Out of time: what is unanswered now is neither a suspect nor a finding.
+            for (Lane* l : lanes_)
+                if (!l->done) {
+                    l->done = true;
+                    l->fd.reset();
+                    result.cut_by_deadline = true;
+                }
+            break;
+        }
+        if (options_.deadline_ns) wait_ns = std::min(wait_ns, options_.deadline_ns - now);
         for (std::size_t li = 0; li < lanes_.size(); ++li) {
             Lane& l = *lanes_[li];
             if (l.done) continue;
@@ -249,6 +260,10 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         }
     }
     std::vector<bool> requeued(cases.size(), false);
+    if (result.cut_by_deadline) {
+        result.suspects.clear();
+        return result;
+    }
     for (Lane* lp : lanes_) {
         Lane& l = *lp;
         if (l.cases.empty()) continue;

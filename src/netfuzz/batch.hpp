@@ -22,6 +22,7 @@ struct BatchOptions {
     // A request owed an exception ends a send: what follows waits for its answer (for targets
     // that drop what is pipelined behind an exception).
     bool barrier_after_exception = false;
+    std::int64_t deadline_ns = 0;  // the campaign's deadline (0: none): lanes stop there
 };
 
 // Where a lane broke (closed, reset or went silent): the first request owed an answer that got
@@ -48,8 +49,9 @@ struct BatchResult {
     // Cases whose frames came after a lane broke: never judged, to be run again.
     std::vector<std::size_t> requeue;
     std::uint64_t answers = 0, busy_answers = 0;  // busy: exception 06
-    bool lane_lost = false;                       // a lane was closed, reset or timed out
-    bool connect_failed = false;                  // a lane could not (re)connect
+    bool cut_by_deadline = false;  // stopped at the deadline: unanswered frames not judged
+    bool lane_lost = false;        // a lane was closed, reset or timed out
+    bool connect_failed = false;   // a lane could not (re)connect
 };
 
 class BatchRunner {

@@ -289,7 +289,7 @@ void Campaign::set_drops_after_exception() {
     if (r_.profile.drops_after_exception) return;
     r_.profile.drops_after_exception = true;
     batch_ = std::make_unique<BatchRunner>(o_.target, r_.profile,
-                                           BatchOptions{o_.lanes, o_.timeout_ms, true});
+                                           BatchOptions{o_.lanes, o_.timeout_ms, true, deadline_});
 }
 
 bool Campaign::recover(const std::string& cause) {
@@ -693,7 +693,7 @@ CampaignResult Campaign::run() {
     gen_ = std::make_unique<Generator>(go);
     batch_ = std::make_unique<BatchRunner>(
         o_.target, r_.profile,
-        BatchOptions{o_.lanes, o_.timeout_ms, r_.profile.drops_after_exception});
+        BatchOptions{o_.lanes, o_.timeout_ms, r_.profile.drops_after_exception, deadline_});
     lane_depth_ = std::max(1u, o_.lane_depth);
     std::uint64_t generated = 0;
     std::vector<Case> requeue, piped, alone;
