@@ -82,3 +82,33 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 }  // namespace
+
+namespace {
+
+// A target that answers 06 (busy) to most requests: the summary says most cases were wasted
+// (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings".
+TEST(BusyTarget, WastedCasesAreReportedAndTheFuzzerSlowsDown) {
+    mbstorm::test::Target* raw = nullptr;
+    const std::string target = mbstorm::test::start_broken(raw, "broken_server_busy");
+    std::unique_ptr<mbstorm::test::Target> server(raw);
+    ASSERT_FALSE(target.empty()) << "broken_server_busy did not start";
+    const std::string dir = mbstorm::test::temp_dir("busy");
+    const auto run = run_mbstorm("fuzz --target " + target +
+                                 " --seed 7 --cases 4000 --seconds 20 --timeout 300ms --out " +
+                                 dir + "/findings --json " + dir + "/summary.json");
+    std::ifstream in(dir + "/summary.json");
+    ASSERT_TRUE(in.good()) << run.output;
+    const auto summary = nlohmann::json::parse(in);
+    const auto answers = summary.at("answers").get<std::uint64_t>();
+    const auto busy = summary.at("busy_answers").get<std::uint64_t>();
+    EXPECT_GT(answers, 16u) << run.output;
+    EXPECT_GT(busy * 2, answers) << run.output;
+    EXPECT_TRUE(summary.at("slowed_for_busy").get<bool>()) << run.output;
+    EXPECT_NE(run.output.find("exception 06 (busy)"), std::string::npos) << run.output;
+    // Busy is a legal answer to any request: it is never a finding by itself.
+    for (const auto& f : summary.at("findings"))
+        EXPECT_EQ(f.at("rule").get<std::string>().find("busy"), std::string::npos) << f.dump();
+    std::filesystem::remove_all(dir);
+}
+
+}  // namespace
