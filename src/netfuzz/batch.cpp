@@ -314,12 +314,14 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             br.previous_case = f.case_index;
             br.previous_culprit = culprit_text(cases[f.case_index].cls, &f.info);
             br.previous_exception = f.exception;
+            br.length_mismatch = pdu_length_mismatch(f.info);
             suspect[f.case_index] = true;
         }
         if (first < l.frames.size() && !l.frames[first].fence) {
             const Lane::Frame& f = l.frames[first];
             br.unanswered_case = f.case_index;
             br.unanswered_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+            br.length_mismatch = br.length_mismatch || (br.closed && pdu_length_mismatch(f.info));
             suspect[f.case_index] = true;
             for (std::size_t k = first + 1; k < l.frames.size(); ++k) {
                 const std::size_t ci = l.frames[k].case_index;

@@ -35,6 +35,8 @@ struct LaneBreak {
     std::string previous_culprit;
     bool previous_exception = false;  // the request before drew an exception
     bool closed = false;              // the lane was closed or reset, not silent
+    // The request before or at the break has a PDU of the wrong length for its function code.
+    bool length_mismatch = false;
     // Every case with a frame left unanswered, in the lane's order: where a target that died
     // or hung as a whole must be looked for (it may not answer what came before the culprit
     // either).

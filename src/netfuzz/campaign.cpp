@@ -103,6 +103,54 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
 constexpr unsigned kMaxRestartsPerCause = 3;
 
 // A rule as a folder name part: "target-down/fc0F-invalid" -> "target-down-fc0F-invalid".
+// Canonical valid requests of every function code the codec knows (discovery asks each once).
+const std::vector<Pdu>& canonical_requests() {
+    static const std::vector<Pdu> canonical = {{0x01, 0, 0, 0, 1},
+                                               {0x02, 0, 0, 0, 1},
+                                               {0x03, 0, 0, 0, 1},
+                                               {0x04, 0, 0, 0, 1},
+                                               {0x05, 0x5F, 0xFF, 0xFF, 0x00},
+                                               {0x06, 0x5F, 0xFF, 0, 0},
+                                               {0x07},
+                                               {0x08, 0, 0, 0x12, 0x34},
+                                               {0x0B},
+                                               {0x0C},
+                                               {0x0F, 0x5F, 0xFF, 0, 1, 1, 0},
+                                               {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+                                               {0x11},
+                                               {0x14, 7, 6, 0, 1, 0, 0, 0, 1},
+                                               {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
+                                               {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0},
+                                               {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+                                               {0x18, 0x5F, 0xFF},
+                                               {0x2B, 0x0E, 0x01, 0x00}};
+    return canonical;
+}
+
+// What discovery already hinted at, looked at before anything else so that a slow target
+// cannot hide it behind its pauses: each valid request the target was silent to (alone, on a
+// fresh connection, where the oracle can tell a function that is never answered), and the probe
+// with a non-zero protocol id (which must be discarded, for every function alike).
+std::vector<Case> first_looks(const TargetProfile& profile) {
+    std::vector<Case> out;
+    for (const Pdu& pdu : canonical_requests()) {
+        if (!profile.silent[pdu[0]]) continue;
+        Case c;
+        c.cls = MutationClass::ValidLimits;
+        c.function = pdu[0];
+        c.steps.push_back(Step{Op::Send, 0, 0, 0, frame_of(pdu, 0x0F00 + pdu[0], profile.unit)});
+        out.push_back(std::move(c));  // not pipelinable: runs alone
+    }
+    Case pid;
+    pid.cls = MutationClass::ProtocolId;
+    pid.function = profile.probe_pdu[0];
+    Pdu f = frame_of(profile.probe_pdu, 0x0FFF, profile.unit);
+    codec::store_be16(f.data() + 2, 0x0001);
+    pid.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(f)});
+    out.push_back(std::move(pid));  // alone too: the first batch is the generator's alone
+    return out;
+}
+
 std::string slug(std::string_view rule) {
     std::string s;
     for (char c : rule) {
@@ -184,6 +232,25 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
     return out;
 }
 
+// Whether any frame the case delivers has a PDU of the wrong length for its function code.
+bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
+    Case plain;
+    const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
+    for (const Step& s : framed.steps) {
+        if (s.op != Op::Send) continue;
+        std::size_t off = 0;
+        while (s.bytes.size() - off > lim::kMbapHeader) {
+            const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+            if (size > s.bytes.size() - off) break;
+            RequestInfo info;
+            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
+            if (pdu_length_mismatch(info)) return true;
+            off += size;
+        }
+    }
+    return false;
+}
+
 bool whole_server_hang(const Verdict& v) {
     return v.oracle == Oracle::Hang && v.rule.rfind("whole-server-hang", 0) == 0;
 }
@@ -227,13 +294,15 @@ class Campaign {
     bool recover(const std::string& cause);
     // The target accepts but does not answer (a whole-server hang): wait for it to answer
     // again before anything else is judged, restarting it if it never does.
-    bool settle();
+    // A hang that outlasts --restart-wait is restarted like a crash, charged to `cause`.
+    bool settle(const std::string& cause = "");
     void record(const Case& c, Execution ex);
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
     void check_capacity_once();
     void progress(bool force);
     void set_drops_after_exception();
+    void make_batch_runner();
 
     const CampaignOptions& o_;
     const ProgressFn& on_progress_;
@@ -251,9 +320,13 @@ class Campaign {
     std::uint64_t last_cases_ = 0;
     bool up_ = true;
     bool capacity_checked_ = false;
+    bool settle_restarted_ = false;   // the last settle() ended in a restart
+    bool stream_lost_known_ = false;  // a stream-lost-after-pdu-length-mismatch finding exists
+    mutable std::uint64_t length_mismatch_seen_ = 0;
     Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
     std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
+    unsigned lanes_ = 4;
 };
 
 Finding* Campaign::known(const Verdict& v) {
@@ -268,6 +341,11 @@ void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
 }
 
 bool Campaign::would_retrigger(const Case& c) const {
+    // Once the target is known to lose the stream on a request of the wrong length, each such
+    // request costs a broken connection (and the target's pause) to show it again: only one in
+    // 16 is still sent, for what else it may hit in the handler.
+    if (stream_lost_known_ && carries_length_mismatch(c, r_.profile))
+        return ++length_mismatch_seen_ % 16 != 0;
     if (costly_culprits_.empty()) return false;
     for (const std::string& k : culprits(c, r_.profile))
         if (costly_culprits_.count(k)) return true;
@@ -275,6 +353,7 @@ bool Campaign::would_retrigger(const Case& c) const {
 }
 
 void Campaign::learn_costly(const Finding& f) {
+    if (rule_stem(f.verdict.rule) == kStreamLostRule) stream_lost_known_ = true;
     const Oracle o = f.oracle();
     if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
     const std::string culprit = culprit_of(f.verdict.rule);
@@ -288,8 +367,19 @@ void Campaign::learn_costly(const Finding& f) {
 void Campaign::set_drops_after_exception() {
     if (r_.profile.drops_after_exception) return;
     r_.profile.drops_after_exception = true;
+    make_batch_runner();
+}
+
+// A target that drops what follows an exception usually pauses too (libmodbus sleeps its
+// response timeout, server-wide): parallel lanes would only wait on each other's pauses and
+// break on silence, so such a target gets one lane and short rounds (every function code is
+// still reached early and progress is reported).
+void Campaign::make_batch_runner() {
+    const bool pauses = r_.profile.drops_after_exception;
+    lanes_ = pauses ? 1u : std::max(1u, o_.lanes);
+    lane_depth_ = pauses ? std::min(16u, std::max(1u, o_.lane_depth)) : std::max(1u, o_.lane_depth);
     batch_ = std::make_unique<BatchRunner>(o_.target, r_.profile,
-                                           BatchOptions{o_.lanes, o_.timeout_ms, true, deadline_});
+                                           BatchOptions{lanes_, o_.timeout_ms, pauses, deadline_});
 }
 
 bool Campaign::recover(const std::string& cause) {
@@ -320,7 +410,8 @@ bool Campaign::recover(const std::string& cause) {
     return true;
 }
 
-bool Campaign::settle() {
+bool Campaign::settle(const std::string& cause) {
+    settle_restarted_ = false;
     up_ = false;
     progress(true);
     RestartCommand none;
@@ -332,7 +423,8 @@ bool Campaign::settle() {
     }
     if (remaining_ns() <= 0) return false;
     ++r_.deaths;
-    return recover("");
+    settle_restarted_ = true;
+    return recover(cause);
 }
 
 Campaign::Outcome Campaign::isolate(Case c) {
@@ -363,7 +455,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
         if (ex.target_down) {
             ++r_.deaths;
             if (!recover(key)) return Outcome::Lost;
-        } else if (whole_server_hang(ex.verdict) && !settle()) {
+        } else if (whole_server_hang(ex.verdict) && !settle(key)) {
             return Outcome::Lost;
         }
         return Outcome::Fired;
@@ -377,7 +469,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
         if (ex.target_down) {
             ++r_.deaths;
             if (!recover(key)) return Outcome::Lost;
-        } else if (whole_server_hang(ex.verdict) && !settle()) {
+        } else if (whole_server_hang(ex.verdict) && !settle(key)) {
             return Outcome::Lost;
         }
         if (!can_afford(1)) {
@@ -396,7 +488,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
                 if (ex.target_down) {
                     ++r_.deaths;
                     if (!recover(key)) return Outcome::Lost;
-                } else if (whole_server_hang(ex.verdict) && !settle()) {
+                } else if (whole_server_hang(ex.verdict) && !settle(key)) {
                     return Outcome::Lost;
                 }
                 return Outcome::Fired;
@@ -406,7 +498,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
                 ++restarts_by_cause_[key];  // the transport case's death was this one's too
                 if (!recover(key)) return Outcome::Lost;
                 ex.target_down = false;  // confirmed: it killed the target twice
-            } else if (whole_server_hang(ex.verdict) && !settle()) {
+            } else if (whole_server_hang(ex.verdict) && !settle(key)) {
                 return Outcome::Lost;
             }
             record(c, std::move(ex));
@@ -437,7 +529,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             ex.target_down = false;  // confirmed
         }
     }
-    if (whole_server_hang(ex.verdict) && !ex.target_down && !settle()) return Outcome::Lost;
+    if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
     if (ex.target_down) {
         // A death is a crash only if the case, replayed alone, kills the target again.
         ++r_.deaths;
@@ -529,7 +621,7 @@ void Campaign::record(const Case& c, Execution ex) {
             if (e.down_before || e.target_down) {
                 ++r_.deaths;
                 if (!recover(same && e.target_down ? key : "")) lost = true;
-            } else if (whole_server_hang(e.verdict) && !settle()) {
+            } else if (whole_server_hang(e.verdict) && !settle(same ? key : "")) {
                 lost = true;
             }
             if (!same) return false;
@@ -691,16 +783,25 @@ CampaignResult Campaign::run() {
     go.dict_words = o_.dict_words;
     go.dict_tokens = o_.dict_tokens;
     gen_ = std::make_unique<Generator>(go);
-    batch_ = std::make_unique<BatchRunner>(
-        o_.target, r_.profile,
-        BatchOptions{o_.lanes, o_.timeout_ms, r_.profile.drops_after_exception, deadline_});
-    lane_depth_ = std::max(1u, o_.lane_depth);
+    make_batch_runner();
     std::uint64_t generated = 0;
     std::vector<Case> requeue, piped, alone;
+    bool lost_at_first_look = false;
+    for (Case& c : first_looks(r_.profile)) {
+        if (!can_afford(1)) break;
+        c.number = ++generated;
+        ++r_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        ++r_.cases;
+        ++r_.first_looks;
+        if (isolate(std::move(c)) == Outcome::Lost) {
+            lost_at_first_look = true;
+            break;
+        }
+    }
     std::set<std::uint64_t> requeued_once;
     std::size_t rounds = 0;
-    while (!out_of_budget()) {
-        const std::size_t round = std::max(1u, o_.lanes) * lane_depth_;
+    while (!lost_at_first_look && !out_of_budget()) {
+        const std::size_t round = lanes_ * lane_depth_;
         std::size_t n = round;
         if (o_.max_cases) n = std::min<std::uint64_t>(n, o_.max_cases - r_.cases);
         piped.clear();
@@ -751,6 +852,7 @@ CampaignResult Campaign::run() {
         for (const LaneBreak& b : br.breaks) {
             std::vector<std::string> keys;
             const std::string close = b.closed ? "unexpected-close:" : "hang:";
+            if (b.length_mismatch) keys.push_back(fmt::format("stream:{}", kStreamLostRule));
             if (b.has_previous && b.previous_exception)
                 keys.push_back(close + (b.closed ? "closes-after-exception"
                                                  : "drops-requests-after-exception"));
@@ -772,7 +874,7 @@ CampaignResult Campaign::run() {
         }
         std::sort(suspects.begin(), suspects.end());
         suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-        bool lost = false, whole_target = false, died = false;
+        bool lost = false, whole_target = false, died = false, settled_by_restart = false;
         if (br.connect_failed || br.lane_lost) {
             batch_->close_all();
             const ProbeResult pr = probe_target(o_.target, r_.profile, o_.timeout_ms);
@@ -787,7 +889,9 @@ CampaignResult Campaign::run() {
                 }
             } else if (pr != ProbeResult::Ok) {
                 whole_target = true;
-                if (!settle()) {
+                const bool settled = settle();
+                settled_by_restart = settle_restarted_;
+                if (!settled) {
                     // Hung and never back: the suspects cannot be judged.
                     r_.cases += fresh;
                     break;
@@ -830,8 +934,9 @@ CampaignResult Campaign::run() {
                 // A crash or hang explains the batch; anything else keeps looking.
                 found = out == Outcome::Fired &&
                         (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
-                // The batch's death was this crash's doing.
-                if (found && died) ++restarts_by_cause_[last_key_];
+                // The batch's death (or the hang it had to be restarted from) was this one's
+                // doing.
+                if (found && (died || settled_by_restart)) ++restarts_by_cause_[last_key_];
             }
         } else {
             later = br.requeue;
@@ -909,34 +1014,13 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
             unit);
         return false;
     }
-    // Canonical valid requests of every function code the codec knows, and every other code
-    // bare; the probe last as a fence.
-    const std::vector<Pdu> canonical = {{0x01, 0, 0, 0, 1},
-                                        {0x02, 0, 0, 0, 1},
-                                        {0x03, 0, 0, 0, 1},
-                                        {0x04, 0, 0, 0, 1},
-                                        {0x05, 0x5F, 0xFF, 0xFF, 0x00},
-                                        {0x06, 0x5F, 0xFF, 0, 0},
-                                        {0x07},
-                                        {0x08, 0, 0, 0x12, 0x34},
-                                        {0x0B},
-                                        {0x0C},
-                                        {0x0F, 0x5F, 0xFF, 0, 1, 1, 0},
-                                        {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0},
-                                        {0x11},
-                                        {0x14, 7, 6, 0, 1, 0, 0, 0, 1},
-                                        {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
-                                        {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0},
-                                        {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
-                                        {0x18, 0x5F, 0xFF},
-                                        {0x2B, 0x0E, 0x01, 0x00}};
     // Does it drop what is pipelined behind a request it answers with an exception? Then
     // everything below goes one request at a time.
     answers = pipeline(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
                        timeout_ms, connected);
     profile.drops_after_exception =
         answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
-    std::vector<Pdu> pdus = canonical;
+    std::vector<Pdu> pdus = canonical_requests();
     if (!profile.drops_after_exception) {
         for (unsigned fc = 0; fc < 256; ++fc)
             if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
@@ -955,9 +1039,15 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
             answers[i] =
                 pipeline(target, {frame_of(pdus[i], 0, unit)}, timeout_ms, connected).front();
     }
+    // Silence counts only where the stream went on (the probe behind them was answered).
+    const bool stream_went_on = profile.drops_after_exception || !answers.back().empty();
     for (std::size_t i = 0; i + 1 < pdus.size(); ++i) {
         const Pdu& a = answers[i];
-        if (a.empty()) continue;
+        if (a.empty()) {
+            if (stream_went_on && codec::is_supported_function(pdus[i][0]))
+                profile.silent[pdus[i][0]] = true;
+            continue;
+        }
         const std::uint8_t fc = pdus[i][0];
         if (a.size() == 2 && a[0] == (fc | 0x80) && a[1] == 0x01) profile.unsupported[fc] = true;
         if (!codec::is_supported_function(fc) && a[0] == fc) profile.extended[fc] = true;

@@ -304,6 +304,15 @@ void Runner::judge(const Case& c) {
                             codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
                 "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
         }
+        // An answer nobody asked for, on a connection that carried a request of the wrong
+        // length, is the target framing that request by its function code.
+        bool length_mismatch_sent = false;
+        for (const Pending& pd : cn.pending) {
+            if (pd.probe || pd.size < lim::kMbapHeader) continue;
+            RequestInfo sent;
+            describe_request(codec::Bytes(cn.sent.data() + pd.offset, pd.size), profile_, sent);
+            length_mismatch_sent = length_mismatch_sent || pdu_length_mismatch(sent);
+        }
         for (const auto& [off, size] : cn.unmatched) {
             std::string tids;
             for (const Pending& pd : cn.pending)
@@ -317,7 +326,9 @@ void Runner::judge(const Case& c) {
                         cn.sent[pd.offset + lim::kMbapHeader] == rfc)
                         fc = rfc;
             }
-            consider(Verdict{Oracle::MalformedResponse, "unmatched-transaction-id", fc,
+            consider(Verdict{Oracle::MalformedResponse,
+                             length_mismatch_sent ? kStreamLostRule : "unmatched-transaction-id",
+                             fc,
                              fmt::format("response with transaction id {:04X} matches no request",
                                          codec::load_be16(cn.received.data() + off)),
                              fmt::format("transaction ids {}", tids),
@@ -340,8 +351,12 @@ void Runner::judge(const Case& c) {
                 consider(judge_response(info, rsp, profile_));
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
                                                rsp.subspan(lim::kMbapHeader)});
-                exception = rsp.size() > lim::kMbapHeader &&
-                            (rsp[lim::kMbapHeader] & codec::kExceptionBit) != 0;
+                // Not a normal answer: an exception, or a function code that is not the
+                // request's (libmodbus answers 0x39 for an unknown 0xB9), which a server may
+                // follow with the same flush as an exception.
+                exception = rsp.size() > lim::kMbapHeader && !info.pdu.empty() &&
+                            ((rsp[lim::kMbapHeader] & codec::kExceptionBit) != 0 ||
+                             rsp[lim::kMbapHeader] != info.pdu[0]);
             } else {
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
             }
@@ -369,6 +384,11 @@ void Runner::judge(const Case& c) {
             const RequestInfo* blamed = pd.probe ? before : &info;
             if (cn.shut) {
                 rule = "drops-answers-on-half-close";
+            } else if (before && pdu_length_mismatch(*before)) {
+                rule = kStreamLostRule;
+                blamed = before;
+            } else if (!pd.probe && closed && pdu_length_mismatch(info)) {
+                rule = kStreamLostRule;
             } else if (before && before_exception) {
                 rule = closed ? "closes-after-exception" : "drops-requests-after-exception";
                 blamed = before;

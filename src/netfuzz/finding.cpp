@@ -60,7 +60,16 @@ void parse_list(const std::string& s, std::array<bool, 256>& flags) {
 
 }  // namespace
 
+namespace {
+// A stream lost after a request of the wrong length shows as a close, silence or a stray
+// answer depending on timing: one root cause under any of those oracles.
+bool any_oracle(const std::string& stem) {
+    return stem == kStreamLostRule;
+}
+}  // namespace
+
 std::string root_cause_key(const Verdict& v) {
+    if (any_oracle(rule_stem(v.rule))) return fmt::format("stream:{}", v.rule);
     return fmt::format("{}:{}", oracle_name(v.oracle), v.rule);
 }
 
@@ -70,7 +79,8 @@ std::string rule_stem(const std::string& rule) {
 }
 
 bool same_fault(const Verdict& a, const Verdict& b) {
-    return a.oracle == b.oracle && rule_stem(a.rule) == rule_stem(b.rule);
+    const std::string stem = rule_stem(a.rule);
+    return stem == rule_stem(b.rule) && (a.oracle == b.oracle || any_oracle(stem));
 }
 
 std::string to_hex(const std::vector<std::uint8_t>& bytes) {

@@ -301,11 +301,16 @@ bool Generator::deprioritised(const Case& c) const noexcept {
 std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
                                            std::uint8_t unit) {
     std::vector<std::uint8_t> f(lim::kMbapHeader + pdu.size());
+    // However the PDU was made (a mutation, random bytes), never diagnostics 0001 (restart)
+    // or 0004 (listen-only): a device may rightly go quiet after either. Echo (0000) instead.
+    const bool restart_or_listen_only =
+        pdu.size() >= 3 && pdu[0] == 0x08 && pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
     codec::store_be16(f.data(), tid());
     codec::store_be16(f.data() + 2, 0);
     codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(pdu.size() + 1));
     f[6] = unit;
     std::copy(pdu.begin(), pdu.end(), f.begin() + lim::kMbapHeader);
+    if (restart_or_listen_only) f[lim::kMbapHeader + 2] = 0x00;
     return f;
 }
 
@@ -683,6 +688,26 @@ void Generator::stateful(Case& out, bool cross) {
     // And the other connection reads the overlapping range too: every reader must see it.
     out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
                              frame(pdu5(coils ? 0x01 : 0x03, before, span), options_.unit)});
+    // Registers have a second reader, FC 17: its read part must show the same values (its own
+    // write goes to a register of the state range outside the window, so it changes nothing
+    // there).
+    if (!coils && span <= lim::kMaxRwReadRegisters) {
+        const std::uint32_t last = std::min<std::uint32_t>(
+            0xFFFFu, std::uint32_t{options_.state.base} + options_.state.span - 1);
+        const std::uint32_t scratch =
+            last >= std::uint32_t{before} + span ? last : std::uint32_t{options_.state.base};
+        if (scratch < before || scratch >= std::uint32_t{before} + span) {
+            std::vector<std::uint8_t> rw{0x17};
+            put16(rw, before);
+            put16(rw, span);
+            put16(rw, static_cast<std::uint16_t>(scratch));
+            put16(rw, 1);
+            rw.push_back(2);
+            put16(rw, word());
+            out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
+                                     frame(rw, options_.unit)});
+        }
+    }
 }
 
 }  // namespace mbstorm::netfuzz

@@ -7,6 +7,7 @@
 
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
+#include "codec/rtu.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -89,6 +90,31 @@ std::string culprit_text(MutationClass cls, const RequestInfo* rq) {
     if (request_kind(*rq) == "unknown-fc") return "unknown-fc";
     // The function code alone: one handler, whether this request was valid or not.
     return fmt::format("fc{:02X}", rq->pdu[0]);
+}
+
+bool pdu_length_mismatch(const RequestInfo& info) noexcept {
+    if (info.pdu.empty()) return false;
+    if (info.status.error == codec::CodecError::UnsupportedFunction) return true;
+    // The length a reader that frames by function code would take: the codec's RTU length
+    // rule (the same fields decide it), asked of unit + PDU + two bytes where the CRC would be.
+    // The codec's first complaint may be another (a quantity), so its status is not enough.
+    std::array<std::uint8_t, 1 + codec::limits::kMaxPdu + 2> head{};
+    if (info.pdu.size() > codec::limits::kMaxPdu) return true;
+    head[0] = info.header.unit_id;
+    std::copy(info.pdu.begin(), info.pdu.end(), head.begin() + 1);
+    const std::size_t size = info.pdu.size() + 3;
+    const codec::RtuLength len = codec::rtu_request_length(codec::Bytes(head.data(), size));
+    switch (len.status) {
+        case codec::RtuLength::Status::Known:
+            return len.size != size;
+        case codec::RtuLength::Status::NeedMore:
+            return len.size > size;
+        case codec::RtuLength::Status::TooLong:
+            return true;
+        case codec::RtuLength::Status::Unknown:
+            return false;
+    }
+    return false;
 }
 
 bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexcept {

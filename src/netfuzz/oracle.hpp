@@ -51,6 +51,9 @@ struct TargetProfile {
     // or answers normally although the codec does not know it (a vendor extension).
     std::array<bool, 256> unsupported{};
     std::array<bool, 256> extended{};
+    // The canonical valid request of this function code drew no answer at discovery while the
+    // stream went on: the campaign looks at it alone first.
+    std::array<bool, 256> silent{};
     // It drops requests pipelined behind one it answers with an exception (libmodbus flushes
     // its socket after an exception): such requests are sent only after that answer.
     bool drops_after_exception = false;
@@ -99,6 +102,14 @@ std::string culprit_text(MutationClass cls, const RequestInfo* rq);
 // True when a conforming server owes this request an exception (or the target said it does
 // not support its function code).
 bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexcept;
+
+// A request whose MBAP length is consistent but whose PDU is shorter or longer than its
+// function code implies (or whose function code gives no length at all). A server that frames
+// by the MBAP length answers it and goes on; one that frames by the function code takes bytes
+// of the next frame or waits for bytes that never come. Whatever the stream then shows (a
+// close, silence, an answer with a transaction id nobody sent), it is that one root cause.
+bool pdu_length_mismatch(const RequestInfo& info) noexcept;
+inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mismatch";
 
 // Fills `info` for one complete, well-framed request ADU.
 void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept;

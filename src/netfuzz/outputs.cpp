@@ -64,6 +64,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"duplicates", r.duplicates},
         {"unconfirmed", r.unconfirmed},
         {"skipped_known", r.skipped_known},
+        {"first_looks", r.first_looks},
         {"requeued", r.requeued},
         {"restarts", r.restarts},
         {"deaths", r.deaths},

@@ -84,6 +84,80 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
     EXPECT_EQ(classes.size(), static_cast<std::size_t>(MutationClass::Count) - 1);  // all but naive
 }
 
+// Diagnostics 0001 (restart) and 0004 (listen-only) may rightly silence a device: no case
+// sends them, however it was made (structured, recorded mutation or random bytes). A recorded
+// mutation once did, and pymodbus's silence after 08 00 04 was reported as a hang.
+TEST(Generator, NeverSendsRestartOrListenOnly) {
+    for (bool naive : {false, true}) {
+        GeneratorOptions o = options(3, 100);
+        o.naive = naive;
+        Generator g(o);
+        Case c;
+        for (int i = 0; i < 60000; ++i) {
+            g.next(c);
+            if (!c.pipelinable) continue;  // lying lengths: what follows is not a frame
+            for (const Step& s : c.steps) {
+                // Every frame in the step.
+                for (std::size_t off = 0; off + 10 <= s.bytes.size();) {
+                    const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+                    const std::uint8_t* pdu = s.bytes.data() + off + 7;
+                    if (pdu[0] == 0x08 && pdu[1] == 0x00) {
+                        ASSERT_NE(pdu[2], 0x01) << hex(s.bytes);
+                        ASSERT_NE(pdu[2], 0x04) << hex(s.bytes);
+                    }
+                    if (size < 8) break;
+                    off += size;
+                }
+            }
+        }
+    }
+}
+
+// Stateful register cases read back with every register reader: FC 03 on both connections,
+// then FC 17's read part over the same window (its own write lands outside the window).
+TEST(Generator, StatefulRegisterCasesReadBackWithFc17Too) {
+    Generator g(options(5, 1000));
+    Case c;
+    int register_cases = 0, with_fc17_reader = 0;
+    for (int i = 0; i < 20000; ++i) {
+        g.next(c);
+        if (c.cls != MutationClass::StatefulSame && c.cls != MutationClass::StatefulCross) continue;
+        if (c.function == 0x05 || c.function == 0x0F) continue;
+        ++register_cases;
+        const Step& last = c.steps.back();
+        ASSERT_GE(last.bytes.size(), 7u + 10u);
+        if (last.bytes[7] != 0x17) continue;
+        ++with_fc17_reader;
+        const std::uint16_t read = codec::load_be16(last.bytes.data() + 8);
+        const std::uint16_t read_qty = codec::load_be16(last.bytes.data() + 10);
+        const std::uint16_t write = codec::load_be16(last.bytes.data() + 12);
+        EXPECT_TRUE(write < read || write >= read + read_qty) << hex(last.bytes);
+        EXPECT_TRUE(StateRange{}.contains(write)) << hex(last.bytes);
+    }
+    ASSERT_GT(register_cases, 50);
+    EXPECT_EQ(with_fc17_reader, register_cases);
+}
+
+// A request whose PDU is shorter or longer than its function code implies, whatever the
+// codec's first complaint about it (here a read quantity of 126 comes first).
+TEST(Oracle, PduLengthMismatchIsJudgedByTheFunctionCodesLengthRule) {
+    auto mismatch = [](const std::vector<std::uint8_t>& pdu) {
+        const auto f = adu(1, pdu);
+        RequestInfo info;
+        describe_request(codec::Bytes(f.data(), f.size()), profile(), info);
+        return pdu_length_mismatch(info);
+    };
+    EXPECT_FALSE(mismatch({0x03, 0, 0, 0, 1}));
+    EXPECT_FALSE(mismatch({0x03, 0, 0, 0, 126}));     // invalid, but the right length
+    EXPECT_TRUE(mismatch({0x01, 0xFE, 0x00, 0x02}));  // truncated
+    EXPECT_TRUE(mismatch({0x03, 0, 0, 0, 1, 0}));     // trailing byte
+    EXPECT_TRUE(mismatch({0x10, 0, 0, 0}));           // cut before its byte count
+    EXPECT_TRUE(
+        mismatch({0x17, 0x01, 0, 0, 0x7E, 0x01, 0x7D, 0, 0x7A, 0xF5}));  // count 245, no data
+    EXPECT_TRUE(mismatch({0xB9}));                                       // no length rule at all
+    EXPECT_FALSE(mismatch({0x10, 0, 0, 0, 1, 2, 0, 0}));
+}
+
 TEST(Oracle, WrongExceptionCodeIsASpecDeviation) {
     // FC03 quantity 0 at 0xFFFF: 03 is owed (quantity before address, v1.1b3).
     const auto req = adu(1, {0x03, 0xFF, 0xFF, 0x00, 0x00});

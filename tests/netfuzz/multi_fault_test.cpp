@@ -66,8 +66,9 @@ TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
     }
     for (const std::string& bug : kPlanted) EXPECT_EQ(found[bug], 1) << bug << "\n" << run.output;
     EXPECT_EQ(s.at("findings").size(), kPlanted.size()) << run.output;
-    // Three crashes: each may cost at most three restarts.
-    EXPECT_LE(s.at("restarts").get<unsigned>(), 3u * 3u) << run.output;
+    // Three crashes and a whole-server hang (restarted when it outlasts --restart-wait): each
+    // may cost at most three restarts.
+    EXPECT_LE(s.at("restarts").get<unsigned>(), 4u * 3u) << run.output;
     EXPECT_TRUE(restarted.stop_all());
     first.reset();
     std::filesystem::remove_all(dir);

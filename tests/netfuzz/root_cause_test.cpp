@@ -83,6 +83,20 @@ TEST(RootCause, CulpritsNameTheHandlerNotTheRequest) {
     EXPECT_EQ(culprit_text(MutationClass::Coalesced, nullptr), "coalesced");
 }
 
+// A stream lost after a request of the wrong length shows as a close, silence or a stray
+// answer depending on timing (libmodbus frames by function code): one root cause.
+TEST(RootCause, StreamLostAfterAPduLengthMismatchIsOneRootCauseUnderAnyOracle) {
+    const Verdict closed{Oracle::UnexpectedClose, kStreamLostRule, 0x10, "", "", ""};
+    const Verdict silent{Oracle::Hang, kStreamLostRule, 0x01, "", "", ""};
+    const Verdict stray{Oracle::MalformedResponse, kStreamLostRule, -1, "", "", ""};
+    EXPECT_EQ(root_cause_key(closed), root_cause_key(silent));
+    EXPECT_EQ(root_cause_key(closed), root_cause_key(stray));
+    EXPECT_TRUE(same_fault(closed, stray));
+    const Verdict other{Oracle::Hang, "drops-requests-after-exception", 0x01, "", "", ""};
+    EXPECT_NE(root_cause_key(silent), root_cause_key(other));
+    EXPECT_FALSE(same_fault(silent, other));
+}
+
 TEST(RootCause, SameFaultComparesOracleAndRuleStem) {
     Verdict a{Oracle::Crash, "target-down/fc0F", 0x0F, "", "", ""};
     Verdict b{Oracle::Crash, "target-down/pipelined-batch", -1, "", "", ""};

@@ -51,7 +51,9 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/
       spec-deviation:exception-04-where-02-owed \
       unexpected-close:close-with-request-pending unexpected-close:closes-after-exception \
       malformed-response:undecodable-response malformed-response:unmatched-transaction-id \
-      hang:capacity
+      unexpected-close:stream-lost-after-pdu-length-mismatch \
+      hang:stream-lost-after-pdu-length-mismatch \
+      malformed-response:stream-lost-after-pdu-length-mismatch hang:capacity
   else echo "FAIL pymodbus server did not start"; fail=1; fi
   stop_server
 else
@@ -64,6 +66,9 @@ if [ -x "$libmodbus_server" ]; then
       spec-deviation:answers-nonzero-protocol-id spec-deviation:exception-02-where-03-owed \
       unexpected-close:close-with-request-pending hang:drops-requests-after-exception \
       hang:drops-requests-after hang:no-answer malformed-response:unmatched-transaction-id \
+      unexpected-close:stream-lost-after-pdu-length-mismatch \
+      hang:stream-lost-after-pdu-length-mismatch \
+      malformed-response:stream-lost-after-pdu-length-mismatch \
       hang:capacity hang:stalls-other-connections
   else echo "FAIL libmodbus server did not start"; fail=1; fi
   stop_server
