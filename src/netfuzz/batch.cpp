@@ -74,9 +74,17 @@ void BatchRunner::close_all() noexcept {
     for (Lane* l : lanes_) l->fd.reset();
 }
 
-BatchResult BatchRunner::run(const std::vector<Case>& cases) {
+// What one call of run() shares between its steps.
+struct BatchRunner::Round {
+    const std::vector<Case>& cases;
     BatchResult result;
-    std::vector<bool> suspect(cases.size(), false), judged(cases.size(), false);
+    std::vector<bool> suspect, judged, requeued;
+    explicit Round(const std::vector<Case>& c)
+        : cases(c), suspect(c.size(), false), judged(c.size(), false), requeued(c.size(), false) {}
+};
+
+BatchResult BatchRunner::run(const std::vector<Case>& cases) {
+    Round round(cases);
     const std::size_t n_lanes = lanes_.size();
     for (Lane* l : lanes_) l->reset_round();
     // Build each lane's stream (stable from here on: RequestInfo views point into it).
@@ -86,107 +94,123 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
         for (const Step& s : cases[i].steps)
             l.out.insert(l.out.end(), s.bytes.begin(), s.bytes.end());
     }
-    for (Lane* lp : lanes_) {
-        Lane& l = *lp;
-        if (l.cases.empty()) {
-            l.done = true;
-            continue;
-        }
-        std::uint16_t fence_tid = 0xFE00;
-        // Frames: the lane's cases in order (each well-framed by construction).
-        std::size_t off = 0;
-        std::vector<std::size_t> sizes;
-        for (std::size_t ci : l.cases) {
-            std::size_t case_bytes = 0;
-            for (const Step& s : cases[ci].steps) case_bytes += s.bytes.size();
-            const std::size_t end = off + case_bytes;
-            while (off + lim::kMbapHeader <= end) {
-                const std::size_t size = 6u + codec::load_be16(l.out.data() + off + 4);
-                Lane::Frame f{ci, {}, off + size};
-                const std::uint16_t tid = codec::load_be16(l.out.data() + off);
-                if (l.by_tid[tid] >= 0)
-                    suspect[ci] = true;  // cannot match: check it alone
-                else
-                    l.by_tid[tid] = static_cast<std::int32_t>(l.frames.size());
-                l.frames.push_back(f);
-                sizes.push_back(size);
-                off += size;
-            }
-            off = end;
-        }
-        while (l.by_tid[fence_tid] >= 0) ++fence_tid;
-        const std::vector<std::uint8_t> fence = probe_frame(profile_, fence_tid);
-        l.out.insert(l.out.end(), fence.begin(), fence.end());
-        // Describe every frame against the final buffer.
-        for (std::size_t k = 0, o = 0; k < l.frames.size(); ++k) {
-            describe_request(codec::Bytes(l.out.data() + o, sizes[k]), profile_, l.frames[k].info);
-            l.frames[k].barrier =
-                options_.barrier_after_exception && owes_exception(l.frames[k].info, profile_);
-            o += sizes[k];
-        }
-        Lane::Frame ff{static_cast<std::size_t>(-1), {}, l.out.size()};
-        ff.fence = true;
-        describe_request(codec::Bytes(l.out.data() + l.out.size() - fence.size(), fence.size()),
-                         profile_, ff.info);
-        l.by_tid[fence_tid] = static_cast<std::int32_t>(l.frames.size());
-        l.frames.push_back(ff);
-        l.advance_limit();
-        if (!l.fd.valid()) {
-            const int fd = connect_with_timeout(target_, options_.timeout_ms);
-            if (fd < 0) {
-                result.connect_failed = true;
-                l.failed = true;
-                l.done = true;
-                l.suspect_all = true;
-                continue;
-            }
-            l.fd.reset(fd);
-        }
+    for (Lane* l : lanes_) prepare(*l, round);
+    exchange(round);
+    if (round.result.cut_by_deadline) {
+        round.result.suspects.clear();
+        return std::move(round.result);
     }
+    for (Lane* l : lanes_) conclude(*l, round);
+    for (std::size_t i = 0; i < cases.size(); ++i)
+        if (round.suspect[i]) round.result.suspects.push_back(i);
+    return std::move(round.result);
+}
 
-    auto fail_lane = [&](Lane& l, bool closed) {
-        l.failed = true;
-        l.closed = closed;
+// Frames the lane's cases (each well-framed by construction), appends the fence and connects.
+void BatchRunner::prepare(Lane& l, Round& round) {
+    if (l.cases.empty()) {
         l.done = true;
-        l.fd.reset();
-        result.lane_lost = true;
-    };
-    auto parse = [&](Lane& l) {
-        while (l.in.size() - l.in_pos >= lim::kMbapHeader) {
-            const std::uint8_t* p = l.in.data() + l.in_pos;
-            const codec::MbapHeader h = codec::read_mbap_header(p);
-            if (h.length < 2 || h.length > lim::kMaxMbapLength) {
-                l.suspect_all = true;
-                fail_lane(l, false);
-                return;
-            }
-            const std::size_t size = 6u + h.length;
-            if (l.in.size() - l.in_pos < size) return;
-            const std::int32_t k = l.by_tid[h.transaction_id];
-            if (k >= 0 && l.frames[k].answered && !l.frames[k].fence) {
-                suspect[l.frames[k].case_index] = true;  // answered twice: that one is odd
-            } else if (k < 0 || l.frames[k].answered) {
-                l.suspect_all = true;  // an answer nobody asked for: attribute in isolation
-            } else {
-                Lane::Frame& f = l.frames[k];
-                f.answered = true;
-                ++result.answers;
-                f.exception = size > lim::kMbapHeader + 1 && (p[7] & codec::kExceptionBit);
-                if (f.exception && p[8] == 0x06) ++result.busy_answers;
-                if (f.fence) {
-                    l.fence_answered = true;
-                } else {
-                    Verdict v = judge_response(f.info, codec::Bytes(p, size), profile_);
-                    judged[f.case_index] = true;
-                    if (v) result.verdicts.emplace_back(f.case_index, std::move(v));
-                }
-            }
-            l.in_pos += size;
+        return;
+    }
+    std::uint16_t fence_tid = 0xFE00;
+    std::size_t off = 0;
+    std::vector<std::size_t> sizes;
+    for (std::size_t ci : l.cases) {
+        std::size_t case_bytes = 0;
+        for (const Step& s : round.cases[ci].steps) case_bytes += s.bytes.size();
+        const std::size_t end = off + case_bytes;
+        while (off + lim::kMbapHeader <= end) {
+            const std::size_t size = 6u + codec::load_be16(l.out.data() + off + 4);
+            Lane::Frame f{ci, {}, off + size};
+            const std::uint16_t tid = codec::load_be16(l.out.data() + off);
+            if (l.by_tid[tid] >= 0)
+                round.suspect[ci] = true;  // cannot match: check it alone
+            else
+                l.by_tid[tid] = static_cast<std::int32_t>(l.frames.size());
+            l.frames.push_back(f);
+            sizes.push_back(size);
+            off += size;
         }
-        l.advance_limit();
-        if (l.fence_answered) l.done = true;
-    };
+        off = end;
+    }
+    while (l.by_tid[fence_tid] >= 0) ++fence_tid;
+    const std::vector<std::uint8_t> fence = probe_frame(profile_, fence_tid);
+    l.out.insert(l.out.end(), fence.begin(), fence.end());
+    // Describe every frame against the final buffer.
+    for (std::size_t k = 0, o = 0; k < l.frames.size(); ++k) {
+        describe_request(codec::Bytes(l.out.data() + o, sizes[k]), profile_, l.frames[k].info);
+        l.frames[k].barrier =
+            options_.barrier_after_exception && owes_exception(l.frames[k].info, profile_);
+        o += sizes[k];
+    }
+    Lane::Frame ff{static_cast<std::size_t>(-1), {}, l.out.size()};
+    ff.fence = true;
+    describe_request(codec::Bytes(l.out.data() + l.out.size() - fence.size(), fence.size()),
+                     profile_, ff.info);
+    l.by_tid[fence_tid] = static_cast<std::int32_t>(l.frames.size());
+    l.frames.push_back(ff);
+    l.advance_limit();
+    if (l.fd.valid()) return;
+    const int fd = connect_with_timeout(target_, options_.timeout_ms);
+    if (fd < 0) {
+        round.result.connect_failed = true;
+        l.failed = true;
+        l.done = true;
+        l.suspect_all = true;
+        return;
+    }
+    l.fd.reset(fd);
+}
 
+void BatchRunner::fail(Lane& l, Round& round, bool closed) {
+    l.failed = true;
+    l.closed = closed;
+    l.done = true;
+    l.fd.reset();
+    round.result.lane_lost = true;
+}
+
+// Matches every complete answer received on the lane and judges it on the fly.
+void BatchRunner::parse(Lane& l, Round& round) {
+    BatchResult& result = round.result;
+    while (l.in.size() - l.in_pos >= lim::kMbapHeader) {
+        const std::uint8_t* p = l.in.data() + l.in_pos;
+        const codec::MbapHeader h = codec::read_mbap_header(p);
+        if (h.length < 2 || h.length > lim::kMaxMbapLength) {
+            l.suspect_all = true;
+            fail(l, round, false);
+            return;
+        }
+        const std::size_t size = 6u + h.length;
+        if (l.in.size() - l.in_pos < size) return;
+        const std::int32_t k = l.by_tid[h.transaction_id];
+        if (k >= 0 && l.frames[k].answered && !l.frames[k].fence) {
+            round.suspect[l.frames[k].case_index] = true;  // answered twice: that one is odd
+        } else if (k < 0 || l.frames[k].answered) {
+            l.suspect_all = true;  // an answer nobody asked for: attribute in isolation
+        } else {
+            Lane::Frame& f = l.frames[k];
+            f.answered = true;
+            ++result.answers;
+            f.exception = size > lim::kMbapHeader + 1 && (p[7] & codec::kExceptionBit);
+            if (f.exception && p[8] == 0x06) ++result.busy_answers;
+            if (f.fence) {
+                l.fence_answered = true;
+            } else {
+                Verdict v = judge_response(f.info, codec::Bytes(p, size), profile_);
+                round.judged[f.case_index] = true;
+                if (v) result.verdicts.emplace_back(f.case_index, std::move(v));
+            }
+        }
+        l.in_pos += size;
+    }
+    l.advance_limit();
+    if (l.fence_answered) l.done = true;
+}
+
+// Sends and receives on every lane until each is answered up to its fence, broke, went silent
+// for the timeout or the deadline came.
+void BatchRunner::exchange(Round& round) {
     // A lane that makes no progress for the timeout is given up (a barrier after an exception
     // may legitimately take a while: each answer restarts the clock).
     std::vector<std::int64_t> last_progress(lanes_.size(), net::now_ns());
@@ -204,9 +228,9 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                 if (!l->done) {
                     l->done = true;
                     l->fd.reset();
-                    result.cut_by_deadline = true;
+                    round.result.cut_by_deadline = true;
                 }
-            break;
+            return;
         }
         if (options_.deadline_ns) wait_ns = std::min(wait_ns, options_.deadline_ns - now);
         for (std::size_t li = 0; li < lanes_.size(); ++li) {
@@ -214,7 +238,7 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
             if (l.done) continue;
             const std::int64_t left = last_progress[li] + options_.timeout_ms * net::kNsPerMs - now;
             if (left <= 0) {
-                fail_lane(l, false);  // silence: the unanswered become suspects
+                fail(l, round, false);  // silence: the unanswered become suspects
                 continue;
             }
             wait_ns = std::min(wait_ns, left);
@@ -223,7 +247,7 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                        static_cast<short>(POLLIN | (l.out_pos < l.send_limit ? POLLOUT : 0)), 0});
             polled.push_back(li);
         }
-        if (fds.empty()) break;
+        if (fds.empty()) return;
         const int rc = ::poll(fds.data(), fds.size(),
                               static_cast<int>(std::max<std::int64_t>(1, wait_ns / net::kNsPerMs)));
         if (rc <= 0) continue;
@@ -235,111 +259,103 @@ BatchResult BatchRunner::run(const std::vector<Case>& cases) {
                 if (n > 0) {
                     l.out_pos += static_cast<std::size_t>(n);
                 } else if (n < 0 && errno != EAGAIN && errno != EINTR) {
-                    fail_lane(l, true);
+                    fail(l, round, true);
                     continue;
                 }
             }
-            if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) {
-                for (;;) {
-                    const ssize_t n = ::recv(l.fd.get(), buf, sizeof buf, 0);
-                    if (n > 0) {
-                        last_progress[polled[i]] = net::now_ns();
-                        if (l.in_pos == l.in.size()) {
-                            l.in.clear();
-                            l.in_pos = 0;
-                        }
-                        l.in.insert(l.in.end(), buf, buf + n);
-                        parse(l);
-                        if (l.done) break;
-                        continue;
+            if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+            for (;;) {
+                const ssize_t n = ::recv(l.fd.get(), buf, sizeof buf, 0);
+                if (n > 0) {
+                    last_progress[polled[i]] = net::now_ns();
+                    if (l.in_pos == l.in.size()) {
+                        l.in.clear();
+                        l.in_pos = 0;
                     }
-                    if (n == 0 || (errno != EAGAIN && errno != EINTR)) fail_lane(l, true);
-                    break;
+                    l.in.insert(l.in.end(), buf, buf + n);
+                    parse(l, round);
+                    if (l.done) break;
+                    continue;
                 }
-            }
-        }
-    }
-    std::vector<bool> requeued(cases.size(), false);
-    if (result.cut_by_deadline) {
-        result.suspects.clear();
-        return result;
-    }
-    for (Lane* lp : lanes_) {
-        Lane& l = *lp;
-        if (l.cases.empty()) continue;
-        if (l.suspect_all) {
-            for (std::size_t ci : l.cases) suspect[ci] = true;
-            continue;
-        }
-        if (!l.failed) {
-            // The lane went on past them: a request with no answer is its own fault.
-            for (const Lane::Frame& f : l.frames) {
-                if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
-                if (judged[f.case_index]) continue;
-                judged[f.case_index] = true;
-                result.verdicts.emplace_back(
-                    f.case_index,
-                    Verdict{Oracle::Hang,
-                            "no-answer/" + culprit_text(cases[f.case_index].cls, &f.info),
-                            f.info.pdu.empty() ? -1 : f.info.pdu[0],
-                            fmt::format("no answer to request {} (later requests were answered)",
-                                        hex(f.info.pdu, 16)),
-                            "an answer", "silence"});
-            }
-            continue;
-        }
-        // The lane broke: blame the first request owed an answer that got none, or the one
-        // answered just before it; whatever came after is run again in a later round.
-        std::size_t first = l.frames.size();
-        for (std::size_t k = 0; k < l.frames.size(); ++k) {
-            const Lane::Frame& f = l.frames[k];
-            if (!f.answered && f.info.expect == Expect::Answer) {
-                first = k;
+                if (n == 0 || (errno != EAGAIN && errno != EINTR)) fail(l, round, true);
                 break;
             }
         }
-        LaneBreak br;
-        br.closed = l.closed;
+    }
+}
+
+// What a finished lane says: requests it went past unanswered are their own fault; a lane that
+// broke blames the first request left unanswered or the one answered just before it, and what
+// came after is run again in a later round.
+void BatchRunner::conclude(Lane& l, Round& round) {
+    const std::vector<Case>& cases = round.cases;
+    BatchResult& result = round.result;
+    if (l.cases.empty()) return;
+    if (l.suspect_all) {
+        for (std::size_t ci : l.cases) round.suspect[ci] = true;
+        return;
+    }
+    if (!l.failed) {
         for (const Lane::Frame& f : l.frames) {
             if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
-            if (br.unanswered.empty() || br.unanswered.back() != f.case_index)
-                br.unanswered.push_back(f.case_index);
+            if (round.judged[f.case_index]) continue;
+            round.judged[f.case_index] = true;
+            result.verdicts.emplace_back(
+                f.case_index,
+                Verdict{Oracle::Hang, "no-answer/" + culprit_text(cases[f.case_index].cls, &f.info),
+                        f.info.pdu.empty() ? -1 : f.info.pdu[0],
+                        fmt::format("no answer to request {} (later requests were answered)",
+                                    hex(f.info.pdu, 16)),
+                        "an answer", "silence"});
         }
-        std::size_t prev = l.frames.size();
-        for (std::size_t k = 0; k < first && k < l.frames.size(); ++k)
-            if (l.frames[k].answered && !l.frames[k].fence) prev = k;
-        if (prev < l.frames.size()) {
-            const Lane::Frame& f = l.frames[prev];
-            br.has_previous = true;
-            br.previous_case = f.case_index;
-            br.previous_culprit = culprit_text(cases[f.case_index].cls, &f.info);
-            br.previous_exception = f.exception;
-            br.length_mismatch = pdu_length_mismatch(f.info);
-            suspect[f.case_index] = true;
-        }
-        if (first < l.frames.size() && !l.frames[first].fence) {
-            const Lane::Frame& f = l.frames[first];
-            br.unanswered_case = f.case_index;
-            br.unanswered_culprit = culprit_text(cases[f.case_index].cls, &f.info);
-            br.length_mismatch = br.length_mismatch || (br.closed && pdu_length_mismatch(f.info));
-            suspect[f.case_index] = true;
-            for (std::size_t k = first + 1; k < l.frames.size(); ++k) {
-                const std::size_t ci = l.frames[k].case_index;
-                if (l.frames[k].fence || ci == f.case_index || suspect[ci] || requeued[ci] ||
-                    judged[ci])
-                    continue;
-                requeued[ci] = true;
-                result.requeue.push_back(ci);
-            }
-        } else {
-            br.unanswered_case = static_cast<std::size_t>(-1);  // only the fence went unanswered
-            br.unanswered_culprit = "fence";
-        }
-        result.breaks.push_back(std::move(br));
+        return;
     }
-    for (std::size_t i = 0; i < cases.size(); ++i)
-        if (suspect[i]) result.suspects.push_back(i);
-    return result;
+    std::size_t first = l.frames.size();
+    for (std::size_t k = 0; k < l.frames.size(); ++k) {
+        const Lane::Frame& f = l.frames[k];
+        if (!f.answered && f.info.expect == Expect::Answer) {
+            first = k;
+            break;
+        }
+    }
+    LaneBreak br;
+    br.closed = l.closed;
+    for (const Lane::Frame& f : l.frames) {
+        if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
+        if (br.unanswered.empty() || br.unanswered.back() != f.case_index)
+            br.unanswered.push_back(f.case_index);
+    }
+    std::size_t prev = l.frames.size();
+    for (std::size_t k = 0; k < first && k < l.frames.size(); ++k)
+        if (l.frames[k].answered && !l.frames[k].fence) prev = k;
+    if (prev < l.frames.size()) {
+        const Lane::Frame& f = l.frames[prev];
+        br.has_previous = true;
+        br.previous_case = f.case_index;
+        br.previous_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+        br.previous_exception = f.exception;
+        br.length_mismatch = pdu_length_mismatch(f.info);
+        round.suspect[f.case_index] = true;
+    }
+    if (first < l.frames.size() && !l.frames[first].fence) {
+        const Lane::Frame& f = l.frames[first];
+        br.unanswered_case = f.case_index;
+        br.unanswered_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+        br.length_mismatch = br.length_mismatch || (br.closed && pdu_length_mismatch(f.info));
+        round.suspect[f.case_index] = true;
+        for (std::size_t k = first + 1; k < l.frames.size(); ++k) {
+            const std::size_t ci = l.frames[k].case_index;
+            if (l.frames[k].fence || ci == f.case_index || round.suspect[ci] ||
+                round.requeued[ci] || round.judged[ci])
+                continue;
+            round.requeued[ci] = true;
+            result.requeue.push_back(ci);
+        }
+    } else {
+        br.unanswered_case = static_cast<std::size_t>(-1);  // only the fence went unanswered
+        br.unanswered_culprit = "fence";
+    }
+    result.breaks.push_back(std::move(br));
 }
 
 }  // namespace mbstorm::netfuzz

@@ -69,6 +69,12 @@ class BatchRunner {
 
   private:
     struct Lane;
+    struct Round;
+    void prepare(Lane& lane, Round& round);
+    void exchange(Round& round);
+    void parse(Lane& lane, Round& round);
+    void fail(Lane& lane, Round& round, bool closed);
+    void conclude(Lane& lane, Round& round);
     const net::Endpoint& target_;
     const TargetProfile& profile_;
     BatchOptions options_;
