@@ -258,20 +258,20 @@ bool whole_server_hang(const Verdict& v) {
 class Campaign {
   public:
     Campaign(const CampaignOptions& o, const ProgressFn& p, const FindingFn& f)
-        : o_(o), on_progress_(p), on_finding_(f) {}
+        : options_(o), on_progress_(p), on_finding_(f) {}
     CampaignResult run();
 
   private:
     enum class Outcome { Clean, Fired, Skipped, Lost };
 
     double elapsed() const { return static_cast<double>(net::now_ns() - start_) / 1e9; }
-    bool stopped() const { return o_.stop && o_.stop->load(); }
+    bool stopped() const { return options_.stop && options_.stop->load(); }
     std::int64_t remaining_ns() const {
         return deadline_ ? deadline_ - net::now_ns() : std::numeric_limits<std::int64_t>::max();
     }
     bool out_of_budget() const {
         if (stopped()) return true;
-        if (o_.max_cases && r_.cases >= o_.max_cases) return true;
+        if (options_.max_cases && result_.cases >= options_.max_cases) return true;
         return remaining_ns() <= 0;
     }
     // Whether `runs` isolated runs still fit before the deadline (each may wait a timeout for
@@ -279,7 +279,7 @@ class Campaign {
     bool can_afford(unsigned runs) const {
         if (stopped()) return false;
         const std::int64_t per_run =
-            2 * std::int64_t{o_.timeout_ms} * net::kNsPerMs + 200 * net::kNsPerMs;
+            2 * std::int64_t{options_.timeout_ms} * net::kNsPerMs + 200 * net::kNsPerMs;
         return remaining_ns() > runs * per_run;
     }
 
@@ -296,6 +296,8 @@ class Campaign {
     // again before anything else is judged, restarting it if it never does.
     // A hang that outlasts --restart-wait is restarted like a crash, charged to `cause`.
     bool settle(const std::string& cause = "");
+    // After a run that crashed the target or hung it as a whole: either of the above.
+    bool bring_back(const Execution& ex, const std::string& cause);
     void record(const Case& c, Execution ex);
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
@@ -304,12 +306,12 @@ class Campaign {
     void set_drops_after_exception();
     void make_batch_runner();
 
-    const CampaignOptions& o_;
+    const CampaignOptions& options_;
     const ProgressFn& on_progress_;
     const FindingFn& on_finding_;
-    CampaignResult r_;
+    CampaignResult result_;
     std::int64_t start_ = 0, deadline_ = 0;
-    std::map<std::string, std::size_t> by_key_;  // root cause -> index in r_.findings
+    std::map<std::string, std::size_t> by_key_;  // root cause -> index in result_.findings
     std::set<std::string> costly_culprits_;      // culprits of known crashes and hangs
     std::map<std::string, unsigned> restarts_by_cause_;
     std::unique_ptr<Generator> gen_;
@@ -331,23 +333,23 @@ class Campaign {
 
 Finding* Campaign::known(const Verdict& v) {
     const auto it = by_key_.find(root_cause_key(v));
-    return it == by_key_.end() ? nullptr : &r_.findings[it->second];
+    return it == by_key_.end() ? nullptr : &result_.findings[it->second];
 }
 
 void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
     ++f.hits;
     ++f.variants[variant_of(v, c)];
-    ++r_.duplicates;
+    ++result_.duplicates;
 }
 
 bool Campaign::would_retrigger(const Case& c) const {
     // Once the target is known to lose the stream on a request of the wrong length, each such
     // request costs a broken connection (and the target's pause) to show it again: only one in
     // 16 is still sent, for what else it may hit in the handler.
-    if (stream_lost_known_ && carries_length_mismatch(c, r_.profile))
+    if (stream_lost_known_ && carries_length_mismatch(c, result_.profile))
         return ++length_mismatch_seen_ % 16 != 0;
     if (costly_culprits_.empty()) return false;
-    for (const std::string& k : culprits(c, r_.profile))
+    for (const std::string& k : culprits(c, result_.profile))
         if (costly_culprits_.count(k)) return true;
     return false;
 }
@@ -365,8 +367,8 @@ void Campaign::learn_costly(const Finding& f) {
 }
 
 void Campaign::set_drops_after_exception() {
-    if (r_.profile.drops_after_exception) return;
-    r_.profile.drops_after_exception = true;
+    if (result_.profile.drops_after_exception) return;
+    result_.profile.drops_after_exception = true;
     make_batch_runner();
 }
 
@@ -375,36 +377,38 @@ void Campaign::set_drops_after_exception() {
 // break on silence, so such a target gets one lane and short rounds (every function code is
 // still reached early and progress is reported).
 void Campaign::make_batch_runner() {
-    const bool pauses = r_.profile.drops_after_exception;
-    lanes_ = pauses ? 1u : std::max(1u, o_.lanes);
-    lane_depth_ = pauses ? std::min(16u, std::max(1u, o_.lane_depth)) : std::max(1u, o_.lane_depth);
-    batch_ = std::make_unique<BatchRunner>(o_.target, r_.profile,
-                                           BatchOptions{lanes_, o_.timeout_ms, pauses, deadline_});
+    const bool pauses = result_.profile.drops_after_exception;
+    lanes_ = pauses ? 1u : std::max(1u, options_.lanes);
+    lane_depth_ = pauses ? std::min(16u, std::max(1u, options_.lane_depth))
+                         : std::max(1u, options_.lane_depth);
+    batch_ =
+        std::make_unique<BatchRunner>(options_.target, result_.profile,
+                                      BatchOptions{lanes_, options_.timeout_ms, pauses, deadline_});
 }
 
 bool Campaign::recover(const std::string& cause) {
     up_ = false;
     progress(true);
     std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (!wait_for_target_with(restart_, o_.target, r_.profile, o_.restart_cmd, o_.restart_wait_ms,
-                              o_.timeout_ms, wait_deadline)) {
-        r_.target_lost = true;
+    if (!wait_for_target_with(restart_, options_.target, result_.profile, options_.restart_cmd,
+                              options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
+        result_.target_lost = true;
         // Name the command and the wait: the user has to fix one of them.
-        r_.stop_reason =
+        result_.stop_reason =
             remaining_ns() <= 0
                 ? std::string("time limit reached while waiting for the target to come back")
-            : o_.restart_cmd.empty()
+            : options_.restart_cmd.empty()
                 ? fmt::format(
                       "the target did not come back within {} ms (--restart-wait; no "
                       "--restart-cmd given)",
-                      o_.restart_wait_ms)
+                      options_.restart_wait_ms)
                 : fmt::format(
                       "the target did not come back within {} ms (--restart-wait) after "
                       "--restart-cmd '{}'",
-                      o_.restart_wait_ms, o_.restart_cmd);
+                      options_.restart_wait_ms, options_.restart_cmd);
         return false;
     }
-    ++r_.restarts;
+    ++result_.restarts;
     if (!cause.empty()) ++restarts_by_cause_[cause];
     up_ = true;
     return true;
@@ -416,33 +420,41 @@ bool Campaign::settle(const std::string& cause) {
     progress(true);
     RestartCommand none;
     const std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (wait_for_target_with(none, o_.target, r_.profile, "", o_.restart_wait_ms, o_.timeout_ms,
-                             wait_deadline)) {
+    if (wait_for_target_with(none, options_.target, result_.profile, "", options_.restart_wait_ms,
+                             options_.timeout_ms, wait_deadline)) {
         up_ = true;
         return true;
     }
     if (remaining_ns() <= 0) return false;
-    ++r_.deaths;
+    ++result_.deaths;
     settle_restarted_ = true;
     return recover(cause);
 }
 
+bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
+    if (ex.target_down) {
+        ++result_.deaths;
+        return recover(cause);
+    }
+    return !whole_server_hang(ex.verdict) || settle(cause);
+}
+
 Campaign::Outcome Campaign::isolate(Case c) {
     if (would_retrigger(c)) {
-        ++r_.skipped_known;
+        ++result_.skipped_known;
         return Outcome::Skipped;
     }
-    ++r_.isolated_runs;
-    Execution ex = execute_case(c, o_.target, r_.profile, exec_);
+    ++result_.isolated_runs;
+    Execution ex = execute_case(c, options_.target, result_.profile, exec_);
     if (ex.down_before) {
         // Down before this case began: whatever did it is not this case.
-        ++r_.deaths;
-        ++r_.unattributed_deaths;
+        ++result_.deaths;
+        ++result_.unattributed_deaths;
         if (!recover("")) return Outcome::Lost;
-        ex = execute_case(c, o_.target, r_.profile, exec_);
+        ex = execute_case(c, options_.target, result_.profile, exec_);
         if (ex.down_before) {
-            r_.target_lost = true;
-            r_.stop_reason = "the target keeps refusing connections";
+            result_.target_lost = true;
+            result_.stop_reason = "the target keeps refusing connections";
             return Outcome::Lost;
         }
     }
@@ -452,12 +464,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
     std::string key = last_key_;
     if (Finding* f = known(ex.verdict)) {
         hit(*f, ex.verdict, c);
-        if (ex.target_down) {
-            ++r_.deaths;
-            if (!recover(key)) return Outcome::Lost;
-        } else if (whole_server_hang(ex.verdict) && !settle(key)) {
-            return Outcome::Lost;
-        }
+        if (!bring_back(ex, key)) return Outcome::Lost;
         return Outcome::Fired;
     }
     // A transport case that crashed or hung the target: were the frames it delivered the
@@ -466,18 +473,13 @@ Campaign::Outcome Campaign::isolate(Case c) {
     if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang ||
          ex.verdict.oracle == Oracle::UnexpectedClose) &&
         is_transport_class(c.cls) && reassemble(c, plain)) {
-        if (ex.target_down) {
-            ++r_.deaths;
-            if (!recover(key)) return Outcome::Lost;
-        } else if (whole_server_hang(ex.verdict) && !settle(key)) {
-            return Outcome::Lost;
-        }
+        if (!bring_back(ex, key)) return Outcome::Lost;
         if (!can_afford(1)) {
-            ++r_.suspects_left;
+            ++result_.suspects_left;
             return Outcome::Clean;
         }
-        ++r_.isolated_runs;
-        Execution whole = execute_case(plain, o_.target, r_.profile, exec_);
+        ++result_.isolated_runs;
+        Execution whole = execute_case(plain, options_.target, result_.profile, exec_);
         if (whole.verdict.oracle == ex.verdict.oracle) {
             // The content: judge it as the plain case (its death confirms a crash).
             c = std::move(plain);
@@ -485,16 +487,11 @@ Campaign::Outcome Campaign::isolate(Case c) {
             key = root_cause_key(ex.verdict);
             if (Finding* f = known(ex.verdict)) {
                 hit(*f, ex.verdict, c);
-                if (ex.target_down) {
-                    ++r_.deaths;
-                    if (!recover(key)) return Outcome::Lost;
-                } else if (whole_server_hang(ex.verdict) && !settle(key)) {
-                    return Outcome::Lost;
-                }
+                if (!bring_back(ex, key)) return Outcome::Lost;
                 return Outcome::Fired;
             }
             if (ex.target_down) {
-                ++r_.deaths;
+                ++result_.deaths;
                 ++restarts_by_cause_[key];  // the transport case's death was this one's too
                 if (!recover(key)) return Outcome::Lost;
                 ex.target_down = false;  // confirmed: it killed the target twice
@@ -505,26 +502,26 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return up_ ? Outcome::Fired : Outcome::Lost;
         }
         if (whole.target_down) {
-            ++r_.deaths;
+            ++result_.deaths;
             if (!recover("")) return Outcome::Lost;
         }
         // The way the bytes arrived: confirm the transport case itself below.
         if (!can_afford(1)) {
-            ++r_.suspects_left;
+            ++result_.suspects_left;
             return Outcome::Clean;
         }
-        ++r_.isolated_runs;
-        ex = execute_case(c, o_.target, r_.profile, exec_);
+        ++result_.isolated_runs;
+        ex = execute_case(c, options_.target, result_.profile, exec_);
         if (!ex.verdict || root_cause_key(ex.verdict) != key) {
-            ++r_.unconfirmed;
+            ++result_.unconfirmed;
             if (ex.target_down) {
-                ++r_.deaths;
+                ++result_.deaths;
                 if (!recover("")) return Outcome::Lost;
             }
             return Outcome::Clean;
         }
         if (ex.target_down) {
-            ++r_.deaths;
+            ++result_.deaths;
             if (!recover(key)) return Outcome::Lost;
             ex.target_down = false;  // confirmed
         }
@@ -532,7 +529,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
     if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
     if (ex.target_down) {
         // A death is a crash only if the case, replayed alone, kills the target again.
-        ++r_.deaths;
+        ++result_.deaths;
         if (!recover(key)) {
             Finding f;
             f.found_after_s = elapsed();
@@ -550,21 +547,21 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Lost;
         }
         if (!can_afford(1)) {
-            ++r_.suspects_left;
+            ++result_.suspects_left;
             return Outcome::Clean;
         }
-        ++r_.isolated_runs;
-        Execution again = execute_case(c, o_.target, r_.profile, exec_);
+        ++result_.isolated_runs;
+        Execution again = execute_case(c, options_.target, result_.profile, exec_);
         const bool same = again.verdict && root_cause_key(again.verdict) == key;
         if (!same) {
-            ++r_.unattributed_deaths;
+            ++result_.unattributed_deaths;
             if (again.target_down) {
-                ++r_.deaths;
+                ++result_.deaths;
                 if (!recover("")) return Outcome::Lost;
             }
             return Outcome::Clean;
         }
-        ++r_.deaths;
+        ++result_.deaths;
         if (!recover(key)) {
             Finding f;
             f.found_after_s = elapsed();
@@ -600,7 +597,7 @@ void Campaign::record(const Case& c, Execution ex) {
     f.variants[variant_of(f.verdict, c)] = 1;
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
-    if (o_.minimize) {
+    if (options_.minimize) {
         Execution last;
         bool lost = false, cut = false, restart_budget = false;
         auto reproduces = [&](const Case& candidate) {
@@ -613,13 +610,13 @@ void Campaign::record(const Case& c, Execution ex) {
                 restart_budget = true;
                 return false;
             }
-            ++r_.isolated_runs;
-            Execution e = execute_case(candidate, o_.target, r_.profile, exec_);
+            ++result_.isolated_runs;
+            Execution e = execute_case(candidate, options_.target, result_.profile, exec_);
             // The same fault, not merely the same oracle: else it drifted to another bug.
             // (the detail naming the request may change as the case shrinks: see same_fault)
             const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
             if (e.down_before || e.target_down) {
-                ++r_.deaths;
+                ++result_.deaths;
                 if (!recover(same && e.target_down ? key : "")) lost = true;
             } else if (whole_server_hang(e.verdict) && !settle(same ? key : "")) {
                 lost = true;
@@ -631,7 +628,8 @@ void Campaign::record(const Case& c, Execution ex) {
         // Crashes and hangs cost a restart or a timeout per try: a smaller budget, whole
         // frames only.
         Case small = minimize_case(
-            c, reproduces, costly ? std::min(8u, o_.minimize_budget / 3) : o_.minimize_budget,
+            c, reproduces,
+            costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget,
             !costly);
         if (size_of(small) < size_of(c) && last.verdict) {
             f.fuzz_case = std::move(small);
@@ -641,7 +639,7 @@ void Campaign::record(const Case& c, Execution ex) {
         }
         if (cut) {
             f.minimize_note = "minimisation cut short by --seconds";
-            ++r_.findings_not_minimized;
+            ++result_.findings_not_minimized;
         } else if (restart_budget) {
             f.minimize_note = fmt::format(
                 "minimisation stopped: a crash may cost at most {} restarts", kMaxRestartsPerCause);
@@ -651,23 +649,23 @@ void Campaign::record(const Case& c, Execution ex) {
     // cause already known under another guise (a codec detail that fell away).
     if (Finding* existing = known(f.verdict)) {
         hit(*existing, f.verdict, c);
-        by_key_[key] = static_cast<std::size_t>(existing - r_.findings.data());
+        by_key_[key] = static_cast<std::size_t>(existing - result_.findings.data());
         return;
     }
-    by_key_[key] = r_.findings.size();  // the unminimised guise leads here too
+    by_key_[key] = result_.findings.size();  // the unminimised guise leads here too
     keep(std::move(f));
 }
 
 void Campaign::keep(Finding f) {
-    f.id = r_.findings.size() + 1;
-    f.profile = r_.profile;
-    f.target = o_.target_text;
-    f.seed = o_.seed;
-    f.timeout_ms = o_.timeout_ms;
+    f.id = result_.findings.size() + 1;
+    f.profile = result_.profile;
+    f.target = options_.target_text;
+    f.seed = options_.seed;
+    f.timeout_ms = options_.timeout_ms;
     if (f.verdict.culprit_fc >= 0)
         f.fuzz_case.function = static_cast<std::uint8_t>(f.verdict.culprit_fc);
-    if (!o_.out_dir.empty()) {
-        const std::string dir = fmt::format("{}/{:03}-{}-{}", o_.out_dir, f.id,
+    if (!options_.out_dir.empty()) {
+        const std::string dir = fmt::format("{}/{:03}-{}-{}", options_.out_dir, f.id,
                                             oracle_name(f.oracle()), slug(f.verdict.rule));
         std::string err;
         if (save_finding(f, dir, err))
@@ -675,15 +673,16 @@ void Campaign::keep(Finding f) {
         else
             fmt::print(stderr, "mbstorm fuzz: {}\n", err);
     }
-    by_key_[f.key()] = r_.findings.size();
+    by_key_[f.key()] = result_.findings.size();
     learn_costly(f);
-    r_.findings.push_back(std::move(f));
-    if (on_finding_) on_finding_(r_.findings.back());
+    result_.findings.push_back(std::move(f));
+    if (on_finding_) on_finding_(result_.findings.back());
 }
 
 void Campaign::record_lost_batch(const std::vector<Case>& batch) {
     // What the server looks like now decides crash or whole-server hang, as after one case.
-    Verdict v = fresh_probe_verdict(probe_target(o_.target, r_.profile, o_.timeout_ms));
+    Verdict v =
+        fresh_probe_verdict(probe_target(options_.target, result_.profile, options_.timeout_ms));
     if (!v) v = fresh_probe_verdict(ProbeResult::ConnectFailed);
     v.rule += "/pipelined-batch";
     Case all;
@@ -718,11 +717,11 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
 }
 
 void Campaign::check_capacity_once() {
-    if (capacity_checked_ || o_.max_connections == 0 || !can_afford(4)) return;
+    if (capacity_checked_ || options_.max_connections == 0 || !can_afford(4)) return;
     capacity_checked_ = true;
-    const CapacityResult cr =
-        check_capacity(o_.target, r_.profile, o_.max_connections, o_.timeout_ms, deadline_);
-    r_.capacity_held = cr.held;
+    const CapacityResult cr = check_capacity(
+        options_.target, result_.profile, options_.max_connections, options_.timeout_ms, deadline_);
+    result_.capacity_held = cr.held;
     if (cr.verdict && !known(cr.verdict)) {
         Finding f;
         f.found_after_s = elapsed();
@@ -744,7 +743,7 @@ void Campaign::check_capacity_once() {
         keep(std::move(f));
     }
     if (cr.target_down) {
-        ++r_.deaths;
+        ++result_.deaths;
         recover(cr.verdict ? root_cause_key(cr.verdict) : "");
     }
 }
@@ -753,46 +752,49 @@ void Campaign::progress(bool force) {
     if (!on_progress_) return;
     const std::int64_t now = net::now_ns();
     const double dt = static_cast<double>(now - last_progress_) / 1e9;
-    if (!force && dt < o_.progress_interval_s) return;
+    if (!force && dt < options_.progress_interval_s) return;
     Progress p;
-    p.cases = r_.cases;
+    p.cases = result_.cases;
     p.seconds = elapsed();
-    p.cases_per_second = dt > 0 ? static_cast<double>(r_.cases - last_cases_) / dt : 0;
-    p.findings = r_.findings.size();
+    p.cases_per_second = dt > 0 ? static_cast<double>(result_.cases - last_cases_) / dt : 0;
+    p.findings = result_.findings.size();
     p.target_up = up_;
-    p.restarts = r_.restarts;
+    p.restarts = result_.restarts;
     last_progress_ = now;
-    last_cases_ = r_.cases;
+    last_cases_ = result_.cases;
     on_progress_(p);
 }
 
 CampaignResult Campaign::run() {
     start_ = net::now_ns();
     last_progress_ = start_;
-    if (o_.max_seconds > 0) deadline_ = start_ + static_cast<std::int64_t>(o_.max_seconds * 1e9);
-    if (!discover_target(o_.target, o_.unit, o_.timeout_ms, r_.profile, r_.error)) return r_;
-    r_.started = true;
-    exec_.timeout_ms = o_.timeout_ms;
-    exec_.state = o_.state;
+    if (options_.max_seconds > 0)
+        deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
+    if (!discover_target(options_.target, options_.unit, options_.timeout_ms, result_.profile,
+                         result_.error))
+        return result_;
+    result_.started = true;
+    exec_.timeout_ms = options_.timeout_ms;
+    exec_.state = options_.state;
     GeneratorOptions go;
-    go.seed = o_.seed;
-    go.unit = o_.unit;
-    go.naive = o_.naive;
-    go.isolated_per_mille = o_.isolated_per_mille;
-    go.state = o_.state;
-    go.dict_words = o_.dict_words;
-    go.dict_tokens = o_.dict_tokens;
+    go.seed = options_.seed;
+    go.unit = options_.unit;
+    go.naive = options_.naive;
+    go.isolated_per_mille = options_.isolated_per_mille;
+    go.state = options_.state;
+    go.dict_words = options_.dict_words;
+    go.dict_tokens = options_.dict_tokens;
     gen_ = std::make_unique<Generator>(go);
     make_batch_runner();
     std::uint64_t generated = 0;
     std::vector<Case> requeue, piped, alone;
     bool lost_at_first_look = false;
-    for (Case& c : first_looks(r_.profile)) {
+    for (Case& c : first_looks(result_.profile)) {
         if (!can_afford(1)) break;
         c.number = ++generated;
-        ++r_.cases_by_class[static_cast<std::size_t>(c.cls)];
-        ++r_.cases;
-        ++r_.first_looks;
+        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        ++result_.cases;
+        ++result_.first_looks;
         if (isolate(std::move(c)) == Outcome::Lost) {
             lost_at_first_look = true;
             break;
@@ -803,13 +805,13 @@ CampaignResult Campaign::run() {
     while (!lost_at_first_look && !out_of_budget()) {
         const std::size_t round = lanes_ * lane_depth_;
         std::size_t n = round;
-        if (o_.max_cases) n = std::min<std::uint64_t>(n, o_.max_cases - r_.cases);
+        if (options_.max_cases) n = std::min<std::uint64_t>(n, options_.max_cases - result_.cases);
         piped.clear();
         alone.clear();
         for (Case& c : requeue) {
             // Queued before a crash or hang became known: it may carry that culprit.
             if (would_retrigger(c)) {
-                ++r_.skipped_known;
+                ++result_.skipped_known;
                 continue;
             }
             (c.pipelinable ? piped : alone).push_back(std::move(c));
@@ -821,23 +823,23 @@ CampaignResult Campaign::run() {
             gen_->next(c);
             c.number = ++generated;
             if (would_retrigger(c)) {
-                ++r_.skipped_known;
+                ++result_.skipped_known;
                 continue;
             }
             ++fresh;
-            ++r_.cases_by_class[static_cast<std::size_t>(c.cls)];
+            ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
             (c.pipelinable ? piped : alone).push_back(std::move(c));
         }
         const std::int64_t t0 = net::now_ns();
         BatchResult br = batch_->run(piped);
         const std::int64_t t1 = net::now_ns();
-        r_.batch_seconds += static_cast<double>(t1 - t0) / 1e9;
-        r_.batched_cases += piped.size();
-        r_.answers += br.answers;
-        r_.busy_answers += br.busy_answers;
+        result_.batch_seconds += static_cast<double>(t1 - t0) / 1e9;
+        result_.batched_cases += piped.size();
+        result_.answers += br.answers;
+        result_.busy_answers += br.busy_answers;
         // A target answering mostly 06 (busy) wastes the cases: thin the lanes and pause.
         if (br.answers >= 16 && br.busy_answers * 2 > br.answers) {
-            r_.slowed_for_busy = true;
+            result_.slowed_for_busy = true;
             lane_depth_ = std::max(1u, lane_depth_ / 2);
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         }
@@ -864,7 +866,7 @@ CampaignResult Campaign::run() {
             for (const std::string& k : keys) {
                 const auto it = by_key_.find(k);
                 if (it == by_key_.end()) continue;
-                Finding& f = r_.findings[it->second];
+                Finding& f = result_.findings[it->second];
                 const std::size_t ci = b.has_previous ? b.previous_case : b.unanswered_case;
                 if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
                 std::erase(suspects, b.previous_case);
@@ -877,14 +879,15 @@ CampaignResult Campaign::run() {
         bool lost = false, whole_target = false, died = false, settled_by_restart = false;
         if (br.connect_failed || br.lane_lost) {
             batch_->close_all();
-            const ProbeResult pr = probe_target(o_.target, r_.profile, o_.timeout_ms);
+            const ProbeResult pr =
+                probe_target(options_.target, result_.profile, options_.timeout_ms);
             if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
                 whole_target = died = true;
-                ++r_.deaths;
+                ++result_.deaths;
                 if (!recover("")) {
                     // Nothing can be re-run: the batch is all there is to show for it.
                     if (br.lane_lost) record_lost_batch(piped);
-                    r_.cases += fresh;
+                    result_.cases += fresh;
                     break;
                 }
             } else if (pr != ProbeResult::Ok) {
@@ -893,7 +896,7 @@ CampaignResult Campaign::run() {
                 settled_by_restart = settle_restarted_;
                 if (!settled) {
                     // Hung and never back: the suspects cannot be judged.
-                    r_.cases += fresh;
+                    result_.cases += fresh;
                     break;
                 }
             }
@@ -942,7 +945,7 @@ CampaignResult Campaign::run() {
             later = br.requeue;
             for (std::size_t k = 0; k < suspects.size(); ++k) {
                 if (!can_afford(1)) {
-                    r_.suspects_left += suspects.size() - k;
+                    result_.suspects_left += suspects.size() - k;
                     break;
                 }
                 const Outcome out = isolate(piped[suspects[k]]);
@@ -950,37 +953,38 @@ CampaignResult Campaign::run() {
                     lost = true;
                     break;
                 }
-                if (out == Outcome::Clean) ++r_.unconfirmed;
+                if (out == Outcome::Clean) ++result_.unconfirmed;
             }
         }
         for (std::size_t ci : later) {
             if (!requeued_once.insert(piped[ci].number).second) continue;
-            ++r_.requeued;
+            ++result_.requeued;
             requeue.push_back(piped[ci]);
         }
         for (std::size_t i = 0; !lost && i < alone.size(); ++i) {
             if (!can_afford(1)) break;
             if (isolate(alone[i]) == Outcome::Lost) lost = true;
         }
-        r_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
-        r_.cases += fresh;
+        result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
+        result_.cases += fresh;
         progress(false);
         if (lost) break;
         if (++rounds == 1) check_capacity_once();
     }
-    if (r_.stop_reason.empty()) {
-        r_.stop_reason = stopped()                                    ? "interrupted"
-                         : (o_.max_cases && r_.cases >= o_.max_cases) ? "case limit reached"
-                                                                      : "time limit reached";
+    if (result_.stop_reason.empty()) {
+        result_.stop_reason = stopped() ? "interrupted"
+                              : (options_.max_cases && result_.cases >= options_.max_cases)
+                                  ? "case limit reached"
+                                  : "time limit reached";
     }
     // Restarts per root cause, including those charged to a guise it had before minimising.
     for (const auto& [key, n] : restarts_by_cause_) {
         const auto it = by_key_.find(key);
-        if (it != by_key_.end()) r_.findings[it->second].restarts += n;
+        if (it != by_key_.end()) result_.findings[it->second].restarts += n;
     }
-    r_.seconds = elapsed();
+    result_.seconds = elapsed();
     progress(true);
-    return r_;
+    return result_;
 }
 
 }  // namespace
