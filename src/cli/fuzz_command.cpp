@@ -149,9 +149,12 @@ int run_fuzz(const FuzzOptions& o) {
                    f.verdict.summary);
         if (!f.folder.empty()) fmt::print(stderr, "  saved to {}\n", f.folder);
     };
-    const netfuzz::CampaignResult r = netfuzz::run_campaign(c, progress, finding);
+    netfuzz::CampaignResult r = netfuzz::run_campaign(c, progress, finding);
     std::signal(SIGINT, SIG_DFL);
     std::signal(SIGTERM, SIG_DFL);
+    // Every report names the signal, not only the last stderr line.
+    if (const int sig = g_stop_signal.load(); sig != 0 && r.stop_reason == "interrupted")
+        r.stop_reason = fmt::format("interrupted by {}", signal_name(sig));
     if (!r.started) {
         fmt::print(stderr, "mbstorm fuzz: {}: {}\n", c.target_text, r.error);
         return kExitUsage;

@@ -40,4 +40,5 @@ interrupt TERM 143 run-term run -d 60s -c 2 --depth 2
 start_server "$work/server.out" "$tool" --threads 1 --seconds 120 || { echo "FAIL server did not start"; exit 1; }
 interrupt TERM 143 fuzz-term fuzz --target "127.0.0.1:$port" -d 60s -q --no-minimize --out "$work/findings"
 interrupt INT 130 fuzz-int fuzz --target "127.0.0.1:$port" -d 60s -q --no-minimize --out "$work/findings"
+grep -q '"stop_reason": "interrupted by SIGTERM"' "$work/fuzz-term.json" || { echo "FAIL fuzz-term: the JSON's stop_reason does not name the signal"; fail=1; }
 exit $fail
