@@ -14,6 +14,7 @@ packages=(
   clang libclang-rt-14-dev clang-format
   liburing-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libmodbus-dev
+  zlib1g-dev
   procps util-linux
 )
 # Lines of test-needs.txt: kind name package...

@@ -212,6 +212,7 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--seed", p.seed, "seed for address and value generators");
     cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
     add_output_options(cmd, o->outputs);
+    add_run_identity_options(cmd, o->outputs);
     cmd->add_option("file", o->scenario_file,
                     "scenario file (YAML, see scenarios/README.md); flags override its values")
         ->check(CLI::ExistingFile);

@@ -20,6 +20,15 @@ void add_output_options(CLI::App* cmd, OutputFiles& files) {
                     "write a self-contained HTML report with plots ('-': stdout)");
 }
 
+void add_run_identity_options(CLI::App* cmd, OutputFiles& files) {
+    cmd->add_option("--hlog", files.hlog,
+                    "write the latency as an HdrHistogram interval log, one line per interval and "
+                    "operation, as the run goes (for mbstorm merge and HdrHistogram's tools)");
+    cmd->add_option("--test-id", files.test_id,
+                    "name of the test this run belongs to, kept in --json and --hlog: mbstorm "
+                    "merge refuses runs of different tests");
+}
+
 std::string stdout_conflict(const OutputFiles& files) {
     int n = 0;
     for (const std::string* f : {&files.json, &files.hdr, &files.html, &files.junit})

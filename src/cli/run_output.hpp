@@ -15,6 +15,10 @@ namespace mbstorm::cli {
 // be "-", and then the console report goes to stderr so that stdout holds only that file.
 struct OutputFiles {
     std::string json, hdr, html;
+    std::string hlog;  // HdrHistogram interval log, written as the run goes (not stdout)
+    // --test-id: names the test the run belongs to in the JSON and the interval log, so that
+    // `mbstorm merge` can refuse a run of another test.
+    std::string test_id;
     // JUnit XML of a scenario's thresholds: not a flag of add_output_options, set from the
     // scenario request with the scenario's name as the suite.
     std::string junit;
@@ -26,6 +30,8 @@ struct OutputFiles {
 std::string stdout_conflict(const OutputFiles& files);
 
 void add_output_options(CLI::App* cmd, OutputFiles& files);
+// run only: --hlog and --test-id.
+void add_run_identity_options(CLI::App* cmd, OutputFiles& files);
 
 // Live progress on stderr: one updating line on a terminal, plain lines otherwise.
 class LiveProgress {

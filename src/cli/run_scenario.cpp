@@ -5,10 +5,12 @@
 
 #include <atomic>
 #include <cstdio>
+#include <random>
 #include <utility>
 
 #include "cli/commands.hpp"
 #include "report/files.hpp"
+#include "report/hlog.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -31,6 +33,30 @@ int usage_error(const std::string& message) {
     return kExitUsage;
 }
 
+// 64 random bits in hex: tells this run apart from every other (merge refuses duplicates).
+std::string new_run_id() {
+    std::random_device device;
+    const std::uint64_t bits = (std::uint64_t{device()} << 32) ^ device();
+    return fmt::format("{:016x}", bits);
+}
+
+// --hlog: each interval's lines (all operations, then one per operation) as it completes.
+load::IntervalHistogramsCallback hlog_lines(report::HlogWriter& writer,
+                                            const scenario::Scenario& s) {
+    std::vector<std::string> tags;
+    for (const auto& op : s.plan.operations) tags.push_back(report::hlog_tag(op.name));
+    return [&writer, tags](const stats::IntervalHistograms& interval,
+                           std::chrono::system_clock::time_point measure_start) {
+        writer.start(measure_start);
+        const double start = static_cast<double>(interval.start_offset_ns) / 1e9;
+        const double length = static_cast<double>(interval.duration_ns) / 1e9;
+        writer.write_interval("", start, length, interval.all);
+        for (std::size_t i = 0; i < interval.by_tag.size() && i < tags.size(); ++i)
+            writer.write_interval(tags[i], start, length, interval.by_tag[i]);
+        writer.end_interval();
+    };
+}
+
 }  // namespace
 
 int print_flag_scenario(const load::Plan& plan, const std::string& target) {
@@ -43,11 +69,24 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     const std::pair<const char*, const std::string*> outputs[] = {{"--json", &request.outputs.json},
                                                                   {"--hdr", &request.outputs.hdr},
                                                                   {"--html", &request.outputs.html},
+                                                                  {"--hlog", &request.outputs.hlog},
                                                                   {"--junit", &request.junit}};
     for (const auto& [flag, path] : outputs) {
         std::string error;
         if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
             return usage_error(fmt::format("cannot write {} {}", flag, error));
+    }
+    if (request.outputs.hlog == "-")
+        return usage_error("--hlog needs a file (it is written as the run goes)");
+    const std::string run_id = new_run_id();
+    report::HlogWriter hlog;
+    if (!request.outputs.hlog.empty()) {
+        std::string error;
+        const std::string identity =
+            fmt::format("mbstorm interval log: test {}, run {}",
+                        request.outputs.test_id.empty() ? "-" : request.outputs.test_id, run_id);
+        if (!hlog.open(request.outputs.hlog, identity, error))
+            return usage_error(fmt::format("cannot write --hlog {}", error));
     }
     g_scenario_stop = false;
     g_scenario_signal = 0;
@@ -59,7 +98,22 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.tool_version = "mbstorm 0.1.0";
     hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
     hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
+    if (hlog.is_open()) hooks.on_interval_histograms = hlog_lines(hlog, s);
     load::LoadResult result = scenario::run_scenario(s, hooks);
+    result.run.metadata.test_id = request.outputs.test_id;
+    result.run.metadata.run_id = run_id;
+    bool hlog_failed = false;
+    if (hlog.is_open()) {
+        std::string error;
+        if (!hlog.started()) hlog.start(result.run.metadata.start_time);
+        if (!hlog.close(error)) {
+            fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
+                       error);
+            hlog_failed = true;
+        } else {
+            fmt::print(stderr, "wrote HdrHistogram interval log {}\n", request.outputs.hlog);
+        }
+    }
     progress.finish();
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
@@ -72,6 +126,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     files.junit = request.junit;
     files.junit_suite = s.name;
     int code = report_run(result, files);
+    if (hlog_failed && code == kExitOk) code = kExitUsage;
     if (code == kExitOk && !result.run.thresholds_passed()) {
         std::size_t failed = 0;
         for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;

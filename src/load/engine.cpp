@@ -203,6 +203,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         run_ns > 0 ? static_cast<std::size_t>(run_ns / interval_ns) + 16 : 86400;
     stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads,
                                      max_intervals);
+    if (options.on_interval_histograms)
+        timeline.keep_histograms(static_cast<std::uint32_t>(plan.operations.size()));
 
     std::atomic<bool> abort{false};
     std::atomic<bool> any_connected{false};
@@ -260,8 +262,17 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         return open;
     };
     OutageWatch outages;
+    const auto measure_start_wall =
+        wall_start + std::chrono::duration_cast<std::chrono::system_clock::duration>(plan.warmup);
+    auto drain_histograms = [&] {
+        if (!options.on_interval_histograms) return;
+        timeline.drain_histograms([&](const stats::IntervalHistograms& interval) {
+            options.on_interval_histograms(interval, measure_start_wall);
+        });
+    };
     while (finished.load() < threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        drain_histograms();
         // Only while the run is meant to go on: at its end the connections close anyway.
         if (const std::int64_t now = net::now_ns();
             now < end_ns && !abort.load() &&
@@ -304,6 +315,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     }
     for (auto& t : pool) t.join();
     timeline.finish();
+    drain_histograms();
 
     if (!schedule.empty()) {
         result.run.stages.resize(schedule.stages());

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -31,6 +32,13 @@ struct ProgressSnapshot {
 };
 using ProgressCallback = std::function<void(const ProgressSnapshot&)>;
 
+// Every interval's full latency histograms (all operations, then one per plan operation), in
+// order, as soon as every worker is past it (called on run_load()'s thread, never a worker's).
+// measure_start: wall-clock time of interval offset 0 (the end of warm-up).
+using IntervalHistogramsCallback =
+    std::function<void(const stats::IntervalHistograms& interval,
+                       std::chrono::system_clock::time_point measure_start)>;
+
 // Optional content check of successful responses (e.g. read-back of known register values).
 // Returns false on a mismatch, which is counted as Outcome::ValueMismatch. Called on worker
 // threads, concurrently: it must be thread-safe and must not allocate.
@@ -46,6 +54,7 @@ struct EngineOptions {
     ResponseVerifier verifier;
     std::string tool_version = "mbstorm";
     std::int64_t progress_interval_ns = 1'000'000'000;
+    IntervalHistogramsCallback on_interval_histograms;  // optional: costs a histogram per operation
 };
 
 struct LoadResult {

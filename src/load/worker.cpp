@@ -44,7 +44,8 @@ Worker::Worker(WorkerSetup setup)
       quota_(setup_.quota),
       generator_(plan_.operations, derive_seed(plan_.seed, setup_.index)),
       lag_(plan_.late_threshold.count()),
-      interval_(setup_.timeline->interval_ns()) {
+      interval_(setup_.timeline->interval_ns(), stats::Histogram::kOneHourNs,
+                setup_.timeline->tags()) {
     operations.reserve(plan_.operations.size());
     for (const Operation& op : plan_.operations) {
         stats::OperationResult r;
@@ -712,7 +713,7 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
         if (answered) stage.latency.record(latency);
         if (!stage.operations.empty()) count(stage.operations[t.request.op_index]);
     }
-    if (answered) interval_.record_latency(latency);
+    if (answered) interval_.record_latency(latency, t.request.op_index);
     interval_.record_transaction(outcome != stats::Outcome::Ok);
 }
 

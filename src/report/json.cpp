@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
+
 #include <nlohmann/json.hpp>
 
 #include "codec/function_code.hpp"
@@ -135,6 +137,7 @@ std::string format_json(const stats::RunResult& r, int indent) {
                              {"start_offset_s", seconds(i.start_offset_ns)},
                              {"transactions", i.transactions},
                              {"errors", i.errors},
+                             {"latency_count", i.latency_count},
                              {"throughput_per_s", i.transactions_per_second()},
                              {"p50_ns", i.p50_ns},
                              {"p90_ns", i.p90_ns},
@@ -160,12 +163,28 @@ std::string format_json(const stats::RunResult& r, int indent) {
             {{"what", s.what}, {"planned", s.planned}, {"achieved", s.achieved}, {"text", s.text}});
     }
 
+    const double measure_start =
+        m.start_time.time_since_epoch().count() == 0
+            ? 0.0
+            : std::chrono::duration<double>(m.start_time.time_since_epoch()).count() +
+                  seconds(m.warmup_ns);
+    const stats::Histogram& h = r.latency;
+    json test = {{"id", m.test_id},
+                 {"run_id", m.run_id},
+                 {"merged_runs", m.merged_runs},
+                 {"measure_start_epoch_s", measure_start},
+                 {"histogram",
+                  {{"lowest_discernible_ns", 1},
+                   {"highest_trackable_ns", h.highest_trackable()},
+                   {"significant_digits", stats::Histogram::kSignificantDigits}}}};
+
     const auto& lag = r.schedule_lag;
     const stats::LagCounts all_lag = lag.total();
     json doc = {
         {"schema_version", kJsonSchemaVersion},
         {"tool", m.tool_version},
         {"run", run},
+        {"test", test},
         {"totals", totals_json(r.counters, m.measured_duration_ns)},
         {"latency", latency_json(r.latency)},
         {"outcomes", outcomes_json(r.counters)},

@@ -94,6 +94,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     eo.verifier = make_verifier(s.expectations);
 
     eo.on_progress = hooks.on_progress;
+    eo.on_interval_histograms = hooks.on_interval_histograms;
     out = load::run_load(plan, eo);
 
     if (embedded) {

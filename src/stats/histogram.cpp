@@ -143,6 +143,23 @@ void Histogram::add(const Histogram& other) noexcept {
     max_ = std::max(max_, std::min(other.max_, highest_trackable_));
 }
 
+void Histogram::add_at_index(std::size_t index, std::uint64_t count) noexcept {
+    if (index >= counts_length_ || count == 0) return;
+    counts_[index] += count;
+    total_count_ += count;
+    const std::uint64_t low = value_at_index(index);
+    min_ = std::min(min_, low);
+    max_ = std::max(max_, std::min(highest_equivalent(low), highest_trackable_));
+}
+
+void Histogram::narrow_extremes(std::uint64_t exact_min, std::uint64_t exact_max) noexcept {
+    if (total_count_ == 0) return;
+    if (exact_min >= min_ && lowest_equivalent(exact_min) == lowest_equivalent(min_))
+        min_ = exact_min;
+    if (exact_max <= max_ && lowest_equivalent(exact_max) == lowest_equivalent(max_))
+        max_ = exact_max;
+}
+
 void Histogram::reset() noexcept {
     std::fill_n(counts_.get(), counts_length_, std::uint64_t{0});
     total_count_ = 0;

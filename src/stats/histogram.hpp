@@ -59,6 +59,13 @@ class Histogram {
     // re-recorded (and clamped) at their highest-equivalent value.
     void add(const Histogram& other) noexcept;
     void reset() noexcept;
+    // Adds count at counts index `index` (< counts_length()), as a decoder rebuilds a
+    // histogram: min and max become the bucket's lowest and highest-equivalent values, as in
+    // HdrHistogram after decoding, until narrow_extremes() says what was really recorded.
+    void add_at_index(std::size_t index, std::uint64_t count) noexcept;
+    // The exact smallest and largest values recorded, when known from elsewhere (a run's
+    // summary): kept only where they lie within the recorded buckets.
+    void narrow_extremes(std::uint64_t exact_min, std::uint64_t exact_max) noexcept;
 
     std::uint64_t total_count() const noexcept { return total_count_; }
     bool empty() const noexcept { return total_count_ == 0; }

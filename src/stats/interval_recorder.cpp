@@ -25,26 +25,29 @@ IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_n
     return s;
 }
 
-IntervalRecorder::IntervalRecorder(std::uint64_t interval_ns, std::uint64_t highest_trackable_ns)
+IntervalRecorder::IntervalRecorder(std::uint64_t interval_ns, std::uint64_t highest_trackable_ns,
+                                   std::uint32_t tags)
     : interval_ns_(std::max<std::uint64_t>(1, interval_ns)),
       next_boundary_ns_(interval_ns_),
-      histogram_(highest_trackable_ns) {}
+      histogram_(highest_trackable_ns),
+      tagged_(tags, Histogram(highest_trackable_ns)) {}
 
 void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
                                  std::uint32_t contributor) noexcept {
-    timeline.contribute(contributor, current_index_, histogram_, transactions_, errors_);
+    timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
     current_index_ = now_offset_ns / interval_ns_;
     next_boundary_ns_ = (current_index_ + 1) * interval_ns_;
 }
 
 void IntervalRecorder::flush(IntervalTimeline& timeline, std::uint32_t contributor) noexcept {
-    timeline.contribute(contributor, current_index_, histogram_, transactions_, errors_);
+    timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
 }
 
 void IntervalRecorder::clear() noexcept {
     histogram_.reset();
+    for (auto& h : tagged_) h.reset();
     transactions_ = 0;
     errors_ = 0;
 }
@@ -53,12 +56,73 @@ IntervalTimeline::IntervalTimeline(std::uint64_t interval_ns, std::uint32_t cont
                                    std::size_t max_intervals, std::uint64_t highest_trackable_ns)
     : interval_ns_(std::max<std::uint64_t>(1, interval_ns)),
       max_intervals_(max_intervals),
-      done_before_(std::max<std::uint32_t>(1, contributors), 0) {
+      done_before_(std::max<std::uint32_t>(1, contributors), 0),
+      highest_trackable_ns_(highest_trackable_ns) {
     pending_.reserve(kPendingSlots);
     for (std::size_t i = 0; i < kPendingSlots; ++i) {
-        pending_.push_back(Pending{Histogram(highest_trackable_ns), 0, 0});
+        pending_.push_back(Pending{Histogram(highest_trackable_ns), 0, 0, {}});
     }
     summaries_.reserve(max_intervals_);
+}
+
+void IntervalTimeline::keep_histograms(std::uint32_t tags) {
+    std::lock_guard lock(mutex_);
+    keep_ = true;
+    tags_ = tags;
+    for (Pending& slot : pending_) slot.by_tag.assign(tags, Histogram(highest_trackable_ns_));
+    // A few sets in reserve: the drain empties the queue every few milliseconds, so more are
+    // made only when it falls behind.
+    constexpr std::size_t kSpareSets = 4;
+    constexpr std::size_t kQueueCapacity = 64;
+    completed_.reserve(kQueueCapacity);
+    spare_.reserve(kQueueCapacity);
+    draining_.reserve(kQueueCapacity);
+    for (std::size_t i = 0; i < kSpareSets; ++i) {
+        auto set = std::make_unique<IntervalHistograms>();
+        set->all = Histogram(highest_trackable_ns_);
+        set->by_tag.assign(tags, Histogram(highest_trackable_ns_));
+        spare_.push_back(std::move(set));
+    }
+}
+
+void IntervalTimeline::keep_completed(Pending& slot) noexcept {
+    std::unique_ptr<IntervalHistograms> set;
+    if (!spare_.empty()) {
+        set = std::move(spare_.back());
+        spare_.pop_back();
+    } else {
+        try {
+            set = std::make_unique<IntervalHistograms>();
+            set->all = Histogram(highest_trackable_ns_);
+            set->by_tag.assign(tags_, Histogram(highest_trackable_ns_));
+            completed_.reserve(completed_.size() + 1);
+        } catch (...) {
+            return;  // out of memory: the log misses this interval, the summary has it
+        }
+    }
+    set->index = next_to_summarize_;
+    set->start_offset_ns = next_to_summarize_ * interval_ns_;
+    set->duration_ns = interval_ns_;
+    // Swaps, not copies: the slot takes the set's cleared histograms.
+    std::swap(set->all, slot.latency);
+    std::swap(set->by_tag, slot.by_tag);
+    completed_.push_back(std::move(set));
+}
+
+void IntervalTimeline::drain_histograms(const std::function<void(const IntervalHistograms&)>& use) {
+    {
+        std::lock_guard lock(mutex_);
+        if (completed_.empty()) return;
+        std::swap(draining_, completed_);
+    }
+    for (const auto& set : draining_) use(*set);
+    for (auto& set : draining_) {
+        set->all.reset();
+        for (auto& h : set->by_tag) h.reset();
+    }
+    std::lock_guard lock(mutex_);
+    for (auto& set : draining_) spare_.push_back(std::move(set));
+    draining_.clear();
 }
 
 void IntervalTimeline::summarize_next() noexcept {
@@ -69,15 +133,17 @@ void IntervalTimeline::summarize_next() noexcept {
     } else {
         ++dropped_;
     }
+    if (keep_) keep_completed(slot);
     slot.latency.reset();
+    for (auto& h : slot.by_tag) h.reset();
     slot.transactions = 0;
     slot.errors = 0;
     ++next_to_summarize_;
 }
 
 void IntervalTimeline::contribute(std::uint32_t contributor, std::uint64_t index,
-                                  const Histogram& latency, std::uint64_t transactions,
-                                  std::uint64_t errors) noexcept {
+                                  const Histogram& latency, std::span<const Histogram> tagged,
+                                  std::uint64_t transactions, std::uint64_t errors) noexcept {
     std::lock_guard lock(mutex_);
     if (index < next_to_summarize_) {
         // Already summarized (this worker lagged behind the pending window): keep the
@@ -91,6 +157,8 @@ void IntervalTimeline::contribute(std::uint32_t contributor, std::uint64_t index
         while (index >= next_to_summarize_ + kPendingSlots) summarize_next();
         Pending& slot = pending_[index % kPendingSlots];
         slot.latency.add(latency);
+        for (std::size_t t = 0; t < tagged.size() && t < slot.by_tag.size(); ++t)
+            slot.by_tag[t].add(tagged[t]);
         slot.transactions += transactions;
         slot.errors += errors;
     }

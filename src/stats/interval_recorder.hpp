@@ -11,8 +11,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "stats/histogram.hpp"
@@ -47,16 +50,33 @@ IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_n
                                    const Histogram& latency, std::uint64_t transactions,
                                    std::uint64_t errors) noexcept;
 
+// One interval's full histograms, kept for an interval log (IntervalTimeline::keep_histograms):
+// all operations, and one per tag (operation) in the order the recorders number them.
+struct IntervalHistograms {
+    std::uint64_t index = 0;
+    std::uint64_t start_offset_ns = 0;
+    std::uint64_t duration_ns = 0;
+    Histogram all;
+    std::vector<Histogram> by_tag;
+};
+
 class IntervalTimeline;
 
 class IntervalRecorder {
   public:
     // interval_ns > 0. Offsets are ns since the run start (the same origin for all workers).
+    // tags > 0 keeps one more histogram per tag (operation), for interval logs.
     explicit IntervalRecorder(std::uint64_t interval_ns,
-                              std::uint64_t highest_trackable_ns = Histogram::kOneHourNs);
+                              std::uint64_t highest_trackable_ns = Histogram::kOneHourNs,
+                              std::uint32_t tags = 0);
 
     // Hot path. Call tick() first whenever time may have crossed a boundary.
     void record_latency(std::uint64_t latency_ns) noexcept { histogram_.record(latency_ns); }
+    // The same, also counted under tag when the recorder keeps tags (ignored otherwise).
+    void record_latency(std::uint64_t latency_ns, std::uint32_t tag) noexcept {
+        histogram_.record(latency_ns);
+        if (tag < tagged_.size()) tagged_[tag].record(latency_ns);
+    }
     void record_transaction(bool error) noexcept {
         ++transactions_;
         errors_ += error ? 1 : 0;
@@ -85,6 +105,7 @@ class IntervalRecorder {
     std::uint64_t current_index_ = 0;
     std::uint64_t next_boundary_ns_;
     Histogram histogram_;
+    std::vector<Histogram> tagged_;
     std::uint64_t transactions_ = 0;
     std::uint64_t errors_ = 0;
 };
@@ -98,11 +119,26 @@ class IntervalTimeline {
                      std::size_t max_intervals,
                      std::uint64_t highest_trackable_ns = Histogram::kOneHourNs);
 
+    // Before any contribution: keep every interval's histograms (all operations and one per
+    // tag) for drain_histograms(). Recorders should then be built with tags().
+    void keep_histograms(std::uint32_t tags);
+    std::uint32_t tags() const noexcept { return tags_; }
+
     // Thread-safe. Merges one interval of one worker; the worker is then done with every
     // interval <= index. A contribution for an already summarized interval only adds its
-    // counts (counted in late_contributions()).
+    // counts (counted in late_contributions()); its latencies reach no summary or log.
     void contribute(std::uint32_t contributor, std::uint64_t index, const Histogram& latency,
-                    std::uint64_t transactions, std::uint64_t errors) noexcept;
+                    std::uint64_t transactions, std::uint64_t errors) noexcept {
+        contribute(contributor, index, latency, {}, transactions, errors);
+    }
+    // tagged: the worker's per-tag histograms (fewer than tags() is fine).
+    void contribute(std::uint32_t contributor, std::uint64_t index, const Histogram& latency,
+                    std::span<const Histogram> tagged, std::uint64_t transactions,
+                    std::uint64_t errors) noexcept;
+    // Hands every interval summarized since the last call to `use`, oldest first, outside the
+    // lock (call from one thread). Allocation-free in steady state: the histograms go back to
+    // a pool. Only with keep_histograms().
+    void drain_histograms(const std::function<void(const IntervalHistograms&)>& use);
     // Summarizes every pending interval (call after all workers flushed).
     void finish() noexcept;
 
@@ -119,8 +155,10 @@ class IntervalTimeline {
         Histogram latency;
         std::uint64_t transactions = 0;
         std::uint64_t errors = 0;
+        std::vector<Histogram> by_tag;  // keep_histograms() only
     };
-    void summarize_next() noexcept;  // requires mutex_ held
+    void summarize_next() noexcept;               // requires mutex_ held
+    void keep_completed(Pending& slot) noexcept;  // requires mutex_ held
 
     mutable std::mutex mutex_;
     std::uint64_t interval_ns_;
@@ -131,6 +169,14 @@ class IntervalTimeline {
     std::vector<IntervalSummary> summaries_;
     std::uint64_t dropped_ = 0;
     std::uint64_t late_ = 0;
+    std::uint64_t highest_trackable_ns_;
+    // keep_histograms(): finished intervals wait in completed_ for drain_histograms(); their
+    // storage comes from and returns to spare_.
+    std::uint32_t tags_ = 0;
+    bool keep_ = false;
+    std::vector<std::unique_ptr<IntervalHistograms>> completed_;
+    std::vector<std::unique_ptr<IntervalHistograms>> spare_;
+    std::vector<std::unique_ptr<IntervalHistograms>> draining_;  // drain_histograms() only
 };
 
 }  // namespace mbstorm::stats

@@ -37,6 +37,12 @@ struct RunMetadata {
     std::chrono::system_clock::time_point start_time{};  // wall clock at run start
     bool coordinated_omission_corrected = false;         // closed loop histograms back-filled
     std::vector<std::string> notes;                      // e.g. "embedded slave on 127.0.0.1:15020"
+    // Which test the run belongs to, for `mbstorm merge`: the user's --test-id (may be empty)
+    // and a random id of this run (its interval log carries it too).
+    std::string test_id;
+    std::string run_id;
+    // Runs merged into this result (mbstorm merge); 0 for a single run.
+    std::uint32_t merged_runs = 0;
 };
 
 struct OperationResult {

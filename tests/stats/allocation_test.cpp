@@ -2,6 +2,7 @@
 // operator new in this test binary.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <random>
 
 #include "../support/counting_allocator.hpp"
@@ -55,6 +56,34 @@ TEST(Allocation, CountersAndIntervalTickNeverAllocate) {
     timeline.finish();
     EXPECT_EQ(mbstorm::testing::allocations(), before);
     EXPECT_EQ(timeline.summaries().size(), 50u);
+}
+
+TEST(Allocation, KeptIntervalHistogramsNeverAllocateOnceWarm) {
+    // An interval log keeps every interval's histograms: recording, handing them over and
+    // draining them reuses a pool (the drain runs every few intervals, as the engine's does).
+    IntervalTimeline timeline(1'000'000'000, 1, 64);
+    timeline.keep_histograms(2);
+    IntervalRecorder rec(1'000'000'000, Histogram::kOneHourNs, timeline.tags());
+    std::uint64_t drained = 0, counted = 0;
+    const std::function<void(const IntervalHistograms&)> drain =
+        [&](const IntervalHistograms& interval) {
+            ++drained;
+            counted += interval.all.total_count();
+        };
+    const auto before = mbstorm::testing::allocations();
+    for (std::uint64_t i = 0; i < 50'000; ++i) {
+        const std::uint64_t now = i * 1'000'000;  // 50 simulated seconds
+        rec.tick(now, timeline, 0);
+        rec.record_latency(20'000 + i, static_cast<std::uint32_t>(i % 2));
+        rec.record_transaction(false);
+        if (i % 2000 == 0) timeline.drain_histograms(drain);
+    }
+    rec.flush(timeline, 0);
+    timeline.finish();
+    timeline.drain_histograms(drain);
+    EXPECT_EQ(mbstorm::testing::allocations(), before);
+    EXPECT_EQ(drained, 50u);
+    EXPECT_EQ(counted, 50'000u);
 }
 
 }  // namespace

@@ -117,5 +117,44 @@ TEST(IntervalTimeline, ConcurrentWorkersLoseNoCounts) {
     EXPECT_EQ(errors, kWorkers * kIntervals * kPerInterval / 100);
 }
 
+TEST(IntervalTimeline, KeptHistogramsHoldEveryIntervalByTagInOrder) {
+    constexpr std::uint32_t kWorkers = 3;
+    IntervalTimeline timeline(kSecond, kWorkers, 100);
+    timeline.keep_histograms(2);
+    std::vector<IntervalRecorder> recorders;
+    for (std::uint32_t w = 0; w < kWorkers; ++w)
+        recorders.emplace_back(kSecond, Histogram::kOneHourNs, timeline.tags());
+    // Worker w records, in interval i, (w + 1) latencies of tag i % 2 and one of tag 1 - i % 2.
+    for (std::uint64_t i = 0; i < 6; ++i) {
+        for (std::uint32_t w = 0; w < kWorkers; ++w) {
+            recorders[w].tick(i * kSecond + 1, timeline, w);
+            for (std::uint32_t k = 0; k <= w; ++k)
+                recorders[w].record_latency(1000 * (i + 1), static_cast<std::uint32_t>(i % 2));
+            recorders[w].record_latency(7, static_cast<std::uint32_t>(1 - i % 2));
+            recorders[w].record_transaction(false);
+        }
+    }
+    for (std::uint32_t w = 0; w < kWorkers; ++w) recorders[w].flush(timeline, w);
+    timeline.finish();
+    std::vector<std::uint64_t> seen;
+    timeline.drain_histograms([&](const IntervalHistograms& interval) {
+        seen.push_back(interval.index);
+        EXPECT_EQ(interval.start_offset_ns, interval.index * kSecond);
+        EXPECT_EQ(interval.duration_ns, kSecond);
+        ASSERT_EQ(interval.by_tag.size(), 2u);
+        const auto main_tag = interval.index % 2;
+        EXPECT_EQ(interval.by_tag[main_tag].total_count(), 1u + 2u + 3u);
+        EXPECT_EQ(interval.by_tag[main_tag].max(), 1000 * (interval.index + 1));
+        EXPECT_EQ(interval.by_tag[1 - main_tag].total_count(), kWorkers);
+        EXPECT_EQ(interval.by_tag[1 - main_tag].max(), 7u);
+        EXPECT_EQ(interval.all.total_count(), 6u + kWorkers);
+    });
+    EXPECT_EQ(seen, (std::vector<std::uint64_t>{0, 1, 2, 3, 4, 5}));
+    // Drained once: nothing is handed over twice.
+    std::size_t again = 0;
+    timeline.drain_histograms([&](const IntervalHistograms&) { ++again; });
+    EXPECT_EQ(again, 0u);
+}
+
 }  // namespace
 }  // namespace mbstorm::stats

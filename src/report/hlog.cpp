@@ -1,0 +1,199 @@
+#include "report/hlog.hpp"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <sstream>
+
+#include "stats/hdr_encoding.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+constexpr std::string_view kFormatVersionLine = "[Histogram log format version 1.3]";
+constexpr std::string_view kLegend =
+    "\"StartTimestamp\",\"Interval_Length\",\"Interval_Max\",\"Interval_Compressed_Histogram\"";
+
+double epoch_seconds(std::chrono::system_clock::time_point t) {
+    return std::chrono::duration<double>(t.time_since_epoch()).count();
+}
+
+// Parses the whole field as a finite number.
+bool parse_double(std::string_view text, double& out) {
+    if (text.empty()) return false;
+    const std::string copy(text);
+    char* end = nullptr;
+    errno = 0;
+    out = std::strtod(copy.c_str(), &end);
+    return end == copy.c_str() + copy.size() && errno == 0 && std::isfinite(out);
+}
+
+// "#[StartTime: 1795942311.123 (seconds ..." -> the number after the key.
+bool header_number(std::string_view comment, std::string_view key, double& out) {
+    if (comment.substr(0, key.size()) != key) return false;
+    std::string_view rest = comment.substr(key.size());
+    while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
+    const auto end = rest.find_first_of(" ]");
+    return parse_double(rest.substr(0, end), out);
+}
+
+}  // namespace
+
+std::string hlog_tag(std::string_view name) {
+    std::string tag(name);
+    for (char& c : tag)
+        if (c == ',' || c == ' ' || c == '\t' || c == '\r' || c == '\n') c = '_';
+    return tag;
+}
+
+HlogWriter::~HlogWriter() {
+    if (file_ != nullptr) std::fclose(file_);
+}
+
+bool HlogWriter::open(const std::string& path, std::string comment, std::string& error) {
+    file_ = std::fopen(path.c_str(), "w");
+    if (file_ == nullptr) {
+        error = path + ": " + std::strerror(errno);
+        return false;
+    }
+    comment_ = std::move(comment);
+    return true;
+}
+
+void HlogWriter::start(std::chrono::system_clock::time_point start_time) {
+    if (file_ == nullptr || started_) return;
+    started_ = true;
+    const double start = epoch_seconds(start_time);
+    const std::time_t seconds = std::chrono::system_clock::to_time_t(start_time);
+    std::tm tm{};
+    gmtime_r(&seconds, &tm);
+    // The date as HdrHistogram's Java writer prints it (Date.toString(), here in UTC).
+    const std::string date = fmt::format("{:%a %b %d %H:%M:%S} UTC {:%Y}", tm, tm);
+    std::string head;
+    if (!comment_.empty()) head += fmt::format("#[{}]\n", comment_);
+    head += fmt::format("#{}\n", kFormatVersionLine);
+    head += fmt::format("#[StartTime: {:.3f} (seconds since epoch), {}]\n", start, date);
+    // Line times are relative: the base time is the start time.
+    head += fmt::format("#[BaseTime: {:.3f} (seconds since epoch)]\n", start);
+    head += fmt::format("{}\n", kLegend);
+    if (std::fputs(head.c_str(), file_) < 0) failed_ = true;
+}
+
+void HlogWriter::write_interval(std::string_view tag, double start_s, double length_s,
+                                const stats::Histogram& histogram) {
+    if (file_ == nullptr) return;
+    const std::string line =
+        fmt::format("{}{:.3f},{:.3f},{:.3f},{}\n", tag.empty() ? "" : fmt::format("Tag={},", tag),
+                    start_s, length_s, static_cast<double>(histogram.max()) / 1e6,
+                    stats::encode_hdr_compressed_base64(histogram));
+    if (std::fputs(line.c_str(), file_) < 0) failed_ = true;
+}
+
+void HlogWriter::end_interval() {
+    if (file_ != nullptr && std::fflush(file_) != 0) failed_ = true;
+}
+
+bool HlogWriter::close(std::string& error) {
+    if (file_ == nullptr) return true;
+    if (!started_) start(std::chrono::system_clock::now());
+    const int saved = errno;
+    const bool closed = std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (failed_ || !closed) {
+        error = std::strerror(closed ? saved : errno);
+        return false;
+    }
+    return true;
+}
+
+double Hlog::absolute_start_s(const HlogInterval& interval) const {
+    // HdrHistogram's rule: without a base time, timestamps more than a year before the start
+    // time are relative to it.
+    double base = base_time_s;
+    if (!has_base_time) {
+        const double first = intervals.empty() ? interval.start_s : intervals.front().start_s;
+        base = has_start_time && first < start_time_s - 365 * 24 * 3600.0 ? start_time_s : 0.0;
+    }
+    return interval.start_s + base;
+}
+
+bool parse_hlog(std::string_view text, Hlog& out, std::string& error) {
+    out = Hlog{};
+    std::size_t line_number = 0;
+    while (!text.empty()) {
+        const auto eol = text.find('\n');
+        std::string_view line = text.substr(0, eol);
+        text = eol == std::string_view::npos ? std::string_view{} : text.substr(eol + 1);
+        ++line_number;
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        if (line.empty()) continue;
+        auto fail = [&](const std::string& why) {
+            error = fmt::format("line {}: {}", line_number, why);
+            return false;
+        };
+        if (line.front() == '#') {
+            const std::string_view comment = line.substr(1);
+            out.comments.emplace_back(comment);
+            double value = 0;
+            if (header_number(comment, "[StartTime:", value)) {
+                out.has_start_time = true;
+                out.start_time_s = value;
+            } else if (header_number(comment, "[BaseTime:", value)) {
+                out.has_base_time = true;
+                out.base_time_s = value;
+            }
+            continue;
+        }
+        if (line.front() == '"' || line.substr(0, 9) == "StartTime" ||
+            line.substr(0, 9) == "Timestamp")
+            continue;  // a legend
+        HlogInterval interval;
+        if (line.substr(0, 4) == "Tag=") {
+            const auto comma = line.find(',');
+            if (comma == std::string_view::npos) return fail("a tag and nothing else");
+            interval.tag = std::string(line.substr(4, comma - 4));
+            line.remove_prefix(comma + 1);
+        }
+        std::string_view fields[4];
+        for (int i = 0; i < 4; ++i) {
+            const auto comma = i < 3 ? line.find(',') : std::string_view::npos;
+            if (i < 3 && comma == std::string_view::npos)
+                return fail("an interval line has four fields: start,length,max,histogram");
+            fields[i] = line.substr(0, comma);
+            if (i < 3) line.remove_prefix(comma + 1);
+        }
+        if (!parse_double(fields[0], interval.start_s) ||
+            !parse_double(fields[1], interval.length_s) ||
+            !parse_double(fields[2], interval.max_ms))
+            return fail("start, length and max must be numbers");
+        if (interval.length_s < 0) return fail("negative interval length");
+        std::string why;
+        if (!stats::decode_hdr_compressed_base64(fields[3], interval.histogram, why))
+            return fail(why);
+        out.intervals.push_back(std::move(interval));
+    }
+    return true;
+}
+
+bool read_hlog(const std::string& path, Hlog& out, std::string& error) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        error = path + ": " + std::strerror(errno);
+        return false;
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!parse_hlog(text.str(), out, error)) {
+        error = path + ": " + error;
+        return false;
+    }
+    return true;
+}
+
+}  // namespace mbstorm::report

@@ -1,0 +1,83 @@
+// HdrHistogram interval logs (`run --hlog FILE`), the text format HdrHistogram's own log
+// readers and tools (HistogramLogReader, HistogramLogProcessor, HdrHistogramVisualizer) read:
+//
+//   #[mbstorm interval log: test <id>, run <run id>]
+//   #[Histogram log format version 1.3]
+//   #[StartTime: 1795942311.123 (seconds since epoch), Tue Nov 24 08:51:51 UTC 2026]
+//   #[BaseTime: 1795942311.123 (seconds since epoch)]
+//   "StartTimestamp","Interval_Length","Interval_Max","Interval_Compressed_Histogram"
+//   0.000,1.000,0.532,HISTFAAA...                          all operations
+//   Tag=read_holding_registers,0.000,1.000,0.532,HISTFAAA... one operation
+//
+// Times are seconds from StartTime (the end of warm-up), maxima milliseconds, histograms
+// nanoseconds (stats/hdr_encoding.hpp). The writer flushes every interval, so a run that is
+// killed leaves a log of its completed intervals.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stats/histogram.hpp"
+
+namespace mbstorm::report {
+
+// A tag may hold no comma or white space (they separate a line's fields): those become '_'.
+std::string hlog_tag(std::string_view name);
+
+class HlogWriter {
+  public:
+    HlogWriter() = default;
+    HlogWriter(const HlogWriter&) = delete;
+    HlogWriter& operator=(const HlogWriter&) = delete;
+    ~HlogWriter();
+
+    // Creates (truncates) path; comment: the first line's text, e.g. the run's identity.
+    bool open(const std::string& path, std::string comment, std::string& error);
+    // The header: written once, before the first interval (or at close when none came).
+    void start(std::chrono::system_clock::time_point start_time);
+    // One line; tag empty for the untagged (all operations) line.
+    void write_interval(std::string_view tag, double start_s, double length_s,
+                        const stats::Histogram& histogram);
+    // Ends the interval's lines: flushed to the file.
+    void end_interval();
+    // Flushes and closes; false (error set) when any write failed.
+    bool close(std::string& error);
+
+    bool is_open() const noexcept { return file_ != nullptr; }
+    bool started() const noexcept { return started_; }
+
+  private:
+    std::FILE* file_ = nullptr;
+    std::string comment_;
+    bool started_ = false;
+    bool failed_ = false;
+};
+
+struct HlogInterval {
+    std::string tag;       // empty: untagged
+    double start_s = 0.0;  // from the log's start time
+    double length_s = 0.0;
+    double max_ms = 0.0;
+    stats::Histogram histogram;
+};
+
+struct Hlog {
+    std::vector<std::string> comments;  // '#' lines without the '#'
+    bool has_start_time = false;
+    double start_time_s = 0.0;  // seconds since the epoch
+    bool has_base_time = false;
+    double base_time_s = 0.0;
+    std::vector<HlogInterval> intervals;
+
+    // Seconds since the epoch of an interval's start, as HdrHistogram's reader computes it.
+    double absolute_start_s(const HlogInterval& interval) const;
+};
+
+// Parses a log (as read_hlog does a file). Errors name the line: "line 7: ...".
+bool parse_hlog(std::string_view text, Hlog& out, std::string& error);
+bool read_hlog(const std::string& path, Hlog& out, std::string& error);
+
+}  // namespace mbstorm::report

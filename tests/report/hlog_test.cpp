@@ -1,0 +1,107 @@
+#include "report/hlog.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace mbstorm::report {
+namespace {
+
+std::string temp_path(const char* name) {
+    return ::testing::TempDir() + name + std::to_string(::getpid());
+}
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+TEST(Hlog, TagsHoldNoSeparators) {
+    EXPECT_EQ(hlog_tag("read holding,regs\t1"), "read_holding_regs_1");
+    EXPECT_EQ(hlog_tag("read_holding_registers"), "read_holding_registers");
+}
+
+TEST(Hlog, WriterWritesHdrHistogramsHeaderAndEveryLineIsFlushedAtOnce) {
+    const std::string path = temp_path("hlog_writer");
+    HlogWriter writer;
+    std::string error;
+    ASSERT_TRUE(writer.open(path, "mbstorm interval log: test t, run 01", error)) << error;
+    // 2026-11-24T08:00:00.250Z
+    const auto start =
+        std::chrono::system_clock::time_point(std::chrono::milliseconds(1795507200250));
+    writer.start(start);
+    stats::Histogram all, read;
+    all.record(1'500'000);
+    all.record(2'000);
+    read.record(2'000);
+    writer.write_interval("", 0.0, 1.0, all);
+    writer.write_interval("read", 0.0, 1.0, read);
+    writer.end_interval();
+    // Flushed: readable before close, as after a kill.
+    const std::string text = slurp(path);
+    std::istringstream lines(text);
+    std::string line;
+    std::getline(lines, line);
+    EXPECT_EQ(line, "#[mbstorm interval log: test t, run 01]");
+    std::getline(lines, line);
+    EXPECT_EQ(line, "#[Histogram log format version 1.3]");
+    std::getline(lines, line);
+    EXPECT_EQ(line,
+              "#[StartTime: 1795507200.250 (seconds since epoch), Tue Nov 24 08:00:00 UTC 2026]");
+    std::getline(lines, line);
+    EXPECT_EQ(line, "#[BaseTime: 1795507200.250 (seconds since epoch)]");
+    std::getline(lines, line);
+    EXPECT_EQ(line,
+              "\"StartTimestamp\",\"Interval_Length\",\"Interval_Max\",\"Interval_Compressed_"
+              "Histogram\"");
+    std::getline(lines, line);
+    EXPECT_EQ(line.rfind("0.000,1.000,1.500,HISTFAAA", 0), 0u) << line;
+    std::getline(lines, line);
+    EXPECT_EQ(line.rfind("Tag=read,0.000,1.000,0.002,HISTFAAA", 0), 0u) << line;
+    ASSERT_TRUE(writer.close(error)) << error;
+
+    Hlog log;
+    ASSERT_TRUE(read_hlog(path, log, error)) << error;
+    std::remove(path.c_str());
+    EXPECT_TRUE(log.has_start_time);
+    EXPECT_DOUBLE_EQ(log.start_time_s, 1795507200.250);
+    ASSERT_EQ(log.intervals.size(), 2u);
+    EXPECT_EQ(log.intervals[0].tag, "");
+    EXPECT_EQ(log.intervals[0].histogram.total_count(), 2u);
+    EXPECT_EQ(log.intervals[1].tag, "read");
+    EXPECT_EQ(log.intervals[1].histogram.total_count(), 1u);
+    EXPECT_DOUBLE_EQ(log.absolute_start_s(log.intervals[1]), 1795507200.250);
+}
+
+TEST(Hlog, ReaderNamesTheBadLine) {
+    Hlog log;
+    std::string error;
+    EXPECT_FALSE(parse_hlog("#[StartTime: 5 (x)]\n0.0,1.0,2.0\n", log, error));
+    EXPECT_EQ(error, "line 2: an interval line has four fields: start,length,max,histogram");
+    EXPECT_FALSE(parse_hlog("0.0,x,2.0,HISTFAAA\n", log, error));
+    EXPECT_EQ(error, "line 1: start, length and max must be numbers");
+    EXPECT_FALSE(parse_hlog("\n\n0.0,1.0,2.0,AAAA\n", log, error));
+    EXPECT_EQ(error, "line 3: not a compressed HdrHistogram V2 encoding");
+    EXPECT_FALSE(read_hlog("/nonexistent/x.hlog", log, error));
+    EXPECT_NE(error.find("/nonexistent/x.hlog"), std::string::npos);
+}
+
+TEST(Hlog, AbsoluteTimesFollowHdrHistogramsRule) {
+    // No base time: timestamps far before the start time are relative to it.
+    Hlog log;
+    std::string error;
+    // An empty histogram as HdrHistogram's Java library encodes it.
+    const std::string line =
+        "2.000,1.000,0.000,HISTFAAAACF4nJNpmSzMwMDAyAABzFAayGd2M9ixgMH+A1QEAFKmBEw=\n";
+    ASSERT_TRUE(parse_hlog("#[StartTime: 1000000000.000 (x)]\n" + line, log, error)) << error;
+    ASSERT_EQ(log.intervals.size(), 1u);
+    EXPECT_DOUBLE_EQ(log.absolute_start_s(log.intervals[0]), 1000000002.0);
+}
+
+}  // namespace
+}  // namespace mbstorm::report
