@@ -33,5 +33,6 @@ void add_fuzz_command(CLI::App& app, Action& action);
 void add_replay_command(CLI::App& app, Action& action);
 void add_read_command(CLI::App& app, Action& action);
 void add_write_command(CLI::App& app, Action& action);
+void add_merge_command(CLI::App& app, Action& action);
 
 }  // namespace mbstorm::cli

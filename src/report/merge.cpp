@@ -1,0 +1,454 @@
+#include "report/merge.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "report/units.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+using nlohmann::json;
+
+std::uint64_t ns_from_s(double s) {
+    return s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(s * 1e9));
+}
+
+void read_counters(const json& outcomes, const json& exceptions, const json& totals,
+                   stats::OutcomeCounters& c) {
+    for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
+        const std::string name(stats::outcome_name(static_cast<stats::Outcome>(i)));
+        c.outcomes[i] = outcomes.value(name, std::uint64_t{0});
+    }
+    for (const auto& [key, count] : exceptions.items()) {
+        const unsigned long code = std::stoul(key, nullptr, 16);
+        if (code < c.exceptions.size()) c.exceptions[code] = count.get<std::uint64_t>();
+    }
+    c.transactions_sent = totals.value("transactions_sent", std::uint64_t{0});
+    c.bytes_sent = totals.value("bytes_sent", std::uint64_t{0});
+    c.bytes_received = totals.value("bytes_received", std::uint64_t{0});
+}
+
+void read_lag(const json& j, stats::LagCounts& lag) {
+    lag.late_sends = j.value("late_sends", std::uint64_t{0});
+    lag.max_lag_ns = j.value("max_lag_ns", std::uint64_t{0});
+    lag.total_lag_ns = static_cast<std::uint64_t>(j.value("mean_lag_ns", 0.0) *
+                                                  static_cast<double>(lag.late_sends));
+}
+
+// "#[mbstorm interval log: test <id>, run <run id>]" -> run id.
+std::string log_run_id(const Hlog& log) {
+    for (const auto& c : log.comments) {
+        const auto at = c.find("mbstorm interval log:");
+        const auto run = c.find(", run ");
+        if (at == std::string::npos || run == std::string::npos) continue;
+        std::string id = c.substr(run + 6);
+        if (!id.empty() && id.back() == ']') id.pop_back();
+        return id;
+    }
+    return {};
+}
+
+// What must agree for runs to be parts of one test (see merge.hpp).
+std::string plan_of(const ShardRun& s) {
+    const auto& m = s.summary.metadata;
+    std::string ops;
+    for (const auto& op : s.summary.operations)
+        ops += fmt::format("{}{} (0x{:02X})", ops.empty() ? "" : ", ", op.name, op.function_code);
+    return fmt::format(
+        "target {}, {} loop, operations [{}], duration {:.3f}s, warm-up {:.3f}s, "
+        "interval {:.3f}s",
+        m.target, stats::load_model_name(m.model), ops,
+        static_cast<double>(m.requested_duration_ns) / 1e9, static_cast<double>(m.warmup_ns) / 1e9,
+        static_cast<double>(s.summary.timeline_interval_ns) / 1e9);
+}
+
+std::string name_of(const ShardRun& s) {
+    return fmt::format("{} (run {})", s.json_path, s.summary.metadata.run_id);
+}
+
+struct MergedInterval {
+    stats::Histogram latency;
+    std::uint64_t transactions = 0, errors = 0;
+    double target_rate = 0.0;
+    std::uint32_t open_connections = 0;
+};
+
+}  // namespace
+
+bool read_shard_summary(const std::string& path, ShardRun& out, std::string& error) {
+    std::ifstream in(path);
+    if (!in) {
+        error = fmt::format("{}: cannot open", path);
+        return false;
+    }
+    try {
+        const json doc = json::parse(in);
+        out.json_path = path;
+        if (!doc.contains("test"))
+            throw std::runtime_error(
+                "no 'test' object: written by an mbstorm without --hlog support; run it again");
+        const json& t = doc.at("test");
+        auto& m = out.summary.metadata;
+        m.test_id = t.at("id").get<std::string>();
+        m.run_id = t.at("run_id").get<std::string>();
+        out.measure_start_epoch_s = t.at("measure_start_epoch_s").get<double>();
+        out.shard_index = t.contains("shard_index") ? t.at("shard_index").get<int>() : -1;
+        out.shard_count = t.contains("shard_count") ? t.at("shard_count").get<int>() : 0;
+        const json& h = t.at("histogram");
+        out.lowest_discernible_ns = h.at("lowest_discernible_ns").get<std::uint64_t>();
+        out.highest_trackable_ns = h.at("highest_trackable_ns").get<std::uint64_t>();
+        out.significant_digits = h.at("significant_digits").get<int>();
+
+        const json& r = doc.at("run");
+        m.tool_version = doc.value("tool", "mbstorm");
+        m.target = r.at("target").get<std::string>();
+        m.threads = r.at("threads").get<std::uint32_t>();
+        m.connections = r.at("connections").get<std::uint32_t>();
+        m.depth = r.at("depth").get<std::uint32_t>();
+        m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
+                                                             : stats::LoadModel::Closed;
+        m.rate_per_second = r.at("rate_per_second").get<double>();
+        m.requested_duration_ns = ns_from_s(r.at("requested_duration_s").get<double>());
+        m.measured_duration_ns = ns_from_s(r.at("measured_duration_s").get<double>());
+        m.warmup_ns = ns_from_s(r.at("warmup_s").get<double>());
+        m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
+        m.notes = r.at("notes").get<std::vector<std::string>>();
+
+        read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"),
+                      out.summary.counters);
+        const json& lat = doc.at("latency");
+        out.latency_count = lat.at("count").get<std::uint64_t>();
+        out.min_ns = lat.at("min_ns").get<std::uint64_t>();
+        out.max_ns = lat.at("max_ns").get<std::uint64_t>();
+        for (const json& op : doc.at("operations")) {
+            stats::OperationResult o;
+            o.name = op.at("name").get<std::string>();
+            o.function_code = op.at("function_code").get<std::uint8_t>();
+            read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
+            out.op_min_ns.push_back(op.at("latency").at("min_ns").get<std::uint64_t>());
+            out.op_max_ns.push_back(op.at("latency").at("max_ns").get<std::uint64_t>());
+            out.summary.operations.push_back(std::move(o));
+        }
+        const json& tl = doc.at("timeline");
+        out.summary.timeline_interval_ns = ns_from_s(tl.at("interval_s").get<double>());
+        for (const json& iv : tl.at("intervals")) {
+            stats::IntervalSummary s;
+            s.index = iv.at("index").get<std::uint64_t>();
+            s.start_offset_ns = ns_from_s(iv.at("start_offset_s").get<double>());
+            s.transactions = iv.at("transactions").get<std::uint64_t>();
+            s.errors = iv.at("errors").get<std::uint64_t>();
+            s.target_rate = iv.at("target_rate_per_s").get<double>();
+            s.open_connections = iv.at("open_connections").get<std::uint32_t>();
+            out.summary.timeline.push_back(s);
+        }
+        const json& lag = doc.at("schedule_lag");
+        read_lag(lag.at("engine"), out.summary.schedule_lag.engine);
+        read_lag(lag.at("target"), out.summary.schedule_lag.target);
+        const json& c = doc.at("connections");
+        auto& cs = out.summary.connections;
+        cs.opened = c.at("opened").get<std::uint64_t>();
+        cs.failed = c.at("failed").get<std::uint64_t>();
+        cs.reconnects = c.at("reconnects").get<std::uint64_t>();
+        cs.closed_by_peer = c.at("closed_by_peer").get<std::uint64_t>();
+        cs.peak_open = c.at("peak_open").get<std::uint64_t>();
+        for (const json& s : doc.at("plan_shortfalls")) {
+            stats::PlanShortfall p;
+            p.what = s.at("what").get<std::string>();
+            p.planned = s.at("planned").get<double>();
+            p.achieved = s.at("achieved").get<double>();
+            p.text = s.at("text").get<std::string>();
+            out.summary.shortfalls.push_back(std::move(p));
+        }
+        out.summary.pipelining.skipped_requests =
+            doc.at("pipelining").at("skipped_requests").get<std::uint64_t>();
+        for (const json& th : doc.at("thresholds")) {
+            std::string e = th.at("expression").get<std::string>();
+            if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
+        }
+        out.stages = doc.at("stages").size();
+    } catch (const std::exception& e) {
+        error =
+            fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what());
+        return false;
+    }
+    return true;
+}
+
+bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out,
+                 std::string& error) {
+    std::vector<ShardRun> runs;
+    std::vector<std::pair<std::string, Hlog>> logs;
+    for (const auto& path : files) {
+        std::ifstream in(path);
+        if (!in) {
+            error = fmt::format("{}: cannot open", path);
+            return false;
+        }
+        char first = 0;
+        in >> first;
+        if (first == '{') {
+            ShardRun run;
+            if (!read_shard_summary(path, run, error)) return false;
+            runs.push_back(std::move(run));
+        } else if (first == '#' || first == '"' || first == 'T' || std::isdigit(first)) {
+            Hlog log;
+            if (!read_hlog(path, log, error)) return false;
+            logs.emplace_back(path, std::move(log));
+        } else {
+            error = fmt::format(
+                "{}: neither a JSON summary (run --json) nor an interval log "
+                "(run --hlog)",
+                path);
+            return false;
+        }
+    }
+    std::set<std::size_t> used;
+    for (auto& run : runs) {
+        for (std::size_t i = 0; i < logs.size(); ++i) {
+            if (used.count(i) != 0 || log_run_id(logs[i].second) != run.summary.metadata.run_id)
+                continue;
+            used.insert(i);
+            run.hlog_path = logs[i].first;
+            run.log = std::move(logs[i].second);
+            break;
+        }
+        if (run.hlog_path.empty()) {
+            error = fmt::format(
+                "{}: no interval log of this run given (run {}: pass the file "
+                "its --hlog wrote too)",
+                run.json_path, run.summary.metadata.run_id);
+            return false;
+        }
+    }
+    for (std::size_t i = 0; i < logs.size(); ++i) {
+        if (used.count(i) != 0) continue;
+        const std::string id = log_run_id(logs[i].second);
+        error = id.empty() ? fmt::format(
+                                 "{}: not written by mbstorm run --hlog (no run id in "
+                                 "its first line)",
+                                 logs[i].first)
+                           : fmt::format(
+                                 "{}: the interval log of run {}, whose JSON summary is "
+                                 "not given (or is given once for two logs)",
+                                 logs[i].first, id);
+        return false;
+    }
+    out = std::move(runs);
+    return true;
+}
+
+MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
+    MergeOutcome r;
+    auto refuse = [&r](std::string why) {
+        r.error = std::move(why);
+        return r;
+    };
+    if (shards.empty()) return refuse("no runs to merge");
+    const ShardRun& first = shards.front();
+
+    // Identity: duplicates, other tests, other histogram settings.
+    for (std::size_t i = 0; i < shards.size(); ++i) {
+        const ShardRun& s = shards[i];
+        for (std::size_t j = 0; j < i; ++j) {
+            if (shards[j].summary.metadata.run_id == s.summary.metadata.run_id)
+                return refuse(fmt::format("duplicate run: {} and {} are the same run ({})",
+                                          shards[j].json_path, s.json_path,
+                                          s.summary.metadata.run_id));
+        }
+        if (s.summary.metadata.test_id != first.summary.metadata.test_id)
+            return refuse(fmt::format(
+                "{} is from another test: test id '{}', {} has '{}' (run --test-id)", name_of(s),
+                s.summary.metadata.test_id, name_of(first), first.summary.metadata.test_id));
+        if (plan_of(s) != plan_of(first))
+            return refuse(fmt::format("{} is from another test: its plan is {}; {} has {}",
+                                      name_of(s), plan_of(s), name_of(first), plan_of(first)));
+        if (s.significant_digits != stats::Histogram::kSignificantDigits ||
+            s.lowest_discernible_ns != 1 || s.highest_trackable_ns != first.highest_trackable_ns)
+            return refuse(fmt::format(
+                "different histogram settings: {} has {} significant digits, lowest {} ns, "
+                "highest {} ns; {} has {}, {} ns, {} ns",
+                name_of(s), s.significant_digits, s.lowest_discernible_ns, s.highest_trackable_ns,
+                name_of(first), first.significant_digits, first.lowest_discernible_ns,
+                first.highest_trackable_ns));
+        if (s.threshold_expressions != first.threshold_expressions)
+            return refuse(fmt::format("{} is from another test: its thresholds differ from {}'s",
+                                      name_of(s), name_of(first)));
+        if (s.summary.metadata.merged_runs != 0)
+            return refuse(fmt::format("{} is itself a merged result: merge the runs' own files",
+                                      s.json_path));
+    }
+    // Completeness.
+    const bool numbered = first.shard_count > 0;
+    for (const auto& s : shards) {
+        if ((s.shard_count > 0) != numbered || s.shard_count != first.shard_count)
+            return refuse(fmt::format("{} and {} disagree on the shard count ({} vs {})",
+                                      name_of(s), name_of(first), s.shard_count,
+                                      first.shard_count));
+    }
+    if (numbered) {
+        std::map<int, const ShardRun*> by_index;
+        for (const auto& s : shards) {
+            if (s.shard_index < 0 || s.shard_index >= s.shard_count)
+                return refuse(fmt::format("{}: shard index {} outside 0..{}", name_of(s),
+                                          s.shard_index, s.shard_count - 1));
+            if (auto [it, fresh] = by_index.emplace(s.shard_index, &s); !fresh)
+                return refuse(fmt::format("duplicate shard {}: {} and {}", s.shard_index,
+                                          name_of(*it->second), name_of(s)));
+        }
+        std::string missing;
+        for (int i = 0; i < first.shard_count; ++i)
+            if (by_index.count(i) == 0)
+                missing += fmt::format("{}{}", missing.empty() ? "" : ", ", i);
+        if (!missing.empty())
+            return refuse(fmt::format("missing shards: {} of {} given, shard {} missing",
+                                      shards.size(), first.shard_count, missing));
+    }
+    if (expect_runs != 0 && shards.size() != expect_runs)
+        return refuse(fmt::format("{} runs given, --expect says the test has {}{}", shards.size(),
+                                  expect_runs,
+                                  shards.size() < expect_runs ? ": missing runs" : ""));
+
+    // Merge.
+    stats::RunResult& out = r.run;
+    auto& m = out.metadata;
+    const auto& fm = first.summary.metadata;
+    const std::uint64_t interval = first.summary.timeline_interval_ns == 0
+                                       ? 1'000'000'000
+                                       : first.summary.timeline_interval_ns;
+    double origin = first.measure_start_epoch_s, end = 0.0;
+    for (const auto& s : shards) {
+        origin = std::min(origin, s.measure_start_epoch_s);
+        end = std::max(end, s.measure_start_epoch_s +
+                                static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
+    }
+    m.tool_version = fm.tool_version;
+    m.target = fm.target;
+    m.depth = fm.depth;
+    m.model = fm.model;
+    m.requested_duration_ns = fm.requested_duration_ns;
+    m.warmup_ns = fm.warmup_ns;
+    m.measured_duration_ns = ns_from_s(end - origin);
+    m.coordinated_omission_corrected = fm.coordinated_omission_corrected;
+    m.test_id = fm.test_id;
+    m.merged_runs = static_cast<std::uint32_t>(shards.size());
+    const auto origin_time = std::chrono::system_clock::time_point(
+        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+            std::chrono::duration<double>(origin)));
+    m.start_time = origin_time - std::chrono::nanoseconds(m.warmup_ns);
+    out.timeline_interval_ns = interval;
+    out.operations = first.summary.operations;
+    for (auto& op : out.operations) op.counters.reset();
+
+    std::map<std::int64_t, MergedInterval> timeline;
+    std::uint64_t min_ns = UINT64_MAX, max_ns = 0;
+    std::vector<std::uint64_t> op_min(out.operations.size(), UINT64_MAX),
+        op_max(out.operations.size(), 0);
+    for (const auto& s : shards) {
+        const auto& sm = s.summary.metadata;
+        m.threads += sm.threads;
+        m.connections += sm.connections;
+        m.rate_per_second += sm.rate_per_second;
+        for (const auto& note : sm.notes)
+            m.notes.push_back(fmt::format("run {}: {}", sm.run_id, note));
+        out.counters.add(s.summary.counters);
+        for (std::size_t i = 0; i < out.operations.size(); ++i) {
+            out.operations[i].counters.add(s.summary.operations[i].counters);
+            if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
+                op_min[i] = std::min(op_min[i], s.op_min_ns[i]);
+                op_max[i] = std::max(op_max[i], s.op_max_ns[i]);
+            }
+        }
+        if (s.latency_count != 0) {
+            min_ns = std::min(min_ns, s.min_ns);
+            max_ns = std::max(max_ns, s.max_ns);
+        }
+        out.schedule_lag.engine.add(s.summary.schedule_lag.engine);
+        out.schedule_lag.target.add(s.summary.schedule_lag.target);
+        auto& c = out.connections;
+        c.opened += s.summary.connections.opened;
+        c.failed += s.summary.connections.failed;
+        c.reconnects += s.summary.connections.reconnects;
+        c.closed_by_peer += s.summary.connections.closed_by_peer;
+        c.peak_open += s.summary.connections.peak_open;
+        for (auto p : s.summary.shortfalls) {
+            p.text = fmt::format("run {}: {}", sm.run_id, p.text);
+            out.shortfalls.push_back(std::move(p));
+        }
+        out.pipelining.skipped_requests += s.summary.pipelining.skipped_requests;
+
+        // On the wall clock: a run's interval k goes to the merged interval holding its middle.
+        const double offset = s.measure_start_epoch_s - origin;
+        auto slot = [&](double start_s) {
+            const double middle = offset + start_s + static_cast<double>(interval) / 2e9;
+            return static_cast<std::int64_t>(
+                std::floor(middle * 1e9 / static_cast<double>(interval)));
+        };
+        for (const auto& iv : s.summary.timeline) {
+            MergedInterval& into = timeline[slot(static_cast<double>(iv.start_offset_ns) / 1e9)];
+            into.transactions += iv.transactions;
+            into.errors += iv.errors;
+            into.target_rate += iv.target_rate;
+            into.open_connections += iv.open_connections;
+        }
+        std::uint64_t logged = 0;
+        for (const auto& line : s.log.intervals) {
+            if (line.tag.empty()) {
+                out.latency.add(line.histogram);
+                timeline[slot(line.start_s)].latency.add(line.histogram);
+                logged += line.histogram.total_count();
+                continue;
+            }
+            for (auto& op : out.operations)
+                if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
+        }
+        if (logged != s.latency_count)
+            r.warnings.push_back(fmt::format(
+                "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
+                "answers that came in after their interval was logged)",
+                name_of(s), logged, s.latency_count));
+    }
+    out.latency.narrow_extremes(min_ns, max_ns);
+    for (std::size_t i = 0; i < out.operations.size(); ++i)
+        out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
+    if (!timeline.empty()) {
+        const std::int64_t last = timeline.rbegin()->first;
+        for (std::int64_t k = std::max<std::int64_t>(0, timeline.begin()->first); k <= last; ++k) {
+            const MergedInterval& iv = timeline[k];
+            stats::IntervalSummary s = stats::summarize_interval(
+                static_cast<std::uint64_t>(k), interval, iv.latency, iv.transactions, iv.errors);
+            s.target_rate = iv.target_rate;
+            s.open_connections = iv.open_connections;
+            out.timeline.push_back(s);
+        }
+        // The last interval runs to the end of the last run: runs that started apart end
+        // mid-interval, and their last stretch lands there (its throughput divides by this).
+        auto& back = out.timeline.back();
+        if (back.start_offset_ns < m.measured_duration_ns)
+            back.duration_ns = m.measured_duration_ns - back.start_offset_ns;
+    }
+    m.notes.push_back(fmt::format(
+        "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
+        "timeline on wall-clock time from {}",
+        shards.size(), m.test_id, format_utc(origin_time)));
+    for (const auto& s : shards) {
+        if (s.stages == 0) continue;
+        r.warnings.push_back(
+            "the runs had stages: the merged report has no per-stage table (the interval logs "
+            "hold no stage histograms); the timeline shows the stages");
+        break;
+    }
+    r.threshold_expressions = first.threshold_expressions;
+    r.ok = true;
+    return r;
+}
+
+}  // namespace mbstorm::report

@@ -1,0 +1,64 @@
+// `mbstorm merge`: the runs (shards) of one test, each given as its JSON summary (--json) and
+// its interval log (--hlog), combined into one result as if one machine had run the whole
+// plan. Counts add; latencies come from the logs' histograms added bucket by bucket, never
+// from averaged percentiles; the timeline is lined up on wall-clock time (each run's
+// test.measure_start_epoch_s).
+//
+// What identifies a test: the runs' --test-id (equal, possibly empty) and their plan as the
+// JSON shows it (target, load model, operations, requested duration, warm-up, timeline
+// interval). Runs differing in either are refused, as are runs given twice (same run id),
+// runs without their log (or logs without their run), other histogram settings, and a set
+// that is not whole: with shard numbers (test.shard_index / test.shard_count) every index
+// 0..count-1 exactly once, otherwise exactly `expect_runs` runs when that is set.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "report/hlog.hpp"
+#include "stats/run_result.hpp"
+
+namespace mbstorm::report {
+
+// One run, read from its files.
+struct ShardRun {
+    std::string json_path;  // for messages
+    std::string hlog_path;
+    stats::RunResult summary;  // from the JSON; histograms empty (they come from the log)
+    double measure_start_epoch_s = 0.0;
+    int shard_index = -1;  // -1: a plain run
+    int shard_count = 0;
+    std::uint64_t highest_trackable_ns = 0;
+    int significant_digits = 0;
+    std::uint64_t lowest_discernible_ns = 0;
+    std::vector<std::string> threshold_expressions;  // as the run judged them
+    std::size_t stages = 0;                          // stages in the JSON (not merged)
+    // Exact extremes from the JSON (the logs only know buckets): whole run, then by operation.
+    std::uint64_t min_ns = 0, max_ns = 0, latency_count = 0;
+    std::vector<std::uint64_t> op_min_ns, op_max_ns;
+    Hlog log;
+};
+
+// Reads a run's JSON summary (not its log). False with error naming the file on failure.
+bool read_shard_summary(const std::string& path, ShardRun& out, std::string& error);
+
+// Sorts files into JSON summaries and interval logs by content, reads them and pairs each
+// summary with the log of the same run id.
+bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out,
+                 std::string& error);
+
+struct MergeOutcome {
+    bool ok = false;
+    std::string error;  // why the runs were refused
+    stats::RunResult run;
+    // Threshold expressions the runs carried (identical in every run, else refused), e.g.
+    // "p99 < 5ms" or "read: p99 < 5ms"; "plan carried out" is left out (re-derived).
+    std::vector<std::string> threshold_expressions;
+    std::vector<std::string> warnings;
+};
+
+// expect_runs: 0 unless the user said how many runs make the test.
+MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs = 0);
+
+}  // namespace mbstorm::report

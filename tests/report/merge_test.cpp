@@ -1,0 +1,217 @@
+#include "report/merge.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace mbstorm::report {
+namespace {
+
+constexpr std::uint64_t kSecond = 1'000'000'000;
+
+// A run of `intervals` seconds starting at `start_s` (epoch seconds), operations "read" and
+// "write", latencies drawn from rng and also fed to `all` (the one-machine reference).
+ShardRun make_shard(const std::string& run_id, double start_s, int intervals, std::mt19937_64& rng,
+                    stats::Histogram& all, stats::Histogram& all_read) {
+    ShardRun s;
+    s.json_path = run_id + ".json";
+    s.hlog_path = run_id + ".hlog";
+    auto& m = s.summary.metadata;
+    m.test_id = "t";
+    m.run_id = run_id;
+    m.target = "127.0.0.1:502";
+    m.threads = 1;
+    m.connections = 4;
+    m.depth = 2;
+    m.requested_duration_ns = intervals * kSecond;
+    m.measured_duration_ns = intervals * kSecond;
+    s.summary.timeline_interval_ns = kSecond;
+    s.measure_start_epoch_s = start_s;
+    s.significant_digits = 3;
+    s.lowest_discernible_ns = 1;
+    s.highest_trackable_ns = stats::Histogram::kOneHourNs;
+    s.summary.operations.resize(2);
+    s.summary.operations[0].name = "read";
+    s.summary.operations[0].function_code = 3;
+    s.summary.operations[1].name = "write";
+    s.summary.operations[1].function_code = 16;
+    s.op_min_ns.assign(2, UINT64_MAX);
+    s.op_max_ns.assign(2, 0);
+    s.min_ns = UINT64_MAX;
+    s.log.has_start_time = true;
+    s.log.start_time_s = start_s;
+    for (int k = 0; k < intervals; ++k) {
+        HlogInterval untagged, read, write;
+        untagged.start_s = read.start_s = write.start_s = k;
+        untagged.length_s = read.length_s = write.length_s = 1;
+        read.tag = "read";
+        write.tag = "write";
+        stats::IntervalSummary iv;
+        iv.index = static_cast<std::uint64_t>(k);
+        iv.start_offset_ns = k * kSecond;
+        for (int i = 0; i < 1000; ++i) {
+            const std::uint64_t v = 1000 + rng() % 50'000'000;
+            const bool is_read = i % 4 != 0;
+            untagged.histogram.record(v);
+            (is_read ? read : write).histogram.record(v);
+            all.record(v);
+            if (is_read) all_read.record(v);
+            auto& op = s.summary.operations[is_read ? 0 : 1];
+            op.counters.record(stats::Outcome::Ok);
+            ++op.counters.transactions_sent;
+            s.summary.counters.record(stats::Outcome::Ok);
+            ++s.summary.counters.transactions_sent;
+            const std::size_t o = is_read ? 0 : 1;
+            s.op_min_ns[o] = std::min(s.op_min_ns[o], v);
+            s.op_max_ns[o] = std::max(s.op_max_ns[o], v);
+            s.min_ns = std::min(s.min_ns, v);
+            s.max_ns = std::max(s.max_ns, v);
+            ++s.latency_count;
+            ++iv.transactions;
+        }
+        s.summary.timeline.push_back(iv);
+        s.log.intervals.push_back(std::move(untagged));
+        s.log.intervals.push_back(std::move(read));
+        s.log.intervals.push_back(std::move(write));
+    }
+    return s;
+}
+
+void expect_same_histogram(const stats::Histogram& a, const stats::Histogram& b) {
+    ASSERT_EQ(a.total_count(), b.total_count());
+    for (std::size_t i = 0; i < a.counts_length(); ++i)
+        ASSERT_EQ(a.count_at_index(i), b.count_at_index(i)) << "index " << i;
+    EXPECT_EQ(a.min(), b.min());
+    EXPECT_EQ(a.max(), b.max());
+    for (double p : {0.0, 50.0, 90.0, 99.0, 99.9, 99.99, 100.0})
+        EXPECT_EQ(a.value_at_percentile(p), b.value_at_percentile(p)) << "p" << p;
+}
+
+TEST(Merge, CountsAddAndPercentilesAreThoseOfOneHistogramFedEveryValue) {
+    std::mt19937_64 rng(7);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> shards;
+    shards.push_back(make_shard("a", 1000.0, 3, rng, all, all_read));
+    shards.push_back(make_shard("b", 1000.0, 3, rng, all, all_read));
+    shards.push_back(make_shard("c", 1000.0, 3, rng, all, all_read));
+    const MergeOutcome merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok) << merged.error;
+    EXPECT_TRUE(merged.warnings.empty());
+    const auto& run = merged.run;
+    EXPECT_EQ(run.metadata.merged_runs, 3u);
+    EXPECT_EQ(run.metadata.connections, 12u);
+    EXPECT_EQ(run.counters.ok(), 9000u);
+    EXPECT_EQ(run.counters.transactions_sent, 9000u);
+    expect_same_histogram(run.latency, all);
+    ASSERT_EQ(run.operations.size(), 2u);
+    EXPECT_EQ(run.operations[0].counters.ok(), 6750u);
+    expect_same_histogram(run.operations[0].latency, all_read);
+    EXPECT_EQ(run.operations[1].latency.total_count(), 2250u);
+    ASSERT_EQ(run.timeline.size(), 3u);
+    for (const auto& iv : run.timeline) {
+        EXPECT_EQ(iv.transactions, 3000u);
+        EXPECT_EQ(iv.latency_count, 3000u);
+    }
+    EXPECT_EQ(run.metadata.measured_duration_ns, 3 * kSecond);
+}
+
+TEST(Merge, TimelineLinesUpOnWallClockTime) {
+    std::mt19937_64 rng(8);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> shards;
+    shards.push_back(make_shard("late", 1002.2, 2, rng, all, all_read));  // 2.2 s after "early"
+    shards.back().summary.metadata.requested_duration_ns = 3 * kSecond;  // the same plan, cut short
+    shards.push_back(make_shard("early", 1000.0, 3, rng, all, all_read));
+    const MergeOutcome merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok) << merged.error;
+    const auto& tl = merged.run.timeline;
+    // early: 0, 1, 2; late's intervals start at 2.2 and 3.2: their middles fall in 2 and 3.
+    ASSERT_EQ(tl.size(), 4u);
+    EXPECT_EQ(tl[0].transactions, 1000u);
+    EXPECT_EQ(tl[1].transactions, 1000u);
+    EXPECT_EQ(tl[2].transactions, 2000u);
+    EXPECT_EQ(tl[2].latency_count, 2000u);
+    EXPECT_EQ(tl[3].transactions, 1000u);
+    // From the first start to the last end: 4.2 s.
+    EXPECT_NEAR(static_cast<double>(merged.run.metadata.measured_duration_ns), 4.2e9, 1e3);
+    EXPECT_EQ(tl[3].duration_ns, merged.run.metadata.measured_duration_ns - 3 * kSecond);
+    expect_same_histogram(merged.run.latency, all);
+}
+
+TEST(Merge, RefusesWhatIsNotOneWholeTest) {
+    std::mt19937_64 rng(9);
+    stats::Histogram all, all_read;
+    auto two = [&] {
+        std::vector<ShardRun> v;
+        v.push_back(make_shard("a", 1000.0, 1, rng, all, all_read));
+        v.push_back(make_shard("b", 1000.0, 1, rng, all, all_read));
+        return v;
+    };
+    auto refused = [](std::vector<ShardRun> v, std::uint32_t expect = 0) {
+        const MergeOutcome r = merge_shards(std::move(v), expect);
+        EXPECT_FALSE(r.ok);
+        return r.error;
+    };
+    auto v = two();
+    v[1].summary.metadata.run_id = "a";
+    EXPECT_EQ(refused(v), "duplicate run: a.json and b.json are the same run (a)");
+
+    v = two();
+    v[1].summary.metadata.test_id = "other";
+    EXPECT_EQ(refused(v),
+              "b.json (run b) is from another test: test id 'other', a.json (run a) has 't' (run "
+              "--test-id)");
+
+    v = two();
+    v[1].summary.metadata.target = "127.0.0.1:503";
+    EXPECT_NE(refused(v).find("b.json (run b) is from another test: its plan is target "
+                              "127.0.0.1:503"),
+              std::string::npos);
+
+    v = two();
+    v[1].summary.operations[1].name = "write2";
+    EXPECT_NE(refused(v).find("is from another test"), std::string::npos);
+
+    v = two();
+    v[1].significant_digits = 2;
+    EXPECT_NE(refused(v).find("different histogram settings: b.json (run b) has 2 significant "
+                              "digits"),
+              std::string::npos);
+
+    v = two();
+    v[0].threshold_expressions = {"p99 < 5ms"};
+    EXPECT_NE(refused(v).find("its thresholds differ"), std::string::npos);
+
+    v = two();
+    EXPECT_EQ(refused(v, 3), "2 runs given, --expect says the test has 3: missing runs");
+    EXPECT_TRUE(merge_shards(two(), 2).ok);
+
+    // Numbered shards: every index once.
+    v = two();
+    for (auto& s : v) s.shard_count = 3;
+    v[0].shard_index = 0;
+    v[1].shard_index = 2;
+    EXPECT_EQ(refused(v), "missing shards: 2 of 3 given, shard 1 missing");
+    v[1].shard_index = 0;
+    EXPECT_EQ(refused(v), "duplicate shard 0: a.json (run a) and b.json (run b)");
+    v[1].shard_count = 2;
+    EXPECT_NE(refused(v).find("disagree on the shard count"), std::string::npos);
+
+    EXPECT_EQ(refused({}), "no runs to merge");
+}
+
+TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {
+    std::mt19937_64 rng(10);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> v;
+    v.push_back(make_shard("a", 1000.0, 2, rng, all, all_read));
+    v[0].log.intervals.resize(3);  // as if killed after its first interval
+    const MergeOutcome r = merge_shards(v);
+    ASSERT_TRUE(r.ok);
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_NE(r.warnings[0].find("its interval log holds 1000 latencies, its JSON 2000"),
+              std::string::npos);
+}
+
+}  // namespace
+}  // namespace mbstorm::report
