@@ -264,11 +264,13 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     OutageWatch outages;
     const auto measure_start_wall =
         wall_start + std::chrono::duration_cast<std::chrono::system_clock::duration>(plan.warmup);
-    auto drain_histograms = [&] {
-        if (!options.on_interval_histograms) return;
-        timeline.drain_histograms([&](const stats::IntervalHistograms& interval) {
+    // Built once: a std::function made per drain could allocate in the steady state.
+    const std::function<void(const stats::IntervalHistograms&)> hand_over =
+        [&options, measure_start_wall](const stats::IntervalHistograms& interval) {
             options.on_interval_histograms(interval, measure_start_wall);
-        });
+        };
+    auto drain_histograms = [&] {
+        if (options.on_interval_histograms) timeline.drain_histograms(hand_over);
     };
     while (finished.load() < threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));

@@ -54,7 +54,9 @@ struct ChildServer {
     }
 };
 
-void run_steady_state_check(LoadModel model) {
+// keep_histograms: with an interval-log consumer, as run --hlog has (it must not allocate
+// either; the histograms it is handed come from a reused pool).
+void run_steady_state_check(LoadModel model, bool keep_histograms = false) {
     ChildServer child;
     ASSERT_TRUE(child.start());
 
@@ -83,12 +85,24 @@ void run_steady_state_check(LoadModel model) {
         if (reports == 1) at_first = mbstorm::testing::allocations();
         if (reports == 3) at_third = mbstorm::testing::allocations();
     };
+    std::uint64_t logged_intervals = 0, logged_latencies = 0;
+    if (keep_histograms) {
+        options.on_interval_histograms = [&](const stats::IntervalHistograms& interval,
+                                             std::chrono::system_clock::time_point) {
+            ++logged_intervals;
+            logged_latencies += interval.all.total_count();
+        };
+    }
     const LoadResult r = run_load(plan, options);
     ASSERT_TRUE(r.ok) << r.error;
     ASSERT_GE(reports, 3);
     EXPECT_GT(at_first, 0u);  // the counter does count (setup allocates)
     EXPECT_GT(r.run.counters.ok(), 10000u);
     EXPECT_EQ(at_third - at_first, 0u) << "allocations during the steady part of the run";
+    if (keep_histograms) {
+        EXPECT_GE(logged_intervals, 3u);
+        EXPECT_EQ(logged_latencies, r.run.latency.total_count());
+    }
 }
 
 TEST(EngineAllocations, ClosedLoopSteadyStateAllocatesNothing) {
@@ -97,6 +111,10 @@ TEST(EngineAllocations, ClosedLoopSteadyStateAllocatesNothing) {
 
 TEST(EngineAllocations, OpenLoopSteadyStateAllocatesNothing) {
     run_steady_state_check(LoadModel::OpenLoop);
+}
+
+TEST(EngineAllocations, KeepingIntervalHistogramsAllocatesNothingInTheSteadyState) {
+    run_steady_state_check(LoadModel::ClosedLoop, true);
 }
 
 }  // namespace

@@ -3,7 +3,9 @@
 # HistogramLogReader (Debian's libhdrhistogram-java, driven by java/HlogDump.java) reads every
 # interval of a two-operation scenario, and each one matches the run's JSON (latency count,
 # max, p50, p99 per interval; count per operation), and the sum of the untagged intervals has
-# the run's .hgrm distribution line for line. setup.sh installs the JDK and the library.
+# the run's .hgrm distribution line for line. A run killed with SIGKILL leaves a log of the
+# intervals it completed, which the reader decodes too. setup.sh installs the JDK and the
+# library.
 #   bash hlog_java_reader.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
@@ -26,6 +28,21 @@ if [ $code -gt 1 ] || [ ! -s run.hlog ]; then
 fi
 timeout 120 java -cp "$jar:$work" HlogDump run.hlog java.hgrm >java.txt 2>java.err ||
   { echo "FAIL HistogramLogReader could not read the log"; sed 's/^/  /' java.err | head; exit 1; }
+
+# Killed mid-run: every completed interval is in the file already (written and flushed as it
+# ended), and the reader decodes each of them.
+"$mbstorm" run -d 20s -c 1 --depth 1 -q --hlog killed.hlog >/dev/null 2>&1 &
+killed=$!
+sleep 3.5
+kill -KILL $killed
+wait $killed 2>/dev/null
+timeout 120 java -cp "$jar:$work" HlogDump killed.hlog killed.hgrm >killed.txt 2>killed.err
+untagged=$(grep -c '^interval - ' killed.txt)
+if [ "$untagged" -ge 2 ] && ! grep -q '^interval - [0-9.]* 0 ' killed.txt; then
+  echo "ok   a run killed after 3.5 s left $untagged intervals in its log, each decoded with its latencies"
+else
+  echo "FAIL a killed run's log: $untagged intervals decoded"; sed 's/^/  /' killed.txt killed.err | head; exit 1
+fi
 
 /usr/bin/python3 - run.json java.txt run.hgrm java.hgrm <<'PY'
 import json, sys
