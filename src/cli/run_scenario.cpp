@@ -105,7 +105,11 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     bool hlog_failed = false;
     if (hlog.is_open()) {
         std::string error;
-        if (!hlog.started()) hlog.start(result.run.metadata.start_time);
+        // A run that never started still leaves a valid (empty) log.
+        const auto start = result.run.metadata.start_time;
+        if (!hlog.started())
+            hlog.start(start.time_since_epoch().count() != 0 ? start
+                                                             : std::chrono::system_clock::now());
         if (!hlog.close(error)) {
             fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
                        error);

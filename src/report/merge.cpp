@@ -100,6 +100,10 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         auto& m = out.summary.metadata;
         m.test_id = t.at("id").get<std::string>();
         m.run_id = t.at("run_id").get<std::string>();
+        m.merged_runs = t.at("merged_runs").get<std::uint32_t>();
+        if (m.merged_runs != 0)
+            throw std::runtime_error(fmt::format(
+                "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
         out.measure_start_epoch_s = t.at("measure_start_epoch_s").get<double>();
         out.shard_index = t.contains("shard_index") ? t.at("shard_index").get<int>() : -1;
         out.shard_count = t.contains("shard_count") ? t.at("shard_count").get<int>() : 0;

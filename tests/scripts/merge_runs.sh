@@ -104,4 +104,5 @@ refused "says the test has 3: missing runs" a.json a.hlog b.json b.hlog --expect
 import json; d = json.load(open("b.json")); d["test"]["histogram"]["significant_digits"] = 2
 json.dump(d, open("b2.json", "w"))'
 refused "different histogram settings" a.json a.hlog b2.json b.hlog
+refused "m.json: not a run's JSON summary mbstorm merge can read: it is a merged result (2 runs)" m.json a.json a.hlog
 exit $fail
