@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstring>
 #include <limits>
+#include <new>
 
 namespace mbstorm::stats {
 namespace {
@@ -117,8 +118,10 @@ std::string encode_hdr_compressed_base64(const Histogram& histogram) {
     uLongf bound = compressBound(static_cast<uLong>(plain.size()));
     std::vector<std::uint8_t> out(8 + bound);
     // compress2 writes the zlib wrapper HdrHistogram's readers inflate.
-    compress2(out.data() + 8, &bound, plain.data(), static_cast<uLong>(plain.size()),
-              Z_BEST_COMPRESSION);
+    // With compressBound's room the only failure is zlib's own allocation.
+    if (compress2(out.data() + 8, &bound, plain.data(), static_cast<uLong>(plain.size()),
+                  Z_BEST_COMPRESSION) != Z_OK)
+        throw std::bad_alloc();
     out.resize(8 + bound);
     set_u32(out, 0, kHdrV2CompressedCookie | kWordSizeBits);
     set_u32(out, 4, static_cast<std::uint32_t>(bound));
