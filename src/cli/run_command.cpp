@@ -67,8 +67,7 @@ std::string build_plan(RunOptions& o) {
     if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
     // No --count: 10 for reads, 1 where the function has a fixed quantity of one.
     op.quantity = o.count;
-    if (op.quantity == 0)
-        op.quantity = (op.function == 5 || op.function == 6 || op.function == 0x16) ? 1 : 10;
+    if (op.quantity == 0) op.quantity = codec::quantity_range(op.function).max == 1 ? 1 : 10;
     p.operations.assign(1, op);
 
     p.model =
