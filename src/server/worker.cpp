@@ -538,13 +538,13 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
-            queue_exception(c, frame, 0x0B);
+            queue_exception(c, frame, codec::ExceptionCode::GatewayTargetFailedToRespond);
         mark_dirty(c, index);
         return true;
     }
     if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
         counters_.add(ServerCounters::BusyRejects);
-        queue_exception(c, frame, 0x06);
+        queue_exception(c, frame, codec::ExceptionCode::ServerDeviceBusy);
         mark_dirty(c, index);
         return true;
     }
@@ -569,7 +569,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
             hold_from_here(index, release_ns);
         }
         if (decision.action == slave::FaultDecision::Action::Exception) {
-            queue_exception(c, frame, static_cast<std::uint8_t>(decision.exception));
+            queue_exception(c, frame, decision.exception);
             mark_dirty(c, index);
             return true;
         }
@@ -587,10 +587,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                : slave::handle_request(frame.pdu, model_, pdu_out);
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
-    codec::store_be16(p, frame.header.transaction_id);
-    codec::store_be16(p + 2, 0);
-    codec::store_be16(p + 4, static_cast<std::uint16_t>(r.size + 1));
-    p[6] = frame.header.unit_id;
+    codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id, r.size);
     const std::size_t n = codec::limits::kMbapHeader + r.size;
     c.out.commit(n);
     counters_.add(ServerCounters::PendingOutput, n);
@@ -603,23 +600,18 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
 }
 
 void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
-                             std::uint8_t code) noexcept {
+                             codec::ExceptionCode code) noexcept {
     std::uint8_t* p;
     try {
-        p = c.out.reserve(pool_, 9);
+        p = c.out.reserve(pool_, codec::kExceptionAduSize);
     } catch (...) {
         return;
     }
-    codec::store_be16(p, frame.header.transaction_id);
-    codec::store_be16(p + 2, 0);
-    codec::store_be16(p + 4, 3);
-    p[6] = frame.header.unit_id;
-    p[7] = static_cast<std::uint8_t>((frame.pdu.empty() ? 0 : frame.pdu[0]) | 0x80);
-    p[8] = code;
-    c.out.commit(9);
-    counters_.add(ServerCounters::PendingOutput, 9);
+    codec::write_exception_frame(p, frame, code);
+    c.out.commit(codec::kExceptionAduSize);
+    counters_.add(ServerCounters::PendingOutput, codec::kExceptionAduSize);
     counters_.add(ServerCounters::Transactions);
-    counters_.add_exception(code);
+    counters_.add_exception(static_cast<std::uint8_t>(code));
 }
 
 void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept {

@@ -94,7 +94,8 @@ class Worker {
     // False when the connection was closed (fault drop).
     // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
     bool on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
-    void queue_exception(Connection& c, const codec::TcpFrame& frame, std::uint8_t code) noexcept;
+    void queue_exception(Connection& c, const codec::TcpFrame& frame,
+                         codec::ExceptionCode code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
     void mark_dirty(Connection& c, std::uint32_t index) noexcept;
     void flush(std::uint32_t index) noexcept;
