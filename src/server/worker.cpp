@@ -176,16 +176,10 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
-    if (multishot_recv_) {
-        io_uring_prep_recv_multishot(sqe, c.fd, nullptr, 0, 0);
-    } else if (use_buf_ring_) {
-        io_uring_prep_recv(sqe, c.fd, nullptr, config_.buf_size, 0);
+    if (use_buf_ring_) {
+        net::prep_group_recv(sqe, c.fd, kBufGroup, config_.buf_size, multishot_recv_);
     } else {
         io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
-    }
-    if (use_buf_ring_) {
-        sqe->flags |= IOSQE_BUFFER_SELECT;
-        sqe->buf_group = kBufGroup;
     }
     io_uring_sqe_set_data64(sqe, net::encode_user_data(OpRecv, index, c.generation));
     c.recv_armed = true;
@@ -204,7 +198,7 @@ void Worker::loop() noexcept {
         std::int64_t deadline = next_deadline();
         std::int64_t wait = deadline < 0 ? -1 : std::max<std::int64_t>(deadline - now_, 0);
         int rc = ring_.submit_and_wait(1, wait);
-        if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) break;
+        if (net::wait_failed(rc)) break;
         now_ = net::now_ns();
         ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
         for (std::uint32_t index : rearm_) {
@@ -214,11 +208,10 @@ void Worker::loop() noexcept {
         rearm_.clear();
         run_timers();
         // One send per connection for everything that arrived in this batch.
-        for (std::uint32_t index : dirty_) {
+        dirty_.drain([this](std::uint32_t index) {
             conns_[index].dirty = false;
             flush(index);
-        }
-        dirty_.clear();
+        });
     }
 }
 
@@ -631,10 +624,7 @@ void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept
 }
 
 void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
-    if (!c.dirty) {
-        c.dirty = true;
-        dirty_.push_back(index);
-    }
+    dirty_.mark(c.dirty, index);
 }
 
 void Worker::flush(std::uint32_t index) noexcept {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "net/buf_ring.hpp"
+#include "net/completion_loop.hpp"
 #include "net/ring.hpp"
 #include "server/config.hpp"
 #include "server/connection.hpp"
@@ -134,7 +135,7 @@ class Worker {
 
     std::deque<Connection> conns_;  // stable addresses; grows, never shrinks
     std::vector<std::uint32_t> free_slots_;
-    std::vector<std::uint32_t> dirty_;
+    net::DirtyList dirty_;
     std::vector<std::uint32_t> rearm_;
     std::vector<std::uint32_t> held_;
     std::vector<std::uint32_t> partial_;  // connections holding part of a frame
