@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "codec/function_code.hpp"
+
 namespace mbstorm::load {
 
 using Duration = std::chrono::nanoseconds;
@@ -29,7 +31,7 @@ struct ValueSpec {
 // One entry of the weighted operation mix.
 struct Operation {
     std::string name;  // shown in errors and reports; defaults to the function name
-    std::uint8_t function = 0x03;
+    std::uint8_t function = codec::to_byte(codec::FunctionCode::ReadHoldingRegisters);
     std::uint8_t unit_id = 1;
     // Every request stays inside [first_address, last_address]. When last_address is unset
     // the operation always starts at first_address.
