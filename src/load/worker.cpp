@@ -318,11 +318,12 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
     if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
     io_uring_sqe* sqe = ring_.sqe();
     io_uring_prep_connect(sqe, fd, setup_.endpoint.sa(), setup_.endpoint.len);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(kConnect, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Connect, index, c.generation));
     sqe->flags |= IOSQE_IO_LINK;
     io_uring_sqe* timeout = ring_.sqe();
     io_uring_prep_link_timeout(timeout, &connect_timeout_ts_, 0);
-    io_uring_sqe_set_data64(timeout, net::encode_user_data(kConnectTimeout, index, c.generation));
+    io_uring_sqe_set_data64(timeout,
+                            net::encode_user_data(Op::ConnectTimeout, index, c.generation));
     inflight_ops_ += 2;
 }
 
@@ -403,7 +404,7 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     io_uring_sqe* sqe = ring_.sqe();
     net::prep_group_recv(sqe, c.fd, buf_ring_.group_id(), buf_ring_.buffer_size(), multishot_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(kRecv, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
     ++inflight_ops_;
 }
@@ -411,23 +412,21 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
 void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= connections_.size()) return;
-    switch (ud.op) {
-        case kConnectTimeout:
+    switch (static_cast<Op>(ud.op)) {
+        case Op::ConnectTimeout:
             --inflight_ops_;
             return;
-        case kConnect:
+        case Op::Connect:
             --inflight_ops_;
             if (ud.generation == connections_[ud.index].generation && !stopping_) {
                 on_connect(ud.index, cqe.res, now);
             }
             return;
-        case kRecv:
+        case Op::Recv:
             on_recv(ud.index, cqe, now);
             return;
-        case kSend:
+        case Op::Send:
             on_send(ud.index, cqe, now);
-            return;
-        default:
             return;
     }
 }
@@ -551,7 +550,7 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         io_uring_sqe* sqe = ring_.sqe();
         io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
                            c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
@@ -642,7 +641,7 @@ void Worker::flush() noexcept {
         io_uring_sqe* sqe = ring_.sqe();
         if (sqe == nullptr) return;
         io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         c.inflight_len = c.queued;
         c.inflight_done = 0;

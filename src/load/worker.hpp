@@ -66,7 +66,8 @@ class Worker {
     std::atomic<std::uint32_t> open_connections{0};
 
   private:
-    enum Op : std::uint8_t { kConnect = 1, kConnectTimeout, kRecv, kSend };
+    // What a completion is for (the op field of its user_data).
+    enum class Op : std::uint8_t { Connect = 1, ConnectTimeout, Recv, Send };
 
     bool setup_io() noexcept;
     void loop() noexcept;

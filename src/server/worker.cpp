@@ -106,21 +106,21 @@ void Worker::arm_accept() noexcept {
         io_uring_prep_multishot_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
     else
         io_uring_prep_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAccept, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Accept, 0, 0));
 }
 
 void Worker::arm_stop() noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_read(sqe, stop_fd_, &stop_value_, sizeof stop_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpStop, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Stop, 0, 0));
 }
 
 void Worker::arm_mail() noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_read(sqe, mail_fd_, &mail_value_, sizeof mail_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpMail, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Mail, 0, 0));
 }
 
 void Worker::request_eviction() noexcept {
@@ -181,7 +181,7 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     } else {
         io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
     }
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpRecv, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
 }
 
@@ -189,8 +189,8 @@ void Worker::cancel_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
-    io_uring_prep_cancel64(sqe, net::encode_user_data(OpRecv, index, c.generation), 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, index, c.generation));
+    io_uring_prep_cancel64(sqe, net::encode_user_data(Op::Recv, index, c.generation), 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, index, c.generation));
 }
 
 void Worker::loop() noexcept {
@@ -222,7 +222,7 @@ void Worker::shutdown_all() noexcept {
     for (std::uint32_t i = 0; i < conns_.size(); ++i) close_connection(i);
     if (io_uring_sqe* sqe = ring_.sqe()) {
         io_uring_prep_cancel64(sqe, 0, IORING_ASYNC_CANCEL_ANY);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, 0, 0));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, 0, 0));
     }
     std::int64_t until = net::now_ns() + kStopDrainNs;
     auto busy = [this] {
@@ -237,28 +237,28 @@ void Worker::shutdown_all() noexcept {
 }
 
 void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
-    switch (net::decode_user_data(cqe.user_data).op) {
-        case OpAccept:
+    switch (static_cast<Op>(net::decode_user_data(cqe.user_data).op)) {
+        case Op::Accept:
             on_accept(cqe);
             break;
-        case OpRecv:
+        case Op::Recv:
             on_recv(cqe);
             break;
-        case OpSend:
+        case Op::Send:
             on_send(cqe);
             break;
-        case OpStop:
+        case Op::Stop:
             stopping_ = true;
             break;
-        case OpAcceptPause:
+        case Op::AcceptPause:
             if (!stopping_) arm_accept();
             break;
-        case OpMail:
+        case Op::Mail:
             serve_evictions();
             if (!stopping_) arm_mail();
             break;
-        default:
-            break;
+        case Op::Cancel:
+            break;  // the cancelled recv reports itself
     }
 }
 
@@ -289,7 +289,7 @@ void Worker::pause_accept() noexcept {
     accept_pause_ts_.tv_sec = accept_pause_ns_ / net::kNsPerSec;
     accept_pause_ts_.tv_nsec = accept_pause_ns_ % net::kNsPerSec;
     io_uring_prep_timeout(sqe, &accept_pause_ts_, 0, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAcceptPause, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::AcceptPause, 0, 0));
     accept_pause_ns_ = std::min(accept_pause_ns_ * 2, kAcceptPauseMaxNs);
 }
 
@@ -636,7 +636,7 @@ void Worker::flush(std::uint32_t index) noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_send(sqe, c.fd, p, size, MSG_NOSIGNAL);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpSend, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
     c.send_inflight = true;
 }
 

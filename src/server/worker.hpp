@@ -47,15 +47,8 @@ class Worker {
     void request_eviction() noexcept;  // any thread
 
   private:
-    enum Op : std::uint8_t {
-        OpAccept = 1,
-        OpRecv,
-        OpSend,
-        OpStop,
-        OpCancel,
-        OpAcceptPause,
-        OpMail
-    };
+    // What a completion is for (the op field of its user_data).
+    enum class Op : std::uint8_t { Accept = 1, Recv, Send, Stop, Cancel, AcceptPause, Mail };
 
     int setup() noexcept;
     void loop() noexcept;
