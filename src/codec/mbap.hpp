@@ -64,6 +64,19 @@ inline void write_exception_frame(std::uint8_t* out, const TcpFrame& request,
 EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id, Bytes pdu,
                               MutableBytes out) noexcept;
 
+// The header fields a fuzzer may set to lie: any protocol id and length field, whatever the
+// PDU (an empty or over-long one included).
+struct RawMbapFields {
+    std::uint16_t transaction_id = 0;
+    std::uint16_t protocol_id = 0;
+    std::uint16_t length = 0;  // written as given, not derived from the PDU
+    std::uint8_t unit_id = 0;
+};
+// Writes a header with exactly `fields`, then `pdu` (any size that fits `out`). For fuzzers
+// that must send frames which lie about their length through the codec.
+EncodeResult encode_raw_tcp_frame(const RawMbapFields& fields, Bytes pdu,
+                                  MutableBytes out) noexcept;
+
 // Splits a TCP byte stream into frames. Feed it chunks as they arrive; call next() until it
 // says NeedMore. Frames wholly inside the current chunk are returned as views into it
 // (no copy); a frame split across chunks is assembled in a 260-byte internal buffer. Views

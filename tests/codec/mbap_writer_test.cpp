@@ -39,5 +39,22 @@ TEST(MbapWriter, ExceptionFrameAnswersTheRequestsTransactionUnitAndFunction) {
     EXPECT_EQ(out[8], 0x0B);
 }
 
+TEST(MbapWriter, RawFrameKeepsALyingLengthAndProtocolId) {
+    std::array<std::uint8_t, 16> out{};
+    const std::uint8_t pdu[] = {0x03, 0x00, 0x00, 0x00, 0x01};
+    const EncodeResult r = encode_raw_tcp_frame({0x0102, 0x0007, 0x0020, 0x09}, pdu, out);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r.size, 12u);
+    EXPECT_EQ(std::vector<std::uint8_t>(out.begin(), out.begin() + 12),
+              (std::vector<std::uint8_t>{1, 2, 0, 7, 0, 0x20, 9, 3, 0, 0, 0, 1}));
+    const MbapHeader h = read_mbap_header(out.data());
+    EXPECT_EQ(h.length, 0x20);
+    EXPECT_EQ(check_mbap_header(h), CodecError::BadProtocolId);
+    // A header alone, and a buffer too small for the PDU.
+    EXPECT_EQ(encode_raw_tcp_frame({1, 0, 6, 1}, {}, out).size, 7u);
+    std::array<std::uint8_t, 8> small{};
+    EXPECT_EQ(encode_raw_tcp_frame({1, 0, 6, 1}, pdu, small).error, CodecError::BufferTooSmall);
+}
+
 }  // namespace
 }  // namespace mbstorm::codec
