@@ -88,19 +88,18 @@ int fail(const std::string& msg) {
     return kExitUsage;
 }
 
-int run_encode(EncodeOptions o) {
-    std::uint8_t fc = 0;
-    // A reference number in --addr without --fc picks the read function, as --ref does.
+// Which function to encode: --fc, or the read function of --ref's (or --addr's) table.
+// Fills `o.reference` when --addr holds a reference number. "" on success, else the refusal.
+std::string resolve_function(EncodeOptions& o, std::uint8_t& fc) {
+    fc = 0;
     if (codec::Reference ref;
         o.function.empty() && o.reference.empty() && codec::parse_reference(o.address, ref))
         o.reference = o.address;
-    std::uint16_t address = 0;
     if (!o.reference.empty()) {
         codec::Reference ref;
         if (!codec::parse_reference(o.reference, ref))
-            return fail(
-                fmt::format("bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)",
-                            o.reference));
+            return fmt::format(
+                "bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)", o.reference);
         if (o.function.empty()) {
             static constexpr std::uint8_t read_fc[] = {1, 2, 4, 3};
             fc = read_fc[static_cast<int>(ref.table)];
@@ -108,39 +107,151 @@ int run_encode(EncodeOptions o) {
     }
     if (!o.function.empty()) {
         if (auto error = codec::parse_function_code(o.function, fc); !error.empty())
-            return fail("--fc: " + error);
+            return "--fc: " + error;
     }
-    if (fc == 0) return fail("--fc (or --ref) is required");
+    if (fc == 0) return "--fc (or --ref) is required";
     if (!o.exception && !codec::is_supported_function(fc))
-        return fail(fmt::format("function code {} ({}): not a public Modbus function; {}",
-                                o.function, codec::function_label(fc), kValidFunctions));
-    {
-        // --ref and --addr follow the one address rule; a reference must suit the function.
-        const std::string& text = o.reference.empty() ? o.address : o.reference;
-        codec::AddressRange range;
-        auto error = codec::parse_address_range(text, codec::function_table(fc), range);
-        if (error.empty() && range.is_range) error = "'" + text + "' is a range: give one";
-        if (!error.empty()) return fail((o.reference.empty() ? "--addr " : "--ref ") + error);
-        address = range.first;
-    }
-    std::uint16_t write_address = 0;
-    if (fc == 0x17) {
-        codec::AddressRange range;
-        auto error =
-            codec::parse_address_range(o.write_address, codec::Table::HoldingRegisters, range);
+        return fmt::format("function code {} ({}): not a public Modbus function; {}", o.function,
+                           codec::function_label(fc), kValidFunctions);
+    return {};
+}
+
+// --ref or --addr, and for FC17 --write-addr, under the one address rule: one address each,
+// suiting the function's table. "" on success, else the refusal.
+std::string resolve_addresses(const EncodeOptions& o, std::uint8_t fc, std::uint16_t& address,
+                              std::uint16_t& write_address) {
+    const std::string& text = o.reference.empty() ? o.address : o.reference;
+    codec::AddressRange range;
+    auto error = codec::parse_address_range(text, codec::function_table(fc), range);
+    if (error.empty() && range.is_range) error = "'" + text + "' is a range: give one";
+    if (!error.empty()) return (o.reference.empty() ? "--addr " : "--ref ") + error;
+    address = range.first;
+    write_address = 0;
+    if (codec::request_is(fc, codec::RequestShape::ReadWriteRegisters)) {
+        error = codec::parse_address_range(o.write_address, codec::Table::HoldingRegisters, range);
         if (error.empty() && range.is_range) error = "'" + o.write_address + "' is a range";
-        if (!error.empty()) return fail("--write-addr " + error);
+        if (!error.empty()) return "--write-addr " + error;
         write_address = range.first;
     }
+    return {};
+}
+
+// Options the decoder cannot judge, because they are packed before it sees them.
+std::string option_fault(const EncodeOptions& o, std::uint8_t fc) {
+    if (auto fault = values_fault(fc, o.values.size()); !fault.empty()) return fault;
+    const std::size_t file_length =
+        fc == 0x15 ? o.values.size() : static_cast<std::size_t>(o.count);
+    if (auto fault = file_fault(fc, o.file, o.record, file_length); !fault.empty()) return fault;
+    if (fc == 0x05 && o.value != 0 && o.value != 1 && o.value != codec::limits::kCoilOn)
+        return fmt::format("--value {} for {}: valid 0 (OFF) or 1 (ON)", o.value,
+                           codec::function_label(fc));
+    return {};
+}
+
+// The request the options describe; its payload is packed into `payload`. "" on success.
+std::string build_request(const EncodeOptions& o, std::uint8_t fc, std::uint16_t address,
+                          std::uint16_t write_address,
+                          std::array<std::uint8_t, codec::limits::kMaxPdu>& payload,
+                          codec::Request& r) {
+    r = codec::Request{};
+    r.function = fc;
+    r.address = address;
+    r.quantity = static_cast<std::uint16_t>(o.count);
+    r.value = static_cast<std::uint16_t>(o.value);
+    r.and_mask = static_cast<std::uint16_t>(o.and_mask);
+    r.or_mask = static_cast<std::uint16_t>(o.or_mask);
+    r.sub_function = static_cast<std::uint16_t>(o.sub_function);
+    r.mei_type = codec::kMeiReadDeviceId;
+    r.device_id_code = static_cast<std::uint8_t>(o.device_id_code);
+    r.object_id = static_cast<std::uint8_t>(o.object_id);
+    std::size_t n = 0;
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(fc)) {
+        case FC::WriteSingleCoil:
+            r.value = o.value ? codec::limits::kCoilOn : codec::limits::kCoilOff;
+            break;
+        case FC::WriteMultipleCoils: {
+            std::vector<std::uint8_t> bits(o.values.begin(), o.values.end());
+            auto packed = codec::pack_bit_bytes(bits, payload);
+            if (!packed.ok()) return "too many coil values";
+            r.quantity = static_cast<std::uint16_t>(bits.size());
+            n = packed.size;
+            break;
+        }
+        case FC::WriteMultipleRegisters:
+        case FC::ReadWriteMultipleRegisters:
+        case FC::Diagnostics:
+            if (o.values.size() * 2 > payload.size()) return "too many values";
+            for (int v : o.values) {
+                codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(v));
+                n += 2;
+            }
+            if (fc == codec::to_byte(FC::WriteMultipleRegisters))
+                r.quantity = static_cast<std::uint16_t>(o.values.size());
+            if (fc == codec::to_byte(FC::ReadWriteMultipleRegisters)) {
+                r.write_address = write_address;
+                r.write_quantity = static_cast<std::uint16_t>(o.values.size());
+            }
+            break;
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord: {
+            bool write = fc == codec::to_byte(FC::WriteFileRecord);
+            std::uint16_t length = static_cast<std::uint16_t>(write ? o.values.size() : o.count);
+            payload[n++] = codec::limits::kFileReferenceType;
+            codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(o.file));
+            codec::store_be16(payload.data() + n + 2, static_cast<std::uint16_t>(o.record));
+            codec::store_be16(payload.data() + n + 4, length);
+            n += 6;
+            if (write) {
+                if (n + o.values.size() * 2 > payload.size()) return "too many values";
+                for (int v : o.values) {
+                    codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(v));
+                    n += 2;
+                }
+            }
+            break;
+        }
+        default:
+            break;
+    }
+    r.payload = codec::Bytes(payload.data(), n);
+    return {};
+}
+
+// Prints the PDU as hex (--pdu), or framed: RTU, ASCII text, or MBAP (the default).
+int print_framed(const EncodeOptions& o, codec::Bytes pdu) {
+    if (o.pdu) {
+        fmt::print("{}\n", codec::format_hex(pdu));
+        return kExitOk;
+    }
+    std::array<std::uint8_t, codec::limits::kMaxAsciiAdu> frame{};
+    codec::EncodeResult framed;
+    if (o.rtu) {
+        framed = codec::encode_rtu_frame(static_cast<std::uint8_t>(o.unit), pdu, frame);
+    } else if (o.ascii) {
+        framed = codec::encode_ascii_frame(static_cast<std::uint8_t>(o.unit), pdu, frame);
+        if (framed.ok()) {
+            // Print the text without the CR LF terminator.
+            fmt::print("{}\n", std::string(frame.begin(), frame.begin() + framed.size - 2));
+            return kExitOk;
+        }
+    } else {
+        framed = codec::encode_tcp_frame(static_cast<std::uint16_t>(o.transaction_id),
+                                         static_cast<std::uint8_t>(o.unit), pdu, frame);
+    }
+    if (!framed.ok()) return fail(std::string(codec::error_description(framed.error)));
+    fmt::print("{}\n", codec::format_hex(codec::Bytes(frame.data(), framed.size)));
+    return kExitOk;
+}
+
+int run_encode(EncodeOptions o) {
+    std::uint8_t fc = 0;
+    if (auto error = resolve_function(o, fc); !error.empty()) return fail(error);
+    std::uint16_t address = 0, write_address = 0;
+    if (auto error = resolve_addresses(o, fc, address, write_address); !error.empty())
+        return fail(error);
     if (!o.exception) {
-        if (auto fault = values_fault(fc, o.values.size()); !fault.empty()) return fail(fault);
-        const std::size_t file_length =
-            fc == 0x15 ? o.values.size() : static_cast<std::size_t>(o.count);
-        if (auto fault = file_fault(fc, o.file, o.record, file_length); !fault.empty())
-            return fail(fault);
-        if (fc == 0x05 && o.value != 0 && o.value != 1 && o.value != codec::limits::kCoilOn)
-            return fail(fmt::format("--value {} for {}: valid 0 (OFF) or 1 (ON)", o.value,
-                                    codec::function_label(fc)));
+        if (auto fault = option_fault(o, fc); !fault.empty()) return fail(fault);
     }
 
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload{};
@@ -150,68 +261,8 @@ int run_encode(EncodeOptions o) {
         enc = codec::encode_exception(fc, static_cast<codec::ExceptionCode>(o.exception), pdu);
     } else {
         codec::Request r;
-        r.function = fc;
-        r.address = address;
-        r.quantity = static_cast<std::uint16_t>(o.count);
-        r.value = static_cast<std::uint16_t>(o.value);
-        r.and_mask = static_cast<std::uint16_t>(o.and_mask);
-        r.or_mask = static_cast<std::uint16_t>(o.or_mask);
-        r.sub_function = static_cast<std::uint16_t>(o.sub_function);
-        r.mei_type = codec::kMeiReadDeviceId;
-        r.device_id_code = static_cast<std::uint8_t>(o.device_id_code);
-        r.object_id = static_cast<std::uint8_t>(o.object_id);
-        std::size_t n = 0;
-        using FC = codec::FunctionCode;
-        switch (static_cast<FC>(fc)) {
-            case FC::WriteSingleCoil:
-                r.value = o.value ? codec::limits::kCoilOn : codec::limits::kCoilOff;
-                break;
-            case FC::WriteMultipleCoils: {
-                std::vector<std::uint8_t> bits(o.values.begin(), o.values.end());
-                auto packed = codec::pack_bit_bytes(bits, payload);
-                if (!packed.ok()) return fail("too many coil values");
-                r.quantity = static_cast<std::uint16_t>(bits.size());
-                n = packed.size;
-                break;
-            }
-            case FC::WriteMultipleRegisters:
-            case FC::ReadWriteMultipleRegisters:
-            case FC::Diagnostics:
-                if (o.values.size() * 2 > payload.size()) return fail("too many values");
-                for (int v : o.values) {
-                    codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(v));
-                    n += 2;
-                }
-                if (fc == codec::to_byte(FC::WriteMultipleRegisters))
-                    r.quantity = static_cast<std::uint16_t>(o.values.size());
-                if (fc == codec::to_byte(FC::ReadWriteMultipleRegisters)) {
-                    r.write_address = write_address;
-                    r.write_quantity = static_cast<std::uint16_t>(o.values.size());
-                }
-                break;
-            case FC::ReadFileRecord:
-            case FC::WriteFileRecord: {
-                bool write = fc == codec::to_byte(FC::WriteFileRecord);
-                std::uint16_t length =
-                    static_cast<std::uint16_t>(write ? o.values.size() : o.count);
-                payload[n++] = codec::limits::kFileReferenceType;
-                codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(o.file));
-                codec::store_be16(payload.data() + n + 2, static_cast<std::uint16_t>(o.record));
-                codec::store_be16(payload.data() + n + 4, length);
-                n += 6;
-                if (write) {
-                    if (n + o.values.size() * 2 > payload.size()) return fail("too many values");
-                    for (int v : o.values) {
-                        codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(v));
-                        n += 2;
-                    }
-                }
-                break;
-            }
-            default:
-                break;
-        }
-        r.payload = codec::Bytes(payload.data(), n);
+        if (auto error = build_request(o, fc, address, write_address, payload, r); !error.empty())
+            return fail(error);
         // Built without checks, then judged by the decoder, so the refusal names the field.
         enc = codec::encode_request(r, pdu, /*allow_invalid=*/true);
         if (enc.ok()) {
@@ -220,30 +271,7 @@ int run_encode(EncodeOptions o) {
         }
     }
     if (!enc.ok()) return fail(std::string(codec::error_description(enc.error)));
-
-    codec::Bytes pdu_bytes(pdu.data(), enc.size);
-    std::array<std::uint8_t, codec::limits::kMaxAsciiAdu> frame{};
-    codec::EncodeResult framed;
-    if (o.pdu) {
-        fmt::print("{}\n", codec::format_hex(pdu_bytes));
-        return kExitOk;
-    }
-    if (o.rtu) {
-        framed = codec::encode_rtu_frame(static_cast<std::uint8_t>(o.unit), pdu_bytes, frame);
-    } else if (o.ascii) {
-        framed = codec::encode_ascii_frame(static_cast<std::uint8_t>(o.unit), pdu_bytes, frame);
-        if (framed.ok()) {
-            // Print the text without the CR LF terminator.
-            fmt::print("{}\n", std::string(frame.begin(), frame.begin() + framed.size - 2));
-            return kExitOk;
-        }
-    } else {
-        framed = codec::encode_tcp_frame(static_cast<std::uint16_t>(o.transaction_id),
-                                         static_cast<std::uint8_t>(o.unit), pdu_bytes, frame);
-    }
-    if (!framed.ok()) return fail(std::string(codec::error_description(framed.error)));
-    fmt::print("{}\n", codec::format_hex(codec::Bytes(frame.data(), framed.size)));
-    return kExitOk;
+    return print_framed(o, codec::Bytes(pdu.data(), enc.size));
 }
 
 }  // namespace

@@ -393,7 +393,7 @@ struct QuantityField {
     codec::limits::QuantityRange range;
 };
 std::vector<QuantityField> quantity_fields(std::uint8_t fc) {
-    using codec::limits::quantity_range;
+    using codec::quantity_range;
     switch (fc) {
         case 0x01:
         case 0x02:

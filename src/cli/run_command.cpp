@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
@@ -17,10 +18,27 @@
 namespace mbstorm::cli {
 namespace {
 
+constexpr std::uint8_t kDefaultFunction = codec::to_byte(codec::FunctionCode::ReadHoldingRegisters);
+
+// "0x05 write_single_coil, 0x06 write_single_register and 0x16 mask_write_register": the
+// functions whose quantity is always one.
+std::string single_item_functions() {
+    std::vector<std::string> labels;
+    for (const codec::FunctionInfo& f : codec::public_functions()) {
+        if (f.quantity.max == 1) labels.push_back(codec::function_label(codec::to_byte(f.code)));
+    }
+    std::string text;
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+        if (i > 0) text += i + 1 == labels.size() ? " and " : ", ";
+        text += labels[i];
+    }
+    return text;
+}
+
 struct RunOptions {
     load::Plan plan;
     std::string target;
-    std::string function = "3";
+    std::string function = std::string(codec::function_name(kDefaultFunction));
     std::string address = "0";
     std::string addr_mode = "sequential";
     std::string model = "closed";
@@ -67,8 +85,7 @@ std::string build_plan(RunOptions& o) {
     if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
     // No --count: 10 for reads, 1 where the function has a fixed quantity of one.
     op.quantity = o.count;
-    if (op.quantity == 0)
-        op.quantity = (op.function == 5 || op.function == 6 || op.function == 0x16) ? 1 : 10;
+    if (op.quantity == 0) op.quantity = codec::quantity_range(op.function).max == 1 ? 1 : 10;
     p.operations.assign(1, op);
 
     p.model =
@@ -188,12 +205,11 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
     cmd->add_option("--fc", o->function,
-                    "function code (default 0x03 read_holding_registers): " +
-                        std::string(codec::kFunctionCodeForms));
+                    "function code (default " + codec::function_label(kDefaultFunction) +
+                        "): " + std::string(codec::kFunctionCodeForms));
     cmd->add_option("--addr", o->address, std::string(codec::kAddressRuleHelp));
     cmd->add_option("--count", o->count,
-                    "quantity per request (default 10; 1 for 0x05 write_single_coil, 0x06 "
-                    "write_single_register and 0x16 mask_write_register)")
+                    "quantity per request (default 10; 1 for " + single_item_functions() + ")")
         ->check(CLI::Range(1, 2000));
     cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")

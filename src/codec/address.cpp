@@ -112,28 +112,6 @@ std::string parse_part(std::string_view text, std::optional<Table> table, Part& 
 
 }  // namespace
 
-std::optional<Table> function_table(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x05:
-        case 0x0F:
-            return Table::Coils;
-        case 0x02:
-            return Table::DiscreteInputs;
-        case 0x04:
-            return Table::InputRegisters;
-        case 0x03:
-        case 0x06:
-        case 0x10:
-        case 0x16:
-        case 0x17:
-        case 0x18:
-            return Table::HoldingRegisters;
-        default:
-            return std::nullopt;
-    }
-}
-
 std::string table_functions(Table table) {
     switch (table) {
         case Table::Coils:

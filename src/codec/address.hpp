@@ -17,12 +17,10 @@
 #include <string>
 #include <string_view>
 
+#include "codec/function_code.hpp"
 #include "codec/values.hpp"
 
 namespace mbstorm::codec {
-
-// The table a function code addresses; nullopt for functions without an address.
-std::optional<Table> function_table(std::uint8_t fc) noexcept;
 
 // "read it with 0x04 read_input_registers", or for a writable table "read it with 0x03
 // read_holding_registers, write it with 0x06 ..., 0x10 ..., 0x16 ..., 0x17 ...".

@@ -6,43 +6,154 @@
 namespace mbstorm::codec {
 namespace {
 
-struct FunctionInfo {
-    std::uint8_t code;
-    std::string_view name;
-    bool writes;
-};
+using enum FunctionCode;
+using enum RequestShape;
+using Kind = FunctionKind;
+using Rsp = ResponseShape;
+namespace lim = limits;
 
-// Kept in code order; the table is small enough that a linear scan beats anything fancier.
+constexpr lim::QuantityRange kNoQuantity{};
+constexpr lim::QuantityRange kOne{1, 1};
+
+// Kept in code order (public_function_codes() promises it).
 constexpr std::array<FunctionInfo, 19> kFunctions{{
-    {0x01, "read_coils", false},
-    {0x02, "read_discrete_inputs", false},
-    {0x03, "read_holding_registers", false},
-    {0x04, "read_input_registers", false},
-    {0x05, "write_single_coil", true},
-    {0x06, "write_single_register", true},
-    {0x07, "read_exception_status", false},
-    {0x08, "diagnostics", true},
-    {0x0B, "get_comm_event_counter", false},
-    {0x0C, "get_comm_event_log", false},
-    {0x0F, "write_multiple_coils", true},
-    {0x10, "write_multiple_registers", true},
-    {0x11, "report_server_id", false},
-    {0x14, "read_file_record", false},
-    {0x15, "write_file_record", true},
-    {0x16, "mask_write_register", true},
-    {0x17, "read_write_multiple_registers", true},
-    {0x18, "read_fifo_queue", false},
-    {0x2B, "encapsulated_interface", false},
+    {ReadCoils,
+     "read_coils",
+     Kind::Read,
+     false,
+     Table::Coils,
+     {1, lim::kMaxReadBits},
+     AddressQuantity,
+     Rsp::Bits},
+    {ReadDiscreteInputs,
+     "read_discrete_inputs",
+     Kind::Read,
+     false,
+     Table::DiscreteInputs,
+     {1, lim::kMaxReadBits},
+     AddressQuantity,
+     Rsp::Bits},
+    {ReadHoldingRegisters,
+     "read_holding_registers",
+     Kind::Read,
+     false,
+     Table::HoldingRegisters,
+     {1, lim::kMaxReadRegisters},
+     AddressQuantity,
+     Rsp::Registers},
+    {ReadInputRegisters,
+     "read_input_registers",
+     Kind::Read,
+     false,
+     Table::InputRegisters,
+     {1, lim::kMaxReadRegisters},
+     AddressQuantity,
+     Rsp::Registers},
+    {WriteSingleCoil, "write_single_coil", Kind::Write, true, Table::Coils, kOne, SingleCoil,
+     Rsp::EchoValue},
+    {WriteSingleRegister, "write_single_register", Kind::Write, true, Table::HoldingRegisters, kOne,
+     SingleRegister, Rsp::EchoValue},
+    {ReadExceptionStatus, "read_exception_status", Kind::Diagnostic, false, std::nullopt,
+     kNoQuantity, FunctionOnly, Rsp::ExceptionStatus},
+    {Diagnostics, "diagnostics", Kind::Diagnostic, true, std::nullopt, kNoQuantity, SubFunction,
+     Rsp::EchoSubFunction},
+    {GetCommEventCounter, "get_comm_event_counter", Kind::Diagnostic, false, std::nullopt,
+     kNoQuantity, FunctionOnly, Rsp::EventCounter},
+    {GetCommEventLog, "get_comm_event_log", Kind::Diagnostic, false, std::nullopt, kNoQuantity,
+     FunctionOnly, Rsp::EventLog},
+    {WriteMultipleCoils,
+     "write_multiple_coils",
+     Kind::Write,
+     true,
+     Table::Coils,
+     {1, lim::kMaxWriteCoils},
+     MultipleCoils,
+     Rsp::EchoQuantity},
+    {WriteMultipleRegisters,
+     "write_multiple_registers",
+     Kind::Write,
+     true,
+     Table::HoldingRegisters,
+     {1, lim::kMaxWriteRegisters},
+     MultipleRegisters,
+     Rsp::EchoQuantity},
+    {ReportServerId, "report_server_id", Kind::Diagnostic, false, std::nullopt, kNoQuantity,
+     FunctionOnly, Rsp::ServerId},
+    {ReadFileRecord, "read_file_record", Kind::Read, false, std::nullopt, kNoQuantity, FileRecords,
+     Rsp::FileRecords},
+    {WriteFileRecord, "write_file_record", Kind::Write, true, std::nullopt, kNoQuantity,
+     FileRecords, Rsp::FileRecords},
+    {MaskWriteRegister, "mask_write_register", Kind::Write, true, Table::HoldingRegisters, kOne,
+     MaskWrite, Rsp::EchoMask},
+    {ReadWriteMultipleRegisters,
+     "read_write_multiple_registers",
+     Kind::Write,
+     true,
+     Table::HoldingRegisters,
+     {1, lim::kMaxRwReadRegisters},
+     ReadWriteRegisters,
+     Rsp::Registers},
+    {ReadFifoQueue, "read_fifo_queue", Kind::Read, false, Table::HoldingRegisters, kNoQuantity,
+     FifoPointer, Rsp::FifoValues},
+    {EncapsulatedInterface, "encapsulated_interface", Kind::Read, false, std::nullopt, kNoQuantity,
+     MeiTransport, Rsp::MeiObjects},
 }};
 
-const FunctionInfo* find(std::uint8_t fc) noexcept {
-    for (const auto& f : kFunctions) {
-        if (f.code == fc) return &f;
+constexpr std::array<std::uint8_t, kFunctions.size()> kCodes = [] {
+    std::array<std::uint8_t, kFunctions.size()> codes{};
+    for (std::size_t i = 0; i < kFunctions.size(); ++i) codes[i] = to_byte(kFunctions[i].code);
+    return codes;
+}();
+
+// Row of each code in kFunctions, kNone for unknown codes: the load engine asks per request.
+constexpr std::uint8_t kNone = 0xFF;
+constexpr std::array<std::uint8_t, 256> kRowOf = [] {
+    std::array<std::uint8_t, 256> rows{};
+    rows.fill(kNone);
+    for (std::size_t i = 0; i < kFunctions.size(); ++i) {
+        rows[to_byte(kFunctions[i].code)] = static_cast<std::uint8_t>(i);
     }
-    return nullptr;
+    return rows;
+}();
+
+const FunctionInfo* find(std::uint8_t fc) noexcept {
+    const std::uint8_t row = kRowOf[fc];
+    return row == kNone ? nullptr : &kFunctions[row];
 }
 
 }  // namespace
+
+std::span<const FunctionInfo> public_functions() noexcept {
+    return kFunctions;
+}
+
+std::span<const std::uint8_t> public_function_codes() noexcept {
+    return kCodes;
+}
+
+const FunctionInfo* function_info(std::uint8_t fc) noexcept {
+    return find(fc);
+}
+
+limits::QuantityRange quantity_range(std::uint8_t fc) noexcept {
+    const FunctionInfo* f = find(fc);
+    return f != nullptr ? f->quantity : limits::QuantityRange{};
+}
+
+std::optional<Table> function_table(std::uint8_t fc) noexcept {
+    const FunctionInfo* f = find(fc);
+    return f != nullptr ? f->table : std::nullopt;
+}
+
+bool request_is(std::uint8_t fc, RequestShape shape) noexcept {
+    const FunctionInfo* f = find(fc);
+    return f != nullptr && f->request == shape;
+}
+
+bool response_is(std::uint8_t fc, ResponseShape shape) noexcept {
+    const FunctionInfo* f = find(fc);
+    return f != nullptr && f->response == shape;
+}
 
 bool is_supported_function(std::uint8_t fc) noexcept {
     return find(fc) != nullptr;
@@ -61,7 +172,7 @@ std::string_view function_name(std::uint8_t fc) noexcept {
 bool function_from_name(std::string_view name, std::uint8_t& fc) noexcept {
     for (const auto& f : kFunctions) {
         if (f.name == name) {
-            fc = f.code;
+            fc = to_byte(f.code);
             return true;
         }
     }

@@ -1,9 +1,17 @@
-// Public Modbus function codes and the facts about them that every layer asks for.
+// Public Modbus function codes and the facts about them that every layer asks for: one
+// descriptor table (public_functions()) that other layers iterate or query instead of naming
+// codes. Adding a public function code means a row here, its encode/decode in pdu_*.cpp (the
+// switches there are over FunctionCode, so -Wswitch lists what is missing) and a slave handler.
 #pragma once
 
 #include <cstdint>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
+
+#include "codec/limits.hpp"
+#include "codec/table.hpp"
 
 namespace mbstorm::codec {
 
@@ -35,6 +43,72 @@ constexpr std::uint8_t to_byte(FunctionCode fc) noexcept {
 
 // Set on the function code of an exception response.
 inline constexpr std::uint8_t kExceptionBit = 0x80;
+
+// What a request carries after the function code. Generators and checkers switch over shapes,
+// not codes, so a new function of a known shape needs no change outside codec/.
+enum class RequestShape : std::uint8_t {
+    FunctionOnly,        // 07, 0B, 0C, 11
+    AddressQuantity,     // 01-04: start, count
+    SingleCoil,          // 05: address, 0xFF00 or 0x0000
+    SingleRegister,      // 06: address, value
+    SubFunction,         // 08: sub-function, data
+    MultipleCoils,       // 0F: start, count, byte count, packed bits
+    MultipleRegisters,   // 10: start, count, byte count, registers
+    FileRecords,         // 14, 15: byte count, sub-requests
+    MaskWrite,           // 16: address, AND mask, OR mask
+    ReadWriteRegisters,  // 17: read start/count, write start/count, byte count, registers
+    FifoPointer,         // 18: FIFO pointer address
+    MeiTransport,        // 2B: MEI type and its data
+};
+
+// What a normal response carries.
+enum class ResponseShape : std::uint8_t {
+    Bits,             // 01, 02: byte count, packed bits
+    Registers,        // 03, 04, 17: byte count, registers
+    EchoValue,        // 05, 06: address and value echoed
+    EchoQuantity,     // 0F, 10: address and quantity echoed
+    EchoMask,         // 16: address and both masks echoed
+    EchoSubFunction,  // 08: sub-function and data echoed
+    ExceptionStatus,  // 07: one status byte
+    EventCounter,     // 0B: status, event count
+    EventLog,         // 0C: byte count, status, counters, events
+    ServerId,         // 11: byte count, server id bytes
+    FileRecords,      // 14: sub-responses; 15: the request echoed
+    FifoValues,       // 18: byte count, FIFO count, values
+    MeiObjects,       // 2B: MEI type and its objects
+};
+
+// The specification's grouping: data access reads and writes, and diagnostics.
+enum class FunctionKind : std::uint8_t { Read, Write, Diagnostic };
+
+struct FunctionInfo {
+    FunctionCode code;
+    std::string_view name;  // snake_case, e.g. "read_holding_registers"
+    FunctionKind kind;
+    bool writes;                     // changes the device's state (08 restarts and clears counters)
+    std::optional<Table> table;      // the table its address points into; nullopt: no address
+    limits::QuantityRange quantity;  // max 0: no quantity; FC17: the read part
+    RequestShape request;
+    ResponseShape response;
+};
+
+// Every public function code this codec encodes and decodes, in code order.
+std::span<const FunctionInfo> public_functions() noexcept;
+// The same codes as bytes, in code order (what a fuzzer walks).
+std::span<const std::uint8_t> public_function_codes() noexcept;
+// The descriptor of `fc`; nullptr for codes this codec does not know.
+const FunctionInfo* function_info(std::uint8_t fc) noexcept;
+
+// The quantity a request of function `fc` may ask for (FC17: the read part); {0, 0} when the
+// function takes no quantity or is unknown. Load plans and scenarios validate against this.
+limits::QuantityRange quantity_range(std::uint8_t fc) noexcept;
+
+// The table a function code addresses; nullopt for functions without an address.
+std::optional<Table> function_table(std::uint8_t fc) noexcept;
+
+// True when `fc` is public and its request (response) has `shape`.
+bool request_is(std::uint8_t fc, RequestShape shape) noexcept;
+bool response_is(std::uint8_t fc, ResponseShape shape) noexcept;
 
 // True for the function codes this codec encodes and decodes.
 bool is_supported_function(std::uint8_t fc) noexcept;

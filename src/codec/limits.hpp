@@ -35,33 +35,11 @@ inline constexpr std::uint8_t kMaxCommEventBytes = 64;       // FC0C events in t
 inline constexpr std::uint8_t kMinDeviceIdCode = 1;          // FC2B/0E: basic stream
 inline constexpr std::uint8_t kMaxDeviceIdCode = 4;          // FC2B/0E: one specific object
 
-// The quantity a request of function `fc` may ask for (FC17: the read part). max == 0: the
-// function takes no quantity. Load plans and scenarios validate against this.
+// A quantity a request may ask for; max == 0: none. codec::quantity_range(fc) gives it per
+// function (function_code.hpp).
 struct QuantityRange {
     std::uint16_t min = 0;
     std::uint16_t max = 0;
 };
-constexpr QuantityRange quantity_range(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-            return {1, kMaxReadBits};
-        case 0x03:
-        case 0x04:
-            return {1, kMaxReadRegisters};
-        case 0x0F:
-            return {1, kMaxWriteCoils};
-        case 0x10:
-            return {1, kMaxWriteRegisters};
-        case 0x17:
-            return {1, kMaxRwReadRegisters};
-        case 0x05:
-        case 0x06:
-        case 0x16:
-            return {1, 1};
-        default:
-            return {};
-    }
-}
 
 }  // namespace mbstorm::codec::limits

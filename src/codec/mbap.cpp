@@ -58,6 +58,21 @@ CodecError decode_tcp_frame(Bytes adu, TcpFrame& out) noexcept {
     return e;
 }
 
+EncodeResult encode_raw_tcp_frame(const RawMbapFields& fields, Bytes pdu,
+                                  MutableBytes out) noexcept {
+    const std::size_t total = limits::kMbapHeader + pdu.size();
+    if (out.size() < total) return {0, CodecError::BufferTooSmall};
+    std::uint8_t* p = out.data();
+    if (!pdu.empty() && pdu.data() != p + limits::kMbapHeader) {
+        std::memmove(p + limits::kMbapHeader, pdu.data(), pdu.size());
+    }
+    store_be16(p, fields.transaction_id);
+    store_be16(p + 2, fields.protocol_id);
+    store_be16(p + 4, fields.length);
+    p[6] = fields.unit_id;
+    return {total, CodecError::Ok};
+}
+
 EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id, Bytes pdu,
                               MutableBytes out) noexcept {
     if (pdu.empty() || pdu.size() > limits::kMaxPdu) return {0, CodecError::InvalidArgument};

@@ -36,9 +36,46 @@ CodecError check_mbap_header(const MbapHeader& h) noexcept;
 // Decodes exactly one ADU (the whole of `adu`), LengthMismatch if sizes disagree.
 CodecError decode_tcp_frame(Bytes adu, TcpFrame& out) noexcept;
 
+// Writes the 7-byte header of an ADU carrying a `pdu_size`-byte PDU at `out` (7 bytes
+// needed; not checked). For hot paths that build the PDU in place at out + 7.
+inline void write_mbap_header(std::uint8_t* out, std::uint16_t transaction_id, std::uint8_t unit_id,
+                              std::size_t pdu_size) noexcept {
+    store_be16(out, transaction_id);
+    store_be16(out + 2, 0);  // protocol id: Modbus
+    store_be16(out + 4, static_cast<std::uint16_t>(pdu_size + 1));
+    out[6] = unit_id;
+}
+
+// A whole exception ADU: header, function | 0x80, exception code.
+inline constexpr std::size_t kExceptionAduSize = limits::kMbapHeader + 2;
+
+// Writes the exception ADU answering `request` (its transaction and unit, its function with
+// the exception bit; function 0 for a request without a PDU) at `out` (kExceptionAduSize
+// bytes needed; not checked).
+inline void write_exception_frame(std::uint8_t* out, const TcpFrame& request,
+                                  ExceptionCode code) noexcept {
+    write_mbap_header(out, request.header.transaction_id, request.header.unit_id, 2);
+    const std::uint8_t function = request.pdu.empty() ? 0 : request.pdu[0];
+    out[7] = static_cast<std::uint8_t>(function | kExceptionBit);
+    out[8] = static_cast<std::uint8_t>(code);
+}
+
 // Writes header + PDU into `out`. The PDU may already sit at out[7..] (no copy then).
 EncodeResult encode_tcp_frame(std::uint16_t transaction_id, std::uint8_t unit_id, Bytes pdu,
                               MutableBytes out) noexcept;
+
+// The header fields a fuzzer may set to lie: any protocol id and length field, whatever the
+// PDU (an empty or over-long one included).
+struct RawMbapFields {
+    std::uint16_t transaction_id = 0;
+    std::uint16_t protocol_id = 0;
+    std::uint16_t length = 0;  // written as given, not derived from the PDU
+    std::uint8_t unit_id = 0;
+};
+// Writes a header with exactly `fields`, then `pdu` (any size that fits `out`). For fuzzers
+// that must send frames which lie about their length through the codec.
+EncodeResult encode_raw_tcp_frame(const RawMbapFields& fields, Bytes pdu,
+                                  MutableBytes out) noexcept;
 
 // Splits a TCP byte stream into frames. Feed it chunks as they arrive; call next() until it
 // says NeedMore. Frames wholly inside the current chunk are returned as views into it

@@ -97,6 +97,12 @@ EncodeResult encode_exception(std::uint8_t function, ExceptionCode code, Mutable
 EncodeResult encode_read_request(std::uint8_t function, std::uint16_t address,
                                  std::uint16_t quantity, MutableBytes out) noexcept;
 
+// Size of a request PDU of function `fc` for `quantity` items (FC17: `write_quantity`
+// registers written) as a generator builds it: FC08 with one data word, FC2B reading device
+// identification. kMaxPdu when the caller's data decides (FC14/15) or the code is unknown.
+std::size_t request_pdu_size(std::uint8_t fc, std::uint16_t quantity,
+                             std::uint16_t write_quantity) noexcept;
+
 // Expected byte count of a read response for the given request, used to match responses.
 // Returns -1 when the function has no fixed data size.
 int expected_read_byte_count(const Request& req) noexcept;

@@ -118,45 +118,45 @@ EncodeResult emit(MutableBytes out, const std::uint8_t* head, std::size_t head_s
 EncodeResult encode_raw(const Request& r, MutableBytes out) noexcept {
     std::uint8_t h[10];
     h[0] = r.function;
-    switch (r.function) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
+    switch (static_cast<FunctionCode>(r.function)) {
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.quantity);
             return emit(out, h, 5, {});
-        case 0x05:
-        case 0x06:
+        case FunctionCode::WriteSingleCoil:
+        case FunctionCode::WriteSingleRegister:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.value);
             return emit(out, h, 5, {});
-        case 0x07:
-        case 0x0B:
-        case 0x0C:
-        case 0x11:
+        case FunctionCode::ReadExceptionStatus:
+        case FunctionCode::GetCommEventCounter:
+        case FunctionCode::GetCommEventLog:
+        case FunctionCode::ReportServerId:
             return emit(out, h, 1, {});
-        case 0x08:
+        case FunctionCode::Diagnostics:
             store_be16(h + 1, r.sub_function);
             return emit(out, h, 3, r.payload);
-        case 0x0F:
-        case 0x10:
+        case FunctionCode::WriteMultipleCoils:
+        case FunctionCode::WriteMultipleRegisters:
             if (r.payload.size() > 0xFF) return {0, CodecError::InvalidArgument};
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.quantity);
             h[5] = static_cast<std::uint8_t>(r.payload.size());
             return emit(out, h, 6, r.payload);
-        case 0x14:
-        case 0x15:
+        case FunctionCode::ReadFileRecord:
+        case FunctionCode::WriteFileRecord:
             if (r.payload.size() > 0xFF) return {0, CodecError::InvalidArgument};
             h[1] = static_cast<std::uint8_t>(r.payload.size());
             return emit(out, h, 2, r.payload);
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.and_mask);
             store_be16(h + 5, r.or_mask);
             return emit(out, h, 7, {});
-        case 0x17:
+        case FunctionCode::ReadWriteMultipleRegisters:
             if (r.payload.size() > 0xFF) return {0, CodecError::InvalidArgument};
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.quantity);
@@ -164,10 +164,10 @@ EncodeResult encode_raw(const Request& r, MutableBytes out) noexcept {
             store_be16(h + 7, r.write_quantity);
             h[9] = static_cast<std::uint8_t>(r.payload.size());
             return emit(out, h, 10, r.payload);
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             store_be16(h + 1, r.address);
             return emit(out, h, 3, {});
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             h[1] = r.mei_type;
             if (r.mei_type == kMeiReadDeviceId) {
                 h[2] = r.device_id_code;
@@ -175,9 +175,8 @@ EncodeResult encode_raw(const Request& r, MutableBytes out) noexcept {
                 return emit(out, h, 4, {});
             }
             return emit(out, h, 2, r.payload);  // other MEI types: opaque bytes (fuzzing)
-        default:
-            return emit(out, h, 1, r.payload);  // unknown function: opaque bytes (fuzzing)
     }
+    return emit(out, h, 1, r.payload);  // unknown function: opaque bytes (fuzzing)
 }
 
 }  // namespace
@@ -201,14 +200,14 @@ RequestStatus decode_request(Bytes pdu, Request& out) noexcept {
     if (n == 0) return {CodecError::Empty, ExceptionCode::None};  // nothing to answer to
     const std::uint8_t* p = pdu.data();
     out.function = p[0];
-    switch (p[0]) {
-        case 0x01:
-        case 0x02:
+    switch (static_cast<FunctionCode>(p[0])) {
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
             return decode_read(p, n, limits::kMaxReadBits, out);
-        case 0x03:
-        case 0x04:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
             return decode_read(p, n, limits::kMaxReadRegisters, out);
-        case 0x05:
+        case FunctionCode::WriteSingleCoil:
             if (n != 5) return bad_value(exact_size(n, 5));
             out.address = load_be16(p + 1);
             out.value = load_be16(p + 3);
@@ -216,33 +215,33 @@ RequestStatus decode_request(Bytes pdu, Request& out) noexcept {
                 return bad_value(CodecError::InvalidCoilValue);
             }
             return {};
-        case 0x06:
+        case FunctionCode::WriteSingleRegister:
             if (n != 5) return bad_value(exact_size(n, 5));
             out.address = load_be16(p + 1);
             out.value = load_be16(p + 3);
             return {};
-        case 0x07:
-        case 0x0B:
-        case 0x0C:
-        case 0x11:
+        case FunctionCode::ReadExceptionStatus:
+        case FunctionCode::GetCommEventCounter:
+        case FunctionCode::GetCommEventLog:
+        case FunctionCode::ReportServerId:
             return size_status(n, 1);
-        case 0x08:
+        case FunctionCode::Diagnostics:
             return decode_diagnostics(p, n, out);
-        case 0x0F:
+        case FunctionCode::WriteMultipleCoils:
             return decode_write_multiple(p, n, limits::kMaxWriteCoils, true, out);
-        case 0x10:
+        case FunctionCode::WriteMultipleRegisters:
             return decode_write_multiple(p, n, limits::kMaxWriteRegisters, false, out);
-        case 0x14:
+        case FunctionCode::ReadFileRecord:
             return decode_file_request(p, n, false, out);
-        case 0x15:
+        case FunctionCode::WriteFileRecord:
             return decode_file_request(p, n, true, out);
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             if (n != 7) return bad_value(exact_size(n, 7));
             out.address = load_be16(p + 1);
             out.and_mask = load_be16(p + 3);
             out.or_mask = load_be16(p + 5);
             return {};
-        case 0x17: {
+        case FunctionCode::ReadWriteMultipleRegisters: {
             if (n < 10) return bad_value(CodecError::Truncated);
             out.address = load_be16(p + 1);
             out.quantity = load_be16(p + 3);
@@ -265,15 +264,14 @@ RequestStatus decode_request(Bytes pdu, Request& out) noexcept {
             }
             return {};
         }
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             if (n != 3) return bad_value(exact_size(n, 3));
             out.address = load_be16(p + 1);
             return {};
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             return decode_mei(p, n, out);
-        default:
-            return bad_function(CodecError::UnsupportedFunction);
     }
+    return bad_function(CodecError::UnsupportedFunction);
 }
 
 EncodeResult encode_request(const Request& req, MutableBytes out, bool allow_invalid) noexcept {
@@ -316,17 +314,46 @@ EncodeResult encode_read_request(std::uint8_t function, std::uint16_t address,
     return {5, CodecError::Ok};
 }
 
+std::size_t request_pdu_size(std::uint8_t fc, std::uint16_t quantity,
+                             std::uint16_t write_quantity) noexcept {
+    const FunctionInfo* f = function_info(fc);
+    if (f == nullptr) return limits::kMaxPdu;
+    switch (f->request) {
+        case RequestShape::FunctionOnly:
+            return 1;
+        case RequestShape::AddressQuantity:
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+        case RequestShape::SubFunction:
+            return 5;
+        case RequestShape::MultipleCoils:
+            return 6 + detail::packed_coil_bytes(quantity);
+        case RequestShape::MultipleRegisters:
+            return 6 + 2u * quantity;
+        case RequestShape::FileRecords:
+            return limits::kMaxPdu;
+        case RequestShape::MaskWrite:
+            return 7;
+        case RequestShape::ReadWriteRegisters:
+            return 10 + 2u * write_quantity;
+        case RequestShape::FifoPointer:
+            return 3;
+        case RequestShape::MeiTransport:
+            return 4;
+    }
+    return limits::kMaxPdu;
+}
+
 int expected_read_byte_count(const Request& req) noexcept {
-    switch (req.function) {
-        case 0x01:
-        case 0x02:
+    const FunctionInfo* f = function_info(req.function);
+    if (f == nullptr) return -1;
+    switch (f->response) {
+        case ResponseShape::Bits:
             return static_cast<int>(detail::packed_coil_bytes(req.quantity));
-        case 0x03:
-        case 0x04:
-        case 0x17:
+        case ResponseShape::Registers:
             return 2 * static_cast<int>(req.quantity);
         default:
-            return -1;
+            return -1;  // no fixed data size
     }
 }
 

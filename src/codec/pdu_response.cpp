@@ -166,56 +166,56 @@ EncodeResult encode_raw(const Response& r, MutableBytes out) noexcept {
     constexpr EncodeResult kInvalid{0, CodecError::InvalidArgument};
     std::uint8_t h[8];
     h[0] = r.function;
-    switch (r.function) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x11:
-        case 0x14:
-        case 0x15:
-        case 0x17:
+    switch (static_cast<FunctionCode>(r.function)) {
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
+        case FunctionCode::ReportServerId:
+        case FunctionCode::ReadFileRecord:
+        case FunctionCode::WriteFileRecord:
+        case FunctionCode::ReadWriteMultipleRegisters:
             if (r.payload.size() > 0xFF) return kInvalid;
             h[1] = static_cast<std::uint8_t>(r.payload.size());
             return emit(out, h, 2, r.payload);
-        case 0x05:
-        case 0x06:
+        case FunctionCode::WriteSingleCoil:
+        case FunctionCode::WriteSingleRegister:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.value);
             return emit(out, h, 5, {});
-        case 0x07:
+        case FunctionCode::ReadExceptionStatus:
             h[1] = r.exception_status;
             return emit(out, h, 2, {});
-        case 0x08:
+        case FunctionCode::Diagnostics:
             store_be16(h + 1, r.sub_function);
             return emit(out, h, 3, r.payload);
-        case 0x0B:
+        case FunctionCode::GetCommEventCounter:
             store_be16(h + 1, r.status);
             store_be16(h + 3, r.event_count);
             return emit(out, h, 5, {});
-        case 0x0C:
+        case FunctionCode::GetCommEventLog:
             if (r.payload.size() > 0xFF - kCommLogFixedBytes) return kInvalid;
             h[1] = static_cast<std::uint8_t>(kCommLogFixedBytes + r.payload.size());
             store_be16(h + 2, r.status);
             store_be16(h + 4, r.event_count);
             store_be16(h + 6, r.message_count);
             return emit(out, h, 8, r.payload);
-        case 0x0F:
-        case 0x10:
+        case FunctionCode::WriteMultipleCoils:
+        case FunctionCode::WriteMultipleRegisters:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.quantity);
             return emit(out, h, 5, {});
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             store_be16(h + 1, r.address);
             store_be16(h + 3, r.and_mask);
             store_be16(h + 5, r.or_mask);
             return emit(out, h, 7, {});
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             if (r.fifo_count > limits::kMaxFifoCount) return kInvalid;
             store_be16(h + 1, static_cast<std::uint16_t>(2u + 2u * r.fifo_count));
             store_be16(h + 3, r.fifo_count);
             return emit(out, h, 5, r.payload);
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             if (r.mei_type != kMeiReadDeviceId) return kInvalid;
             h[1] = r.mei_type;
             h[2] = r.device_id_code;
@@ -224,9 +224,8 @@ EncodeResult encode_raw(const Response& r, MutableBytes out) noexcept {
             h[5] = r.next_object_id;
             h[6] = r.object_count;
             return emit(out, h, 7, r.payload);
-        default:
-            return kInvalid;
     }
+    return kInvalid;
 }
 
 }  // namespace
@@ -246,59 +245,59 @@ CodecError decode_response(Bytes pdu, Response& out) noexcept {
         return CodecError::Ok;
     }
     if (n > limits::kMaxPdu) return CodecError::TrailingBytes;
-    switch (fc) {
-        case 0x01:
-        case 0x02:
+    switch (static_cast<FunctionCode>(fc)) {
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
             return decode_read_data(p, n, false, out);
-        case 0x03:
-        case 0x04:
-        case 0x17:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
+        case FunctionCode::ReadWriteMultipleRegisters:
             return decode_read_data(p, n, true, out);
-        case 0x05:
-        case 0x06:
+        case FunctionCode::WriteSingleCoil:
+        case FunctionCode::WriteSingleRegister:
             if (n != 5) return exact_size(n, 5);
             out.address = load_be16(p + 1);
             out.value = load_be16(p + 3);
-            if (fc == 0x05 && out.value != limits::kCoilOn && out.value != limits::kCoilOff) {
+            if (fc == to_byte(FunctionCode::WriteSingleCoil) && out.value != limits::kCoilOn &&
+                out.value != limits::kCoilOff) {
                 return CodecError::InvalidCoilValue;
             }
             return CodecError::Ok;
-        case 0x07:
+        case FunctionCode::ReadExceptionStatus:
             if (n != 2) return exact_size(n, 2);
             out.exception_status = p[1];
             return CodecError::Ok;
-        case 0x08:
+        case FunctionCode::Diagnostics:
             return decode_diagnostics(p, n, out);
-        case 0x0B:
+        case FunctionCode::GetCommEventCounter:
             if (n != 5) return exact_size(n, 5);
             out.status = load_be16(p + 1);
             out.event_count = load_be16(p + 3);
             return CodecError::Ok;
-        case 0x0C:
+        case FunctionCode::GetCommEventLog:
             return decode_comm_event_log(p, n, out);
-        case 0x0F:
+        case FunctionCode::WriteMultipleCoils:
             return decode_write_echo(p, n, limits::kMaxWriteCoils, out);
-        case 0x10:
+        case FunctionCode::WriteMultipleRegisters:
             return decode_write_echo(p, n, limits::kMaxWriteRegisters, out);
-        case 0x11:
+        case FunctionCode::ReportServerId:
             return decode_report_server_id(p, n, out);
-        case 0x14:
+        case FunctionCode::ReadFileRecord:
             return decode_read_file(p, n, out);
-        case 0x15:
+        case FunctionCode::WriteFileRecord:
             return decode_write_file(p, n, out);
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             if (n != 7) return exact_size(n, 7);
             out.address = load_be16(p + 1);
             out.and_mask = load_be16(p + 3);
             out.or_mask = load_be16(p + 5);
             return CodecError::Ok;
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             return decode_fifo(p, n, out);
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             return decode_device_id(p, n, out);
-        default:
-            return CodecError::UnsupportedFunction;
     }
+    return CodecError::UnsupportedFunction;
 }
 
 EncodeResult encode_response(const Response& rsp, MutableBytes out) noexcept {

@@ -129,89 +129,87 @@ CodecError decode_rtu_frame(Bytes adu, RtuFrame& out) noexcept {
 
 RtuLength rtu_request_length(Bytes head) noexcept {
     if (head.size() < 2) return need(2);
-    switch (head[1]) {
+    switch (static_cast<FunctionCode>(head[1])) {
         // Two 16-bit fields: address + quantity, address + value, or sub-function + data.
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x05:
-        case 0x06:
-        case 0x08:
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
+        case FunctionCode::WriteSingleCoil:
+        case FunctionCode::WriteSingleRegister:
+        case FunctionCode::Diagnostics:
             return known(8);
         // Function code only.
-        case 0x07:
-        case 0x0B:
-        case 0x0C:
-        case 0x11:
+        case FunctionCode::ReadExceptionStatus:
+        case FunctionCode::GetCommEventCounter:
+        case FunctionCode::GetCommEventLog:
+        case FunctionCode::ReportServerId:
             return known(4);
         // Address, quantity, then a byte count.
-        case 0x0F:
-        case 0x10:
+        case FunctionCode::WriteMultipleCoils:
+        case FunctionCode::WriteMultipleRegisters:
             return with_byte_count(head, 6);
         // A byte count right after the function code.
-        case 0x14:
-        case 0x15:
+        case FunctionCode::ReadFileRecord:
+        case FunctionCode::WriteFileRecord:
             return with_byte_count(head, 2);
         // Address, AND mask, OR mask.
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             return known(10);
         // Read address/quantity, write address/quantity, then a byte count.
-        case 0x17:
+        case FunctionCode::ReadWriteMultipleRegisters:
             return with_byte_count(head, 10);
         // FIFO pointer address.
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             return known(6);
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             if (head.size() < 3) return need(3);
             if (head[2] == kMeiReadDeviceId) return known(7);  // mei, code, object id
             return unknown();
-        default:
-            return unknown();
     }
+    return unknown();
 }
 
 RtuLength rtu_response_length(Bytes head) noexcept {
     if (head.size() < 2) return need(2);
     const std::uint8_t fc = head[1];
     if (fc & kExceptionBit) return known(5);  // address, fc|0x80, code, CRC
-    switch (fc) {
+    switch (static_cast<FunctionCode>(fc)) {
         // A byte count right after the function code.
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x0C:
-        case 0x11:
-        case 0x14:
-        case 0x15:
-        case 0x17:
+        case FunctionCode::ReadCoils:
+        case FunctionCode::ReadDiscreteInputs:
+        case FunctionCode::ReadHoldingRegisters:
+        case FunctionCode::ReadInputRegisters:
+        case FunctionCode::GetCommEventLog:
+        case FunctionCode::ReportServerId:
+        case FunctionCode::ReadFileRecord:
+        case FunctionCode::WriteFileRecord:
+        case FunctionCode::ReadWriteMultipleRegisters:
             return with_byte_count(head, 2);
         // Two 16-bit fields echoed or reported.
-        case 0x05:
-        case 0x06:
-        case 0x08:
-        case 0x0B:
-        case 0x0F:
-        case 0x10:
+        case FunctionCode::WriteSingleCoil:
+        case FunctionCode::WriteSingleRegister:
+        case FunctionCode::Diagnostics:
+        case FunctionCode::GetCommEventCounter:
+        case FunctionCode::WriteMultipleCoils:
+        case FunctionCode::WriteMultipleRegisters:
             return known(8);
         // Exception status byte.
-        case 0x07:
+        case FunctionCode::ReadExceptionStatus:
             return known(5);
         // Address, AND mask, OR mask echoed.
-        case 0x16:
+        case FunctionCode::MaskWriteRegister:
             return known(10);
         // 16-bit byte count (FIFO count + values).
-        case 0x18:
+        case FunctionCode::ReadFifoQueue:
             if (head.size() < 4) return need(4);
             return known(4 + load_be16(head.data() + 2) + 2u);
-        case 0x2B:
+        case FunctionCode::EncapsulatedInterface:
             if (head.size() < 3) return need(3);
             if (head[2] == kMeiReadDeviceId) return device_id_response_length(head);
             return unknown();
-        default:
-            return unknown();
     }
+    return unknown();
 }
 
 }  // namespace mbstorm::codec

@@ -12,6 +12,7 @@
 #include "codec/bytes.hpp"
 #include "codec/error.hpp"
 #include "codec/pdu.hpp"
+#include "codec/table.hpp"
 
 namespace mbstorm::codec {
 
@@ -67,8 +68,6 @@ std::int64_t i64_from_registers(std::span<const std::uint16_t, 4> regs, WordOrde
 double f64_from_registers(std::span<const std::uint16_t, 4> regs, WordOrder order) noexcept;
 
 // ---- Tables and Modicon reference numbers.
-
-enum class Table : std::uint8_t { Coils, DiscreteInputs, InputRegisters, HoldingRegisters };
 
 std::string_view table_name(Table table) noexcept;  // "holding_registers"
 bool table_from_name(std::string_view name, Table& out) noexcept;

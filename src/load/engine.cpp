@@ -167,6 +167,135 @@ void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopp
     }
 }
 
+// Each stage's name and the targets it moves between; offsets come after the run.
+void describe_stages(const Plan& plan, const StageSchedule& schedule,
+                     std::vector<stats::StageResult>& stages) {
+    if (!schedule.empty()) {
+        stages.resize(schedule.stages());
+        for (std::size_t i = 0; i < schedule.stages(); ++i) {
+            stats::StageResult& stage = stages[i];
+            stage.index = static_cast<std::uint32_t>(i + 1);
+            stage.name =
+                plan.stages[i].name.empty() ? fmt::format("stage {}", i + 1) : plan.stages[i].name;
+            const StageTargets from = schedule.stage_from(i);
+            const StageTargets to = schedule.stage_to(i);
+            stage.rate_from = from.rate;
+            stage.rate_to = to.rate;
+            stage.connections_from = from.connections;
+            stage.connections_to = to.connections;
+        }
+    }
+}
+
+// The run rarely ends on an interval boundary: drop empty intervals past the end and give
+// the last one its real length, so its throughput is not understated.
+void fit_timeline_to_run(std::vector<stats::IntervalSummary>& series, std::uint64_t measured_ns,
+                         std::int64_t interval_ns) {
+    while (!series.empty() && series.back().transactions == 0 &&
+           series.back().start_offset_ns >= measured_ns)
+        series.pop_back();
+    if (!series.empty() && series.back().start_offset_ns < measured_ns &&
+        series.back().start_offset_ns + series.back().duration_ns > measured_ns)
+        series.back().duration_ns = measured_ns - series.back().start_offset_ns;
+    // A sliver of an interval at the very end would plot as a false spike or dip: fold it into
+    // the interval before (counts add; the percentiles stay those of the full interval).
+    if (series.size() >= 2 &&
+        series.back().duration_ns * 2 < static_cast<std::uint64_t>(interval_ns)) {
+        const stats::IntervalSummary sliver = series.back();
+        series.pop_back();
+        stats::IntervalSummary& last = series.back();
+        last.transactions += sliver.transactions;
+        last.errors += sliver.errors;
+        last.latency_count += sliver.latency_count;
+        last.max_ns = std::max(last.max_ns, sliver.max_ns);
+        last.duration_ns += sliver.duration_ns;
+    }
+}
+
+// Where each stage started and ended within the measured time.
+void place_stages(const StageSchedule& schedule, std::uint64_t measured_ns,
+                  std::vector<stats::StageResult>& stages) {
+    for (std::size_t i = 0; i < stages.size(); ++i) {
+        // A run stopped early ends its stages where measuring ended.
+        auto clip = [&](std::int64_t t) {
+            return std::min(static_cast<std::uint64_t>(t), measured_ns);
+        };
+        stages[i].start_offset_ns = clip(schedule.stage_start_ns(i));
+        stages[i].end_offset_ns = clip(schedule.stage_end_ns(i));
+    }
+    // The last stage ends where measuring ended (a run stops a hair after its schedule).
+    if (!stages.empty()) stages.back().end_offset_ns = measured_ns;
+}
+
+// One note per outage: when the target was lost and when (if) it came back.
+void note_outages(const OutageWatch& outages, std::int64_t measure_start_ns, LoadResult& result) {
+    for (const Outage& o : outages.outages()) {
+        if (o.back_ns >= 0) {
+            result.run.metadata.notes.push_back(fmt::format(
+                "target lost {} (no connection open), back {} ({:.2f}s without a connection)",
+                offset_text(o.lost_ns, measure_start_ns), offset_text(o.back_ns, measure_start_ns),
+                static_cast<double>(o.back_ns - o.lost_ns) / 1e9));
+        } else {
+            result.target_lost_at_end = true;
+            result.run.metadata.notes.push_back(fmt::format(
+                "target lost {} (no connection open) and not back by the end of the run",
+                offset_text(o.lost_ns, measure_start_ns)));
+        }
+    }
+}
+
+// When the run starts, starts measuring and ends (INT64_MAX: when its transactions are done).
+struct RunWindow {
+    std::int64_t start_ns = 0;
+    std::int64_t measure_start_ns = 0;
+    std::int64_t end_ns = 0;
+};
+
+// What the workers share with the engine's thread while they run.
+struct WorkerLinks {
+    const EngineOptions& options;
+    std::atomic<bool>& abort;
+    std::atomic<bool>& any_connected;
+    stats::IntervalTimeline& timeline;
+};
+
+// One worker per thread, each with its share of the connections, the quota and the rate.
+std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::Endpoint& endpoint,
+                                                  std::uint32_t threads, std::uint32_t capacity,
+                                                  const RunWindow& window,
+                                                  const StageSchedule& schedule,
+                                                  const WorkerLinks& links) {
+    std::vector<std::unique_ptr<Worker>> workers;
+    workers.reserve(threads);
+    for (std::uint32_t i = 0; i < threads; ++i) {
+        WorkerSetup setup;
+        setup.plan = &plan;
+        setup.endpoint = endpoint;
+        setup.target = endpoint.to_string();
+        setup.index = i;
+        setup.threads = threads;
+        setup.connections = static_cast<std::uint32_t>(thread_share(capacity, threads, i));
+        const double fraction = static_cast<double>(setup.connections) / capacity;
+        setup.quota = plan.transactions == 0
+                          ? 0
+                          : std::max<std::uint64_t>(thread_share(plan.transactions, threads, i), 1);
+        setup.rate = plan.rate * fraction;
+        setup.connect_rate = plan.connect_rate / threads;
+        setup.start_ns = window.start_ns;
+        setup.measure_start_ns = window.measure_start_ns;
+        setup.end_ns = window.end_ns;
+        setup.stop = links.options.stop;
+        setup.abort = &links.abort;
+        setup.any_connected = &links.any_connected;
+        setup.verifier = links.options.verifier;
+        setup.timeline = &links.timeline;
+        setup.schedule = schedule.empty() ? nullptr : &schedule;
+        workers.push_back(std::make_unique<Worker>(std::move(setup)));
+    }
+
+    return workers;
+}
+
 }  // namespace
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options) {
@@ -213,33 +342,10 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const std::int64_t measure_start_ns = start_ns + plan.warmup.count();
     const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
 
-    std::vector<std::unique_ptr<Worker>> workers;
-    workers.reserve(threads);
-    for (std::uint32_t i = 0; i < threads; ++i) {
-        WorkerSetup setup;
-        setup.plan = &plan;
-        setup.endpoint = endpoint;
-        setup.target = endpoint.to_string();
-        setup.index = i;
-        setup.threads = threads;
-        setup.connections = static_cast<std::uint32_t>(thread_share(capacity, threads, i));
-        const double fraction = static_cast<double>(setup.connections) / capacity;
-        setup.quota = plan.transactions == 0
-                          ? 0
-                          : std::max<std::uint64_t>(thread_share(plan.transactions, threads, i), 1);
-        setup.rate = plan.rate * fraction;
-        setup.connect_rate = plan.connect_rate / threads;
-        setup.start_ns = start_ns;
-        setup.measure_start_ns = measure_start_ns;
-        setup.end_ns = end_ns;
-        setup.stop = options.stop;
-        setup.abort = &abort;
-        setup.any_connected = &any_connected;
-        setup.verifier = options.verifier;
-        setup.timeline = &timeline;
-        setup.schedule = schedule.empty() ? nullptr : &schedule;
-        workers.push_back(std::make_unique<Worker>(std::move(setup)));
-    }
+    const RunWindow window{start_ns, measure_start_ns, end_ns};
+    std::vector<std::unique_ptr<Worker>> workers =
+        make_workers(plan, endpoint, threads, capacity, window, schedule,
+                     WorkerLinks{options, abort, any_connected, timeline});
 
     std::atomic<std::uint32_t> finished{0};
     std::vector<std::thread> pool;
@@ -319,21 +425,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     timeline.finish();
     drain_histograms();
 
-    if (!schedule.empty()) {
-        result.run.stages.resize(schedule.stages());
-        for (std::size_t i = 0; i < schedule.stages(); ++i) {
-            stats::StageResult& stage = result.run.stages[i];
-            stage.index = static_cast<std::uint32_t>(i + 1);
-            stage.name =
-                plan.stages[i].name.empty() ? fmt::format("stage {}", i + 1) : plan.stages[i].name;
-            const StageTargets from = schedule.stage_from(i);
-            const StageTargets to = schedule.stage_to(i);
-            stage.rate_from = from.rate;
-            stage.rate_to = to.rate;
-            stage.connections_from = from.connections;
-            stage.connections_to = to.connections;
-        }
-    }
+    describe_stages(plan, schedule, result.run.stages);
     merge_results(plan, workers, result);
     std::int64_t finished_ns = measure_start_ns;
     for (auto& w : workers) {
@@ -372,58 +464,16 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     }
     result.run.timeline = timeline.summaries();
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
-    // The run rarely ends on an interval boundary: drop empty intervals past the end and give
-    // the last one its real length, so its throughput is not understated.
     auto& series = result.run.timeline;
-    while (!series.empty() && series.back().transactions == 0 &&
-           series.back().start_offset_ns >= meta.measured_duration_ns)
-        series.pop_back();
-    if (!series.empty() && series.back().start_offset_ns < meta.measured_duration_ns &&
-        series.back().start_offset_ns + series.back().duration_ns > meta.measured_duration_ns)
-        series.back().duration_ns = meta.measured_duration_ns - series.back().start_offset_ns;
-    // A sliver of an interval at the very end would plot as a false spike or dip: fold it into
-    // the interval before (counts add; the percentiles stay those of the full interval).
-    if (series.size() >= 2 &&
-        series.back().duration_ns * 2 < static_cast<std::uint64_t>(interval_ns)) {
-        const stats::IntervalSummary sliver = series.back();
-        series.pop_back();
-        stats::IntervalSummary& last = series.back();
-        last.transactions += sliver.transactions;
-        last.errors += sliver.errors;
-        last.latency_count += sliver.latency_count;
-        last.max_ns = std::max(last.max_ns, sliver.max_ns);
-        last.duration_ns += sliver.duration_ns;
-    }
+    fit_timeline_to_run(series, meta.measured_duration_ns, interval_ns);
     for (auto& iv : series) {
         if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
         if (plan.model != LoadModel::OpenLoop) continue;
         const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
         iv.target_rate = schedule.at(mid).rate;  // the plan's rate when there are no stages
     }
-    for (std::size_t i = 0; i < result.run.stages.size(); ++i) {
-        // A run stopped early ends its stages where measuring ended.
-        auto clip = [&](std::int64_t t) {
-            return std::min(static_cast<std::uint64_t>(t), meta.measured_duration_ns);
-        };
-        result.run.stages[i].start_offset_ns = clip(schedule.stage_start_ns(i));
-        result.run.stages[i].end_offset_ns = clip(schedule.stage_end_ns(i));
-    }
-    // The last stage ends where measuring ended (a run stops a hair after its schedule).
-    if (!result.run.stages.empty())
-        result.run.stages.back().end_offset_ns = meta.measured_duration_ns;
-    for (const Outage& o : outages.outages()) {
-        if (o.back_ns >= 0) {
-            meta.notes.push_back(fmt::format(
-                "target lost {} (no connection open), back {} ({:.2f}s without a connection)",
-                offset_text(o.lost_ns, measure_start_ns), offset_text(o.back_ns, measure_start_ns),
-                static_cast<double>(o.back_ns - o.lost_ns) / 1e9));
-        } else {
-            result.target_lost_at_end = true;
-            meta.notes.push_back(fmt::format(
-                "target lost {} (no connection open) and not back by the end of the run",
-                offset_text(o.lost_ns, measure_start_ns)));
-        }
-    }
+    place_stages(schedule, meta.measured_duration_ns, result.run.stages);
+    note_outages(outages, measure_start_ns, result);
     if (!schedule.empty()) {
         meta.notes.push_back(fmt::format(
             "stages: {} stage{}, rate and connections changed live (connections stay open)",

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "codec/function_code.hpp"
 #include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
 
@@ -11,35 +12,7 @@ namespace {
 constexpr std::size_t kHeader = codec::limits::kMbapHeader;
 
 std::size_t max_pdu_size(const Operation& op) noexcept {
-    switch (op.function) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x05:
-        case 0x06:
-        case 0x08:
-            return 5;
-        case 0x07:
-        case 0x0B:
-        case 0x0C:
-        case 0x11:
-            return 1;
-        case 0x0F:
-            return 6 + (op.quantity + 7u) / 8u;
-        case 0x10:
-            return 6 + 2u * op.quantity;
-        case 0x16:
-            return 7;
-        case 0x17:
-            return 10 + 2u * op.write_quantity;
-        case 0x18:
-            return 3;
-        case 0x2B:
-            return 4;
-        default:
-            return codec::limits::kMaxPdu;
-    }
+    return codec::request_pdu_size(op.function, op.quantity, op.write_quantity);
 }
 
 }  // namespace
@@ -57,9 +30,7 @@ std::size_t max_request_size(const std::vector<Operation>& operations) noexcept 
 AddressPicker::AddressPicker(const Operation& op) noexcept
     : mode_(op.address_mode), first_(op.first_address) {
     positions_ = static_cast<std::uint32_t>(last_start_address(op)) - op.first_address + 1;
-    const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
-                                                   : std::max<std::uint16_t>(op.quantity, 1);
-    stride_ = span;
+    stride_ = address_span(op);
     if (mode_ == AddressMode::Zipf) zipf_ = ZipfSampler(positions_, op.zipf_exponent);
 }
 
@@ -153,83 +124,79 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
 
     codec::MutableBytes pdu_out = out.subspan(kHeader);
     codec::EncodeResult pdu{};
-    switch (op.function) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
+    codec::Request req;
+    req.function = op.function;
+    // validate_plan() admitted only generatable functions, so the descriptor exists.
+    const codec::RequestShape shape = codec::function_info(op.function)->request;
+    switch (shape) {
+        case codec::RequestShape::AddressQuantity:
             info.address = st.address.next(rng_);
             info.quantity = op.quantity;
             pdu = codec::encode_read_request(op.function, info.address, info.quantity, pdu_out);
             break;
-        default: {
-            codec::Request req;
-            req.function = op.function;
-            switch (op.function) {
-                case 0x05:
-                    req.address = info.address = st.address.next(rng_);
-                    req.value = info.value =
-                        st.values.next_bit(rng_) ? codec::limits::kCoilOn : codec::limits::kCoilOff;
-                    break;
-                case 0x06:
-                    req.address = info.address = st.address.next(rng_);
-                    req.value = info.value = st.values.next(rng_);
-                    break;
-                case 0x08:
-                    req.sub_function = info.sub_function = op.sub_function;
-                    codec::store_be16(payload_.data(), st.values.next(rng_));
-                    req.payload = codec::Bytes(payload_.data(), 2);
-                    break;
-                case 0x0F: {
-                    req.address = info.address = st.address.next(rng_);
-                    req.quantity = info.quantity = op.quantity;
-                    const std::size_t bytes = (op.quantity + 7u) / 8u;
-                    std::fill_n(payload_.begin(), bytes, std::uint8_t{0});
-                    for (std::uint16_t i = 0; i < op.quantity; ++i) {
-                        if (st.values.next_bit(rng_))
-                            payload_[i / 8] |= std::uint8_t(1u << (i % 8));
-                    }
-                    req.payload = codec::Bytes(payload_.data(), bytes);
-                    break;
-                }
-                case 0x10:
-                    req.address = info.address = st.address.next(rng_);
-                    req.quantity = info.quantity = op.quantity;
-                    for (std::uint16_t i = 0; i < op.quantity; ++i) {
-                        codec::store_be16(payload_.data() + 2 * i, st.values.next(rng_));
-                    }
-                    req.payload = codec::Bytes(payload_.data(), 2u * op.quantity);
-                    break;
-                case 0x16:
-                    req.address = info.address = st.address.next(rng_);
-                    req.and_mask = info.and_mask = op.and_mask;
-                    req.or_mask = info.value = st.values.next(rng_);
-                    break;
-                case 0x17:
-                    req.address = info.address = st.address.next(rng_);
-                    req.quantity = info.quantity = op.quantity;
-                    req.write_address = info.address;
-                    req.write_quantity = op.write_quantity;
-                    for (std::uint16_t i = 0; i < op.write_quantity; ++i) {
-                        codec::store_be16(payload_.data() + 2 * i, st.values.next(rng_));
-                    }
-                    req.payload = codec::Bytes(payload_.data(), 2u * op.write_quantity);
-                    break;
-                case 0x18:
-                    req.address = info.address = st.address.next(rng_);
-                    break;
-                case 0x2B:
-                    req.mei_type = codec::kMeiReadDeviceId;
-                    req.device_id_code = op.device_id_code;
-                    req.object_id = 0;
-                    break;
-                default:
-                    break;  // 07, 0B, 0C, 11: function code only
+        case codec::RequestShape::SingleCoil:
+            req.address = info.address = st.address.next(rng_);
+            req.value = info.value =
+                st.values.next_bit(rng_) ? codec::limits::kCoilOn : codec::limits::kCoilOff;
+            break;
+        case codec::RequestShape::SingleRegister:
+            req.address = info.address = st.address.next(rng_);
+            req.value = info.value = st.values.next(rng_);
+            break;
+        case codec::RequestShape::SubFunction:
+            req.sub_function = info.sub_function = op.sub_function;
+            codec::store_be16(payload_.data(), st.values.next(rng_));
+            req.payload = codec::Bytes(payload_.data(), 2);
+            break;
+        case codec::RequestShape::MultipleCoils: {
+            req.address = info.address = st.address.next(rng_);
+            req.quantity = info.quantity = op.quantity;
+            const std::size_t bytes = (op.quantity + 7u) / 8u;
+            std::fill_n(payload_.begin(), bytes, std::uint8_t{0});
+            for (std::uint16_t i = 0; i < op.quantity; ++i) {
+                if (st.values.next_bit(rng_)) payload_[i / 8] |= std::uint8_t(1u << (i % 8));
             }
-            pdu = codec::encode_request(req, pdu_out);
+            req.payload = codec::Bytes(payload_.data(), bytes);
             break;
         }
+        case codec::RequestShape::MultipleRegisters:
+            req.address = info.address = st.address.next(rng_);
+            req.quantity = info.quantity = op.quantity;
+            for (std::uint16_t i = 0; i < op.quantity; ++i) {
+                codec::store_be16(payload_.data() + 2 * i, st.values.next(rng_));
+            }
+            req.payload = codec::Bytes(payload_.data(), 2u * op.quantity);
+            break;
+        case codec::RequestShape::MaskWrite:
+            req.address = info.address = st.address.next(rng_);
+            req.and_mask = info.and_mask = op.and_mask;
+            req.or_mask = info.value = st.values.next(rng_);
+            break;
+        case codec::RequestShape::ReadWriteRegisters:
+            req.address = info.address = st.address.next(rng_);
+            req.quantity = info.quantity = op.quantity;
+            req.write_address = info.address;
+            req.write_quantity = op.write_quantity;
+            for (std::uint16_t i = 0; i < op.write_quantity; ++i) {
+                codec::store_be16(payload_.data() + 2 * i, st.values.next(rng_));
+            }
+            req.payload = codec::Bytes(payload_.data(), 2u * op.write_quantity);
+            break;
+        case codec::RequestShape::FifoPointer:
+            req.address = info.address = st.address.next(rng_);
+            break;
+        case codec::RequestShape::MeiTransport:
+            req.mei_type = codec::kMeiReadDeviceId;
+            req.device_id_code = op.device_id_code;
+            req.object_id = 0;
+            break;
+        case codec::RequestShape::FunctionOnly:
+            break;
+        case codec::RequestShape::FileRecords:
+            return 0;  // not generatable: validate_plan() refuses it
     }
+    // Reads took the fast path above; every other shape goes through the checked encoder.
+    if (shape != codec::RequestShape::AddressQuantity) pdu = codec::encode_request(req, pdu_out);
     if (!pdu.ok()) return 0;
     const codec::EncodeResult adu = codec::encode_tcp_frame(
         transaction_id, op.unit_id, codec::Bytes(pdu_out.data(), pdu.size), out);

@@ -14,27 +14,8 @@ namespace {
 
 namespace lim = codec::limits;
 
-using lim::quantity_range;
+using codec::quantity_range;
 using lim::QuantityRange;
-
-bool uses_address(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x05:
-        case 0x06:
-        case 0x0F:
-        case 0x10:
-        case 0x16:
-        case 0x17:
-        case 0x18:
-            return true;
-        default:
-            return false;
-    }
-}
 
 std::string seconds_text(Duration d) {
     return fmt::format("{}s", std::chrono::duration<double>(d).count());
@@ -46,10 +27,8 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
     auto fail = [&](std::string what) { errors.push_back(fmt::format("{}: {}", where, what)); };
 
     if (!is_generatable_function(op.function)) {
-        fail(
-            fmt::format("function code 0x{:02X} cannot be generated (valid: 01-08, 0B, 0C, 0F, "
-                        "10, 11, 16, 17, 18, 2B)",
-                        op.function));
+        fail(fmt::format("function {} cannot be generated (valid: {})",
+                         codec::function_label(op.function), generatable_functions_text()));
         return;
     }
     if (op.weight == 0) fail("weight 0 is out of range (valid 1..4294967295)");
@@ -59,21 +38,23 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
         fail(fmt::format("quantity {} is out of range for {} (valid {}..{})", op.quantity,
                          codec::function_name(op.function), q.min, q.max));
     }
-    if (op.function == 0x17 &&
+    const codec::RequestShape shape = codec::function_info(op.function)->request;
+    if (shape == codec::RequestShape::ReadWriteRegisters &&
         (op.write_quantity < 1 || op.write_quantity > lim::kMaxRwWriteRegisters)) {
         fail(fmt::format("write_quantity {} is out of range (valid 1..{})", op.write_quantity,
                          lim::kMaxRwWriteRegisters));
     }
-    if (op.function == 0x08 && op.sub_function != 0) {
+    if (shape == codec::RequestShape::SubFunction && op.sub_function != 0) {
         fail(fmt::format("sub_function {} cannot be generated (valid: 0, return query data)",
                          op.sub_function));
     }
-    if (op.function == 0x2B && (op.device_id_code < 1 || op.device_id_code > 4)) {
-        fail(fmt::format("device_id_code {} is out of range (valid 1..4)", op.device_id_code));
+    if (shape == codec::RequestShape::MeiTransport &&
+        (op.device_id_code < lim::kMinDeviceIdCode || op.device_id_code > lim::kMaxDeviceIdCode)) {
+        fail(fmt::format("device_id_code {} is out of range (valid {}..{})", op.device_id_code,
+                         lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
     }
-    if (uses_address(op.function)) {
-        const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
-                                                       : std::max<std::uint16_t>(op.quantity, 1);
+    if (codec::function_table(op.function)) {
+        const std::uint32_t span = address_span(op);
         const std::uint32_t last_needed = op.first_address + span - 1;
         if (last_needed > 0xFFFF) {
             fail(fmt::format("address {} + quantity {} runs past 65535", op.first_address, span));
@@ -96,34 +77,31 @@ void check_operation(const Operation& op, std::size_t index, std::vector<std::st
 }  // namespace
 
 bool is_generatable_function(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x05:
-        case 0x06:
-        case 0x07:
-        case 0x08:
-        case 0x0B:
-        case 0x0C:
-        case 0x0F:
-        case 0x10:
-        case 0x11:
-        case 0x16:
-        case 0x17:
-        case 0x18:
-        case 0x2B:
-            return true;
-        default:
-            return false;
+    const codec::FunctionInfo* f = codec::function_info(fc);
+    return f != nullptr && f->request != codec::RequestShape::FileRecords;
+}
+
+std::string generatable_functions_text() {
+    std::string text;
+    for (const codec::FunctionInfo& f : codec::public_functions()) {
+        if (!is_generatable_function(codec::to_byte(f.code))) continue;
+        if (!text.empty()) text += ", ";
+        text += codec::function_label(codec::to_byte(f.code));
     }
+    return text;
+}
+
+std::uint32_t address_span(const Operation& op) noexcept {
+    const codec::FunctionInfo* f = codec::function_info(op.function);
+    if (f != nullptr && f->request == codec::RequestShape::ReadWriteRegisters) {
+        return std::max(op.quantity, op.write_quantity);
+    }
+    return std::max<std::uint16_t>(op.quantity, 1);
 }
 
 std::uint16_t last_start_address(const Operation& op) noexcept {
     if (!op.last_address) return op.first_address;
-    const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
-                                                   : std::max<std::uint16_t>(op.quantity, 1);
+    const std::uint32_t span = address_span(op);
     const std::uint32_t last = *op.last_address;
     if (last + 1 < op.first_address + span) return op.first_address;
     return static_cast<std::uint16_t>(last + 1 - span);

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "codec/function_code.hpp"
+
 namespace mbstorm::load {
 
 using Duration = std::chrono::nanoseconds;
@@ -29,7 +31,7 @@ struct ValueSpec {
 // One entry of the weighted operation mix.
 struct Operation {
     std::string name;  // shown in errors and reports; defaults to the function name
-    std::uint8_t function = 0x03;
+    std::uint8_t function = codec::to_byte(codec::FunctionCode::ReadHoldingRegisters);
     std::uint8_t unit_id = 1;
     // Every request stays inside [first_address, last_address]. When last_address is unset
     // the operation always starts at first_address.
@@ -106,8 +108,15 @@ inline constexpr double kMaxZipfExponent = 10.0;
 // out of range (valid 1..100000)"). Empty when the plan is usable.
 std::vector<std::string> validate_plan(const Plan& plan);
 
-// True for the function codes the load generator can produce.
+// True for the function codes the load generator can produce: every public one whose
+// request shape it knows how to fill (all but the file records).
 bool is_generatable_function(std::uint8_t fc) noexcept;
+
+// "0x01 read_coils, 0x02 read_discrete_inputs, ..." for every generatable function.
+std::string generatable_functions_text();
+
+// Addresses one request of `op` covers from its start (FC17: the larger of its two blocks).
+std::uint32_t address_span(const Operation& op) noexcept;
 
 // The operation's last usable start address (the block must end at or before last_address).
 std::uint16_t last_start_address(const Operation& op) noexcept;

@@ -154,7 +154,7 @@ void Worker::loop() noexcept {
             sweep_timeouts(now);
             next_sweep_ns_ = now + sweep_interval_ns_;
         }
-        flush(now);
+        flush();
 
         std::int64_t wake =
             std::min({setup_.end_ns, next_sweep_ns_, now + kMaxSleepNs, next_stage_update_ns_});
@@ -168,7 +168,7 @@ void Worker::loop() noexcept {
         // A 1 us floor keeps the wait from becoming a pure poll; ready CQEs return at once.
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
         const int rc = ring_.submit_and_wait(1, wait);
-        if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) {
+        if (net::wait_failed(rc)) {
             fatal_error =
                 fmt::format("io_uring wait failed: {}", std::system_category().message(-rc));
             setup_.abort->store(true);
@@ -319,11 +319,12 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
     if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
     io_uring_sqe* sqe = ring_.sqe();
     io_uring_prep_connect(sqe, fd, setup_.endpoint.sa(), setup_.endpoint.len);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(kConnect, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Connect, index, c.generation));
     sqe->flags |= IOSQE_IO_LINK;
     io_uring_sqe* timeout = ring_.sqe();
     io_uring_prep_link_timeout(timeout, &connect_timeout_ts_, 0);
-    io_uring_sqe_set_data64(timeout, net::encode_user_data(kConnectTimeout, index, c.generation));
+    io_uring_sqe_set_data64(timeout,
+                            net::encode_user_data(Op::ConnectTimeout, index, c.generation));
     inflight_ops_ += 2;
 }
 
@@ -403,14 +404,8 @@ void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outc
 void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     io_uring_sqe* sqe = ring_.sqe();
-    if (multishot_) {
-        io_uring_prep_recv_multishot(sqe, c.fd, nullptr, 0, 0);
-    } else {
-        io_uring_prep_recv(sqe, c.fd, nullptr, buf_ring_.buffer_size(), 0);
-    }
-    sqe->flags |= IOSQE_BUFFER_SELECT;
-    sqe->buf_group = buf_ring_.group_id();
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(kRecv, index, c.generation));
+    net::prep_group_recv(sqe, c.fd, buf_ring_.group_id(), buf_ring_.buffer_size(), multishot_);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
     ++inflight_ops_;
 }
@@ -418,23 +413,21 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
 void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= connections_.size()) return;
-    switch (ud.op) {
-        case kConnectTimeout:
+    switch (static_cast<Op>(ud.op)) {
+        case Op::ConnectTimeout:
             --inflight_ops_;
             return;
-        case kConnect:
+        case Op::Connect:
             --inflight_ops_;
             if (ud.generation == connections_[ud.index].generation && !stopping_) {
                 on_connect(ud.index, cqe.res, now);
             }
             return;
-        case kRecv:
+        case Op::Recv:
             on_recv(ud.index, cqe, now);
             return;
-        case kSend:
+        case Op::Send:
             on_send(ud.index, cqe, now);
-            return;
-        default:
             return;
     }
 }
@@ -545,10 +538,7 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (ud.generation != c.generation || stopping_) {
         // The socket it went to is gone; its buffer half is free again.
         c.send_in_flight = false;
-        if (c.state == Connection::State::Open && c.queued > 0 && !c.dirty) {
-            c.dirty = true;
-            dirty_.push_back(index);
-        }
+        if (c.state == Connection::State::Open && c.queued > 0) dirty_.mark(c.dirty, index);
         return;
     }
     if (cqe.res < 0) {
@@ -561,15 +551,12 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         io_uring_sqe* sqe = ring_.sqe();
         io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
                            c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
     c.send_in_flight = false;
-    if (c.queued > 0 && !c.dirty) {
-        c.dirty = true;
-        dirty_.push_back(index);
-    }
+    if (c.queued > 0) dirty_.mark(c.dirty, index);
 }
 
 bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept {
@@ -601,10 +588,7 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
             }
         }
     }
-    if (!c.dirty) {
-        c.dirty = true;
-        dirty_.push_back(index);
-    }
+    dirty_.mark(c.dirty, index);
     return true;
 }
 
@@ -650,23 +634,22 @@ void Worker::issue_open_loop(std::int64_t now) noexcept {
     }
 }
 
-void Worker::flush(std::int64_t) noexcept {
-    for (const std::uint32_t index : dirty_) {
+void Worker::flush() noexcept {
+    dirty_.drain([this](std::uint32_t index) {
         Connection& c = connections_[index];
         c.dirty = false;
-        if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) continue;
+        if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) return;
         io_uring_sqe* sqe = ring_.sqe();
-        if (sqe == nullptr) continue;
+        if (sqe == nullptr) return;
         io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(kSend, index, c.generation));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         c.inflight_len = c.queued;
         c.inflight_done = 0;
         c.send_in_flight = true;
         c.queue_half ^= 1u;
         c.queued = 0;
-    }
-    dirty_.clear();
+    });
 }
 
 void Worker::sweep_timeouts(std::int64_t now) noexcept {

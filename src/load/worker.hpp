@@ -16,6 +16,7 @@
 #include "load/plan.hpp"
 #include "load/stage_schedule.hpp"
 #include "net/buf_ring.hpp"
+#include "net/completion_loop.hpp"
 #include "net/ring.hpp"
 #include "net/socket.hpp"
 #include "stats/interval_recorder.hpp"
@@ -65,7 +66,8 @@ class Worker {
     std::atomic<std::uint32_t> open_connections{0};
 
   private:
-    enum Op : std::uint8_t { kConnect = 1, kConnectTimeout, kRecv, kSend };
+    // What a completion is for (the op field of its user_data).
+    enum class Op : std::uint8_t { Connect = 1, ConnectTimeout, Recv, Send };
 
     bool setup_io() noexcept;
     void loop() noexcept;
@@ -97,7 +99,7 @@ class Worker {
     void refill(std::uint32_t index, std::int64_t now) noexcept;  // after answers or timeouts
     void issue_open_loop(std::int64_t now) noexcept;
     void push_ready(std::uint32_t index) noexcept;
-    void flush(std::int64_t now) noexcept;
+    void flush() noexcept;
     void sweep_timeouts(std::int64_t now) noexcept;
     void record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
                 std::int64_t now) noexcept;
@@ -125,7 +127,7 @@ class Worker {
     LagTracker lag_;
     stats::IntervalRecorder interval_;
 
-    std::vector<std::uint32_t> dirty_;  // connections with queued bytes
+    net::DirtyList dirty_;              // connections with queued bytes
     std::vector<std::uint32_t> ready_;  // open loop: ring of connections with spare depth
     std::size_t ready_head_ = 0, ready_size_ = 0;
     std::vector<std::pair<std::int64_t, std::uint32_t>> connect_heap_;  // (due, index), min-heap

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 namespace mbstorm::net {
 
@@ -22,6 +23,14 @@ constexpr std::uint64_t encode_user_data(std::uint8_t op, std::uint32_t index,
                                          std::uint32_t generation) noexcept {
     return (static_cast<std::uint64_t>(op) << 56) |
            (static_cast<std::uint64_t>(generation & kGenerationMask) << 32) | index;
+}
+
+// The same for a worker's own operation enum (an `enum class Op : std::uint8_t`).
+template <class Op>
+requires std::is_enum_v<Op>
+constexpr std::uint64_t encode_user_data(Op op, std::uint32_t index,
+                                         std::uint32_t generation) noexcept {
+    return encode_user_data(static_cast<std::uint8_t>(op), index, generation);
 }
 
 constexpr UserData decode_user_data(std::uint64_t v) noexcept {

@@ -1,6 +1,7 @@
 #include "scenario/expect.hpp"
 
 #include "codec/bytes.hpp"
+#include "codec/function_code.hpp"
 #include "codec/values.hpp"
 
 namespace mbstorm::scenario {
@@ -29,49 +30,35 @@ bool verify(void* context, const load::RequestInfo& request, const codec::Respon
 }  // namespace
 
 bool can_expect(std::uint8_t function) noexcept {
-    switch (function) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x17:
-            return true;
-        default:
-            return false;
-    }
+    return codec::response_is(function, codec::ResponseShape::Bits) ||
+           codec::response_is(function, codec::ResponseShape::Registers);
 }
 
 bool response_matches(const Expectation& e, const load::RequestInfo& request,
                       const codec::Response& response) noexcept {
     if (!e.active) return true;
     const codec::Bytes data = response.payload;
-    switch (request.function) {
-        case 0x01:
-        case 0x02: {
-            if (data.size() < codec::packed_bit_bytes(request.quantity)) return false;
-            for (std::uint16_t i = 0; i < request.quantity; ++i) {
-                const std::uint16_t bit = codec::bit_at(data, i) ? 1 : 0;
-                if (!item_matches(e, static_cast<std::uint16_t>(request.address + i), bit)) {
-                    return false;
-                }
+    if (codec::response_is(request.function, codec::ResponseShape::Bits)) {
+        if (data.size() < codec::packed_bit_bytes(request.quantity)) return false;
+        for (std::uint16_t i = 0; i < request.quantity; ++i) {
+            const std::uint16_t bit = codec::bit_at(data, i) ? 1 : 0;
+            if (!item_matches(e, static_cast<std::uint16_t>(request.address + i), bit)) {
+                return false;
             }
-            return true;
         }
-        case 0x03:
-        case 0x04:
-        case 0x17: {
-            if (data.size() < 2U * request.quantity) return false;
-            for (std::uint16_t i = 0; i < request.quantity; ++i) {
-                const std::uint16_t reg = codec::load_be16(data.data() + 2U * i);
-                if (!item_matches(e, static_cast<std::uint16_t>(request.address + i), reg)) {
-                    return false;
-                }
-            }
-            return true;
-        }
-        default:
-            return true;
+        return true;
     }
+    if (codec::response_is(request.function, codec::ResponseShape::Registers)) {
+        if (data.size() < 2U * request.quantity) return false;
+        for (std::uint16_t i = 0; i < request.quantity; ++i) {
+            const std::uint16_t reg = codec::load_be16(data.data() + 2U * i);
+            if (!item_matches(e, static_cast<std::uint16_t>(request.address + i), reg)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    return true;
 }
 
 load::ResponseVerifier make_verifier(const std::vector<Expectation>& expectations) noexcept {

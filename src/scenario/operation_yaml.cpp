@@ -14,22 +14,35 @@ namespace {
 
 namespace lim = codec::limits;
 
-constexpr const char* kGeneratable =
-    "0x01 read_coils, 0x02 read_discrete_inputs, 0x03 read_holding_registers, "
-    "0x04 read_input_registers, 0x05 write_single_coil, 0x06 write_single_register, "
-    "0x07 read_exception_status, 0x08 diagnostics, 0x0B get_comm_event_counter, "
-    "0x0C get_comm_event_log, 0x0F write_multiple_coils, 0x10 write_multiple_registers, "
-    "0x11 report_server_id, 0x16 mask_write_register, 0x17 read_write_multiple_registers, "
-    "0x18 read_fifo_queue, 0x2B encapsulated_interface";
+using codec::RequestShape;
+
+template <RequestShape Shape>
+bool shape_is(std::uint8_t fc) noexcept {
+    return codec::request_is(fc, Shape);
+}
+
+// The public functions `pred` admits, as codes ("0x05, 0x06") or labels ("0x05
+// write_single_coil, ...") for "X does not apply to F (only to ...)".
+template <typename Pred>
+std::string functions_where(Pred pred, bool labels) {
+    std::string text;
+    for (const codec::FunctionInfo& f : codec::public_functions()) {
+        const std::uint8_t fc = codec::to_byte(f.code);
+        if (!pred(fc)) continue;
+        if (!text.empty()) text += ", ";
+        text += labels ? codec::function_label(fc) : fmt::format("0x{:02X}", fc);
+    }
+    return text;
+}
 
 std::uint8_t parse_function(const YamlReader& r, const YAML::Node& n) {
     const std::string text = r.scalar(n, "function");
     std::uint8_t fc = 0;
     if (auto error = codec::parse_function_code(text, fc); !error.empty())
-        r.fail(n, fmt::format("{} (generated: {})", error, kGeneratable));
+        r.fail(n, fmt::format("{} (generated: {})", error, load::generatable_functions_text()));
     if (!load::is_generatable_function(fc)) {
         r.fail(n, fmt::format("function {} cannot be generated (valid: {})",
-                              codec::function_label(fc), kGeneratable));
+                              codec::function_label(fc), load::generatable_functions_text()));
     }
     return fc;
 }
@@ -113,12 +126,11 @@ load::ValueSpec parse_values(const YamlReader& r, const YAML::Node& n) {
 
 Expectation parse_expect(const YamlReader& r, const YAML::Node& n, const load::Operation& op) {
     if (!can_expect(op.function)) {
-        r.fail(n, fmt::format("expect: {} returns no values to check (valid for 0x01 read_coils, "
-                              "0x02 read_discrete_inputs, 0x03 read_holding_registers, 0x04 "
-                              "read_input_registers and 0x17 read_write_multiple_registers)",
-                              codec::function_label(op.function)));
+        r.fail(n,
+               fmt::format("expect: {} returns no values to check (valid for {})",
+                           codec::function_label(op.function), functions_where(can_expect, true)));
     }
-    const bool bits = op.function == 0x01 || op.function == 0x02;
+    const bool bits = codec::response_is(op.function, codec::ResponseShape::Bits);
     const std::int64_t hi = bits ? 1 : 65535;
     Expectation e;
     e.active = true;
@@ -174,21 +186,29 @@ std::optional<codec::Table> function_table(std::uint8_t fc) noexcept {
 }
 
 QuantityLimits quantity_limits(std::uint8_t fc) noexcept {
-    return codec::limits::quantity_range(fc);
+    return codec::quantity_range(fc);
 }
 
 bool takes_values(std::uint8_t fc) noexcept {
-    switch (fc) {
-        case 0x05:
-        case 0x06:
-        case 0x0F:
-        case 0x10:
-        case 0x16:
-        case 0x17:
+    const codec::FunctionInfo* f = codec::function_info(fc);
+    if (f == nullptr) return false;
+    switch (f->request) {
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+        case RequestShape::MultipleCoils:
+        case RequestShape::MultipleRegisters:
+        case RequestShape::MaskWrite:
+        case RequestShape::ReadWriteRegisters:
             return true;
-        default:
+        case RequestShape::FunctionOnly:
+        case RequestShape::AddressQuantity:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::FifoPointer:
+        case RequestShape::MeiTransport:
             return false;
     }
+    return false;
 }
 
 ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std::size_t index) {
@@ -215,7 +235,7 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
          "values", "weight", "write_quantity", "and_mask", "device_id_code", "expect",
          "thresholds"},
         [&](const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
-            auto only_for = [&](bool ok, const char* valid) {
+            auto only_for = [&](bool ok, const std::string& valid) {
                 if (!ok) {
                     r.fail(key_node,
                            fmt::format("{} does not apply to {} (only to {})", key, fname, valid));
@@ -230,12 +250,18 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
             } else if (key == "unit") {
                 op.unit_id = static_cast<std::uint8_t>(r.integer(v, "unit", 0, 255));
             } else if (key == "address") {
-                only_for(function_table(op.function).has_value(),
-                         "functions with an address: 0x01-0x06, 0x0F, 0x10, 0x16, 0x17, 0x18");
+                only_for(
+                    function_table(op.function).has_value(),
+                    "functions with an address: " +
+                        functions_where(
+                            [](std::uint8_t fc) { return function_table(fc).has_value(); }, false));
                 address_node = v;
             } else if (key == "quantity") {
-                only_for(q.max != 0,
-                         "functions with a quantity: 0x01-0x06, 0x0F, 0x10, 0x16, 0x17");
+                only_for(
+                    q.max != 0,
+                    "functions with a quantity: " +
+                        functions_where(
+                            [](std::uint8_t fc) { return quantity_limits(fc).max != 0; }, false));
                 quantity_node = v;
                 op.quantity = static_cast<std::uint16_t>(
                     r.integer(v, fmt::format("quantity for {}", fname), q.min, q.max));
@@ -254,19 +280,23 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
                                        load::kMaxZipfExponent));
                 }
             } else if (key == "values") {
-                only_for(takes_values(op.function), "writes: 0x05, 0x06, 0x0F, 0x10, 0x16, 0x17");
+                only_for(takes_values(op.function),
+                         "writes: " + functions_where(takes_values, false));
                 op.values = parse_values(r, v);
             } else if (key == "weight") {
                 op.weight = static_cast<std::uint32_t>(r.integer(v, "weight", 1, 4294967295LL));
             } else if (key == "write_quantity") {
-                only_for(op.function == 0x17, "0x17 read_write_multiple_registers");
+                only_for(codec::request_is(op.function, RequestShape::ReadWriteRegisters),
+                         functions_where(shape_is<RequestShape::ReadWriteRegisters>, true));
                 op.write_quantity = static_cast<std::uint16_t>(
                     r.integer(v, "write_quantity", 1, lim::kMaxRwWriteRegisters));
             } else if (key == "and_mask") {
-                only_for(op.function == 0x16, "0x16 mask_write_register");
+                only_for(codec::request_is(op.function, RequestShape::MaskWrite),
+                         functions_where(shape_is<RequestShape::MaskWrite>, true));
                 op.and_mask = static_cast<std::uint16_t>(r.integer(v, "and_mask", 0, 65535));
             } else if (key == "device_id_code") {
-                only_for(op.function == 0x2B, "0x2B encapsulated_interface");
+                only_for(codec::request_is(op.function, RequestShape::MeiTransport),
+                         functions_where(shape_is<RequestShape::MeiTransport>, true));
                 op.device_id_code = static_cast<std::uint8_t>(
                     r.integer(v, "device_id_code", lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
             } else if (key == "expect") {
@@ -281,8 +311,7 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
     if (address_node) parse_address(r, address_node, op);
     if (function_table(op.function)) {
         // The whole block must fit the address space and the range.
-        const std::uint32_t span = op.function == 0x17 ? std::max(op.quantity, op.write_quantity)
-                                                       : std::max<std::uint16_t>(op.quantity, 1);
+        const std::uint32_t span = load::address_span(op);
         const YAML::Node& at =
             address_node ? address_node.node : (quantity_node ? quantity_node.node : node);
         if (op.first_address + span - 1 > 0xFFFF) {

@@ -92,6 +92,277 @@ bool parse_target(const std::string& text, std::string& host, std::uint16_t& por
     return true;
 }
 
+namespace {
+
+// The top-level keys whose meaning depends on others: kept to be checked together, and to
+// point errors at.
+struct TopLevelNodes {
+    NodeSlot target, slave, duration, stages, ops, thresholds, model, rate, transactions, backoff;
+};
+
+// Reads every top-level key: plain settings into `s`, the rest into the returned slots.
+TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenario& s) {
+    load::Plan& p = s.plan;
+    TopLevelNodes k;
+    r.each_key(
+        root, "the scenario", {"name",           "description",
+                               "target",         "slave",
+                               "slave_threads",  "threads",
+                               "connections",    "depth",
+                               "model",          "rate",
+                               "arrival",        "duration",
+                               "transactions",   "warmup",
+                               "timeout",        "connect_timeout",
+                               "connect_rate",   "reconnect_backoff",
+                               "late_threshold", "allow_writes",
+                               "seed",           "stages",
+                               "operations",     "thresholds"},
+        [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
+            if (key == "name")
+                s.name = r.scalar(v, "name");
+            else if (key == "description")
+                s.description = r.scalar(v, "description");
+            else if (key == "target") {
+                k.target = v;
+                s.target = r.scalar(v, "target");
+                check_target(r, v, s.target);
+            } else if (key == "slave")
+                k.slave = v;
+            else if (key == "slave_threads")
+                s.slave_threads = static_cast<unsigned>(r.integer(v, "slave_threads", 0, 1024));
+            else if (key == "threads")
+                p.threads = static_cast<std::uint32_t>(
+                    r.integer(v, "threads (0 = one per core)", 0, load::kMaxThreads));
+            else if (key == "connections")
+                p.connections = static_cast<std::uint32_t>(
+                    r.integer(v, "connections", 1, load::kMaxConnections));
+            else if (key == "depth")
+                p.depth = static_cast<std::uint32_t>(r.integer(v, "depth", 1, load::kMaxDepth));
+            else if (key == "model") {
+                k.model = v;
+                s.model = r.choice(v, "model", {"closed", "open"}) == "open"
+                              ? load::LoadModel::OpenLoop
+                              : load::LoadModel::ClosedLoop;
+            } else if (key == "rate") {
+                k.rate = v;
+                p.rate = r.number(v, "rate (transactions/s)", 0, load::kMaxRate);
+            } else if (key == "arrival")
+                p.arrival = r.choice(v, "arrival", {"even", "poisson"}) == "poisson"
+                                ? load::Arrival::Poisson
+                                : load::Arrival::Even;
+            else if (key == "duration") {
+                k.duration = v;
+                p.duration = r.duration(v, "duration", 0s, kMaxRunTime);
+            } else if (key == "transactions") {
+                k.transactions = v;
+                p.transactions = static_cast<std::uint64_t>(
+                    r.integer(v, "transactions", 0, std::int64_t{1} << 62));
+            } else if (key == "warmup") {
+                p.warmup = r.duration(v, "warmup", 0s, kMaxRunTime);
+            } else if (key == "timeout")
+                p.transaction_timeout = r.duration(v, "timeout", 1ms, 1h);
+            else if (key == "connect_timeout")
+                p.connect_timeout = r.duration(v, "connect_timeout", 0s, 1h, true);
+            else if (key == "connect_rate")
+                p.connect_rate = r.number(v, "connect_rate (connections/s)", 1, 1e7);
+            else if (key == "reconnect_backoff") {
+                k.backoff = v;
+                r.each_key(v, "reconnect_backoff", {"min", "max"},
+                           [&](const std::string& k, const YAML::Node&, const YAML::Node& d) {
+                               (k == "min" ? p.reconnect_backoff_min : p.reconnect_backoff_max) =
+                                   r.duration(d, "reconnect_backoff." + k, 0s, 1h);
+                           });
+            } else if (key == "late_threshold")
+                p.late_threshold = r.duration(v, "late_threshold", 0s, 1h);
+            else if (key == "allow_writes")
+                p.allow_writes = r.boolean(v, "allow_writes");
+            else if (key == "seed")
+                p.seed = static_cast<std::uint64_t>(r.integer(v, "seed", 0, std::int64_t{1} << 62));
+            else if (key == "stages")
+                k.stages = v;
+            else if (key == "operations")
+                k.ops = v;
+            else if (key == "thresholds")
+                k.thresholds = v;
+        });
+
+    return k;
+}
+
+// The operations, their names made unique, and their per-operation expectations and
+// thresholds. Returns the names, which overall thresholds refer to.
+OperationNames parse_operations(const YamlReader& r, const YAML::Node& root, const TopLevelNodes& k,
+                                Scenario& s) {
+    load::Plan& p = s.plan;
+    if (!k.ops) r.fail(root, "`operations` is required: a list of at least one operation");
+    if (!k.ops.node.IsSequence() || k.ops.node.size() == 0) {
+        r.fail(k.ops, "operations must be a list of at least one operation");
+    }
+    if (k.ops.node.size() > kMaxOperations) {
+        r.fail(k.ops.node[kMaxOperations], fmt::format("too many operations: {} (at most {})",
+                                                       k.ops.node.size(), kMaxOperations));
+    }
+    OperationNames names;
+    std::vector<ParsedOperation> parsed;
+    parsed.reserve(k.ops.node.size());
+    for (std::size_t i = 0; i < k.ops.node.size(); ++i) {
+        parsed.push_back(parse_operation(r, k.ops.node[i], i));
+    }
+    // Explicit names must be unique; default names get a suffix when they collide.
+    for (std::size_t i = 0; i < parsed.size(); ++i) {
+        if (parsed[i].named && !names.add_explicit(parsed[i].operation.name)) {
+            r.fail(k.ops.node[i]["name"], fmt::format("operation name '{}' is used twice (names "
+                                                      "must be unique)",
+                                                      parsed[i].operation.name));
+        }
+    }
+    for (std::size_t i = 0; i < parsed.size(); ++i) {
+        auto& op = parsed[i].operation;
+        if (!parsed[i].named) op.name = names.add_default(op.name);
+        for (auto& t : parsed[i].thresholds) t.operation = op.name;
+        p.operations.push_back(op);
+        s.expectations.push_back(parsed[i].expect);
+        s.thresholds.insert(s.thresholds.end(), parsed[i].thresholds.begin(),
+                            parsed[i].thresholds.end());
+    }
+
+    return names;
+}
+
+// Overall thresholds: "p99 < 5ms", or {operation: NAME, check: "p99 < 5ms"}.
+void parse_thresholds(const YamlReader& r, const TopLevelNodes& k, const OperationNames& names,
+                      Scenario& s) {
+    if (k.thresholds) {
+        if (!k.thresholds.node.IsSequence()) {
+            r.fail(k.thresholds, "thresholds must be a list of expressions like \"p99 < 5ms\"");
+        }
+        if (k.thresholds.node.size() > kMaxThresholds) {
+            r.fail(k.thresholds.node[kMaxThresholds],
+                   fmt::format("too many thresholds: {} (at most {})", k.thresholds.node.size(),
+                               kMaxThresholds));
+        }
+        for (const auto& t : k.thresholds.node) {
+            ThresholdSpec spec;
+            std::string error;
+            NodeSlot expr;
+            std::string op_name;
+            if (!t.IsMap()) {
+                expr = t;
+            } else {
+                NodeSlot op_node;
+                r.each_key(t, "threshold", {"operation", "check"},
+                           [&](const std::string& k, const YAML::Node&, const YAML::Node& v) {
+                               if (k == "operation") {
+                                   op_node = v;
+                                   op_name = r.scalar(v, "operation");
+                               } else {
+                                   expr = v;
+                               }
+                           });
+                if (!expr) r.fail(t, "threshold: `check` is required (e.g. check: p99 < 5ms)");
+                if (op_node && !names.contains(op_name)) {
+                    r.fail(op_node, fmt::format("threshold: no operation is named '{}' (names: {})",
+                                                op_name, fmt::join(names.all(), ", ")));
+                }
+            }
+            if (!parse_threshold(r.scalar(expr, "threshold"), spec, error)) r.fail(expr, error);
+            spec.operation = op_name;
+            s.thresholds.push_back(std::move(spec));
+        }
+    }
+}
+
+// Stages, which replace duration and transactions.
+void parse_stages(const YamlReader& r, const TopLevelNodes& k, Scenario& s) {
+    load::Plan& p = s.plan;
+    if (k.stages) {
+        if (!k.stages.node.IsSequence() || k.stages.node.size() == 0) {
+            r.fail(k.stages, "stages must be a list of at least one stage");
+        }
+        if (k.stages.node.size() > kMaxStages) {
+            r.fail(k.stages.node[kMaxStages], fmt::format("too many stages: {} (at most {})",
+                                                          k.stages.node.size(), kMaxStages));
+        }
+        if (k.duration) {
+            r.fail(k.duration,
+                   "duration: not used with stages (the run lasts the sum of the "
+                   "stage durations); remove it");
+        }
+        if (k.transactions) {
+            r.fail(k.transactions,
+                   "transactions: not supported with stages (stages end by "
+                   "time); remove it");
+        }
+        for (std::size_t i = 0; i < k.stages.node.size(); ++i) {
+            s.stages.push_back(parse_stage(r, k.stages.node[i], i));
+        }
+        p.duration = s.total_duration();
+    }
+}
+
+// The model: open loop when asked for, or when a rate is given anywhere.
+void settle_model(const YamlReader& r, const TopLevelNodes& k, Scenario& s) {
+    load::Plan& p = s.plan;
+    bool stage_rate = false;
+    for (std::size_t i = 0; i < s.stages.size(); ++i) {
+        if (!s.stages[i].rate) continue;
+        stage_rate = true;
+        if (s.model == load::LoadModel::ClosedLoop) {
+            r.fail(k.stages.node[i]["rate"],
+                   "stage rate needs an open-loop scenario (model: open "
+                   "or no model key)");
+        }
+    }
+    p.model = s.model.value_or(p.rate > 0 || stage_rate ? load::LoadModel::OpenLoop
+                                                        : load::LoadModel::ClosedLoop);
+    if (p.model == load::LoadModel::OpenLoop && p.rate <= 0 && !stage_rate) {
+        r.fail(k.rate ? k.rate : k.model,
+               fmt::format("rate: an open-loop run needs a rate > 0 (valid > 0..{:g} "
+                           "transactions/s)",
+                           load::kMaxRate));
+    }
+    if (k.rate && p.model == load::LoadModel::ClosedLoop && p.rate > 0) {
+        r.fail(k.rate,
+               "rate: not used in a closed-loop run (model: closed); remove it or "
+               "use model: open");
+    }
+}
+
+// Length of the run, and the reconnect backoff's order.
+void check_run_length(const YamlReader& r, const TopLevelNodes& k, Scenario& s) {
+    const load::Plan& p = s.plan;
+    if (s.stages.empty() && p.duration == load::Duration::zero() && p.transactions == 0) {
+        r.fail(k.duration,
+               "duration: 0s never ends the run (valid > 0s, or 0s with transactions >= 1)");
+    }
+    if (k.backoff && p.reconnect_backoff_max < p.reconnect_backoff_min) {
+        r.fail(k.backoff, fmt::format("reconnect_backoff: max {} is below min {} (need min <= "
+                                      "max)",
+                                      duration_text(p.reconnect_backoff_max),
+                                      duration_text(p.reconnect_backoff_min)));
+    }
+}
+
+// The embedded slave: a device model, only without a target.
+void parse_embedded_slave(const YamlReader& r, const TopLevelNodes& k, std::string_view source,
+                          Scenario& s) {
+    if (k.slave) {
+        if (k.target) {
+            r.fail(k.slave,
+                   "slave: only used with the embedded slave; remove `target` or "
+                   "`slave`");
+        }
+        try {
+            s.slave = slave::parse_device_node(k.slave, source);
+        } catch (const slave::DeviceYamlError& e) {
+            throw ScenarioError(e.what(), e.line(), e.column());
+        }
+        s.slave_given = true;
+    }
+}
+
+}  // namespace
+
 Scenario parse_scenario(std::string_view text, std::string_view source) {
     const YamlReader r{std::string(source)};
     YAML::Node root;
@@ -114,248 +385,14 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
     p.depth = kDefaultDepth;
     p.operations.clear();
 
-    NodeSlot target_node, slave_node, duration_node, stages_node, ops_node, thresholds_node,
-        model_node, rate_node, transactions_node, backoff_node;
     try {
-        r.each_key(
-            root, "the scenario", {"name",           "description",
-                                   "target",         "slave",
-                                   "slave_threads",  "threads",
-                                   "connections",    "depth",
-                                   "model",          "rate",
-                                   "arrival",        "duration",
-                                   "transactions",   "warmup",
-                                   "timeout",        "connect_timeout",
-                                   "connect_rate",   "reconnect_backoff",
-                                   "late_threshold", "allow_writes",
-                                   "seed",           "stages",
-                                   "operations",     "thresholds"},
-            [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
-                if (key == "name")
-                    s.name = r.scalar(v, "name");
-                else if (key == "description")
-                    s.description = r.scalar(v, "description");
-                else if (key == "target") {
-                    target_node = v;
-                    s.target = r.scalar(v, "target");
-                    check_target(r, v, s.target);
-                } else if (key == "slave")
-                    slave_node = v;
-                else if (key == "slave_threads")
-                    s.slave_threads = static_cast<unsigned>(r.integer(v, "slave_threads", 0, 1024));
-                else if (key == "threads")
-                    p.threads = static_cast<std::uint32_t>(
-                        r.integer(v, "threads (0 = one per core)", 0, load::kMaxThreads));
-                else if (key == "connections")
-                    p.connections = static_cast<std::uint32_t>(
-                        r.integer(v, "connections", 1, load::kMaxConnections));
-                else if (key == "depth")
-                    p.depth = static_cast<std::uint32_t>(r.integer(v, "depth", 1, load::kMaxDepth));
-                else if (key == "model") {
-                    model_node = v;
-                    s.model = r.choice(v, "model", {"closed", "open"}) == "open"
-                                  ? load::LoadModel::OpenLoop
-                                  : load::LoadModel::ClosedLoop;
-                } else if (key == "rate") {
-                    rate_node = v;
-                    p.rate = r.number(v, "rate (transactions/s)", 0, load::kMaxRate);
-                } else if (key == "arrival")
-                    p.arrival = r.choice(v, "arrival", {"even", "poisson"}) == "poisson"
-                                    ? load::Arrival::Poisson
-                                    : load::Arrival::Even;
-                else if (key == "duration") {
-                    duration_node = v;
-                    p.duration = r.duration(v, "duration", 0s, kMaxRunTime);
-                } else if (key == "transactions") {
-                    transactions_node = v;
-                    p.transactions = static_cast<std::uint64_t>(
-                        r.integer(v, "transactions", 0, std::int64_t{1} << 62));
-                } else if (key == "warmup") {
-                    p.warmup = r.duration(v, "warmup", 0s, kMaxRunTime);
-                } else if (key == "timeout")
-                    p.transaction_timeout = r.duration(v, "timeout", 1ms, 1h);
-                else if (key == "connect_timeout")
-                    p.connect_timeout = r.duration(v, "connect_timeout", 0s, 1h, true);
-                else if (key == "connect_rate")
-                    p.connect_rate = r.number(v, "connect_rate (connections/s)", 1, 1e7);
-                else if (key == "reconnect_backoff") {
-                    backoff_node = v;
-                    r.each_key(
-                        v, "reconnect_backoff", {"min", "max"},
-                        [&](const std::string& k, const YAML::Node&, const YAML::Node& d) {
-                            (k == "min" ? p.reconnect_backoff_min : p.reconnect_backoff_max) =
-                                r.duration(d, "reconnect_backoff." + k, 0s, 1h);
-                        });
-                } else if (key == "late_threshold")
-                    p.late_threshold = r.duration(v, "late_threshold", 0s, 1h);
-                else if (key == "allow_writes")
-                    p.allow_writes = r.boolean(v, "allow_writes");
-                else if (key == "seed")
-                    p.seed =
-                        static_cast<std::uint64_t>(r.integer(v, "seed", 0, std::int64_t{1} << 62));
-                else if (key == "stages")
-                    stages_node = v;
-                else if (key == "operations")
-                    ops_node = v;
-                else if (key == "thresholds")
-                    thresholds_node = v;
-            });
-
-        // Operations.
-        if (!ops_node) r.fail(root, "`operations` is required: a list of at least one operation");
-        if (!ops_node.node.IsSequence() || ops_node.node.size() == 0) {
-            r.fail(ops_node, "operations must be a list of at least one operation");
-        }
-        if (ops_node.node.size() > kMaxOperations) {
-            r.fail(ops_node.node[kMaxOperations],
-                   fmt::format("too many operations: {} (at most {})", ops_node.node.size(),
-                               kMaxOperations));
-        }
-        OperationNames names;
-        std::vector<ParsedOperation> parsed;
-        parsed.reserve(ops_node.node.size());
-        for (std::size_t i = 0; i < ops_node.node.size(); ++i) {
-            parsed.push_back(parse_operation(r, ops_node.node[i], i));
-        }
-        // Explicit names must be unique; default names get a suffix when they collide.
-        for (std::size_t i = 0; i < parsed.size(); ++i) {
-            if (parsed[i].named && !names.add_explicit(parsed[i].operation.name)) {
-                r.fail(ops_node.node[i]["name"],
-                       fmt::format("operation name '{}' is used twice (names "
-                                   "must be unique)",
-                                   parsed[i].operation.name));
-            }
-        }
-        for (std::size_t i = 0; i < parsed.size(); ++i) {
-            auto& op = parsed[i].operation;
-            if (!parsed[i].named) op.name = names.add_default(op.name);
-            for (auto& t : parsed[i].thresholds) t.operation = op.name;
-            p.operations.push_back(op);
-            s.expectations.push_back(parsed[i].expect);
-            s.thresholds.insert(s.thresholds.end(), parsed[i].thresholds.begin(),
-                                parsed[i].thresholds.end());
-        }
-
-        // Overall thresholds: "p99 < 5ms", or {operation: NAME, check: "p99 < 5ms"}.
-        if (thresholds_node) {
-            if (!thresholds_node.node.IsSequence()) {
-                r.fail(thresholds_node,
-                       "thresholds must be a list of expressions like \"p99 < 5ms\"");
-            }
-            if (thresholds_node.node.size() > kMaxThresholds) {
-                r.fail(thresholds_node.node[kMaxThresholds],
-                       fmt::format("too many thresholds: {} (at most {})",
-                                   thresholds_node.node.size(), kMaxThresholds));
-            }
-            for (const auto& t : thresholds_node.node) {
-                ThresholdSpec spec;
-                std::string error;
-                NodeSlot expr;
-                std::string op_name;
-                if (!t.IsMap()) {
-                    expr = t;
-                } else {
-                    NodeSlot op_node;
-                    r.each_key(t, "threshold", {"operation", "check"},
-                               [&](const std::string& k, const YAML::Node&, const YAML::Node& v) {
-                                   if (k == "operation") {
-                                       op_node = v;
-                                       op_name = r.scalar(v, "operation");
-                                   } else {
-                                       expr = v;
-                                   }
-                               });
-                    if (!expr) r.fail(t, "threshold: `check` is required (e.g. check: p99 < 5ms)");
-                    if (op_node && !names.contains(op_name)) {
-                        r.fail(op_node,
-                               fmt::format("threshold: no operation is named '{}' (names: {})",
-                                           op_name, fmt::join(names.all(), ", ")));
-                    }
-                }
-                if (!parse_threshold(r.scalar(expr, "threshold"), spec, error)) r.fail(expr, error);
-                spec.operation = op_name;
-                s.thresholds.push_back(std::move(spec));
-            }
-        }
-
-        // Stages.
-        if (stages_node) {
-            if (!stages_node.node.IsSequence() || stages_node.node.size() == 0) {
-                r.fail(stages_node, "stages must be a list of at least one stage");
-            }
-            if (stages_node.node.size() > kMaxStages) {
-                r.fail(stages_node.node[kMaxStages],
-                       fmt::format("too many stages: {} (at most {})", stages_node.node.size(),
-                                   kMaxStages));
-            }
-            if (duration_node) {
-                r.fail(duration_node,
-                       "duration: not used with stages (the run lasts the sum of the "
-                       "stage durations); remove it");
-            }
-            if (transactions_node) {
-                r.fail(transactions_node,
-                       "transactions: not supported with stages (stages end by "
-                       "time); remove it");
-            }
-            for (std::size_t i = 0; i < stages_node.node.size(); ++i) {
-                s.stages.push_back(parse_stage(r, stages_node.node[i], i));
-            }
-            p.duration = s.total_duration();
-        }
-
-        // The model: open loop when asked for, or when a rate is given anywhere.
-        bool stage_rate = false;
-        for (std::size_t i = 0; i < s.stages.size(); ++i) {
-            if (!s.stages[i].rate) continue;
-            stage_rate = true;
-            if (s.model == load::LoadModel::ClosedLoop) {
-                r.fail(stages_node.node[i]["rate"],
-                       "stage rate needs an open-loop scenario (model: open "
-                       "or no model key)");
-            }
-        }
-        p.model = s.model.value_or(p.rate > 0 || stage_rate ? load::LoadModel::OpenLoop
-                                                            : load::LoadModel::ClosedLoop);
-        if (p.model == load::LoadModel::OpenLoop && p.rate <= 0 && !stage_rate) {
-            r.fail(rate_node ? rate_node : model_node,
-                   fmt::format("rate: an open-loop run needs a rate > 0 (valid > 0..{:g} "
-                               "transactions/s)",
-                               load::kMaxRate));
-        }
-        if (rate_node && p.model == load::LoadModel::ClosedLoop && p.rate > 0) {
-            r.fail(rate_node,
-                   "rate: not used in a closed-loop run (model: closed); remove it or "
-                   "use model: open");
-        }
-
-        // Length of the run.
-        if (s.stages.empty() && p.duration == load::Duration::zero() && p.transactions == 0) {
-            r.fail(duration_node,
-                   "duration: 0s never ends the run (valid > 0s, or 0s with transactions >= 1)");
-        }
-        if (backoff_node && p.reconnect_backoff_max < p.reconnect_backoff_min) {
-            r.fail(backoff_node,
-                   fmt::format("reconnect_backoff: max {} is below min {} (need min <= "
-                               "max)",
-                               duration_text(p.reconnect_backoff_max),
-                               duration_text(p.reconnect_backoff_min)));
-        }
-
-        // The embedded slave.
-        if (slave_node) {
-            if (target_node) {
-                r.fail(slave_node,
-                       "slave: only used with the embedded slave; remove `target` or "
-                       "`slave`");
-            }
-            try {
-                s.slave = slave::parse_device_node(slave_node, source);
-            } catch (const slave::DeviceYamlError& e) {
-                throw ScenarioError(e.what(), e.line(), e.column());
-            }
-            s.slave_given = true;
-        }
+        const TopLevelNodes k = read_top_level(r, root, s);
+        const OperationNames names = parse_operations(r, root, k, s);
+        parse_thresholds(r, k, names, s);
+        parse_stages(r, k, s);
+        settle_model(r, k, s);
+        check_run_length(r, k, s);
+        parse_embedded_slave(r, k, source, s);
     } catch (const YAML::Exception& e) {  // e.g. a conversion yaml-cpp refused
         r.fail(e.mark, e.msg);
     }

@@ -56,10 +56,12 @@ void emit_operation(YAML::Emitter& out, const load::Operation& op, const Expecta
     if (quantity_limits(op.function).max != 0) {
         out << YAML::Key << "quantity" << YAML::Value << op.quantity;
     }
-    if (op.function == 0x17)
+    using codec::RequestShape;
+    if (codec::request_is(op.function, RequestShape::ReadWriteRegisters))
         out << YAML::Key << "write_quantity" << YAML::Value << op.write_quantity;
-    if (op.function == 0x16) out << YAML::Key << "and_mask" << YAML::Value << op.and_mask;
-    if (op.function == 0x2B) {
+    if (codec::request_is(op.function, RequestShape::MaskWrite))
+        out << YAML::Key << "and_mask" << YAML::Value << op.and_mask;
+    if (codec::request_is(op.function, RequestShape::MeiTransport)) {
         out << YAML::Key << "device_id_code" << YAML::Value << static_cast<int>(op.device_id_code);
     }
     out << YAML::Key << "distribution" << YAML::Value << address_mode_name(op.address_mode);

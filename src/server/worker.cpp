@@ -106,21 +106,21 @@ void Worker::arm_accept() noexcept {
         io_uring_prep_multishot_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
     else
         io_uring_prep_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAccept, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Accept, 0, 0));
 }
 
 void Worker::arm_stop() noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_read(sqe, stop_fd_, &stop_value_, sizeof stop_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpStop, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Stop, 0, 0));
 }
 
 void Worker::arm_mail() noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_read(sqe, mail_fd_, &mail_value_, sizeof mail_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpMail, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Mail, 0, 0));
 }
 
 void Worker::request_eviction() noexcept {
@@ -176,18 +176,12 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
-    if (multishot_recv_) {
-        io_uring_prep_recv_multishot(sqe, c.fd, nullptr, 0, 0);
-    } else if (use_buf_ring_) {
-        io_uring_prep_recv(sqe, c.fd, nullptr, config_.buf_size, 0);
+    if (use_buf_ring_) {
+        net::prep_group_recv(sqe, c.fd, kBufGroup, config_.buf_size, multishot_recv_);
     } else {
         io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
     }
-    if (use_buf_ring_) {
-        sqe->flags |= IOSQE_BUFFER_SELECT;
-        sqe->buf_group = kBufGroup;
-    }
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpRecv, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
 }
 
@@ -195,8 +189,8 @@ void Worker::cancel_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
-    io_uring_prep_cancel64(sqe, net::encode_user_data(OpRecv, index, c.generation), 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, index, c.generation));
+    io_uring_prep_cancel64(sqe, net::encode_user_data(Op::Recv, index, c.generation), 0);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, index, c.generation));
 }
 
 void Worker::loop() noexcept {
@@ -204,7 +198,7 @@ void Worker::loop() noexcept {
         std::int64_t deadline = next_deadline();
         std::int64_t wait = deadline < 0 ? -1 : std::max<std::int64_t>(deadline - now_, 0);
         int rc = ring_.submit_and_wait(1, wait);
-        if (rc < 0 && rc != -ETIME && rc != -EINTR && rc != -EAGAIN && rc != -EBUSY) break;
+        if (net::wait_failed(rc)) break;
         now_ = net::now_ns();
         ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
         for (std::uint32_t index : rearm_) {
@@ -214,11 +208,10 @@ void Worker::loop() noexcept {
         rearm_.clear();
         run_timers();
         // One send per connection for everything that arrived in this batch.
-        for (std::uint32_t index : dirty_) {
+        dirty_.drain([this](std::uint32_t index) {
             conns_[index].dirty = false;
             flush(index);
-        }
-        dirty_.clear();
+        });
     }
 }
 
@@ -229,7 +222,7 @@ void Worker::shutdown_all() noexcept {
     for (std::uint32_t i = 0; i < conns_.size(); ++i) close_connection(i);
     if (io_uring_sqe* sqe = ring_.sqe()) {
         io_uring_prep_cancel64(sqe, 0, IORING_ASYNC_CANCEL_ANY);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(OpCancel, 0, 0));
+        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, 0, 0));
     }
     std::int64_t until = net::now_ns() + kStopDrainNs;
     auto busy = [this] {
@@ -244,28 +237,28 @@ void Worker::shutdown_all() noexcept {
 }
 
 void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
-    switch (net::decode_user_data(cqe.user_data).op) {
-        case OpAccept:
+    switch (static_cast<Op>(net::decode_user_data(cqe.user_data).op)) {
+        case Op::Accept:
             on_accept(cqe);
             break;
-        case OpRecv:
+        case Op::Recv:
             on_recv(cqe);
             break;
-        case OpSend:
+        case Op::Send:
             on_send(cqe);
             break;
-        case OpStop:
+        case Op::Stop:
             stopping_ = true;
             break;
-        case OpAcceptPause:
+        case Op::AcceptPause:
             if (!stopping_) arm_accept();
             break;
-        case OpMail:
+        case Op::Mail:
             serve_evictions();
             if (!stopping_) arm_mail();
             break;
-        default:
-            break;
+        case Op::Cancel:
+            break;  // the cancelled recv reports itself
     }
 }
 
@@ -296,7 +289,7 @@ void Worker::pause_accept() noexcept {
     accept_pause_ts_.tv_sec = accept_pause_ns_ / net::kNsPerSec;
     accept_pause_ts_.tv_nsec = accept_pause_ns_ % net::kNsPerSec;
     io_uring_prep_timeout(sqe, &accept_pause_ts_, 0, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpAcceptPause, 0, 0));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::AcceptPause, 0, 0));
     accept_pause_ns_ = std::min(accept_pause_ns_ * 2, kAcceptPauseMaxNs);
 }
 
@@ -538,13 +531,13 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
-            queue_exception(c, frame, 0x0B);
+            queue_exception(c, frame, codec::ExceptionCode::GatewayTargetFailedToRespond);
         mark_dirty(c, index);
         return true;
     }
     if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
         counters_.add(ServerCounters::BusyRejects);
-        queue_exception(c, frame, 0x06);
+        queue_exception(c, frame, codec::ExceptionCode::ServerDeviceBusy);
         mark_dirty(c, index);
         return true;
     }
@@ -569,7 +562,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
             hold_from_here(index, release_ns);
         }
         if (decision.action == slave::FaultDecision::Action::Exception) {
-            queue_exception(c, frame, static_cast<std::uint8_t>(decision.exception));
+            queue_exception(c, frame, decision.exception);
             mark_dirty(c, index);
             return true;
         }
@@ -587,10 +580,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                : slave::handle_request(frame.pdu, model_, pdu_out);
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
-    codec::store_be16(p, frame.header.transaction_id);
-    codec::store_be16(p + 2, 0);
-    codec::store_be16(p + 4, static_cast<std::uint16_t>(r.size + 1));
-    p[6] = frame.header.unit_id;
+    codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id, r.size);
     const std::size_t n = codec::limits::kMbapHeader + r.size;
     c.out.commit(n);
     counters_.add(ServerCounters::PendingOutput, n);
@@ -603,23 +593,18 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
 }
 
 void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
-                             std::uint8_t code) noexcept {
+                             codec::ExceptionCode code) noexcept {
     std::uint8_t* p;
     try {
-        p = c.out.reserve(pool_, 9);
+        p = c.out.reserve(pool_, codec::kExceptionAduSize);
     } catch (...) {
         return;
     }
-    codec::store_be16(p, frame.header.transaction_id);
-    codec::store_be16(p + 2, 0);
-    codec::store_be16(p + 4, 3);
-    p[6] = frame.header.unit_id;
-    p[7] = static_cast<std::uint8_t>((frame.pdu.empty() ? 0 : frame.pdu[0]) | 0x80);
-    p[8] = code;
-    c.out.commit(9);
-    counters_.add(ServerCounters::PendingOutput, 9);
+    codec::write_exception_frame(p, frame, code);
+    c.out.commit(codec::kExceptionAduSize);
+    counters_.add(ServerCounters::PendingOutput, codec::kExceptionAduSize);
     counters_.add(ServerCounters::Transactions);
-    counters_.add_exception(code);
+    counters_.add_exception(static_cast<std::uint8_t>(code));
 }
 
 void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept {
@@ -639,10 +624,7 @@ void Worker::hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept
 }
 
 void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
-    if (!c.dirty) {
-        c.dirty = true;
-        dirty_.push_back(index);
-    }
+    dirty_.mark(c.dirty, index);
 }
 
 void Worker::flush(std::uint32_t index) noexcept {
@@ -654,7 +636,7 @@ void Worker::flush(std::uint32_t index) noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_send(sqe, c.fd, p, size, MSG_NOSIGNAL);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(OpSend, index, c.generation));
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
     c.send_inflight = true;
 }
 

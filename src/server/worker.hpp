@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "net/buf_ring.hpp"
+#include "net/completion_loop.hpp"
 #include "net/ring.hpp"
 #include "server/config.hpp"
 #include "server/connection.hpp"
@@ -46,15 +47,8 @@ class Worker {
     void request_eviction() noexcept;  // any thread
 
   private:
-    enum Op : std::uint8_t {
-        OpAccept = 1,
-        OpRecv,
-        OpSend,
-        OpStop,
-        OpCancel,
-        OpAcceptPause,
-        OpMail
-    };
+    // What a completion is for (the op field of its user_data).
+    enum class Op : std::uint8_t { Accept = 1, Recv, Send, Stop, Cancel, AcceptPause, Mail };
 
     int setup() noexcept;
     void loop() noexcept;
@@ -94,7 +88,8 @@ class Worker {
     // False when the connection was closed (fault drop).
     // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
     bool on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
-    void queue_exception(Connection& c, const codec::TcpFrame& frame, std::uint8_t code) noexcept;
+    void queue_exception(Connection& c, const codec::TcpFrame& frame,
+                         codec::ExceptionCode code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
     void mark_dirty(Connection& c, std::uint32_t index) noexcept;
     void flush(std::uint32_t index) noexcept;
@@ -133,7 +128,7 @@ class Worker {
 
     std::deque<Connection> conns_;  // stable addresses; grows, never shrinks
     std::vector<std::uint32_t> free_slots_;
-    std::vector<std::uint32_t> dirty_;
+    net::DirtyList dirty_;
     std::vector<std::uint32_t> rearm_;
     std::vector<std::uint32_t> held_;
     std::vector<std::uint32_t> partial_;  // connections holding part of a frame

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "codec/ascii.hpp"
-#include "framing_test_util.hpp"
+#include "framing_test_support.hpp"
 
 namespace mbstorm::codec {
 namespace {

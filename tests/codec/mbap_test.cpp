@@ -5,7 +5,7 @@
 #include <cstring>
 
 #include "codec/mbap.hpp"
-#include "framing_test_util.hpp"
+#include "framing_test_support.hpp"
 
 namespace mbstorm::codec {
 namespace {

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "codec/rtu.hpp"
-#include "framing_test_util.hpp"
+#include "framing_test_support.hpp"
 
 namespace mbstorm::codec {
 namespace {

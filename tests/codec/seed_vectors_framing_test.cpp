@@ -18,7 +18,7 @@
 #include "codec/mbap.hpp"
 #include "codec/rtu.hpp"
 #include "codec/values.hpp"
-#include "framing_test_util.hpp"
+#include "framing_test_support.hpp"
 
 namespace mbstorm::codec {
 namespace {

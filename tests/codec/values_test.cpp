@@ -9,7 +9,7 @@
 #include <string>
 
 #include "codec/values.hpp"
-#include "framing_test_util.hpp"
+#include "framing_test_support.hpp"
 
 namespace mbstorm::codec {
 namespace {

@@ -7,7 +7,7 @@
 #include <memory>
 #include <vector>
 
-#include "../server/test_client.hpp"
+#include "../server/client_test_support.hpp"
 #include "server/server.hpp"
 #include "server/stats.hpp"
 

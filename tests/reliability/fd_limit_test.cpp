@@ -10,7 +10,7 @@
 #include <memory>
 #include <vector>
 
-#include "../server/test_client.hpp"
+#include "../server/client_test_support.hpp"
 #include "net/features.hpp"
 #include "server/server.hpp"
 

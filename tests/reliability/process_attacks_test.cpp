@@ -13,7 +13,7 @@
 #include <memory>
 #include <sstream>
 
-#include "../server/test_client.hpp"
+#include "../server/client_test_support.hpp"
 #include "child_process.hpp"
 #include "hostile_target.hpp"
 

@@ -11,9 +11,9 @@
 #include <memory>
 #include <vector>
 
+#include "client_test_support.hpp"
 #include "net/features.hpp"
 #include "server/server.hpp"
-#include "test_client.hpp"
 
 using namespace mbstorm;
 using test::Client;

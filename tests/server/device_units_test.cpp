@@ -4,10 +4,10 @@
 
 #include <memory>
 
+#include "client_test_support.hpp"
 #include "server/server.hpp"
 #include "slave/data_model.hpp"
 #include "slave/device_yaml.hpp"
-#include "test_client.hpp"
 
 using namespace mbstorm;
 using test::Client;

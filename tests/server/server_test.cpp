@@ -5,11 +5,11 @@
 #include <memory>
 #include <vector>
 
+#include "client_test_support.hpp"
 #include "net/socket.hpp"
 #include "server/server.hpp"
 #include "server/stats.hpp"
 #include "slave/data_model.hpp"
-#include "test_client.hpp"
 
 using namespace mbstorm;
 using test::Client;

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "../support/counting_allocator.hpp"
+#include "client_test_support.hpp"
 #include "server/server.hpp"
-#include "test_client.hpp"
 
 using namespace mbstorm;
 

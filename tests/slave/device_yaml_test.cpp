@@ -5,7 +5,7 @@
 #include <string>
 
 #include "slave/device_yaml.hpp"
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

@@ -4,7 +4,7 @@
 #include <map>
 #include <string>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

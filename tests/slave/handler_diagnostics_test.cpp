@@ -1,7 +1,7 @@
 // FC08 diagnostics, FC0B comm event counter, FC0C comm event log.
 #include <gtest/gtest.h>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

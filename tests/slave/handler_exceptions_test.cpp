@@ -2,7 +2,7 @@
 // and table-size limits.
 #include <gtest/gtest.h>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

@@ -1,7 +1,7 @@
 // FC14/15 file records and FC18 FIFO queues.
 #include <gtest/gtest.h>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

@@ -1,7 +1,7 @@
 // Reads and writes of the four tables: FC01-06, 0F, 10, 16, 17.
 #include <gtest/gtest.h>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {

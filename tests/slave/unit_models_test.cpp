@@ -1,7 +1,7 @@
 // Shared and per-unit models, unknown units, unit-0 broadcast.
 #include <gtest/gtest.h>
 
-#include "slave_test_util.hpp"
+#include "slave_test_support.hpp"
 
 namespace mbstorm::slave::test {
 namespace {
