@@ -30,6 +30,16 @@ struct TcpFrame {
 // Reads the 7-byte header (needs at least 7 bytes; no validation).
 MbapHeader read_mbap_header(const std::uint8_t* p) noexcept;
 
+// The whole ADU (header and PDU) a header announces: what a stream reader cuts, whether or
+// not the length is valid.
+constexpr std::size_t adu_size(const MbapHeader& h) noexcept {
+    return limits::kMbapHeader - 1 + h.length;
+}
+// The same, from the first 6 bytes of a frame (needs at least 6 bytes).
+inline std::size_t announced_adu_size(const std::uint8_t* frame) noexcept {
+    return limits::kMbapHeader - 1 + load_be16(frame + 4);
+}
+
 // Validates a header: BadProtocolId, LengthZero, LengthOne, LengthTooLong or Ok.
 CodecError check_mbap_header(const MbapHeader& h) noexcept;
 

@@ -8,6 +8,7 @@
 #include <cerrno>
 
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/executor.hpp"
 
@@ -120,7 +121,7 @@ void BatchRunner::prepare(Lane& l, Round& round) {
         for (const Step& s : round.cases[ci].steps) case_bytes += s.bytes.size();
         const std::size_t end = off + case_bytes;
         while (off + lim::kMbapHeader <= end) {
-            const std::size_t size = 6u + codec::load_be16(l.out.data() + off + 4);
+            const std::size_t size = codec::announced_adu_size(l.out.data() + off);
             Lane::Frame f{ci, {}, off + size};
             const std::uint16_t tid = codec::load_be16(l.out.data() + off);
             if (l.by_tid[tid] >= 0)
@@ -181,7 +182,7 @@ void BatchRunner::parse(Lane& l, Round& round) {
             fail(l, round, false);
             return;
         }
-        const std::size_t size = 6u + h.length;
+        const std::size_t size = codec::adu_size(h);
         if (l.in.size() - l.in_pos < size) return;
         const std::int32_t k = l.by_tid[h.transaction_id];
         if (k >= 0 && l.frames[k].answered && !l.frames[k].fence) {

@@ -16,8 +16,10 @@
 #include <thread>
 #include <utility>
 
+#include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
@@ -47,13 +49,7 @@ std::pair<std::size_t, std::size_t> size_of(const Case& c) {
 }
 
 Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit) {
-    Pdu f(lim::kMbapHeader + pdu.size());
-    codec::store_be16(f.data(), tid);
-    codec::store_be16(f.data() + 2, 0);
-    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(pdu.size() + 1));
-    f[6] = unit;
-    std::copy(pdu.begin(), pdu.end(), f.begin() + lim::kMbapHeader);
-    return f;
+    return frame_pdu(pdu, tid, unit);
 }
 
 // Sends all frames at once on one connection and collects answers by transaction id until
@@ -86,12 +82,12 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
             while (in.size() - pos >= lim::kMbapHeader) {
                 const auto h = codec::read_mbap_header(in.data() + pos);
                 if (h.length < 2 || h.length > lim::kMaxMbapLength) return answers;
-                if (in.size() - pos < 6u + h.length) break;
+                if (in.size() - pos < codec::adu_size(h)) break;
                 if (h.transaction_id < answers.size())
                     answers[h.transaction_id].assign(
                         in.begin() + static_cast<std::ptrdiff_t>(pos + 7),
-                        in.begin() + static_cast<std::ptrdiff_t>(pos + 6 + h.length));
-                pos += 6u + h.length;
+                        in.begin() + static_cast<std::ptrdiff_t>(pos + codec::adu_size(h)));
+                pos += codec::adu_size(h);
             }
         }
     }
@@ -103,27 +99,51 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
 constexpr unsigned kMaxRestartsPerCause = 3;
 
 // A rule as a folder name part: "target-down/fc0F-invalid" -> "target-down-fc0F-invalid".
-// Canonical valid requests of every function code the codec knows (discovery asks each once).
+// A valid request of every public function code (discovery asks each once): made from each
+// function's request shape in the codec's table, writes aimed just below the state range.
+Pdu canonical_request(const codec::FunctionInfo& info) {
+    using codec::RequestShape;
+    const std::uint8_t fc = codec::to_byte(info.code);
+    switch (info.request) {
+        case RequestShape::FunctionOnly:
+            return {fc};
+        case RequestShape::AddressQuantity:
+            return {fc, 0, 0, 0, 1};
+        case RequestShape::SingleCoil:
+            return {fc, 0x5F, 0xFF, 0xFF, 0x00};
+        case RequestShape::SingleRegister:
+            return {fc, 0x5F, 0xFF, 0, 0};
+        case RequestShape::SubFunction:
+            return {fc, 0, 0, 0x12, 0x34};  // return query data
+        case RequestShape::MultipleCoils:
+            return {fc, 0x5F, 0xFF, 0, 1, 1, 0};
+        case RequestShape::MultipleRegisters:
+            return {fc, 0x5F, 0xFF, 0, 1, 2, 0, 0};
+        case RequestShape::FileRecords:
+            // One sub-request of record 0 in file 1: a read, or a write of one register.
+            if (info.writes) return {fc, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0};
+            return {fc, 7, 6, 0, 1, 0, 0, 0, 1};
+        case RequestShape::MaskWrite:
+            return {fc, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0};
+        case RequestShape::ReadWriteRegisters:
+            return {fc, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0};
+        case RequestShape::FifoPointer:
+            return {fc, 0x5F, 0xFF};
+        case RequestShape::MeiTransport: {
+            const std::uint8_t basic = 0x01;  // read device id code 01: the basic objects
+            return {fc, codec::kMeiReadDeviceId, basic, 0x00};
+        }
+    }
+    return {fc};
+}
+
 const std::vector<Pdu>& canonical_requests() {
-    static const std::vector<Pdu> canonical = {{0x01, 0, 0, 0, 1},
-                                               {0x02, 0, 0, 0, 1},
-                                               {0x03, 0, 0, 0, 1},
-                                               {0x04, 0, 0, 0, 1},
-                                               {0x05, 0x5F, 0xFF, 0xFF, 0x00},
-                                               {0x06, 0x5F, 0xFF, 0, 0},
-                                               {0x07},
-                                               {0x08, 0, 0, 0x12, 0x34},
-                                               {0x0B},
-                                               {0x0C},
-                                               {0x0F, 0x5F, 0xFF, 0, 1, 1, 0},
-                                               {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0},
-                                               {0x11},
-                                               {0x14, 7, 6, 0, 1, 0, 0, 0, 1},
-                                               {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
-                                               {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0},
-                                               {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
-                                               {0x18, 0x5F, 0xFF},
-                                               {0x2B, 0x0E, 0x01, 0x00}};
+    static const std::vector<Pdu> canonical = [] {
+        std::vector<Pdu> out;
+        for (const codec::FunctionInfo& info : codec::public_functions())
+            out.push_back(canonical_request(info));
+        return out;
+    }();
     return canonical;
 }
 
@@ -193,7 +213,7 @@ bool reassemble(const Case& c, Case& plain) {
     }
     std::size_t off = 0, frames = 0;
     while (bytes.size() - off > lim::kMbapHeader) {
-        const std::size_t size = 6u + codec::load_be16(bytes.data() + off + 4);
+        const std::size_t size = codec::announced_adu_size(bytes.data() + off);
         if (size <= lim::kMbapHeader || size > bytes.size() - off) return false;
         off += size;
         ++frames;
@@ -220,7 +240,7 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
         if (s.op != Op::Send) continue;
         std::size_t off = 0;
         while (s.bytes.size() - off > lim::kMbapHeader) {
-            const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
             if (size > s.bytes.size() - off) break;
             RequestInfo info;
             describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
@@ -240,7 +260,7 @@ bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
         if (s.op != Op::Send) continue;
         std::size_t off = 0;
         while (s.bytes.size() - off > lim::kMbapHeader) {
-            const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
             if (size > s.bytes.size() - off) break;
             RequestInfo info;
             describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
@@ -994,9 +1014,12 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
     profile = TargetProfile{};
     profile.unit = unit;
     // Probe candidates, most common first.
-    const std::vector<Pdu> probes = {
-        {0x03, 0, 0, 0, 1},      {0x04, 0, 0, 0, 1}, {0x01, 0, 0, 0, 1}, {0x02, 0, 0, 0, 1}, {0x11},
-        {0x08, 0, 0, 0x12, 0x34}};
+    using codec::FunctionCode;
+    std::vector<Pdu> probes;
+    for (FunctionCode fc : {FunctionCode::ReadHoldingRegisters, FunctionCode::ReadInputRegisters,
+                            FunctionCode::ReadCoils, FunctionCode::ReadDiscreteInputs,
+                            FunctionCode::ReportServerId, FunctionCode::Diagnostics})
+        probes.push_back(canonical_request(*codec::function_info(codec::to_byte(fc))));
     std::vector<Pdu> frames;
     for (std::size_t i = 0; i < probes.size(); ++i)
         frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit));
@@ -1053,7 +1076,9 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
             continue;
         }
         const std::uint8_t fc = pdus[i][0];
-        if (a.size() == 2 && a[0] == (fc | 0x80) && a[1] == 0x01) profile.unsupported[fc] = true;
+        if (a.size() == 2 && a[0] == (fc | codec::kExceptionBit) &&
+            a[1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalFunction))
+            profile.unsupported[fc] = true;
         if (!codec::is_supported_function(fc) && a[0] == fc) profile.extended[fc] = true;
     }
     return true;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/executor.hpp"
 
@@ -71,7 +72,7 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
             if (n > 0) {
                 h.in.insert(h.in.end(), buf, buf + n);
                 if (h.in.size() >= lim::kMbapHeader &&
-                    h.in.size() >= 6u + codec::load_be16(h.in.data() + 4)) {
+                    h.in.size() >= codec::announced_adu_size(h.in.data())) {
                     h.state = ConnState::Answered;
                     h.in.clear();
                 }

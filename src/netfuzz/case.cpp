@@ -1,5 +1,10 @@
 #include "netfuzz/case.hpp"
 
+#include <algorithm>
+
+#include "codec/limits.hpp"
+#include "codec/mbap.hpp"
+
 #include <array>
 
 namespace mbstorm::netfuzz {
@@ -53,6 +58,14 @@ std::uint8_t Case::connections() const noexcept {
     for (const Step& s : steps)
         if (s.conn + 1 > n) n = static_cast<std::uint8_t>(s.conn + 1);
     return n;
+}
+
+std::vector<std::uint8_t> frame_pdu(const std::vector<std::uint8_t>& pdu, std::uint16_t tid,
+                                    std::uint8_t unit) {
+    std::vector<std::uint8_t> f(codec::limits::kMbapHeader + pdu.size());
+    codec::write_mbap_header(f.data(), tid, unit, pdu.size());
+    std::copy(pdu.begin(), pdu.end(), f.begin() + codec::limits::kMbapHeader);
+    return f;
 }
 
 }  // namespace mbstorm::netfuzz

@@ -72,4 +72,9 @@ struct Case {
     std::uint8_t connections() const noexcept;
 };
 
+// One MBAP frame around `pdu` (header written by the codec). Any size: a mutation may have
+// made a PDU the codec's encoder would refuse; lengths that lie are set afterwards.
+std::vector<std::uint8_t> frame_pdu(const std::vector<std::uint8_t>& pdu, std::uint16_t tid,
+                                    std::uint8_t unit);
+
 }  // namespace mbstorm::netfuzz

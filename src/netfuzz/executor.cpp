@@ -13,6 +13,7 @@
 
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "net/clock.hpp"
 
 namespace mbstorm::netfuzz {
@@ -158,7 +159,7 @@ void Runner::parse_sent(Conn& c) {
             c.desync = true;
             return;
         }
-        const std::size_t size = 6u + h.length;
+        const std::size_t size = codec::adu_size(h);
         if (c.sent.size() - c.parsed < size) return;
         Pending pd;
         pd.offset = c.parsed;
@@ -207,7 +208,7 @@ void Runner::parse_received(Conn& c) {
             c.framing_lost = true;
             return;
         }
-        const std::size_t size = 6u + h.length;
+        const std::size_t size = codec::adu_size(h);
         if (c.received.size() - c.rparsed < size) return;
         bool matched = false;
         for (Pending& pd : c.pending) {
@@ -642,13 +643,7 @@ int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept {
 }
 
 std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_t tid) {
-    std::vector<std::uint8_t> f(lim::kMbapHeader + profile.probe_pdu.size());
-    codec::store_be16(f.data(), tid);
-    codec::store_be16(f.data() + 2, 0);
-    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(profile.probe_pdu.size() + 1));
-    f[6] = profile.unit;
-    std::copy(profile.probe_pdu.begin(), profile.probe_pdu.end(), f.begin() + lim::kMbapHeader);
-    return f;
+    return frame_pdu(profile.probe_pdu, tid, profile.unit);
 }
 
 ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile,
@@ -678,7 +673,7 @@ ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profi
         if (have >= lim::kMbapHeader) {
             const codec::MbapHeader h = codec::read_mbap_header(buf);
             if (h.length < 2 || h.length > lim::kMaxMbapLength) return ProbeResult::BadAnswer;
-            if (have >= 6u + h.length) return ProbeResult::Ok;
+            if (have >= codec::adu_size(h)) return ProbeResult::Ok;
         }
         if (have == sizeof buf) return ProbeResult::BadAnswer;
     }

@@ -5,6 +5,7 @@
 #include "codec/bytes.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
 #include "netfuzz/oracle.hpp"
 
@@ -18,6 +19,37 @@ void put16(Pdu& p, std::uint16_t v) {
     p.push_back(static_cast<std::uint8_t>(v >> 8));
     p.push_back(static_cast<std::uint8_t>(v));
 }
+
+// The function codes the generator builds boundary cases for, by the codec's names.
+constexpr std::uint8_t kReadCoils = codec::to_byte(codec::FunctionCode::ReadCoils);
+constexpr std::uint8_t kReadDiscreteInputs =
+    codec::to_byte(codec::FunctionCode::ReadDiscreteInputs);
+constexpr std::uint8_t kReadHoldingRegisters =
+    codec::to_byte(codec::FunctionCode::ReadHoldingRegisters);
+constexpr std::uint8_t kReadInputRegisters =
+    codec::to_byte(codec::FunctionCode::ReadInputRegisters);
+constexpr std::uint8_t kWriteSingleCoil = codec::to_byte(codec::FunctionCode::WriteSingleCoil);
+constexpr std::uint8_t kWriteSingleRegister =
+    codec::to_byte(codec::FunctionCode::WriteSingleRegister);
+constexpr std::uint8_t kReadExceptionStatus =
+    codec::to_byte(codec::FunctionCode::ReadExceptionStatus);
+constexpr std::uint8_t kDiagnostics = codec::to_byte(codec::FunctionCode::Diagnostics);
+constexpr std::uint8_t kGetCommEventCounter =
+    codec::to_byte(codec::FunctionCode::GetCommEventCounter);
+constexpr std::uint8_t kGetCommEventLog = codec::to_byte(codec::FunctionCode::GetCommEventLog);
+constexpr std::uint8_t kWriteMultipleCoils =
+    codec::to_byte(codec::FunctionCode::WriteMultipleCoils);
+constexpr std::uint8_t kWriteMultipleRegisters =
+    codec::to_byte(codec::FunctionCode::WriteMultipleRegisters);
+constexpr std::uint8_t kReportServerId = codec::to_byte(codec::FunctionCode::ReportServerId);
+constexpr std::uint8_t kReadFileRecord = codec::to_byte(codec::FunctionCode::ReadFileRecord);
+constexpr std::uint8_t kWriteFileRecord = codec::to_byte(codec::FunctionCode::WriteFileRecord);
+constexpr std::uint8_t kMaskWriteRegister = codec::to_byte(codec::FunctionCode::MaskWriteRegister);
+constexpr std::uint8_t kReadWriteMultipleRegisters =
+    codec::to_byte(codec::FunctionCode::ReadWriteMultipleRegisters);
+constexpr std::uint8_t kReadFifoQueue = codec::to_byte(codec::FunctionCode::ReadFifoQueue);
+constexpr std::uint8_t kEncapsulatedInterface =
+    codec::to_byte(codec::FunctionCode::EncapsulatedInterface);
 
 Pdu pdu5(std::uint8_t fc, std::uint16_t a, std::uint16_t b) {
     Pdu p{fc};
@@ -48,7 +80,7 @@ void add_reads(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
 
 // FC0F/FC10: quantity, and byte counts that agree or disagree with it.
 void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
-    const bool coils = fc == 0x0F;
+    const bool coils = fc == kWriteMultipleCoils;
     const std::uint32_t qs[] = {0u, 1u, 2u, 8u, 9u, max - 1u, max, max + 1u, 0xFFFFu};
     for (std::uint32_t q : qs) {
         const std::uint32_t right = coils ? (q + 7) / 8 : 2 * q;
@@ -77,7 +109,7 @@ void add_file_records(std::vector<Pdu>& out) {
     const Sub subs[] = {{6, 1, 0, 1},      {6, 1, 9999, 1}, {6, 1, 10000, 1}, {6, 0, 0, 1},
                         {6, 0xFFFF, 0, 1}, {5, 1, 0, 1},    {7, 1, 0, 1},     {6, 1, 0, 0},
                         {6, 1, 9990, 20},  {6, 4, 0, 120},  {6, 5, 0, 1},     {0xFF, 1, 0, 1}};
-    for (std::uint8_t fc : {std::uint8_t{0x14}, std::uint8_t{0x15}}) {
+    for (std::uint8_t fc : {kReadFileRecord, kWriteFileRecord}) {
         for (const Sub& s : subs) {
             for (int copies : {1, 2}) {
                 Pdu body;
@@ -86,7 +118,7 @@ void add_file_records(std::vector<Pdu>& out) {
                     put16(body, s.file);
                     put16(body, s.record);
                     put16(body, s.length);
-                    if (fc == 0x15)
+                    if (fc == kWriteFileRecord)
                         for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u;
                              ++i)
                             body.push_back(static_cast<std::uint8_t>(i));
@@ -119,7 +151,7 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
                 for (int skew : {0, 1, -1}) {
                     const int bc = static_cast<int>(2 * wq) + skew;
                     if (bc < 0) continue;
-                    Pdu p = pdu5(0x17, ra, static_cast<std::uint16_t>(rq));
+                    Pdu p = pdu5(kReadWriteMultipleRegisters, ra, static_cast<std::uint16_t>(rq));
                     put16(p, wa);
                     put16(p, static_cast<std::uint16_t>(wq));
                     const int room = static_cast<int>(lim::kMaxPdu) - 10;
@@ -131,7 +163,8 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
             }
         }
         // The read range itself at the top of the address space.
-        Pdu p = pdu5(0x17, static_cast<std::uint16_t>(0x10000 - std::max(rq, 1u) + 1),
+        Pdu p = pdu5(kReadWriteMultipleRegisters,
+                     static_cast<std::uint16_t>(0x10000 - std::max(rq, 1u) + 1),
                      static_cast<std::uint16_t>(rq));
         put16(p, 0);
         put16(p, 1);
@@ -145,16 +178,18 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
 
 std::vector<std::vector<std::uint8_t>> structured_pdus() {
     std::vector<Pdu> out;
-    add_reads(out, 0x01, lim::kMaxReadBits);
-    add_reads(out, 0x02, lim::kMaxReadBits);
-    add_reads(out, 0x03, lim::kMaxReadRegisters);
-    add_reads(out, 0x04, lim::kMaxReadRegisters);
+    add_reads(out, kReadCoils, lim::kMaxReadBits);
+    add_reads(out, kReadDiscreteInputs, lim::kMaxReadBits);
+    add_reads(out, kReadHoldingRegisters, lim::kMaxReadRegisters);
+    add_reads(out, kReadInputRegisters, lim::kMaxReadRegisters);
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
         for (std::uint16_t v : {0x0000, 0xFF00, 0x0001, 0x00FF, 0xFFFF, 0xFF01, 0x8000})
-            out.push_back(pdu5(0x05, a, v));
+            out.push_back(pdu5(kWriteSingleCoil, a, v));
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
-        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF}) out.push_back(pdu5(0x06, a, v));
-    for (std::uint8_t fc : {0x07, 0x0B, 0x0C, 0x11}) {
+        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF})
+            out.push_back(pdu5(kWriteSingleRegister, a, v));
+    for (std::uint8_t fc :
+         {kReadExceptionStatus, kGetCommEventCounter, kGetCommEventLog, kReportServerId}) {
         out.push_back(Pdu{fc});
         out.push_back(Pdu{fc, 0x00});
     }
@@ -165,30 +200,30 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
          {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x000F, 0x0010, 0x0011,
           0x0012, 0x0013, 0x0014, 0x0015, 0x00FF, 0xFFFF}) {
         for (int words : {0, 1, 2}) {
-            Pdu p{0x08};
+            Pdu p{kDiagnostics};
             put16(p, sub);
             for (int i = 0; i < words; ++i) put16(p, sub == 0 ? 0xA55A : 0x0000);
             out.push_back(std::move(p));
         }
     }
     {
-        Pdu echo{0x08, 0x00, 0x00};
+        Pdu echo{kDiagnostics, 0x00, 0x00};
         for (int i = 0; i < 250; ++i) echo.push_back(static_cast<std::uint8_t>(i));
         out.push_back(echo);
     }
-    add_multi_writes(out, 0x0F, lim::kMaxWriteCoils);
-    add_multi_writes(out, 0x10, lim::kMaxWriteRegisters);
+    add_multi_writes(out, kWriteMultipleCoils, lim::kMaxWriteCoils);
+    add_multi_writes(out, kWriteMultipleRegisters, lim::kMaxWriteRegisters);
     add_file_records(out);
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFFF}) {
         for (std::uint16_t m : {0x0000, 0xFFFF, 0x00FF}) {
-            Pdu p = pdu5(0x16, a, m);
+            Pdu p = pdu5(kMaskWriteRegister, a, m);
             put16(p, static_cast<std::uint16_t>(~m));
             out.push_back(std::move(p));
         }
     }
     add_read_write_multiple(out);
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFE0, 0xFFFE, 0xFFFF}) {
-        Pdu p{0x18};
+        Pdu p{kReadFifoQueue};
         put16(p, a);
         out.push_back(std::move(p));
     }
@@ -196,10 +231,11 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
     // the edges of the basic, regular, reserved and extended ranges.
     for (std::uint8_t code : {0, 1, 2, 3, 4, 5, 0xFF})
         for (std::uint8_t obj : {0x00, 0x01, 0x02, 0x03, 0x06, 0x07, 0x7F, 0x80, 0xFF})
-            out.push_back(Pdu{0x2B, codec::kMeiReadDeviceId, code, obj});
-    for (std::uint8_t mei : {0x00, 0x0D, 0x0F, 0xFF}) out.push_back(Pdu{0x2B, mei, 0x01, 0x00});
-    out.push_back(Pdu{0x2B});
-    out.push_back(Pdu{0x2B, codec::kMeiReadDeviceId});
+            out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId, code, obj});
+    for (std::uint8_t mei : {0x00, 0x0D, 0x0F, 0xFF})
+        out.push_back(Pdu{kEncapsulatedInterface, mei, 0x01, 0x00});
+    out.push_back(Pdu{kEncapsulatedInterface});
+    out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId});
     // Every function code 0-255: bare, and with a plausible read body.
     for (unsigned fc = 0; fc < 256; ++fc) {
         const auto b = static_cast<std::uint8_t>(fc);
@@ -300,16 +336,11 @@ bool Generator::deprioritised(const Case& c) const noexcept {
 
 std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
                                            std::uint8_t unit) {
-    std::vector<std::uint8_t> f(lim::kMbapHeader + pdu.size());
+    std::vector<std::uint8_t> f = frame_pdu(pdu, tid(), unit);
     // However the PDU was made (a mutation, random bytes), never diagnostics 0001 (restart)
     // or 0004 (listen-only): a device may rightly go quiet after either. Echo (0000) instead.
     const bool restart_or_listen_only =
         pdu.size() >= 3 && pdu[0] == 0x08 && pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
-    codec::store_be16(f.data(), tid());
-    codec::store_be16(f.data() + 2, 0);
-    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(pdu.size() + 1));
-    f[6] = unit;
-    std::copy(pdu.begin(), pdu.end(), f.begin() + lim::kMbapHeader);
     if (restart_or_listen_only) f[lim::kMbapHeader + 2] = 0x00;
     return f;
 }
@@ -605,23 +636,26 @@ void Generator::burst_split(Case& out) {
 void Generator::stateful(Case& out, bool cross) {
     out.cls = cross ? MutationClass::StatefulCross : MutationClass::StatefulSame;
     const std::uint16_t base = state_address(130);
-    const std::uint8_t writes[] = {0x05, 0x06, 0x0F, 0x10, 0x10, 0x17, 0x16};
+    const std::uint8_t writes[] = {kWriteSingleCoil,        kWriteSingleRegister,
+                                   kWriteMultipleCoils,     kWriteMultipleRegisters,
+                                   kWriteMultipleRegisters, kReadWriteMultipleRegisters,
+                                   kMaskWriteRegister};
     const std::uint8_t fc = rng_.pick(writes);
     out.function = fc;
     std::vector<std::uint8_t> w{fc};
     std::uint16_t qty = 1;
     bool coils = false;
     switch (fc) {
-        case 0x05:
+        case kWriteSingleCoil:
             coils = true;
             put16(w, base);
             put16(w, rng_.chance(2) ? 0xFF00 : 0x0000);
             break;
-        case 0x06:
+        case kWriteSingleRegister:
             put16(w, base);
             put16(w, word());
             break;
-        case 0x0F: {
+        case kWriteMultipleCoils: {
             coils = true;
             qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteCoils));
             put16(w, base);
@@ -630,7 +664,7 @@ void Generator::stateful(Case& out, bool cross) {
             for (int i = 0; i < (qty + 7) / 8; ++i) w.push_back(rng_.byte());
             break;
         }
-        case 0x10: {
+        case kWriteMultipleRegisters: {
             qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteRegisters));
             put16(w, base);
             put16(w, qty);
@@ -638,7 +672,7 @@ void Generator::stateful(Case& out, bool cross) {
             for (int i = 0; i < qty; ++i) put16(w, word());
             break;
         }
-        case 0x17: {
+        case kReadWriteMultipleRegisters: {
             qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwWriteRegisters));
             // Read back an overlapping range in the same request, then again separately.
             const std::uint16_t rq =
@@ -674,20 +708,23 @@ void Generator::stateful(Case& out, bool cross) {
     const std::uint16_t max = coils ? lim::kMaxReadBits : lim::kMaxReadRegisters;
     const std::uint16_t n = std::min(qty, max);
     out.steps.push_back(
-        Step{Op::Send, reader, 0, 0, frame(pdu5(coils ? 0x01 : 0x03, base, n), options_.unit)});
-    if (fc == 0x16) {
+        Step{Op::Send, reader, 0, 0,
+             frame(pdu5(coils ? kReadCoils : kReadHoldingRegisters, base, n), options_.unit)});
+    if (fc == kMaskWriteRegister) {
         // The mask write's result depends on the old value (written above): read it too.
-        out.steps.back().bytes = frame(pdu5(0x03, base, 1), options_.unit);
+        out.steps.back().bytes = frame(pdu5(kReadHoldingRegisters, base, 1), options_.unit);
     }
     const std::uint16_t before = static_cast<std::uint16_t>(
         base - std::min<std::uint32_t>(3, base - std::min(base, options_.state.base)));
     const std::uint16_t span = static_cast<std::uint16_t>(
         std::min<std::uint32_t>({std::uint32_t{n} + 3, max, 0x10000u - before}));
-    out.steps.push_back(Step{Op::Send, reader, 0, 0,
-                             frame(pdu5(coils ? 0x01 : 0x03, before, span), options_.unit)});
+    out.steps.push_back(
+        Step{Op::Send, reader, 0, 0,
+             frame(pdu5(coils ? kReadCoils : kReadHoldingRegisters, before, span), options_.unit)});
     // And the other connection reads the overlapping range too: every reader must see it.
-    out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
-                             frame(pdu5(coils ? 0x01 : 0x03, before, span), options_.unit)});
+    out.steps.push_back(
+        Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
+             frame(pdu5(coils ? kReadCoils : kReadHoldingRegisters, before, span), options_.unit)});
     // Registers have a second reader, FC 17: its read part must show the same values (its own
     // write goes to a register of the state range outside the window, so it changes nothing
     // there).

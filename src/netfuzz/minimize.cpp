@@ -4,6 +4,7 @@
 
 #include "codec/bytes.hpp"
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -18,7 +19,7 @@ Case split_frames(const Case& c) {
         std::size_t off = 0;
         std::vector<Step> parts;
         while (s.bytes.size() - off >= codec::limits::kMbapHeader) {
-            const std::size_t size = 6u + codec::load_be16(s.bytes.data() + off + 4);
+            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
             if (size > s.bytes.size() - off || size <= 6u) break;
             parts.push_back(Step{Op::Send,
                                  s.conn,
@@ -72,7 +73,7 @@ void drop_steps(Case& best, const Reproduces& reproduces, unsigned& budget) {
 
 bool is_one_frame(const std::vector<std::uint8_t>& bytes) {
     return bytes.size() > codec::limits::kMbapHeader &&
-           bytes.size() == 6u + codec::load_be16(bytes.data() + 4);
+           bytes.size() == codec::announced_adu_size(bytes.data());
 }
 
 // The frame with its PDU cut to `pdu_size` bytes and its MBAP length field to match.

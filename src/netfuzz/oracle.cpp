@@ -43,7 +43,14 @@ Verdict make(Oracle o, std::string rule, const RequestInfo& rq, std::string summ
 // Function codes whose sub-function (or object) support legitimately varies per device, so a
 // 01 answer is acceptable for any of their requests.
 bool sub_function_varies(std::uint8_t fc) noexcept {
-    return fc == 0x08 || fc == 0x2B || fc == 0x14 || fc == 0x15;
+    using codec::RequestShape;
+    return codec::request_is(fc, RequestShape::SubFunction) ||
+           codec::request_is(fc, RequestShape::MeiTransport) ||
+           codec::request_is(fc, RequestShape::FileRecords);
+}
+
+constexpr std::uint8_t code_of(ExceptionCode e) noexcept {
+    return static_cast<std::uint8_t>(e);
 }
 
 }  // namespace
@@ -162,7 +169,8 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         return make(Oracle::MalformedResponse, "response-function", rq,
                     fmt::format("response function 0x{:02X} for request {}",
                                 pdu.empty() ? 0 : pdu[0], codec::function_label(fc)),
-                    fmt::format("function 0x{:02X} or 0x{:02X}", fc & 0x7F, (fc & 0x7F) | 0x80),
+                    fmt::format("function 0x{:02X} or 0x{:02X}", fc & 0x7F,
+                                (fc & 0x7F) | codec::kExceptionBit),
                     seen);
     }
     const auto owed = rq.status.exception;
@@ -174,20 +182,27 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
             return make(Oracle::MalformedResponse, "exception-response-length", rq,
                         fmt::format("exception response of {} bytes (MBAP length {})", pdu.size(),
                                     h.length),
-                        "function|0x80 and one exception code byte", seen);
+                        "the function with its exception bit and one exception code byte", seen);
         }
         const std::uint8_t code = pdu[1];
         const bool foreign_unit = rq.header.unit_id != profile.unit;
-        bool ok = code == 0x06 || (foreign_unit && (code == 0x0A || code == 0x0B));
-        if (owed != ExceptionCode::None) {
-            ok = ok || code == static_cast<std::uint8_t>(owed) || profile.unsupported[fc] ||
-                 (code == 0x01 && sub_function_varies(fc)) || profile.extended[fc];
+        using E = ExceptionCode;
+        bool ok = code == code_of(E::ServerDeviceBusy) ||
+                  (foreign_unit && (code == code_of(E::GatewayPathUnavailable) ||
+                                    code == code_of(E::GatewayTargetFailedToRespond)));
+        if (owed != E::None) {
+            ok = ok || code == code_of(owed) || profile.unsupported[fc] ||
+                 (code == code_of(E::IllegalFunction) && sub_function_varies(fc)) ||
+                 profile.extended[fc];
         } else {
             // A valid request may meet an address the device lacks (02), a device failure
-            // (04/05) or an unsupported function (01). 03 is only a deviation for reads, where
-            // a valid quantity leaves nothing to object to.
-            ok = ok || code == 0x01 || code == 0x02 || code == 0x04 || code == 0x05 ||
-                 (code == 0x03 && fc > 0x04);
+            // (04/05) or an unsupported function (01). 03 is only a deviation for the plain
+            // reads (01-04), where a valid quantity leaves nothing to object to.
+            ok = ok || code == code_of(E::IllegalFunction) ||
+                 code == code_of(E::IllegalDataAddress) ||
+                 code == code_of(E::ServerDeviceFailure) || code == code_of(E::Acknowledge) ||
+                 (code == code_of(E::IllegalDataValue) &&
+                  !codec::request_is(fc, codec::RequestShape::AddressQuantity));
         }
         if (!ok) {
             return make(
@@ -235,35 +250,43 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
         return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
                                                       r.payload.size(), want));
-    switch (fc) {
-        case 0x05:
-        case 0x06:
+    const codec::FunctionInfo* info = codec::function_info(fc);
+    if (!info) return {};
+    using codec::ResponseShape;
+    switch (info->response) {
+        case ResponseShape::EchoValue:
             if (r.address != q.address || r.value != q.value)
                 return mismatch("echo-differs", "echo differs from the request");
             break;
-        case 0x0F:
-        case 0x10:
+        case ResponseShape::EchoQuantity:
             if (r.address != q.address || r.quantity != q.quantity)
                 return mismatch("echo-differs",
                                 "echo of address/quantity differs from the request");
             break;
-        case 0x16:
+        case ResponseShape::EchoMask:
             if (r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask)
                 return mismatch("echo-differs", "echo differs from the request");
             break;
-        case 0x08:
+        case ResponseShape::EchoSubFunction:
             if (r.sub_function != q.sub_function)
                 return mismatch("sub-function-not-echoed", "sub-function not echoed");
             if (q.sub_function == 0x0000 &&
                 !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
                 return mismatch("query-data-not-echoed", "return-query-data did not echo the data");
             break;
-        case 0x2B:
+        case ResponseShape::MeiObjects:
             if (r.mei_type != q.mei_type)
                 return mismatch("mei-type-not-echoed", "MEI type not echoed");
             break;
-        default:
-            break;
+        case ResponseShape::Bits:
+        case ResponseShape::Registers:
+        case ResponseShape::ExceptionStatus:
+        case ResponseShape::EventCounter:
+        case ResponseShape::EventLog:
+        case ResponseShape::ServerId:
+        case ResponseShape::FileRecords:
+        case ResponseShape::FifoValues:
+            break;  // their data sizes were checked above
     }
     return {};
 }
@@ -272,15 +295,22 @@ void relocate_writes(std::uint8_t* adu, std::size_t size, const StateRange& stat
     if (size < codec::limits::kMbapHeader + 5 || state.whole_map()) return;
     std::uint8_t* p = adu + codec::limits::kMbapHeader;
     const std::uint8_t fc = p[0];
-    if (!codec::is_write_function(fc) || fc == 0x15 || fc == 0x08) return;
-    // Address field: 17 writes at offset 5, the others at offset 1.
-    const std::size_t at = fc == 0x17 ? 5 : 1;
+    using codec::RequestShape;
+    // Writes without an address of the tables (file records, diagnostics) are left alone.
+    if (!codec::is_write_function(fc) || codec::request_is(fc, RequestShape::FileRecords) ||
+        codec::request_is(fc, RequestShape::SubFunction))
+        return;
+    // Address field: read/write requests write at offset 5, the others at offset 1.
+    const bool read_write = codec::request_is(fc, RequestShape::ReadWriteRegisters);
+    const std::size_t at = read_write ? 5 : 1;
     if (codec::limits::kMbapHeader + at + 2 > size) return;
     const std::uint16_t a = load_be16(p + at);
     std::uint32_t qty = 1;
-    if ((fc == 0x0F || fc == 0x10) && size >= codec::limits::kMbapHeader + 5)
+    if ((codec::request_is(fc, RequestShape::MultipleCoils) ||
+         codec::request_is(fc, RequestShape::MultipleRegisters)) &&
+        size >= codec::limits::kMbapHeader + 5)
         qty = load_be16(p + 3);
-    if (fc == 0x17 && size >= codec::limits::kMbapHeader + 9) qty = load_be16(p + 7);
+    if (read_write && size >= codec::limits::kMbapHeader + 9) qty = load_be16(p + 7);
     const std::uint32_t end = std::uint32_t{a} + std::max<std::uint32_t>(qty, 1);
     if (end > state.base && a < state.base + state.span) {
         // Move it out of the range (keeps the value's low bits, so limits near 0 survive).
@@ -309,33 +339,35 @@ std::optional<WriteRecord> write_of(const RequestInfo& rq) {
     const codec::Request& q = rq.request;
     WriteRecord w;
     w.self = &rq;
-    switch (q.function) {
-        case 0x05:
+    const codec::FunctionInfo* info = codec::function_info(q.function);
+    if (!info) return {};
+    switch (info->request) {
+        case codec::RequestShape::SingleCoil:
             w.coils = true;
             w.address = q.address;
             w.values = {static_cast<std::uint16_t>(q.value == 0xFF00)};
             break;
-        case 0x06:
+        case codec::RequestShape::SingleRegister:
             w.address = q.address;
             w.values = {q.value};
             break;
-        case 0x0F:
+        case codec::RequestShape::MultipleCoils:
             w.coils = true;
             w.address = q.address;
             for (std::uint16_t i = 0; i < q.quantity; ++i)
                 w.values.push_back(static_cast<std::uint16_t>((q.payload[i / 8] >> (i % 8)) & 1));
             break;
-        case 0x10:
+        case codec::RequestShape::MultipleRegisters:
             w.address = q.address;
             for (std::uint16_t i = 0; i < q.quantity; ++i)
                 w.values.push_back(load_be16(q.payload.data() + 2 * i));
             break;
-        case 0x17:
+        case codec::RequestShape::ReadWriteRegisters:
             w.address = q.write_address;
             for (std::uint16_t i = 0; i < q.write_quantity; ++i)
                 w.values.push_back(load_be16(q.payload.data() + 2 * i));
             break;
-        case 0x16:
+        case codec::RequestShape::MaskWrite:
             w.address = q.address;
             w.values = {std::nullopt};  // depends on the old value
             break;
@@ -366,9 +398,14 @@ Verdict Shadow::check(std::vector<Event>& events, const StateRange& state) {
         if (rq.status.error != codec::CodecError::Ok || e.answered_ns == 0 ||
             e.response_pdu.size() < 2 || (e.response_pdu[0] & codec::kExceptionBit))
             continue;
+        // Readers of the tables stateful cases write: coils and holding registers.
         const std::uint8_t fc = rq.request.function;
-        if (fc != 0x01 && fc != 0x03 && fc != 0x17) continue;
-        const bool coils = fc == 0x01;
+        const auto table = codec::function_table(fc);
+        const bool coils = table == codec::Table::Coils;
+        if (!coils && table != codec::Table::HoldingRegisters) continue;
+        if (!codec::response_is(fc, codec::ResponseShape::Bits) &&
+            !codec::response_is(fc, codec::ResponseShape::Registers))
+            continue;
         const std::uint16_t start = rq.request.address;
         const codec::Bytes data = e.response_pdu.subspan(2);
         for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {

@@ -50,6 +50,7 @@ void put_word(std::vector<std::uint8_t>& out, std::int64_t value) {
             out.push_back(low7);
             return;
         }
+        // one-place: LEB128's continuation bit, not Modbus's exception bit
         out.push_back(static_cast<std::uint8_t>(low7 | 0x80));
     }
     out.push_back(static_cast<std::uint8_t>(zz >> 56));
