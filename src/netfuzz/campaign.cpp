@@ -228,6 +228,23 @@ bool reassemble(const Case& c, Case& plain) {
     return true;
 }
 
+// Calls `visit` with each whole frame the case sends, described, until it returns false.
+template <class Visit>
+void for_each_request(const Case& c, const TargetProfile& profile, Visit&& visit) {
+    for (const Step& s : c.steps) {
+        if (s.op != Op::Send) continue;
+        std::size_t off = 0;
+        while (s.bytes.size() - off > lim::kMbapHeader) {
+            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
+            if (size > s.bytes.size() - off) break;
+            RequestInfo info;
+            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
+            if (!visit(info)) return;
+            off += size;
+        }
+    }
+}
+
 // What a case's culprit would be called: each frame's, and its class for transport cases
 // (whose frames, once delivered, may be at fault as well as the way they arrived).
 std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
@@ -236,18 +253,10 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
     Case plain;
     const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
     if (&framed == &c && is_transport_class(c.cls)) return out;
-    for (const Step& s : framed.steps) {
-        if (s.op != Op::Send) continue;
-        std::size_t off = 0;
-        while (s.bytes.size() - off > lim::kMbapHeader) {
-            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
-            if (size > s.bytes.size() - off) break;
-            RequestInfo info;
-            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
-            out.push_back(culprit_text(framed.cls, &info));
-            off += size;
-        }
-    }
+    for_each_request(framed, profile, [&](const RequestInfo& info) {
+        out.push_back(culprit_text(framed.cls, &info));
+        return true;
+    });
     if (out.empty()) out.push_back(culprit_text(c.cls, nullptr));
     return out;
 }
@@ -256,19 +265,12 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
 bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
     Case plain;
     const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
-    for (const Step& s : framed.steps) {
-        if (s.op != Op::Send) continue;
-        std::size_t off = 0;
-        while (s.bytes.size() - off > lim::kMbapHeader) {
-            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
-            if (size > s.bytes.size() - off) break;
-            RequestInfo info;
-            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
-            if (pdu_length_mismatch(info)) return true;
-            off += size;
-        }
-    }
-    return false;
+    bool found = false;
+    for_each_request(framed, profile, [&](const RequestInfo& info) {
+        found = pdu_length_mismatch(info);
+        return !found;
+    });
+    return found;
 }
 
 bool whole_server_hang(const Verdict& v) {
