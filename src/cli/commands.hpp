@@ -3,7 +3,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <fmt/format.h>
+
 #include <functional>
+#include <string_view>
 
 #include "cli/run_cli.hpp"
 
@@ -21,6 +24,13 @@ inline int exit_code_for_signal(int signal_number) {
 // "SIGINT", "SIGTERM" (the two signals run and fuzz stop on).
 inline const char* signal_name(int signal_number) {
     return signal_number == 2 ? "SIGINT" : signal_number == 15 ? "SIGTERM" : "a signal";
+}
+
+// Says "mbstorm <command>: <message>" on stderr and returns kExitUsage: how every subcommand
+// refuses bad input.
+inline int usage_error(std::string_view command, std::string_view message) {
+    fmt::print(stderr, "mbstorm {}: {}\n", command, message);
+    return kExitUsage;
 }
 
 using Action = std::function<int()>;

@@ -38,25 +38,32 @@ struct EncodeOptions {
     bool rtu = false, ascii = false, pdu = false;
 };
 
-// The public function codes this tool encodes, for refusals.
-constexpr const char* kValidFunctions =
-    "valid: 0x01..0x08, 0x0B, 0x0C, 0x0F..0x11, 0x14..0x18, 0x2B (decimal 1..8, 11, 12, 15..17, "
-    "20..24, 43) or a name like read_holding_registers";
+// "valid: 0x01 0x02 ...": the public function codes this tool encodes, for refusals.
+std::string valid_functions() {
+    std::string text = "valid:";
+    for (const codec::FunctionInfo& f : codec::public_functions())
+        text += fmt::format(" 0x{:02X}", codec::to_byte(f.code));
+    return text + " (or decimal, or a name like read_holding_registers)";
+}
 
 // Counts given as --values must fit the function's quantity range before they are packed.
 std::string values_fault(std::uint8_t fc, std::size_t given) {
+    const codec::FunctionInfo* f = codec::function_info(fc);
+    if (f == nullptr) return {};
     std::uint16_t max = 0;
-    switch (fc) {
-        case 0x0F:
+    switch (f->request) {
+        case codec::RequestShape::MultipleCoils:
             max = codec::limits::kMaxWriteCoils;
             break;
-        case 0x10:
+        case codec::RequestShape::MultipleRegisters:
             max = codec::limits::kMaxWriteRegisters;
             break;
-        case 0x17:
+        case codec::RequestShape::ReadWriteRegisters:
             max = codec::limits::kMaxRwWriteRegisters;
             break;
-        case 0x15:  // one sub-request: 7 header bytes + 2 per register within the byte count
+        case codec::RequestShape::FileRecords:
+            if (!f->writes) return {};
+            // One sub-request: 7 header bytes + 2 per register within the byte count.
             max = (codec::limits::kMaxFileWriteBytes - 7) / 2;
             break;
         default:
@@ -69,10 +76,11 @@ std::string values_fault(std::uint8_t fc, std::size_t given) {
 
 // FC14/15 build one sub-request from --file, --record and the record length.
 std::string file_fault(std::uint8_t fc, int file, int record, std::size_t length) {
-    if (fc != 0x14 && fc != 0x15) return {};
+    if (!codec::request_is(fc, codec::RequestShape::FileRecords)) return {};
+    const bool reads = !codec::is_write_function(fc);
     // FC14: each sub-response takes 2 bytes + 2 per register within the response's byte count.
     const std::size_t max_read = (codec::limits::kMaxFileResponseBytes - 2) / 2;
-    if (fc == 0x14 && (length < 1 || length > max_read))
+    if (reads && (length < 1 || length > max_read))
         return fmt::format("--count {} (record length): valid 1..{} for {}", length, max_read,
                            codec::function_label(fc));
     if (file < codec::limits::kMinFileNumber)
@@ -81,11 +89,6 @@ std::string file_fault(std::uint8_t fc, int file, int record, std::size_t length
         return fmt::format("--record {} + record length {} runs past record {}", record, length,
                            codec::limits::kMaxFileRecordNumber);
     return {};
-}
-
-int fail(const std::string& msg) {
-    fmt::print(stderr, "mbstorm encode: {}\n", msg);
-    return kExitUsage;
 }
 
 // Which function to encode: --fc, or the read function of --ref's (or --addr's) table.
@@ -101,8 +104,7 @@ std::string resolve_function(EncodeOptions& o, std::uint8_t& fc) {
             return fmt::format(
                 "bad reference number '{}' (e.g. 00001, 10001, 30001, 40001, 400001)", o.reference);
         if (o.function.empty()) {
-            static constexpr std::uint8_t read_fc[] = {1, 2, 4, 3};
-            fc = read_fc[static_cast<int>(ref.table)];
+            fc = codec::function_for(ref.table, codec::RequestShape::AddressQuantity);
         }
     }
     if (!o.function.empty()) {
@@ -112,7 +114,7 @@ std::string resolve_function(EncodeOptions& o, std::uint8_t& fc) {
     if (fc == 0) return "--fc (or --ref) is required";
     if (!o.exception && !codec::is_supported_function(fc))
         return fmt::format("function code {} ({}): not a public Modbus function; {}", o.function,
-                           codec::function_label(fc), kValidFunctions);
+                           codec::function_label(fc), valid_functions());
     return {};
 }
 
@@ -140,9 +142,12 @@ std::string resolve_addresses(const EncodeOptions& o, std::uint8_t fc, std::uint
 std::string option_fault(const EncodeOptions& o, std::uint8_t fc) {
     if (auto fault = values_fault(fc, o.values.size()); !fault.empty()) return fault;
     const std::size_t file_length =
-        fc == 0x15 ? o.values.size() : static_cast<std::size_t>(o.count);
+        codec::request_is(fc, codec::RequestShape::FileRecords) && codec::is_write_function(fc)
+            ? o.values.size()
+            : static_cast<std::size_t>(o.count);
     if (auto fault = file_fault(fc, o.file, o.record, file_length); !fault.empty()) return fault;
-    if (fc == 0x05 && o.value != 0 && o.value != 1 && o.value != codec::limits::kCoilOn)
+    if (codec::request_is(fc, codec::RequestShape::SingleCoil) && o.value != 0 && o.value != 1 &&
+        o.value != codec::limits::kCoilOn)
         return fmt::format("--value {} for {}: valid 0 (OFF) or 1 (ON)", o.value,
                            codec::function_label(fc));
     return {};
@@ -239,19 +244,20 @@ int print_framed(const EncodeOptions& o, codec::Bytes pdu) {
         framed = codec::encode_tcp_frame(static_cast<std::uint16_t>(o.transaction_id),
                                          static_cast<std::uint8_t>(o.unit), pdu, frame);
     }
-    if (!framed.ok()) return fail(std::string(codec::error_description(framed.error)));
+    if (!framed.ok())
+        return usage_error("encode", std::string(codec::error_description(framed.error)));
     fmt::print("{}\n", codec::format_hex(codec::Bytes(frame.data(), framed.size)));
     return kExitOk;
 }
 
 int run_encode(EncodeOptions o) {
     std::uint8_t fc = 0;
-    if (auto error = resolve_function(o, fc); !error.empty()) return fail(error);
+    if (auto error = resolve_function(o, fc); !error.empty()) return usage_error("encode", error);
     std::uint16_t address = 0, write_address = 0;
     if (auto error = resolve_addresses(o, fc, address, write_address); !error.empty())
-        return fail(error);
+        return usage_error("encode", error);
     if (!o.exception) {
-        if (auto fault = option_fault(o, fc); !fault.empty()) return fail(fault);
+        if (auto fault = option_fault(o, fc); !fault.empty()) return usage_error("encode", fault);
     }
 
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload{};
@@ -262,15 +268,15 @@ int run_encode(EncodeOptions o) {
     } else {
         codec::Request r;
         if (auto error = build_request(o, fc, address, write_address, payload, r); !error.empty())
-            return fail(error);
+            return usage_error("encode", error);
         // Built without checks, then judged by the decoder, so the refusal names the field.
         enc = codec::encode_request(r, pdu, /*allow_invalid=*/true);
         if (enc.ok()) {
             auto fault = request_fault(codec::Bytes(pdu.data(), enc.size));
-            if (!fault.empty()) return fail(fault);
+            if (!fault.empty()) return usage_error("encode", fault);
         }
     }
-    if (!enc.ok()) return fail(std::string(codec::error_description(enc.error)));
+    if (!enc.ok()) return usage_error("encode", std::string(codec::error_description(enc.error)));
     return print_framed(o, codec::Bytes(pdu.data(), enc.size));
 }
 

@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
 #include "codec/pdu.hpp"
+#include "codec/rtu.hpp"
 #include "codec/values.hpp"
 
 namespace mbstorm::cli {
@@ -319,71 +321,18 @@ codec::Response raw_response(Bytes pdu) {
 }
 
 // How many bytes a PDU of this function needs, from its fixed layout or its own byte count;
-// 0 when that cannot be told.
+// 0 when that cannot be told. The codec's RTU length rule knows each function's layout: it is
+// asked about the PDU behind a placeholder address (the CRC it counts is taken off again).
 std::size_t needed_size(Bytes pdu, Direction dir) {
-    std::uint8_t fc = pdu[0];
-    auto counted = [&](std::size_t count_at, std::size_t extra) -> std::size_t {
-        return count_at < pdu.size() ? extra + pdu[count_at] : 0;
-    };
-    if (dir == Direction::Response) {
-        if (fc & codec::kExceptionBit) return 2;
-        switch (fc) {
-            case 0x01:
-            case 0x02:
-            case 0x03:
-            case 0x04:
-            case 0x0C:
-            case 0x11:
-            case 0x14:
-            case 0x15:
-            case 0x17:
-                return counted(1, 2);
-            case 0x05:
-            case 0x06:
-            case 0x0B:
-            case 0x0F:
-            case 0x10:
-                return 5;
-            case 0x07:
-                return 2;
-            case 0x16:
-                return 7;
-            case 0x18:
-                return pdu.size() >= 3 ? 3u + be16_at(pdu, 1) : 0;
-            default:
-                return 0;
-        }
-    }
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-        case 0x03:
-        case 0x04:
-        case 0x05:
-        case 0x06:
-            return 5;
-        case 0x07:
-        case 0x0B:
-        case 0x0C:
-        case 0x11:
-            return 1;
-        case 0x0F:
-        case 0x10:
-            return counted(5, 6);
-        case 0x14:
-        case 0x15:
-            return counted(1, 2);
-        case 0x16:
-            return 7;
-        case 0x17:
-            return counted(9, 10);
-        case 0x18:
-            return 3;
-        case 0x2B:
-            return 4;
-        default:
-            return 0;
-    }
+    std::array<std::uint8_t, codec::limits::kMaxRtuAdu> head{};
+    const std::size_t copied = std::min(pdu.size(), head.size() - 1);
+    std::copy_n(pdu.begin(), copied, head.begin() + 1);
+    const Bytes frame(head.data(), copied + 1);
+    const codec::RtuLength length = dir == Direction::Response ? codec::rtu_response_length(frame)
+                                                               : codec::rtu_request_length(frame);
+    constexpr std::size_t kAddressAndCrc = 3;
+    if (length.status != codec::RtuLength::Status::Known || length.size < kAddressAndCrc) return 0;
+    return length.size - kAddressAndCrc;
 }
 
 // A quantity field of a request and the range the specification allows it.
@@ -393,19 +342,20 @@ struct QuantityField {
     codec::limits::QuantityRange range;
 };
 std::vector<QuantityField> quantity_fields(std::uint8_t fc) {
-    using codec::quantity_range;
-    switch (fc) {
-        case 0x01:
-        case 0x02:
-            return {{"Quantity of bits", 3, quantity_range(fc)}};
-        case 0x03:
-        case 0x04:
-        case 0x10:
-            return {{"Quantity of registers", 3, quantity_range(fc)}};
-        case 0x0F:
-            return {{"Quantity of outputs", 3, quantity_range(fc)}};
-        case 0x17:
-            return {{"Quantity to read", 3, quantity_range(fc)},
+    using codec::RequestShape;
+    const codec::FunctionInfo* f = codec::function_info(fc);
+    if (f == nullptr) return {};
+    switch (f->request) {
+        case RequestShape::AddressQuantity:
+            return {{f->table && codec::is_bit_table(*f->table) ? "Quantity of bits"
+                                                                : "Quantity of registers",
+                     3, f->quantity}};
+        case RequestShape::MultipleRegisters:
+            return {{"Quantity of registers", 3, f->quantity}};
+        case RequestShape::MultipleCoils:
+            return {{"Quantity of outputs", 3, f->quantity}};
+        case RequestShape::ReadWriteRegisters:
+            return {{"Quantity to read", 3, f->quantity},
                     {"Quantity to write", 7, {1, codec::limits::kMaxRwWriteRegisters}}};
         default:
             return {};
@@ -463,7 +413,8 @@ std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
                 }
             }
             if (row.empty()) {
-                row = fc == 0x18 ? "FIFO count" : "Quantity";
+                row = codec::request_is(fc, codec::RequestShape::FifoPointer) ? "FIFO count"
+                                                                              : "Quantity";
                 why = fmt::format("{} for {}", codec::error_description(error), fc_text);
             }
             break;
@@ -481,7 +432,7 @@ std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
             why = fmt::format("0x{:04X}: valid 0xFF00 (ON) or 0x0000 (OFF)", be16_at(pdu, 3));
             break;
         case CodecError::UnsupportedSubFunction:
-            if (fc == 0x2B) {
+            if (codec::request_is(fc, codec::RequestShape::MeiTransport)) {
                 row = "MEI type";
                 why = fmt::format("MEI type 0x{:02X}: valid 0x0E (read device identification)",
                                   pdu.size() > 1 ? pdu[1] : 0);

@@ -12,6 +12,7 @@
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/fuzz_target.hpp"
+#include "codec/function_code.hpp"
 #include "netfuzz/campaign.hpp"
 #include "netfuzz/dictionary.hpp"
 #include "netfuzz/outputs.hpp"
@@ -78,9 +79,13 @@ bool parse_state_range(const std::string& text, netfuzz::StateRange& out, std::s
     return true;
 }
 
-int usage(const std::string& msg) {
-    fmt::print(stderr, "mbstorm fuzz: {}\n", msg);
-    return kExitUsage;
+// "0x05 0x06 0x08 ...": the codes the codec says change a device, all of which the fuzzer sends.
+std::string write_function_codes() {
+    std::string codes;
+    for (const codec::FunctionInfo& f : codec::public_functions())
+        if (f.writes)
+            codes += fmt::format("{}0x{:02X}", codes.empty() ? "" : " ", codec::to_byte(f.code));
+    return codes;
 }
 
 bool write_output(const std::string& path, const std::string& text) {
@@ -93,13 +98,14 @@ bool write_output(const std::string& path, const std::string& text) {
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
-    if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error)) return usage(error);
+    if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error))
+        return usage_error("fuzz", error);
     if (o.duration_ns == 0 && o.cases == 0)
-        return usage("bound the run with --seconds DURATION or --cases N");
-    if (!parse_state_range(o.state_range, c.state, error)) return usage(error);
+        return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
+    if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);
     if (!o.dict.empty()) {
         netfuzz::Dictionary d;
-        if (!netfuzz::load_dictionary(o.dict, d, error)) return usage(error);
+        if (!netfuzz::load_dictionary(o.dict, d, error)) return usage_error("fuzz", error);
         c.dict_words = std::move(d.words);
         c.dict_tokens = std::move(d.tokens);
     }
@@ -109,16 +115,16 @@ int run_fuzz(const FuzzOptions& o) {
                                      {"--junit", o.junit},
                                      {"--sarif", o.sarif}}) {
         if (!path.empty() && path != "-" && !report::check_writable(path, error))
-            return usage(fmt::format("cannot write {} {}", flag, error));
+            return usage_error("fuzz", fmt::format("cannot write {} {}", flag, error));
     }
     const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
-    if (on_stdout > 1) return usage("only one of --json, --junit and --sarif can be '-' (stdout)");
+    if (on_stdout > 1)
+        return usage_error("fuzz", "only one of --json, --junit and --sarif can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
-    fmt::print(
-        stderr,
-        "mbstorm fuzz: WARNING: writes will be sent to {} (function codes 0x05 0x06 0x0F 0x10 0x15 "
-        "0x16 0x17 and malformed frames); only fuzz devices you may change\n",
-        c.target.to_string());
+    fmt::print(stderr,
+               "mbstorm fuzz: WARNING: writes will be sent to {} (function codes {} and malformed "
+               "frames); only fuzz devices you may change\n",
+               c.target.to_string(), write_function_codes());
     c.target_text = c.target.to_string();
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;

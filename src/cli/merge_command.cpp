@@ -25,11 +25,6 @@ struct MergeOptions {
     OutputFiles outputs;
 };
 
-int fail(const std::string& message) {
-    fmt::print(stderr, "mbstorm merge: {}\n", message);
-    return kExitUsage;
-}
-
 // The runs' own threshold expressions ("p99 < 5ms", "read: p99 < 5ms") as specs.
 bool thresholds_from_runs(const std::vector<std::string>& expressions, const stats::RunResult& run,
                           scenario::Scenario& s, std::string& error) {
@@ -56,18 +51,19 @@ bool thresholds_from_runs(const std::vector<std::string>& expressions, const sta
 }
 
 int merge(const MergeOptions& o) {
-    if (auto conflict = stdout_conflict(o.outputs); !conflict.empty()) return fail(conflict);
+    if (auto conflict = stdout_conflict(o.outputs); !conflict.empty())
+        return usage_error("merge", conflict);
     for (const std::string* path :
          {&o.outputs.json, &o.outputs.hdr, &o.outputs.html, &o.outputs.junit}) {
         std::string error;
         if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return fail("cannot write " + error);
+            return usage_error("merge", "cannot write " + error);
     }
     std::vector<report::ShardRun> shards;
     std::string error;
-    if (!report::read_shards(o.files, shards, error)) return fail(error);
+    if (!report::read_shards(o.files, shards, error)) return usage_error("merge", error);
     report::MergeOutcome merged = report::merge_shards(std::move(shards), o.expect);
-    if (!merged.ok) return fail(merged.error);
+    if (!merged.ok) return usage_error("merge", merged.error);
     for (const auto& w : merged.warnings) fmt::print(stderr, "mbstorm merge: warning: {}\n", w);
 
     scenario::Scenario s;
@@ -75,10 +71,10 @@ int merge(const MergeOptions& o) {
         try {
             s = scenario::load_scenario_file(o.scenario_file);
         } catch (const scenario::ScenarioError& e) {
-            return fail(e.what());
+            return usage_error("merge", e.what());
         }
     } else if (!thresholds_from_runs(merged.threshold_expressions, merged.run, s, error)) {
-        return fail(error);
+        return usage_error("merge", error);
     }
     scenario::evaluate_thresholds(s, merged.run);
 

@@ -33,6 +33,18 @@
 namespace mbstorm::cli {
 namespace {
 
+// "0x05 write_single_coil (one value) or 0x0F write_multiple_coils": the writes of a table.
+std::string write_choices(codec::Table table) {
+    const bool bits = codec::is_bit_table(table);
+    const auto single =
+        bits ? codec::RequestShape::SingleCoil : codec::RequestShape::SingleRegister;
+    const auto multiple =
+        bits ? codec::RequestShape::MultipleCoils : codec::RequestShape::MultipleRegisters;
+    return fmt::format("{} (one value) or {}",
+                       codec::function_label(codec::function_for(table, single)),
+                       codec::function_label(codec::function_for(table, multiple)));
+}
+
 struct IoOptions {
     bool write = false;
     std::string target;
@@ -117,8 +129,7 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     auto& r = p.request;
     r.address = p.address;
     if (!o.write) {
-        static constexpr std::uint8_t kReadFunction[] = {0x01, 0x02, 0x04, 0x03};
-        r.function = kReadFunction[static_cast<int>(p.table)];
+        r.function = codec::function_for(p.table, codec::RequestShape::AddressQuantity);
         std::size_t items =
             bit_table ? static_cast<std::size_t>(o.quantity)
             : p.type == ValueType::String
@@ -148,37 +159,38 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     if (p.registers.size() > 0xFFFF) return "too many values";
     p.items = static_cast<std::uint16_t>(p.registers.size());
     const bool one = p.registers.size() == 1;
-    r.function = bit_table ? (one ? 0x05 : 0x0F) : (one ? 0x06 : 0x10);
+    const auto single =
+        bit_table ? codec::RequestShape::SingleCoil : codec::RequestShape::SingleRegister;
+    const auto multiple =
+        bit_table ? codec::RequestShape::MultipleCoils : codec::RequestShape::MultipleRegisters;
+    r.function = codec::function_for(p.table, one ? single : multiple);
     if (!o.function.empty()) {
         std::uint8_t fc = 0;
         if (auto error = codec::parse_function_code(o.function, fc); !error.empty())
             return "--fc: " + error;
-        const bool fits =
-            bit_table ? (fc == 0x0F || (fc == 0x05 && one)) : (fc == 0x10 || (fc == 0x06 && one));
+        const bool fits = fc == codec::function_for(p.table, multiple) ||
+                          (one && fc == codec::function_for(p.table, single));
         if (!fits)
-            return fmt::format(
-                "--fc '{}' cannot write {} value(s) to {}: valid {}", o.function,
-                p.registers.size(), codec::table_name(p.table),
-                bit_table ? "0x05 write_single_coil (one value) or 0x0F write_multiple_coils"
-                          : "0x06 write_single_register (one register) or 0x10 "
-                            "write_multiple_registers");
+            return fmt::format("--fc '{}' cannot write {} value(s) to {}: valid {}", o.function,
+                               p.registers.size(), codec::table_name(p.table),
+                               write_choices(p.table));
         r.function = fc;
     }
-    switch (r.function) {
-        case 0x05:
+    switch (codec::function_info(r.function)->request) {
+        case codec::RequestShape::SingleCoil:
             r.value = p.registers[0] ? codec::limits::kCoilOn : codec::limits::kCoilOff;
             break;
-        case 0x06:
+        case codec::RequestShape::SingleRegister:
             r.value = p.registers[0];
             break;
-        case 0x0F: {
+        case codec::RequestShape::MultipleCoils: {
             std::vector<std::uint8_t> bits(p.registers.begin(), p.registers.end());
             p.payload.assign(codec::packed_bit_bytes(bits.size()), 0);
             codec::pack_bit_bytes(bits, p.payload);
             r.quantity = p.items;
             break;
         }
-        default:
+        default:  // MultipleRegisters: function_for above picks only these four shapes
             for (std::uint16_t w : p.registers) {
                 p.payload.push_back(static_cast<std::uint8_t>(w >> 8));
                 p.payload.push_back(static_cast<std::uint8_t>(w & 0xFF));
@@ -278,10 +290,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
 
 int run_io(const IoOptions& o) {
     const char* name = o.write ? "write" : "read";
-    auto usage = [&](const std::string& msg) {
-        fmt::print(stderr, "mbstorm {}: {}\n", name, msg);
-        return kExitUsage;
-    };
+    auto usage = [name](std::string_view message) { return usage_error(name, message); };
     IoPlan p;
     if (auto error = build_request(o, p); !error.empty()) return usage(error);
     p.request.payload = codec::Bytes(p.payload.data(), p.payload.size());
@@ -363,11 +372,12 @@ void add_write_command(CLI::App& app, Action& action) {
         "write", "Write values to one range of a device once or every --interval");
     add_common_options(cmd, *o);
     cmd->add_option("values", o->values, "values to write, as --type says")->required();
-    cmd->add_option("--fc", o->function,
-                    "force the function: 0x05 write_single_coil or 0x06 write_single_register "
-                    "(one value), 0x0F write_multiple_coils or 0x10 write_multiple_registers "
-                    "(default: single for one value, multiple otherwise); " +
-                        std::string(codec::kFunctionCodeForms));
+    cmd->add_option(
+        "--fc", o->function,
+        fmt::format("force the function: {} for coils, {} for holding registers "
+                    "(default: single for one value, multiple otherwise); {}",
+                    write_choices(codec::Table::Coils),
+                    write_choices(codec::Table::HoldingRegisters), codec::kFunctionCodeForms));
     cmd->add_flag("--allow-writes", o->allow_writes,
                   "allow writing to a target outside loopback (127.0.0.0/8, ::1)");
     cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });

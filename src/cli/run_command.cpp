@@ -56,11 +56,6 @@ struct RunOptions {
     std::string junit;
 };
 
-int fail(const std::string& msg) {
-    fmt::print(stderr, "mbstorm run: {}\n", msg);
-    return kExitUsage;
-}
-
 // Fills the single-operation plan from flags; returns an error message or "".
 std::string build_plan(RunOptions& o) {
     auto& p = o.plan;
@@ -104,11 +99,13 @@ std::string build_plan(RunOptions& o) {
 
 int run_load_test(RunOptions& o) {
     if (o.plan.operations.empty()) o.plan.operations.push_back({});
-    if (auto err = build_plan(o); !err.empty()) return fail(err);
+    if (auto err = build_plan(o); !err.empty()) return usage_error("run", err);
     if (o.print_scenario) return print_flag_scenario(o.plan, o.target);
-    if (!o.junit.empty()) return fail("--junit needs a scenario FILE (thresholds are set there)");
+    if (!o.junit.empty())
+        return usage_error("run", "--junit needs a scenario FILE (thresholds are set there)");
     auto& plan = o.plan;
-    if (auto problems = load::validate_plan(plan); !problems.empty()) return fail(problems.front());
+    if (auto problems = load::validate_plan(plan); !problems.empty())
+        return usage_error("run", problems.front());
 
     // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
     // there is no target, and reports the same way.
@@ -136,7 +133,8 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     for (const char* flag : {"--fc", "--addr", "--count", "--unit", "--addr-mode", "--zipf",
                              "--value", "--model", "--arrival"}) {
         if (cmd.count(flag) != 0)
-            return fail(
+            return usage_error(
+                "run",
                 fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
     }
     ScenarioRunRequest r;
@@ -239,7 +237,7 @@ void add_run_command(CLI::App& app, Action& action) {
         action = [o, cmd] {
             OutputFiles outputs = o->outputs;
             outputs.junit = o->junit;
-            if (std::string e = stdout_conflict(outputs); !e.empty()) return fail(e);
+            if (std::string e = stdout_conflict(outputs); !e.empty()) return usage_error("run", e);
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

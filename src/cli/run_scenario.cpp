@@ -28,11 +28,6 @@ extern "C" void on_scenario_stop_signal(int signal_number) {
     signal(SIGTERM, SIG_DFL);
 }
 
-int usage_error(const std::string& message) {
-    fmt::print(stderr, "mbstorm run: {}\n", message);
-    return kExitUsage;
-}
-
 // 64 random bits in hex: tells this run apart from every other (merge refuses duplicates).
 std::string new_run_id() {
     std::random_device device;
@@ -74,10 +69,10 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     for (const auto& [flag, path] : outputs) {
         std::string error;
         if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return usage_error(fmt::format("cannot write {} {}", flag, error));
+            return usage_error("run", fmt::format("cannot write {} {}", flag, error));
     }
     if (request.outputs.hlog == "-")
-        return usage_error("--hlog needs a file (it is written as the run goes)");
+        return usage_error("run", "--hlog needs a file (it is written as the run goes)");
     const std::string run_id = new_run_id();
     report::HlogWriter hlog;
     if (!request.outputs.hlog.empty()) {
@@ -86,7 +81,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
             fmt::format("mbstorm interval log: test {}, run {}",
                         request.outputs.test_id.empty() ? "-" : request.outputs.test_id, run_id);
         if (!hlog.open(request.outputs.hlog, identity, error))
-            return usage_error(fmt::format("cannot write --hlog {}", error));
+            return usage_error("run", fmt::format("cannot write --hlog {}", error));
     }
     g_scenario_stop = false;
     g_scenario_signal = 0;
@@ -152,7 +147,7 @@ int run_scenario_file(const ScenarioRunRequest& request) {
     try {
         s = scenario::load_scenario_file(request.file);
     } catch (const scenario::ScenarioError& e) {
-        return usage_error(e.what());
+        return usage_error("run", e.what());
     }
     if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
         for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);

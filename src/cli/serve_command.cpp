@@ -33,11 +33,6 @@ struct ServeOptions {
     std::uint64_t duration_ns = 0;
 };
 
-int fail(const std::string& msg) {
-    fmt::print(stderr, "mbstorm serve: {}\n", msg);
-    return kExitUsage;
-}
-
 int run_serve(ServeOptions& o) {
     auto& c = o.config;
     std::optional<slave::DeviceDescription> device;
@@ -46,7 +41,7 @@ int run_serve(ServeOptions& o) {
         try {
             device = slave::load_device_file(o.device_file);
         } catch (const std::exception& e) {
-            return fail(e.what());
+            return usage_error("serve", e.what());
         }
         c.faults = device->faults;
         units = std::make_unique<slave::UnitModels>(slave::build_units(*device));
@@ -72,7 +67,7 @@ int run_serve(ServeOptions& o) {
     if (o.drop_rate) f.drop_rate = o.drop_rate;
     if (o.no_answer_rate) f.no_answer_rate = o.no_answer_rate;
     if (o.seed) f.seed = o.seed;
-    if (auto problem = slave::validate(f); !problem.empty()) return fail(problem);
+    if (auto problem = slave::validate(f); !problem.empty()) return usage_error("serve", problem);
 
     c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse
                                               : server::FullPolicy::EvictOldestIdle;
@@ -87,7 +82,7 @@ int run_serve(ServeOptions& o) {
     server::block_stop_signals();
     server::Server srv(c);
     std::string error;
-    if (!srv.start(&error)) return fail(error);
+    if (!srv.start(&error)) return usage_error("serve", error);
     fmt::print("mbstorm serve: listening on {} ({} thread{}, {}); Ctrl-C stops\n", srv.endpoint(),
                srv.threads(), srv.threads() == 1 ? "" : "s", srv.describe_io());
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());

@@ -145,6 +145,12 @@ std::optional<Table> function_table(std::uint8_t fc) noexcept {
     return f != nullptr ? f->table : std::nullopt;
 }
 
+std::uint8_t function_for(Table table, RequestShape shape) noexcept {
+    for (const FunctionInfo& f : public_functions())
+        if (f.table == table && f.request == shape) return to_byte(f.code);
+    return 0;
+}
+
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept {
     const FunctionInfo* f = find(fc);
     return f != nullptr && f->request == shape;

@@ -106,6 +106,10 @@ limits::QuantityRange quantity_range(std::uint8_t fc) noexcept;
 // The table a function code addresses; nullopt for functions without an address.
 std::optional<Table> function_table(std::uint8_t fc) noexcept;
 
+// The function whose request has `shape` and addresses `table`: the read of holding registers
+// (AddressQuantity) is 03, the single write of coils (SingleCoil) 05; 0 when there is none.
+std::uint8_t function_for(Table table, RequestShape shape) noexcept;
+
 // True when `fc` is public and its request (response) has `shape`.
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept;
 bool response_is(std::uint8_t fc, ResponseShape shape) noexcept;

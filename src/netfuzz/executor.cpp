@@ -49,9 +49,12 @@ struct Conn {
     std::vector<std::pair<std::size_t, std::size_t>> unmatched;  // responses nobody asked for
 };
 
-class Runner {
+// Runs one case alone on its own connections and judges it; `BatchRunner` (batch.cpp) runs many
+// well-framed cases pipelined over lanes.
+class CaseRunner {
   public:
-    Runner(const net::Endpoint& target, const TargetProfile& profile, const ExecOptions& options)
+    CaseRunner(const net::Endpoint& target, const TargetProfile& profile,
+               const ExecOptions& options)
         : target_(target), profile_(profile), options_(options), start_(net::now_ns()) {}
 
     Execution run(const Case& c);
@@ -95,7 +98,7 @@ class Runner {
     std::vector<SideProbe> side_probes_;
 };
 
-bool Runner::ensure_open(std::uint8_t index) {
+bool CaseRunner::ensure_open(std::uint8_t index) {
     Conn& c = conns_[index];
     if (c.opened) return c.fd.valid();
     c.opened = true;
@@ -112,7 +115,7 @@ bool Runner::ensure_open(std::uint8_t index) {
     return true;
 }
 
-void Runner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes) {
+void CaseRunner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes) {
     Conn& c = conns_[index];
     if (!ensure_open(index) || c.closed || c.shut) return;
     std::size_t done = 0;
@@ -150,7 +153,7 @@ void Runner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& byt
 
 // Cuts what we sent into request frames; anything that cannot be framed desynchronises the
 // stream (the server's view of frame boundaries is then unknown, so no probe follows).
-void Runner::parse_sent(Conn& c) {
+void CaseRunner::parse_sent(Conn& c) {
     while (!c.desync && c.sent.size() - c.parsed >= lim::kMbapHeader) {
         const std::uint8_t* p = c.sent.data() + c.parsed;
         const codec::MbapHeader h = codec::read_mbap_header(p);
@@ -173,7 +176,7 @@ void Runner::parse_sent(Conn& c) {
     }
 }
 
-void Runner::read_conn(std::uint8_t index) {
+void CaseRunner::read_conn(std::uint8_t index) {
     Conn& c = conns_[index];
     if (!c.fd.valid() || c.closed) return;
     std::uint8_t buf[4096];
@@ -200,7 +203,7 @@ void Runner::read_conn(std::uint8_t index) {
     }
 }
 
-void Runner::parse_received(Conn& c) {
+void CaseRunner::parse_received(Conn& c) {
     const std::int64_t now = net::now_ns();
     while (!c.framing_lost && c.received.size() - c.rparsed >= lim::kMbapHeader) {
         const codec::MbapHeader h = codec::read_mbap_header(c.received.data() + c.rparsed);
@@ -225,7 +228,7 @@ void Runner::parse_received(Conn& c) {
     }
 }
 
-bool Runner::answered(const Conn& c) const {
+bool CaseRunner::answered(const Conn& c) const {
     if (c.closed || c.framing_lost || !c.unmatched.empty()) return true;
     for (const Pending& pd : c.pending)
         if (pd.expect == Expect::Answer && pd.answered_ns == 0) return false;
@@ -233,7 +236,7 @@ bool Runner::answered(const Conn& c) const {
 }
 
 template <typename Done>
-bool Runner::pump(std::int64_t deadline, Done done) {
+bool CaseRunner::pump(std::int64_t deadline, Done done) {
     std::vector<pollfd> fds;
     for (;;) {
         if (done()) return true;
@@ -251,7 +254,7 @@ bool Runner::pump(std::int64_t deadline, Done done) {
     }
 }
 
-void Runner::flood(std::uint16_t count) {
+void CaseRunner::flood(std::uint16_t count) {
     flooded_ = true;
     event(0, TraceKind::Flood, {}, fmt::format("{} connections", count));
     std::vector<net::UniqueFd> fds;
@@ -281,7 +284,7 @@ std::string culprit_text(const Case& c, const RequestInfo* rq) {
     return netfuzz::culprit_text(c.cls, rq);
 }
 
-void Runner::judge(const Case& c) {
+void CaseRunner::judge(const Case& c) {
     Verdict candidate;
     auto consider = [&](Verdict v) {
         if (v && (!candidate || v.oracle < candidate.oracle)) candidate = std::move(v);
@@ -467,7 +470,7 @@ void Runner::judge(const Case& c) {
     out_.verdict = std::move(candidate);
 }
 
-void Runner::side_probe() {
+void CaseRunner::side_probe() {
     const std::int64_t t0 = net::now_ns();
     // What the case's connections are in the middle of, for the rule.
     std::string during = "request";
@@ -487,7 +490,7 @@ void Runner::side_probe() {
     side_probes_.push_back(SideProbe{r, ms, std::move(during)});
 }
 
-Execution Runner::run(const Case& c) {
+Execution CaseRunner::run(const Case& c) {
     conns_.resize(std::max<std::size_t>(c.connections(), 1));
     for (const Step& s : c.steps) {
         if (s.delay_us >= 2000) {
@@ -681,7 +684,7 @@ ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profi
 
 Execution execute_case(const Case& c, const net::Endpoint& target, const TargetProfile& profile,
                        const ExecOptions& options) {
-    Runner r(target, profile, options);
+    CaseRunner r(target, profile, options);
     return r.run(c);
 }
 

@@ -161,7 +161,8 @@ TEST(EncodeCommand, RefusalsNameFieldValueAndRange) {
     const std::pair<const char*, const char*> cases[] = {
         {"encode --fc 3 -n 200", "quantity 200: valid 1..125 for 0x03 read_holding_registers"},
         {"encode --fc 99",
-         "function code 99 (0x63): not a public Modbus function; valid: 0x01..0x08, 0x0B"},
+         "function code 99 (0x63): not a public Modbus function; valid: 0x01 0x02 0x03 0x04 "
+         "0x05 0x06 0x07 0x08 0x0B"},
         {"encode --fc nonsense", "function 'nonsense' is not a function code; write a name"},
         {"encode --fc 1 -n 0", "quantity 0: valid 1..2000 for 0x01 read_coils"},
         {"encode --fc 3 --addr 0xFFFF -n 2", "address 65535 + quantity 2 runs past 65535"},

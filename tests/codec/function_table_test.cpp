@@ -52,6 +52,19 @@ TEST(FunctionTable, QuantityLimitsAndTablesAreTheSpecifications) {
     EXPECT_FALSE(request_is(0x41, RequestShape::FunctionOnly));
 }
 
+// `read` and `encode --ref` pick the read of a table, `write` its single and multiple writes.
+TEST(FunctionTable, FunctionForATableAndAShape) {
+    EXPECT_EQ(function_for(Table::Coils, RequestShape::AddressQuantity), 0x01);
+    EXPECT_EQ(function_for(Table::DiscreteInputs, RequestShape::AddressQuantity), 0x02);
+    EXPECT_EQ(function_for(Table::HoldingRegisters, RequestShape::AddressQuantity), 0x03);
+    EXPECT_EQ(function_for(Table::InputRegisters, RequestShape::AddressQuantity), 0x04);
+    EXPECT_EQ(function_for(Table::Coils, RequestShape::SingleCoil), 0x05);
+    EXPECT_EQ(function_for(Table::HoldingRegisters, RequestShape::SingleRegister), 0x06);
+    EXPECT_EQ(function_for(Table::Coils, RequestShape::MultipleCoils), 0x0F);
+    EXPECT_EQ(function_for(Table::HoldingRegisters, RequestShape::MultipleRegisters), 0x10);
+    EXPECT_EQ(function_for(Table::InputRegisters, RequestShape::SingleRegister), 0);
+}
+
 // request_pdu_size() is what the load engine sizes its buffers by: it must equal what the
 // encoder writes for every shape a generator fills.
 TEST(FunctionTable, RequestSizeIsWhatTheEncoderWrites) {
