@@ -25,6 +25,8 @@ std::string endpoint_text(const std::string& host, std::uint16_t port);
 std::string numeric_address(const net::Endpoint& endpoint);
 
 // Empty when `connections` fit both limits (raising RLIMIT_NOFILE if needed), else the reason.
-std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads);
+// Each source address has the whole ephemeral port range (0 sources: the kernel's one).
+std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
+                                      std::size_t source_addresses = 0);
 
 }  // namespace mbstorm::load

@@ -311,6 +311,11 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
         return;
     }
     net::set_nodelay(fd);
+    if (const int rc = bind_source(fd, index); rc < 0) {
+        ::close(fd);
+        on_connect(index, rc, now);
+        return;
+    }
     c.fd = fd;
     c.state = Connection::State::Connecting;
     c.generation = net::next_generation(c.generation);
@@ -326,6 +331,17 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
     io_uring_sqe_set_data64(timeout,
                             net::encode_user_data(Op::ConnectTimeout, index, c.generation));
     inflight_ops_ += 2;
+}
+
+int Worker::bind_source(int fd, std::uint32_t index) noexcept {
+    if (setup_.sources == nullptr || setup_.sources->empty()) return 0;
+    const std::vector<net::Endpoint>& sources = *setup_.sources;
+    const net::Endpoint& source = sources[(setup_.first_connection + index) % sources.size()];
+    // The port is chosen at connect time, per destination: without this, bind would take one
+    // of the address's ephemeral ports for good, whatever the target.
+    const int one = 1;
+    ::setsockopt(fd, SOL_IP, IP_BIND_ADDRESS_NO_PORT, &one, sizeof one);
+    return ::bind(fd, source.sa(), source.len) == 0 ? 0 : -errno;
 }
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {

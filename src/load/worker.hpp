@@ -27,6 +27,9 @@ namespace mbstorm::load {
 struct WorkerSetup {
     const Plan* plan = nullptr;
     net::Endpoint endpoint;
+    // Local addresses to bind to, round-robin by connection number (empty: the kernel picks).
+    const std::vector<net::Endpoint>* sources = nullptr;
+    std::uint32_t first_connection = 0;  // number of this thread's first connection in the run
     std::string target;  // for messages
     std::uint32_t index = 0;
     std::uint32_t threads = 1;
@@ -81,6 +84,8 @@ class Worker {
     void retire_if_idle(std::uint32_t index) noexcept;
     std::uint32_t share_of(std::uint32_t total) const noexcept;
     void start_connect(std::uint32_t index, std::int64_t now) noexcept;
+    // Binds a connection's socket to its source address, if the run has any: 0 or -errno.
+    int bind_source(int fd, std::uint32_t index) noexcept;
     void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
     void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
     void drop_socket(Connection& c) noexcept;  // closes it; the connection waits to reopen
