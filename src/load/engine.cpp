@@ -14,6 +14,7 @@
 #include "load/worker.hpp"
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
+#include "net/features.hpp"
 #include "net/source_addresses.hpp"
 
 namespace mbstorm::load {
@@ -278,6 +279,7 @@ struct WorkerLinks {
     std::atomic<bool>& abort;
     std::atomic<bool>& any_connected;
     stats::IntervalTimeline& timeline;
+    bool direct_descriptors = false;
 };
 
 // One worker per thread, each with its share of the connections, the quota and the rate.
@@ -316,6 +318,7 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.verifier = links.options.verifier;
         setup.timeline = &links.timeline;
         setup.schedule = schedule.empty() ? nullptr : &schedule;
+        setup.direct_descriptors = links.direct_descriptors;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
 
@@ -347,10 +350,13 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = std::move(why);
         return result;
     }
-    const std::uint32_t threads = effective_threads(plan);
     const StageSchedule schedule(plan);
     const std::uint32_t capacity = schedule.peak_connections();
-    if (std::string why = check_connection_capacity(capacity, threads, sources.size());
+    const bool direct = options.use_direct_descriptors && net::features().direct_descriptors;
+    std::uint32_t threads = effective_threads(plan);
+    // Threads left to the engine: as many rings as the connections' socket tables need.
+    if (direct && plan.threads == 0) threads = threads_for_socket_tables(capacity, threads);
+    if (std::string why = check_connection_capacity(capacity, threads, sources.size(), direct);
         !why.empty()) {
         result.error = std::move(why);
         return result;
@@ -377,7 +383,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const RunWindow window{start_ns, measure_start_ns, end_ns};
     std::vector<std::unique_ptr<Worker>> workers =
         make_workers(plan, endpoint, sources, threads, capacity, window, schedule,
-                     WorkerLinks{options, abort, any_connected, timeline});
+                     WorkerLinks{options, abort, any_connected, timeline, direct});
 
     std::atomic<std::uint32_t> finished{0};
     std::vector<std::thread> pool;

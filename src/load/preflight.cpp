@@ -3,6 +3,8 @@
 #include <arpa/inet.h>
 #include <fmt/format.h>
 
+#include "load/plan.hpp"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -36,7 +38,7 @@ std::string numeric_address(const net::Endpoint& endpoint) {
 }
 
 std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
-                                      std::size_t source_addresses) {
+                                      std::size_t source_addresses, bool direct) {
     // Ports first: no descriptor limit helps when the ports run out.
     PortRange range;
     const std::uint64_t addresses = std::max<std::uint64_t>(source_addresses, 1);
@@ -56,6 +58,17 @@ std::string check_connection_capacity(std::uint32_t connections, std::uint32_t t
             "source addresses (--source-addr) or use at most {} connections",
             connections, range.low, range.high, range.size(), range.size());
     }
+    if (direct) {
+        const std::uint64_t per_ring = (std::uint64_t{connections} + threads - 1) / threads;
+        std::string why;
+        const std::uint64_t limit = net::raise_nofile_limit(per_ring + 64, &why);
+        if (limit >= per_ring) return {};
+        return fmt::format(
+            "connections: {} over {} thread{} need {} io_uring socket slots per thread, above the "
+            "open-files limit {} that caps a ring's table ({}); use --threads {} or more",
+            connections, threads, threads == 1 ? "" : "s", per_ring, limit, why,
+            (connections + limit - 1) / std::max<std::uint64_t>(limit, 1));
+    }
     // Each thread also holds a ring (and a few fds), the process its stdio and friends.
     const std::uint64_t wanted = std::uint64_t{connections} + 8ull * threads + 64;
     std::string why;
@@ -66,6 +79,14 @@ std::string check_connection_capacity(std::uint32_t connections, std::uint32_t t
             connections, limit > 8ull * threads + 64 ? limit - 8ull * threads - 64 : 0, why);
     }
     return {};
+}
+
+std::uint32_t threads_for_socket_tables(std::uint32_t connections, std::uint32_t threads) {
+    const std::uint64_t limit = net::raise_nofile_limit(std::uint64_t{connections} + 64);
+    if (limit == 0) return threads;
+    const std::uint64_t needed = (connections + limit - 1) / limit;
+    return static_cast<std::uint32_t>(
+        std::min<std::uint64_t>(std::max<std::uint64_t>(threads, needed), kMaxThreads));
 }
 
 }  // namespace mbstorm::load
