@@ -297,6 +297,7 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.plan = &plan;
         setup.endpoint = endpoint;
         setup.sources = &sources;
+        if (!sources.empty() && !read_port_range(setup.ports)) setup.ports = PortRange{1, 0};
         setup.first_connection = first_connection;
         setup.target = endpoint.to_string();
         setup.index = i;

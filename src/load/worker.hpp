@@ -14,6 +14,7 @@
 #include "load/operation_generator.hpp"
 #include "load/pacer.hpp"
 #include "load/plan.hpp"
+#include "load/preflight.hpp"
 #include "load/stage_schedule.hpp"
 #include "net/buf_ring.hpp"
 #include "net/completion_loop.hpp"
@@ -30,6 +31,7 @@ struct WorkerSetup {
     // Local addresses to bind to, round-robin by connection number (empty: the kernel picks).
     const std::vector<net::Endpoint>* sources = nullptr;
     std::uint32_t first_connection = 0;  // number of this thread's first connection in the run
+    PortRange ports{1, 0};               // ephemeral ports given out with `sources` (size 0: none)
     std::string target;                  // for messages
     std::uint32_t index = 0;
     std::uint32_t threads = 1;

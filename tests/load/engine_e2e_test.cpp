@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -345,7 +346,9 @@ namespace {
 
 // The peer addresses of the established connections whose local port is `port` (the server's
 // side of each connection), from the kernel's table.
-std::map<std::string, int> peers_of_port(std::uint16_t port) {
+// With `ports`, also each peer's ports ("127.0.0.2:32768").
+std::map<std::string, int> peers_of_port(std::uint16_t port,
+                                         std::set<std::string>* ports = nullptr) {
     std::map<std::string, int> peers;
     std::ifstream in("/proc/net/tcp");
     std::string line;
@@ -363,6 +366,9 @@ std::map<std::string, int> peers_of_port(std::uint16_t port) {
         a.s_addr = address;  // the kernel prints the address in host order of the raw bytes
         inet_ntop(AF_INET, &a, text, sizeof text);
         ++peers[text];
+        if (ports != nullptr)
+            ports->insert(std::string(text) + ":" +
+                          std::to_string(std::stoul(remote.substr(9), nullptr, 16)));
     }
     return peers;
 }
@@ -375,11 +381,13 @@ TEST(EngineSourceAddresses, ConnectionsAreSpreadRoundRobinAndSeenByTheServerFrom
     plan.duration = 1500ms;
     plan.source_addresses = "127.0.0.2-127.0.0.4";
     std::map<std::string, int> seen;
+    std::set<std::string> ports;
     std::thread watch([&] {
         // Every connection is open well within a second on loopback; look a few times.
         for (int i = 0; i < 10 && seen.size() < 3; ++i) {
             std::this_thread::sleep_for(100ms);
-            seen = peers_of_port(server->port());
+            ports.clear();
+            seen = peers_of_port(server->port(), &ports);
         }
     });
     const LoadResult r = run_load(plan);
@@ -389,6 +397,16 @@ TEST(EngineSourceAddresses, ConnectionsAreSpreadRoundRobinAndSeenByTheServerFrom
     EXPECT_EQ(r.run.connections.opened, 6u);
     EXPECT_EQ(seen,
               (std::map<std::string, int>{{"127.0.0.2", 2}, {"127.0.0.3", 2}, {"127.0.0.4", 2}}));
+    // Connection k takes port low + k / addresses of its address: the kernel's port search,
+    // slow past tens of thousands of connections, is not used.
+    PortRange range;
+    ASSERT_TRUE(read_port_range(range));
+    std::set<std::string> expected;
+    for (const char* address : {"127.0.0.2", "127.0.0.3", "127.0.0.4"}) {
+        for (std::uint32_t k = 0; k < 2; ++k)
+            expected.insert(std::string(address) + ":" + std::to_string(range.low + k));
+    }
+    EXPECT_EQ(ports, expected);
 }
 
 TEST(EngineSourceAddresses, BadListsAreRefusedBeforeConnecting) {
