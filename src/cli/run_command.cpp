@@ -158,6 +158,7 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     if (given("--connect-timeout"))
         ov.connect_timeout = std::chrono::nanoseconds(o.connect_timeout_ns);
     if (given("--connect-rate")) ov.connect_rate = p.connect_rate;
+    if (given("--source-addr")) ov.source_addresses = p.source_addresses;
     if (given("--seed")) ov.seed = p.seed;
     if (given("--slave-threads")) ov.slave_threads = o.slave_threads;
     ov.allow_writes = p.allow_writes;
@@ -221,6 +222,9 @@ void add_run_command(CLI::App& app, Action& action) {
                         "connect timeout (default 3s)");
     add_number_option(cmd, "--connect-rate", p.connect_rate, 1.0, 1e7,
                       "new connections per second");
+    cmd->add_option("--source-addr", p.source_addresses,
+                    "local addresses to connect from, round-robin: a comma list of addresses "
+                    "and ranges (127.0.0.1-127.0.0.20,::1); each adds its own ephemeral ports");
     cmd->add_flag("--allow-writes", p.allow_writes,
                   "allow write function codes to a target outside loopback");
     cmd->add_option("--seed", p.seed, "seed for address and value generators");

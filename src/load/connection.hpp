@@ -25,7 +25,8 @@ struct Connection {
     }
 
     State state = State::Waiting;
-    int fd = -1;
+    int fd = -1;  // a descriptor, or with direct descriptors the slot in the ring's table
+    bool slot_closing = false;     // direct: the slot's close has not completed yet
     std::uint32_t generation = 0;  // bumped on close: completions of older sockets are ignored
     TransactionTable table;
     codec::MbapSplitter splitter;

@@ -14,6 +14,8 @@
 #include "load/worker.hpp"
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
+#include "net/features.hpp"
+#include "net/source_addresses.hpp"
 
 namespace mbstorm::load {
 namespace {
@@ -244,6 +246,26 @@ void note_outages(const OutageWatch& outages, std::int64_t measure_start_ns, Loa
     }
 }
 
+// The plan's source addresses, each checked to be of the target's family and local. Empty
+// when usable, else the reason.
+std::string resolve_sources(const Plan& plan, const net::Endpoint& target,
+                            std::vector<net::Endpoint>& sources) {
+    std::string error;
+    if (!net::parse_source_addresses(plan.source_addresses, sources, error))
+        return "source_addr: " + error;
+    for (const net::Endpoint& source : sources) {
+        if (source.family() != target.family()) {
+            return fmt::format("source_addr: {} is {} but the target {} is {}",
+                               numeric_address(source),
+                               source.family() == AF_INET ? "IPv4" : "IPv6", target.to_string(),
+                               target.family() == AF_INET ? "IPv4" : "IPv6");
+        }
+        if (std::string why = net::check_source_is_local(source); !why.empty())
+            return "source_addr: " + why;
+    }
+    return {};
+}
+
 // When the run starts, starts measuring and ends (INT64_MAX: when its transactions are done).
 struct RunWindow {
     std::int64_t start_ns = 0;
@@ -257,24 +279,31 @@ struct WorkerLinks {
     std::atomic<bool>& abort;
     std::atomic<bool>& any_connected;
     stats::IntervalTimeline& timeline;
+    bool direct_descriptors = false;
 };
 
 // One worker per thread, each with its share of the connections, the quota and the rate.
 std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::Endpoint& endpoint,
+                                                  const std::vector<net::Endpoint>& sources,
                                                   std::uint32_t threads, std::uint32_t capacity,
                                                   const RunWindow& window,
                                                   const StageSchedule& schedule,
                                                   const WorkerLinks& links) {
     std::vector<std::unique_ptr<Worker>> workers;
     workers.reserve(threads);
+    std::uint32_t first_connection = 0;
     for (std::uint32_t i = 0; i < threads; ++i) {
         WorkerSetup setup;
         setup.plan = &plan;
         setup.endpoint = endpoint;
+        setup.sources = &sources;
+        if (!sources.empty() && !read_port_range(setup.ports)) setup.ports = PortRange{1, 0};
+        setup.first_connection = first_connection;
         setup.target = endpoint.to_string();
         setup.index = i;
         setup.threads = threads;
         setup.connections = static_cast<std::uint32_t>(thread_share(capacity, threads, i));
+        first_connection += setup.connections;
         const double fraction = static_cast<double>(setup.connections) / capacity;
         setup.quota = plan.transactions == 0
                           ? 0
@@ -290,6 +319,7 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.verifier = links.options.verifier;
         setup.timeline = &links.timeline;
         setup.schedule = schedule.empty() ? nullptr : &schedule;
+        setup.direct_descriptors = links.direct_descriptors;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
 
@@ -316,10 +346,19 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = verdict.message;
         return result;
     }
-    const std::uint32_t threads = effective_threads(plan);
+    std::vector<net::Endpoint> sources;
+    if (std::string why = resolve_sources(plan, endpoint, sources); !why.empty()) {
+        result.error = std::move(why);
+        return result;
+    }
     const StageSchedule schedule(plan);
     const std::uint32_t capacity = schedule.peak_connections();
-    if (std::string why = check_connection_capacity(capacity, threads); !why.empty()) {
+    const bool direct = options.use_direct_descriptors && net::features().direct_descriptors;
+    std::uint32_t threads = effective_threads(plan);
+    // Threads left to the engine: as many rings as the connections' socket tables need.
+    if (direct && plan.threads == 0) threads = threads_for_socket_tables(capacity, threads);
+    if (std::string why = check_connection_capacity(capacity, threads, sources.size(), direct);
+        !why.empty()) {
         result.error = std::move(why);
         return result;
     }
@@ -344,8 +383,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
 
     const RunWindow window{start_ns, measure_start_ns, end_ns};
     std::vector<std::unique_ptr<Worker>> workers =
-        make_workers(plan, endpoint, threads, capacity, window, schedule,
-                     WorkerLinks{options, abort, any_connected, timeline});
+        make_workers(plan, endpoint, sources, threads, capacity, window, schedule,
+                     WorkerLinks{options, abort, any_connected, timeline, direct});
 
     std::atomic<std::uint32_t> finished{0};
     std::vector<std::thread> pool;

@@ -55,6 +55,9 @@ struct EngineOptions {
     std::string tool_version = "mbstorm";
     std::int64_t progress_interval_ns = 1'000'000'000;
     IntervalHistogramsCallback on_interval_histograms;  // optional: costs a histogram per operation
+    // Hold sockets as io_uring direct descriptors when the kernel has them, so the open-files
+    // limit does not cap the connections (false: plain descriptors, as on older kernels).
+    bool use_direct_descriptors = true;
 };
 
 struct LoadResult {

@@ -8,6 +8,7 @@
 
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
+#include "net/source_addresses.hpp"
 
 namespace mbstorm::load {
 namespace {
@@ -125,6 +126,11 @@ std::vector<std::string> validate_plan(const Plan& plan) {
 
     if (plan.host.empty()) fail("target: host is empty");
     if (plan.port == 0) fail("target: port 0 is out of range (valid 1..65535)");
+    if (std::vector<net::Endpoint> sources; !plan.source_addresses.empty()) {
+        std::string error;
+        if (!net::parse_source_addresses(plan.source_addresses, sources, error))
+            fail("source_addr: " + error);
+    }
 
     if (plan.operations.empty()) fail("operations: none given (give at least one)");
     for (std::size_t i = 0; i < plan.operations.size(); ++i) {

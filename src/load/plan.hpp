@@ -64,6 +64,10 @@ struct Plan {
     // Target.
     std::string host = "127.0.0.1";  // numeric IPv4/IPv6 or a host name
     std::uint16_t port = 502;
+    // Local addresses the connections are bound to, round-robin (net/source_addresses.hpp's
+    // list and range syntax); empty: the kernel picks. Each address has its own ephemeral
+    // ports, so N addresses hold N times the connections one can towards the target.
+    std::string source_addresses;
 
     std::vector<Operation> operations;
 

@@ -3,6 +3,9 @@
 #include <arpa/inet.h>
 #include <fmt/format.h>
 
+#include "load/plan.hpp"
+
+#include <algorithm>
 #include <cstdio>
 
 namespace mbstorm::load {
@@ -34,7 +37,38 @@ std::string numeric_address(const net::Endpoint& endpoint) {
     return text;
 }
 
-std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads) {
+std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
+                                      std::size_t source_addresses, bool direct) {
+    // Ports first: no descriptor limit helps when the ports run out.
+    PortRange range;
+    const std::uint64_t addresses = std::max<std::uint64_t>(source_addresses, 1);
+    if (read_port_range(range) && connections > range.size() * addresses) {
+        if (source_addresses > 0) {
+            return fmt::format(
+                "connections: {} exceed what {} source address{} can hold towards one target "
+                "({} ephemeral ports each, {}-{} in /proc/sys/net/ipv4/ip_local_port_range); give "
+                "at least {} source addresses with --source-addr",
+                connections, source_addresses, source_addresses == 1 ? "" : "es", range.size(),
+                range.low, range.high, (connections + range.size() - 1) / range.size());
+        }
+        return fmt::format(
+            "connections: {} exceed the ephemeral port range {}-{} ({} ports towards one target "
+            "address, /proc/sys/net/ipv4/ip_local_port_range); widen it with `sysctl -w "
+            "net.ipv4.ip_local_port_range=\"1024 65535\"`, spread the connections over several "
+            "source addresses (--source-addr) or use at most {} connections",
+            connections, range.low, range.high, range.size(), range.size());
+    }
+    if (direct) {
+        const std::uint64_t per_ring = (std::uint64_t{connections} + threads - 1) / threads;
+        std::string why;
+        const std::uint64_t limit = net::raise_nofile_limit(per_ring + 64, &why);
+        if (limit >= per_ring) return {};
+        return fmt::format(
+            "connections: {} over {} thread{} need {} io_uring socket slots per thread, above the "
+            "open-files limit {} that caps a ring's table ({}); use --threads {} or more",
+            connections, threads, threads == 1 ? "" : "s", per_ring, limit, why,
+            (connections + limit - 1) / std::max<std::uint64_t>(limit, 1));
+    }
     // Each thread also holds a ring (and a few fds), the process its stdio and friends.
     const std::uint64_t wanted = std::uint64_t{connections} + 8ull * threads + 64;
     std::string why;
@@ -44,15 +78,15 @@ std::string check_connection_capacity(std::uint32_t connections, std::uint32_t t
             "connections: {} cannot be opened: the open-files limit allows about {} ({})",
             connections, limit > 8ull * threads + 64 ? limit - 8ull * threads - 64 : 0, why);
     }
-    PortRange range;
-    if (read_port_range(range) && connections > range.size()) {
-        return fmt::format(
-            "connections: {} exceed the ephemeral port range {}-{} ({} ports towards one target "
-            "address, /proc/sys/net/ipv4/ip_local_port_range); widen it with `sysctl -w "
-            "net.ipv4.ip_local_port_range=\"1024 65535\"` or use at most {} connections",
-            connections, range.low, range.high, range.size(), range.size());
-    }
     return {};
+}
+
+std::uint32_t threads_for_socket_tables(std::uint32_t connections, std::uint32_t threads) {
+    const std::uint64_t limit = net::raise_nofile_limit(std::uint64_t{connections} + 64);
+    if (limit == 0) return threads;
+    const std::uint64_t needed = (connections + limit - 1) / limit;
+    return static_cast<std::uint32_t>(
+        std::min<std::uint64_t>(std::max<std::uint64_t>(threads, needed), kMaxThreads));
 }
 
 }  // namespace mbstorm::load

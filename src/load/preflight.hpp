@@ -25,6 +25,14 @@ std::string endpoint_text(const std::string& host, std::uint16_t port);
 std::string numeric_address(const net::Endpoint& endpoint);
 
 // Empty when `connections` fit both limits (raising RLIMIT_NOFILE if needed), else the reason.
-std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads);
+// Each source address has the whole ephemeral port range (0 sources: the kernel's one).
+// With `direct` descriptors sockets take no descriptor, but each thread's ring holds its share
+// of the connections in a table the kernel caps at the open-files limit.
+std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
+                                      std::size_t source_addresses = 0, bool direct = false);
+
+// Direct descriptors: the threads needed (at least `threads`) so that each ring's share of
+// `connections` fits the open-files limit, raised first as far as allowed.
+std::uint32_t threads_for_socket_tables(std::uint32_t connections, std::uint32_t threads);
 
 }  // namespace mbstorm::load

@@ -16,6 +16,7 @@
 #include "load/rng.hpp"
 #include "load/thread_share.hpp"
 #include "net/clock.hpp"
+#include "net/direct_socket.hpp"
 #include "net/features.hpp"
 #include "net/user_data.hpp"
 
@@ -123,11 +124,21 @@ bool Worker::setup_io() noexcept {
         return false;
     }
     multishot_ = features.multishot_recv;
+    direct_ = setup_.direct_descriptors;
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
     if (const int rc = ring_.init(options); rc < 0) {
         fatal_error = fmt::format("io_uring setup failed: {}", std::system_category().message(-rc));
         return false;
+    }
+    if (direct_) {
+        if (const int rc = net::register_socket_table(ring_.get(), setup_.connections); rc < 0) {
+            fatal_error = fmt::format(
+                "io_uring socket table of {} slots failed: {} (a ring's table is capped at the "
+                "open-files limit; more threads spread the connections over more rings)",
+                setup_.connections, std::system_category().message(-rc));
+            return false;
+        }
     }
     const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
     if (const int rc = buf_ring_.init(ring_.get(), kBufferGroup, count, 16384); rc < 0) {
@@ -195,7 +206,13 @@ void Worker::teardown() noexcept {
         // A new generation makes every later completion stale: they only release resources.
         c.generation = net::next_generation(c.generation);
         c.recv_armed = false;
-        if (c.fd >= 0) ::shutdown(c.fd, SHUT_RDWR);
+        if (c.fd >= 0) {
+            if (direct_) {
+                close_socket(c);
+            } else {
+                ::shutdown(c.fd, SHUT_RDWR);
+            }
+        }
         if (c.state == Connection::State::Open) open_connections.fetch_sub(1);
         c.state = Connection::State::Waiting;
     }
@@ -210,7 +227,7 @@ void Worker::teardown() noexcept {
         ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
     }
     for (Connection& c : connections_) {
-        if (c.fd >= 0) ::close(c.fd);
+        if (c.fd >= 0 && !direct_) ::close(c.fd);  // direct: the ring's exit closes the table
         c.fd = -1;
     }
 }
@@ -227,6 +244,10 @@ void Worker::start_due_connects(std::int64_t now) noexcept {
         c.connect_queued = false;
         // A ramp down may have made it unwanted meanwhile; a ramp up re-queues it.
         if (index >= active_ || c.state != Connection::State::Waiting) continue;
+        if (c.slot_closing) {  // its slot is still being emptied: a moment later
+            queue_connect(index, now + net::kNsPerMs);
+            continue;
+        }
         next_connect_allowed_ns_ += connect_interval_ns_;
         start_connect(index, now);
         if (setup_.abort->load(std::memory_order_relaxed)) return;
@@ -311,14 +332,28 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
         return;
     }
     net::set_nodelay(fd);
-    c.fd = fd;
+    if (const int rc = bind_source(fd, index); rc < 0) {
+        ::close(fd);
+        on_connect(index, rc, now);
+        return;
+    }
+    if (direct_) {
+        if (const int rc = net::install_in_slot(ring_.get(), index, fd); rc < 0) {
+            on_connect(index, rc, now);
+            return;
+        }
+        c.fd = static_cast<int>(index);
+    } else {
+        c.fd = fd;
+    }
     c.state = Connection::State::Connecting;
     c.generation = net::next_generation(c.generation);
     c.connect_started_ns = now;
     // The connect and its linked timeout must reach the kernel in the same submission.
     if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
     io_uring_sqe* sqe = ring_.sqe();
-    io_uring_prep_connect(sqe, fd, setup_.endpoint.sa(), setup_.endpoint.len);
+    io_uring_prep_connect(sqe, c.fd, setup_.endpoint.sa(), setup_.endpoint.len);
+    net::use_slot_if(sqe, direct_);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Connect, index, c.generation));
     sqe->flags |= IOSQE_IO_LINK;
     io_uring_sqe* timeout = ring_.sqe();
@@ -326,6 +361,28 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
     io_uring_sqe_set_data64(timeout,
                             net::encode_user_data(Op::ConnectTimeout, index, c.generation));
     inflight_ops_ += 2;
+}
+
+int Worker::bind_source(int fd, std::uint32_t index) noexcept {
+    if (setup_.sources == nullptr || setup_.sources->empty()) return 0;
+    const std::vector<net::Endpoint>& sources = *setup_.sources;
+    const std::uint32_t number = setup_.first_connection + index;
+    net::Endpoint source = sources[number % sources.size()];
+    // Each connection gets its own port of the ephemeral range on its address: the kernel's
+    // own search for a free port walks the range, checking each port, on every connect, which
+    // costs seconds per thousand connections once tens of thousands are open.
+    const int one = 1;
+    if (setup_.ports.size() > 0) {
+        source.set_port(static_cast<std::uint16_t>(setup_.ports.low + (number / sources.size()) %
+                                                                          setup_.ports.size()));
+        // A slot reconnecting finds its port's previous connection in TIME_WAIT.
+        ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+        if (::bind(fd, source.sa(), source.len) == 0) return 0;
+        source.set_port(0);  // taken by another socket: let the kernel pick at connect time
+    }
+    // Port 0: chosen at connect time, per destination (bind would take one for good).
+    ::setsockopt(fd, SOL_IP, IP_BIND_ADDRESS_NO_PORT, &one, sizeof one);
+    return ::bind(fd, source.sa(), source.len) == 0 ? 0 : -errno;
 }
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
@@ -349,8 +406,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         return;
     }
     ++connection_stats.failed;
-    if (c.fd >= 0) ::close(c.fd);
-    c.fd = -1;
+    close_socket(c);
     c.state = Connection::State::Waiting;
     c.generation = net::next_generation(c.generation);
     if (!setup_.any_connected->load(std::memory_order_relaxed)) {
@@ -378,17 +434,33 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
 void Worker::drop_socket(Connection& c) noexcept {
     if (c.state == Connection::State::Open)
         open_connections.fetch_sub(1, std::memory_order_relaxed);
-    if (c.fd >= 0) {
-        ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
-        ::close(c.fd);
-        c.fd = -1;
-    }
+    close_socket(c);
     // A new generation makes the old socket's late completions stale.
     c.generation = net::next_generation(c.generation);
     c.state = Connection::State::Waiting;
     c.queued = 0;
     c.recv_armed = false;
     c.splitter.reset();
+}
+
+void Worker::close_socket(Connection& c) noexcept {
+    if (c.fd < 0) return;
+    if (direct_) {
+        // Both SQEs in one submission, linked: the shutdown ends the pending multishot recv.
+        if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
+        const auto index = static_cast<std::uint32_t>(c.fd);
+        io_uring_sqe* shutdown_sqe = ring_.sqe();  // first: the close is linked to it
+        io_uring_sqe* close_sqe = ring_.sqe();
+        net::prep_shutdown_and_close(shutdown_sqe, close_sqe, index,
+                                     net::encode_user_data(Op::Shutdown, index, c.generation),
+                                     net::encode_user_data(Op::Close, index, c.generation));
+        inflight_ops_ += 2;
+        c.slot_closing = true;
+    } else {
+        ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
+        ::close(c.fd);
+    }
+    c.fd = -1;
 }
 
 void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept {
@@ -405,6 +477,7 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     io_uring_sqe* sqe = ring_.sqe();
     net::prep_group_recv(sqe, c.fd, buf_ring_.group_id(), buf_ring_.buffer_size(), multishot_);
+    net::use_slot_if(sqe, direct_);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
     ++inflight_ops_;
@@ -428,6 +501,13 @@ void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
             return;
         case Op::Send:
             on_send(ud.index, cqe, now);
+            return;
+        case Op::Shutdown:
+            --inflight_ops_;
+            return;
+        case Op::Close:
+            --inflight_ops_;
+            connections_[ud.index].slot_closing = false;
             return;
     }
 }
@@ -551,6 +631,7 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         io_uring_sqe* sqe = ring_.sqe();
         io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
                            c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
+        net::use_slot_if(sqe, direct_);
         io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
@@ -642,6 +723,7 @@ void Worker::flush() noexcept {
         io_uring_sqe* sqe = ring_.sqe();
         if (sqe == nullptr) return;
         io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
+        net::use_slot_if(sqe, direct_);
         io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         c.inflight_len = c.queued;

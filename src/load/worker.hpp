@@ -14,6 +14,7 @@
 #include "load/operation_generator.hpp"
 #include "load/pacer.hpp"
 #include "load/plan.hpp"
+#include "load/preflight.hpp"
 #include "load/stage_schedule.hpp"
 #include "net/buf_ring.hpp"
 #include "net/completion_loop.hpp"
@@ -27,7 +28,11 @@ namespace mbstorm::load {
 struct WorkerSetup {
     const Plan* plan = nullptr;
     net::Endpoint endpoint;
-    std::string target;  // for messages
+    // Local addresses to bind to, round-robin by connection number (empty: the kernel picks).
+    const std::vector<net::Endpoint>* sources = nullptr;
+    std::uint32_t first_connection = 0;  // number of this thread's first connection in the run
+    PortRange ports{1, 0};               // ephemeral ports given out with `sources` (size 0: none)
+    std::string target;                  // for messages
     std::uint32_t index = 0;
     std::uint32_t threads = 1;
     std::uint32_t connections = 1;  // this thread's share of the peak connection count
@@ -43,6 +48,9 @@ struct WorkerSetup {
     ResponseVerifier verifier;
     stats::IntervalTimeline* timeline = nullptr;
     const StageSchedule* schedule = nullptr;  // staged runs only
+    // Hold sockets as io_uring direct descriptors (the engine checked the kernel has them and
+    // that `connections` fits a ring's table).
+    bool direct_descriptors = false;
 };
 
 class Worker {
@@ -67,7 +75,7 @@ class Worker {
 
   private:
     // What a completion is for (the op field of its user_data).
-    enum class Op : std::uint8_t { Connect = 1, ConnectTimeout, Recv, Send };
+    enum class Op : std::uint8_t { Connect = 1, ConnectTimeout, Recv, Send, Shutdown, Close };
 
     bool setup_io() noexcept;
     void loop() noexcept;
@@ -81,9 +89,12 @@ class Worker {
     void retire_if_idle(std::uint32_t index) noexcept;
     std::uint32_t share_of(std::uint32_t total) const noexcept;
     void start_connect(std::uint32_t index, std::int64_t now) noexcept;
+    // Binds a connection's socket to its source address, if the run has any: 0 or -errno.
+    int bind_source(int fd, std::uint32_t index) noexcept;
     void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
     void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
-    void drop_socket(Connection& c) noexcept;  // closes it; the connection waits to reopen
+    void drop_socket(Connection& c) noexcept;   // closes it; the connection waits to reopen
+    void close_socket(Connection& c) noexcept;  // direct: until its close completes, no reopen
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
     void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
@@ -116,6 +127,7 @@ class Worker {
     net::Ring ring_;
     net::BufRing buf_ring_;  // declared after ring_: unregistered before the ring goes
     bool multishot_ = true;
+    bool direct_ = false;  // sockets are slots of ring_'s file table (slot = connection index)
 
     std::vector<Connection> connections_;
     OperationGenerator generator_;

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "net/buf_ring.hpp"
+#include "net/direct_socket.hpp"
 #include "net/ring.hpp"
 #include "net/socket.hpp"
 
@@ -66,6 +67,36 @@ bool probe_multishot_accept(io_uring* ring) {
     return ok;
 }
 
+// Accepts one connection into a slot the kernel allocates, then shuts it down and closes the
+// slot the way the workers do.
+bool probe_direct_descriptors(io_uring* ring) {
+    if (register_socket_table(ring, 4) != 0) return false;
+    Endpoint ep;
+    if (!parse_endpoint("127.0.0.1:0", ep)) return false;
+    UniqueFd listener(listen_socket(ep, ListenOptions{16, false, true}));
+    if (!listener.valid()) return false;
+    ep.set_port(local_port(listener.get()));
+    io_uring_sqe* sqe = io_uring_get_sqe(ring);
+    io_uring_prep_accept_direct(sqe, listener.get(), nullptr, nullptr, 0, kAnySlot);
+    io_uring_submit(ring);
+    UniqueFd client(connect_blocking(ep));
+    if (!client.valid()) return false;
+    io_uring_cqe* cqe = nullptr;
+    if (!wait_one(ring, &cqe)) return false;
+    const int slot = cqe->res;
+    io_uring_cqe_seen(ring, cqe);
+    if (slot < 0 || slot >= 4) return false;
+    prep_shutdown_and_close(io_uring_get_sqe(ring), io_uring_get_sqe(ring),
+                            static_cast<unsigned>(slot), 1, 2);
+    io_uring_submit(ring);
+    bool closed = false;
+    for (int i = 0; i < 2 && wait_one(ring, &cqe); ++i) {
+        if (cqe->user_data == 2) closed = cqe->res == 0;
+        io_uring_cqe_seen(ring, cqe);
+    }
+    return closed;
+}
+
 }  // namespace
 
 Features probe_features() noexcept {
@@ -99,6 +130,11 @@ Features probe_features() noexcept {
         if (accept_ring.init(plain) == 0)
             f.multishot_accept = probe_multishot_accept(accept_ring.get());
     }
+    {
+        Ring direct_ring;
+        if (direct_ring.init(plain) == 0)
+            f.direct_descriptors = probe_direct_descriptors(direct_ring.get());
+    }
     return f;
 }
 
@@ -113,8 +149,9 @@ std::string describe(const Features& f) {
     if (!f.ring) return s + "unavailable";
     s += std::string("multishot_accept=") + yn(f.multishot_accept) +
          " multishot_recv=" + yn(f.multishot_recv) + " buf_ring=" + yn(f.buf_ring) +
-         " send_zc=" + yn(f.send_zc) + " single_issuer=" + yn(f.single_issuer) +
-         " defer_taskrun=" + yn(f.defer_taskrun) + " coop_taskrun=" + yn(f.coop_taskrun);
+         " send_zc=" + yn(f.send_zc) + " direct_descriptors=" + yn(f.direct_descriptors) +
+         " single_issuer=" + yn(f.single_issuer) + " defer_taskrun=" + yn(f.defer_taskrun) +
+         " coop_taskrun=" + yn(f.coop_taskrun);
     return s;
 }
 

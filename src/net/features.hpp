@@ -16,7 +16,10 @@ struct Features {
     bool multishot_recv = false;    // IORING_RECV_MULTISHOT (6.0)
     bool buf_ring = false;          // IORING_REGISTER_PBUF_RING (5.19)
     bool send_zc = false;           // IORING_OP_SEND_ZC (6.0)
-    std::string kernel;             // uname release, for reports
+    // Sockets as direct descriptors: a sparse registered file table, accept into a slot the
+    // kernel allocates (IORING_FILE_INDEX_ALLOC), shutdown and close of a slot (5.19).
+    bool direct_descriptors = false;
+    std::string kernel;  // uname release, for reports
 };
 
 // Probes on first call (thread-safe), cached afterwards.

@@ -84,6 +84,7 @@ std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
     if (o.transaction_timeout) p.transaction_timeout = *o.transaction_timeout;
     if (o.connect_timeout) p.connect_timeout = *o.connect_timeout;
     if (o.connect_rate) p.connect_rate = *o.connect_rate;
+    if (o.source_addresses) p.source_addresses = *o.source_addresses;
     if (o.seed) p.seed = *o.seed;
     if (o.slave_threads) s.slave_threads = *o.slave_threads;
     if (o.allow_writes) p.allow_writes = true;

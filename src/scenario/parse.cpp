@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "net/socket.hpp"
+#include "net/source_addresses.hpp"
 #include "scenario/operation_names.hpp"
 #include "scenario/operation_yaml.hpp"
 #include "scenario/scenario.hpp"
@@ -105,18 +106,32 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
     load::Plan& p = s.plan;
     TopLevelNodes k;
     r.each_key(
-        root, "the scenario", {"name",           "description",
-                               "target",         "slave",
-                               "slave_threads",  "threads",
-                               "connections",    "depth",
-                               "model",          "rate",
-                               "arrival",        "duration",
-                               "transactions",   "warmup",
-                               "timeout",        "connect_timeout",
-                               "connect_rate",   "reconnect_backoff",
-                               "late_threshold", "allow_writes",
-                               "seed",           "stages",
-                               "operations",     "thresholds"},
+        root, "the scenario",
+        {"name",
+         "description",
+         "target",
+         "source_addr",
+         "slave",
+         "slave_threads",
+         "threads",
+         "connections",
+         "depth",
+         "model",
+         "rate",
+         "arrival",
+         "duration",
+         "transactions",
+         "warmup",
+         "timeout",
+         "connect_timeout",
+         "connect_rate",
+         "reconnect_backoff",
+         "late_threshold",
+         "allow_writes",
+         "seed",
+         "stages",
+         "operations",
+         "thresholds"},
         [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
             if (key == "name")
                 s.name = r.scalar(v, "name");
@@ -126,6 +141,12 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
                 k.target = v;
                 s.target = r.scalar(v, "target");
                 check_target(r, v, s.target);
+            } else if (key == "source_addr") {
+                p.source_addresses = r.scalar(v, "source_addr");
+                std::vector<net::Endpoint> sources;
+                std::string error;
+                if (!net::parse_source_addresses(p.source_addresses, sources, error))
+                    r.fail(v, "source_addr: " + error);
             } else if (key == "slave")
                 k.slave = v;
             else if (key == "slave_threads")

@@ -122,6 +122,8 @@ std::string format_scenario(const Scenario& s) {
         out << YAML::Key << "slave" << YAML::Value;
         slave::emit_device_yaml(out, s.slave);
     }
+    if (!p.source_addresses.empty())
+        out << YAML::Key << "source_addr" << YAML::Value << p.source_addresses;
     out << YAML::Key << "threads" << YAML::Value << p.threads << YAML::Comment("0 = one per core");
     out << YAML::Key << "connections" << YAML::Value << p.connections;
     out << YAML::Key << "depth" << YAML::Value << p.depth;

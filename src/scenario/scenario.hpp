@@ -87,6 +87,7 @@ Scenario load_scenario_file(const std::string& path);
 // Values given on the command line; each set one replaces the file's value.
 struct Overrides {
     std::optional<std::string> target;
+    std::optional<std::string> source_addresses;
     std::optional<load::Duration> duration;  // with stages: the stages are scaled to fit
     std::optional<load::Duration> warmup;
     std::optional<std::uint32_t> connections;

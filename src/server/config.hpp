@@ -71,6 +71,9 @@ struct ServerConfig {
     bool use_buf_ring = true;        // provided buffer ring for input, else per-connection buffers
     bool use_multishot_recv = true;  // needs use_buf_ring
     bool use_multishot_accept = true;
+    // Accepted sockets as io_uring direct descriptors when the kernel has them: the open-files
+    // limit then caps each thread's share of the connections (a ring's table), not their sum.
+    bool use_direct_descriptors = true;
     unsigned ring_entries = 4096;
     unsigned buf_ring_count = 2048;  // per thread, power of two
     unsigned buf_size = 4096;

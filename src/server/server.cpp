@@ -1,5 +1,6 @@
 #include "server/server.hpp"
 
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -35,7 +36,10 @@ bool Server::start(std::string* error) {
     if (!net::parse_endpoint(config_.listen, ep, &parse_error, 502)) return fail(parse_error);
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
-    if (config_.max_connections) fit_connection_limit_to_descriptors(n);
+    if (config_.use_direct_descriptors && net::features().direct_descriptors)
+        table_slots_ = fit_socket_tables(n);
+    else if (config_.max_connections)
+        fit_connection_limit_to_descriptors(n);
     if (config_.units) {
         model_ = &config_.units->model_at(0);
     } else if (config_.model) {
@@ -48,6 +52,11 @@ bool Server::start(std::string* error) {
     for (unsigned i = 0; i < n; ++i) {
         int fd = net::listen_socket(ep);
         if (fd < 0) return fail("cannot listen on " + ep.to_string() + ": " + strerror(-fd));
+        // Accepted sockets inherit these: direct ones cannot be given them afterwards.
+        net::set_nodelay(fd);
+        if (config_.socket_send_buffer > 0)
+            setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &config_.socket_send_buffer,
+                       sizeof config_.socket_send_buffer);
         if (i == 0) {
             port_ = net::local_port(fd);
             ep.set_port(port_);  // the other threads join the same (possibly ephemeral) port
@@ -58,7 +67,10 @@ bool Server::start(std::string* error) {
     }
     std::vector<Worker*> peers;
     for (auto& w : workers_) peers.push_back(w.get());
-    for (auto& w : workers_) w->set_peers(peers);
+    for (auto& w : workers_) {
+        w->set_peers(peers);
+        w->set_socket_table(table_slots_);
+    }
     for (auto& w : workers_) threads_.emplace_back([wp = w.get()] { wp->run(); });
     running_ = true;
     if (!config_.simulated.empty()) {
@@ -108,6 +120,36 @@ void Server::fit_connection_limit_to_descriptors(unsigned threads) {
     config_.max_connections = static_cast<std::uint32_t>(usable);
 }
 
+unsigned Server::fit_socket_tables(unsigned& threads) {
+    // SO_REUSEPORT spreads connections by hash, not evenly: a quarter more room per table.
+    auto share = [this](unsigned n) -> std::uint64_t {
+        return (std::uint64_t{config_.max_connections} + n - 1) / n * 5 / 4 + 64;
+    };
+    const std::uint64_t wanted = config_.max_connections ? share(threads) : 65536;
+    // Unlimited: the limit in force, as with plain descriptors.
+    const std::uint64_t limit = config_.raise_nofile_limit && config_.max_connections != 0
+                                    ? net::raise_nofile_limit(wanted, nullptr)
+                                    : net::nofile_limit();
+    if (limit == 0) return 0;
+    if (config_.max_connections == 0) return static_cast<unsigned>(std::min(limit, wanted));
+    if (config_.threads == 0) {
+        while (share(threads) > limit && threads < 1024) ++threads;
+    }
+    const std::uint64_t slots = std::min(share(threads), limit);
+    // Full tables refuse new connections at accept (handled like running out of descriptors):
+    // keep the limit below what the tables hold, so that eviction or refusal does its work.
+    if (slots >= share(threads)) return static_cast<unsigned>(slots);
+    const std::uint64_t holds = slots * threads * 4 / 5;
+    if (holds < config_.max_connections) {
+        warning_ = "open-files limit " + std::to_string(limit) +
+                   " caps each thread's io_uring socket table; connection limit lowered from " +
+                   std::to_string(config_.max_connections) + " to " + std::to_string(holds) +
+                   " (more --threads hold more)";
+        config_.max_connections = static_cast<std::uint32_t>(std::max<std::uint64_t>(holds, 1));
+    }
+    return static_cast<unsigned>(slots);
+}
+
 void Server::stop() noexcept {
     simulator_stop_ = true;
     if (simulator_thread_.joinable()) simulator_thread_.join();
@@ -141,6 +183,8 @@ std::string Server::describe_io() const {
                   std::to_string(config_.buf_size) + " B per thread)"
             : " into per-connection buffers";
     s += (config_.use_multishot_accept && f.multishot_accept) ? ", multishot accept" : ", accept";
+    if (table_slots_ > 0 && !workers_.empty() && workers_.front()->direct_descriptors())
+        s += ", direct descriptors (" + std::to_string(table_slots_) + " slots per thread)";
     s += ", " + std::to_string(bytes_per_connection()) + " B per idle connection";
     return s;
 }

@@ -47,6 +47,10 @@ class Server {
   private:
     // Raises the descriptor limit, or lowers max_connections below it (with a warning).
     void fit_connection_limit_to_descriptors(unsigned threads);
+    // Direct descriptors: each thread's socket table (its share of max_connections with room
+    // for an uneven spread, at most the open-files limit); may add threads when `threads` was
+    // not set, or lower max_connections (with a warning). Returns the slots per table.
+    unsigned fit_socket_tables(unsigned& threads);
 
     ServerConfig config_;
     std::unique_ptr<slave::DataModel> owned_model_;
@@ -57,6 +61,7 @@ class Server {
     std::uint16_t port_ = 0;
     std::string host_;
     std::string warning_;
+    unsigned table_slots_ = 0;  // per thread; 0: plain descriptors
     bool running_ = false;
     // Simulated inputs: one thread writes them every simulate_interval_ms until stop().
     std::unique_ptr<slave::Simulator> simulator_;

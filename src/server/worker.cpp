@@ -10,6 +10,7 @@
 #include "codec/bytes.hpp"
 #include "codec/limits.hpp"
 #include "net/clock.hpp"
+#include "net/direct_socket.hpp"
 #include "net/features.hpp"
 #include "net/socket.hpp"
 #include "net/user_data.hpp"
@@ -65,6 +66,7 @@ int Worker::setup() noexcept {
         buf_ring_.init(ring_.get(), kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
     multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && f.multishot_recv;
     multishot_accept_ = config_.use_multishot_accept && f.multishot_accept;
+    direct_ = table_slots_ > 0 && net::register_socket_table(ring_.get(), table_slots_) == 0;
     try {
         std::size_t expect = config_.max_connections ? config_.max_connections : 1024;
         expect = std::min<std::size_t>(expect, 65536);
@@ -102,8 +104,14 @@ void Worker::run() noexcept {
 void Worker::arm_accept() noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
-    if (multishot_accept_)
+    // Direct: the kernel picks a free slot, and -ENFILE when the table is full (handled like
+    // running out of descriptors).
+    if (multishot_accept_ && direct_)
+        io_uring_prep_multishot_accept_direct(sqe, listen_fd_, nullptr, nullptr, 0);
+    else if (multishot_accept_)
         io_uring_prep_multishot_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+    else if (direct_)
+        io_uring_prep_accept_direct(sqe, listen_fd_, nullptr, nullptr, 0, net::kAnySlot);
     else
         io_uring_prep_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Accept, 0, 0));
@@ -181,6 +189,7 @@ void Worker::arm_recv(std::uint32_t index) noexcept {
     } else {
         io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
     }
+    net::use_slot_if(sqe, direct_);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
     c.recv_armed = true;
 }
@@ -258,14 +267,16 @@ void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
             if (!stopping_) arm_mail();
             break;
         case Op::Cancel:
-            break;  // the cancelled recv reports itself
+        case Op::SocketShutdown:
+        case Op::SocketClose:
+            break;  // the cancelled recv reports itself; a closed slot is free for accepts
     }
 }
 
 void Worker::on_accept(const io_uring_cqe& cqe) noexcept {
     if (cqe.res >= 0) {
         if (stopping_)
-            ::close(cqe.res);
+            close_socket(cqe.res);
         else
             admit(cqe.res);
     }
@@ -303,7 +314,7 @@ void Worker::admit(int fd) noexcept {
             close_connection(lru_head_);
         } else if (!evicted) {
             counters_.add(ServerCounters::Refusals);
-            ::close(fd);
+            close_socket(fd);
             return;
         }
     }
@@ -320,14 +331,17 @@ void Worker::admit(int fd) noexcept {
         if (!use_buf_ring_ && !c.plain_buf) c.plain_buf.reset(new std::uint8_t[config_.buf_size]);
     } catch (...) {
         counters_.add(ServerCounters::Refusals);
-        ::close(fd);
+        close_socket(fd);
         return;
     }
     Connection& c = conns_[index];
-    net::set_nodelay(fd);
-    if (config_.socket_send_buffer > 0)
-        setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &config_.socket_send_buffer,
-                   sizeof config_.socket_send_buffer);
+    // Direct sockets have these from the listener (accepted sockets inherit them).
+    if (!direct_) {
+        net::set_nodelay(fd);
+        if (config_.socket_send_buffer > 0)
+            setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &config_.socket_send_buffer,
+                       sizeof config_.socket_send_buffer);
+    }
     c.fd = fd;
     c.state = Connection::State::Open;
     c.recv_armed = c.send_inflight = c.paused = c.dirty = false;
@@ -352,15 +366,35 @@ void Worker::close_connection(std::uint32_t index) noexcept {
     lru_unlink(index);
     // shutdown() ends a pending recv/send at once; the ops still hold the socket, so the
     // descriptor can be closed now and the slot released when they have completed.
-    ::shutdown(c.fd, SHUT_RDWR);
+    if (direct_) {
+        close_socket(c.fd);  // shutdown, then close, in the kernel's order
+    } else {
+        ::shutdown(c.fd, SHUT_RDWR);
+    }
     if (c.recv_armed) cancel_recv(index);
     drop_stash(index);
-    ::close(c.fd);
+    if (!direct_) ::close(c.fd);
     c.fd = -1;
     --open_here_;
     open_connections_.fetch_sub(1, std::memory_order_relaxed);
     counters_.sub(ServerCounters::ConnectionsCurrent);
     maybe_release(index);
+}
+
+void Worker::close_socket(int fd) noexcept {
+    if (!direct_) {
+        ::close(fd);
+        return;
+    }
+    // Both SQEs in one submission: the close is linked to the shutdown.
+    if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
+    io_uring_sqe* shutdown_sqe = ring_.sqe();
+    io_uring_sqe* close_sqe = ring_.sqe();
+    if (!shutdown_sqe || !close_sqe) return;
+    const auto slot = static_cast<std::uint32_t>(fd);
+    net::prep_shutdown_and_close(shutdown_sqe, close_sqe, slot,
+                                 net::encode_user_data(Op::SocketShutdown, slot, 0),
+                                 net::encode_user_data(Op::SocketClose, slot, 0));
 }
 
 void Worker::maybe_release(std::uint32_t index) noexcept {
@@ -636,6 +670,7 @@ void Worker::flush(std::uint32_t index) noexcept {
     io_uring_sqe* sqe = ring_.sqe();
     if (!sqe) return;
     io_uring_prep_send(sqe, c.fd, p, size, MSG_NOSIGNAL);
+    net::use_slot_if(sqe, direct_);
     io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
     c.send_inflight = true;
 }

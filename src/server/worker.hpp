@@ -46,9 +46,25 @@ class Worker {
     void set_peers(std::vector<Worker*> peers) { peers_ = std::move(peers); }
     void request_eviction() noexcept;  // any thread
 
+    // Hold accepted sockets as io_uring direct descriptors in a table of `slots` (0: plain
+    // descriptors). Set before run(); falls back to plain descriptors if the table cannot be
+    // registered.
+    void set_socket_table(unsigned slots) noexcept { table_slots_ = slots; }
+    bool direct_descriptors() const noexcept { return direct_; }
+
   private:
     // What a completion is for (the op field of its user_data).
-    enum class Op : std::uint8_t { Accept = 1, Recv, Send, Stop, Cancel, AcceptPause, Mail };
+    enum class Op : std::uint8_t {
+        Accept = 1,
+        Recv,
+        Send,
+        Stop,
+        Cancel,
+        AcceptPause,
+        Mail,
+        SocketShutdown,
+        SocketClose
+    };
 
     int setup() noexcept;
     void loop() noexcept;
@@ -71,6 +87,7 @@ class Worker {
     void cancel_recv(std::uint32_t index) noexcept;
     void admit(int fd) noexcept;
     void close_connection(std::uint32_t index) noexcept;
+    void close_socket(int fd) noexcept;  // a descriptor, or a slot with direct descriptors
     void maybe_release(std::uint32_t index) noexcept;
 
     void stash(std::uint32_t index, std::uint16_t bid, std::uint32_t size) noexcept;
@@ -113,6 +130,8 @@ class Worker {
     bool use_buf_ring_ = false;
     bool multishot_recv_ = false;
     bool multishot_accept_ = false;
+    unsigned table_slots_ = 0;
+    bool direct_ = false;  // Connection::fd is a slot of ring_'s file table
     int stop_fd_ = -1;
     std::uint64_t stop_value_ = 0;
     int mail_fd_ = -1;  // eventfd: another worker asked for an eviction

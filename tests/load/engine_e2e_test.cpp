@@ -1,6 +1,7 @@
 // End-to-end: the load engine against the in-process reference slave (loopback only, every run
 // bounded in time and count). Assertions are on behaviour; bounds are generous for a busy
 // 2-core machine.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -8,11 +9,16 @@
 
 #include <atomic>
 #include <chrono>
+#include <fstream>
+#include <map>
 #include <memory>
+#include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 
 #include "load/engine.hpp"
+#include "load/preflight.hpp"
 #include "server/server.hpp"
 #include "slave/data_model.hpp"
 
@@ -330,6 +336,110 @@ TEST(EngineE2E, ServerDroppingConnectionsLeadsToReconnects) {
     EXPECT_GT(r.run.counters.count(Outcome::ConnectionClosed), 0u);
     EXPECT_GT(r.run.counters.ok(), 1000u);
     expect_accounted(r);
+}
+
+}  // namespace
+}  // namespace mbstorm::load
+
+namespace mbstorm::load {
+namespace {
+
+// The peer addresses of the established connections whose local port is `port` (the server's
+// side of each connection), from the kernel's table.
+// With `ports`, also each peer's ports ("127.0.0.2:32768").
+std::map<std::string, int> peers_of_port(std::uint16_t port,
+                                         std::set<std::string>* ports = nullptr) {
+    std::map<std::string, int> peers;
+    std::ifstream in("/proc/net/tcp");
+    std::string line;
+    std::getline(in, line);  // header
+    for (int lines = 0; lines < 100000 && std::getline(in, line); ++lines) {
+        std::istringstream fields(line);
+        std::string slot, local, remote, state;
+        fields >> slot >> local >> remote >> state;
+        if (state != "01" || local.size() != 13 || remote.size() != 13) continue;
+        if (std::stoul(local.substr(9), nullptr, 16) != port) continue;
+        const auto address =
+            static_cast<std::uint32_t>(std::stoul(remote.substr(0, 8), nullptr, 16));
+        char text[INET_ADDRSTRLEN] = {};
+        in_addr a{};
+        a.s_addr = address;  // the kernel prints the address in host order of the raw bytes
+        inet_ntop(AF_INET, &a, text, sizeof text);
+        ++peers[text];
+        if (ports != nullptr)
+            ports->insert(std::string(text) + ":" +
+                          std::to_string(std::stoul(remote.substr(9), nullptr, 16)));
+    }
+    return peers;
+}
+
+TEST(EngineSourceAddresses, ConnectionsAreSpreadRoundRobinAndSeenByTheServerFromThoseAddresses) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 6;
+    plan.threads = 2;
+    plan.duration = 1500ms;
+    plan.source_addresses = "127.0.0.2-127.0.0.4";
+    std::map<std::string, int> seen;
+    std::set<std::string> ports;
+    std::thread watch([&] {
+        // Every connection is open well within a second on loopback; look a few times.
+        for (int i = 0; i < 10 && seen.size() < 3; ++i) {
+            std::this_thread::sleep_for(100ms);
+            ports.clear();
+            seen = peers_of_port(server->port(), &ports);
+        }
+    });
+    const LoadResult r = run_load(plan);
+    watch.join();
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.counters.errors(), 0u);
+    EXPECT_EQ(r.run.connections.opened, 6u);
+    EXPECT_EQ(seen,
+              (std::map<std::string, int>{{"127.0.0.2", 2}, {"127.0.0.3", 2}, {"127.0.0.4", 2}}));
+    // Connection k takes port low + k / addresses of its address: the kernel's port search,
+    // slow past tens of thousands of connections, is not used.
+    PortRange range;
+    ASSERT_TRUE(read_port_range(range));
+    std::set<std::string> expected;
+    for (const char* address : {"127.0.0.2", "127.0.0.3", "127.0.0.4"}) {
+        for (std::uint32_t k = 0; k < 2; ++k)
+            expected.insert(std::string(address) + ":" + std::to_string(range.low + k));
+    }
+    EXPECT_EQ(ports, expected);
+}
+
+TEST(EngineSourceAddresses, BadListsAreRefusedBeforeConnecting) {
+    Plan plan = base_plan(1);
+    plan.source_addresses = "127.0.0.2-127.0.0.x";
+    LoadResult r = run_load(plan);
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("source_addr: '127.0.0.2-127.0.0.x' is not a range"), std::string::npos)
+        << r.error;
+    plan.source_addresses = "127.0.0.2,192.0.2.77";
+    r = run_load(plan);
+    EXPECT_NE(r.error.find("source_addr: source address 192.0.2.77 is not an address of this "
+                           "machine"),
+              std::string::npos)
+        << r.error;
+    plan.source_addresses = "::1";
+    r = run_load(plan);
+    EXPECT_NE(r.error.find("source_addr: ::1 is IPv6 but the target 127.0.0.1:1 is IPv4"),
+              std::string::npos)
+        << r.error;
+    EXPECT_EQ(r.run.connections.opened, 0u);
+}
+
+TEST(EngineSourceAddresses, MoreConnectionsThanOneAddressHasPortsAskForSourceAddresses) {
+    PortRange range;
+    ASSERT_TRUE(read_port_range(range));
+    if (range.size() * 2 > kMaxConnections) GTEST_SKIP() << "port range too wide to exceed";
+    const auto connections = static_cast<std::uint32_t>(range.size() + 1);
+    EXPECT_NE(check_connection_capacity(connections, 1, 0).find("--source-addr"),
+              std::string::npos);
+    EXPECT_NE(
+        check_connection_capacity(2 * connections, 1, 2).find("give at least 3 source addresses"),
+        std::string::npos);
 }
 
 }  // namespace

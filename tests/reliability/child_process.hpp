@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,11 +17,16 @@ namespace mbstorm::test {
 
 class ChildProcess {
   public:
-    explicit ChildProcess(const std::vector<std::string>& args) {
+    // `nofile`: when not 0, the child's RLIMIT_NOFILE, soft and hard (it cannot raise it).
+    explicit ChildProcess(const std::vector<std::string>& args, rlim_t nofile = 0) {
         int fds[2];
         if (::pipe2(fds, O_CLOEXEC) != 0) return;
         pid_ = ::fork();
         if (pid_ == 0) {
+            if (nofile != 0) {
+                const rlimit limit{nofile, nofile};
+                if (::setrlimit(RLIMIT_NOFILE, &limit) != 0) ::_exit(126);
+            }
             ::dup2(fds[1], 1);
             ::dup2(fds[1], 2);
             std::vector<char*> argv;

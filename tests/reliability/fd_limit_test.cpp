@@ -59,6 +59,7 @@ void run_past_the_descriptor_limit(server::FullPolicy policy) {
     auto config = test::test_config();
     config.raise_nofile_limit = false;  // as if the hard limit were reached (root could raise it)
     config.full_policy = policy;        // the default limit, 16384, is far above the 48
+    config.use_direct_descriptors = false;  // descriptors, as on a kernel without direct ones
     server::Server srv(config);
     std::string error;
     ASSERT_TRUE(srv.start(&error)) << error;

@@ -28,6 +28,7 @@ warmup: 250ms
 timeout: 20ms
 connect_timeout: 2s
 connect_rate: 500
+source_addr: 127.0.0.2-127.0.0.3,::1
 reconnect_backoff: {min: 10ms, max: 2s}
 late_threshold: 2ms
 allow_writes: true
@@ -91,6 +92,7 @@ TEST(ScenarioParse, EveryKeyLandsInThePlan) {
     EXPECT_EQ(p.transaction_timeout, 20ms);
     EXPECT_EQ(p.connect_timeout, 2s);
     EXPECT_DOUBLE_EQ(p.connect_rate, 500);
+    EXPECT_EQ(p.source_addresses, "127.0.0.2-127.0.0.3,::1");
     EXPECT_EQ(p.reconnect_backoff_min, 10ms);
     EXPECT_EQ(p.reconnect_backoff_max, 2s);
     EXPECT_EQ(p.late_threshold, 2ms);
@@ -190,6 +192,7 @@ TEST(ScenarioPrint, ReadsBackToTheSameScenario) {
     EXPECT_EQ(body(format_scenario(again)), body(printed));
     // Defaults are written out.
     EXPECT_NE(printed.find("connect_timeout: 2s"), std::string::npos) << printed;
+    EXPECT_NE(printed.find("source_addr: 127.0.0.2-127.0.0.3,::1"), std::string::npos) << printed;
     EXPECT_NE(printed.find("address: 100-109"), std::string::npos) << printed;
     EXPECT_NE(printed.find("function: read_holding_registers"), std::string::npos);
     EXPECT_NE(printed.find("init"), std::string::npos) << printed;

@@ -53,6 +53,8 @@ const BadCase kCases[] = {
      1, 10},
     {"connect_timeout zero", "connect_timeout: 0\n" OPS, "out of range (valid > 0s..1h)", 1, 18},
     {"connect_rate zero", "connect_rate: 0\n" OPS, "valid 1..1e+07", 1, 15},
+    {"source_addr bad range", "source_addr: 127.0.0.1-x\n" OPS,
+     "source_addr: '127.0.0.1-x' is not a range FIRST-LAST", 1, 14},
     {"backoff unknown key", "reconnect_backoff: {minimum: 1s}\n" OPS,
      "unknown key 'minimum' in reconnect_backoff", 1, 21},
     {"backoff inverted", "reconnect_backoff: {min: 2s, max: 1s}\n" OPS, "max 1s is below min 2s", 1,

@@ -95,7 +95,8 @@ TEST(AcceptFdExhaustion, PausesAcceptingWithoutSpinningAndRecovers) {
     // Lowered before the server starts: an accept takes the limit in force when it was armed.
     if (!exhaustion.lower(served.fd(), 16)) GTEST_SKIP() << "cannot lower RLIMIT_NOFILE";
     auto config = test::test_config();
-    config.max_connections = 0;  // else start() raises the open-files limit again
+    config.max_connections = 0;             // else start() raises the open-files limit again
+    config.use_direct_descriptors = false;  // sockets as descriptors: they run out here
     server::Server srv(config);
     std::string error;
     ASSERT_TRUE(srv.start(&error)) << error;
