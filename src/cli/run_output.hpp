@@ -19,6 +19,8 @@ struct OutputFiles {
     // --test-id: names the test the run belongs to in the JSON and the interval log, so that
     // `mbstorm merge` can refuse a run of another test.
     std::string test_id;
+    // --metrics-listen HOST:PORT: serve live metrics (Prometheus) while the run goes.
+    std::string metrics_listen;
     // JUnit XML of a scenario's thresholds: not a flag of add_output_options, set from the
     // scenario request with the scenario's name as the suite.
     std::string junit;

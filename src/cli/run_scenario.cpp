@@ -9,8 +9,10 @@
 #include <utility>
 
 #include "cli/commands.hpp"
+#include "cli/metrics_endpoint.hpp"
 #include "report/files.hpp"
 #include "report/hlog.hpp"
+#include "report/prometheus.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -83,6 +85,12 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         if (!hlog.open(request.outputs.hlog, identity, error))
             return usage_error("run", fmt::format("cannot write --hlog {}", error));
     }
+    load::LiveMetrics live(request.outputs.test_id);
+    net::HttpServer metrics;
+    if (!request.outputs.metrics_listen.empty() &&
+        !start_metrics_endpoint(metrics, request.outputs.metrics_listen, "run",
+                                [&live] { return report::format_load_metrics(live.snapshot()); }))
+        return kExitUsage;
     g_scenario_stop = false;
     g_scenario_signal = 0;
     signal(SIGINT, on_scenario_stop_signal);
@@ -94,6 +102,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
     hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
     if (hlog.is_open()) hooks.on_interval_histograms = hlog_lines(hlog, s);
+    if (metrics.running()) hooks.live = &live;
     load::LoadResult result = scenario::run_scenario(s, hooks);
     result.run.metadata.test_id = request.outputs.test_id;
     result.run.metadata.run_id = run_id;

@@ -290,10 +290,24 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.verifier = links.options.verifier;
         setup.timeline = &links.timeline;
         setup.schedule = schedule.empty() ? nullptr : &schedule;
+        setup.live = links.options.live != nullptr ? links.options.live->worker(i) : nullptr;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
 
     return workers;
+}
+
+// --metrics-listen's rate gauges: what the plan asks for now (open loop) and what the last full
+// interval achieved.
+void publish_rates(const Plan& plan, const StageSchedule& schedule, std::int64_t measure_start_ns,
+                   const stats::IntervalTimeline& timeline, LiveMetrics& live) {
+    double target = 0;
+    if (plan.model == LoadModel::OpenLoop) {
+        const std::int64_t offset = std::max<std::int64_t>(net::now_ns() - measure_start_ns, 0);
+        target = schedule.empty() ? plan.rate : schedule.at(offset).rate;
+    }
+    const auto latest = timeline.latest();
+    live.set_rates(target, latest ? latest->transactions_per_second() : 0.0);
 }
 
 }  // namespace
@@ -343,6 +357,10 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
 
     const RunWindow window{start_ns, measure_start_ns, end_ns};
+    if (options.live != nullptr) {
+        options.live->prepare(plan, threads);
+        options.live->set_running(true);
+    }
     std::vector<std::unique_ptr<Worker>> workers =
         make_workers(plan, endpoint, threads, capacity, window, schedule,
                      WorkerLinks{options, abort, any_connected, timeline});
@@ -400,6 +418,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
                 open_by_interval[index] = std::max(open_by_interval[index], open_now());
             }
         }
+        if (options.live != nullptr)
+            publish_rates(plan, schedule, measure_start_ns, timeline, *options.live);
         if (!options.on_progress) continue;
         const auto latest = timeline.latest();
         if (!latest || latest->index == reported) continue;
@@ -422,6 +442,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         options.on_progress(snap);
     }
     for (auto& t : pool) t.join();
+    if (options.live != nullptr) options.live->set_running(false);
     timeline.finish();
     drain_histograms();
 

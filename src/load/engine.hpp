@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "codec/pdu.hpp"
+#include "load/live_metrics.hpp"
 #include "load/plan.hpp"
 #include "load/request_info.hpp"
 #include "stats/run_result.hpp"
@@ -55,6 +56,8 @@ struct EngineOptions {
     std::string tool_version = "mbstorm";
     std::int64_t progress_interval_ns = 1'000'000'000;
     IntervalHistogramsCallback on_interval_histograms;  // optional: costs a histogram per operation
+    // Optional: live totals for --metrics-listen (prepared here, kept by the caller).
+    LiveMetrics* live = nullptr;
 };
 
 struct LoadResult {

@@ -11,6 +11,7 @@
 #include "codec/pdu.hpp"
 #include "load/connection.hpp"
 #include "load/engine.hpp"
+#include "load/live_metrics.hpp"
 #include "load/operation_generator.hpp"
 #include "load/pacer.hpp"
 #include "load/plan.hpp"
@@ -43,6 +44,7 @@ struct WorkerSetup {
     ResponseVerifier verifier;
     stats::IntervalTimeline* timeline = nullptr;
     const StageSchedule* schedule = nullptr;  // staged runs only
+    LiveWorkerCells* live = nullptr;          // --metrics-listen only
 };
 
 class Worker {
