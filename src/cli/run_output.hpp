@@ -15,7 +15,8 @@ namespace mbstorm::cli {
 // be "-", and then the console report goes to stderr so that stdout holds only that file.
 struct OutputFiles {
     std::string json, hdr, html;
-    std::string hlog;  // HdrHistogram interval log, written as the run goes (not stdout)
+    std::string hlog;      // HdrHistogram interval log, written as the run goes (not stdout)
+    std::string timeline;  // JSON Lines, one object per interval, written as the run goes
     // --test-id: names the test the run belongs to in the JSON and the interval log, so that
     // `mbstorm merge` can refuse a run of another test.
     std::string test_id;
