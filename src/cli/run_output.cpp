@@ -24,9 +24,15 @@ void add_run_identity_options(CLI::App* cmd, OutputFiles& files) {
     cmd->add_option("--hlog", files.hlog,
                     "write the latency as an HdrHistogram interval log, one line per interval and "
                     "operation, as the run goes (for mbstorm merge and HdrHistogram's tools)");
+    cmd->add_option("--timeline", files.timeline,
+                    "write the timeline as JSON Lines, one object per interval (keys: "
+                    "docs/json-schema.md), each flushed as soon as the interval is complete");
     cmd->add_option("--test-id", files.test_id,
                     "name of the test this run belongs to, kept in --json and --hlog: mbstorm "
                     "merge refuses runs of different tests");
+    cmd->add_option("--metrics-listen", files.metrics_listen,
+                    "serve live metrics at http://HOST:PORT/metrics (Prometheus text format) "
+                    "while the run goes; port 0: any free port, printed on stderr");
 }
 
 std::string stdout_conflict(const OutputFiles& files) {

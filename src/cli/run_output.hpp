@@ -15,10 +15,13 @@ namespace mbstorm::cli {
 // be "-", and then the console report goes to stderr so that stdout holds only that file.
 struct OutputFiles {
     std::string json, hdr, html;
-    std::string hlog;  // HdrHistogram interval log, written as the run goes (not stdout)
+    std::string hlog;      // HdrHistogram interval log, written as the run goes (not stdout)
+    std::string timeline;  // JSON Lines, one object per interval, written as the run goes
     // --test-id: names the test the run belongs to in the JSON and the interval log, so that
     // `mbstorm merge` can refuse a run of another test.
     std::string test_id;
+    // --metrics-listen HOST:PORT: serve live metrics (Prometheus) while the run goes.
+    std::string metrics_listen;
     // JUnit XML of a scenario's thresholds: not a flag of add_output_options, set from the
     // scenario request with the scenario's name as the suite.
     std::string junit;

@@ -9,8 +9,11 @@
 #include <utility>
 
 #include "cli/commands.hpp"
+#include "cli/metrics_endpoint.hpp"
 #include "report/files.hpp"
 #include "report/hlog.hpp"
+#include "report/prometheus.hpp"
+#include "report/timeline_stream.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -61,11 +64,10 @@ int print_flag_scenario(const load::Plan& plan, const std::string& target) {
 
 int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
     // A report that cannot be written must not cost a whole run first.
-    const std::pair<const char*, const std::string*> outputs[] = {{"--json", &request.outputs.json},
-                                                                  {"--hdr", &request.outputs.hdr},
-                                                                  {"--html", &request.outputs.html},
-                                                                  {"--hlog", &request.outputs.hlog},
-                                                                  {"--junit", &request.junit}};
+    const std::pair<const char*, const std::string*> outputs[] = {
+        {"--json", &request.outputs.json},         {"--hdr", &request.outputs.hdr},
+        {"--html", &request.outputs.html},         {"--hlog", &request.outputs.hlog},
+        {"--timeline", &request.outputs.timeline}, {"--junit", &request.junit}};
     for (const auto& [flag, path] : outputs) {
         std::string error;
         if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
@@ -73,6 +75,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     }
     if (request.outputs.hlog == "-")
         return usage_error("run", "--hlog needs a file (it is written as the run goes)");
+    if (request.outputs.timeline == "-")
+        return usage_error("run", "--timeline needs a file (it is written as the run goes)");
     const std::string run_id = new_run_id();
     report::HlogWriter hlog;
     if (!request.outputs.hlog.empty()) {
@@ -83,6 +87,18 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         if (!hlog.open(request.outputs.hlog, identity, error))
             return usage_error("run", fmt::format("cannot write --hlog {}", error));
     }
+    report::TimelineWriter timeline;
+    if (!request.outputs.timeline.empty()) {
+        std::string error;
+        if (!timeline.open(request.outputs.timeline, request.outputs.test_id, run_id, error))
+            return usage_error("run", fmt::format("cannot write --timeline {}", error));
+    }
+    load::LiveMetrics live(request.outputs.test_id);
+    net::HttpServer metrics;
+    if (!request.outputs.metrics_listen.empty() &&
+        !start_metrics_endpoint(metrics, request.outputs.metrics_listen, "run",
+                                [&live] { return report::format_load_metrics(live.snapshot()); }))
+        return kExitUsage;
     g_scenario_stop = false;
     g_scenario_signal = 0;
     signal(SIGINT, on_scenario_stop_signal);
@@ -94,10 +110,16 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
     hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
     if (hlog.is_open()) hooks.on_interval_histograms = hlog_lines(hlog, s);
+    if (metrics.running()) hooks.live = &live;
+    if (timeline.is_open())
+        hooks.on_interval = [&timeline](const stats::IntervalSummary& interval,
+                                        std::chrono::system_clock::time_point measure_start) {
+            timeline.write(interval, measure_start);
+        };
     load::LoadResult result = scenario::run_scenario(s, hooks);
     result.run.metadata.test_id = request.outputs.test_id;
     result.run.metadata.run_id = run_id;
-    bool hlog_failed = false;
+    bool stream_failed = false;
     if (hlog.is_open()) {
         std::string error;
         // A run that never started still leaves a valid (empty) log.
@@ -108,9 +130,19 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         if (!hlog.close(error)) {
             fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
                        error);
-            hlog_failed = true;
+            stream_failed = true;
         } else {
             fmt::print(stderr, "wrote HdrHistogram interval log {}\n", request.outputs.hlog);
+        }
+    }
+    if (timeline.is_open()) {
+        std::string error;
+        if (!timeline.close(error)) {
+            fmt::print(stderr, "mbstorm run: cannot write --timeline {}: {}\n",
+                       request.outputs.timeline, error);
+            stream_failed = true;
+        } else {
+            fmt::print(stderr, "wrote timeline {}\n", request.outputs.timeline);
         }
     }
     progress.finish();
@@ -125,7 +157,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     files.junit = request.junit;
     files.junit_suite = s.name;
     int code = report_run(result, files);
-    if (hlog_failed && code == kExitOk) code = kExitUsage;
+    if (stream_failed && code == kExitOk) code = kExitUsage;
     if (code == kExitOk && !result.run.thresholds_passed()) {
         std::size_t failed = 0;
         for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;

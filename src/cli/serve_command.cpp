@@ -8,6 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
+#include "cli/metrics_endpoint.hpp"
 #include "server/run.hpp"
 #include "server/server.hpp"
 #include "slave/device_yaml.hpp"
@@ -31,6 +32,7 @@ struct ServeOptions {
     std::uint64_t seed = 0;
     bool stats = false;
     std::uint64_t duration_ns = 0;
+    std::string metrics_listen;
 };
 
 int run_serve(ServeOptions& o) {
@@ -88,6 +90,11 @@ int run_serve(ServeOptions& o) {
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     std::fflush(stdout);
+    net::HttpServer metrics;
+    if (!o.metrics_listen.empty() &&
+        !start_metrics_endpoint(metrics, o.metrics_listen, "serve",
+                                [&srv] { return format_serve_metrics(srv.stats()); }))
+        return kExitUsage;
     server::RunOptions run;
     run.print_stats = o.stats;
     run.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
@@ -109,6 +116,9 @@ void add_serve_command(CLI::App& app, Action& action) {
     cmd->add_option("--device", o->device_file,
                     "YAML device description: tables, initial data, simulated inputs, faults");
     cmd->add_flag("--stats", o->stats, "print a line of statistics every second");
+    cmd->add_option("--metrics-listen", o->metrics_listen,
+                    "serve live metrics at http://HOST:PORT/metrics (Prometheus text format); "
+                    "port 0: any free port, printed on stderr");
     add_duration_option(cmd, "--duration,-d", o->duration_ns,
                         "stop by itself after this long (default: until Ctrl-C)");
     cmd->add_option("--max-connections", o->config.max_connections, "connection limit (0: none)")

@@ -320,10 +320,24 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.timeline = &links.timeline;
         setup.schedule = schedule.empty() ? nullptr : &schedule;
         setup.direct_descriptors = links.direct_descriptors;
+        setup.live = links.options.live != nullptr ? links.options.live->worker(i) : nullptr;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
 
     return workers;
+}
+
+// --metrics-listen's rate gauges: what the plan asks for now (open loop) and what the last full
+// interval achieved.
+void publish_rates(const Plan& plan, const StageSchedule& schedule, std::int64_t measure_start_ns,
+                   const stats::IntervalTimeline& timeline, LiveMetrics& live) {
+    double target = 0;
+    if (plan.model == LoadModel::OpenLoop) {
+        const std::int64_t offset = std::max<std::int64_t>(net::now_ns() - measure_start_ns, 0);
+        target = schedule.empty() ? plan.rate : schedule.at(offset).rate;
+    }
+    const auto latest = timeline.latest();
+    live.set_rates(target, latest ? latest->transactions_per_second() : 0.0);
 }
 
 }  // namespace
@@ -382,6 +396,10 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
 
     const RunWindow window{start_ns, measure_start_ns, end_ns};
+    if (options.live != nullptr) {
+        options.live->prepare(plan, threads);
+        options.live->set_running(true);
+    }
     std::vector<std::unique_ptr<Worker>> workers =
         make_workers(plan, endpoint, sources, threads, capacity, window, schedule,
                      WorkerLinks{options, abort, any_connected, timeline, direct});
@@ -417,6 +435,29 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     auto drain_histograms = [&] {
         if (options.on_interval_histograms) timeline.drain_histograms(hand_over);
     };
+    // What the engine adds to an interval's summary: the most connections seen open in it
+    // and, in open loop, the rate scheduled at its midpoint.
+    auto complete_interval = [&](stats::IntervalSummary& iv) {
+        if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
+        if (plan.model != LoadModel::OpenLoop) return;
+        const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
+        iv.target_rate = schedule.at(mid).rate;  // the plan's rate when there are no stages
+    };
+    std::size_t streamed = 0;  // intervals handed to on_interval
+    std::vector<stats::IntervalSummary> fresh;
+    fresh.reserve(64);
+    auto stream_whole_intervals = [&] {
+        if (!options.on_interval) return;
+        const std::int64_t whole_before = std::min(net::now_ns(), end_ns);
+        timeline.copy_summaries(streamed, fresh);
+        for (stats::IntervalSummary& iv : fresh) {
+            const auto iv_end = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns);
+            if (measure_start_ns + iv_end > whole_before) break;
+            complete_interval(iv);
+            options.on_interval(iv, measure_start_wall);
+            ++streamed;
+        }
+    };
     while (finished.load() < threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         drain_histograms();
@@ -439,6 +480,9 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
                 open_by_interval[index] = std::max(open_by_interval[index], open_now());
             }
         }
+        stream_whole_intervals();
+        if (options.live != nullptr)
+            publish_rates(plan, schedule, measure_start_ns, timeline, *options.live);
         if (!options.on_progress) continue;
         const auto latest = timeline.latest();
         if (!latest || latest->index == reported) continue;
@@ -461,6 +505,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         options.on_progress(snap);
     }
     for (auto& t : pool) t.join();
+    if (options.live != nullptr) options.live->set_running(false);
     timeline.finish();
     drain_histograms();
 
@@ -505,11 +550,10 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
     auto& series = result.run.timeline;
     fit_timeline_to_run(series, meta.measured_duration_ns, interval_ns);
-    for (auto& iv : series) {
-        if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
-        if (plan.model != LoadModel::OpenLoop) continue;
-        const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
-        iv.target_rate = schedule.at(mid).rate;  // the plan's rate when there are no stages
+    for (auto& iv : series) complete_interval(iv);
+    if (options.on_interval) {
+        for (const auto& iv : series)
+            if (iv.index >= streamed) options.on_interval(iv, measure_start_wall);
     }
     place_stages(schedule, meta.measured_duration_ns, result.run.stages);
     note_outages(outages, measure_start_ns, result);

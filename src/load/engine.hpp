@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "codec/pdu.hpp"
+#include "load/live_metrics.hpp"
 #include "load/plan.hpp"
 #include "load/request_info.hpp"
 #include "stats/run_result.hpp"
@@ -42,6 +43,12 @@ using IntervalHistogramsCallback =
 // Optional content check of successful responses (e.g. read-back of known register values).
 // Returns false on a mismatch, which is counted as Outcome::ValueMismatch. Called on worker
 // threads, concurrently: it must be thread-safe and must not allocate.
+// Every interval's summary (as the report's timeline has it), in order, once it is whole
+// (called on run_load()'s thread). The run's last intervals come after the run, as the
+// report fits them to its end. measure_start: wall-clock time of interval offset 0.
+using IntervalCallback = std::function<void(const stats::IntervalSummary& interval,
+                                            std::chrono::system_clock::time_point measure_start)>;
+
 struct ResponseVerifier {
     bool (*check)(void* context, const RequestInfo& request,
                   const codec::Response& response) = nullptr;
@@ -58,6 +65,9 @@ struct EngineOptions {
     // Hold sockets as io_uring direct descriptors when the kernel has them, so the open-files
     // limit does not cap the connections (false: plain descriptors, as on older kernels).
     bool use_direct_descriptors = true;
+    // Optional: live totals for --metrics-listen (prepared here, kept by the caller).
+    LiveMetrics* live = nullptr;
+    IntervalCallback on_interval;  // optional: --timeline
 };
 
 struct LoadResult {

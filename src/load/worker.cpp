@@ -193,6 +193,10 @@ void Worker::loop() noexcept {
                            *setup_.timeline, setup_.index);
         }
         ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
+        if (setup_.live != nullptr) {
+            setup_.live->open_connections.set(open_connections.load(std::memory_order_relaxed));
+            setup_.live->in_flight.set(outstanding_);
+        }
     }
     finished_ns = now;
 }
@@ -391,6 +395,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         c.state = Connection::State::Open;
         c.backoff_ns = plan_.reconnect_backoff_min.count();
         ++connection_stats.opened;
+        if (setup_.live != nullptr) setup_.live->connections_opened.add();
         if (c.ever_opened) ++connection_stats.reconnects;
         c.ever_opened = true;
         setup_.any_connected->store(true, std::memory_order_relaxed);
@@ -406,6 +411,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         return;
     }
     ++connection_stats.failed;
+    if (setup_.live != nullptr) setup_.live->connections_failed.add();
     close_socket(c);
     c.state = Connection::State::Waiting;
     c.generation = net::next_generation(c.generation);
@@ -566,6 +572,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     }
     if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
     ++connection_stats.closed_by_peer;
+    if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);
 }
 
@@ -578,12 +585,20 @@ bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t 
             if (now >= setup_.measure_start_ns) {
                 stray.record(stats::Outcome::UnknownId);
                 stray.bytes_received += frame.adu.size();
+                if (setup_.live != nullptr) {
+                    setup_.live->stray[static_cast<std::size_t>(stats::Outcome::UnknownId)].add();
+                    setup_.live->stray_bytes.add(frame.adu.size());
+                }
             }
             return false;
         case MatchResult::Duplicate:
             if (now >= setup_.measure_start_ns) {
                 stray.record(stats::Outcome::DuplicateId);
                 stray.bytes_received += frame.adu.size();
+                if (setup_.live != nullptr) {
+                    setup_.live->stray[static_cast<std::size_t>(stats::Outcome::DuplicateId)].add();
+                    setup_.live->stray_bytes.add(frame.adu.size());
+                }
             }
             return false;
         case MatchResult::Late:
@@ -594,6 +609,8 @@ bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t 
     c.answered_up_to = std::max(c.answered_up_to, t->sequence + 1);
     if (t->sent_ns >= setup_.measure_start_ns) {
         operations[t->request.op_index].counters.bytes_received += frame.adu.size();
+        if (setup_.live != nullptr)
+            setup_.live->operations[t->request.op_index].bytes_received.add(frame.adu.size());
         if (setup_.schedule != nullptr) {
             stats::StageResult& stage = stages[setup_.schedule->stage_at(
                 (open_loop_ ? t->intended_ns : t->sent_ns) - setup_.measure_start_ns)];
@@ -658,6 +675,10 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
         stats::OutcomeCounters& op = operations[t->request.op_index].counters;
         ++op.transactions_sent;
         op.bytes_sent += size;
+        if (setup_.live != nullptr) {
+            setup_.live->operations[t->request.op_index].sent.add();
+            setup_.live->operations[t->request.op_index].bytes_sent.add(size);
+        }
         if (setup_.schedule != nullptr) {
             stats::StageResult& stage =
                 stages[setup_.schedule->stage_at(intended - setup_.measure_start_ns)];
@@ -766,6 +787,8 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
         if (answered) into.latency.record(latency);
     };
     count(operations[t.request.op_index]);
+    if (setup_.live != nullptr)
+        setup_.live->record(t.request.op_index, outcome, exception_code, answered, latency);
     if (setup_.schedule != nullptr) {
         // A transaction belongs to the stage it was (meant to be) sent in.
         stats::StageResult& stage =

@@ -11,6 +11,7 @@
 #include "codec/pdu.hpp"
 #include "load/connection.hpp"
 #include "load/engine.hpp"
+#include "load/live_metrics.hpp"
 #include "load/operation_generator.hpp"
 #include "load/pacer.hpp"
 #include "load/plan.hpp"
@@ -51,6 +52,7 @@ struct WorkerSetup {
     // Hold sockets as io_uring direct descriptors (the engine checked the kernel has them and
     // that `connections` fits a ring's table).
     bool direct_descriptors = false;
+    LiveWorkerCells* live = nullptr;          // --metrics-listen only
 };
 
 class Worker {

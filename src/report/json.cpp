@@ -8,6 +8,7 @@
 
 #include "codec/function_code.hpp"
 #include "report/explain.hpp"
+#include "report/interval_json.hpp"
 #include "report/units.hpp"
 
 namespace mbstorm::report {
@@ -91,6 +92,23 @@ json operation_json(const stats::OperationResult& op, std::uint64_t duration_ns)
 
 }  // namespace
 
+json interval_json(const stats::IntervalSummary& i) {
+    return {{"index", i.index},
+            {"start_offset_s", seconds(i.start_offset_ns)},
+            {"transactions", i.transactions},
+            {"errors", i.errors},
+            {"latency_count", i.latency_count},
+            {"throughput_per_s", i.transactions_per_second()},
+            {"p50_ns", i.p50_ns},
+            {"p90_ns", i.p90_ns},
+            {"p99_ns", i.p99_ns},
+            {"p99_9_ns", i.p999_ns},
+            {"max_ns", i.max_ns},
+            {"mean_ns", i.mean_ns},
+            {"target_rate_per_s", i.target_rate},
+            {"open_connections", i.open_connections}};
+}
+
 std::string format_json(const stats::RunResult& r, int indent) {
     const auto& m = r.metadata;
     json run = {{"target", m.target},
@@ -132,22 +150,7 @@ std::string format_json(const stats::RunResult& r, int indent) {
     }
 
     json intervals = json::array();
-    for (const auto& i : r.timeline) {
-        intervals.push_back({{"index", i.index},
-                             {"start_offset_s", seconds(i.start_offset_ns)},
-                             {"transactions", i.transactions},
-                             {"errors", i.errors},
-                             {"latency_count", i.latency_count},
-                             {"throughput_per_s", i.transactions_per_second()},
-                             {"p50_ns", i.p50_ns},
-                             {"p90_ns", i.p90_ns},
-                             {"p99_ns", i.p99_ns},
-                             {"p99_9_ns", i.p999_ns},
-                             {"max_ns", i.max_ns},
-                             {"mean_ns", i.mean_ns},
-                             {"target_rate_per_s", i.target_rate},
-                             {"open_connections", i.open_connections}});
-    }
+    for (const auto& i : r.timeline) intervals.push_back(interval_json(i));
 
     json thresholds = json::array();
     for (const auto& t : r.thresholds) {

@@ -95,6 +95,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
 
     eo.on_progress = hooks.on_progress;
     eo.on_interval_histograms = hooks.on_interval_histograms;
+    eo.live = hooks.live;
+    eo.on_interval = hooks.on_interval;
     out = load::run_load(plan, eo);
 
     if (embedded) {

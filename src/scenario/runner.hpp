@@ -18,6 +18,8 @@ struct RunHooks {
     std::function<void(const std::string&)> on_message;  // e.g. "embedded slave on ..."
     std::string tool_version = "mbstorm";
     load::IntervalHistogramsCallback on_interval_histograms;  // --hlog
+    load::LiveMetrics* live = nullptr;                        // --metrics-listen
+    load::IntervalCallback on_interval;                       // --timeline
 };
 
 // The engine's plan for the scenario (its stages included; host and port as in the file).

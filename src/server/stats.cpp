@@ -34,6 +34,8 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     pending_output += o.pending_output;
     if (o.pending_output_peak > pending_output_peak) pending_output_peak = o.pending_output_peak;
     output_blocks += o.output_blocks;
+    for (std::size_t i = 0; i < requests_by_function.size(); ++i)
+        requests_by_function[i] += o.requests_by_function[i];
     return *this;
 }
 
@@ -64,6 +66,8 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.pending_output = v(PendingOutput);
     s.pending_output_peak = v(PendingOutputPeak);
     s.output_blocks = v(OutputBlocks);
+    for (std::size_t i = 0; i < by_function_.size(); ++i)
+        s.requests_by_function[i] = by_function_[i].load(std::memory_order_relaxed);
     return s;
 }
 

@@ -30,9 +30,10 @@ struct ServerStats {
     std::uint64_t fault_no_answer = 0;
     std::uint64_t fault_delayed = 0;
     std::uint64_t backpressure_pauses = 0;
-    std::uint64_t pending_output = 0;       // bytes queued for sending right now
-    std::uint64_t pending_output_peak = 0;  // largest queue one connection ever had
-    std::uint64_t output_blocks = 0;        // output blocks allocated (pooled)
+    std::uint64_t pending_output = 0;                       // bytes queued for sending right now
+    std::uint64_t pending_output_peak = 0;                  // largest queue one connection ever had
+    std::uint64_t output_blocks = 0;                        // output blocks allocated (pooled)
+    std::array<std::uint64_t, 256> requests_by_function{};  // well-framed requests, by code byte
 
     std::uint64_t exceptions_total() const noexcept;
     ServerStats& operator+=(const ServerStats& o) noexcept;
@@ -83,11 +84,16 @@ class ServerCounters {
         auto& c = exceptions_[code & 15];
         c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     }
+    void add_request(std::uint8_t function_code) noexcept {
+        auto& c = by_function_[function_code];
+        c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+    }
     ServerStats snapshot() const noexcept;
 
   private:
     std::array<std::atomic<std::uint64_t>, kCount> values_{};
     std::array<std::atomic<std::uint64_t>, 16> exceptions_{};
+    std::array<std::atomic<std::uint64_t>, 256> by_function_{};
 };
 
 // "[  3.0s] tps 123456 conns 64 (total 64) in 1.2 MB/s out 2.9 MB/s exc 0 discarded 0 ..."

@@ -562,6 +562,7 @@ void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool complet
 
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     counters_.add(ServerCounters::Requests);
+    if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)

@@ -187,6 +187,12 @@ std::vector<IntervalSummary> IntervalTimeline::summaries() const {
     return summaries_;
 }
 
+void IntervalTimeline::copy_summaries(std::size_t from, std::vector<IntervalSummary>& out) const {
+    out.clear();
+    std::lock_guard lock(mutex_);
+    for (std::size_t i = from; i < summaries_.size(); ++i) out.push_back(summaries_[i]);
+}
+
 std::uint64_t IntervalTimeline::dropped_intervals() const {
     std::lock_guard lock(mutex_);
     return dropped_;

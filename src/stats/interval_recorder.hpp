@@ -145,6 +145,9 @@ class IntervalTimeline {
     // Most recent summarized interval (for the live progress line).
     std::optional<IntervalSummary> latest() const;
     std::vector<IntervalSummary> summaries() const;
+    // The summaries from position `from` on, into `out` (cleared first; reserve it to keep
+    // this allocation-free).
+    void copy_summaries(std::size_t from, std::vector<IntervalSummary>& out) const;
     std::uint64_t interval_ns() const noexcept { return interval_ns_; }
     std::uint64_t dropped_intervals() const;
     std::uint64_t late_contributions() const;

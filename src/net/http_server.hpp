@@ -1,0 +1,58 @@
+// A tiny HTTP/1.1 server on its own thread, for `--metrics-listen`: it answers GET (and HEAD)
+// with what a handler returns for the path, one connection at a time, each closed after its
+// answer. Nothing here touches an engine's ring, so the hot path pays nothing for it. Bad
+// requests get 400, other methods 405, oversized or slow ones are cut off; none stops it.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "net/socket.hpp"
+
+namespace mbstorm::net {
+
+struct HttpReply {
+    int status = 200;
+    std::string content_type = "text/plain; charset=utf-8";
+    std::string body;
+};
+
+class HttpServer {
+  public:
+    // Called on the server's thread with the request's path (without its query string).
+    using Handler = std::function<HttpReply(std::string_view path)>;
+
+    HttpServer() = default;
+    HttpServer(const HttpServer&) = delete;
+    HttpServer& operator=(const HttpServer&) = delete;
+    ~HttpServer() { stop(); }
+
+    // listen: HOST:PORT (port 0: any free port). False with `error` when it cannot listen.
+    bool start(std::string_view listen, Handler handler, std::string& error);
+    void stop() noexcept;
+    bool running() const noexcept { return thread_.joinable(); }
+    // The address it listens on, e.g. "127.0.0.1:40123" or "[::1]:9100".
+    const std::string& address() const noexcept { return address_; }
+
+  private:
+    void serve() noexcept;
+    void answer(int fd) noexcept;
+
+    Handler handler_;
+    UniqueFd listener_;
+    UniqueFd wake_;  // eventfd: stop() writes it to end serve()
+    std::thread thread_;
+    std::string address_;
+};
+
+// The response bytes for a reply (status line, Content-Type, Content-Length, Connection:
+// close); head: without the body.
+std::string http_response(const HttpReply& reply, bool head);
+
+// Parses a request head ("GET /metrics?x HTTP/1.1\r\n..."): method and path (no query), or
+// false when the request line is malformed.
+bool parse_http_request_line(std::string_view head, std::string& method, std::string& path);
+
+}  // namespace mbstorm::net

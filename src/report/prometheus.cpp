@@ -1,0 +1,216 @@
+#include "report/prometheus.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "codec/exception_code.hpp"
+#include "codec/function_code.hpp"
+
+namespace mbstorm::report {
+namespace {
+
+std::string escaped(std::string_view text, bool quotes) {
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+        if (c == '\\') {
+            out += "\\\\";
+        } else if (c == '\n') {
+            out += "\\n";
+        } else if (c == '"' && quotes) {
+            out += "\\\"";
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+std::string number_text(double value) {
+    if (std::isnan(value)) return "NaN";
+    if (std::isinf(value)) return value > 0 ? "+Inf" : "-Inf";
+    return fmt::format("{}", value);
+}
+
+}  // namespace
+
+std::string escape_label_value(std::string_view value) {
+    return escaped(value, true);
+}
+
+std::string escape_help(std::string_view help) {
+    return escaped(help, false);
+}
+
+std::string seconds_text(std::uint64_t ns) {
+    // Integer arithmetic: 25'000 ns is "0.000025" exactly, never 2.4999e-05.
+    std::string text = fmt::format("{}.{:09}", ns / 1'000'000'000, ns % 1'000'000'000);
+    while (text.back() == '0') text.pop_back();
+    if (text.back() == '.') text.pop_back();
+    return text;
+}
+
+void PrometheusWriter::family(std::string_view name, std::string_view type, std::string_view help) {
+    text_ += fmt::format("# HELP {} {}\n# TYPE {} {}\n", name, escape_help(help), name, type);
+}
+
+void PrometheusWriter::labels_and_value(PromLabels labels, std::string_view value) {
+    bool first = true;
+    for (const PromLabel& label : labels) {
+        if (label.value.empty()) continue;  // an empty value is the same as no label
+        text_ += first ? '{' : ',';
+        first = false;
+        text_ += label.name;
+        text_ += "=\"";
+        text_ += escape_label_value(label.value);
+        text_ += '"';
+    }
+    if (!first) text_ += '}';
+    text_ += ' ';
+    text_ += value;
+    text_ += '\n';
+}
+
+void PrometheusWriter::sample(std::string_view name, PromLabels labels, std::uint64_t value) {
+    text_ += name;
+    labels_and_value(labels, fmt::format("{}", value));
+}
+
+void PrometheusWriter::sample(std::string_view name, PromLabels labels, double value) {
+    text_ += name;
+    labels_and_value(labels, number_text(value));
+}
+
+void PrometheusWriter::histogram(std::string_view name, PromLabels labels,
+                                 std::span<const std::uint64_t> bounds_ns,
+                                 std::span<const std::uint64_t> per_bucket, std::uint64_t sum_ns) {
+    std::vector<PromLabel> with_le(labels.begin(), labels.end());
+    with_le.push_back({"le", ""});
+    const std::string bucket = fmt::format("{}_bucket", name);
+    std::uint64_t cumulative = 0;
+    for (std::size_t i = 0; i < per_bucket.size(); ++i) {
+        cumulative += per_bucket[i];
+        const std::string le = i < bounds_ns.size() ? seconds_text(bounds_ns[i]) : "+Inf";
+        with_le.back().value = le;
+        sample(bucket, with_le, cumulative);
+    }
+    sample(fmt::format("{}_sum", name), labels, static_cast<double>(sum_ns) / 1e9);
+    sample(fmt::format("{}_count", name), labels, cumulative);
+}
+
+namespace {
+
+std::string function_label(std::uint8_t fc) {
+    const std::string_view name = codec::function_name(fc);
+    return name.empty() ? fmt::format("0x{:02x}", fc) : std::string(name);
+}
+
+}  // namespace
+
+std::string format_load_metrics(const stats::LiveLoad& live) {
+    PrometheusWriter w;
+    const PromLabel test{"test", live.test_id};
+    struct OperationLabels {
+        std::string function, unit;
+    };
+    std::vector<OperationLabels> op_labels;
+    for (const auto& op : live.operations)
+        op_labels.push_back({function_label(op.function_code), fmt::format("{}", op.unit_id)});
+    // Every operation's labels plus `extra`, in one fixed order.
+    auto for_each_operation = [&](auto&& emit) {
+        for (std::size_t i = 0; i < live.operations.size(); ++i) {
+            const PromLabel labels[] = {test,
+                                        {"operation", live.operations[i].name},
+                                        {"function", op_labels[i].function},
+                                        {"unit", op_labels[i].unit}};
+            emit(live.operations[i], std::span<const PromLabel>(labels));
+        }
+    };
+    auto with = [](PromLabels base, PromLabel extra) {
+        std::vector<PromLabel> all(base.begin(), base.end());
+        all.push_back(extra);
+        return all;
+    };
+
+    w.family("mbstorm_running", "gauge",
+             "1 while the load test runs, 0 before it starts and after it ends.");
+    w.sample("mbstorm_running", std::span(&test, 1), std::uint64_t{live.running ? 1u : 0u});
+
+    w.family("mbstorm_requests_sent_total", "counter",
+             "Requests sent after warm-up (each one a transaction once it ends).");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        w.sample("mbstorm_requests_sent_total", labels, op.counters.transactions_sent);
+    });
+
+    w.family("mbstorm_transactions_total", "counter",
+             "Transactions that ended, by outcome (ok, or the class of error: exception, "
+             "timeout, connection_closed, ...).");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
+            const auto outcome = static_cast<stats::Outcome>(i);
+            if (stats::is_stray(outcome)) continue;
+            w.sample("mbstorm_transactions_total",
+                     with(labels, {"outcome", stats::outcome_name(outcome)}),
+                     op.counters.count(outcome));
+        }
+    });
+
+    w.family("mbstorm_exceptions_total", "counter",
+             "Exception responses, by exception code (also counted as outcome=\"exception\").");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        for (std::size_t code = 0; code < op.counters.exceptions.size(); ++code) {
+            if (op.counters.exceptions[code] == 0) continue;
+            const std::string text = fmt::format("0x{:02x}", code);
+            w.sample("mbstorm_exceptions_total", with(labels, {"exception", text}),
+                     op.counters.exceptions[code]);
+        }
+    });
+
+    w.family("mbstorm_stray_responses_total", "counter",
+             "Responses that answered no transaction (unknown or duplicate transaction id).");
+    for (const auto outcome : {stats::Outcome::UnknownId, stats::Outcome::DuplicateId}) {
+        const PromLabel labels[] = {test, {"outcome", stats::outcome_name(outcome)}};
+        w.sample("mbstorm_stray_responses_total", labels, live.stray.count(outcome));
+    }
+
+    w.family("mbstorm_sent_bytes_total", "counter", "Request bytes sent after warm-up (ADUs).");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        w.sample("mbstorm_sent_bytes_total", labels, op.counters.bytes_sent);
+    });
+    w.family("mbstorm_received_bytes_total", "counter",
+             "Response bytes received for transactions sent after warm-up (ADUs).");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        w.sample("mbstorm_received_bytes_total", labels, op.counters.bytes_received);
+    });
+
+    w.family("mbstorm_transaction_latency_seconds", "histogram",
+             "Latency of answered transactions (open loop: from the intended send time).");
+    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+        w.histogram("mbstorm_transaction_latency_seconds", labels, stats::kLatencyBucketBoundsNs,
+                    op.latency_buckets, op.latency_sum_ns);
+    });
+
+    const std::span<const PromLabel> test_only(&test, 1);
+    w.family("mbstorm_connections_opened_total", "counter",
+             "Connections opened (reconnects included).");
+    w.sample("mbstorm_connections_opened_total", test_only, live.connections_opened);
+    w.family("mbstorm_connections_failed_total", "counter", "Connect attempts that failed.");
+    w.sample("mbstorm_connections_failed_total", test_only, live.connections_failed);
+    w.family("mbstorm_connections_closed_total", "counter", "Connections closed by the target.");
+    w.sample("mbstorm_connections_closed_total", test_only, live.connections_closed_by_peer);
+    w.family("mbstorm_open_connections", "gauge", "Connections open now.");
+    w.sample("mbstorm_open_connections", test_only, live.open_connections);
+    w.family("mbstorm_in_flight_requests", "gauge",
+             "Requests sent and not yet answered or timed out.");
+    w.sample("mbstorm_in_flight_requests", test_only, live.in_flight);
+    w.family("mbstorm_target_transactions_per_second", "gauge",
+             "Open loop: the rate the plan asks for now (0 in closed loop).");
+    w.sample("mbstorm_target_transactions_per_second", test_only, live.target_rate);
+    w.family("mbstorm_achieved_transactions_per_second", "gauge",
+             "Transactions that ended per second over the last full interval.");
+    w.sample("mbstorm_achieved_transactions_per_second", test_only, live.achieved_rate);
+    return w.text();
+}
+
+}  // namespace mbstorm::report

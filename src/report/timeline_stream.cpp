@@ -1,0 +1,58 @@
+#include "report/timeline_stream.hpp"
+
+#include <cerrno>
+#include <cstring>
+
+#include "report/interval_json.hpp"
+
+namespace mbstorm::report {
+
+std::string format_timeline_line(const stats::IntervalSummary& interval,
+                                 std::chrono::system_clock::time_point measure_start,
+                                 const std::string& test_id, const std::string& run_id) {
+    nlohmann::json line = interval_json(interval);
+    line["duration_s"] = static_cast<double>(interval.duration_ns) / 1e9;
+    const double start_epoch_s =
+        std::chrono::duration<double>(measure_start.time_since_epoch()).count();
+    line["epoch_s"] = start_epoch_s + static_cast<double>(interval.start_offset_ns) / 1e9;
+    line["test"] = test_id;
+    line["run_id"] = run_id;
+    return line.dump() + "\n";
+}
+
+TimelineWriter::~TimelineWriter() {
+    if (file_ != nullptr) std::fclose(file_);
+}
+
+bool TimelineWriter::open(const std::string& path, std::string test_id, std::string run_id,
+                          std::string& error) {
+    file_ = std::fopen(path.c_str(), "w");
+    if (file_ == nullptr) {
+        error = path + ": " + std::strerror(errno);
+        return false;
+    }
+    test_id_ = std::move(test_id);
+    run_id_ = std::move(run_id);
+    return true;
+}
+
+void TimelineWriter::write(const stats::IntervalSummary& interval,
+                           std::chrono::system_clock::time_point measure_start) {
+    if (file_ == nullptr) return;
+    const std::string line = format_timeline_line(interval, measure_start, test_id_, run_id_);
+    if (std::fputs(line.c_str(), file_) < 0 || std::fflush(file_) != 0) failed_ = true;
+}
+
+bool TimelineWriter::close(std::string& error) {
+    if (file_ == nullptr) return true;
+    const int saved = errno;
+    const bool closed = std::fclose(file_) == 0;
+    file_ = nullptr;
+    if (failed_ || !closed) {
+        error = std::strerror(closed ? saved : errno);
+        return false;
+    }
+    return true;
+}
+
+}  // namespace mbstorm::report

@@ -1,0 +1,115 @@
+// The --metrics-listen HTTP server: answers GET with the handler's reply, refuses what is not
+// a request, and keeps serving after bad or abandoned clients.
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <string>
+
+#include "net/http_server.hpp"
+#include "net/socket.hpp"
+
+namespace mbstorm::net {
+namespace {
+
+// Sends `request`, returns everything the server answered until it closed.
+std::string round_trip(const std::string& address, const std::string& request) {
+    Endpoint endpoint;
+    if (!parse_endpoint(address, endpoint)) return "bad address";
+    UniqueFd fd(connect_blocking(endpoint));
+    if (!fd.valid()) return "no connection";
+    timeval tv{5, 0};  // bounded: a hung server fails the test instead of blocking it
+    ::setsockopt(fd.get(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    if (!request.empty()) (void)::send(fd.get(), request.data(), request.size(), MSG_NOSIGNAL);
+    std::string reply;
+    char buffer[4096];
+    for (int i = 0; i < 1000; ++i) {
+        const ssize_t n = ::recv(fd.get(), buffer, sizeof buffer, 0);
+        if (n <= 0) break;
+        reply.append(buffer, static_cast<std::size_t>(n));
+    }
+    return reply;
+}
+
+class HttpServerTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        std::string error;
+        ASSERT_TRUE(server_.start(
+            "127.0.0.1:0",
+            [this](std::string_view path) {
+                ++calls_;
+                if (path == "/metrics") return HttpReply{200, "text/plain", "m 1\n"};
+                return HttpReply{404, "text/plain", "no\n"};
+            },
+            error))
+            << error;
+    }
+    HttpServer server_;
+    std::atomic<int> calls_{0};
+};
+
+TEST_F(HttpServerTest, AnswersGetWithTheHandlersReply) {
+    const std::string reply =
+        round_trip(server_.address(), "GET /metrics?x=1 HTTP/1.1\r\nHost: a\r\n\r\n");
+    EXPECT_EQ(reply,
+              "HTTP/1.1 200 OK\r\nContent-Type: text/plain\r\nContent-Length: 4\r\n"
+              "Connection: close\r\n\r\nm 1\n");
+    EXPECT_EQ(server_.address().rfind("127.0.0.1:", 0), 0u);
+    EXPECT_NE(server_.address(), "127.0.0.1:0");
+}
+
+TEST_F(HttpServerTest, OtherPathsAre404AndHeadHasNoBody) {
+    EXPECT_EQ(round_trip(server_.address(), "GET / HTTP/1.0\r\n\r\n").rfind("HTTP/1.1 404 ", 0),
+              0u);
+    const std::string head = round_trip(server_.address(), "HEAD /metrics HTTP/1.1\r\n\r\n");
+    EXPECT_EQ(head.rfind("HTTP/1.1 200 OK\r\n", 0), 0u);
+    EXPECT_TRUE(head.ends_with("\r\n\r\n")) << head;
+}
+
+TEST_F(HttpServerTest, RefusesWhatIsNotAGetAndKeepsServing) {
+    EXPECT_EQ(
+        round_trip(server_.address(), "POST /metrics HTTP/1.1\r\n\r\n").rfind("HTTP/1.1 405 ", 0),
+        0u);
+    EXPECT_EQ(round_trip(server_.address(), "garbage\r\n\r\n").rfind("HTTP/1.1 400 ", 0), 0u);
+    EXPECT_EQ(
+        round_trip(server_.address(), "GET metrics HTTP/1.1\r\n\r\n").rfind("HTTP/1.1 400 ", 0),
+        0u);
+    // Too long a head: 431, or a reset when the rest of it was still unread at the close.
+    const std::string oversized = round_trip(server_.address(), std::string(20000, 'A'));
+    EXPECT_TRUE(oversized.empty() || oversized.rfind("HTTP/1.1 431 ", 0) == 0) << oversized;
+    EXPECT_EQ(round_trip(server_.address(), ""), "");  // connects and says nothing: dropped
+    EXPECT_EQ(calls_.load(), 0);
+    EXPECT_EQ(
+        round_trip(server_.address(), "GET /metrics HTTP/1.1\r\n\r\n").rfind("HTTP/1.1 200 ", 0),
+        0u);
+    EXPECT_EQ(calls_.load(), 1);
+}
+
+TEST(HttpServer, RefusesAnAddressInUseAndStopsPromptly) {
+    HttpServer first, second;
+    std::string error;
+    ASSERT_TRUE(first.start(
+        "127.0.0.1:0", [](std::string_view) { return HttpReply{}; }, error));
+    EXPECT_FALSE(second.start(
+        first.address(), [](std::string_view) { return HttpReply{}; }, error));
+    EXPECT_FALSE(error.empty());
+    first.stop();
+    EXPECT_FALSE(first.running());
+}
+
+TEST(HttpServer, ParsesTheRequestLine) {
+    std::string method, path;
+    EXPECT_TRUE(parse_http_request_line("GET /a/b?c HTTP/1.1\r\nX: y\r\n\r\n", method, path));
+    EXPECT_EQ(method, "GET");
+    EXPECT_EQ(path, "/a/b");
+    EXPECT_FALSE(parse_http_request_line("GET /a\r\n\r\n", method, path));
+    EXPECT_FALSE(parse_http_request_line(" /a HTTP/1.1\r\n\r\n", method, path));
+    EXPECT_FALSE(parse_http_request_line("GET  HTTP/1.1\r\n\r\n", method, path));
+    EXPECT_FALSE(parse_http_request_line("GET /a FTP/1\r\n\r\n", method, path));
+}
+
+}  // namespace
+}  // namespace mbstorm::net
