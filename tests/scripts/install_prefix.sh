@@ -8,7 +8,7 @@ trap 'rm -rf "$work"' EXIT
 
 cmake --install "$build" --prefix "$work/prefix" >"$work/install.log"
 [ -x "$work/prefix/bin/mbstorm" ] || { echo "FAIL no $work/prefix/bin/mbstorm after cmake --install:" >&2; cat "$work/install.log" >&2; exit 1; }
-version=$("$work/prefix/bin/mbstorm" --version)
+version=$("$work/prefix/bin/mbstorm" --version | head -n 1)
 [[ "$version" == "mbstorm "[0-9]* ]] || { echo "FAIL installed mbstorm --version printed '$version'" >&2; exit 1; }
 "$work/prefix/bin/mbstorm" run --help | grep -q -- '--target' || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
 for f in README.md docs/json-schema.md scenarios/ci-gate.yaml; do
