@@ -15,6 +15,7 @@ packages=(
   liburing-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libmodbus-dev
   zlib1g-dev
+  dpkg-dev   # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   procps util-linux
 )
 # Lines of test-needs.txt: kind name package...
