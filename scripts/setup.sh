@@ -16,6 +16,7 @@ packages=(
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libmodbus-dev
   zlib1g-dev
   dpkg-dev   # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
+  help2man   # the man pages, written at build time from mbstorm's own --help
   procps util-linux
 )
 # Lines of test-needs.txt: kind name package...

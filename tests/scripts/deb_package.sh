@@ -42,6 +42,10 @@ for f in usr/share/doc/mbstorm/copyright usr/share/doc/mbstorm/README.md usr/sha
   usr/share/mbstorm/scenarios/ci-gate.yaml usr/share/mbstorm/scenarios/devices/example-device.yaml; do
   [ -f "$work/root/$f" ] || fail "/$f is not in the package"
 done
+for page in "$build"/man/man1/*.1.gz; do
+  [ -f "$work/root/usr/share/man/man1/$(basename "$page")" ] || fail "man page $(basename "$page") is not in the package"
+done
+[ -f "$work/root/usr/share/man/man1/mbstorm-run.1.gz" ] || fail "no man pages in the package"
 readelf -S --wide "$work/root/usr/bin/mbstorm" >"$work/sections"
 grep -qE '\.(debug_info|symtab) ' "$work/sections" && fail "/usr/bin/mbstorm is not stripped"
 first=$("$work/root/usr/bin/mbstorm" --version | head -n 1)
