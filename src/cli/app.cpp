@@ -22,6 +22,7 @@ int run_cli(int argc, char** argv) {
     add_read_command(app, action);
     add_write_command(app, action);
     add_merge_command(app, action);
+    add_completion_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -39,7 +39,8 @@ awk '($1 ~ /^d/ && $1 != "drwxr-xr-x") || ($1 ~ /^-/ && $1 != "-rw-r--r--" && $1
 
 dpkg-deb -x "$deb" "$work/root"
 for f in usr/share/doc/mbstorm/copyright usr/share/doc/mbstorm/README.md usr/share/doc/mbstorm/docs/json-schema.md \
-  usr/share/mbstorm/scenarios/ci-gate.yaml usr/share/mbstorm/scenarios/devices/example-device.yaml; do
+  usr/share/mbstorm/scenarios/ci-gate.yaml usr/share/mbstorm/scenarios/devices/example-device.yaml \
+  usr/share/bash-completion/completions/mbstorm; do
   [ -f "$work/root/$f" ] || fail "/$f is not in the package"
 done
 for page in "$build"/man/man1/*.1.gz; do
