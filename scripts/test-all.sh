@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds and runs every test: release tests, ASan+UBSan tests, each libFuzzer harness for a
-# bounded time from its seed corpus, and the benchmarks in smoke mode (no timing assertions).
+# Builds and runs every test: release tests, the Debian package (built from the release build,
+# installed, tried and removed), ASan+UBSan tests, each libFuzzer harness for a bounded time
+# from its seed corpus, and the benchmarks in smoke mode (no timing assertions).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -12,6 +13,9 @@ step "release build + tests"
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
+
+step "debian package: build, install, try, remove"
+bash scripts/deb-check.sh build/release
 
 step "asan+ubsan build + tests"
 cmake --preset asan >/dev/null

@@ -3,13 +3,15 @@
 #include <cstdio>
 
 #include "cli/commands.hpp"
+#include "cli/version.hpp"
 
 namespace mbstorm::cli {
 
 int run_cli(int argc, char** argv) {
     CLI::App app{"mbstorm: Modbus TCP load tester, reference slave and fuzzer", "mbstorm"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "mbstorm 0.1.0");
+    // Probed only when asked: the io_uring probe opens rings and sockets.
+    app.set_version_flag("--version", [] { return version_text(build_info(), net::features()); });
     Action action;
     add_run_command(app, action);
     add_serve_command(app, action);
@@ -20,6 +22,7 @@ int run_cli(int argc, char** argv) {
     add_read_command(app, action);
     add_write_command(app, action);
     add_merge_command(app, action);
+    add_completion_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

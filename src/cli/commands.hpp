@@ -44,5 +44,7 @@ void add_replay_command(CLI::App& app, Action& action);
 void add_read_command(CLI::App& app, Action& action);
 void add_write_command(CLI::App& app, Action& action);
 void add_merge_command(CLI::App& app, Action& action);
+// Walks `app` when run: add it after every other subcommand.
+void add_completion_command(CLI::App& app, Action& action);
 
 }  // namespace mbstorm::cli

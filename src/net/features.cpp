@@ -143,15 +143,25 @@ const Features& features() noexcept {
     return cached;
 }
 
+std::vector<NamedFeature> named_features(const Features& f) {
+    return {{"multishot_accept", f.multishot_accept},
+            {"multishot_recv", f.multishot_recv},
+            {"buf_ring", f.buf_ring},
+            {"send_zc", f.send_zc},
+            {"direct_descriptors", f.direct_descriptors},
+            {"single_issuer", f.single_issuer},
+            {"defer_taskrun", f.defer_taskrun},
+            {"coop_taskrun", f.coop_taskrun}};
+}
+
 std::string describe(const Features& f) {
-    auto yn = [](bool b) { return b ? "yes" : "no"; };
     std::string s = "io_uring on " + (f.kernel.empty() ? std::string("?") : f.kernel) + ": ";
     if (!f.ring) return s + "unavailable";
-    s += std::string("multishot_accept=") + yn(f.multishot_accept) +
-         " multishot_recv=" + yn(f.multishot_recv) + " buf_ring=" + yn(f.buf_ring) +
-         " send_zc=" + yn(f.send_zc) + " direct_descriptors=" + yn(f.direct_descriptors) +
-         " single_issuer=" + yn(f.single_issuer) + " defer_taskrun=" + yn(f.defer_taskrun) +
-         " coop_taskrun=" + yn(f.coop_taskrun);
+    const char* separator = "";
+    for (const NamedFeature& feature : named_features(f)) {
+        s.append(separator).append(feature.name).append(feature.offered ? "=yes" : "=no");
+        separator = " ";
+    }
     return s;
 }
 

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace mbstorm::net {
 
@@ -27,6 +29,14 @@ const Features& features() noexcept;
 
 // Probes afresh (creates and destroys a few temporary rings and sockets).
 Features probe_features() noexcept;
+
+// Each optional feature by the name reports use for it ("multishot_accept", ...), in a fixed
+// order, with whether `f` has it.
+struct NamedFeature {
+    std::string_view name;
+    bool offered;
+};
+std::vector<NamedFeature> named_features(const Features& f);
 
 // One line, e.g. "io_uring on 6.1.0: multishot_accept=yes multishot_recv=yes ...".
 std::string describe(const Features& f);

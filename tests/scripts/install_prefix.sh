@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# `cmake --install <build> --prefix X` puts a working mbstorm in X/bin and its documentation
-# and example scenarios in X/share/doc/mbstorm.
+# `cmake --install <build> --prefix X` puts a working mbstorm in X/bin, its documentation in
+# X/share/doc/mbstorm, its man pages in X/share/man/man1, its bash completion in
+# X/share/bash-completion/completions and its example scenarios in X/share/mbstorm/scenarios.
 set -euo pipefail
 build=$(cd "$(dirname "$1")" && pwd)
 work=$(mktemp -d)
@@ -8,10 +9,11 @@ trap 'rm -rf "$work"' EXIT
 
 cmake --install "$build" --prefix "$work/prefix" >"$work/install.log"
 [ -x "$work/prefix/bin/mbstorm" ] || { echo "FAIL no $work/prefix/bin/mbstorm after cmake --install:" >&2; cat "$work/install.log" >&2; exit 1; }
-version=$("$work/prefix/bin/mbstorm" --version)
+version=$("$work/prefix/bin/mbstorm" --version | head -n 1)
 [[ "$version" == "mbstorm "[0-9]* ]] || { echo "FAIL installed mbstorm --version printed '$version'" >&2; exit 1; }
 "$work/prefix/bin/mbstorm" run --help | grep -q -- '--target' || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
-for f in README.md docs/json-schema.md scenarios/ci-gate.yaml; do
-  [ -f "$work/prefix/share/doc/mbstorm/$f" ] || { echo "FAIL share/doc/mbstorm/$f not installed" >&2; exit 1; }
+for f in doc/mbstorm/README.md doc/mbstorm/copyright doc/mbstorm/docs/json-schema.md mbstorm/scenarios/ci-gate.yaml man/man1/mbstorm.1.gz man/man1/mbstorm-run.1.gz \
+  bash-completion/completions/mbstorm; do
+  [ -f "$work/prefix/share/$f" ] || { echo "FAIL share/$f not installed" >&2; exit 1; }
 done
 echo "ok   installed: $version, its docs and scenarios"

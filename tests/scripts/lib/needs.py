@@ -19,7 +19,7 @@ import subprocess
 import sys
 
 SHELL_SCRIPTS = ["tests/scripts/*.sh", "tests/scripts/lib/*.bash", "bench/*.sh", "bench/lib/*.bash",
-                 "scripts/test-all.sh", "scripts/run-fuzz.sh", "scripts/bench-smoke.sh"]
+                 "scripts/test-all.sh", "scripts/run-fuzz.sh", "scripts/bench-smoke.sh", "scripts/deb-check.sh"]
 PYTHON_SCRIPTS = ["tests/scripts/*.py", "tests/scripts/lib/*.py", "bench/peers/*.py"]
 
 BUILTINS = set("""
