@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -55,6 +56,9 @@ struct EngineOptions {
     std::string tool_version = "mbstorm";
     std::int64_t progress_interval_ns = 1'000'000'000;
     IntervalHistogramsCallback on_interval_histograms;  // optional: costs a histogram per operation
+    // run --start-at: connect at once, send the first request (warm-up included) at this
+    // wall-clock time; already past, start at once and record by how much (metadata.late_by_ns).
+    std::optional<std::chrono::system_clock::time_point> start_at;
 };
 
 struct LoadResult {
