@@ -12,9 +12,10 @@ namespace {
 using testing::HasSubstr;
 using Clock = std::chrono::system_clock;
 
-Clock::time_point at_epoch(double s) {
-    return Clock::time_point(
-        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)));
+// Exact (a double of epoch nanoseconds is not).
+Clock::time_point at_epoch(std::int64_t seconds, std::int64_t nanos = 0) {
+    return Clock::time_point(std::chrono::duration_cast<Clock::duration>(
+        std::chrono::seconds(seconds) + std::chrono::nanoseconds(nanos)));
 }
 
 TEST(Shard, FromTheFlagOrTheEnvironmentAndTheFlagWins) {
@@ -60,26 +61,26 @@ TEST(Shard, BadValuesSayWhereTheyCameFrom) {
 }
 
 TEST(StartAt, Rfc3339WithZOrAnOffsetAndEpochSeconds) {
-    const Clock::time_point now = at_epoch(1795528000.0);  // 2026-11-24T13:46:40Z
+    const Clock::time_point now = at_epoch(1795528000);  // 2026-11-24T13:46:40Z
     Clock::time_point t;
     EXPECT_EQ(parse_start_at("2026-11-24T14:00:00Z", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.0));
+    EXPECT_EQ(t, at_epoch(1795528800));
     EXPECT_EQ(parse_start_at("2026-11-24t14:00:00.25z", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.25));
+    EXPECT_EQ(t, at_epoch(1795528800, 250'000'000));
     EXPECT_EQ(parse_start_at("2026-11-24T15:30:00+01:30", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.0));
+    EXPECT_EQ(t, at_epoch(1795528800));
     EXPECT_EQ(parse_start_at("2026-11-24T09:00:00-05:00", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.0));
+    EXPECT_EQ(t, at_epoch(1795528800));
     EXPECT_EQ(parse_start_at("1795528800", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.0));
+    EXPECT_EQ(t, at_epoch(1795528800));
     EXPECT_EQ(parse_start_at("1795528800.5", now, t), "");
-    EXPECT_EQ(t, at_epoch(1795528800.5));
+    EXPECT_EQ(t, at_epoch(1795528800, 500'000'000));
     // In the past is fine (a late shard starts at once), within a day.
     EXPECT_EQ(parse_start_at("2026-11-24T13:00:00Z", now, t), "");
 }
 
 TEST(StartAt, MalformedOrFarTimesAreRefused) {
-    const Clock::time_point now = at_epoch(1795528000.0);
+    const Clock::time_point now = at_epoch(1795528000);
     Clock::time_point t;
     EXPECT_THAT(parse_start_at("2026-11-24T14:00:00", now, t),
                 HasSubstr("no time zone: end it with Z (UTC) or an offset like +01:00"));
