@@ -2,10 +2,12 @@
 // ephemeral loopback port so that it works out of the box.
 #include <fmt/format.h>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/distributed_options.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/run_output.hpp"
 #include "cli/run_scenario.hpp"
@@ -54,7 +56,23 @@ struct RunOptions {
     std::string scenario_file;  // `mbstorm run FILE`: see run_scenario.cpp
     bool print_scenario = false;
     std::string junit;
+    std::string shard;     // --shard I/N (else the environment)
+    std::string start_at;  // --start-at TIME
 };
+
+// --shard (or the environment) and --start-at into the request; "" or the usage error.
+std::string distributed_options(const RunOptions& o, ScenarioRunRequest& request) {
+    if (auto e = resolve_shard(o.shard, std::getenv(kShardIndexEnv), std::getenv(kShardCountEnv),
+                               request.shard);
+        !e.empty())
+        return e;
+    if (o.start_at.empty()) return {};
+    std::chrono::system_clock::time_point at;
+    if (auto e = parse_start_at(o.start_at, std::chrono::system_clock::now(), at); !e.empty())
+        return e;
+    request.start_at = at;
+    return {};
+}
 
 // Fills the single-operation plan from flags; returns an error message or "".
 std::string build_plan(RunOptions& o) {
@@ -124,6 +142,7 @@ int run_load_test(RunOptions& o) {
     ScenarioRunRequest request;
     request.quiet = o.quiet;
     request.outputs = o.outputs;
+    if (auto e = distributed_options(o, request); !e.empty()) return usage_error("run", e);
     return run_resolved_scenario(s, request);
 }
 
@@ -143,6 +162,7 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     r.junit = o.junit;
     r.quiet = o.quiet;
     r.outputs = o.outputs;
+    if (auto e = distributed_options(o, r); !e.empty()) return usage_error("run", e);
     auto& ov = r.overrides;
     const auto& p = o.plan;
     auto given = [&cmd](const char* flag) { return cmd.count(flag) != 0; };
@@ -231,6 +251,16 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
     add_output_options(cmd, o->outputs);
     add_run_identity_options(cmd, o->outputs);
+    cmd->add_option("--shard", o->shard,
+                    fmt::format("run shard I of N of the plan (I counts from 0, e.g. 0/3): its "
+                                "part of the connections, rates, stages, transactions and "
+                                "addresses; default from the environment {} and {} "
+                                "(a Kubernetes Indexed Job); merge the shards with mbstorm merge",
+                                kShardIndexEnv, kShardCountEnv));
+    cmd->add_option("--start-at", o->start_at,
+                    "connect now, start sending (warm-up first) at this wall-clock time: RFC 3339 "
+                    "(2026-11-24T14:00:00Z, or with an offset) or seconds since the epoch; a "
+                    "late start begins at once and reports by how much");
     cmd->add_option("file", o->scenario_file,
                     "scenario file (YAML, see scenarios/README.md); flags override its values")
         ->check(CLI::ExistingFile);

@@ -14,6 +14,7 @@
 #include "report/hlog.hpp"
 #include "report/prometheus.hpp"
 #include "report/timeline_stream.hpp"
+#include "report/units.hpp"
 #include "scenario/print.hpp"
 #include "scenario/runner.hpp"
 
@@ -55,6 +56,27 @@ load::IntervalHistogramsCallback hlog_lines(report::HlogWriter& writer,
     };
 }
 
+// "shard 1/3: 5 of the plan's connections, 1000 tx/s, 3334 transactions".
+std::string describe_shard(const load::Plan& part) {
+    std::string text =
+        fmt::format("shard {}/{}: {} connection{}", part.shard.index, part.shard.count,
+                    part.connections, part.connections == 1 ? "" : "s");
+    if (part.model == load::LoadModel::OpenLoop && part.rate > 0)
+        text += fmt::format(", {:.6g} tx/s", part.rate);
+    if (part.transactions != 0) text += fmt::format(", {} transactions", part.transactions);
+    if (!part.stages.empty()) text += ", its share of every stage";
+    return text;
+}
+
+void announce_start(std::chrono::system_clock::time_point at) {
+    const double ahead =
+        std::chrono::duration<double>(at - std::chrono::system_clock::now()).count();
+    fmt::print(stderr, "mbstorm run: connecting now, sending from {} ({})\n",
+               report::format_utc(at),
+               ahead >= 0 ? fmt::format("in {:.1f}s", ahead)
+                          : fmt::format("{:.1f}s ago: starting at once", -ahead));
+}
+
 }  // namespace
 
 int print_flag_scenario(const load::Plan& plan, const std::string& target) {
@@ -77,13 +99,19 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         return usage_error("run", "--hlog needs a file (it is written as the run goes)");
     if (request.outputs.timeline == "-")
         return usage_error("run", "--timeline needs a file (it is written as the run goes)");
+    const load::Plan::Shard shard = request.shard;
+    if (shard.count != 0) {
+        const load::ShardedPlan part = scenario::engine_plan(s, shard);
+        if (!part.error.empty()) return usage_error("run", part.error);
+        fmt::print(stderr, "mbstorm run: {}\n", describe_shard(part.plan));
+    }
+    if (request.start_at) announce_start(*request.start_at);
     const std::string run_id = new_run_id();
     report::HlogWriter hlog;
     if (!request.outputs.hlog.empty()) {
         std::string error;
         const std::string identity =
-            fmt::format("mbstorm interval log: test {}, run {}",
-                        request.outputs.test_id.empty() ? "-" : request.outputs.test_id, run_id);
+            report::hlog_identity_text({request.outputs.test_id, run_id, shard.index, shard.count});
         if (!hlog.open(request.outputs.hlog, identity, error))
             return usage_error("run", fmt::format("cannot write --hlog {}", error));
     }
@@ -116,9 +144,14 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                                         std::chrono::system_clock::time_point measure_start) {
             timeline.write(interval, measure_start);
         };
+    hooks.shard = shard;
+    hooks.start_at = request.start_at;
     load::LoadResult result = scenario::run_scenario(s, hooks);
     result.run.metadata.test_id = request.outputs.test_id;
     result.run.metadata.run_id = run_id;
+    if (const auto late = result.run.metadata.late_by_ns; late != 0)
+        fmt::print(stderr, "mbstorm run: started {:.3f}s late (after --start-at): began at once\n",
+                   static_cast<double>(late) / 1e9);
     bool stream_failed = false;
     if (hlog.is_open()) {
         std::string error;
@@ -161,9 +194,19 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     if (code == kExitOk && !result.run.thresholds_passed()) {
         std::size_t failed = 0;
         for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;
-        fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
-                   result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
-        code = kExitFailed;
+        if (shard.count != 0) {
+            // A shard's thresholds see its part only ("throughput > X" cannot pass on a third
+            // of the load): the verdict is mbstorm merge's, on the whole test.
+            fmt::print(stderr,
+                       "mbstorm run: shard {}/{}: {} of {} threshold{} breached on this shard's "
+                       "part (not a verdict: mbstorm merge judges the whole test)\n",
+                       shard.index, shard.count, failed, result.run.thresholds.size(),
+                       result.run.thresholds.size() == 1 ? "" : "s");
+        } else {
+            fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
+                       result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
+            code = kExitFailed;
+        }
     }
     if (stopped_by != 0) {
         // Reports are written above; the exit code says the run did not finish.

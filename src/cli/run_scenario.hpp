@@ -1,6 +1,8 @@
 // `mbstorm run FILE`: the scenario path of the run command (the logic is in src/scenario/).
 #pragma once
 
+#include <chrono>
+#include <optional>
 #include <string>
 
 #include "cli/run_output.hpp"
@@ -16,6 +18,8 @@ struct ScenarioRunRequest {
     scenario::Overrides overrides;
     bool quiet = false;
     OutputFiles outputs;
+    load::Plan::Shard shard;  // --shard or the environment; count 0: the whole plan
+    std::optional<std::chrono::system_clock::time_point> start_at;  // --start-at
 };
 
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.

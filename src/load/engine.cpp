@@ -268,6 +268,7 @@ std::string resolve_sources(const Plan& plan, const net::Endpoint& target,
 
 // When the run starts, starts measuring and ends (INT64_MAX: when its transactions are done).
 struct RunWindow {
+    std::int64_t connect_start_ns = 0;
     std::int64_t start_ns = 0;
     std::int64_t measure_start_ns = 0;
     std::int64_t end_ns = 0;
@@ -310,6 +311,7 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
                           : std::max<std::uint64_t>(thread_share(plan.transactions, threads, i), 1);
         setup.rate = plan.rate * fraction;
         setup.connect_rate = plan.connect_rate / threads;
+        setup.connect_start_ns = window.connect_start_ns;
         setup.start_ns = window.start_ns;
         setup.measure_start_ns = window.measure_start_ns;
         setup.end_ns = window.end_ns;
@@ -390,12 +392,26 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
 
     std::atomic<bool> abort{false};
     std::atomic<bool> any_connected{false};
-    const auto wall_start = std::chrono::system_clock::now();
-    const std::int64_t start_ns = net::now_ns();
+    // Connections open at once; requests (warm-up first) wait for --start-at, if any.
+    auto wall_start = std::chrono::system_clock::now();
+    const std::int64_t connect_start_ns = net::now_ns();
+    std::int64_t start_ns = connect_start_ns;
+    std::uint64_t late_by_ns = 0;
+    if (options.start_at) {
+        const std::int64_t ahead =
+            std::chrono::duration_cast<std::chrono::nanoseconds>(*options.start_at - wall_start)
+                .count();
+        if (ahead > 0) {
+            start_ns += ahead;
+            wall_start = *options.start_at;
+        } else {
+            late_by_ns = static_cast<std::uint64_t>(-ahead);
+        }
+    }
     const std::int64_t measure_start_ns = start_ns + plan.warmup.count();
     const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
 
-    const RunWindow window{start_ns, measure_start_ns, end_ns};
+    const RunWindow window{connect_start_ns, start_ns, measure_start_ns, end_ns};
     if (options.live != nullptr) {
         options.live->prepare(plan, threads);
         options.live->set_running(true);
@@ -541,6 +557,20 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     meta.measured_duration_ns = static_cast<std::uint64_t>(finished_ns - measure_start_ns);
     meta.warmup_ns = static_cast<std::uint64_t>(plan.warmup.count());
     meta.start_time = wall_start;
+    if (plan.shard.count != 0) {
+        meta.shard_index = plan.shard.index;
+        meta.shard_count = plan.shard.count;
+    }
+    if (options.start_at) {
+        meta.start_at_epoch_s =
+            std::chrono::duration<double>(options.start_at->time_since_epoch()).count();
+        meta.late_by_ns = late_by_ns;
+        if (late_by_ns != 0) {
+            meta.notes.push_back(
+                fmt::format("started late: {:.3f}s after --start-at (epoch {:.3f}s); began at once",
+                            static_cast<double>(late_by_ns) / 1e9, meta.start_at_epoch_s));
+        }
+    }
     if (plan.model == LoadModel::OpenLoop) {
         meta.notes.push_back(
             "open loop: latency measured from each request's intended send time (coordinated "

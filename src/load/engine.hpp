@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,9 @@ struct EngineOptions {
     // Optional: live totals for --metrics-listen (prepared here, kept by the caller).
     LiveMetrics* live = nullptr;
     IntervalCallback on_interval;  // optional: --timeline
+    // run --start-at: connect at once, send the first request (warm-up included) at this
+    // wall-clock time; already past, start at once and record by how much (metadata.late_by_ns).
+    std::optional<std::chrono::system_clock::time_point> start_at;
 };
 
 struct LoadResult {

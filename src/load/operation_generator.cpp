@@ -31,6 +31,11 @@ AddressPicker::AddressPicker(const Operation& op) noexcept
     : mode_(op.address_mode), first_(op.first_address) {
     positions_ = static_cast<std::uint32_t>(last_start_address(op)) - op.first_address + 1;
     stride_ = address_span(op);
+    // Whole blocks only, so that a shard's requests tile the range like everyone else's.
+    if (mode_ == AddressMode::Sequential) {
+        const std::uint32_t blocks = (positions_ + stride_ - 1) / stride_;
+        cursor_ = (op.start_offset / stride_ % blocks) * stride_;
+    }
     if (mode_ == AddressMode::Zipf) zipf_ = ZipfSampler(positions_, op.zipf_exponent);
 }
 

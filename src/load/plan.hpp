@@ -39,6 +39,9 @@ struct Operation {
     std::optional<std::uint16_t> last_address;
     std::uint16_t quantity = 1;  // registers or coils (FC17: registers read)
     AddressMode address_mode = AddressMode::Sequential;
+    // Sequential: the first request starts this many addresses past first_address (rounded
+    // down to a whole block, wrapped into the range). Shards start apart (load/shard.hpp).
+    std::uint32_t start_offset = 0;
     double zipf_exponent = 1.0;  // AddressMode::Zipf: P(rank k) ~ 1 / k^exponent
     ValueSpec values;            // write functions only
     std::uint32_t weight = 1;
@@ -99,6 +102,12 @@ struct Plan {
 
     bool allow_writes = false;  // see write_safety.hpp
     std::uint64_t seed = 1;
+
+    // Which part of a sharded test this plan is (load/shard.hpp); count 0: not sharded.
+    struct Shard {
+        std::uint32_t index = 0;
+        std::uint32_t count = 0;
+    } shard;
 };
 
 // Valid ranges, one place.

@@ -98,9 +98,9 @@ void Worker::run() noexcept {
             rate_ = t.connections == 0 ? 0 : t.rate * active_ / t.connections;
             next_stage_update_ns_ = setup_.measure_start_ns;
         }
-        for (std::uint32_t i = 0; i < active_; ++i) queue_connect(i, setup_.start_ns);
-        next_connect_allowed_ns_ = setup_.start_ns;
-        next_sweep_ns_ = setup_.start_ns + sweep_interval_ns_;
+        for (std::uint32_t i = 0; i < active_; ++i) queue_connect(i, setup_.connect_start_ns);
+        next_connect_allowed_ns_ = setup_.connect_start_ns;
+        next_sweep_ns_ = setup_.connect_start_ns + sweep_interval_ns_;
         loop();
         teardown();
     } else {
@@ -153,6 +153,7 @@ void Worker::loop() noexcept {
     std::int64_t now = net::now_ns();
     update_stage(now);
     for (;;) {
+        if (!started_ && now >= setup_.start_ns) begin_sending(now);
         if ((setup_.stop && setup_.stop->load(std::memory_order_relaxed)) ||
             setup_.abort->load(std::memory_order_relaxed) || now >= setup_.end_ns) {
             break;
@@ -176,6 +177,7 @@ void Worker::loop() noexcept {
             wake = std::min(wake, pacer_.next_intended_ns());
         }
         if (now < setup_.measure_start_ns) wake = std::min(wake, setup_.measure_start_ns);
+        if (!started_) wake = std::min(wake, setup_.start_ns);
         // A 1 us floor keeps the wait from becoming a pure poll; ready CQEs return at once.
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
         const int rc = ring_.submit_and_wait(1, wait);
@@ -233,6 +235,23 @@ void Worker::teardown() noexcept {
     for (Connection& c : connections_) {
         if (c.fd >= 0 && !direct_) ::close(c.fd);  // direct: the ring's exit closes the table
         c.fd = -1;
+    }
+}
+
+void Worker::begin_sending(std::int64_t now) noexcept {
+    started_ = true;
+    bool any_open = false;
+    for (std::uint32_t i = 0; i < active_; ++i)
+        any_open = any_open || connections_[i].state == Connection::State::Open;
+    // Connected while waiting for the start: the schedule begins at the start itself, the
+    // same instant on every machine of a sharded test.
+    if (open_loop_ && !pacer_started_ && any_open) {
+        pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index),
+                       setup_.start_ns);
+        pacer_started_ = true;
+    }
+    for (std::uint32_t i = 0; i < active_; ++i) {
+        if (connections_[i].state == Connection::State::Open) refill(i, now);
     }
 }
 
@@ -403,7 +422,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
         c.splitter.reset();
         arm_recv(index);
-        if (open_loop_ && !pacer_started_) {
+        if (open_loop_ && !pacer_started_ && started_) {
             pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
             pacer_started_ = true;
         }

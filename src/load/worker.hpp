@@ -36,11 +36,12 @@ struct WorkerSetup {
     std::string target;                  // for messages
     std::uint32_t index = 0;
     std::uint32_t threads = 1;
-    std::uint32_t connections = 1;  // this thread's share of the peak connection count
-    std::uint64_t quota = 0;        // measured transactions this thread sends; 0: unlimited
-    double rate = 0;                // open loop: this thread's share
-    double connect_rate = 1;        // this thread's share
-    std::int64_t start_ns = 0;
+    std::uint32_t connections = 1;      // this thread's share of the peak connection count
+    std::uint64_t quota = 0;            // measured transactions this thread sends; 0: unlimited
+    double rate = 0;                    // open loop: this thread's share
+    double connect_rate = 1;            // this thread's share
+    std::int64_t connect_start_ns = 0;  // connections open from here
+    std::int64_t start_ns = 0;          // requests from here (run --start-at: later)
     std::int64_t measure_start_ns = 0;  // end of warm-up
     std::int64_t end_ns = INT64_MAX;
     const std::atomic<bool>* stop = nullptr;
@@ -105,7 +106,7 @@ class Worker {
     void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
 
     bool may_send() const noexcept {
-        return !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
+        return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
     }
     bool enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept;
     void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
@@ -113,6 +114,7 @@ class Worker {
     void issue_open_loop(std::int64_t now) noexcept;
     void push_ready(std::uint32_t index) noexcept;
     void flush() noexcept;
+    void begin_sending(std::int64_t now) noexcept;  // at setup_.start_ns
     void sweep_timeouts(std::int64_t now) noexcept;
     void record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
                 std::int64_t now) noexcept;
@@ -125,6 +127,7 @@ class Worker {
     std::uint64_t outstanding_ = 0;    // over all connections
     std::int64_t inflight_ops_ = 0;    // ring operations not yet completed (for teardown)
     bool stopping_ = false;
+    bool started_ = false;  // past setup_.start_ns: requests may go out
 
     net::Ring ring_;
     net::BufRing buf_ring_;  // declared after ring_: unregistered before the ring goes

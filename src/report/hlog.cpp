@@ -52,6 +52,42 @@ std::string hlog_tag(std::string_view name) {
     return tag;
 }
 
+std::string hlog_identity_text(const HlogIdentity& identity) {
+    std::string text =
+        fmt::format("mbstorm interval log: test {}, run {}",
+                    identity.test_id.empty() ? "-" : identity.test_id, identity.run_id);
+    if (identity.shard_count != 0)
+        text += fmt::format(", shard {}/{}", identity.shard_index, identity.shard_count);
+    return text;
+}
+
+bool find_hlog_identity(const Hlog& log, HlogIdentity& out) {
+    constexpr std::string_view kLead = "mbstorm interval log: test ";
+    for (const auto& c : log.comments) {
+        const auto at = c.find(kLead);
+        const auto run = c.rfind(", run ");
+        if (at == std::string::npos || run == std::string::npos || run < at + kLead.size())
+            continue;
+        HlogIdentity id;
+        id.test_id = c.substr(at + kLead.size(), run - at - kLead.size());
+        std::string rest = c.substr(run + 6);
+        if (!rest.empty() && rest.back() == ']') rest.pop_back();
+        if (const auto shard = rest.find(", shard "); shard != std::string::npos) {
+            unsigned index = 0, count = 0;
+            char slash = 0;
+            std::istringstream in(rest.substr(shard + 8));
+            if (!(in >> index >> slash >> count) || slash != '/') continue;
+            id.shard_index = index;
+            id.shard_count = count;
+            rest.resize(shard);
+        }
+        id.run_id = rest;
+        out = id;
+        return true;
+    }
+    return false;
+}
+
 HlogWriter::~HlogWriter() {
     if (file_ != nullptr) std::fclose(file_);
 }

@@ -1,7 +1,7 @@
 // HdrHistogram interval logs (`run --hlog FILE`), the text format HdrHistogram's own log
 // readers and tools (HistogramLogReader, HistogramLogProcessor, HdrHistogramVisualizer) read:
 //
-//   #[mbstorm interval log: test <id>, run <run id>]
+//   #[mbstorm interval log: test <id>, run <run id>]            (, shard I/N with run --shard)
 //   #[Histogram log format version 1.3]
 //   #[StartTime: 1795942311.123 (seconds since epoch), Tue Nov 24 08:51:51 UTC 2026]
 //   #[BaseTime: 1795942311.123 (seconds since epoch)]
@@ -15,6 +15,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <string_view>
@@ -79,5 +80,16 @@ struct Hlog {
 // Parses a log (as read_hlog does a file). Errors name the line: "line 7: ...".
 bool parse_hlog(std::string_view text, Hlog& out, std::string& error);
 bool read_hlog(const std::string& path, Hlog& out, std::string& error);
+
+// Which run wrote a log: its first line's text (HlogWriter::open's comment).
+struct HlogIdentity {
+    std::string test_id;  // "-" when the run had no --test-id
+    std::string run_id;
+    std::uint32_t shard_index = 0;
+    std::uint32_t shard_count = 0;  // 0: not a shard
+};
+std::string hlog_identity_text(const HlogIdentity& identity);
+// False when no comment of the log is such a line.
+bool find_hlog_identity(const Hlog& log, HlogIdentity& out);
 
 }  // namespace mbstorm::report

@@ -180,6 +180,16 @@ std::string format_json(const stats::RunResult& r, int indent) {
                   {{"lowest_discernible_ns", 1},
                    {"highest_trackable_ns", h.highest_trackable()},
                    {"significant_digits", stats::Histogram::kSignificantDigits}}}};
+    // run --shard I/N: which part of the test this is (mbstorm merge wants each exactly once).
+    if (m.shard_count != 0) {
+        test["shard_index"] = m.shard_index;
+        test["shard_count"] = m.shard_count;
+    }
+    // run --start-at: the start asked for and how late the run began against it.
+    if (m.start_at_epoch_s != 0.0) {
+        test["start_at_epoch_s"] = m.start_at_epoch_s;
+        test["late_by_seconds"] = seconds(m.late_by_ns);
+    }
 
     const auto& lag = r.schedule_lag;
     const stats::LagCounts all_lag = lag.total();

@@ -44,17 +44,14 @@ void read_lag(const json& j, stats::LagCounts& lag) {
                                                   static_cast<double>(lag.late_sends));
 }
 
-// "#[mbstorm interval log: test <id>, run <run id>]" -> run id.
+// The run id of the log's first line; empty when it has none.
 std::string log_run_id(const Hlog& log) {
-    for (const auto& c : log.comments) {
-        const auto at = c.find("mbstorm interval log:");
-        const auto run = c.find(", run ");
-        if (at == std::string::npos || run == std::string::npos) continue;
-        std::string id = c.substr(run + 6);
-        if (!id.empty() && id.back() == ']') id.pop_back();
-        return id;
-    }
-    return {};
+    HlogIdentity id;
+    return find_hlog_identity(log, id) ? id.run_id : std::string();
+}
+
+std::string shard_text(int index, int count) {
+    return count > 0 ? fmt::format("shard {}/{}", index, count) : std::string("not a shard");
 }
 
 // What must agree for runs to be parts of one test (see merge.hpp).
@@ -232,6 +229,17 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
                 run.json_path, run.summary.metadata.run_id);
             return false;
         }
+        HlogIdentity id;
+        find_hlog_identity(run.log, id);
+        const int log_index = id.shard_count > 0 ? static_cast<int>(id.shard_index) : -1;
+        if (static_cast<int>(id.shard_count) != run.shard_count ||
+            (run.shard_count > 0 && log_index != run.shard_index)) {
+            error = fmt::format("{}: its interval log {} says {}, the JSON {} (edited files?)",
+                                run.json_path, run.hlog_path,
+                                shard_text(log_index, static_cast<int>(id.shard_count)),
+                                shard_text(run.shard_index, run.shard_count));
+            return false;
+        }
     }
     for (std::size_t i = 0; i < logs.size(); ++i) {
         if (used.count(i) != 0) continue;
@@ -293,7 +301,13 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     // Completeness.
     const bool numbered = first.shard_count > 0;
     for (const auto& s : shards) {
-        if ((s.shard_count > 0) != numbered || s.shard_count != first.shard_count)
+        if ((s.shard_count > 0) != numbered)
+            return refuse(
+                fmt::format("{} is {}, {} is {}: shards merge only with the other "
+                            "shards of their test",
+                            name_of(s), shard_text(s.shard_index, s.shard_count), name_of(first),
+                            shard_text(first.shard_index, first.shard_count)));
+        if (s.shard_count != first.shard_count)
             return refuse(fmt::format("{} and {} disagree on the shard count ({} vs {})",
                                       name_of(s), name_of(first), s.shard_count,
                                       first.shard_count));

@@ -29,6 +29,11 @@ load::Plan engine_plan(const Scenario& s) {
     return plan;
 }
 
+load::ShardedPlan engine_plan(const Scenario& s, load::Plan::Shard shard) {
+    if (shard.count == 0) return {engine_plan(s), {}};
+    return load::shard_plan(engine_plan(s), shard.index, shard.count);
+}
+
 void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
     run.thresholds.clear();
     for (const auto& spec : s.thresholds) run.thresholds.push_back(evaluate_threshold(spec, run));
@@ -48,7 +53,12 @@ void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
 
 load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     load::LoadResult out;
-    load::Plan plan = engine_plan(s);
+    load::ShardedPlan part = engine_plan(s, hooks.shard);
+    if (!part.error.empty()) {
+        out.error = part.error;
+        return out;
+    }
+    load::Plan plan = std::move(part.plan);
     auto say = [&hooks](const std::string& m) {
         if (hooks.on_message) hooks.on_message(m);
     };
@@ -97,6 +107,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     eo.on_interval_histograms = hooks.on_interval_histograms;
     eo.live = hooks.live;
     eo.on_interval = hooks.on_interval;
+    eo.start_at = hooks.start_at;
     out = load::run_load(plan, eo);
 
     if (embedded) {

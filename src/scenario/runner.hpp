@@ -3,11 +3,14 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "load/engine.hpp"
+#include "load/shard.hpp"
 #include "scenario/scenario.hpp"
 
 namespace mbstorm::scenario {
@@ -20,10 +23,14 @@ struct RunHooks {
     load::IntervalHistogramsCallback on_interval_histograms;  // --hlog
     load::LiveMetrics* live = nullptr;                        // --metrics-listen
     load::IntervalCallback on_interval;                       // --timeline
+    load::Plan::Shard shard;                                  // run --shard: count 0 = whole plan
+    std::optional<std::chrono::system_clock::time_point> start_at;  // run --start-at
 };
 
-// The engine's plan for the scenario (its stages included; host and port as in the file).
+// The engine's plan for the scenario (its stages included; host and port as in the file),
+// or a shard's part of it (load/shard.hpp; the error says why a shard has no part).
 load::Plan engine_plan(const Scenario& scenario);
+load::ShardedPlan engine_plan(const Scenario& scenario, load::Plan::Shard shard);
 
 // The result; result.ok false with result.error when nothing could be run.
 load::LoadResult run_scenario(const Scenario& scenario, const RunHooks& hooks = {});

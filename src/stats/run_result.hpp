@@ -43,6 +43,13 @@ struct RunMetadata {
     std::string run_id;
     // Runs merged into this result (mbstorm merge); 0 for a single run.
     std::uint32_t merged_runs = 0;
+    // run --shard I/N: this run is shard I (0-based) of N; count 0 when not sharded.
+    std::uint32_t shard_index = 0;
+    std::uint32_t shard_count = 0;
+    // run --start-at: the wall-clock time asked for (seconds since the epoch; 0: none) and how
+    // late the run started against it (0 when on time).
+    double start_at_epoch_s = 0.0;
+    std::uint64_t late_by_ns = 0;
 };
 
 struct OperationResult {

@@ -442,5 +442,59 @@ TEST(EngineSourceAddresses, MoreConnectionsThanOneAddressHasPortsAskForSourceAdd
         std::string::npos);
 }
 
+// run --start-at: the connections open at once, the first request waits for the start, and
+// the run's clock (warm-up, then measuring) begins there.
+TEST(EngineStartAt, ConnectsAtOnceAndSendsNothingBeforeTheStart) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.connections = 3;
+    plan.depth = 2;
+    plan.duration = 500ms;
+    plan.warmup = 200ms;
+    EngineOptions options;
+    const auto asked = std::chrono::system_clock::now() + 1500ms;
+    options.start_at = asked;
+    LoadResult r;
+    std::thread run([&] { r = run_load(plan, options); });
+    // Bounded: 100 x 10 ms for the connections, well before the start.
+    server::ServerStats before;
+    for (int i = 0; i < 100; ++i) {
+        before = server->stats();
+        if (before.connections_current == 3) break;
+        std::this_thread::sleep_for(10ms);
+    }
+    const bool ahead_of_start = std::chrono::system_clock::now() < asked - 200ms;
+    run.join();
+    ASSERT_TRUE(r.ok) << r.error;
+    if (ahead_of_start) {
+        EXPECT_EQ(before.connections_current, 3u);
+        EXPECT_EQ(before.requests, 0u);
+    }
+    const auto& m = r.run.metadata;
+    EXPECT_EQ(m.start_time, asked);
+    EXPECT_EQ(m.late_by_ns, 0u);
+    EXPECT_DOUBLE_EQ(m.start_at_epoch_s,
+                     std::chrono::duration<double>(asked.time_since_epoch()).count());
+    EXPECT_GT(r.run.counters.ok(), 0u);
+    EXPECT_EQ(r.run.counters.errors(), 0u);
+    expect_accounted(r);
+}
+
+TEST(EngineStartAt, ALateStartBeginsAtOnceAndSaysByHowMuch) {
+    auto server = start_server();
+    Plan plan = base_plan(server->port());
+    plan.duration = 300ms;
+    EngineOptions options;
+    options.start_at = std::chrono::system_clock::now() - 2s;
+    const LoadResult r = run_load(plan, options);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_GE(r.run.metadata.late_by_ns, 2'000'000'000u);
+    EXPECT_LT(r.run.metadata.late_by_ns, 60'000'000'000u);
+    EXPECT_GT(r.run.counters.ok(), 0u);
+    bool noted = false;
+    for (const auto& n : r.run.metadata.notes) noted = noted || n.find("started late: 2.") == 0;
+    EXPECT_TRUE(noted);
+}
+
 }  // namespace
 }  // namespace mbstorm::load

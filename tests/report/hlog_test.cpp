@@ -26,6 +26,28 @@ TEST(Hlog, TagsHoldNoSeparators) {
     EXPECT_EQ(hlog_tag("read_holding_registers"), "read_holding_registers");
 }
 
+TEST(Hlog, IdentityLineNamesTestRunAndShardAndReadsBack) {
+    HlogIdentity id{"nightly, 42", "5f0c", 2, 3};
+    EXPECT_EQ(hlog_identity_text(id),
+              "mbstorm interval log: test nightly, 42, run 5f0c, shard 2/3");
+    Hlog log;
+    log.comments = {"[some tool]", "[" + hlog_identity_text(id) + "]"};
+    HlogIdentity back;
+    ASSERT_TRUE(find_hlog_identity(log, back));
+    EXPECT_EQ(back.test_id, "nightly, 42");
+    EXPECT_EQ(back.run_id, "5f0c");
+    EXPECT_EQ(back.shard_index, 2u);
+    EXPECT_EQ(back.shard_count, 3u);
+
+    log.comments = {"[" + hlog_identity_text({"", "77", 0, 0}) + "]"};
+    EXPECT_EQ(log.comments[0], "[mbstorm interval log: test -, run 77]");
+    ASSERT_TRUE(find_hlog_identity(log, back));
+    EXPECT_EQ(back.run_id, "77");
+    EXPECT_EQ(back.shard_count, 0u);
+    log.comments = {"[Histogram log format version 1.3]"};
+    EXPECT_FALSE(find_hlog_identity(log, back));
+}
+
 TEST(Hlog, WriterWritesHdrHistogramsHeaderAndEveryLineIsFlushedAtOnce) {
     const std::string path = temp_path("hlog_writer");
     HlogWriter writer;

@@ -36,7 +36,13 @@ const json* resolve(const json& root, const std::string& path) {
 }
 
 TEST(Json, EveryDocumentedFieldIsPresent) {
-    const json doc = json::parse(format_json(testing::make_sample_result()));
+    // A shard of a test started with --start-at: the fields only such runs carry are there too.
+    auto r = testing::make_sample_result();
+    r.metadata.shard_index = 1;
+    r.metadata.shard_count = 3;
+    r.metadata.start_at_epoch_s = 1714564800.0;
+    r.metadata.late_by_ns = 1'500'000'000;
+    const json doc = json::parse(format_json(r));
     std::ifstream schema(MBSTORM_SOURCE_DIR "/docs/json-schema.md");
     ASSERT_TRUE(schema.good());
     const std::regex row(R"(^\| `([^`]+)` \|)");
@@ -91,6 +97,23 @@ TEST(Json, ValuesMatchTheRunResult) {
     // Per-operation traffic is filled (it used to be 0).
     EXPECT_EQ(doc["operations"][0]["totals"]["bytes_sent"], r.operations[0].counters.bytes_sent);
     EXPECT_GT(r.operations[0].counters.bytes_sent, 0u);
+}
+
+TEST(Json, ShardAndStartAtOnlyWhenTheRunHadThem) {
+    auto r = testing::make_sample_result();
+    json doc = json::parse(format_json(r));
+    EXPECT_FALSE(doc["test"].contains("shard_index"));
+    EXPECT_FALSE(doc["test"].contains("shard_count"));
+    EXPECT_FALSE(doc["test"].contains("late_by_seconds"));
+    r.metadata.shard_index = 0;
+    r.metadata.shard_count = 2;
+    r.metadata.start_at_epoch_s = 1714564800.25;
+    r.metadata.late_by_ns = 0;
+    doc = json::parse(format_json(r));
+    EXPECT_EQ(doc["test"]["shard_index"], 0);
+    EXPECT_EQ(doc["test"]["shard_count"], 2);
+    EXPECT_DOUBLE_EQ(doc["test"]["start_at_epoch_s"].get<double>(), 1714564800.25);
+    EXPECT_EQ(doc["test"]["late_by_seconds"], 0.0);
 }
 
 TEST(Json, ShortfallsCausesAndHints) {

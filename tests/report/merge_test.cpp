@@ -196,6 +196,13 @@ TEST(Merge, RefusesWhatIsNotOneWholeTest) {
     EXPECT_EQ(refused(v), "duplicate shard 0: a.json (run a) and b.json (run b)");
     v[1].shard_count = 2;
     EXPECT_NE(refused(v).find("disagree on the shard count"), std::string::npos);
+    // A plain run among shards (or a shard among plain runs) is not part of the set.
+    v = two();
+    v[0].shard_index = 0;
+    v[0].shard_count = 2;
+    EXPECT_EQ(refused(v),
+              "b.json (run b) is not a shard, a.json (run a) is shard 0/2: shards merge only with "
+              "the other shards of their test");
 
     EXPECT_EQ(refused({}), "no runs to merge");
 }
