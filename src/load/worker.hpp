@@ -53,7 +53,7 @@ struct WorkerSetup {
     // Hold sockets as io_uring direct descriptors (the engine checked the kernel has them and
     // that `connections` fits a ring's table).
     bool direct_descriptors = false;
-    LiveWorkerCells* live = nullptr;          // --metrics-listen only
+    LiveWorkerCells* live = nullptr;  // --metrics-listen only
 };
 
 class Worker {
