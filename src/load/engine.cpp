@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <thread>
 
@@ -342,6 +343,252 @@ void publish_rates(const Plan& plan, const StageSchedule& schedule, std::int64_t
     live.set_rates(target, latest ? latest->transactions_per_second() : 0.0);
 }
 
+// What run_load settles before a socket opens: where to, from where, how many rings.
+struct RunSetup {
+    net::Endpoint endpoint;
+    std::vector<net::Endpoint> sources;
+    WriteSafetyVerdict verdict;
+    std::uint32_t capacity = 0;  // the most connections open at once (the peak stage's)
+    std::uint32_t threads = 0;
+    bool direct = false;  // sockets as io_uring direct descriptors
+};
+
+// "" when the (valid) plan can run against its target; else why not, in one line.
+std::string prepare_run(const Plan& plan, const EngineOptions& options,
+                        const StageSchedule& schedule, RunSetup& setup) {
+    const std::string target = endpoint_text(plan.host, plan.port);
+    std::string resolve_error;
+    if (!net::parse_endpoint(target, setup.endpoint, &resolve_error, plan.port))
+        return fmt::format("cannot resolve {}: {}", target, resolve_error);
+    setup.verdict = check_write_safety(plan, numeric_address(setup.endpoint));
+    if (!setup.verdict.allowed) return setup.verdict.message;
+    if (std::string why = resolve_sources(plan, setup.endpoint, setup.sources); !why.empty())
+        return why;
+    setup.capacity = schedule.peak_connections();
+    setup.direct = options.use_direct_descriptors && net::features().direct_descriptors;
+    setup.threads = effective_threads(plan);
+    // Threads left to the engine: as many rings as the connections' socket tables need.
+    if (setup.direct && plan.threads == 0)
+        setup.threads = threads_for_socket_tables(setup.capacity, setup.threads);
+    return check_connection_capacity(setup.capacity, setup.threads, setup.sources.size(),
+                                     setup.direct);
+}
+
+// The run's clock: connections open at once; requests (warm-up first) wait for --start-at, if
+// any; a start-at already past starts at once and is remembered as lateness.
+struct RunClock {
+    RunWindow window;
+    std::chrono::system_clock::time_point wall_start;  // when requests begin, wall-clock
+    std::uint64_t late_by_ns = 0;
+};
+
+RunClock start_clock(const Plan& plan, const EngineOptions& options, std::int64_t run_ns) {
+    RunClock clock;
+    clock.wall_start = std::chrono::system_clock::now();
+    clock.window.connect_start_ns = net::now_ns();
+    std::int64_t start_ns = clock.window.connect_start_ns;
+    if (options.start_at) {
+        const std::int64_t ahead = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                       *options.start_at - clock.wall_start)
+                                       .count();
+        if (ahead > 0) {
+            start_ns += ahead;
+            clock.wall_start = *options.start_at;
+        } else {
+            clock.late_by_ns = static_cast<std::uint64_t>(-ahead);
+        }
+    }
+    clock.window.start_ns = start_ns;
+    clock.window.measure_start_ns = start_ns + plan.warmup.count();
+    clock.window.end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
+    return clock;
+}
+
+// What the engine's thread does while the workers run, one look every 10 ms: outages of the
+// target, the most connections open in each interval, whole intervals handed to --timeline and
+// the progress line, histograms to --hlog, and the live rate gauges.
+class RunWatch {
+  public:
+    RunWatch(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
+             const RunClock& clock, stats::IntervalTimeline& timeline,
+             const std::vector<std::unique_ptr<Worker>>& workers, std::size_t max_intervals)
+        : plan_(plan),
+          options_(options),
+          schedule_(schedule),
+          window_(clock.window),
+          measure_start_wall_(
+              clock.wall_start +
+              std::chrono::duration_cast<std::chrono::system_clock::duration>(plan.warmup)),
+          timeline_(timeline),
+          workers_(workers),
+          max_intervals_(max_intervals) {
+        open_by_interval_.reserve(max_intervals);
+        fresh_.reserve(64);
+        // Built once: a std::function made per drain could allocate in the steady state.
+        hand_over_ = [this](const stats::IntervalHistograms& interval) {
+            options_.on_interval_histograms(interval, measure_start_wall_);
+        };
+    }
+
+    void look(bool stopping) {
+        drain_histograms();
+        // Only while the run is meant to go on: at its end the connections close anyway.
+        if (const std::int64_t now = net::now_ns(); now < window_.end_ns && !stopping)
+            watch_outages(now);
+        note_open_connections();
+        stream_whole_intervals();
+        if (options_.live != nullptr)
+            publish_rates(plan_, schedule_, window_.measure_start_ns, timeline_, *options_.live);
+        report_progress();
+    }
+
+    void drain_histograms() {
+        if (options_.on_interval_histograms) timeline_.drain_histograms(hand_over_);
+    }
+
+    // What the engine adds to an interval's summary: the most connections seen open in it
+    // and, in open loop, the rate scheduled at its midpoint.
+    void complete_interval(stats::IntervalSummary& iv) const {
+        if (iv.index < open_by_interval_.size()) iv.open_connections = open_by_interval_[iv.index];
+        if (plan_.model != LoadModel::OpenLoop) return;
+        const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
+        iv.target_rate = schedule_.at(mid).rate;  // the plan's rate when there are no stages
+    }
+
+    // After the run: every interval --timeline has not had yet.
+    void stream_the_rest(std::vector<stats::IntervalSummary>& series) const {
+        if (!options_.on_interval) return;
+        for (const auto& iv : series)
+            if (iv.index >= streamed_) options_.on_interval(iv, measure_start_wall_);
+    }
+
+    const OutageWatch& outages() const { return outages_; }
+
+  private:
+    std::uint32_t open_now() const {
+        std::uint32_t open = 0;
+        for (auto& w : workers_) open += w->open_connections.load(std::memory_order_relaxed);
+        return open;
+    }
+
+    void watch_outages(std::int64_t now) {
+        const bool wanted =
+            schedule_.empty() ||
+            schedule_.at(std::max<std::int64_t>(now - window_.measure_start_ns, 0)).connections > 0;
+        if (wanted)
+            outages_.sample(open_now(), now);
+        else
+            outages_.none_wanted();
+    }
+
+    void note_open_connections() {
+        const std::int64_t now = net::now_ns();
+        if (now < window_.measure_start_ns) return;
+        const auto index =
+            static_cast<std::size_t>((now - window_.measure_start_ns) / timeline_interval_ns());
+        if (index >= max_intervals_) return;
+        if (open_by_interval_.size() <= index) open_by_interval_.resize(index + 1, 0);
+        open_by_interval_[index] = std::max(open_by_interval_[index], open_now());
+    }
+
+    std::int64_t timeline_interval_ns() const {
+        return static_cast<std::int64_t>(timeline_.interval_ns());
+    }
+
+    void stream_whole_intervals() {
+        if (!options_.on_interval) return;
+        const std::int64_t whole_before = std::min(net::now_ns(), window_.end_ns);
+        timeline_.copy_summaries(streamed_, fresh_);
+        for (stats::IntervalSummary& iv : fresh_) {
+            const auto iv_end = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns);
+            if (window_.measure_start_ns + iv_end > whole_before) break;
+            complete_interval(iv);
+            options_.on_interval(iv, measure_start_wall_);
+            ++streamed_;
+        }
+    }
+
+    // Each interval once every worker has moved past it; only whole intervals: the last,
+    // partial one of a run would show a false rate.
+    void report_progress() {
+        if (!options_.on_progress) return;
+        const auto latest = timeline_.latest();
+        if (!latest || latest->index == reported_) return;
+        const auto interval_end =
+            static_cast<std::int64_t>((latest->index + 1) * latest->duration_ns);
+        if (window_.measure_start_ns + interval_end > std::min(net::now_ns(), window_.end_ns))
+            return;
+        reported_ = latest->index;
+        total_transactions_ += latest->transactions;
+        ProgressSnapshot snap;
+        snap.interval_index = latest->index;
+        snap.elapsed_seconds = static_cast<double>(net::now_ns() - window_.start_ns) / 1e9;
+        snap.transactions_per_second = latest->transactions_per_second();
+        snap.p50_ns = latest->p50_ns;
+        snap.p99_ns = latest->p99_ns;
+        snap.max_ns = latest->max_ns;
+        snap.errors = latest->errors;
+        snap.total_transactions = total_transactions_;
+        snap.open_connections = open_now();
+        options_.on_progress(snap);
+    }
+
+    const Plan& plan_;
+    const EngineOptions& options_;
+    const StageSchedule& schedule_;
+    const RunWindow window_;
+    const std::chrono::system_clock::time_point measure_start_wall_;
+    stats::IntervalTimeline& timeline_;
+    const std::vector<std::unique_ptr<Worker>>& workers_;
+    const std::size_t max_intervals_;
+    std::function<void(const stats::IntervalHistograms&)> hand_over_;
+    OutageWatch outages_;
+    std::vector<std::uint32_t> open_by_interval_;  // open connections seen during each interval
+    std::uint64_t reported_ = UINT64_MAX;
+    std::uint64_t total_transactions_ = 0;
+    std::size_t streamed_ = 0;  // intervals handed to on_interval
+    std::vector<stats::IntervalSummary> fresh_;
+};
+
+// The run's metadata: what was asked, what ran, and the notes every report shows.
+void describe_run(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
+                  const RunSetup& setup, const RunClock& clock, std::int64_t finished_ns,
+                  stats::RunMetadata& meta) {
+    meta.tool_version = options.tool_version;
+    meta.target = setup.endpoint.to_string();
+    meta.threads = setup.threads;
+    meta.connections = setup.capacity;
+    meta.depth = plan.depth;
+    meta.model =
+        plan.model == LoadModel::OpenLoop ? stats::LoadModel::Open : stats::LoadModel::Closed;
+    meta.rate_per_second = plan.model == LoadModel::OpenLoop ? schedule.peak_rate() : 0.0;
+    meta.requested_duration_ns =
+        static_cast<std::uint64_t>(schedule.empty() ? plan.duration.count() : schedule.total_ns());
+    meta.measured_duration_ns =
+        static_cast<std::uint64_t>(finished_ns - clock.window.measure_start_ns);
+    meta.warmup_ns = static_cast<std::uint64_t>(plan.warmup.count());
+    meta.start_time = clock.wall_start;
+    if (plan.shard.count != 0) {
+        meta.shard_index = plan.shard.index;
+        meta.shard_count = plan.shard.count;
+    }
+    if (options.start_at) {
+        meta.start_at_epoch_s =
+            std::chrono::duration<double>(options.start_at->time_since_epoch()).count();
+        meta.late_by_ns = clock.late_by_ns;
+        if (clock.late_by_ns != 0) {
+            meta.notes.push_back(
+                fmt::format("started late: {:.3f}s after --start-at (epoch {:.3f}s); began at once",
+                            static_cast<double>(clock.late_by_ns) / 1e9, meta.start_at_epoch_s));
+        }
+    }
+    if (plan.model == LoadModel::OpenLoop) {
+        meta.notes.push_back(
+            "open loop: latency measured from each request's intended send time (coordinated "
+            "omission corrected)");
+    }
+}
+
 }  // namespace
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options) {
@@ -350,31 +597,9 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = fmt::format("invalid plan: {}", fmt::join(errors, "; "));
         return result;
     }
-    const std::string target = endpoint_text(plan.host, plan.port);
-    net::Endpoint endpoint;
-    std::string resolve_error;
-    if (!net::parse_endpoint(target, endpoint, &resolve_error, plan.port)) {
-        result.error = fmt::format("cannot resolve {}: {}", target, resolve_error);
-        return result;
-    }
-    const WriteSafetyVerdict verdict = check_write_safety(plan, numeric_address(endpoint));
-    if (!verdict.allowed) {
-        result.error = verdict.message;
-        return result;
-    }
-    std::vector<net::Endpoint> sources;
-    if (std::string why = resolve_sources(plan, endpoint, sources); !why.empty()) {
-        result.error = std::move(why);
-        return result;
-    }
     const StageSchedule schedule(plan);
-    const std::uint32_t capacity = schedule.peak_connections();
-    const bool direct = options.use_direct_descriptors && net::features().direct_descriptors;
-    std::uint32_t threads = effective_threads(plan);
-    // Threads left to the engine: as many rings as the connections' socket tables need.
-    if (direct && plan.threads == 0) threads = threads_for_socket_tables(capacity, threads);
-    if (std::string why = check_connection_capacity(capacity, threads, sources.size(), direct);
-        !why.empty()) {
+    RunSetup setup;
+    if (std::string why = prepare_run(plan, options, schedule, setup); !why.empty()) {
         result.error = std::move(why);
         return result;
     }
@@ -385,149 +610,44 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     const std::int64_t run_ns = measured_ns > 0 ? plan.warmup.count() + measured_ns : 0;
     const std::size_t max_intervals =
         run_ns > 0 ? static_cast<std::size_t>(run_ns / interval_ns) + 16 : 86400;
-    stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), threads,
+    stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), setup.threads,
                                      max_intervals);
     if (options.on_interval_histograms)
         timeline.keep_histograms(static_cast<std::uint32_t>(plan.operations.size()));
 
     std::atomic<bool> abort{false};
     std::atomic<bool> any_connected{false};
-    // Connections open at once; requests (warm-up first) wait for --start-at, if any.
-    auto wall_start = std::chrono::system_clock::now();
-    const std::int64_t connect_start_ns = net::now_ns();
-    std::int64_t start_ns = connect_start_ns;
-    std::uint64_t late_by_ns = 0;
-    if (options.start_at) {
-        const std::int64_t ahead =
-            std::chrono::duration_cast<std::chrono::nanoseconds>(*options.start_at - wall_start)
-                .count();
-        if (ahead > 0) {
-            start_ns += ahead;
-            wall_start = *options.start_at;
-        } else {
-            late_by_ns = static_cast<std::uint64_t>(-ahead);
-        }
-    }
-    const std::int64_t measure_start_ns = start_ns + plan.warmup.count();
-    const std::int64_t end_ns = run_ns > 0 ? start_ns + run_ns : INT64_MAX;
-
-    const RunWindow window{connect_start_ns, start_ns, measure_start_ns, end_ns};
+    const RunClock clock = start_clock(plan, options, run_ns);
     if (options.live != nullptr) {
-        options.live->prepare(plan, threads);
+        options.live->prepare(plan, setup.threads);
         options.live->set_running(true);
     }
-    std::vector<std::unique_ptr<Worker>> workers =
-        make_workers(plan, endpoint, sources, threads, capacity, window, schedule,
-                     WorkerLinks{options, abort, any_connected, timeline, direct});
+    std::vector<std::unique_ptr<Worker>> workers = make_workers(
+        plan, setup.endpoint, setup.sources, setup.threads, setup.capacity, clock.window, schedule,
+        WorkerLinks{options, abort, any_connected, timeline, setup.direct});
 
     std::atomic<std::uint32_t> finished{0};
     std::vector<std::thread> pool;
-    pool.reserve(threads);
+    pool.reserve(setup.threads);
     for (auto& w : workers) {
         pool.emplace_back([&finished, worker = w.get()] {
             worker->run();
             finished.fetch_add(1);
         });
     }
-
-    // Progress: report each interval once every worker has moved past it.
-    std::uint64_t reported = UINT64_MAX;
-    std::uint64_t total_transactions = 0;
-    std::vector<std::uint32_t> open_by_interval;  // open connections seen during each interval
-    open_by_interval.reserve(max_intervals);
-    auto open_now = [&workers] {
-        std::uint32_t open = 0;
-        for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);
-        return open;
-    };
-    OutageWatch outages;
-    const auto measure_start_wall =
-        wall_start + std::chrono::duration_cast<std::chrono::system_clock::duration>(plan.warmup);
-    // Built once: a std::function made per drain could allocate in the steady state.
-    const std::function<void(const stats::IntervalHistograms&)> hand_over =
-        [&options, measure_start_wall](const stats::IntervalHistograms& interval) {
-            options.on_interval_histograms(interval, measure_start_wall);
-        };
-    auto drain_histograms = [&] {
-        if (options.on_interval_histograms) timeline.drain_histograms(hand_over);
-    };
-    // What the engine adds to an interval's summary: the most connections seen open in it
-    // and, in open loop, the rate scheduled at its midpoint.
-    auto complete_interval = [&](stats::IntervalSummary& iv) {
-        if (iv.index < open_by_interval.size()) iv.open_connections = open_by_interval[iv.index];
-        if (plan.model != LoadModel::OpenLoop) return;
-        const auto mid = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns / 2);
-        iv.target_rate = schedule.at(mid).rate;  // the plan's rate when there are no stages
-    };
-    std::size_t streamed = 0;  // intervals handed to on_interval
-    std::vector<stats::IntervalSummary> fresh;
-    fresh.reserve(64);
-    auto stream_whole_intervals = [&] {
-        if (!options.on_interval) return;
-        const std::int64_t whole_before = std::min(net::now_ns(), end_ns);
-        timeline.copy_summaries(streamed, fresh);
-        for (stats::IntervalSummary& iv : fresh) {
-            const auto iv_end = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns);
-            if (measure_start_ns + iv_end > whole_before) break;
-            complete_interval(iv);
-            options.on_interval(iv, measure_start_wall);
-            ++streamed;
-        }
-    };
-    while (finished.load() < threads) {
+    RunWatch watch(plan, options, schedule, clock, timeline, workers, max_intervals);
+    while (finished.load() < setup.threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        drain_histograms();
-        // Only while the run is meant to go on: at its end the connections close anyway.
-        if (const std::int64_t now = net::now_ns();
-            now < end_ns && !abort.load() &&
-            !(options.stop && options.stop->load(std::memory_order_relaxed))) {
-            const bool wanted =
-                schedule.empty() ||
-                schedule.at(std::max<std::int64_t>(now - measure_start_ns, 0)).connections > 0;
-            if (wanted)
-                outages.sample(open_now(), now);
-            else
-                outages.none_wanted();
-        }
-        if (const std::int64_t now = net::now_ns(); now >= measure_start_ns) {
-            const auto index = static_cast<std::size_t>((now - measure_start_ns) / interval_ns);
-            if (index < max_intervals) {
-                if (open_by_interval.size() <= index) open_by_interval.resize(index + 1, 0);
-                open_by_interval[index] = std::max(open_by_interval[index], open_now());
-            }
-        }
-        stream_whole_intervals();
-        if (options.live != nullptr)
-            publish_rates(plan, schedule, measure_start_ns, timeline, *options.live);
-        if (!options.on_progress) continue;
-        const auto latest = timeline.latest();
-        if (!latest || latest->index == reported) continue;
-        // Only whole intervals: the last, partial one of a run would show a false rate.
-        const auto interval_end =
-            static_cast<std::int64_t>((latest->index + 1) * latest->duration_ns);
-        if (measure_start_ns + interval_end > std::min(net::now_ns(), end_ns)) continue;
-        reported = latest->index;
-        total_transactions += latest->transactions;
-        ProgressSnapshot snap;
-        snap.interval_index = latest->index;
-        snap.elapsed_seconds = static_cast<double>(net::now_ns() - start_ns) / 1e9;
-        snap.transactions_per_second = latest->transactions_per_second();
-        snap.p50_ns = latest->p50_ns;
-        snap.p99_ns = latest->p99_ns;
-        snap.max_ns = latest->max_ns;
-        snap.errors = latest->errors;
-        snap.total_transactions = total_transactions;
-        snap.open_connections = open_now();
-        options.on_progress(snap);
+        watch.look(abort.load() || (options.stop && options.stop->load(std::memory_order_relaxed)));
     }
     for (auto& t : pool) t.join();
     if (options.live != nullptr) options.live->set_running(false);
     timeline.finish();
-    drain_histograms();
+    watch.drain_histograms();
 
     describe_stages(plan, schedule, result.run.stages);
     merge_results(plan, workers, result);
-    std::int64_t finished_ns = measure_start_ns;
+    std::int64_t finished_ns = clock.window.measure_start_ns;
     for (auto& w : workers) {
         finished_ns = std::max(finished_ns, w->finished_ns);
         if (result.error.empty() && !w->fatal_error.empty()) result.error = w->fatal_error;
@@ -538,64 +658,31 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = fmt::format(
             "cannot connect to {}: no connection was established during the run ({:.3g}s; "
             "connect timeout {:.3g}s)",
-            endpoint.to_string(), static_cast<double>(finished_ns - start_ns) / 1e9,
+            setup.endpoint.to_string(),
+            static_cast<double>(finished_ns - clock.window.start_ns) / 1e9,
             std::chrono::duration<double>(plan.connect_timeout).count());
     }
     result.ok = result.error.empty();
 
     stats::RunMetadata& meta = result.run.metadata;
-    meta.tool_version = options.tool_version;
-    meta.target = endpoint.to_string();
-    meta.threads = threads;
-    meta.connections = capacity;
-    meta.depth = plan.depth;
-    meta.model =
-        plan.model == LoadModel::OpenLoop ? stats::LoadModel::Open : stats::LoadModel::Closed;
-    meta.rate_per_second = plan.model == LoadModel::OpenLoop ? schedule.peak_rate() : 0.0;
-    meta.requested_duration_ns =
-        static_cast<std::uint64_t>(schedule.empty() ? plan.duration.count() : schedule.total_ns());
-    meta.measured_duration_ns = static_cast<std::uint64_t>(finished_ns - measure_start_ns);
-    meta.warmup_ns = static_cast<std::uint64_t>(plan.warmup.count());
-    meta.start_time = wall_start;
-    if (plan.shard.count != 0) {
-        meta.shard_index = plan.shard.index;
-        meta.shard_count = plan.shard.count;
-    }
-    if (options.start_at) {
-        meta.start_at_epoch_s =
-            std::chrono::duration<double>(options.start_at->time_since_epoch()).count();
-        meta.late_by_ns = late_by_ns;
-        if (late_by_ns != 0) {
-            meta.notes.push_back(
-                fmt::format("started late: {:.3f}s after --start-at (epoch {:.3f}s); began at once",
-                            static_cast<double>(late_by_ns) / 1e9, meta.start_at_epoch_s));
-        }
-    }
-    if (plan.model == LoadModel::OpenLoop) {
-        meta.notes.push_back(
-            "open loop: latency measured from each request's intended send time (coordinated "
-            "omission corrected)");
-    }
+    describe_run(plan, options, schedule, setup, clock, finished_ns, meta);
     result.run.timeline = timeline.summaries();
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
     auto& series = result.run.timeline;
     fit_timeline_to_run(series, meta.measured_duration_ns, interval_ns);
-    for (auto& iv : series) complete_interval(iv);
-    if (options.on_interval) {
-        for (const auto& iv : series)
-            if (iv.index >= streamed) options.on_interval(iv, measure_start_wall);
-    }
+    for (auto& iv : series) watch.complete_interval(iv);
+    watch.stream_the_rest(series);
     place_stages(schedule, meta.measured_duration_ns, result.run.stages);
-    note_outages(outages, measure_start_ns, result);
+    note_outages(watch.outages(), clock.window.measure_start_ns, result);
     if (!schedule.empty()) {
         meta.notes.push_back(fmt::format(
             "stages: {} stage{}, rate and connections changed live (connections stay open)",
             schedule.stages(), schedule.stages() == 1 ? "" : "s"));
     }
     note_shortfalls(plan, schedule, options.stop != nullptr && options.stop->load(), result.run);
-    if (!verdict.write_operations.empty()) {
+    if (!setup.verdict.write_operations.empty()) {
         result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
-                                              fmt::join(verdict.write_operations, ", ")));
+                                              fmt::join(setup.verdict.write_operations, ", ")));
     }
     return result;
 }
