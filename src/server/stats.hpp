@@ -10,9 +10,9 @@
 namespace mbstorm::server {
 
 struct ServerStats {
-    std::uint64_t transactions = 0;              // requests answered (normal or exception)
-    std::uint64_t requests = 0;                  // well-framed requests received
-    std::array<std::uint64_t, 16> exceptions{};  // by exception code (index 1..11)
+    std::uint64_t transactions = 0;               // requests answered (normal or exception)
+    std::uint64_t requests = 0;                   // well-framed requests received
+    std::array<std::uint64_t, 256> exceptions{};  // by exception code (fault injection: any)
     std::uint64_t bytes_in = 0;
     std::uint64_t bytes_out = 0;
     std::uint64_t connections_current = 0;
@@ -81,7 +81,7 @@ class ServerCounters {
         if (v > c.load(std::memory_order_relaxed)) c.store(v, std::memory_order_relaxed);
     }
     void add_exception(std::uint8_t code) noexcept {
-        auto& c = exceptions_[code & 15];
+        auto& c = exceptions_[code];
         c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     }
     void add_request(std::uint8_t function_code) noexcept {
@@ -92,7 +92,7 @@ class ServerCounters {
 
   private:
     std::array<std::atomic<std::uint64_t>, kCount> values_{};
-    std::array<std::atomic<std::uint64_t>, 16> exceptions_{};
+    std::array<std::atomic<std::uint64_t>, 256> exceptions_{};
     std::array<std::atomic<std::uint64_t>, 256> by_function_{};
 };
 
