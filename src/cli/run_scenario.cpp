@@ -121,7 +121,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         if (!timeline.open(request.outputs.timeline, request.outputs.test_id, run_id, error))
             return usage_error("run", fmt::format("cannot write --timeline {}", error));
     }
-    load::LiveMetrics live(request.outputs.test_id);
+    load::LiveMetrics live(request.outputs.test_id,
+                           shard.count != 0 ? fmt::format("{}", shard.index) : std::string());
     net::HttpServer metrics;
     if (!request.outputs.metrics_listen.empty() &&
         !start_metrics_endpoint(metrics, request.outputs.metrics_listen, "run",

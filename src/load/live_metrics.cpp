@@ -32,6 +32,7 @@ void LiveMetrics::set_rates(double target, double achieved) noexcept {
 stats::LiveLoad LiveMetrics::snapshot() const {
     stats::LiveLoad out;
     out.test_id = test_id_;
+    out.shard = shard_;
     out.target_rate = target_rate_.load(std::memory_order_relaxed);
     out.achieved_rate = achieved_rate_.load(std::memory_order_relaxed);
     out.running = running_.load(std::memory_order_relaxed);

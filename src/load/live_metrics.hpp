@@ -65,7 +65,9 @@ struct LiveWorkerCells {
 
 class LiveMetrics {
   public:
-    explicit LiveMetrics(std::string test_id = {}) : test_id_(std::move(test_id)) {}
+    // `shard`: "I" for shard I of a distributed run (the `shard` label), empty otherwise.
+    explicit LiveMetrics(std::string test_id = {}, std::string shard = {})
+        : test_id_(std::move(test_id)), shard_(std::move(shard)) {}
 
     // The engine, before its workers start: one set of cells per worker thread.
     void prepare(const Plan& plan, std::uint32_t threads);
@@ -79,6 +81,7 @@ class LiveMetrics {
 
   private:
     std::string test_id_;
+    std::string shard_;
     mutable std::mutex mutex_;
     std::vector<stats::LiveOperation> labels_;  // name, function and unit of each operation
     std::vector<std::unique_ptr<LiveWorkerCells>> workers_;

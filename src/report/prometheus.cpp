@@ -110,7 +110,11 @@ std::string function_label(std::uint8_t fc) {
 
 std::string format_load_metrics(const stats::LiveLoad& live) {
     PrometheusWriter w;
-    const PromLabel test{"test", live.test_id};
+    // On every series: the test and, for a shard of a distributed run, its index (so a sum
+    // over `shard` is the whole test).
+    std::vector<PromLabel> run_labels{{"test", live.test_id}};
+    if (!live.shard.empty()) run_labels.push_back({"shard", live.shard});
+    const PromLabels run_only(run_labels);
     struct OperationLabels {
         std::string function, unit;
     };
@@ -120,11 +124,11 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
     // Every operation's labels plus `extra`, in one fixed order.
     auto for_each_operation = [&](auto&& emit) {
         for (std::size_t i = 0; i < live.operations.size(); ++i) {
-            const PromLabel labels[] = {test,
-                                        {"operation", live.operations[i].name},
-                                        {"function", op_labels[i].function},
-                                        {"unit", op_labels[i].unit}};
-            emit(live.operations[i], std::span<const PromLabel>(labels));
+            std::vector<PromLabel> labels = run_labels;
+            labels.push_back({"operation", live.operations[i].name});
+            labels.push_back({"function", op_labels[i].function});
+            labels.push_back({"unit", op_labels[i].unit});
+            emit(live.operations[i], PromLabels(labels));
         }
     };
     auto with = [](PromLabels base, PromLabel extra) {
@@ -135,7 +139,7 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
 
     w.family("mbstorm_running", "gauge",
              "1 while the load test runs, 0 before it starts and after it ends.");
-    w.sample("mbstorm_running", std::span(&test, 1), std::uint64_t{live.running ? 1u : 0u});
+    w.sample("mbstorm_running", run_only, std::uint64_t{live.running ? 1u : 0u});
 
     w.family("mbstorm_requests_sent_total", "counter",
              "Requests sent after warm-up (each one a transaction once it ends).");
@@ -170,7 +174,7 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
     w.family("mbstorm_stray_responses_total", "counter",
              "Responses that answered no transaction (unknown or duplicate transaction id).");
     for (const auto outcome : {stats::Outcome::UnknownId, stats::Outcome::DuplicateId}) {
-        const PromLabel labels[] = {test, {"outcome", stats::outcome_name(outcome)}};
+        const auto labels = with(run_only, {"outcome", stats::outcome_name(outcome)});
         w.sample("mbstorm_stray_responses_total", labels, live.stray.count(outcome));
     }
 
@@ -191,25 +195,24 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
                     op.latency_buckets, op.latency_sum_ns);
     });
 
-    const std::span<const PromLabel> test_only(&test, 1);
     w.family("mbstorm_connections_opened_total", "counter",
              "Connections opened (reconnects included).");
-    w.sample("mbstorm_connections_opened_total", test_only, live.connections_opened);
+    w.sample("mbstorm_connections_opened_total", run_only, live.connections_opened);
     w.family("mbstorm_connections_failed_total", "counter", "Connect attempts that failed.");
-    w.sample("mbstorm_connections_failed_total", test_only, live.connections_failed);
+    w.sample("mbstorm_connections_failed_total", run_only, live.connections_failed);
     w.family("mbstorm_connections_closed_total", "counter", "Connections closed by the target.");
-    w.sample("mbstorm_connections_closed_total", test_only, live.connections_closed_by_peer);
+    w.sample("mbstorm_connections_closed_total", run_only, live.connections_closed_by_peer);
     w.family("mbstorm_open_connections", "gauge", "Connections open now.");
-    w.sample("mbstorm_open_connections", test_only, live.open_connections);
+    w.sample("mbstorm_open_connections", run_only, live.open_connections);
     w.family("mbstorm_in_flight_requests", "gauge",
              "Requests sent and not yet answered or timed out.");
-    w.sample("mbstorm_in_flight_requests", test_only, live.in_flight);
+    w.sample("mbstorm_in_flight_requests", run_only, live.in_flight);
     w.family("mbstorm_target_transactions_per_second", "gauge",
              "Open loop: the rate the plan asks for now (0 in closed loop).");
-    w.sample("mbstorm_target_transactions_per_second", test_only, live.target_rate);
+    w.sample("mbstorm_target_transactions_per_second", run_only, live.target_rate);
     w.family("mbstorm_achieved_transactions_per_second", "gauge",
              "Transactions that ended per second over the last full interval.");
-    w.sample("mbstorm_achieved_transactions_per_second", test_only, live.achieved_rate);
+    w.sample("mbstorm_achieved_transactions_per_second", run_only, live.achieved_rate);
     return w.text();
 }
 

@@ -23,6 +23,7 @@ struct LiveOperation {
 
 struct LiveLoad {
     std::string test_id;  // --test-id; empty when not given
+    std::string shard;    // run --shard I/N: "I"; empty for a whole run
     std::vector<LiveOperation> operations;
     OutcomeCounters stray;  // responses that answered no transaction
     std::uint64_t connections_opened = 0;

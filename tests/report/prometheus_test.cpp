@@ -110,6 +110,21 @@ TEST(Prometheus, LoadMetricsCarryTheirLabelsAndCounts) {
     EXPECT_THAT(text, HasSubstr("# TYPE mbstorm_transaction_latency_seconds histogram\n"));
 }
 
+// A shard of a distributed run labels every series with its index, after the test, so that
+// sum without (shard) is the whole test.
+TEST(Prometheus, AShardLabelsEverySeriesWithItsIndex) {
+    stats::LiveLoad live = sample_live();
+    live.test_id = "t";
+    live.shard = "2";
+    const std::string text = format_load_metrics(live);
+    EXPECT_THAT(text, HasSubstr(R"(mbstorm_open_connections{test="t",shard="2"} 4)"));
+    EXPECT_THAT(text, HasSubstr(R"(mbstorm_running{test="t",shard="2"} )"));
+    EXPECT_THAT(text,
+                HasSubstr(R"(mbstorm_requests_sent_total{test="t",shard="2",operation="read",)"
+                          R"(function="read_holding_registers",unit="7"} 12)"));
+    EXPECT_THAT(text, HasSubstr(R"(mbstorm_stray_responses_total{test="t",shard="2",outcome=)"));
+}
+
 TEST(Prometheus, NoTestIdMeansNoTestLabel) {
     stats::LiveLoad live = sample_live();
     live.test_id.clear();
