@@ -108,12 +108,12 @@ check("the shards' connections", [s["run"]["connections"] for s in shards], [2, 
 check("merged connections", merged["run"]["connections"], whole["run"]["connections"])
 check("shard numbers", [(s["test"]["shard_index"], s["test"]["shard_count"]) for s in shards],
       [(0, 3), (1, 3), (2, 3)])
-# Percentiles: separate runs on a shared machine, so only alike (the histograms' own
-# precision is 0.1 %; the bound is the runs' noise).
+# Percentiles: separate runs on a shared machine (CI runs other tests beside this one), so
+# only alike; that a merge is exact to the histograms' precision is script.merge_runs' check.
 for p in ("50", "90"):
     w, m = whole["latency"]["percentiles_ns"][p], merged["latency"]["percentiles_ns"][p]
-    if not (w / 5 <= m <= w * 5):
-        problems.append(f"p{p}: merged {m} ns, whole plan {w} ns (more than 5x apart)")
+    if not (w / 20 <= m <= w * 20):
+        problems.append(f"p{p}: merged {m} ns, whole plan {w} ns (more than 20x apart)")
 check("merged min_ns", merged["latency"]["min_ns"], min(s["latency"]["min_ns"] for s in shards))
 check("merged max_ns", merged["latency"]["max_ns"], max(s["latency"]["max_ns"] for s in shards))
 # Together at START_AT: warm-up from there, measuring 1 s later, on every shard.
