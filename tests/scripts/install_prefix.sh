@@ -9,9 +9,13 @@ trap 'rm -rf "$work"' EXIT
 
 cmake --install "$build" --prefix "$work/prefix" >"$work/install.log"
 [ -x "$work/prefix/bin/mbstorm" ] || { echo "FAIL no $work/prefix/bin/mbstorm after cmake --install:" >&2; cat "$work/install.log" >&2; exit 1; }
-version=$("$work/prefix/bin/mbstorm" --version | head -n 1)
+# Whole outputs first, then the checks: `mbstorm ... | grep -q` fails under pipefail when grep
+# exits before a slower (sanitizer) build has written everything (SIGPIPE).
+version_text=$("$work/prefix/bin/mbstorm" --version)
+version=${version_text%%$'\n'*}
 [[ "$version" == "mbstorm "[0-9]* ]] || { echo "FAIL installed mbstorm --version printed '$version'" >&2; exit 1; }
-"$work/prefix/bin/mbstorm" run --help | grep -q -- '--target' || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
+run_help=$("$work/prefix/bin/mbstorm" run --help)
+grep -q -- '--target' <<<"$run_help" || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
 for f in doc/mbstorm/README.md doc/mbstorm/copyright doc/mbstorm/docs/json-schema.md mbstorm/scenarios/ci-gate.yaml man/man1/mbstorm.1.gz man/man1/mbstorm-run.1.gz \
   bash-completion/completions/mbstorm; do
   [ -f "$work/prefix/share/$f" ] || { echo "FAIL share/$f not installed" >&2; exit 1; }
