@@ -59,4 +59,16 @@ bool check_writable(const std::string& path, std::string& error) {
     return problem == 0 || fail(problem);
 }
 
+bool close_streamed_file(std::FILE*& file, bool write_failed, std::string& error) {
+    if (file == nullptr) return true;
+    const int saved = errno;
+    const bool closed = std::fclose(file) == 0;
+    file = nullptr;
+    if (write_failed || !closed) {
+        error = std::strerror(closed ? saved : errno);
+        return false;
+    }
+    return true;
+}
+
 }  // namespace mbstorm::report

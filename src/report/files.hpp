@@ -1,6 +1,7 @@
 // Writing report text to disk.
 #pragma once
 
+#include <cstdio>
 #include <string>
 #include <string_view>
 
@@ -15,5 +16,9 @@ bool write_text_file(const std::string& path, std::string_view content, std::str
 // room, and a character device that is not a terminal takes a probe byte (/dev/full does
 // not). On failure returns false and sets error like write_text_file.
 bool check_writable(const std::string& path, std::string& error);
+
+// Closes a file written as the run goes (--hlog, --timeline) and sets `file` to null; false,
+// with error set, when closing fails or `write_failed` says an earlier write did.
+bool close_streamed_file(std::FILE*& file, bool write_failed, std::string& error);
 
 }  // namespace mbstorm::report

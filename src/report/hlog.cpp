@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "report/files.hpp"
 #include "stats/hdr_encoding.hpp"
 
 namespace mbstorm::report {
@@ -138,14 +139,7 @@ void HlogWriter::end_interval() {
 bool HlogWriter::close(std::string& error) {
     if (file_ == nullptr) return true;
     if (!started_) start(std::chrono::system_clock::now());
-    const int saved = errno;
-    const bool closed = std::fclose(file_) == 0;
-    file_ = nullptr;
-    if (failed_ || !closed) {
-        error = std::strerror(closed ? saved : errno);
-        return false;
-    }
-    return true;
+    return close_streamed_file(file_, failed_, error);
 }
 
 double Hlog::absolute_start_s(const HlogInterval& interval) const {

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstring>
 
+#include "report/files.hpp"
 #include "report/interval_json.hpp"
 
 namespace mbstorm::report {
@@ -44,15 +45,7 @@ void TimelineWriter::write(const stats::IntervalSummary& interval,
 }
 
 bool TimelineWriter::close(std::string& error) {
-    if (file_ == nullptr) return true;
-    const int saved = errno;
-    const bool closed = std::fclose(file_) == 0;
-    file_ = nullptr;
-    if (failed_ || !closed) {
-        error = std::strerror(closed ? saved : errno);
-        return false;
-    }
-    return true;
+    return close_streamed_file(file_, failed_, error);
 }
 
 }  // namespace mbstorm::report

@@ -11,15 +11,8 @@ trap '[ -n "$run_pid" ] && kill "$run_pid" 2>/dev/null; [ -n "$serve_pid" ] && k
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
 
-# wait_for PATTERN FILE: sets $found to the first match of the sed expression (up to 10 s).
-wait_for() {
-  found=""
-  for _ in $(seq 100); do
-    found=$(sed -n "$1" "$2" | head -1); [ -n "$found" ] && return 0
-    sleep 0.1
-  done
-  return 1
-}
+# wait_for (tests/scripts/lib/peer.bash): the first match of a sed expression, up to 10 s.
+source "$(dirname "$0")/lib/peer.bash"
 # sample FILE NAME{LABELS}: the value of one sample line.
 sample() { awk -v key="$2" 'index($0, key " ") == 1 { print $2 }' "$1"; }
 

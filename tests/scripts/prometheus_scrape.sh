@@ -12,14 +12,8 @@ pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done; wait 2>/dev/null; rm -rf "$work"' EXIT
 fail=0
 check() { if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi; }
-wait_for() {
-  found=""
-  for _ in $(seq 100); do
-    found=$(sed -n "$1" "$2" | head -1); [ -n "$found" ] && return 0
-    sleep 0.1
-  done
-  return 1
-}
+# wait_for (tests/scripts/lib/peer.bash): the first match of a sed expression, up to 10 s.
+source "$(dirname "$0")/lib/peer.bash"
 free_port() {
   /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'
 }

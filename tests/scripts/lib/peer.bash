@@ -21,3 +21,14 @@ stop_server() {
   if [ -n "${server_pid:-}" ]; then kill "$server_pid" 2>/dev/null; wait "$server_pid" 2>/dev/null; fi
   server_pid=""
 }
+
+# wait_for SED_EXPRESSION FILE: sets $found to the first line `sed -n` prints from FILE, waiting
+# up to 10 s for it to appear. Returns non-zero if it never does.
+wait_for() {
+  found=""
+  for _ in $(seq 100); do
+    found=$(sed -n "$1" "$2" | head -1); [ -n "$found" ] && return 0
+    sleep 0.1
+  done
+  return 1
+}
