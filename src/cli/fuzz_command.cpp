@@ -12,6 +12,7 @@
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/fuzz_target.hpp"
+#include "cli/transport_options.hpp"
 #include "codec/function_code.hpp"
 #include "netfuzz/campaign.hpp"
 #include "netfuzz/dictionary.hpp"
@@ -48,6 +49,7 @@ struct FuzzOptions {
     std::string dict;
     std::string state_range = "0x6000-0x6FFF";
     std::uint32_t max_connections = 4096;
+    TransportOptions transport;
 };
 
 // "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
@@ -236,7 +238,14 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "skip the check)")
         ->check(CLI::Range(0u, 1000000u))
         ->capture_default_str();
-    cmd->callback([o, &action] { action = [o] { return run_fuzz(*o); }; });
+    add_transport_options(cmd, o->transport, TransportSide::Client);
+    cmd->callback([o, &action] {
+        action = [o] {
+            if (std::string e = check_transport(o->transport, "fuzz"); !e.empty())
+                return usage_error("fuzz", e);
+            return run_fuzz(*o);
+        };
+    });
 }
 
 }  // namespace mbstorm::cli

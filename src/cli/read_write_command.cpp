@@ -19,6 +19,7 @@
 #include "cli/duration_option.hpp"
 #include "cli/frame_describe.hpp"
 #include "cli/modbus_client.hpp"
+#include "cli/transport_options.hpp"
 #include "cli/typed_values.hpp"
 #include "codec/address.hpp"
 #include "codec/exception_code.hpp"
@@ -61,6 +62,7 @@ struct IoOptions {
     std::uint64_t timeout_ns = 1'000'000'000ULL;
     bool json = false;
     bool allow_writes = false;
+    TransportOptions transport;
 };
 
 // What the options resolve to before anything is sent.
@@ -291,6 +293,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
 int run_io(const IoOptions& o) {
     const char* name = o.write ? "write" : "read";
     auto usage = [name](std::string_view message) { return usage_error(name, message); };
+    if (std::string e = check_transport(o.transport, name); !e.empty()) return usage(e);
     IoPlan p;
     if (auto error = build_request(o, p); !error.empty()) return usage(error);
     p.request.payload = codec::Bytes(p.payload.data(), p.payload.size());
@@ -350,6 +353,7 @@ void add_common_options(CLI::App* cmd, IoOptions& o) {
                         "time between the starts of two transactions (default 1s)");
     add_duration_option(cmd, "--timeout", o.timeout_ns, "connect and answer timeout (default 1s)");
     cmd->add_flag("--json", o.json, "one JSON object per transaction on stdout");
+    add_transport_options(cmd, o.transport, TransportSide::Client);
 }
 
 }  // namespace

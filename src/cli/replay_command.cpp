@@ -8,6 +8,7 @@
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/fuzz_target.hpp"
+#include "cli/transport_options.hpp"
 #include "netfuzz/campaign.hpp"
 #include "netfuzz/executor.hpp"
 #include "netfuzz/finding.hpp"
@@ -22,6 +23,7 @@ struct ReplayOptions {
     std::uint64_t timeout_ns = 0;  // 0: the finding's own timeout
     unsigned runs = 1;
     bool original = false;
+    TransportOptions transport;
 };
 
 int run_replay(const ReplayOptions& o) {
@@ -96,7 +98,14 @@ void add_replay_command(CLI::App& app, Action& action) {
         ->check(CLI::Range(1u, 1000u));
     cmd->add_flag("--original", o->original,
                   "replay the case as it was first found, not the minimised one");
-    cmd->callback([o, &action] { action = [o] { return run_replay(*o); }; });
+    add_transport_options(cmd, o->transport, TransportSide::Client);
+    cmd->callback([o, &action] {
+        action = [o] {
+            if (std::string e = check_transport(o->transport, "replay"); !e.empty())
+                return usage_error("replay", e);
+            return run_replay(*o);
+        };
+    });
 }
 
 }  // namespace mbstorm::cli

@@ -11,6 +11,7 @@
 #include "cli/duration_option.hpp"
 #include "cli/run_output.hpp"
 #include "cli/run_scenario.hpp"
+#include "cli/transport_options.hpp"
 #include "codec/address.hpp"
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
@@ -58,6 +59,7 @@ struct RunOptions {
     std::string junit;
     std::string shard;     // --shard I/N (else the environment)
     std::string start_at;  // --start-at TIME
+    TransportOptions transport;
 };
 
 // --shard (or the environment) and --start-at into the request; "" or the usage error.
@@ -198,6 +200,7 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--target", o->target,
                     "server to test: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if "
                     "omitted (default: start the embedded slave)");
+    add_transport_options(cmd, o->transport, TransportSide::Client);
     cmd->add_option("-c,--connections", p.connections, "connections")
         ->check(CLI::Range(1u, load::kMaxConnections))
         ->capture_default_str();
@@ -272,6 +275,8 @@ void add_run_command(CLI::App& app, Action& action) {
             OutputFiles outputs = o->outputs;
             outputs.junit = o->junit;
             if (std::string e = stdout_conflict(outputs); !e.empty()) return usage_error("run", e);
+            if (std::string e = check_transport(o->transport, "run"); !e.empty())
+                return usage_error("run", e);
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

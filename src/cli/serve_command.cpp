@@ -9,6 +9,7 @@
 #include "cli/commands.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/metrics_endpoint.hpp"
+#include "cli/transport_options.hpp"
 #include "server/run.hpp"
 #include "server/server.hpp"
 #include "slave/device_yaml.hpp"
@@ -33,9 +34,12 @@ struct ServeOptions {
     bool stats = false;
     std::uint64_t duration_ns = 0;
     std::string metrics_listen;
+    TransportOptions transport;
 };
 
 int run_serve(ServeOptions& o) {
+    if (std::string e = check_transport(o.transport, "serve"); !e.empty())
+        return usage_error("serve", e);
     auto& c = o.config;
     std::optional<slave::DeviceDescription> device;
     std::unique_ptr<slave::UnitModels> units;
@@ -110,6 +114,7 @@ void add_serve_command(CLI::App& app, Action& action) {
                     "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
                     "port 502 if omitted")
         ->capture_default_str();
+    add_transport_options(cmd, o->transport, TransportSide::Server);
     cmd->add_option("--threads,-t", o->config.threads,
                     "worker threads, each with its own ring (0: one per core)")
         ->check(CLI::Range(0u, 1024u));

@@ -1,0 +1,94 @@
+#include "cli/transport_options.hpp"
+
+#include <fmt/format.h>
+
+namespace mbstorm::cli {
+
+TransportKind TransportOptions::kind() const noexcept {
+    if (!serial_device.empty()) return TransportKind::Serial;
+    if (transport == "rtu-over-tcp") return TransportKind::RtuOverTcp;
+    if (transport == "tls") return TransportKind::Tls;
+    return TransportKind::Tcp;
+}
+
+codec::Framing TransportOptions::framing_kind() const noexcept {
+    switch (kind()) {
+        case TransportKind::Tcp:
+        case TransportKind::Tls:
+            return codec::Framing::Mbap;
+        case TransportKind::RtuOverTcp:
+            return codec::Framing::Rtu;
+        case TransportKind::Serial:
+            return framing == "ascii" ? codec::Framing::Ascii : codec::Framing::Rtu;
+    }
+    return codec::Framing::Mbap;
+}
+
+std::string_view transport_name(TransportKind kind) noexcept {
+    switch (kind) {
+        case TransportKind::Tcp:
+            return "tcp";
+        case TransportKind::RtuOverTcp:
+            return "rtu-over-tcp";
+        case TransportKind::Tls:
+            return "tls";
+        case TransportKind::Serial:
+            return "serial";
+    }
+    return "?";
+}
+
+void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide side) {
+    const bool server = side == TransportSide::Server;
+    cmd->add_option("--transport", o.transport,
+                    "tcp (Modbus TCP, MBAP), rtu-over-tcp (RTU frames on TCP, as gateways "
+                    "speak) or tls (Modbus/TCP Security, port 802)")
+        ->check(CLI::IsMember({"tcp", "rtu-over-tcp", "tls"}))
+        ->capture_default_str();
+
+    // Serial line.
+    cmd->add_option("--serial", o.serial_device,
+                    server ? "serve on this tty instead of TCP (RTU or ASCII, see --framing)"
+                           : "talk to a device on this tty instead of TCP (RTU or ASCII)");
+    cmd->add_option("--baud", o.baud, "serial: bits per second")
+        ->check(CLI::Range(50u, 4000000u))
+        ->capture_default_str();
+    cmd->add_option("--parity", o.parity, "serial: parity")
+        ->check(CLI::IsMember({"none", "even", "odd"}))
+        ->capture_default_str();
+    cmd->add_option("--data-bits", o.data_bits, "serial: data bits (RTU needs 8, ASCII 7 or 8)")
+        ->check(CLI::Range(7u, 8u))
+        ->capture_default_str();
+    cmd->add_option("--stop-bits", o.stop_bits, "serial: stop bits")
+        ->check(CLI::Range(1u, 2u))
+        ->capture_default_str();
+    cmd->add_option("--framing", o.framing, "serial: RTU (binary, CRC-16) or ASCII (hex, LRC)")
+        ->check(CLI::IsMember({"rtu", "ascii"}))
+        ->capture_default_str();
+
+    // TLS.
+    cmd->add_option("--tls-cert", o.tls_cert,
+                    server ? "TLS: the server's certificate (PEM)"
+                           : "TLS: the client's certificate (PEM), carrying its role");
+    cmd->add_option("--tls-key", o.tls_key, "TLS: the private key of --tls-cert (PEM)");
+    cmd->add_option("--tls-ca", o.tls_ca,
+                    "TLS: CA certificates the peer's certificate must chain to (PEM)");
+    if (!server)
+        cmd->add_flag("--tls-resume", o.tls_resume,
+                      "TLS: resume the session when a connection is reopened");
+}
+
+std::string check_transport(const TransportOptions& o, std::string_view command) {
+    const TransportKind kind = o.kind();
+    if (kind == TransportKind::Serial && o.transport != "tcp")
+        return "--serial and --transport exclude each other (a serial line is its own transport)";
+    if (kind == TransportKind::Tcp) return {};
+    // Each transport lifts this as it reaches the subcommand.
+    return fmt::format("--{} is not supported by {} yet",
+                       kind == TransportKind::Serial
+                           ? std::string("serial")
+                           : fmt::format("transport {}", transport_name(kind)),
+                       command);
+}
+
+}  // namespace mbstorm::cli
