@@ -15,6 +15,7 @@ packages=(
   liburing-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libmodbus-dev
   zlib1g-dev
+  libssl-dev   # --transport tls (Modbus/TCP Security): OpenSSL
   dpkg-dev   # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   help2man   # the man pages, written at build time from mbstorm's own --help
   bash-completion   # tests/scripts/bash_completion.sh loads the completion as a shell would
