@@ -15,15 +15,8 @@ fail=0
 ok() { echo "ok   $1"; }
 bad() { echo "FAIL $1"; sed 's/^/  err: /' err 2>/dev/null | tail -5; fail=1; }
 
-"$mbstorm" serve --listen 127.0.0.1:0 -d 60s >serve.out 2>serve.err &
-server_pid=$!
-port=""
-for _ in $(seq 100); do
-  port=$(sed -n 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' serve.out)
-  [ -n "$port" ] && break
-  sleep 0.1
-done
-[ -n "$port" ] || { echo "FAIL mbstorm serve did not start"; cat serve.err; exit 1; }
+source "$(dirname "$0")/lib/peer.bash"
+start_mbstorm_serve serve.out "$mbstorm" -d 60s || { echo "FAIL mbstorm serve did not start"; cat serve.out.err; exit 1; }
 
 scenario() {  # scenario NAME THRESHOLD...: a 3 s scenario of reads with those thresholds
   printf 'name: %s\nconnections: 2\ndepth: 2\nduration: 3s\noperations:\n' "$1"

@@ -35,15 +35,10 @@ for job, out in (("shards-job.yaml", "shard.sh"), ("merge-job.yaml", "merge.sh")
     open(f"{work}/{out}", "w").write(script)
 PY
 
-"$mbstorm" serve --listen 127.0.0.1:0 -d 120s >serve.out 2>serve.err &
-pids+=($!)
-port=""
-for _ in $(seq 100); do
-  port=$(sed -n 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' serve.out)
-  [ -n "$port" ] && break
-  sleep 0.1
-done
-[ -n "$port" ] || { echo "FAIL mbstorm serve did not start"; cat serve.err; exit 1; }
+source "$(dirname "$0")/lib/peer.bash"
+start_mbstorm_serve serve.out "$mbstorm" -d 120s
+pids+=("$server_pid")
+[ -n "$port" ] || { echo "FAIL mbstorm serve did not start"; cat serve.out.err; exit 1; }
 
 scenario() {  # scenario THRESHOLD...: 6 connections, 3000 transactions after a 1 s warm-up
   printf 'name: fleet\nconnections: 6\ndepth: 2\nduration: 30s\ntransactions: 3000\nwarmup: 1s\n'

@@ -32,3 +32,14 @@ wait_for() {
   done
   return 1
 }
+
+# start_mbstorm_serve OUTFILE MBSTORM [SERVE_ARGS...]: starts `MBSTORM serve --listen
+# 127.0.0.1:0 SERVE_ARGS` in the background (stdout to OUTFILE, stderr to OUTFILE.err); sets
+# $server_pid, and $port once serve says where it listens (up to 10 s). Non-zero if it never does.
+start_mbstorm_serve() {
+  local out=$1 mbstorm=$2; shift 2
+  "$mbstorm" serve --listen 127.0.0.1:0 "$@" >"$out" 2>"$out.err" &
+  server_pid=$!
+  wait_for 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$out" || { port=""; return 1; }
+  port=$found
+}
