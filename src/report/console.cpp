@@ -16,13 +16,14 @@ namespace {
 using stats::Histogram;
 using stats::OutcomeCounters;
 
-constexpr std::array<std::pair<double, const char*>, 7> kPercentiles = {{{50.0, "p50"},
-                                                                         {75.0, "p75"},
-                                                                         {90.0, "p90"},
-                                                                         {99.0, "p99"},
-                                                                         {99.9, "p99.9"},
-                                                                         {99.99, "p99.99"},
-                                                                         {99.999, "p99.999"}}};
+constexpr std::array<std::pair<double, const char*>, 7> kConsolePercentiles = {
+    {{50.0, "p50"},
+     {75.0, "p75"},
+     {90.0, "p90"},
+     {99.0, "p99"},
+     {99.9, "p99.9"},
+     {99.99, "p99.99"},
+     {99.999, "p99.999"}}};
 
 // fmt pads by code points, so "µs" (two bytes, one column) lines up.
 void append_latency_table(std::string& out, const Histogram& h) {
@@ -30,7 +31,7 @@ void append_latency_table(std::string& out, const Histogram& h) {
         out += "  (no latency samples)\n";
         return;
     }
-    for (const auto& [p, label] : kPercentiles) {
+    for (const auto& [p, label] : kConsolePercentiles) {
         out += fmt::format("  {:<9}{:>10}\n", label, format_latency(h.value_at_percentile(p)));
     }
     out += fmt::format("  {:<9}{:>10}\n", "max", format_latency(h.max()));

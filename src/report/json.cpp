@@ -17,14 +17,14 @@ namespace {
 using nlohmann::json;
 
 // Keys are the percentile as written by humans: "50", "99.9", "99.999", "100".
-constexpr std::array<std::pair<double, const char*>, 8> kPercentiles = {{{50.0, "50"},
-                                                                         {75.0, "75"},
-                                                                         {90.0, "90"},
-                                                                         {99.0, "99"},
-                                                                         {99.9, "99.9"},
-                                                                         {99.99, "99.99"},
-                                                                         {99.999, "99.999"},
-                                                                         {100.0, "100"}}};
+constexpr std::array<std::pair<double, const char*>, 8> kJsonPercentiles = {{{50.0, "50"},
+                                                                             {75.0, "75"},
+                                                                             {90.0, "90"},
+                                                                             {99.0, "99"},
+                                                                             {99.9, "99.9"},
+                                                                             {99.99, "99.99"},
+                                                                             {99.999, "99.999"},
+                                                                             {100.0, "100"}}};
 
 double seconds(std::uint64_t ns) {
     return static_cast<double>(ns) / 1e9;
@@ -32,7 +32,7 @@ double seconds(std::uint64_t ns) {
 
 json latency_json(const stats::Histogram& h) {
     json percentiles = json::object();
-    for (const auto& [p, key] : kPercentiles) percentiles[key] = h.value_at_percentile(p);
+    for (const auto& [p, key] : kJsonPercentiles) percentiles[key] = h.value_at_percentile(p);
     return {{"count", h.total_count()},
             {"min_ns", h.min()},
             {"max_ns", h.max()},

@@ -27,6 +27,10 @@ enum class Table : std::uint8_t { Coils, DiscreteInputs, InputRegisters, Holding
 
 // "coils", "discrete_inputs", "input_registers", "holding_registers".
 const char* table_name(Table t) noexcept;
+// True for the two 1-bit tables.
+constexpr bool is_bit_table(Table t) noexcept {
+    return t == Table::Coils || t == Table::DiscreteInputs;
+}
 
 inline constexpr std::uint32_t kFullTable = 65536;
 

@@ -106,10 +106,6 @@ ValueType parse_type(const Parser& p, const YAML::Node& n) {
     p.fail(n, "unknown type '" + s + "' (uint16, int16 or float32)");
 }
 
-bool is_bit_table(Table t) {
-    return t == Table::Coils || t == Table::DiscreteInputs;
-}
-
 // One value of `type` as registers; bit tables take 0/1 (or true/false).
 void push_value(const Parser& p, const YAML::Node& n, Table table, ValueType type,
                 std::vector<std::uint16_t>& words) {

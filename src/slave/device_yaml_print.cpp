@@ -73,10 +73,6 @@ const char* policy_name(UnknownUnitPolicy p) {
     return "gateway_target_failed";
 }
 
-bool is_bit_table(Table t) {
-    return t == Table::Coils || t == Table::DiscreteInputs;
-}
-
 std::string hex_text(unsigned v) {
     char buf[8];
     std::snprintf(buf, sizeof buf, "0x%02X", v);

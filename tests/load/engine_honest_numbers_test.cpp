@@ -23,7 +23,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::unique_ptr<server::Server> start_server(const slave::FaultConfig& faults = {}) {
+std::unique_ptr<server::Server> start_honest_slave(const slave::FaultConfig& faults = {}) {
     server::ServerConfig config;
     config.listen = "127.0.0.1:0";
     config.threads = 1;
@@ -61,7 +61,7 @@ TEST(EngineHonestNumbers, ASaturatedTargetIsBlamedNotTheEngine) {
     slave::FaultConfig faults;
     faults.delay.kind = slave::DelayConfig::Kind::Fixed;
     faults.delay.fixed_ns = 20'000'000;
-    auto server = start_server(faults);
+    auto server = start_honest_slave(faults);
     Plan plan = read_plan(server->port());
     plan.model = LoadModel::OpenLoop;
     plan.rate = 1200;
@@ -89,7 +89,7 @@ bool stall_now_and_then(void*, const RequestInfo&, const codec::Response&) {
 }
 
 TEST(EngineHonestNumbers, AStalledEngineIsBlamedNotTheTarget) {
-    auto server = start_server();
+    auto server = start_honest_slave();
     Plan plan = read_plan(server->port());
     plan.model = LoadModel::OpenLoop;
     plan.rate = 1000;
@@ -107,7 +107,7 @@ TEST(EngineHonestNumbers, AStalledEngineIsBlamedNotTheTarget) {
 
 // Connections opened at 5/s cannot reach 8 in half a second: said, not hidden.
 TEST(EngineHonestNumbers, ConnectionsThatNeverOpenedAreAShortfall) {
-    auto server = start_server();
+    auto server = start_honest_slave();
     Plan plan = read_plan(server->port());
     plan.connections = 8;
     plan.connect_rate = 5;
@@ -125,7 +125,7 @@ TEST(EngineHonestNumbers, ConnectionsThatNeverOpenedAreAShortfall) {
 }
 
 TEST(EngineHonestNumbers, ARunStoppedEarlyIsAShortfallAndACarriedOutPlanHasNone) {
-    auto server = start_server();
+    auto server = start_honest_slave();
     Plan plan = read_plan(server->port());
     plan.duration = 10s;
     std::atomic<bool> stop{false};
@@ -158,7 +158,7 @@ TEST(EngineHonestNumbers, ARunStoppedEarlyIsAShortfallAndACarriedOutPlanHasNone)
 // Per-operation traffic used to be 0: FC 03 for one register is a 12-byte request and an
 // 11-byte answer.
 TEST(EngineHonestNumbers, PerOperationTrafficIsCounted) {
-    auto server = start_server();
+    auto server = start_honest_slave();
     Plan plan = read_plan(server->port());
     plan.duration = 400ms;
     plan.warmup = 200ms;

@@ -22,14 +22,14 @@ using mbstorm::test::tool_path;
 
 // Every run is bounded from outside too: a fuzzer stuck in the restart path fails the test
 // (exit 124 from timeout(1)) instead of blocking the suite.
-constexpr int kRunLimitSeconds = 180;
+constexpr int kRestartRunLimitSeconds = 180;
 // Servers started by a restart command end by themselves even if this test dies first.
-constexpr int kServerLifetimeSeconds = 300;
+constexpr int kRestartServerLifetimeSeconds = 300;
 // Cases per round of the campaign loop with the default 4 connections (4 lanes x 48).
-constexpr std::uint64_t kCasesPerRound = 4 * 48;
+constexpr std::uint64_t kRestartCasesPerRound = 4 * 48;
 
 CommandResult run_mbstorm_bounded(const std::string& args) {
-    return run_mbstorm(args, kRunLimitSeconds);
+    return run_mbstorm(args, kRestartRunLimitSeconds);
 }
 
 using mbstorm::test::RestartedServers;
@@ -44,7 +44,7 @@ const nlohmann::json* find_crash(const nlohmann::json& summary) {
 class RestartCmd : public ::testing::Test {
   protected:
     void SetUp() override {
-        first_ = start_crash_server(port_, 0, kServerLifetimeSeconds);
+        first_ = start_crash_server(port_, 0, kRestartServerLifetimeSeconds);
         ASSERT_TRUE(first_) << "broken_server_crash did not start on any port";
         dir_ = mbstorm::test::temp_dir("restart-cmd");
         restarted_ = std::make_unique<RestartedServers>(dir_ + "/restarted.pids");
@@ -71,7 +71,7 @@ class RestartCmd : public ::testing::Test {
     std::string server_cmd() const {
         return tool_path("broken_server_crash") + " --port " + std::to_string(port_) +
                " --pid-file " + dir_ + "/restarted.pids --exit-after-s " +
-               std::to_string(kServerLifetimeSeconds);
+               std::to_string(kRestartServerLifetimeSeconds);
     }
     // Fuzzes the server with a fixed seed; `extra` adds the bounds and restart options.
     CommandResult fuzz(const std::string& extra) const {
@@ -105,7 +105,7 @@ TEST_F(RestartCmd, CrashedTargetIsRestartedAndFuzzingGoesOn) {
     // It went on to the full case budget, at least two whole rounds after the crash's round.
     EXPECT_EQ(s.at("stop_reason"), "case limit reached") << run.output;
     EXPECT_EQ(s.at("cases").get<std::uint64_t>(), cases);
-    EXPECT_GT(cases - crash->at("case_number").get<std::uint64_t>(), 3 * kCasesPerRound)
+    EXPECT_GT(cases - crash->at("case_number").get<std::uint64_t>(), 3 * kRestartCasesPerRound)
         << run.output;
     // The restart command really ran, and the server it started last is still serving.
     const auto pids = restarted_->pids();
@@ -117,7 +117,7 @@ TEST_F(RestartCmd, CrashedTargetIsRestartedAndFuzzingGoesOn) {
 // --restart-wait itself (as `systemctl restart` may) still gets the whole wait afterwards.
 TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
     const auto run =
-        fuzz("--cases " + std::to_string(kCasesPerRound) +
+        fuzz("--cases " + std::to_string(kRestartCasesPerRound) +
              " -q --no-minimize --restart-wait 2s --restart-cmd '" + restart_cmd("3") + "'");
     ASSERT_EQ(run.exit_code, 1) << run.output;
     const auto s = summary();
@@ -130,7 +130,7 @@ TEST_F(RestartCmd, SlowRestartCmdDoesNotUseUpTheWait) {
 // A command that runs the target in the foreground never returns: the fuzzer must not wait
 // for it, only for the target to answer.
 TEST_F(RestartCmd, ForegroundRestartCmdIsLeftRunningAndFuzzingGoesOn) {
-    const auto run = fuzz("--cases " + std::to_string(3 * kCasesPerRound) +
+    const auto run = fuzz("--cases " + std::to_string(3 * kRestartCasesPerRound) +
                           " -q --no-minimize --restart-wait 5s --restart-cmd '" +
                           foreground_restart_cmd() + "'");
     ASSERT_EQ(run.exit_code, 1) << run.output;

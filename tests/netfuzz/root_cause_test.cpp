@@ -21,7 +21,7 @@ std::vector<std::uint8_t> adu(const std::vector<std::uint8_t>& pdu, std::uint8_t
     return f;
 }
 
-TargetProfile profile() {
+TargetProfile root_cause_profile() {
     TargetProfile p;
     p.probe_pdu = {0x03, 0, 0, 0, 1};
     return p;
@@ -32,8 +32,8 @@ Verdict judge(const std::vector<std::uint8_t>& request, const std::vector<std::u
               std::uint8_t unit = 1, std::uint16_t pid = 0) {
     const auto rq_adu = adu(request, unit, pid);
     RequestInfo rq;
-    describe_request(rq_adu, profile(), rq);
-    return judge_response(rq, adu(response, unit), profile());
+    describe_request(rq_adu, root_cause_profile(), rq);
+    return judge_response(rq, adu(response, unit), root_cause_profile());
 }
 
 TEST(RootCause, AnsweringProtocolIdIsOneRootCauseWhateverTheFunctionOrUnit) {
@@ -70,9 +70,9 @@ TEST(RootCause, TwoDifferentViolationsUnderOneFunctionAreTwoRootCauses) {
 TEST(RootCause, CulpritsNameTheHandlerNotTheRequest) {
     RequestInfo valid, invalid, unknown;
     const auto a = adu({0x03, 0, 0, 0, 1}), b = adu({0x03, 0, 0, 0, 200}), c = adu({0x41});
-    describe_request(a, profile(), valid);
-    describe_request(b, profile(), invalid);
-    describe_request(c, profile(), unknown);
+    describe_request(a, root_cause_profile(), valid);
+    describe_request(b, root_cause_profile(), invalid);
+    describe_request(c, root_cause_profile(), unknown);
     EXPECT_EQ(culprit_text(MutationClass::ValidLimits, &valid), "fc03");
     EXPECT_EQ(culprit_text(MutationClass::InvalidValues, &invalid), "fc03");
     EXPECT_EQ(culprit_text(MutationClass::UnknownFunction, &unknown), "unknown-fc");

@@ -7,7 +7,7 @@
 namespace mbstorm::stats {
 namespace {
 
-void expect_same_counts(const Histogram& a, const Histogram& b) {
+void expect_same_decoded_counts(const Histogram& a, const Histogram& b) {
     ASSERT_EQ(a.total_count(), b.total_count());
     const std::size_t n = std::max(a.counts_length(), b.counts_length());
     for (std::size_t i = 0; i < n; ++i) {
@@ -56,7 +56,7 @@ TEST(HdrEncoding, RoundTripKeepsEveryCount) {
     std::string error;
     ASSERT_TRUE(decode_hdr_compressed_base64(encode_hdr_compressed_base64(h), back, error))
         << error;
-    expect_same_counts(h, back);
+    expect_same_decoded_counts(h, back);
     EXPECT_EQ(back.highest_trackable(), h.highest_trackable());
     // Decoded extremes are bucket edges, as in HdrHistogram; percentiles land in the same buckets.
     for (double p : {50.0, 90.0, 99.0, 99.9, 100.0})
@@ -90,7 +90,7 @@ TEST(HdrEncoding, DecodesWhatHdrHistogramJavaWrote) {
     expected.record_n(3, 2);
     expected.record_n(5000, 300);
     expected.record(123456789);
-    expect_same_counts(h, expected);
+    expect_same_decoded_counts(h, expected);
     EXPECT_EQ(h.total_count(), 304u);
     EXPECT_EQ(h.max(), 123469823u);                 // Java's getMaxValue()
     EXPECT_EQ(h.value_at_percentile(99.0), 5003u);  // Java's getValueAtPercentile(99)

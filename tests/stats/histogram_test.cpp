@@ -284,7 +284,7 @@ TEST(Histogram, CoordinatedOmissionCorrectionMatchesHdrLoop) {
              {3 * kMs, kMs},   // exactly divisible
              {kS + 17, 997},   // ~1M back-filled samples: the per-bucket path
              {40 * kMs, 1234}}) {
-        SCOPED_TRACE(testing::Message() << value << "/" << interval);
+        SCOPED_TRACE(::testing::Message() << value << "/" << interval);
         Histogram fast;
         fast.record_corrected(value, interval);
         expect_same_counts(fast, naive_corrected(value, interval));

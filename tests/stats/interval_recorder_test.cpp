@@ -9,20 +9,20 @@ namespace mbstorm::stats {
 namespace {
 
 constexpr std::uint64_t kSecond = 1'000'000'000;
-constexpr std::uint64_t kMs = 1'000'000;
+constexpr std::uint64_t kOneMs = 1'000'000;
 
 TEST(IntervalTimeline, SingleWorkerProducesOneSummaryPerInterval) {
     IntervalTimeline timeline(kSecond, 1, 100);
     IntervalRecorder rec(kSecond);
     // Interval 0: 3 transactions, one error; interval 1 empty; interval 2: one slow one.
-    for (std::uint64_t t : {100 * kMs, 200 * kMs, 300 * kMs}) {
+    for (std::uint64_t t : {100 * kOneMs, 200 * kOneMs, 300 * kOneMs}) {
         rec.tick(t, timeline, 0);
         rec.record_latency(t);
-        rec.record_transaction(t == 300 * kMs);
+        rec.record_transaction(t == 300 * kOneMs);
     }
     rec.tick(2 * kSecond + 5, timeline, 0);
     EXPECT_EQ(rec.current_index(), 2u);
-    rec.record_latency(50 * kMs);
+    rec.record_latency(50 * kOneMs);
     rec.record_transaction(false);
     rec.flush(timeline, 0);
     timeline.finish();
@@ -32,13 +32,13 @@ TEST(IntervalTimeline, SingleWorkerProducesOneSummaryPerInterval) {
     EXPECT_EQ(s[0].index, 0u);
     EXPECT_EQ(s[0].transactions, 3u);
     EXPECT_EQ(s[0].errors, 1u);
-    EXPECT_EQ(s[0].max_ns, 300 * kMs);
-    EXPECT_EQ(s[0].p50_ns, Histogram::highest_equivalent(200 * kMs));
+    EXPECT_EQ(s[0].max_ns, 300 * kOneMs);
+    EXPECT_EQ(s[0].p50_ns, Histogram::highest_equivalent(200 * kOneMs));
     EXPECT_DOUBLE_EQ(s[0].transactions_per_second(), 3.0);
     EXPECT_EQ(s[1].transactions, 0u);  // gap filled, timeline stays continuous
     EXPECT_EQ(s[1].start_offset_ns, kSecond);
     EXPECT_EQ(s[2].transactions, 1u);
-    EXPECT_EQ(s[2].max_ns, 50 * kMs);
+    EXPECT_EQ(s[2].max_ns, 50 * kOneMs);
     ASSERT_TRUE(timeline.latest().has_value());
     EXPECT_EQ(timeline.latest()->index, 2u);
 }
@@ -46,18 +46,18 @@ TEST(IntervalTimeline, SingleWorkerProducesOneSummaryPerInterval) {
 TEST(IntervalTimeline, WaitsForEveryWorkerBeforeSummarizing) {
     IntervalTimeline timeline(kSecond, 2, 100);
     IntervalRecorder a(kSecond), b(kSecond);
-    a.record_latency(kMs);
+    a.record_latency(kOneMs);
     a.record_transaction(false);
     a.tick(kSecond, timeline, 0);  // worker 0 done with interval 0
     EXPECT_FALSE(timeline.latest().has_value());
-    b.record_latency(9 * kMs);
+    b.record_latency(9 * kOneMs);
     b.record_transaction(true);
     b.tick(kSecond + 1, timeline, 1);  // now both are done
     const auto latest = timeline.latest();
     ASSERT_TRUE(latest.has_value());
     EXPECT_EQ(latest->transactions, 2u);
     EXPECT_EQ(latest->errors, 1u);
-    EXPECT_EQ(latest->max_ns, 9 * kMs);
+    EXPECT_EQ(latest->max_ns, 9 * kOneMs);
     EXPECT_EQ(latest->latency_count, 2u);
 }
 
