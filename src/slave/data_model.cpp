@@ -1,6 +1,8 @@
 #include "slave/data_model.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -110,6 +112,14 @@ void BitTable::write_packed(std::uint16_t address, std::uint16_t quantity,
 
 // ---- RegisterTable ----
 
+namespace {
+// A register's value big-endian at `out` (any alignment).
+inline void store_swapped(std::uint8_t* out, std::uint16_t value) noexcept {
+    if constexpr (std::endian::native == std::endian::little) value = __builtin_bswap16(value);
+    std::memcpy(out, &value, sizeof value);
+}
+}  // namespace
+
 RegisterTable::RegisterTable(std::uint32_t size)
     : regs_(new std::atomic<std::uint16_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
 
@@ -128,9 +138,14 @@ void RegisterTable::read_be(std::uint16_t address, std::uint16_t quantity,
                             std::uint8_t* out) noexcept {
     if (!read_counters_.empty()) bump_read_counters(address, quantity);
     const std::atomic<std::uint16_t>* src = regs_.get() + address;
-    for (std::uint32_t i = 0; i < quantity; ++i) {
-        codec::store_be16(out + 2 * i, src[i].load(std::memory_order_relaxed));
+    // One load, one byte swap and one 16-bit store per register (store_be16 costs two byte
+    // stores and a shift): this loop was a fifth of the slave's instructions at FC03 x 10.
+    std::uint32_t i = 0;
+    for (; i + 2 <= quantity; i += 2) {
+        store_swapped(out + 2 * i, src[i].load(std::memory_order_relaxed));
+        store_swapped(out + 2 * i + 2, src[i + 1].load(std::memory_order_relaxed));
     }
+    if (i < quantity) store_swapped(out + 2 * i, src[i].load(std::memory_order_relaxed));
 }
 
 void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
@@ -187,13 +202,6 @@ void FileStore::write_be(std::uint16_t file, std::uint16_t record, std::uint16_t
 }
 
 // ---- Diagnostics ----
-
-void Diagnostics::end_message(std::uint64_t seq, std::uint8_t receive_event,
-                              std::uint8_t send_event) noexcept {
-    log_[seq % kLogPairs].store(
-        static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
-        std::memory_order_relaxed);
-}
 
 std::uint16_t Diagnostics::comm_event_count() const noexcept {
     return static_cast<std::uint16_t>(message_count() - exception_count() -

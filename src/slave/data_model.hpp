@@ -177,7 +177,11 @@ class Diagnostics {
         return messages_.fetch_add(1, std::memory_order_relaxed);
     }
     void end_message(std::uint64_t seq, std::uint8_t receive_event,
-                     std::uint8_t send_event) noexcept;
+                     std::uint8_t send_event) noexcept {
+        log_[seq % kLogPairs].store(
+            static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
+            std::memory_order_relaxed);
+    }
     void note_exception() noexcept { exceptions_.fetch_add(1, std::memory_order_relaxed); }
     void note_fetch() noexcept { fetches_.fetch_add(1, std::memory_order_relaxed); }
     void note_no_response() noexcept { no_responses_.fetch_add(1, std::memory_order_relaxed); }
