@@ -1,8 +1,6 @@
 #include "slave/data_model.hpp"
 
 #include <algorithm>
-#include <bit>
-#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -112,14 +110,6 @@ void BitTable::write_packed(std::uint16_t address, std::uint16_t quantity,
 
 // ---- RegisterTable ----
 
-namespace {
-// A register's value big-endian at `out` (any alignment).
-inline void store_swapped(std::uint8_t* out, std::uint16_t value) noexcept {
-    if constexpr (std::endian::native == std::endian::little) value = __builtin_bswap16(value);
-    std::memcpy(out, &value, sizeof value);
-}
-}  // namespace
-
 RegisterTable::RegisterTable(std::uint32_t size)
     : regs_(new std::atomic<std::uint16_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
 
@@ -132,20 +122,6 @@ std::uint16_t RegisterTable::mask_write(std::uint16_t address, std::uint16_t and
         next = static_cast<std::uint16_t>((current & and_mask) | (or_mask & ~and_mask));
     } while (!reg.compare_exchange_weak(current, next, std::memory_order_relaxed));
     return next;
-}
-
-void RegisterTable::read_be(std::uint16_t address, std::uint16_t quantity,
-                            std::uint8_t* out) noexcept {
-    if (!read_counters_.empty()) bump_read_counters(address, quantity);
-    const std::atomic<std::uint16_t>* src = regs_.get() + address;
-    // One load, one byte swap and one 16-bit store per register (store_be16 costs two byte
-    // stores and a shift): this loop was a fifth of the slave's instructions at FC03 x 10.
-    std::uint32_t i = 0;
-    for (; i + 2 <= quantity; i += 2) {
-        store_swapped(out + 2 * i, src[i].load(std::memory_order_relaxed));
-        store_swapped(out + 2 * i + 2, src[i + 1].load(std::memory_order_relaxed));
-    }
-    if (i < quantity) store_swapped(out + 2 * i, src[i].load(std::memory_order_relaxed));
 }
 
 void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
@@ -166,6 +142,7 @@ void RegisterTable::add_read_counter(std::uint16_t address, std::uint16_t step) 
     } else {
         read_counters_.insert(pos, ReadCounter{address, step});
     }
+    has_read_counters_ = true;
 }
 
 void RegisterTable::bump_read_counters(std::uint16_t address, std::uint16_t quantity) noexcept {
