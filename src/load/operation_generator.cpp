@@ -96,7 +96,10 @@ OperationGenerator::OperationGenerator(const std::vector<Operation>& operations,
     for (const Operation& op : operations) {
         total += op.weight;
         cumulative_weight_.push_back(total);
-        state_.push_back(OpState{AddressPicker(op), ValuePicker(op.values), max_request_size(op)});
+        const codec::FunctionInfo* f = codec::function_info(op.function);
+        state_.push_back(
+            OpState{AddressPicker(op), ValuePicker(op.values), max_request_size(op),
+                    f != nullptr && f->request == codec::RequestShape::AddressQuantity});
     }
 }
 
@@ -126,6 +129,7 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
     info.op_index = op_index;
     info.function = op.function;
     info.unit_id = op.unit_id;
+    if (st.read) return encode_read(op, st, transaction_id, out.data(), info);
 
     codec::MutableBytes pdu_out = out.subspan(kHeader);
     codec::EncodeResult pdu{};
@@ -206,6 +210,19 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
     const codec::EncodeResult adu = codec::encode_tcp_frame(
         transaction_id, op.unit_id, codec::Bytes(pdu_out.data(), pdu.size), out);
     return adu.ok() ? adu.size : 0;
+}
+
+std::size_t OperationGenerator::encode_read(const Operation& op, OpState& st,
+                                            std::uint16_t transaction_id, std::uint8_t* out,
+                                            RequestInfo& info) noexcept {
+    constexpr std::size_t kPdu = 5;  // function, address, quantity
+    info.address = st.address.next(rng_);
+    info.quantity = op.quantity;
+    codec::write_mbap_header(out, transaction_id, op.unit_id, kPdu);
+    out[kHeader] = op.function;
+    codec::store_be16(out + kHeader + 1, info.address);
+    codec::store_be16(out + kHeader + 3, info.quantity);
+    return kHeader + kPdu;
 }
 
 }  // namespace mbstorm::load

@@ -70,7 +70,13 @@ class OperationGenerator {
         AddressPicker address;
         ValuePicker values;
         std::size_t max_size = 0;  // max_request_size(op), precomputed for the hot path
+        bool read = false;         // FC01-04: written directly by encode_read()
     };
+
+    // FC01-04, the request of most load tests: the 12 bytes written in place, with the same
+    // bytes the checked encoders give (the plan's checks already hold for these fields).
+    std::size_t encode_read(const Operation& op, OpState& st, std::uint16_t transaction_id,
+                            std::uint8_t* out, RequestInfo& info) noexcept;
 
     std::size_t encode(std::uint16_t op_index, std::uint16_t transaction_id,
                        codec::MutableBytes out, RequestInfo& info) noexcept;
