@@ -57,10 +57,10 @@ if [ "$which" = serve ] || [ "$which" = both ]; then
   client_run "$port" $((2 * n))
   callgrind_control --dump=large "$server_pid" >/dev/null 2>&1
   sleep 0.5
-  small=$(ls "$work"/serve.*.1 2>/dev/null | head -1); large=$(ls "$work"/serve.*.2 2>/dev/null | head -1)
-  a=$(total_of "$small"); b=$(total_of "$large")
+  small=("$work"/serve.*.1); large=("$work"/serve.*.2)
+  a=$(total_of "${small[0]}"); b=$(total_of "${large[0]}")
   echo "serve: $a instructions for $n transactions ($(( a / n )) each), $b for $((2 * n)) ($(( b / (2 * n) )) each)"
-  [ -n "$keep" ] && cp "$large" "$keep/callgrind.serve" && cp "$small" "$keep/callgrind.serve.small"
+  if [ -n "$keep" ]; then cp "${large[0]}" "$keep/callgrind.serve"; cp "${small[0]}" "$keep/callgrind.serve.small"; fi
   kill -9 "$server_pid"; wait "$server_pid" 2>/dev/null || true; server_pid=""
 fi
 
@@ -73,6 +73,6 @@ if [ "$which" = run ] || [ "$which" = both ]; then
   client_run "$port" $((2 * n)) valgrind --tool=callgrind --callgrind-out-file="$work/run.large"
   a=$(total_of "$work/run.small"); b=$(total_of "$work/run.large")
   echo "run:   $a instructions for $n transactions, $b for $((2 * n)): $(( (b - a) / n )) per transaction"
-  [ -n "$keep" ] && cp "$work/run.large" "$keep/callgrind.run" && cp "$work/run.small" "$keep/callgrind.run.small"
+  if [ -n "$keep" ]; then cp "$work/run.large" "$keep/callgrind.run"; cp "$work/run.small" "$keep/callgrind.run.small"; fi
   kill "$server_pid"; wait "$server_pid" 2>/dev/null || true; server_pid=""
 fi
