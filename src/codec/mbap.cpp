@@ -103,8 +103,7 @@ void MbapSplitter::reset() noexcept {
 
 namespace {
 
-// Everything but the common case, kept out of line so that next() stays a leaf function
-// without register spills (it runs once per frame on the server's hot path).
+// Everything but the common case, which next() handles inline.
 [[gnu::noinline]] MbapSplitter::Status next_slow(Bytes& chunk, std::uint8_t* partial,
                                                  std::size_t& partial_size, CodecError& error,
                                                  TcpFrame& out) noexcept {
@@ -160,20 +159,7 @@ namespace {
 
 }  // namespace
 
-MbapSplitter::Status MbapSplitter::next(TcpFrame& out) noexcept {
-    // Fast path: healthy, nothing buffered, and a whole valid frame sits in the chunk.
-    const std::uint8_t* p = chunk_.data();
-    const std::size_t avail = chunk_.size();
-    if (avail >= limits::kMbapHeader && partial_size_ == 0 && error_ == CodecError::Ok) [[likely]] {
-        const std::uint16_t length = load_be16(p + 4);
-        const std::size_t total = length + 6u;
-        if (length - 2u <= limits::kMaxMbapLength - 2u && load_be16(p + 2) == 0 && avail >= total)
-            [[likely]] {
-            fill_frame(p, length, out);
-            chunk_ = Bytes(p + total, avail - total);
-            return Status::Frame;
-        }
-    }
+MbapSplitter::Status MbapSplitter::next_rest(TcpFrame& out) noexcept {
     return next_slow(chunk_, partial_.data(), partial_size_, error_, out);
 }
 

@@ -106,7 +106,30 @@ class MbapSplitter {
     };
 
     void feed(Bytes chunk) noexcept;
-    Status next(TcpFrame& out) noexcept;
+    // Inline for the common case (healthy, nothing buffered, a whole valid frame in the
+    // chunk): it runs once per frame on the server's and the engine's hot paths, where the
+    // call cost more than the work. Everything else is out of line in next_rest().
+    Status next(TcpFrame& out) noexcept {
+        const std::uint8_t* p = chunk_.data();
+        const std::size_t avail = chunk_.size();
+        if (avail >= limits::kMbapHeader && partial_size_ == 0 && error_ == CodecError::Ok)
+            [[likely]] {
+            const std::uint16_t length = load_be16(p + 4);
+            const std::size_t total = length + 6u;
+            if (length - 2u <= limits::kMaxMbapLength - 2u && load_be16(p + 2) == 0 &&
+                avail >= total) [[likely]] {
+                out.header.transaction_id = load_be16(p);
+                out.header.protocol_id = 0;
+                out.header.length = length;
+                out.header.unit_id = p[6];
+                out.pdu = Bytes(p + limits::kMbapHeader, length - 1u);
+                out.adu = Bytes(p, total);
+                chunk_ = Bytes(p + total, avail - total);
+                return Status::Frame;
+            }
+        }
+        return next_rest(out);
+    }
     CodecError error() const noexcept { return error_; }
     // Bytes of a partial frame held in the internal buffer.
     std::size_t buffered() const noexcept { return partial_size_; }
@@ -115,6 +138,8 @@ class MbapSplitter {
     void reset() noexcept;
 
   private:
+    Status next_rest(TcpFrame& out) noexcept;
+
     Bytes chunk_;
     std::array<std::uint8_t, limits::kMaxTcpAdu> partial_{};
     std::size_t partial_size_ = 0;

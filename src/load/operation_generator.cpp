@@ -1,6 +1,7 @@
 #include "load/operation_generator.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 #include "codec/function_code.hpp"
 #include "codec/mbap.hpp"
@@ -39,16 +40,11 @@ AddressPicker::AddressPicker(const Operation& op) noexcept
     if (mode_ == AddressMode::Zipf) zipf_ = ZipfSampler(positions_, op.zipf_exponent);
 }
 
-std::uint16_t AddressPicker::next(Rng& rng) noexcept {
+std::uint16_t AddressPicker::draw(Rng& rng) noexcept {
     std::uint32_t offset = 0;
     switch (mode_) {
         case AddressMode::Sequential:
-            offset = cursor_;
-            // Step by the block size so consecutive requests tile the range; wrap to the
-            // first address when the next block would leave it.
-            cursor_ += stride_;
-            if (cursor_ >= positions_) cursor_ = 0;
-            break;
+            return next(rng);
         case AddressMode::Uniform:
             offset = rng.below(positions_);
             break;
@@ -96,7 +92,15 @@ OperationGenerator::OperationGenerator(const std::vector<Operation>& operations,
     for (const Operation& op : operations) {
         total += op.weight;
         cumulative_weight_.push_back(total);
-        state_.push_back(OpState{AddressPicker(op), ValuePicker(op.values), max_request_size(op)});
+        OpState st{AddressPicker(op), ValuePicker(op.values), max_request_size(op)};
+        const codec::FunctionInfo* f = codec::function_info(op.function);
+        st.read = f != nullptr && f->request == codec::RequestShape::AddressQuantity;
+        if (st.read) {
+            codec::write_mbap_header(st.read_frame.data(), 0, op.unit_id, 5);
+            codec::encode_read_request(op.function, 0, op.quantity,
+                                       codec::MutableBytes(st.read_frame).subspan(kHeader));
+        }
+        state_.push_back(st);
     }
 }
 
@@ -113,7 +117,9 @@ std::uint16_t OperationGenerator::pick_operation() noexcept {
 std::size_t OperationGenerator::next(std::uint16_t transaction_id, codec::MutableBytes out,
                                      RequestInfo& info) noexcept {
     if (operations_.empty()) return 0;
-    return encode(pick_operation(), transaction_id, out, info);
+    const std::uint16_t op_index = cumulative_weight_.size() == 1 ? 0 : pick_operation();
+    if (state_[op_index].read) return encode_read(op_index, transaction_id, out, info);
+    return encode(op_index, transaction_id, out, info);
 }
 
 std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t transaction_id,
@@ -206,6 +212,24 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
     const codec::EncodeResult adu = codec::encode_tcp_frame(
         transaction_id, op.unit_id, codec::Bytes(pdu_out.data(), pdu.size), out);
     return adu.ok() ? adu.size : 0;
+}
+
+std::size_t OperationGenerator::encode_read(std::uint16_t op_index, std::uint16_t transaction_id,
+                                            codec::MutableBytes out, RequestInfo& info) noexcept {
+    const Operation& op = operations_[op_index];
+    OpState& st = state_[op_index];
+    if (out.size() < st.read_frame.size()) return 0;
+    info = RequestInfo{};
+    info.op_index = op_index;
+    info.function = op.function;
+    info.unit_id = op.unit_id;
+    info.address = st.address.next(rng_);
+    info.quantity = op.quantity;
+    std::uint8_t* p = out.data();
+    std::memcpy(p, st.read_frame.data(), st.read_frame.size());
+    codec::store_be16(p, transaction_id);
+    codec::store_be16(p + kHeader + 1, info.address);
+    return st.read_frame.size();
 }
 
 }  // namespace mbstorm::load

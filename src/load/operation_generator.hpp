@@ -25,9 +25,20 @@ class AddressPicker {
   public:
     AddressPicker() = default;
     explicit AddressPicker(const Operation& op) noexcept;
-    std::uint16_t next(Rng& rng) noexcept;
+    // Sequential inline (once per request on the engine's hot path), the draws out of line.
+    std::uint16_t next(Rng& rng) noexcept {
+        if (mode_ != AddressMode::Sequential) return draw(rng);
+        const std::uint32_t offset = cursor_;
+        // Step by the block size so consecutive requests tile the range; wrap to the first
+        // address when the next block would leave it.
+        cursor_ += stride_;
+        if (cursor_ >= positions_) cursor_ = 0;
+        return static_cast<std::uint16_t>(first_ + offset);
+    }
 
   private:
+    std::uint16_t draw(Rng& rng) noexcept;  // Uniform and Zipf
+
     AddressMode mode_ = AddressMode::Sequential;
     std::uint16_t first_ = 0;
     std::uint32_t positions_ = 1;  // usable start addresses: first_ .. first_ + positions_ - 1
@@ -70,7 +81,16 @@ class OperationGenerator {
         AddressPicker address;
         ValuePicker values;
         std::size_t max_size = 0;  // max_request_size(op), precomputed for the hot path
+        // FC01-04: the whole request with transaction id and address 0, which encode_read()
+        // copies and completes; empty for the other functions.
+        std::array<std::uint8_t, 12> read_frame{};
+        bool read = false;
     };
+
+    // FC01-04, the request of most load tests: the 12 bytes written in place, the same bytes
+    // the checked encoders give (the plan's checks already hold for these fields).
+    std::size_t encode_read(std::uint16_t op_index, std::uint16_t transaction_id,
+                            codec::MutableBytes out, RequestInfo& info) noexcept;
 
     std::size_t encode(std::uint16_t op_index, std::uint16_t transaction_id,
                        codec::MutableBytes out, RequestInfo& info) noexcept;

@@ -34,16 +34,14 @@ void BlockPool::put(OutBlock* b) noexcept {
     free_ = b;
 }
 
-std::uint8_t* OutQueue::reserve(BlockPool& pool, std::size_t max_size) {
-    if (!tail_ || OutBlock::kCapacity - tail_->end < max_size) {
-        OutBlock* b = pool.get();
-        if (tail_)
-            tail_->next = b;
-        else
-            head_ = b;
-        tail_ = b;
-    }
-    return tail_->data + tail_->end;
+std::uint8_t* OutQueue::reserve_new_block(BlockPool& pool) {
+    OutBlock* b = pool.get();
+    if (tail_)
+        tail_->next = b;
+    else
+        head_ = b;
+    tail_ = b;
+    return b->data;
 }
 
 const std::uint8_t* OutQueue::sendable(std::uint64_t limit, std::size_t& size) const noexcept {

@@ -39,7 +39,12 @@ class BlockPool {
 class OutQueue {
   public:
     // Space for one more frame of up to `max_size` bytes at the tail (a new block if needed).
-    std::uint8_t* reserve(BlockPool& pool, std::size_t max_size);
+    // Inline: once per answer, and nearly always the tail has room.
+    std::uint8_t* reserve(BlockPool& pool, std::size_t max_size) {
+        if (tail_ && OutBlock::kCapacity - tail_->end >= max_size) [[likely]]
+            return tail_->data + tail_->end;
+        return reserve_new_block(pool);
+    }
     // Commits `size` bytes written at the pointer reserve() returned.
     void commit(std::size_t size) noexcept {
         tail_->end += static_cast<std::uint32_t>(size);
@@ -59,6 +64,8 @@ class OutQueue {
     void clear(BlockPool& pool) noexcept;
 
   private:
+    std::uint8_t* reserve_new_block(BlockPool& pool);
+
     OutBlock* head_ = nullptr;
     OutBlock* tail_ = nullptr;
     std::uint64_t written_ = 0;

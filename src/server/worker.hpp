@@ -104,7 +104,10 @@ class Worker {
     void close_if_answered(std::uint32_t index) noexcept;
     // False when the connection was closed (fault drop).
     // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
-    bool on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
+    // Inlined into consume_input's loop: the call per frame (saved registers, arguments)
+    // cost 28 instructions per transaction at FC03 x 10, 9 % of the server's.
+    [[gnu::always_inline]] inline bool on_frame(Connection& c, std::uint32_t index,
+                                                const codec::TcpFrame& frame) noexcept;
     void queue_exception(Connection& c, const codec::TcpFrame& frame,
                          codec::ExceptionCode code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;

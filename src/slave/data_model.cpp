@@ -124,15 +124,6 @@ std::uint16_t RegisterTable::mask_write(std::uint16_t address, std::uint16_t and
     return next;
 }
 
-void RegisterTable::read_be(std::uint16_t address, std::uint16_t quantity,
-                            std::uint8_t* out) noexcept {
-    if (!read_counters_.empty()) bump_read_counters(address, quantity);
-    const std::atomic<std::uint16_t>* src = regs_.get() + address;
-    for (std::uint32_t i = 0; i < quantity; ++i) {
-        codec::store_be16(out + 2 * i, src[i].load(std::memory_order_relaxed));
-    }
-}
-
 void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
                              const std::uint8_t* in) noexcept {
     std::atomic<std::uint16_t>* dst = regs_.get() + address;
@@ -151,6 +142,7 @@ void RegisterTable::add_read_counter(std::uint16_t address, std::uint16_t step) 
     } else {
         read_counters_.insert(pos, ReadCounter{address, step});
     }
+    has_read_counters_ = true;
 }
 
 void RegisterTable::bump_read_counters(std::uint16_t address, std::uint16_t quantity) noexcept {
@@ -187,13 +179,6 @@ void FileStore::write_be(std::uint16_t file, std::uint16_t record, std::uint16_t
 }
 
 // ---- Diagnostics ----
-
-void Diagnostics::end_message(std::uint64_t seq, std::uint8_t receive_event,
-                              std::uint8_t send_event) noexcept {
-    log_[seq % kLogPairs].store(
-        static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
-        std::memory_order_relaxed);
-}
 
 std::uint16_t Diagnostics::comm_event_count() const noexcept {
     return static_cast<std::uint16_t>(message_count() - exception_count() -

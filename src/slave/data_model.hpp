@@ -14,8 +14,10 @@
 
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <span>
 #include <string>
@@ -108,7 +110,20 @@ class RegisterTable {
 
     // Copies registers to `out` big-endian, first bumping any read counter in range.
     // Precondition: contains(address, quantity).
-    void read_be(std::uint16_t address, std::uint16_t quantity, std::uint8_t* out) noexcept;
+    // Inline, four registers a round, one load, byte swap and 16-bit store each: as a called
+    // loop of byte stores it was a fifth of the slave's instructions at FC03 x 10.
+    void read_be(std::uint16_t address, std::uint16_t quantity, std::uint8_t* out) noexcept {
+        if (has_read_counters_) bump_read_counters(address, quantity);
+        const std::atomic<std::uint16_t>* src = regs_.get() + address;
+        std::uint32_t i = 0;
+        for (; i + 4 <= quantity; i += 4) {
+            store_be(out + 2 * i, src[i]);
+            store_be(out + 2 * i + 2, src[i + 1]);
+            store_be(out + 2 * i + 4, src[i + 2]);
+            store_be(out + 2 * i + 6, src[i + 3]);
+        }
+        for (; i < quantity; ++i) store_be(out + 2 * i, src[i]);
+    }
     // Stores big-endian values from `in`. Precondition: contains(address, quantity).
     void write_be(std::uint16_t address, std::uint16_t quantity, const std::uint8_t* in) noexcept;
 
@@ -118,6 +133,11 @@ class RegisterTable {
     bool has_read_counters() const noexcept { return !read_counters_.empty(); }
 
   private:
+    static void store_be(std::uint8_t* out, const std::atomic<std::uint16_t>& reg) noexcept {
+        std::uint16_t value = reg.load(std::memory_order_relaxed);
+        if constexpr (std::endian::native == std::endian::little) value = __builtin_bswap16(value);
+        std::memcpy(out, &value, sizeof value);
+    }
     struct ReadCounter {
         std::uint16_t address;
         std::uint16_t step;
@@ -127,6 +147,7 @@ class RegisterTable {
     std::unique_ptr<std::atomic<std::uint16_t>[]> regs_;
     std::uint32_t size_;
     std::vector<ReadCounter> read_counters_;  // sorted by address
+    bool has_read_counters_ = false;          // !read_counters_.empty(), one load on reads
 };
 
 // File records for FC20/21: files 1..file_count, each `records` 16-bit records numbered from 0.
@@ -181,7 +202,11 @@ class Diagnostics {
         return messages_.fetch_add(1, std::memory_order_relaxed);
     }
     void end_message(std::uint64_t seq, std::uint8_t receive_event,
-                     std::uint8_t send_event) noexcept;
+                     std::uint8_t send_event) noexcept {
+        log_[seq % kLogPairs].store(
+            static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
+            std::memory_order_relaxed);
+    }
     void note_exception() noexcept { exceptions_.fetch_add(1, std::memory_order_relaxed); }
     void note_fetch() noexcept { fetches_.fetch_add(1, std::memory_order_relaxed); }
     void note_no_response() noexcept { no_responses_.fetch_add(1, std::memory_order_relaxed); }
