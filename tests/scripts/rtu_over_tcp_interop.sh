@@ -3,6 +3,7 @@
 #  - pymodbus 3.0's client (RTU framer on TCP) against `mbstorm serve --transport rtu-over-tcp`;
 #  - `mbstorm run --transport rtu-over-tcp` against pymodbus's TCP server with its RTU framer,
 #    every answer matched and checked, and the same run with MBAP framing getting no answer;
+#  - `mbstorm write` then `mbstorm read` with the transport against that server;
 #  - tshark's Modbus RTU dissector (mbrtu, forced on the port) decoding a capture of the run
 #    without a malformed packet, when tshark may capture here.
 #   bash rtu_over_tcp_interop.sh <mbstorm-binary> <scripts-dir>
@@ -56,6 +57,11 @@ timeout 60 "$mbstorm" run --target "127.0.0.1:$port" -c 1 -d 1s --timeout 200ms 
 mbap_ok=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["outcomes"]["ok"])' "$work/mbap.json" 2>/dev/null)
 [ "${mbap_ok:-0}" = 0 ] && echo "ok   MBAP framing against the RTU peer: nothing counted as answered" \
   || { echo "FAIL MBAP framing against an RTU peer counted $mbap_ok answers"; fail=1; }
+"$mbstorm" write --transport rtu-over-tcp --target "127.0.0.1:$port" --allow-writes -a 40011 7 8 9 >/dev/null 2>&1 \
+  || { echo "FAIL mbstorm write rtu-over-tcp -> pymodbus"; fail=1; }
+got=$("$mbstorm" read --transport rtu-over-tcp --target "127.0.0.1:$port" -a 40011 --quantity 3 2>/dev/null | awk '{print $2}' | tr '\n' ' ')
+[ "$got" = "7 8 9 " ] && echo "ok   mbstorm write + read rtu-over-tcp -> pymodbus round trip" \
+  || { echo "FAIL mbstorm read rtu-over-tcp -> pymodbus: '$got'"; fail=1; }
 "$mbstorm" run --transport rtu-over-tcp --target "127.0.0.1:$port" --depth 4 -d 1s >"$work/depth.out" 2>&1
 rc=$?
 [ $rc = 2 ] && grep -q "RTU over TCP" "$work/depth.out" && echo "ok   --depth 4 refused for RTU over TCP" \
