@@ -9,7 +9,13 @@ namespace mbstorm::codec {
 
 namespace {
 constexpr std::size_t kMinRtuAdu = 4;  // address, function code, CRC
+
+bool ends_in_its_crc(const std::uint8_t* p, std::size_t size) noexcept {
+    if (size < kMinRtuAdu) return false;
+    const std::uint16_t crc = crc16(Bytes(p, size - 2));
+    return p[size - 2] == (crc & 0xFFu) && p[size - 1] == (crc >> 8);
 }
+}  // namespace
 
 void RtuSplitter::reset() noexcept {
     chunk_ = {};
@@ -58,9 +64,9 @@ RtuSplitter::Status RtuSplitter::next(TcpFrame& out) noexcept {
                 return Status::Fatal;
             case RtuLength::Status::Unknown:
             default:
-                // No length rule (an unknown function code): the frame is taken to end where
-                // the bytes at hand end and their CRC holds, as a gateway ends it at a pause.
-                want = limits::kMaxRtuAdu;
+                // No length rule (an unknown function code): the frame ends at the first byte
+                // after which the bytes so far end in their CRC (taken one at a time).
+                want = std::min(partial_size_ + 1, limits::kMaxRtuAdu);
                 break;
         }
         if (len.status == RtuLength::Status::Known && partial_size_ == len.size) break;
@@ -69,6 +75,9 @@ RtuSplitter::Status RtuSplitter::next(TcpFrame& out) noexcept {
         std::memcpy(partial_.data() + partial_size_, chunk_.data(), take);
         partial_size_ += take;
         chunk_ = Bytes(chunk_.data() + take, chunk_.size() - take);
+        if (len.status == RtuLength::Status::Unknown &&
+            ends_in_its_crc(partial_.data(), partial_size_))
+            break;
     }
     const RtuLength len = infer(Bytes(partial_.data(), partial_size_));
     if (len.status == RtuLength::Status::TooLong) {
@@ -80,9 +89,7 @@ RtuSplitter::Status RtuSplitter::next(TcpFrame& out) noexcept {
         return emit(partial_.data(), len.size, out);
     }
     if (len.status == RtuLength::Status::Unknown && partial_size_ >= kMinRtuAdu) {
-        const std::uint16_t crc = crc16(Bytes(partial_.data(), partial_size_ - 2));
-        if (partial_[partial_size_ - 2] == (crc & 0xFFu) &&
-            partial_[partial_size_ - 1] == (crc >> 8)) {
+        if (ends_in_its_crc(partial_.data(), partial_size_)) {
             const std::size_t size = partial_size_;
             partial_size_ = 0;
             return emit(partial_.data(), size, out);

@@ -128,6 +128,21 @@ TEST(RtuSplitter, UnknownFunctionEndsWhereItsCrcHolds) {
     EXPECT_EQ(c.frames[0], odd);
 }
 
+TEST(RtuSplitter, UnknownFunctionFollowedByAnotherFrameInOneChunkIsTwoFrames) {
+    const Bytes8 odd = with_crc({0x01, 0x41, 0x12, 0x34, 0x56});
+    const Bytes8 read = with_crc({0x01, 0x03, 0x00, 0x00, 0x00, 0x01});
+    Bytes8 stream = odd;
+    stream.insert(stream.end(), read.begin(), read.end());
+    for (std::size_t piece : {1u, 6u, 100u}) {
+        RtuSplitter s;
+        const Cut c = cut(s, stream, piece);
+        ASSERT_FALSE(c.fatal) << "piece " << piece;
+        ASSERT_EQ(c.frames.size(), 2u) << "piece " << piece;
+        EXPECT_EQ(c.frames[0], odd);
+        EXPECT_EQ(c.frames[1], read);
+    }
+}
+
 TEST(RtuSplitter, UnknownFunctionWithoutValidCrcFailsAtTheRtuLimit) {
     Bytes8 junk(300, 0x00);
     junk[0] = 0x01;
