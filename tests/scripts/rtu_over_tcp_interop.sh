@@ -74,11 +74,13 @@ if [ $capturing = 1 ]; then
     -e mbrtu.unit_id -e modbus.func_code >"$work/decoded.txt" 2>"$work/decode.err"
   frames=$(grep -c . "$work/decoded.txt")
   bad=$(tshark -r "$work/capture.pcapng" -d "tcp.port==$port,mbrtu" -Y "_ws.malformed || _ws.expert.severity >= error" 2>/dev/null | grep -c .)
-  crc_bad=$(tshark -r "$work/capture.pcapng" -d "tcp.port==$port,mbrtu" -o mbrtu.mbrtu_crc_verify:TRUE -Y "mbrtu.crc16.status == 0 || mbrtu.crc16.status == bad" 2>/dev/null | grep -c .)
-  if [ "$frames" -ge 300 ] && [ "$bad" = 0 ]; then
-    echo "ok   tshark decodes $frames RTU frames (mbrtu), none malformed (bad CRC flagged: ${crc_bad:-?})"
+  # With the dissector's CRC check on: every frame's CRC verified good, none flagged.
+  crc_good=$(tshark -r "$work/capture.pcapng" -d "tcp.port==$port,mbrtu" -o mbrtu.crc_verification:TRUE -Y "mbrtu.crc16.status == 1" 2>/dev/null | grep -c .)
+  crc_bad=$(tshark -r "$work/capture.pcapng" -d "tcp.port==$port,mbrtu" -o mbrtu.crc_verification:TRUE -Y "mbrtu.crc16.incorrect" 2>/dev/null | grep -c .)
+  if [ "$frames" -ge 300 ] && [ "$bad" = 0 ] && [ "$crc_good" = "$frames" ] && [ "$crc_bad" = 0 ]; then
+    echo "ok   tshark decodes $frames RTU frames (mbrtu), none malformed, every CRC verified good"
   else
-    echo "FAIL tshark mbrtu: $frames frames decoded, $bad malformed"; head -5 "$work/decode.err"; fail=1
+    echo "FAIL tshark mbrtu: $frames frames decoded, $bad malformed, CRC good $crc_good, bad $crc_bad"; head -5 "$work/decode.err"; fail=1
   fi
 else
   echo "tshark missing or may not capture on lo here: its part skipped"
