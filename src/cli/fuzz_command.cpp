@@ -100,8 +100,10 @@ bool write_output(const std::string& path, const std::string& text) {
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
-    if (!resolve_fuzz_target(o.target, o.allow_remote, c.target, error))
+    net::Endpoint target;
+    if (!resolve_fuzz_target(o.target, o.allow_remote, target, error))
         return usage_error("fuzz", error);
+    c.connector = std::make_shared<netfuzz::TcpConnector>(target);
     if (o.duration_ns == 0 && o.cases == 0)
         return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
     if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);
@@ -126,8 +128,8 @@ int run_fuzz(const FuzzOptions& o) {
     fmt::print(stderr,
                "mbstorm fuzz: WARNING: writes will be sent to {} (function codes {} and malformed "
                "frames); only fuzz devices you may change\n",
-               c.target.to_string(), write_function_codes());
-    c.target_text = c.target.to_string();
+               c.connector->describe(), write_function_codes());
+    c.target_text = c.connector->describe();
     c.unit = static_cast<std::uint8_t>(o.unit);
     c.seed = o.seed;
     c.max_cases = o.cases;

@@ -69,6 +69,7 @@ std::string format_serve_metrics(const server::ServerStats& s) {
     const std::pair<const char*, std::uint64_t> closes[] = {{"idle", s.idle_closes},
                                                             {"slow_frame", s.frame_timeouts},
                                                             {"bad_framing", s.bad_framing_closes},
+                                                            {"bad_crc", s.crc_errors},
                                                             {"evicted", s.evictions},
                                                             {"refused", s.refusals},
                                                             {"fault_drop", s.fault_drops}};
@@ -80,6 +81,7 @@ std::string format_serve_metrics(const server::ServerStats& s) {
              "Input that was not a usable Modbus TCP request, by kind.");
     const std::pair<const char*, std::uint64_t> malformed[] = {
         {"bad_length", s.bad_framing_closes},
+        {"bad_crc", s.crc_errors},
         {"protocol_id", s.discarded_frames},
         {"incomplete_frame", s.frame_timeouts}};
     for (const auto& [kind, n] : malformed) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "codec/bytes.hpp"
+#include "codec/framing.hpp"
 #include "codec/pdu.hpp"
 #include "net/socket.hpp"
 
@@ -14,6 +15,9 @@ namespace mbstorm::cli {
 
 class ModbusClient {
   public:
+    // Mbap (Modbus TCP) or Rtu (RTU over TCP: no transaction id, the next frame is the answer).
+    explicit ModbusClient(codec::Framing framing = codec::Framing::Mbap) : framing_(framing) {}
+
     // Connects within `timeout_ms`; "" on success, else the system's reason.
     std::string connect(const net::Endpoint& target, int timeout_ms);
 
@@ -24,6 +28,9 @@ class ModbusClient {
                          codec::Response& response);
 
   private:
+    std::string transact_rtu(std::uint8_t unit, codec::Bytes request, int timeout_ms,
+                             codec::Response& response);
+    codec::Framing framing_;
     net::UniqueFd fd_;
     std::uint16_t next_tid_ = 1;
     std::vector<std::uint8_t> buffer_;

@@ -314,7 +314,7 @@ int run_io(const IoOptions& o) {
         if (!verdict.allowed) return usage(verdict.message);
     }
     const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
-    ModbusClient client;
+    ModbusClient client(o.transport.framing_kind());
     if (auto why = client.connect(p.target, timeout_ms); !why.empty())
         return usage(fmt::format("cannot connect to {}: {}", p.target.to_string(), why));
 

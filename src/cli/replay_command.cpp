@@ -27,18 +27,20 @@ struct ReplayOptions {
 };
 
 int run_replay(const ReplayOptions& o) {
-    net::Endpoint target;
+    net::Endpoint endpoint;
     std::string error;
-    if (!resolve_fuzz_target(o.target, o.allow_remote, target, error)) {
+    if (!resolve_fuzz_target(o.target, o.allow_remote, endpoint, error)) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
+    netfuzz::TcpConnector tcp(endpoint);
+    netfuzz::Connector& target = tcp;
     netfuzz::Finding f;
     if (!netfuzz::load_finding(o.finding, f, error)) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
-    fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.to_string());
+    fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.describe());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
     if (!f.note.empty()) fmt::print("note: {}\n", f.note);
     netfuzz::ExecOptions ex;
@@ -55,7 +57,7 @@ int run_replay(const ReplayOptions& o) {
             // A crash from an earlier run: give the target time to come back.
             if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
                 fmt::print(stderr, "mbstorm replay: {} does not accept connections\n",
-                           target.to_string());
+                           target.describe());
                 return kExitUsage;
             }
             e = netfuzz::execute_case(replayed, target, f.profile, ex);

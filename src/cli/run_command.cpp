@@ -60,6 +60,7 @@ struct RunOptions {
     std::string shard;     // --shard I/N (else the environment)
     std::string start_at;  // --start-at TIME
     TransportOptions transport;
+    bool depth_given = false;  // --depth on the command line (not its default)
 };
 
 // --shard (or the environment) and --start-at into the request; "" or the usage error.
@@ -79,6 +80,11 @@ std::string distributed_options(const RunOptions& o, ScenarioRunRequest& request
 // Fills the single-operation plan from flags; returns an error message or "".
 std::string build_plan(RunOptions& o) {
     auto& p = o.plan;
+    if (o.transport.kind() == TransportKind::RtuOverTcp) {
+        p.framing = codec::Framing::Rtu;
+        // One request at a time per connection: RTU has no transaction ids.
+        if (!o.depth_given) p.depth = 1;
+    }
     // Starts from the operation the flags filled (--unit, --zipf).
     load::Operation op = p.operations.at(0);
     if (auto error = codec::parse_function_code(o.function, op.function); !error.empty())
@@ -173,6 +179,7 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     if (given("--warmup")) ov.warmup = std::chrono::nanoseconds(o.warmup_ns);
     if (given("--connections")) ov.connections = p.connections;
     if (given("--depth")) ov.depth = p.depth;
+    if (given("--transport")) ov.framing = o.transport.framing_kind();
     if (given("--threads")) ov.threads = p.threads;
     if (given("--rate")) ov.rate = p.rate;
     if (given("--transactions")) ov.transactions = p.transactions;
@@ -277,6 +284,7 @@ void add_run_command(CLI::App& app, Action& action) {
             if (std::string e = stdout_conflict(outputs); !e.empty()) return usage_error("run", e);
             if (std::string e = check_transport(o->transport, "run"); !e.empty())
                 return usage_error("run", e);
+            o->depth_given = cmd->count("--depth") != 0;
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

@@ -41,6 +41,7 @@ int run_serve(ServeOptions& o) {
     if (std::string e = check_transport(o.transport, "serve"); !e.empty())
         return usage_error("serve", e);
     auto& c = o.config;
+    if (o.transport.kind() == TransportKind::RtuOverTcp) c.framing = codec::Framing::Rtu;
     std::optional<slave::DeviceDescription> device;
     std::unique_ptr<slave::UnitModels> units;
     if (!o.device_file.empty()) {

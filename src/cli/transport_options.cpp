@@ -83,6 +83,10 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
     if (kind == TransportKind::Serial && o.transport != "tcp")
         return "--serial and --transport exclude each other (a serial line is its own transport)";
     if (kind == TransportKind::Tcp) return {};
+    // RTU over TCP.
+    if (kind == TransportKind::RtuOverTcp &&
+        (command == "serve" || command == "run" || command == "read" || command == "write"))
+        return {};
     // Each transport lifts this as it reaches the subcommand.
     return fmt::format("--{} is not supported by {} yet",
                        kind == TransportKind::Serial

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "codec/mbap.hpp"
+#include "codec/rtu_stream.hpp"
 #include "load/transaction_table.hpp"
 
 namespace mbstorm::load {
@@ -30,6 +31,10 @@ struct Connection {
     std::uint32_t generation = 0;  // bumped on close: completions of older sockets are ignored
     TransactionTable table;
     codec::MbapSplitter splitter;
+    // RTU over TCP only (null otherwise): its splitter, and the id of the one outstanding
+    // transaction, which the next answer is taken to be for.
+    std::unique_ptr<codec::RtuSplitter> rtu;
+    std::uint16_t rtu_transaction = 0;
 
     std::unique_ptr<std::uint8_t[]> send_buffer;
     std::uint32_t send_half;

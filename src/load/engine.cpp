@@ -109,6 +109,7 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         result.pending_at_end += w->pending_at_end;
         result.late_responses += w->late_responses;
         result.framing_errors += w->framing_errors;
+        result.crc_errors += w->crc_errors;
         result.bad_protocol_frames += w->bad_protocol_frames;
     }
 }

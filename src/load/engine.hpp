@@ -83,6 +83,7 @@ struct LoadResult {
     // (stray responses are counted apart: they answer no transaction).
     std::uint64_t pending_at_end = 0;  // sent but neither answered nor timed out at the end
     std::uint64_t late_responses = 0;  // answers that arrived after their transaction timed out
+    std::uint64_t crc_errors = 0;      // RTU over TCP: answers whose CRC failed (connection reset)
     std::uint64_t framing_errors = 0;  // unrecoverable MBAP framing (connection was reset)
     std::uint64_t bad_protocol_frames = 0;  // frames with protocol id != 0 (discarded)
     // The target went away during the run (no connection open for a while after one was) and

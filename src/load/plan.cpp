@@ -144,6 +144,11 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     if (plan.depth < 1 || plan.depth > kMaxDepth) {
         fail(fmt::format("depth: {} is out of range (valid 1..{})", plan.depth, kMaxDepth));
     }
+    if (plan.framing == codec::Framing::Rtu && plan.depth > 1)
+        fail(
+            fmt::format("depth: {} with RTU over TCP, which has no transaction ids to match "
+                        "pipelined answers by (valid: 1; use more connections for more load)",
+                        plan.depth));
     if (plan.threads > kMaxThreads) {
         fail(fmt::format("threads: {} is out of range (valid 0..{}, 0 = one per core)",
                          plan.threads, kMaxThreads));

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/framing.hpp"
 #include "codec/function_code.hpp"
 
 namespace mbstorm::load {
@@ -71,6 +72,8 @@ struct Plan {
     // list and range syntax); empty: the kernel picks. Each address has its own ephemeral
     // ports, so N addresses hold N times the connections one can towards the target.
     std::string source_addresses;
+    // Mbap: Modbus TCP. Rtu: RTU over TCP (no transaction ids: depth must be 1).
+    codec::Framing framing = codec::Framing::Mbap;
 
     std::vector<Operation> operations;
 

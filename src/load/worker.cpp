@@ -30,7 +30,8 @@ constexpr std::uint16_t kBufferGroup = 0;
 
 bool has_response(stats::Outcome o) noexcept {
     return o != stats::Outcome::Timeout && o != stats::Outcome::ConnectionClosed &&
-           o != stats::Outcome::ConnectFailed && o != stats::Outcome::FramingError;
+           o != stats::Outcome::ConnectFailed && o != stats::Outcome::FramingError &&
+           o != stats::Outcome::CrcError;
 }
 
 using HeapEntry = std::pair<std::int64_t, std::uint32_t>;
@@ -75,6 +76,9 @@ Worker::Worker(WorkerSetup setup)
     for (std::uint32_t i = 0; i < setup_.connections; ++i) {
         connections_.emplace_back(plan_.depth, half, std::uint16_t{0});
         connections_.back().backoff_ns = plan_.reconnect_backoff_min.count();
+        if (plan_.framing == codec::Framing::Rtu)
+            connections_.back().rtu =
+                std::make_unique<codec::RtuSplitter>(codec::RtuSplitter::Direction::Responses);
     }
     dirty_.reserve(setup_.connections);
     ready_.assign(setup_.connections, 0);
@@ -421,6 +425,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         const std::uint32_t open = open_connections.fetch_add(1, std::memory_order_relaxed) + 1;
         connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
         c.splitter.reset();
+        if (c.rtu) c.rtu->reset();
         arm_recv(index);
         if (open_loop_ && !pacer_started_ && started_) {
             pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
@@ -466,6 +471,7 @@ void Worker::drop_socket(Connection& c) noexcept {
     c.queued = 0;
     c.recv_armed = false;
     c.splitter.reset();
+    if (c.rtu) c.rtu->reset();
 }
 
 void Worker::close_socket(Connection& c) noexcept {
@@ -550,6 +556,23 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     }
     if (!more) c.recv_armed = false;
 
+    if (cqe.res > 0 && has_buffer && c.rtu) {
+        const codec::CodecError e =
+            consume_rtu(c, buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res), now);
+        buf_ring_.recycle(buffer_id);
+        if (e != codec::CodecError::Ok) {
+            // No reliable frame boundary after a bad CRC (or an impossible length): the
+            // transactions the connection carried end with it, and a fresh one starts.
+            const bool crc = e == codec::CodecError::BadCrc;
+            ++(crc ? crc_errors : framing_errors);
+            close_connection(index, now,
+                             crc ? stats::Outcome::CrcError : stats::Outcome::FramingError);
+            return;
+        }
+        if (!c.recv_armed) arm_recv(index);
+        refill(index, now);
+        return;
+    }
     if (cqe.res > 0 && has_buffer) {
         c.splitter.feed(
             codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
@@ -681,12 +704,13 @@ bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intende
     const std::uint32_t room = c.send_half - c.queued;
     Transaction* t = c.table.begin(now, intended);
     if (t == nullptr) return false;
-    const std::size_t size = generator_.next(
+    std::size_t size = generator_.next(
         t->transaction_id(), codec::MutableBytes(c.queue_data() + c.queued, room), t->request);
     if (size == 0) {
         c.table.cancel(t);
         return false;
     }
+    if (c.rtu) size = rtu_request(c, c.queue_data() + c.queued, size, *t);
     c.queued += static_cast<std::uint32_t>(size);
     ++outstanding_;
     if (now >= setup_.measure_start_ns) {

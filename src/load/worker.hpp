@@ -70,6 +70,7 @@ class Worker {
     std::uint64_t pending_at_end = 0;
     std::uint64_t late_responses = 0;
     std::uint64_t framing_errors = 0;
+    std::uint64_t crc_errors = 0;  // RTU over TCP: answers with a bad CRC (connection reset)
     std::uint64_t bad_protocol_frames = 0;
     std::uint64_t skipped_requests = 0;  // see stats::PipeliningSigns
     std::int64_t finished_ns = 0;
@@ -102,6 +103,13 @@ class Worker {
     void arm_recv(std::uint32_t index) noexcept;
     void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
     bool on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept;
+    // RTU over TCP (rtu_io.cpp). Feeds received bytes; answers are matched to the one
+    // outstanding transaction. Not Ok when framing was lost (BadCrc, FrameTooLong).
+    codec::CodecError consume_rtu(Connection& c, const std::uint8_t* data, std::size_t size,
+                                  std::int64_t now) noexcept;
+    // Rewrites the MBAP request just encoded at `at` as an RTU frame; returns its size.
+    std::size_t rtu_request(Connection& c, std::uint8_t* at, std::size_t size,
+                            const Transaction& t) noexcept;
     void on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
     void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
 

@@ -26,7 +26,7 @@ struct BatchRunner::Lane {
         bool fence = false;
         bool barrier = false;  // what follows is sent once this is answered
     };
-    net::UniqueFd fd;
+    std::unique_ptr<Link> link;
     std::vector<std::uint8_t> out, in;
     std::size_t out_pos = 0, in_pos = 0;
     std::size_t send_limit = 0;    // bytes of `out` that may be sent now
@@ -61,8 +61,7 @@ struct BatchRunner::Lane {
     }
 };
 
-BatchRunner::BatchRunner(const net::Endpoint& target, const TargetProfile& profile,
-                         BatchOptions options)
+BatchRunner::BatchRunner(Connector& target, const TargetProfile& profile, BatchOptions options)
     : target_(target), profile_(profile), options_(options) {
     for (unsigned i = 0; i < std::max(1u, options_.lanes); ++i) lanes_.push_back(new Lane);
 }
@@ -72,7 +71,7 @@ BatchRunner::~BatchRunner() {
 }
 
 void BatchRunner::close_all() noexcept {
-    for (Lane* l : lanes_) l->fd.reset();
+    for (Lane* l : lanes_) l->link.reset();
 }
 
 // What one call of run() shares between its steps.
@@ -151,23 +150,23 @@ void BatchRunner::prepare(Lane& l, Round& round) {
     l.by_tid[fence_tid] = static_cast<std::int32_t>(l.frames.size());
     l.frames.push_back(ff);
     l.advance_limit();
-    if (l.fd.valid()) return;
-    const int fd = connect_with_timeout(target_, options_.timeout_ms);
-    if (fd < 0) {
+    if (l.link) return;
+    int error = 0;
+    l.link = target_.open(options_.timeout_ms, error);
+    if (!l.link) {
         round.result.connect_failed = true;
         l.failed = true;
         l.done = true;
         l.suspect_all = true;
         return;
     }
-    l.fd.reset(fd);
 }
 
 void BatchRunner::fail(Lane& l, Round& round, bool closed) {
     l.failed = true;
     l.closed = closed;
     l.done = true;
-    l.fd.reset();
+    l.link.reset();
     round.result.lane_lost = true;
 }
 
@@ -221,6 +220,7 @@ void BatchRunner::exchange(Round& round) {
     for (;;) {
         fds.clear();
         polled.clear();
+        bool buffered = false;
         const std::int64_t now = net::now_ns();
         std::int64_t wait_ns = options_.timeout_ms * net::kNsPerMs;
         if (options_.deadline_ns && now >= options_.deadline_ns) {
@@ -228,7 +228,7 @@ void BatchRunner::exchange(Round& round) {
             for (Lane* l : lanes_)
                 if (!l->done) {
                     l->done = true;
-                    l->fd.reset();
+                    l->link.reset();
                     round.result.cut_by_deadline = true;
                 }
             return;
@@ -244,29 +244,31 @@ void BatchRunner::exchange(Round& round) {
             }
             wait_ns = std::min(wait_ns, left);
             fds.push_back(
-                pollfd{l.fd.get(),
+                pollfd{l.link->poll_fd(),
                        static_cast<short>(POLLIN | (l.out_pos < l.send_limit ? POLLOUT : 0)), 0});
             polled.push_back(li);
+            buffered = buffered || l.link->has_buffered_input();
         }
         if (fds.empty()) return;
-        const int rc = ::poll(fds.data(), fds.size(),
-                              static_cast<int>(std::max<std::int64_t>(1, wait_ns / net::kNsPerMs)));
-        if (rc <= 0) continue;
+        const int rc = ::poll(
+            fds.data(), fds.size(),
+            buffered ? 0 : static_cast<int>(std::max<std::int64_t>(1, wait_ns / net::kNsPerMs)));
+        if (rc < 0 || (rc == 0 && !buffered)) continue;
         for (std::size_t i = 0; i < fds.size(); ++i) {
             Lane& l = *lanes_[polled[i]];
             if (fds[i].revents & POLLOUT) {
-                const ssize_t n = ::send(l.fd.get(), l.out.data() + l.out_pos,
-                                         l.send_limit - l.out_pos, MSG_NOSIGNAL);
+                const ssize_t n = l.link->send(l.out.data() + l.out_pos, l.send_limit - l.out_pos);
                 if (n > 0) {
                     l.out_pos += static_cast<std::size_t>(n);
-                } else if (n < 0 && errno != EAGAIN && errno != EINTR) {
+                } else if (n < 0 && n != -EAGAIN) {
                     fail(l, round, true);
                     continue;
                 }
             }
-            if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+            if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR)) && !l.link->has_buffered_input())
+                continue;
             for (;;) {
-                const ssize_t n = ::recv(l.fd.get(), buf, sizeof buf, 0);
+                const ssize_t n = l.link->recv(buf, sizeof buf);
                 if (n > 0) {
                     last_progress[polled[i]] = net::now_ns();
                     if (l.in_pos == l.in.size()) {
@@ -278,7 +280,7 @@ void BatchRunner::exchange(Round& round) {
                     if (l.done) break;
                     continue;
                 }
-                if (n == 0 || (errno != EAGAIN && errno != EINTR)) fail(l, round, true);
+                if (n != -EAGAIN) fail(l, round, true);
                 break;
             }
         }

@@ -12,6 +12,7 @@
 
 #include "net/socket.hpp"
 #include "netfuzz/case.hpp"
+#include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
@@ -58,7 +59,7 @@ struct BatchResult {
 
 class BatchRunner {
   public:
-    BatchRunner(const net::Endpoint& target, const TargetProfile& profile, BatchOptions options);
+    BatchRunner(Connector& target, const TargetProfile& profile, BatchOptions options);
     ~BatchRunner();
     BatchRunner(const BatchRunner&) = delete;
     BatchRunner& operator=(const BatchRunner&) = delete;
@@ -75,7 +76,7 @@ class BatchRunner {
     void parse(Lane& lane, Round& round);
     void fail(Lane& lane, Round& round, bool closed);
     void conclude(Lane& lane, Round& round);
-    const net::Endpoint& target_;
+    Connector& target_;
     const TargetProfile& profile_;
     BatchOptions options_;
     std::vector<Lane*> lanes_;

@@ -29,9 +29,9 @@
 
 namespace mbstorm::netfuzz {
 // Defined below; the campaign keeps one RestartCommand for the whole run.
-bool wait_for_target_with(RestartCommand& command, const net::Endpoint& target,
-                          const TargetProfile& profile, const std::string& restart_cmd, int wait_ms,
-                          int timeout_ms, std::int64_t deadline_ns);
+bool wait_for_target_with(RestartCommand& command, Connector& target, const TargetProfile& profile,
+                          const std::string& restart_cmd, int wait_ms, int timeout_ms,
+                          std::int64_t deadline_ns);
 
 namespace {
 
@@ -54,13 +54,13 @@ Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit) {
 
 // Sends all frames at once on one connection and collects answers by transaction id until
 // the last one is answered, the connection closes or the time is up.
-std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& frames,
-                          int timeout_ms, bool& connected) {
+std::vector<Pdu> pipeline(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
+                          bool& connected) {
     std::vector<Pdu> answers(frames.size());
-    const int raw = connect_with_timeout(target, timeout_ms);
-    connected = raw >= 0;
-    if (raw < 0) return answers;
-    net::UniqueFd fd(raw);
+    int error = 0;
+    const std::unique_ptr<Link> link = target.open(timeout_ms, error);
+    connected = link != nullptr;
+    if (!link) return answers;
     Pdu out;
     for (const Pdu& f : frames) out.insert(out.end(), f.begin(), f.end());
     std::size_t sent = 0;
@@ -68,16 +68,18 @@ std::vector<Pdu> pipeline(const net::Endpoint& target, const std::vector<Pdu>& f
     std::size_t pos = 0;
     const std::int64_t deadline = net::now_ns() + timeout_ms * net::kNsPerMs;
     while (net::now_ns() < deadline && answers.back().empty()) {
-        pollfd p{fd.get(), static_cast<short>(POLLIN | (sent < out.size() ? POLLOUT : 0)), 0};
-        if (::poll(&p, 1, 20) <= 0) continue;
+        pollfd p{link->poll_fd(), static_cast<short>(POLLIN | (sent < out.size() ? POLLOUT : 0)),
+                 0};
+        const bool buffered = link->has_buffered_input();
+        if (::poll(&p, 1, buffered ? 0 : 20) <= 0 && !buffered) continue;
         if (p.revents & POLLOUT) {
-            const ssize_t n = ::send(fd.get(), out.data() + sent, out.size() - sent, MSG_NOSIGNAL);
+            const ssize_t n = link->send(out.data() + sent, out.size() - sent);
             if (n > 0) sent += static_cast<std::size_t>(n);
         }
-        if (p.revents & (POLLIN | POLLHUP | POLLERR)) {
+        if ((p.revents & (POLLIN | POLLHUP | POLLERR)) || buffered) {
             std::uint8_t buf[8192];
-            const ssize_t n = ::recv(fd.get(), buf, sizeof buf, 0);
-            if (n <= 0 && !(n < 0 && (errno == EAGAIN || errno == EINTR))) break;
+            const ssize_t n = link->recv(buf, sizeof buf);
+            if (n <= 0 && n != -EAGAIN) break;
             if (n > 0) in.insert(in.end(), buf, buf + n);
             while (in.size() - pos >= lim::kMbapHeader) {
                 const auto h = codec::read_mbap_header(in.data() + pos);
@@ -404,7 +406,7 @@ void Campaign::make_batch_runner() {
     lane_depth_ = pauses ? std::min(16u, std::max(1u, options_.lane_depth))
                          : std::max(1u, options_.lane_depth);
     batch_ =
-        std::make_unique<BatchRunner>(options_.target, result_.profile,
+        std::make_unique<BatchRunner>(*options_.connector, result_.profile,
                                       BatchOptions{lanes_, options_.timeout_ms, pauses, deadline_});
 }
 
@@ -412,7 +414,7 @@ bool Campaign::recover(const std::string& cause) {
     up_ = false;
     progress(true);
     std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (!wait_for_target_with(restart_, options_.target, result_.profile, options_.restart_cmd,
+    if (!wait_for_target_with(restart_, *options_.connector, result_.profile, options_.restart_cmd,
                               options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
         result_.target_lost = true;
         // Name the command and the wait: the user has to fix one of them.
@@ -442,8 +444,8 @@ bool Campaign::settle(const std::string& cause) {
     progress(true);
     RestartCommand none;
     const std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (wait_for_target_with(none, options_.target, result_.profile, "", options_.restart_wait_ms,
-                             options_.timeout_ms, wait_deadline)) {
+    if (wait_for_target_with(none, *options_.connector, result_.profile, "",
+                             options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
         up_ = true;
         return true;
     }
@@ -467,13 +469,13 @@ Campaign::Outcome Campaign::isolate(Case c) {
         return Outcome::Skipped;
     }
     ++result_.isolated_runs;
-    Execution ex = execute_case(c, options_.target, result_.profile, exec_);
+    Execution ex = execute_case(c, *options_.connector, result_.profile, exec_);
     if (ex.down_before) {
         // Down before this case began: whatever did it is not this case.
         ++result_.deaths;
         ++result_.unattributed_deaths;
         if (!recover("")) return Outcome::Lost;
-        ex = execute_case(c, options_.target, result_.profile, exec_);
+        ex = execute_case(c, *options_.connector, result_.profile, exec_);
         if (ex.down_before) {
             result_.target_lost = true;
             result_.stop_reason = "the target keeps refusing connections";
@@ -501,7 +503,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        Execution whole = execute_case(plain, options_.target, result_.profile, exec_);
+        Execution whole = execute_case(plain, *options_.connector, result_.profile, exec_);
         if (whole.verdict.oracle == ex.verdict.oracle) {
             // The content: judge it as the plain case (its death confirms a crash).
             c = std::move(plain);
@@ -533,7 +535,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        ex = execute_case(c, options_.target, result_.profile, exec_);
+        ex = execute_case(c, *options_.connector, result_.profile, exec_);
         if (!ex.verdict || root_cause_key(ex.verdict) != key) {
             ++result_.unconfirmed;
             if (ex.target_down) {
@@ -573,7 +575,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        Execution again = execute_case(c, options_.target, result_.profile, exec_);
+        Execution again = execute_case(c, *options_.connector, result_.profile, exec_);
         const bool same = again.verdict && root_cause_key(again.verdict) == key;
         if (!same) {
             ++result_.unattributed_deaths;
@@ -633,7 +635,7 @@ void Campaign::record(const Case& c, Execution ex) {
                 return false;
             }
             ++result_.isolated_runs;
-            Execution e = execute_case(candidate, options_.target, result_.profile, exec_);
+            Execution e = execute_case(candidate, *options_.connector, result_.profile, exec_);
             // The same fault, not merely the same oracle: else it drifted to another bug.
             // (the detail naming the request may change as the case shrinks: see same_fault)
             const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
@@ -703,8 +705,8 @@ void Campaign::keep(Finding f) {
 
 void Campaign::record_lost_batch(const std::vector<Case>& batch) {
     // What the server looks like now decides crash or whole-server hang, as after one case.
-    Verdict v =
-        fresh_probe_verdict(probe_target(options_.target, result_.profile, options_.timeout_ms));
+    Verdict v = fresh_probe_verdict(
+        probe_target(*options_.connector, result_.profile, options_.timeout_ms));
     if (!v) v = fresh_probe_verdict(ProbeResult::ConnectFailed);
     v.rule += "/pipelined-batch";
     Case all;
@@ -741,8 +743,9 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
 void Campaign::check_capacity_once() {
     if (capacity_checked_ || options_.max_connections == 0 || !can_afford(4)) return;
     capacity_checked_ = true;
-    const CapacityResult cr = check_capacity(
-        options_.target, result_.profile, options_.max_connections, options_.timeout_ms, deadline_);
+    const CapacityResult cr =
+        check_capacity(*options_.connector, result_.profile, options_.max_connections,
+                       options_.timeout_ms, deadline_);
     result_.capacity_held = cr.held;
     if (cr.verdict && !known(cr.verdict)) {
         Finding f;
@@ -792,7 +795,7 @@ CampaignResult Campaign::run() {
     last_progress_ = start_;
     if (options_.max_seconds > 0)
         deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
-    if (!discover_target(options_.target, options_.unit, options_.timeout_ms, result_.profile,
+    if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
                          result_.error))
         return result_;
     result_.started = true;
@@ -902,7 +905,7 @@ CampaignResult Campaign::run() {
         if (br.connect_failed || br.lane_lost) {
             batch_->close_all();
             const ProbeResult pr =
-                probe_target(options_.target, result_.profile, options_.timeout_ms);
+                probe_target(*options_.connector, result_.profile, options_.timeout_ms);
             if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
                 whole_target = died = true;
                 ++result_.deaths;
@@ -1011,8 +1014,8 @@ CampaignResult Campaign::run() {
 
 }  // namespace
 
-bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout_ms,
-                     TargetProfile& profile, std::string& error) {
+bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
+                     std::string& error) {
     profile = TargetProfile{};
     profile.unit = unit;
     // Probe candidates, most common first.
@@ -1086,9 +1089,9 @@ bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout
     return true;
 }
 
-bool wait_for_target_with(RestartCommand& command, const net::Endpoint& target,
-                          const TargetProfile& profile, const std::string& restart_cmd, int wait_ms,
-                          int timeout_ms, std::int64_t deadline_ns) {
+bool wait_for_target_with(RestartCommand& command, Connector& target, const TargetProfile& profile,
+                          const std::string& restart_cmd, int wait_ms, int timeout_ms,
+                          std::int64_t deadline_ns) {
     const std::int64_t wait_ns = std::int64_t{wait_ms} * net::kNsPerMs;
     std::int64_t deadline = net::now_ns() + wait_ns;
     bool command_running = false;
@@ -1120,7 +1123,7 @@ bool wait_for_target_with(RestartCommand& command, const net::Endpoint& target,
     }
 }
 
-bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
+bool wait_for_target(Connector& target, const TargetProfile& profile,
                      const std::string& restart_cmd, int wait_ms, int timeout_ms,
                      std::int64_t deadline_ns) {
     RestartCommand command;

@@ -10,17 +10,19 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "net/socket.hpp"
 #include "netfuzz/finding.hpp"
+#include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
 
 struct CampaignOptions {
-    net::Endpoint target;
+    std::shared_ptr<Connector> connector;  // opens links to the target (TCP, TLS, serial)
     std::string target_text;
     std::uint8_t unit = 1;
     std::uint64_t seed = 1;
@@ -89,14 +91,14 @@ CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on
 
 // Learns the probe request, the function codes the target does not support and its vendor
 // extensions. False with `error` when the target does not answer at all.
-bool discover_target(const net::Endpoint& target, std::uint8_t unit, int timeout_ms,
-                     TargetProfile& profile, std::string& error);
+bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
+                     std::string& error);
 
 // Waits (connects retried with backoff) until the target answers the probe, starting
 // `restart_cmd` first when given. False when it does not come back within `wait_ms` of the
 // command returning (or, for a command that keeps running, of its start plus a minute), or by
 // `deadline_ns` (0: none).
-bool wait_for_target(const net::Endpoint& target, const TargetProfile& profile,
+bool wait_for_target(Connector& target, const TargetProfile& profile,
                      const std::string& restart_cmd, int wait_ms, int timeout_ms,
                      std::int64_t deadline_ns = 0);
 

@@ -19,15 +19,16 @@ namespace {
 
 namespace lim = codec::limits;
 
-enum class ConnState : std::uint8_t { Connecting, Waiting, Answered, Refused };
+// Connected: the probe is still to be sent.
+enum class ConnState : std::uint8_t { Connected, Waiting, Answered, Refused };
 
 struct Held {
-    net::UniqueFd fd;
-    ConnState state = ConnState::Connecting;
+    std::unique_ptr<Link> link;
+    ConnState state = ConnState::Refused;
     std::vector<std::uint8_t> in;
 };
 
-// Sends the probe on every connection of `conns[from..]` once connected and waits until each
+// Sends the probe on every connection of `conns[from..]` and waits until each
 // is answered or refused, or the time is up. Returns the number left unanswered (silent).
 std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetProfile& profile,
                       int timeout_ms, std::int64_t deadline_ns) {
@@ -42,10 +43,10 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
         idx.clear();
         for (std::size_t i = from; i < conns.size(); ++i) {
             Held& h = conns[i];
-            if (h.state == ConnState::Connecting)
-                ps.push_back(pollfd{h.fd.get(), POLLOUT, 0});
+            if (h.state == ConnState::Connected)
+                ps.push_back(pollfd{h.link->poll_fd(), POLLOUT, 0});
             else if (h.state == ConnState::Waiting)
-                ps.push_back(pollfd{h.fd.get(), POLLIN, 0});
+                ps.push_back(pollfd{h.link->poll_fd(), POLLIN, 0});
             else
                 continue;
             idx.push_back(i);
@@ -56,19 +57,18 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
         ::poll(ps.data(), ps.size(), static_cast<int>(std::max<std::int64_t>(1, left / 1000000)));
         for (std::size_t k = 0; k < ps.size(); ++k) {
             Held& h = conns[idx[k]];
-            if (!ps[k].revents) continue;
-            if (h.state == ConnState::Connecting) {
-                if (net::socket_error(h.fd.get()) != 0 ||
-                    ::send(h.fd.get(), frame.data(), frame.size(), MSG_NOSIGNAL) !=
-                        static_cast<ssize_t>(frame.size())) {
+            if (!ps[k].revents && !h.link->has_buffered_input()) continue;
+            if (h.state == ConnState::Connected) {
+                if (h.link->send(frame.data(), frame.size()) !=
+                    static_cast<ssize_t>(frame.size())) {
                     h.state = ConnState::Refused;
-                    h.fd.reset();
+                    h.link.reset();
                 } else {
                     h.state = ConnState::Waiting;
                 }
                 continue;
             }
-            const ssize_t n = ::recv(h.fd.get(), buf, sizeof buf, 0);
+            const ssize_t n = h.link->recv(buf, sizeof buf);
             if (n > 0) {
                 h.in.insert(h.in.end(), buf, buf + n);
                 if (h.in.size() >= lim::kMbapHeader &&
@@ -76,9 +76,9 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
                     h.state = ConnState::Answered;
                     h.in.clear();
                 }
-            } else if (n == 0 || (errno != EAGAIN && errno != EINTR)) {
+            } else if (n != -EAGAIN) {
                 h.state = ConnState::Refused;  // closed: a limit, which is allowed
-                h.fd.reset();
+                h.link.reset();
             }
         }
     }
@@ -100,25 +100,26 @@ std::uint32_t connection_budget() {
                : 0;
 }
 
-CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& profile,
+CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
                               std::uint32_t max_connections, int timeout_ms,
                               std::int64_t deadline_ns) {
     CapacityResult out;
-    max_connections = std::min(max_connections, connection_budget());
+    max_connections = std::min({max_connections, connection_budget(), target.max_links()});
     std::vector<Held> conns;
     conns.reserve(max_connections);
     auto out_of_time = [&] { return deadline_ns && net::now_ns() >= deadline_ns; };
     for (std::uint32_t step = 16; !out_of_time();) {
         const std::uint32_t goal = std::min(step, max_connections);
         const std::size_t from = conns.size();
+        // A target at its limit may leave connects pending: once one times out, the rest of
+        // the step counts as refused without waiting for each.
+        bool timed_out = false;
         while (conns.size() < goal) {
             Held h;
-            const int fd = net::connect_nonblocking(target);
-            if (fd < 0) {
-                h.state = ConnState::Refused;
-            } else {
-                h.fd.reset(fd);
-            }
+            int error = 0;
+            if (!timed_out) h.link = target.open(timeout_ms, error);
+            timed_out = timed_out || error == ETIMEDOUT;
+            h.state = h.link ? ConnState::Connected : ConnState::Refused;
             conns.push_back(std::move(h));
         }
         // A slow target gets three timeouts, and 2 ms more per new connection, to answer a
@@ -149,7 +150,7 @@ CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& 
                 break;
             }
         if (oldest < conns.size()) {
-            conns[oldest].state = ConnState::Connecting;  // connected: sends the probe again
+            conns[oldest].state = ConnState::Connected;  // sends the probe again
             if (probe_all(conns, oldest, profile, timeout_ms, deadline_ns) > 0 &&
                 conns[oldest].state == ConnState::Waiting && !out_of_time()) {
                 out.verdict = Verdict{

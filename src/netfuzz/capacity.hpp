@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "net/socket.hpp"
+#include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
@@ -19,7 +20,7 @@ struct CapacityResult {
 };
 
 // `deadline_ns` (0: none) bounds the whole check; it stops early, clean, when reached.
-CapacityResult check_capacity(const net::Endpoint& target, const TargetProfile& profile,
+CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
                               std::uint32_t max_connections, int timeout_ms,
                               std::int64_t deadline_ns);
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 
+#include "codec/ascii.hpp"
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
+#include "codec/rtu_stream.hpp"
 
 #include <array>
 
@@ -61,7 +63,30 @@ std::uint8_t Case::connections() const noexcept {
 }
 
 std::vector<std::uint8_t> frame_pdu(const std::vector<std::uint8_t>& pdu, std::uint16_t tid,
-                                    std::uint8_t unit) {
+                                    std::uint8_t unit, codec::Framing framing) {
+    if (framing == codec::Framing::Rtu) {
+        std::vector<std::uint8_t> f(1 + pdu.size() + 2);
+        f[0] = unit;
+        std::copy(pdu.begin(), pdu.end(), f.begin() + 1);
+        codec::append_rtu_crc(f.data(), 1 + pdu.size());
+        return f;
+    }
+    if (framing == codec::Framing::Ascii) {
+        std::vector<std::uint8_t> body;
+        body.reserve(pdu.size() + 2);
+        body.push_back(unit);
+        for (std::uint8_t b : pdu) body.push_back(b);
+        body.push_back(codec::lrc(codec::Bytes(body.data(), body.size())));
+        static constexpr char kHex[] = "0123456789ABCDEF";
+        std::vector<std::uint8_t> f(1, ':');
+        for (std::uint8_t b : body) {
+            f.push_back(static_cast<std::uint8_t>(kHex[b >> 4]));
+            f.push_back(static_cast<std::uint8_t>(kHex[b & 0x0F]));
+        }
+        f.push_back('\r');
+        f.push_back('\n');
+        return f;
+    }
     std::vector<std::uint8_t> f(codec::limits::kMbapHeader + pdu.size());
     codec::write_mbap_header(f.data(), tid, unit, pdu.size());
     std::copy(pdu.begin(), pdu.end(), f.begin() + codec::limits::kMbapHeader);

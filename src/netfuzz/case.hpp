@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "codec/framing.hpp"
+
 namespace mbstorm::netfuzz {
 
 // How a case was made. Findings are deduplicated by (oracle, function code, class).
@@ -72,9 +74,12 @@ struct Case {
     std::uint8_t connections() const noexcept;
 };
 
-// One MBAP frame around `pdu` (header written by the codec). Any size: a mutation may have
-// made a PDU the codec's encoder would refuse; lengths that lie are set afterwards.
+// One frame around `pdu` in the given framing: MBAP (header written by the codec), RTU (unit,
+// PDU, CRC-16; `tid` unused) or ASCII (':' hex of unit, PDU and LRC, CR LF; `tid` unused). Any
+// size: a mutation may have made a PDU the codec's encoder would refuse; lengths that lie are
+// set afterwards.
 std::vector<std::uint8_t> frame_pdu(const std::vector<std::uint8_t>& pdu, std::uint16_t tid,
-                                    std::uint8_t unit);
+                                    std::uint8_t unit,
+                                    codec::Framing framing = codec::Framing::Mbap);
 
 }  // namespace mbstorm::netfuzz

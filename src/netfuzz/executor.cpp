@@ -39,7 +39,7 @@ struct Pending {
 };
 
 struct Conn {
-    net::UniqueFd fd;
+    std::unique_ptr<Link> link;
     bool opened = false, closed = false, reset = false, shut = false, desync = false;
     bool shut_after_frames = false;  // half-closed with every frame sent complete
     bool framing_lost = false;
@@ -53,8 +53,7 @@ struct Conn {
 // well-framed cases pipelined over lanes.
 class CaseRunner {
   public:
-    CaseRunner(const net::Endpoint& target, const TargetProfile& profile,
-               const ExecOptions& options)
+    CaseRunner(Connector& target, const TargetProfile& profile, const ExecOptions& options)
         : target_(target), profile_(profile), options_(options), start_(net::now_ns()) {}
 
     Execution run(const Case& c);
@@ -87,7 +86,7 @@ class CaseRunner {
         std::string during;  // "partial-frame", "exception" or "request"
     };
 
-    const net::Endpoint& target_;
+    Connector& target_;
     const TargetProfile& profile_;
     ExecOptions options_;
     std::int64_t start_;
@@ -100,17 +99,17 @@ class CaseRunner {
 
 bool CaseRunner::ensure_open(std::uint8_t index) {
     Conn& c = conns_[index];
-    if (c.opened) return c.fd.valid();
+    if (c.opened) return c.link != nullptr;
     c.opened = true;
-    const int fd = connect_with_timeout(target_, options_.timeout_ms);
-    if (fd < 0) {
-        event(index, TraceKind::ConnectFailed, {}, std::strerror(-fd));
+    int error = 0;
+    c.link = target_.open(options_.timeout_ms, error);
+    if (!c.link) {
+        event(index, TraceKind::ConnectFailed, {}, std::strerror(error));
         if (!any_connect_) out_.down_before = true;
         c.closed = true;
         return false;
     }
     any_connect_ = true;
-    c.fd.reset(fd);
     event(index, TraceKind::Connect);
     return true;
 }
@@ -121,24 +120,22 @@ void CaseRunner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>&
     std::size_t done = 0;
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
     while (done < bytes.size()) {
-        const ssize_t n =
-            ::send(c.fd.get(), bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+        const ssize_t n = c.link->send(bytes.data() + done, bytes.size() - done);
         if (n > 0) {
             done += static_cast<std::size_t>(n);
             continue;
         }
-        if (n < 0 && errno == EINTR) continue;
-        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+        if (n == -EAGAIN || n == 0) {
             if (net::now_ns() > deadline) break;
             // Drain input so that a server blocked on its own output can progress.
             read_conn(index);
-            pollfd p{c.fd.get(), POLLOUT, 0};
+            pollfd p{c.link->poll_fd(), POLLOUT, 0};
             ::poll(&p, 1, 10);
             continue;
         }
         c.closed = true;
-        c.reset = errno == ECONNRESET || errno == EPIPE;
-        event(index, TraceKind::Reset, {}, std::strerror(errno));
+        c.reset = n == -ECONNRESET || n == -EPIPE;
+        event(index, TraceKind::Reset, {}, std::strerror(static_cast<int>(-n)));
         break;
     }
     if (done == 0) return;
@@ -178,10 +175,10 @@ void CaseRunner::parse_sent(Conn& c) {
 
 void CaseRunner::read_conn(std::uint8_t index) {
     Conn& c = conns_[index];
-    if (!c.fd.valid() || c.closed) return;
+    if (!c.link || c.closed) return;
     std::uint8_t buf[4096];
     for (;;) {
-        const ssize_t n = ::recv(c.fd.get(), buf, sizeof buf, 0);
+        const ssize_t n = c.link->recv(buf, sizeof buf);
         if (n > 0) {
             event(index, TraceKind::Recv, {buf, buf + n});
             c.received.insert(c.received.end(), buf, buf + n);
@@ -193,11 +190,10 @@ void CaseRunner::read_conn(std::uint8_t index) {
             event(index, TraceKind::PeerClosed);
             return;
         }
-        if (errno == EINTR) continue;
-        if (errno != EAGAIN && errno != EWOULDBLOCK) {
+        if (n != -EAGAIN) {
             c.closed = true;
             c.reset = true;
-            event(index, TraceKind::Reset, {}, std::strerror(errno));
+            event(index, TraceKind::Reset, {}, std::strerror(static_cast<int>(-n)));
         }
         return;
     }
@@ -243,40 +239,38 @@ bool CaseRunner::pump(std::int64_t deadline, Done done) {
         const std::int64_t now = net::now_ns();
         if (now >= deadline) return false;
         fds.clear();
+        bool buffered = false;
         for (const Conn& c : conns_)
-            if (c.fd.valid() && !c.closed) fds.push_back(pollfd{c.fd.get(), POLLIN, 0});
+            if (c.link && !c.closed) {
+                fds.push_back(pollfd{c.link->poll_fd(), POLLIN, 0});
+                buffered = buffered || c.link->has_buffered_input();
+            }
         if (fds.empty()) return done();
         const int wait_ms =
             static_cast<int>(std::max<std::int64_t>(1, (deadline - now) / net::kNsPerMs));
-        ::poll(fds.data(), fds.size(), std::min(wait_ms, 50));
+        ::poll(fds.data(), fds.size(), buffered ? 0 : std::min(wait_ms, 50));
         for (std::size_t i = 0; i < conns_.size(); ++i)
-            if (conns_[i].fd.valid() && !conns_[i].closed) read_conn(static_cast<std::uint8_t>(i));
+            if (conns_[i].link && !conns_[i].closed) read_conn(static_cast<std::uint8_t>(i));
     }
 }
 
 void CaseRunner::flood(std::uint16_t count) {
     flooded_ = true;
     event(0, TraceKind::Flood, {}, fmt::format("{} connections", count));
-    std::vector<net::UniqueFd> fds;
-    for (std::uint16_t i = 0; i < count; ++i) {
-        const int fd = net::connect_nonblocking(target_);
-        if (fd >= 0) fds.emplace_back(fd);
-    }
-    std::vector<pollfd> ps;
-    for (auto& f : fds) ps.push_back(pollfd{f.get(), POLLOUT, 0});
+    // Every link opened (within one timeout in all) gets one probe; answers are not awaited.
+    std::vector<std::unique_ptr<Link>> links;
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
-    // Connected sockets get one probe each; answers are read and dropped (bounded wait).
-    std::size_t sent = 0;
-    while (sent < ps.size() && net::now_ns() < deadline) {
-        ::poll(ps.data(), ps.size(), 20);
-        for (std::size_t i = 0; i < ps.size(); ++i) {
-            if (ps[i].events == POLLOUT && (ps[i].revents & (POLLOUT | POLLERR | POLLHUP))) {
-                const auto f = probe_frame(profile_, static_cast<std::uint16_t>(i));
-                (void)::send(ps[i].fd, f.data(), f.size(), MSG_NOSIGNAL);
-                ps[i].events = POLLIN;
-                ++sent;
-            }
-        }
+    const std::uint16_t n =
+        static_cast<std::uint16_t>(std::min<unsigned>(count, target_.max_links()));
+    for (std::uint16_t i = 0; i < n; ++i) {
+        const std::int64_t left_ms = (deadline - net::now_ns()) / net::kNsPerMs;
+        if (left_ms <= 0) break;
+        int error = 0;
+        auto link = target_.open(static_cast<int>(left_ms), error);
+        if (!link) continue;
+        const auto f = probe_frame(profile_, i);
+        (void)link->send(f.data(), f.size());
+        links.push_back(std::move(link));
     }
 }
 
@@ -507,7 +501,7 @@ Execution CaseRunner::run(const Case& c) {
             case Op::ShutdownWrite:
                 if (ensure_open(s.conn) && !conns_[s.conn].closed && !conns_[s.conn].shut) {
                     Conn& cn = conns_[s.conn];
-                    ::shutdown(cn.fd.get(), SHUT_WR);
+                    cn.link->shutdown_write();
                     cn.shut = true;
                     cn.shut_after_frames = !cn.desync && cn.parsed == cn.sent.size();
                     event(s.conn, TraceKind::ShutdownWrite);
@@ -533,7 +527,7 @@ Execution CaseRunner::run(const Case& c) {
     // desynchronised ones.
     for (std::size_t i = 0; i < conns_.size(); ++i) {
         Conn& cn = conns_[i];
-        if (!cn.opened || !cn.fd.valid() || cn.closed) continue;
+        if (!cn.opened || !cn.link || cn.closed) continue;
         if (!cn.shut && !cn.desync && cn.parsed == cn.sent.size()) {
             std::uint16_t tid = 0xFADE;
             while (std::any_of(cn.pending.begin(), cn.pending.end(),
@@ -544,7 +538,7 @@ Execution CaseRunner::run(const Case& c) {
             if (cn.pending.size() > before) cn.pending.back().probe = true;
         } else {
             if (!cn.shut) {
-                ::shutdown(cn.fd.get(), SHUT_WR);
+                cn.link->shutdown_write();
                 cn.shut = true;
                 event(static_cast<std::uint8_t>(i), TraceKind::ShutdownWrite);
             }
@@ -553,7 +547,7 @@ Execution CaseRunner::run(const Case& c) {
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
     const bool ok = pump(deadline, [&] {
         for (const Conn& cn : conns_) {
-            if (!cn.opened || !cn.fd.valid()) continue;
+            if (!cn.opened || !cn.link) continue;
             if (cn.shut_after_frames) {
                 if (!cn.closed && !answered(cn)) return false;
             } else if ((cn.shut || cn.desync) ? !cn.closed : !answered(cn)) {
@@ -649,13 +643,12 @@ std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_
     return frame_pdu(profile.probe_pdu, tid, profile.unit);
 }
 
-ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile,
-                         int timeout_ms) {
-    const int raw = connect_with_timeout(target, timeout_ms);
-    if (raw < 0) return ProbeResult::ConnectFailed;
-    net::UniqueFd fd(raw);
+ProbeResult probe_target(Connector& target, const TargetProfile& profile, int timeout_ms) {
+    int error = 0;
+    const std::unique_ptr<Link> link = target.open(timeout_ms, error);
+    if (!link) return ProbeResult::ConnectFailed;
     const auto f = probe_frame(profile, 0x7E57);
-    if (::send(fd.get(), f.data(), f.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(f.size()))
+    if (link->send(f.data(), f.size()) != static_cast<ssize_t>(f.size()))
         return ProbeResult::Closed;
     std::uint8_t buf[lim::kMaxTcpAdu];
     std::size_t have = 0;
@@ -663,13 +656,13 @@ ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profi
     for (;;) {
         const std::int64_t left = deadline - net::now_ns();
         if (left <= 0) return ProbeResult::NoAnswer;
-        pollfd p{fd.get(), POLLIN, 0};
-        if (::poll(&p, 1, static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs))) <= 0)
+        if (!wait_readable(*link,
+                           static_cast<int>(std::max<std::int64_t>(1, left / net::kNsPerMs))))
             continue;
-        const ssize_t n = ::recv(fd.get(), buf + have, sizeof buf - have, 0);
+        const ssize_t n = link->recv(buf + have, sizeof buf - have);
         if (n == 0) return ProbeResult::Closed;
         if (n < 0) {
-            if (errno == EAGAIN || errno == EINTR) continue;
+            if (n == -EAGAIN) continue;
             return ProbeResult::Closed;
         }
         have += static_cast<std::size_t>(n);
@@ -682,7 +675,7 @@ ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profi
     }
 }
 
-Execution execute_case(const Case& c, const net::Endpoint& target, const TargetProfile& profile,
+Execution execute_case(const Case& c, Connector& target, const TargetProfile& profile,
                        const ExecOptions& options) {
     CaseRunner r(target, profile, options);
     return r.run(c);

@@ -10,6 +10,7 @@
 
 #include "net/socket.hpp"
 #include "netfuzz/case.hpp"
+#include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
@@ -49,14 +50,14 @@ struct Execution {
     bool target_down = false;  // the fresh probe after the case could not connect
 };
 
-Execution execute_case(const Case& c, const net::Endpoint& target, const TargetProfile& profile,
+Execution execute_case(const Case& c, Connector& target, const TargetProfile& profile,
                        const ExecOptions& options);
 
 enum class ProbeResult : std::uint8_t { Ok, ConnectFailed, NoAnswer, Closed, BadAnswer };
 std::string_view probe_result_name(ProbeResult r) noexcept;
 
 // One liveness probe on a fresh connection: connect, send the profile's probe, await it.
-ProbeResult probe_target(const net::Endpoint& target, const TargetProfile& profile, int timeout_ms);
+ProbeResult probe_target(Connector& target, const TargetProfile& profile, int timeout_ms);
 
 // What a fresh connection's probe result says about the whole server: crash (refuses or
 // closes new connections), hang (accepts but does not answer properly), nothing for Ok.

@@ -73,6 +73,11 @@ std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
         for (auto& st : s.stages) st.connections.reset();
     }
     if (o.depth) p.depth = *o.depth;
+    if (o.framing) {
+        p.framing = *o.framing;
+        // RTU over TCP has no transaction ids: one request at a time unless --depth says.
+        if (p.framing == codec::Framing::Rtu && !o.depth) p.depth = 1;
+    }
     if (o.threads) p.threads = *o.threads;
     if (o.rate) {
         p.rate = *o.rate;

@@ -99,6 +99,7 @@ namespace {
 // point errors at.
 struct TopLevelNodes {
     NodeSlot target, slave, duration, stages, ops, thresholds, model, rate, transactions, backoff;
+    bool depth = false;  // given in the file
 };
 
 // Reads every top-level key: plain settings into `s`, the rest into the returned slots.
@@ -107,31 +108,13 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
     TopLevelNodes k;
     r.each_key(
         root, "the scenario",
-        {"name",
-         "description",
-         "target",
-         "source_addr",
-         "slave",
-         "slave_threads",
-         "threads",
-         "connections",
-         "depth",
-         "model",
-         "rate",
-         "arrival",
-         "duration",
-         "transactions",
-         "warmup",
-         "timeout",
-         "connect_timeout",
-         "connect_rate",
-         "reconnect_backoff",
-         "late_threshold",
-         "allow_writes",
-         "seed",
-         "stages",
-         "operations",
-         "thresholds"},
+        {"name",           "description",     "target",        "transport",
+         "source_addr",    "slave",           "slave_threads", "threads",
+         "connections",    "depth",           "model",         "rate",
+         "arrival",        "duration",        "transactions",  "warmup",
+         "timeout",        "connect_timeout", "connect_rate",  "reconnect_backoff",
+         "late_threshold", "allow_writes",    "seed",          "stages",
+         "operations",     "thresholds"},
         [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
             if (key == "name")
                 s.name = r.scalar(v, "name");
@@ -141,6 +124,15 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
                 k.target = v;
                 s.target = r.scalar(v, "target");
                 check_target(r, v, s.target);
+            } else if (key == "transport") {
+                // Its own values beside tcp come with each transport (see the README).
+                const std::string t = r.scalar(v, "transport");
+                if (t == "tcp")
+                    p.framing = codec::Framing::Mbap;
+                else if (t == "rtu-over-tcp")
+                    p.framing = codec::Framing::Rtu;
+                else
+                    r.fail(v, "transport: '" + t + "' is not one of tcp, rtu-over-tcp");
             } else if (key == "source_addr") {
                 p.source_addresses = r.scalar(v, "source_addr");
                 std::vector<net::Endpoint> sources;
@@ -158,6 +150,7 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
                 p.connections = static_cast<std::uint32_t>(
                     r.integer(v, "connections", 1, load::kMaxConnections));
             else if (key == "depth")
+                k.depth = true,
                 p.depth = static_cast<std::uint32_t>(r.integer(v, "depth", 1, load::kMaxDepth));
             else if (key == "model") {
                 k.model = v;
@@ -408,6 +401,8 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
 
     try {
         const TopLevelNodes k = read_top_level(r, root, s);
+        // RTU over TCP has no transaction ids: one request at a time unless the file says.
+        if (s.plan.framing == codec::Framing::Rtu && !k.depth) s.plan.depth = 1;
         const OperationNames names = parse_operations(r, root, k, s);
         parse_thresholds(r, k, names, s);
         parse_stages(r, k, s);

@@ -116,7 +116,10 @@ std::string format_scenario(const Scenario& s) {
     if (!s.description.empty()) out << YAML::Key << "description" << YAML::Value << s.description;
     if (!s.target.empty()) {
         out << YAML::Key << "target" << YAML::Value << s.target;
-    } else {
+    }
+    if (p.framing == codec::Framing::Rtu)
+        out << YAML::Key << "transport" << YAML::Value << "rtu-over-tcp";
+    if (s.target.empty()) {
         out << YAML::Key << "slave_threads" << YAML::Value << s.slave_threads
             << YAML::Comment("no target: the embedded reference slave (0 = half the cores)");
         out << YAML::Key << "slave" << YAML::Value;

@@ -71,6 +71,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         units = std::make_unique<slave::UnitModels>(slave::build_units(s.slave));
         server::ServerConfig sc;
         sc.listen = "127.0.0.1:0";
+        sc.framing = plan.framing;  // the slave speaks what the engine speaks
         // Split the cores between the engine and the slave unless told otherwise.
         sc.threads = s.slave_threads != 0 ? s.slave_threads : std::max(1U, cores / 2);
         if (plan.threads == 0) plan.threads = std::max(1U, cores - std::min(cores - 1, sc.threads));

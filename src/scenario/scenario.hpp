@@ -92,6 +92,7 @@ struct Overrides {
     std::optional<load::Duration> warmup;
     std::optional<std::uint32_t> connections;
     std::optional<std::uint32_t> depth;
+    std::optional<codec::Framing> framing;  // --transport (depth 1 for RTU unless --depth)
     std::optional<std::uint32_t> threads;
     std::optional<double> rate;  // also switches an unstaged closed-loop scenario to open loop
     std::optional<std::uint64_t> transactions;

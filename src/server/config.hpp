@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "codec/framing.hpp"
 #include "slave/faults.hpp"
 
 #include "slave/simulator.hpp"
@@ -30,7 +31,9 @@ enum class ForeignUnitPolicy : std::uint8_t {
 
 struct ServerConfig {
     std::string listen = "127.0.0.1:5020";  // port 0: ephemeral (see Server::port())
-    unsigned threads = 0;                   // 0: one per core
+    // Mbap: Modbus TCP. Rtu: RTU over TCP (address, PDU, CRC; no MBAP), as gateways speak.
+    codec::Framing framing = codec::Framing::Mbap;
+    unsigned threads = 0;  // 0: one per core
 
     std::uint32_t max_connections = 16384;  // across all threads; 0: unlimited
     FullPolicy full_policy = FullPolicy::EvictOldestIdle;

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "codec/mbap.hpp"
+#include "codec/rtu_stream.hpp"
 #include "server/out_queue.hpp"
 
 namespace mbstorm::server {
@@ -55,6 +56,8 @@ struct Connection {
     OutQueue out;
     std::unique_ptr<std::uint8_t[]> plain_buf;  // only without a buffer ring
     codec::MbapSplitter splitter;
+    // RTU over TCP only: made when the slot is first used, kept for its next connections.
+    std::unique_ptr<codec::RtuSplitter> rtu;
 };
 
 }  // namespace mbstorm::server

@@ -20,6 +20,7 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     connections_total += o.connections_total;
     discarded_frames += o.discarded_frames;
     bad_framing_closes += o.bad_framing_closes;
+    crc_errors += o.crc_errors;
     idle_closes += o.idle_closes;
     frame_timeouts += o.frame_timeouts;
     evictions += o.evictions;
@@ -52,6 +53,7 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.connections_total = v(ConnectionsTotal);
     s.discarded_frames = v(DiscardedFrames);
     s.bad_framing_closes = v(BadFramingCloses);
+    s.crc_errors = v(CrcErrors);
     s.idle_closes = v(IdleCloses);
     s.frame_timeouts = v(FrameTimeouts);
     s.evictions = v(Evictions);
@@ -109,14 +111,15 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
         "{} accepts out of fds (EMFILE/ENFILE)\n"
         "  bytes: {} in, {} out\n"
         "  exceptions: {} ({})\n"
-        "  framing: {} discarded (protocol id != 0), {} closed for bad length\n"
+        "  framing: {} discarded (protocol id != 0), {} closed for bad length, {} closed for a "
+        "bad CRC\n"
         "  emulation: {} busy (06), {} other-unit requests\n"
         "  faults: {} delayed, {} dropped connections, {} unanswered\n"
         "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
         elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
         t.connections_total, t.connections_current, t.idle_closes, t.frame_timeouts, t.evictions,
         t.refusals, t.accept_fd_exhausted, t.bytes_in, t.bytes_out, t.exceptions_total(),
-        exceptions_text(t), t.discarded_frames, t.bad_framing_closes, t.busy_rejects,
+        exceptions_text(t), t.discarded_frames, t.bad_framing_closes, t.crc_errors, t.busy_rejects,
         t.foreign_unit, t.fault_delayed, t.fault_drops, t.fault_no_answer, t.backpressure_pauses,
         t.pending_output_peak, t.output_blocks);
 }

@@ -329,6 +329,8 @@ void Worker::admit(int fd) noexcept {
         }
         Connection& c = conns_[index];
         if (!use_buf_ring_ && !c.plain_buf) c.plain_buf.reset(new std::uint8_t[config_.buf_size]);
+        if (config_.framing == codec::Framing::Rtu && !c.rtu)
+            c.rtu = std::make_unique<codec::RtuSplitter>();
     } catch (...) {
         counters_.add(ServerCounters::Refusals);
         close_socket(fd);
@@ -350,6 +352,7 @@ void Worker::admit(int fd) noexcept {
     c.hold_pos = kNoHold;
     c.unanswered = 0;
     c.splitter.reset();
+    if (c.rtu) c.rtu->reset();
     c.last_active_ns = now_ ? now_ : net::now_ns();
     lru_push_back(index);
     ++open_here_;
@@ -466,9 +469,9 @@ void Worker::close_if_answered(std::uint32_t index) noexcept {
     if (c.out.empty() && c.stash_head == kNoBuffer) close_connection(index);
 }
 
-void Worker::lose_framing(std::uint32_t index) noexcept {
+void Worker::lose_framing(std::uint32_t index, bool crc) noexcept {
     Connection& c = conns_[index];
-    counters_.add(ServerCounters::BadFramingCloses);
+    counters_.add(crc ? ServerCounters::CrcErrors : ServerCounters::BadFramingCloses);
     c.framing_lost = true;
     c.frame_started_ns = 0;
     drop_stash(index);
@@ -522,6 +525,7 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
 void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
                            std::size_t size) noexcept {
     Connection& c = conns_[index];
+    if (c.rtu) return consume_rtu_input(index, data, size);
     c.splitter.feed(codec::Bytes(data, size));
     codec::TcpFrame frame;
     bool completed = false;
@@ -548,7 +552,7 @@ void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
 }
 
 void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool completed) noexcept {
-    if (c.splitter.buffered() == 0) {
+    if ((c.rtu ? c.rtu->buffered() : c.splitter.buffered()) == 0) {
         c.frame_started_ns = 0;
         return;
     }
@@ -610,13 +614,20 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         close_connection(index);
         return false;
     }
-    const codec::MutableBytes pdu_out(p + codec::limits::kMbapHeader, slave::kMinOutput);
+    const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
+    const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
     const slave::HandleResult r =
         units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                : slave::handle_request(frame.pdu, model_, pdu_out);
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
-    codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id, r.size);
-    const std::size_t n = codec::limits::kMbapHeader + r.size;
+    std::size_t n;
+    if (c.rtu) {
+        p[0] = frame.header.unit_id;
+        n = codec::append_rtu_crc(p, 1 + r.size);
+    } else {
+        codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id, r.size);
+        n = codec::limits::kMbapHeader + r.size;
+    }
     c.out.commit(n);
     counters_.add(ServerCounters::PendingOutput, n);
     counters_.add(ServerCounters::Transactions);
@@ -635,9 +646,16 @@ void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
     } catch (...) {
         return;
     }
-    codec::write_exception_frame(p, frame, code);
-    c.out.commit(codec::kExceptionAduSize);
-    counters_.add(ServerCounters::PendingOutput, codec::kExceptionAduSize);
+    std::size_t n = codec::kExceptionAduSize;
+    if (c.rtu) {
+        n = codec::kRtuExceptionAduSize;
+        codec::write_rtu_exception(p, frame.header.unit_id, frame.pdu.empty() ? 0 : frame.pdu[0],
+                                   static_cast<std::uint8_t>(code));
+    } else {
+        codec::write_exception_frame(p, frame, code);
+    }
+    c.out.commit(n);
+    counters_.add(ServerCounters::PendingOutput, n);
     counters_.add(ServerCounters::Transactions);
     counters_.add_exception(static_cast<std::uint8_t>(code));
 }

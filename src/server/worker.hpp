@@ -96,10 +96,14 @@ class Worker {
     // Pauses reading when the output queue is over the cap. True when paused.
     bool check_backpressure(std::uint32_t index) noexcept;
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
+    // RTU over TCP (rtu_input.cpp): the same, with RTU frames.
+    void consume_rtu_input(std::uint32_t index, const std::uint8_t* data,
+                           std::size_t size) noexcept;
     // Tracks when the partial frame the splitter holds began (frame timeout).
     void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
     // Framing was lost: answer what came before, read no more, close once answered.
-    void lose_framing(std::uint32_t index) noexcept;
+    // `crc`: an RTU frame's CRC failed (counted as such, not as a bad length).
+    void lose_framing(std::uint32_t index, bool crc = false) noexcept;
     // Closes a connection whose input is over once every answer has gone out.
     void close_if_answered(std::uint32_t index) noexcept;
     // False when the connection was closed (fault drop).

@@ -26,8 +26,9 @@ enum class Outcome : std::uint8_t {
     ValueMismatch,     // read-after-write check saw a different value
     FramingError,      // the answer stream lost MBAP framing (length 0, 1 or > 254, garbage):
                        // the connection was reset with the request outstanding
+    CrcError,          // RTU over TCP: an answer's CRC failed; the connection was reset
 };
-inline constexpr std::size_t kOutcomeCount = 12;
+inline constexpr std::size_t kOutcomeCount = 13;
 
 // snake_case name used in JSON and console output, e.g. "connection_closed".
 constexpr std::string_view outcome_name(Outcome outcome) noexcept {
@@ -42,7 +43,8 @@ constexpr std::string_view outcome_name(Outcome outcome) noexcept {
                                                                     "wrong_unit_id",
                                                                     "wrong_function",
                                                                     "value_mismatch",
-                                                                    "framing_error"};
+                                                                    "framing_error",
+                                                                    "crc_error"};
     const auto i = static_cast<std::size_t>(outcome);
     return i < kOutcomeCount ? kNames[i] : std::string_view{"unknown"};
 }

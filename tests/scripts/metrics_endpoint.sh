@@ -51,6 +51,7 @@ requests=$(sample "$work/serve.prom" 'mbstorm_slave_requests_total{function="rea
 check "serve counted the run's requests by function ($requests >= $json_total)" "[ -n '$requests' ] && [ '$requests' -ge '$json_total' ]"
 check "serve exports open connections" "grep -q '^mbstorm_slave_open_connections [0-9]' '$work/serve.prom'"
 check "serve exports malformed input counts" "grep -q '^mbstorm_slave_malformed_input_total{kind=\"bad_length\"} 0' '$work/serve.prom'"
+check "serve exports RTU CRC failures" "grep -q '^mbstorm_slave_malformed_input_total{kind=\"bad_crc\"} 0' '$work/serve.prom'"
 # Garbage at the slave shows up as malformed input.
 /usr/bin/python3 - "$slave" <<'PY'
 import socket, sys

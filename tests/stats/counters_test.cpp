@@ -65,6 +65,7 @@ TEST(OutcomeCounters, EveryOutcomeHasAUniqueName) {
     EXPECT_EQ(names.size(), kOutcomeCount);
     EXPECT_EQ(outcome_name(Outcome::ValueMismatch), "value_mismatch");
     EXPECT_EQ(outcome_name(Outcome::FramingError), "framing_error");
+    EXPECT_EQ(outcome_name(Outcome::CrcError), "crc_error");
     EXPECT_EQ(outcome_name(static_cast<Outcome>(200)), "unknown");
 }
 

@@ -1,0 +1,167 @@
+// The load engine speaking RTU over TCP: against the in-process reference slave in RTU mode,
+// against a peer whose answers fail their CRC (a class of its own, then a fresh connection),
+// and the plan check that keeps RTU at one outstanding request per connection.
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "codec/rtu.hpp"
+#include "load/engine.hpp"
+#include "net/socket.hpp"
+#include "server/server.hpp"
+
+namespace mbstorm::load {
+namespace {
+
+using namespace std::chrono_literals;
+using stats::Outcome;
+
+Plan rtu_plan(std::uint16_t port) {
+    Plan plan;
+    plan.host = "127.0.0.1";
+    plan.port = port;
+    plan.framing = codec::Framing::Rtu;
+    Operation op;
+    op.name = "read";
+    op.function = 0x03;
+    op.first_address = 0;
+    op.last_address = 99;
+    op.quantity = 4;
+    plan.operations = {op};
+    plan.threads = 1;
+    plan.depth = 1;
+    plan.duration = 10s;  // ended by the transaction count long before
+    return plan;
+}
+
+TEST(RtuOverTcpEngine, AgainstTheRtuSlaveEveryAnswerIsMatchedAndChecked) {
+    server::ServerConfig config;
+    config.listen = "127.0.0.1:0";
+    config.threads = 1;
+    config.framing = codec::Framing::Rtu;
+    server::Server srv(config);
+    std::string error;
+    ASSERT_TRUE(srv.start(&error)) << error;
+    Plan plan = rtu_plan(srv.port());
+    plan.connections = 4;
+    plan.transactions = 2000;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.counters.transactions_sent, 2000u);
+    EXPECT_EQ(r.run.counters.ok(), 2000u);
+    EXPECT_EQ(r.crc_errors, 0u);
+    EXPECT_EQ(r.framing_errors, 0u);
+    EXPECT_EQ(srv.stats().transactions, 2000u);
+}
+
+TEST(RtuOverTcpEngine, MbapEngineAgainstAnRtuSlaveGetsNoAnswers) {
+    // The wrong framing on one side must show as errors, never as successes.
+    server::ServerConfig config;
+    config.listen = "127.0.0.1:0";
+    config.threads = 1;
+    config.framing = codec::Framing::Rtu;
+    server::Server srv(config);
+    std::string error;
+    ASSERT_TRUE(srv.start(&error)) << error;
+    Plan plan = rtu_plan(srv.port());
+    plan.framing = codec::Framing::Mbap;
+    plan.transactions = 20;
+    plan.duration = 2s;
+    plan.transaction_timeout = 200ms;
+    const LoadResult r = run_load(plan);
+    EXPECT_EQ(r.run.counters.ok(), 0u);
+}
+
+// Answers every RTU read with a frame whose CRC is wrong, on every connection it accepts.
+class BadCrcPeer {
+  public:
+    BadCrcPeer() {
+        net::Endpoint ep;
+        net::parse_endpoint("127.0.0.1:0", ep);
+        net::ListenOptions lo;
+        lo.nonblocking = true;
+        lo.reuse_port = false;
+        listener_.reset(net::listen_socket(ep, lo));
+        sockaddr_storage a{};
+        socklen_t len = sizeof a;
+        ::getsockname(listener_.get(), reinterpret_cast<sockaddr*>(&a), &len);
+        port_ = ntohs(reinterpret_cast<sockaddr_in*>(&a)->sin_port);
+        thread_ = std::thread([this] { serve(); });
+    }
+    ~BadCrcPeer() {
+        stop_ = true;
+        thread_.join();
+    }
+    std::uint16_t port() const { return port_; }
+    std::atomic<int> accepted{0};
+
+  private:
+    void serve() {
+        std::vector<net::UniqueFd> conns;
+        const auto end = std::chrono::steady_clock::now() + 30s;
+        while (!stop_ && std::chrono::steady_clock::now() < end) {
+            std::vector<pollfd> ps{{listener_.get(), POLLIN, 0}};
+            for (auto& c : conns) ps.push_back({c.get(), POLLIN, 0});
+            if (::poll(ps.data(), ps.size(), 20) <= 0) continue;
+            if (ps[0].revents & POLLIN) {
+                const int fd = ::accept(listener_.get(), nullptr, nullptr);
+                if (fd >= 0) {
+                    conns.emplace_back(fd);
+                    ++accepted;
+                }
+            }
+            for (std::size_t i = 1; i < ps.size(); ++i) {
+                if (!(ps[i].revents & (POLLIN | POLLHUP))) continue;
+                std::uint8_t buf[256];
+                const ssize_t n = ::recv(ps[i].fd, buf, sizeof buf, 0);
+                if (n < 8) continue;
+                // Unit, 03, 8 bytes of registers, then a CRC that is off by one.
+                std::uint8_t answer[13] = {buf[0], 3, 8};
+                const std::uint16_t crc = codec::crc16(codec::Bytes(answer, 11)) ^ 1u;
+                answer[11] = static_cast<std::uint8_t>(crc & 0xFF);
+                answer[12] = static_cast<std::uint8_t>(crc >> 8);
+                (void)::send(ps[i].fd, answer, sizeof answer, MSG_NOSIGNAL);
+            }
+        }
+    }
+    net::UniqueFd listener_;
+    std::uint16_t port_ = 0;
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+};
+
+TEST(RtuOverTcpEngine, BadCrcIsItsOwnErrorClassAndTheConnectionIsRenewed) {
+    BadCrcPeer peer;
+    Plan plan = rtu_plan(peer.port());
+    plan.connections = 1;
+    plan.transactions = 5;
+    plan.reconnect_backoff_min = 1ms;
+    plan.reconnect_backoff_max = 10ms;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.counters.ok(), 0u);
+    EXPECT_EQ(r.run.counters.count(Outcome::CrcError), 5u);
+    EXPECT_EQ(r.crc_errors, 5u);
+    EXPECT_EQ(r.framing_errors, 0u);
+    EXPECT_GE(peer.accepted.load(), 5);
+}
+
+TEST(RtuOverTcpEngine, PlanRefusesPipelining) {
+    Plan plan = rtu_plan(502);
+    plan.depth = 2;
+    const auto problems = validate_plan(plan);
+    ASSERT_EQ(problems.size(), 1u);
+    EXPECT_NE(problems[0].find("RTU over TCP"), std::string::npos) << problems[0];
+    plan.depth = 1;
+    EXPECT_TRUE(validate_plan(plan).empty());
+}
+
+}  // namespace
+}  // namespace mbstorm::load
