@@ -75,7 +75,10 @@ Worker::Worker(WorkerSetup setup)
     for (std::uint32_t i = 0; i < setup_.connections; ++i) {
         connections_.emplace_back(plan_.depth, half, std::uint16_t{0});
         connections_.back().backoff_ns = plan_.reconnect_backoff_min.count();
+        if (plan_.tls) connections_.back().tls = std::make_unique<TlsLink>();
     }
+    // A recv's plaintext is at most its ciphertext plus one record the session held back.
+    if (plan_.tls) tls_plain_.resize(16384 + 17 * 1024);
     dirty_.reserve(setup_.connections);
     ready_.assign(setup_.connections, 0);
     connect_heap_.reserve(setup_.connections);
@@ -410,6 +413,10 @@ int Worker::bind_source(int fd, std::uint32_t index) noexcept {
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
     Connection& c = connections_[index];
+    if (result == 0 && c.tls && c.state == Connection::State::Connecting) {
+        tls_begin(index, now);  // back here once the handshake is done
+        return;
+    }
     if (result == 0) {
         c.state = Connection::State::Open;
         c.backoff_ns = plan_.reconnect_backoff_min.count();
@@ -421,7 +428,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         const std::uint32_t open = open_connections.fetch_add(1, std::memory_order_relaxed) + 1;
         connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
         c.splitter.reset();
-        arm_recv(index);
+        if (!c.recv_armed) arm_recv(index);
         if (open_loop_ && !pacer_started_ && started_) {
             pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
             pacer_started_ = true;
@@ -437,7 +444,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
     if (!setup_.any_connected->load(std::memory_order_relaxed)) {
         // Nothing ever connected: the target is wrong or down. Say so now, not after retries.
         const std::string reason =
-            result == -ECANCELED
+            result == -EPROTO && !tls_error_.empty() ? "TLS handshake failed: " + tls_error_
+            : result == -ECANCELED
                 ? fmt::format("no answer within the connect timeout ({}s)",
                               std::chrono::duration<double>(plan_.connect_timeout).count())
                 : std::system_category().message(-result);
@@ -459,6 +467,7 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
 void Worker::drop_socket(Connection& c) noexcept {
     if (c.state == Connection::State::Open)
         open_connections.fetch_sub(1, std::memory_order_relaxed);
+    if (c.tls) tls_end(c);
     close_socket(c);
     // A new generation makes the old socket's late completions stale.
     c.generation = net::next_generation(c.generation);
@@ -551,8 +560,15 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (!more) c.recv_armed = false;
 
     if (cqe.res > 0 && has_buffer) {
-        c.splitter.feed(
-            codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
+        codec::Bytes input(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
+        if (c.tls && !tls_input(index, input, now)) {
+            buf_ring_.recycle(buffer_id);
+            if ((c.state == Connection::State::Handshaking || c.state == Connection::State::Open) &&
+                !c.recv_armed)
+                arm_recv(index);
+            return;
+        }
+        c.splitter.feed(input);
         codec::TcpFrame frame;
         bool fatal = false;
         for (bool done = false; !done;) {
@@ -590,6 +606,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         return;
     }
     if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
+    if (c.tls && !tls_answered_) tls_refused("the target closed the connection");
     ++connection_stats.closed_by_peer;
     if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);
@@ -654,6 +671,7 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (ud.generation != c.generation || stopping_) {
         // The socket it went to is gone; its buffer half is free again.
         c.send_in_flight = false;
+        if (c.tls && !stopping_) tls_pump(index);  // a new connection's handshake waited
         if (c.state == Connection::State::Open && c.queued > 0) dirty_.mark(c.dirty, index);
         return;
     }
@@ -665,14 +683,16 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
         io_uring_sqe* sqe = ring_.sqe();
-        io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
-                           c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
+        const std::uint8_t* base = c.tls ? c.tls->cipher.data() : c.inflight_data();
+        io_uring_prep_send(sqe, c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
+                           MSG_NOSIGNAL);
         net::use_slot_if(sqe, direct_);
         io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
     c.send_in_flight = false;
+    if (c.tls) tls_pump(index);
     if (c.queued > 0) dirty_.mark(c.dirty, index);
 }
 
@@ -760,6 +780,10 @@ void Worker::flush() noexcept {
         Connection& c = connections_[index];
         c.dirty = false;
         if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) return;
+        if (c.tls) {
+            tls_send_queued(index);
+            return;
+        }
         io_uring_sqe* sqe = ring_.sqe();
         if (sqe == nullptr) return;
         io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);

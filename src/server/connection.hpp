@@ -9,6 +9,7 @@
 
 #include "codec/mbap.hpp"
 #include "server/out_queue.hpp"
+#include "server/tls_link.hpp"
 
 namespace mbstorm::server {
 
@@ -55,6 +56,7 @@ struct Connection {
     OutQueue out;
     std::unique_ptr<std::uint8_t[]> plain_buf;  // only without a buffer ring
     codec::MbapSplitter splitter;
+    std::unique_ptr<TlsLink> tls;  // --transport tls only
 };
 
 }  // namespace mbstorm::server
