@@ -97,7 +97,8 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
         return "--serial and --transport exclude each other (a serial line is its own transport)";
     if (kind == TransportKind::Tcp) return {};
     if (kind == TransportKind::Tls) {
-        if (command == "serve" || command == "run") return {};
+        if (command == "serve" || command == "run" || command == "read" || command == "write")
+            return {};
     }
     // Each transport lifts this as it reaches the subcommand.
     return fmt::format("--{} is not supported by {} yet",

@@ -4,7 +4,8 @@
 #  - pymodbus's TLS client against `mbstorm serve --transport tls` (tls_pymodbus_client.py:
 #    TLS 1.2 and 1.3, the role allow-list's exception 01, refused certificates);
 #  - `mbstorm run --transport tls` against pymodbus's TLS server, with and without
-#    --tls-resume: every transaction answered, handshakes counted, resumptions seen.
+#    --tls-resume: every transaction answered, handshakes counted, resumptions seen;
+#  - `mbstorm read`/`write --transport tls` against both.
 #   bash tls_pymodbus.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -20,6 +21,14 @@ fi
 make_tls_certs "$work" || { echo "FAIL: openssl could not make the certificates"; exit 1; }
 tls=(--transport tls --tls-ca "$work/ca.pem")
 fail=0
+# expect <name> <wanted exit code> <wanted text> <mbstorm args...>
+expect() {
+  local name=$1 code=$2 text=$3; shift 3
+  local out rc
+  out=$(timeout -k 5 30 "$mbstorm" "$@" 2>&1); rc=$?
+  if [ "$rc" = "$code" ] && [[ "$out" == *"$text"* ]]; then echo "ok   $name"
+  else echo "FAIL $name: exit $rc, wanted $code and '$text'"; sed 's/^/  /' <<<"$out"; fail=1; fi
+}
 # json_counts FILE: transactions, errors, TLS handshakes and resumptions of a run's --json.
 json_counts() {
   /usr/bin/python3 -c '
@@ -36,6 +45,11 @@ print(r["totals"]["transactions"], r["totals"]["errors"], c["tls_handshakes"], c
 server_pid=$!
 if wait_for 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve.out"; then
   timeout -k 5 60 /usr/bin/python3 "$scripts/tls_pymodbus_client.py" "$found" "$work" || fail=1
+  # mbstorm's own one-shot client: the Viewer's write is exception 01, its read is allowed.
+  viewer=("${tls[@]}" --tls-cert "$work/viewer.pem" --tls-key "$work/viewer.key")
+  expect "read as Viewer" 0 "[0]: 0" read "${viewer[@]}" --target "127.0.0.1:$found" --addr 40001
+  expect "write as Viewer refused" 1 "ILLEGAL FUNCTION" write "${viewer[@]}" \
+    --target "127.0.0.1:$found" --addr 40001 7
 else
   echo "FAIL: mbstorm serve --transport tls did not start"; cat "$work/serve.out"; fail=1
 fi
@@ -45,6 +59,10 @@ stop_server
 start_server "$work/py.out" /usr/bin/python3 "$scripts/tls_pymodbus_server.py" "$work" \
   --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
 client=("${tls[@]}" --tls-cert "$work/operator.pem" --tls-key "$work/operator.key")
+expect "write to pymodbus" 0 "wrote 2 register(s)" write "${client[@]}" \
+  --target "127.0.0.1:$port" --addr 40021 1234 5678
+expect "read back from pymodbus" 0 $'[20]: 1234\n[21]: 5678' read "${client[@]}" \
+  --target "127.0.0.1:$port" --addr 40021 -q 2
 for resume in "" --tls-resume; do
   out=$(timeout -k 5 60 "$mbstorm" run --target "127.0.0.1:$port" "${client[@]}" $resume \
         -c 4 --depth 1 -d 1s --warmup 0 --fc 3 --addr 0 --count 10 --json "$work/run.json" 2>&1)
