@@ -606,7 +606,6 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         return;
     }
     if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
-    if (c.tls && !tls_answered_) tls_refused("the target closed the connection");
     ++connection_stats.closed_by_peer;
     if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);

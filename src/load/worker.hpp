@@ -114,7 +114,7 @@ class Worker {
     void tls_send_queued(std::uint32_t index) noexcept;
     void tls_pump(std::uint32_t index) noexcept;
     void tls_end(Connection& c) noexcept;  // the socket goes: keep the session to resume
-    void tls_refused(const std::string& why) noexcept;  // before any answer: the run stops
+    void tls_refused(const std::string& why) noexcept;  // an alert before any answer: stop
 
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
