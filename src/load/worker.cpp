@@ -801,6 +801,7 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
     const std::int64_t deadline = now - plan_.transaction_timeout.count();
     for (std::uint32_t index = 0; index < connections_.size(); ++index) {
         Connection& c = connections_[index];
+        if (c.state == Connection::State::Handshaking) tls_check_handshake_time(index, now);
         if (c.state != Connection::State::Open || c.table.outstanding() == 0) continue;
         const std::uint32_t expired = c.table.expire(deadline, [&](const Transaction& t) {
             --outstanding_;

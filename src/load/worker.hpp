@@ -115,6 +115,8 @@ class Worker {
     void tls_pump(std::uint32_t index) noexcept;
     void tls_end(Connection& c) noexcept;  // the socket goes: keep the session to resume
     void tls_refused(const std::string& why) noexcept;  // an alert before any answer: stop
+    // A handshake gets the connect timeout too: a peer that accepts and never answers fails.
+    void tls_check_handshake_time(std::uint32_t index, std::int64_t now) noexcept;
 
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);

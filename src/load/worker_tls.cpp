@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 
 #include <fmt/format.h>
 
@@ -90,6 +91,14 @@ void Worker::tls_refused(const std::string& why) noexcept {
     // proves nothing: fault-injecting servers close before answering too.)
     fatal_error = fmt::format("cannot talk to {}: TLS session refused: {}", setup_.target, why);
     setup_.abort->store(true);
+}
+
+void Worker::tls_check_handshake_time(std::uint32_t index, std::int64_t now) noexcept {
+    const TlsLink& t = *connections_[index].tls;
+    if (now - t.handshake_started_ns < plan_.connect_timeout.count()) return;
+    tls_error_ = fmt::format("no handshake within the connect timeout ({}s)",
+                             std::chrono::duration<double>(plan_.connect_timeout).count());
+    on_connect(index, -EPROTO, now);
 }
 
 void Worker::tls_send_queued(std::uint32_t index) noexcept {

@@ -114,4 +114,20 @@ if wait_for 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve2.out"
 else
   echo "FAIL: mbstorm serve --transport tls did not start"; fail=1
 fi
+stop_server
+
+# 5. A peer that accepts the TCP connection and never answers the ClientHello: the handshake
+# fails at the connect timeout instead of hanging the connection.
+start_server "$work/silent.out" /usr/bin/python3 -c '
+import socket, time
+s = socket.socket(); s.bind(("127.0.0.1", 0)); s.listen(16)
+print("PORT", s.getsockname()[1], flush=True)
+held = []
+while True:
+    held.append(s.accept()[0])' || { echo "FAIL: silent listener did not start"; exit 1; }
+out=$(timeout -k 5 30 "$mbstorm" run --target "127.0.0.1:$port" "${client[@]}" -c 1 -d 5s \
+      --connect-timeout 300ms 2>&1); rc=$?
+if [ "$rc" != 0 ] && [[ "$out" == *"no handshake within the connect timeout"* ]]; then
+  echo "ok   a silent peer fails the handshake at the connect timeout"
+else echo "FAIL silent peer: exit $rc"; sed 's/^/  /' <<<"$out" | head; fail=1; fi
 exit $fail
