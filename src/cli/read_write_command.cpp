@@ -304,7 +304,8 @@ int run_io(const IoOptions& o) {
         return usage(fault);
 
     std::string error;
-    if (!net::parse_endpoint(o.target, p.target, &error, 502))
+    const bool tls_port = o.transport.kind() == TransportKind::Tls;
+    if (!net::parse_endpoint(o.target, p.target, &error, tls_port ? 802 : 502))
         return usage(fmt::format("--target '{}': {}", o.target, error));
     if (o.write) {
         load::Operation op;
@@ -314,8 +315,10 @@ int run_io(const IoOptions& o) {
         if (!verdict.allowed) return usage(verdict.message);
     }
     const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
+    std::shared_ptr<net::TlsContext> tls;
+    if (std::string e = client_tls(o.transport, tls); !e.empty()) return usage(e);
     ModbusClient client(o.transport.framing_kind());
-    if (auto why = client.connect(p.target, timeout_ms); !why.empty())
+    if (auto why = client.connect(p.target, timeout_ms, tls); !why.empty())
         return usage(fmt::format("cannot connect to {}: {}", p.target.to_string(), why));
 
     int exit_code = kExitOk;

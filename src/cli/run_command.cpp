@@ -136,6 +136,11 @@ int run_load_test(RunOptions& o) {
     // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
     // there is no target, and reports the same way.
     scenario::Scenario s = scenario::scenario_from_plan(plan, o.target);
+    if (auto e = client_tls(o.transport, s.plan.tls); !e.empty()) return usage_error("run", e);
+    if (s.plan.tls && o.target.empty())
+        return usage_error("run",
+                           "--transport tls needs --target (the embedded slave is plain TCP)");
+    s.plan.tls_resume = o.transport.tls_resume;
     s.name.clear();
     s.slave_threads = o.slave_threads;
     fmt::print(
@@ -165,6 +170,8 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
                 fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
     }
     ScenarioRunRequest r;
+    if (auto e = client_tls(o.transport, r.tls); !e.empty()) return usage_error("run", e);
+    r.tls_resume = o.transport.tls_resume;
     r.file = o.scenario_file;
     r.print = o.print_scenario;
     r.junit = o.junit;

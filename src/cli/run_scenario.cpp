@@ -233,6 +233,11 @@ int run_scenario_file(const ScenarioRunRequest& request) {
         fmt::print("{}", scenario::format_scenario(s));
         return kExitOk;
     }
+    if (request.tls && s.target.empty())
+        return usage_error("run",
+                           "--transport tls needs a target (the embedded slave is plain TCP)");
+    s.plan.tls = request.tls;
+    s.plan.tls_resume = request.tls_resume;
 
     const auto& plan = s.plan;
     fmt::print(stderr,

@@ -20,6 +20,8 @@ struct ScenarioRunRequest {
     OutputFiles outputs;
     load::Plan::Shard shard;  // --shard or the environment; count 0: the whole plan
     std::optional<std::chrono::system_clock::time_point> start_at;  // --start-at
+    std::shared_ptr<net::TlsContext> tls;                           // --transport tls
+    bool tls_resume = false;
 };
 
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.

@@ -42,6 +42,18 @@ int run_serve(ServeOptions& o) {
         return usage_error("serve", e);
     auto& c = o.config;
     if (o.transport.kind() == TransportKind::RtuOverTcp) c.framing = codec::Framing::Rtu;
+    if (o.transport.kind() == TransportKind::Tls) {
+        std::string error;
+        c.tls = net::TlsContext::create(
+            net::TlsSide::Server, {o.transport.tls_cert, o.transport.tls_key, o.transport.tls_ca},
+            error);
+        if (!c.tls) return usage_error("serve", error);
+        for (const std::string& rule : o.transport.tls_roles)
+            if (!c.tls_roles.add_rule(rule, error)) return usage_error("serve", error);
+        c.default_port = 802;
+    } else if (!o.transport.tls_roles.empty()) {
+        return usage_error("serve", "--tls-role needs --transport tls");
+    }
     std::optional<slave::DeviceDescription> device;
     std::unique_ptr<slave::UnitModels> units;
     if (!o.device_file.empty()) {
@@ -113,7 +125,7 @@ void add_serve_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
     cmd->add_option("--listen,-l", o->config.listen,
                     "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
-                    "port 502 if omitted")
+                    "port 502 if omitted (802 with --transport tls)")
         ->capture_default_str();
     add_transport_options(cmd, o->transport, TransportSide::Server);
     cmd->add_option("--threads,-t", o->config.threads,

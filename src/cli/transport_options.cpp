@@ -76,6 +76,19 @@ void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide sid
     if (!server)
         cmd->add_flag("--tls-resume", o.tls_resume,
                       "TLS: resume the session when a connection is reopened");
+    if (server)
+        cmd->add_option("--tls-role", o.tls_roles,
+                        "TLS: ROLE=FC,FC-FC,... lets clients whose certificate names ROLE use "
+                        "those function codes (repeatable); once any is given, other requests "
+                        "get exception 01 (default: every role may use every function)");
+}
+
+std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out) {
+    out.reset();
+    if (o.kind() != TransportKind::Tls) return {};
+    std::string error;
+    out = net::TlsContext::create(net::TlsSide::Client, {o.tls_cert, o.tls_key, o.tls_ca}, error);
+    return error;
 }
 
 std::string check_transport(const TransportOptions& o, std::string_view command) {
@@ -87,6 +100,10 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
     if (kind == TransportKind::RtuOverTcp &&
         (command == "serve" || command == "run" || command == "read" || command == "write"))
         return {};
+    if (kind == TransportKind::Tls) {
+        if (command == "serve" || command == "run" || command == "read" || command == "write")
+            return {};
+    }
     // Each transport lifts this as it reaches the subcommand.
     return fmt::format("--{} is not supported by {} yet",
                        kind == TransportKind::Serial

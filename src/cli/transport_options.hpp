@@ -5,11 +5,15 @@
 
 #include <CLI/CLI.hpp>
 
+#include <memory>
+
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "codec/framing.hpp"
+#include "net/tls_context.hpp"
 
 namespace mbstorm::cli {
 
@@ -36,10 +40,11 @@ struct TransportOptions {
     std::string framing = "rtu";  // rtu | ascii
 
     // TLS (Modbus/TCP Security).
-    std::string tls_cert;     // own certificate (PEM)
-    std::string tls_key;      // its private key (PEM)
-    std::string tls_ca;       // CA certificates that sign the peer's certificate (PEM)
-    bool tls_resume = false;  // client: resume sessions on reconnect
+    std::string tls_cert;                // own certificate (PEM)
+    std::string tls_key;                 // its private key (PEM)
+    std::string tls_ca;                  // CA certificates that sign the peer's certificate (PEM)
+    bool tls_resume = false;             // client: resume sessions on reconnect
+    std::vector<std::string> tls_roles;  // server: ROLE=FC,FC-FC,... allow-list rules
 
     TransportKind kind() const noexcept;
     codec::Framing framing_kind() const noexcept;
@@ -52,5 +57,9 @@ void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide sid
 std::string check_transport(const TransportOptions& o, std::string_view command);
 
 std::string_view transport_name(TransportKind kind) noexcept;
+
+// --transport tls on a client: the TLS context from the certificate options into `out` (left
+// empty for other transports). Empty, or why the files cannot be used.
+std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out);
 
 }  // namespace mbstorm::cli

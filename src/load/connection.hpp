@@ -8,12 +8,13 @@
 
 #include "codec/mbap.hpp"
 #include "codec/rtu_stream.hpp"
+#include "load/tls_link.hpp"
 #include "load/transaction_table.hpp"
 
 namespace mbstorm::load {
 
 struct Connection {
-    enum class State : std::uint8_t { Waiting, Connecting, Open };
+    enum class State : std::uint8_t { Waiting, Connecting, Handshaking, Open };
 
     Connection(std::uint32_t depth, std::uint32_t send_half_bytes, std::uint16_t first_id)
         : table(depth, first_id),
@@ -55,6 +56,7 @@ struct Connection {
 
     std::int64_t backoff_ns = 0;
     std::int64_t connect_started_ns = 0;
+    std::unique_ptr<TlsLink> tls;  // --transport tls only
 };
 
 }  // namespace mbstorm::load

@@ -86,6 +86,11 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.connections.failed += w->connection_stats.failed;
         run.connections.reconnects += w->connection_stats.reconnects;
         run.connections.closed_by_peer += w->connection_stats.closed_by_peer;
+        run.connections.tls_handshakes += w->connection_stats.tls_handshakes;
+        run.connections.tls_resumed += w->connection_stats.tls_resumed;
+        run.connections.tls_handshake_ns_total += w->connection_stats.tls_handshake_ns_total;
+        run.connections.tls_handshake_ns_max = std::max(run.connections.tls_handshake_ns_max,
+                                                        w->connection_stats.tls_handshake_ns_max);
         run.connections.peak_open += w->connection_stats.peak_open;
         run.pipelining.skipped_requests += w->skipped_requests;
         for (std::size_t i = 0; i < w->stages.size(); ++i) {

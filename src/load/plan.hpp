@@ -4,12 +4,15 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "codec/framing.hpp"
 #include "codec/function_code.hpp"
+
+#include "net/tls_context.hpp"
 
 namespace mbstorm::load {
 
@@ -67,6 +70,10 @@ struct Stage {
 struct Plan {
     // Target.
     std::string host = "127.0.0.1";  // numeric IPv4/IPv6 or a host name
+    // Modbus/TCP Security: set, every connection is TLS (mutual authentication), MBAP inside;
+    // `tls_resume` offers the previous session when a connection reopens.
+    std::shared_ptr<net::TlsContext> tls;
+    bool tls_resume = false;
     std::uint16_t port = 502;
     // Local addresses the connections are bound to, round-robin (net/source_addresses.hpp's
     // list and range syntax); empty: the kernel picks. Each address has its own ephemeral

@@ -79,7 +79,10 @@ Worker::Worker(WorkerSetup setup)
         if (plan_.framing == codec::Framing::Rtu)
             connections_.back().rtu =
                 std::make_unique<codec::RtuSplitter>(codec::RtuSplitter::Direction::Responses);
+        if (plan_.tls) connections_.back().tls = std::make_unique<TlsLink>();
     }
+    // A recv's plaintext is at most its ciphertext plus one record the session held back.
+    if (plan_.tls) tls_plain_.resize(16384 + 17 * 1024);
     dirty_.reserve(setup_.connections);
     ready_.assign(setup_.connections, 0);
     connect_heap_.reserve(setup_.connections);
@@ -414,6 +417,10 @@ int Worker::bind_source(int fd, std::uint32_t index) noexcept {
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
     Connection& c = connections_[index];
+    if (result == 0 && c.tls && c.state == Connection::State::Connecting) {
+        tls_begin(index, now);  // back here once the handshake is done
+        return;
+    }
     if (result == 0) {
         c.state = Connection::State::Open;
         c.backoff_ns = plan_.reconnect_backoff_min.count();
@@ -426,7 +433,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
         c.splitter.reset();
         if (c.rtu) c.rtu->reset();
-        arm_recv(index);
+        if (!c.recv_armed) arm_recv(index);
         if (open_loop_ && !pacer_started_ && started_) {
             pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
             pacer_started_ = true;
@@ -442,7 +449,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
     if (!setup_.any_connected->load(std::memory_order_relaxed)) {
         // Nothing ever connected: the target is wrong or down. Say so now, not after retries.
         const std::string reason =
-            result == -ECANCELED
+            result == -EPROTO && !tls_error_.empty() ? "TLS handshake failed: " + tls_error_
+            : result == -ECANCELED
                 ? fmt::format("no answer within the connect timeout ({}s)",
                               std::chrono::duration<double>(plan_.connect_timeout).count())
                 : std::system_category().message(-result);
@@ -464,6 +472,7 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
 void Worker::drop_socket(Connection& c) noexcept {
     if (c.state == Connection::State::Open)
         open_connections.fetch_sub(1, std::memory_order_relaxed);
+    if (c.tls) tls_end(c);
     close_socket(c);
     // A new generation makes the old socket's late completions stale.
     c.generation = net::next_generation(c.generation);
@@ -574,8 +583,15 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         return;
     }
     if (cqe.res > 0 && has_buffer) {
-        c.splitter.feed(
-            codec::Bytes(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res)));
+        codec::Bytes input(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
+        if (c.tls && !tls_input(index, input, now)) {
+            buf_ring_.recycle(buffer_id);
+            if ((c.state == Connection::State::Handshaking || c.state == Connection::State::Open) &&
+                !c.recv_armed)
+                arm_recv(index);
+            return;
+        }
+        c.splitter.feed(input);
         codec::TcpFrame frame;
         bool fatal = false;
         for (bool done = false; !done;) {
@@ -677,6 +693,7 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (ud.generation != c.generation || stopping_) {
         // The socket it went to is gone; its buffer half is free again.
         c.send_in_flight = false;
+        if (c.tls && !stopping_) tls_pump(index);  // a new connection's handshake waited
         if (c.state == Connection::State::Open && c.queued > 0) dirty_.mark(c.dirty, index);
         return;
     }
@@ -688,14 +705,16 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
         io_uring_sqe* sqe = ring_.sqe();
-        io_uring_prep_send(sqe, c.fd, c.inflight_data() + c.inflight_done,
-                           c.inflight_len - c.inflight_done, MSG_NOSIGNAL);
+        const std::uint8_t* base = c.tls ? c.tls->cipher.data() : c.inflight_data();
+        io_uring_prep_send(sqe, c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
+                           MSG_NOSIGNAL);
         net::use_slot_if(sqe, direct_);
         io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
     c.send_in_flight = false;
+    if (c.tls) tls_pump(index);
     if (c.queued > 0) dirty_.mark(c.dirty, index);
 }
 
@@ -784,6 +803,10 @@ void Worker::flush() noexcept {
         Connection& c = connections_[index];
         c.dirty = false;
         if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) return;
+        if (c.tls) {
+            tls_send_queued(index);
+            return;
+        }
         io_uring_sqe* sqe = ring_.sqe();
         if (sqe == nullptr) return;
         io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
@@ -802,6 +825,7 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
     const std::int64_t deadline = now - plan_.transaction_timeout.count();
     for (std::uint32_t index = 0; index < connections_.size(); ++index) {
         Connection& c = connections_[index];
+        if (c.state == Connection::State::Handshaking) tls_check_handshake_time(index, now);
         if (c.state != Connection::State::Open || c.table.outstanding() == 0) continue;
         const std::uint32_t expired = c.table.expire(deadline, [&](const Transaction& t) {
             --outstanding_;

@@ -113,6 +113,19 @@ class Worker {
     void on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
     void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
 
+    // TLS (worker_tls.cpp). tls_begin: TCP is up, the handshake starts. tls_input: ciphertext
+    // in; `data` becomes the plaintext it held; false when there is none to take (handshake
+    // still going, or the connection was closed). tls_send_queued: the queued requests
+    // encrypted and sent; tls_pump: whatever ciphertext the session has, sent.
+    void tls_begin(std::uint32_t index, std::int64_t now) noexcept;
+    bool tls_input(std::uint32_t index, codec::Bytes& data, std::int64_t now) noexcept;
+    void tls_send_queued(std::uint32_t index) noexcept;
+    void tls_pump(std::uint32_t index) noexcept;
+    void tls_end(Connection& c) noexcept;  // the socket goes: keep the session to resume
+    void tls_refused(const std::string& why) noexcept;  // an alert before any answer: stop
+    // A handshake gets the connect timeout too: a peer that accepts and never answers fails.
+    void tls_check_handshake_time(std::uint32_t index, std::int64_t now) noexcept;
+
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
     }
@@ -162,6 +175,9 @@ class Worker {
     std::int64_t sweep_interval_ns_ = 0;
     __kernel_timespec connect_timeout_ts_{};
     codec::Response response_scratch_;
+    std::vector<std::uint8_t> tls_plain_;  // decrypted input of one recv
+    std::string tls_error_;                // why the last handshake failed
+    bool tls_answered_ = false;            // a TLS session here has carried a response
 };
 
 }  // namespace mbstorm::load

@@ -139,6 +139,18 @@ std::string format_console_report(const stats::RunResult& r) {
                        format_count(r.connections.opened), format_count(r.connections.failed),
                        format_count(r.connections.reconnects),
                        format_count(r.connections.closed_by_peer));
+    if (r.connections.tls_handshakes != 0) {
+        const auto& cs = r.connections;
+        out += fmt::format(
+            "TLS         {} handshakes ({:.0f}/s), {} resumed, latency mean {:.3f} ms, max {:.3f} "
+            "ms\n",
+            format_count(cs.tls_handshakes),
+            static_cast<double>(cs.tls_handshakes) / (seconds > 0 ? seconds : 1.0),
+            format_count(cs.tls_resumed),
+            static_cast<double>(cs.tls_handshake_ns_total) /
+                static_cast<double>(cs.tls_handshakes) / 1e6,
+            static_cast<double>(cs.tls_handshake_ns_max) / 1e6);
+    }
     for (const auto& line : schedule_lines(r)) out += fmt::format("Schedule    {}\n", line);
     if (!r.shortfalls.empty()) {
         out += "Plan        NOT carried out:\n";

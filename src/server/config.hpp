@@ -3,6 +3,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -11,6 +12,9 @@
 #include "slave/faults.hpp"
 
 #include "slave/simulator.hpp"
+
+#include "net/tls_context.hpp"
+#include "server/tls_link.hpp"
 
 namespace mbstorm::slave {
 class DataModel;
@@ -33,7 +37,8 @@ struct ServerConfig {
     std::string listen = "127.0.0.1:5020";  // port 0: ephemeral (see Server::port())
     // Mbap: Modbus TCP. Rtu: RTU over TCP (address, PDU, CRC; no MBAP), as gateways speak.
     codec::Framing framing = codec::Framing::Mbap;
-    unsigned threads = 0;  // 0: one per core
+    std::uint16_t default_port = 502;  // when `listen` names none (TLS: 802)
+    unsigned threads = 0;              // 0: one per core
 
     std::uint32_t max_connections = 16384;  // across all threads; 0: unlimited
     FullPolicy full_policy = FullPolicy::EvictOldestIdle;
@@ -59,6 +64,11 @@ struct ServerConfig {
     ForeignUnitPolicy foreign_unit = ForeignUnitPolicy::NoAnswer;
 
     slave::FaultConfig faults;
+
+    // Modbus/TCP Security: set, every connection is TLS (mutual authentication) with MBAP
+    // inside, and requests are checked against the client's role.
+    std::shared_ptr<net::TlsContext> tls;
+    TlsRoles tls_roles;
 
     // The shared data model; nullptr: the server owns a default one.
     slave::DataModel* model = nullptr;

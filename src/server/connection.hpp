@@ -10,6 +10,7 @@
 #include "codec/mbap.hpp"
 #include "codec/rtu_stream.hpp"
 #include "server/out_queue.hpp"
+#include "server/tls_link.hpp"
 
 namespace mbstorm::server {
 
@@ -58,6 +59,7 @@ struct Connection {
     codec::MbapSplitter splitter;
     // RTU over TCP only: made when the slot is first used, kept for its next connections.
     std::unique_ptr<codec::RtuSplitter> rtu;
+    std::unique_ptr<TlsLink> tls;  // --transport tls only
 };
 
 }  // namespace mbstorm::server

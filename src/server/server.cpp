@@ -33,7 +33,8 @@ bool Server::start(std::string* error) {
     if (std::string v = slave::validate(config_.faults); !v.empty()) return fail(v);
     net::Endpoint ep;
     std::string parse_error;
-    if (!net::parse_endpoint(config_.listen, ep, &parse_error, 502)) return fail(parse_error);
+    if (!net::parse_endpoint(config_.listen, ep, &parse_error, config_.default_port))
+        return fail(parse_error);
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
     if (config_.use_direct_descriptors && net::features().direct_descriptors)

@@ -35,6 +35,10 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     pending_output += o.pending_output;
     if (o.pending_output_peak > pending_output_peak) pending_output_peak = o.pending_output_peak;
     output_blocks += o.output_blocks;
+    tls_handshakes += o.tls_handshakes;
+    tls_resumed += o.tls_resumed;
+    tls_refused += o.tls_refused;
+    tls_role_denied += o.tls_role_denied;
     for (std::size_t i = 0; i < requests_by_function.size(); ++i)
         requests_by_function[i] += o.requests_by_function[i];
     return *this;
@@ -68,6 +72,10 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.pending_output = v(PendingOutput);
     s.pending_output_peak = v(PendingOutputPeak);
     s.output_blocks = v(OutputBlocks);
+    s.tls_handshakes = v(TlsHandshakes);
+    s.tls_resumed = v(TlsResumed);
+    s.tls_refused = v(TlsRefused);
+    s.tls_role_denied = v(TlsRoleDenied);
     for (std::size_t i = 0; i < by_function_.size(); ++i)
         s.requests_by_function[i] = by_function_[i].load(std::memory_order_relaxed);
     return s;
@@ -105,23 +113,27 @@ std::string format_stats_line(const ServerStats& now, const ServerStats& before,
 std::string format_summary(const ServerStats& t, double elapsed_s) {
     const double secs = elapsed_s > 0 ? elapsed_s : 1.0;
     return fmt::format(
-        "summary: {:.1f}s, {} transactions ({:.0f}/s), {} requests\n"
-        "  connections: {} total, {} open, {} idle-closed, {} closed for a slow frame, {} evicted, "
-        "{} refused, "
-        "{} accepts out of fds (EMFILE/ENFILE)\n"
-        "  bytes: {} in, {} out\n"
-        "  exceptions: {} ({})\n"
-        "  framing: {} discarded (protocol id != 0), {} closed for bad length, {} closed for a "
-        "bad CRC\n"
-        "  emulation: {} busy (06), {} other-unit requests\n"
-        "  faults: {} delayed, {} dropped connections, {} unanswered\n"
-        "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
-        elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
-        t.connections_total, t.connections_current, t.idle_closes, t.frame_timeouts, t.evictions,
-        t.refusals, t.accept_fd_exhausted, t.bytes_in, t.bytes_out, t.exceptions_total(),
-        exceptions_text(t), t.discarded_frames, t.bad_framing_closes, t.crc_errors, t.busy_rejects,
-        t.foreign_unit, t.fault_delayed, t.fault_drops, t.fault_no_answer, t.backpressure_pauses,
-        t.pending_output_peak, t.output_blocks);
+               "summary: {:.1f}s, {} transactions ({:.0f}/s), {} requests\n"
+               "  connections: {} total, {} open, {} idle-closed, {} closed for a slow frame, {} "
+               "evicted, {} refused, {} accepts out of fds (EMFILE/ENFILE)\n"
+               "  bytes: {} in, {} out\n"
+               "  exceptions: {} ({})\n"
+               "  framing: {} discarded (protocol id != 0), {} closed for bad length, {} closed "
+               "for a bad CRC\n"
+               "  emulation: {} busy (06), {} other-unit requests\n"
+               "  faults: {} delayed, {} dropped connections, {} unanswered\n"
+               "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
+               elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
+               t.connections_total, t.connections_current, t.idle_closes, t.frame_timeouts,
+               t.evictions, t.refusals, t.accept_fd_exhausted, t.bytes_in, t.bytes_out,
+               t.exceptions_total(), exceptions_text(t), t.discarded_frames, t.bad_framing_closes,
+               t.crc_errors, t.busy_rejects, t.foreign_unit, t.fault_delayed, t.fault_drops,
+               t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak, t.output_blocks) +
+           (t.tls_handshakes + t.tls_refused == 0
+                ? std::string()
+                : fmt::format("  tls: {} handshakes ({} resumed), {} refused at the handshake, {} "
+                              "requests denied to their role (01)\n",
+                              t.tls_handshakes, t.tls_resumed, t.tls_refused, t.tls_role_denied));
 }
 
 }  // namespace mbstorm::server

@@ -31,9 +31,13 @@ struct ServerStats {
     std::uint64_t fault_no_answer = 0;
     std::uint64_t fault_delayed = 0;
     std::uint64_t backpressure_pauses = 0;
-    std::uint64_t pending_output = 0;                       // bytes queued for sending right now
-    std::uint64_t pending_output_peak = 0;                  // largest queue one connection ever had
-    std::uint64_t output_blocks = 0;                        // output blocks allocated (pooled)
+    std::uint64_t pending_output = 0;       // bytes queued for sending right now
+    std::uint64_t pending_output_peak = 0;  // largest queue one connection ever had
+    std::uint64_t output_blocks = 0;        // output blocks allocated (pooled)
+    std::uint64_t tls_handshakes = 0;       // --transport tls: handshakes completed
+    std::uint64_t tls_resumed = 0;          // of them, sessions resumed
+    std::uint64_t tls_refused = 0;          // closed at the handshake (certificate, role, protocol)
+    std::uint64_t tls_role_denied = 0;  // requests answered 01: the role may not use the function
     std::array<std::uint64_t, 256> requests_by_function{};  // well-framed requests, by code byte
 
     std::uint64_t exceptions_total() const noexcept;
@@ -66,6 +70,10 @@ class ServerCounters {
         PendingOutputPeak,
         OutputBlocks,
         CrcErrors,
+        TlsHandshakes,
+        TlsResumed,
+        TlsRefused,
+        TlsRoleDenied,
         kCount
     };
 

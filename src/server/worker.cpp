@@ -76,6 +76,7 @@ int Worker::setup() noexcept {
         held_.reserve(expect);
         partial_.reserve(expect);
         pool_.prewarm(config_.prealloc_output_blocks);
+        if (config_.tls) tls_plain_.resize(16 * 1024);  // one TLS record's plaintext at most
         if (use_buf_ring_) {
             stash_next_.assign(config_.buf_ring_count, kNoBuffer);
             stash_size_.assign(config_.buf_ring_count, 0);
@@ -353,6 +354,21 @@ void Worker::admit(int fd) noexcept {
     c.unanswered = 0;
     c.splitter.reset();
     if (c.rtu) c.rtu->reset();
+    if (config_.tls) {
+        try {
+            c.tls = std::make_unique<TlsLink>(config_.tls);
+        } catch (...) {
+            c.tls.reset();
+        }
+        if (!c.tls || !c.tls->session.valid()) {
+            c.tls.reset();
+            c.state = Connection::State::Free;
+            free_slots_.push_back(index);
+            counters_.add(ServerCounters::Refusals);
+            close_socket(fd);
+            return;
+        }
+    }
     c.last_active_ns = now_ ? now_ : net::now_ns();
     lru_push_back(index);
     ++open_here_;
@@ -406,6 +422,7 @@ void Worker::maybe_release(std::uint32_t index) noexcept {
     counters_.sub(ServerCounters::PendingOutput, c.out.bytes());
     c.out.clear(pool_);
     c.splitter.reset();
+    c.tls.reset();
     c.hold_pos = kNoHold;
     c.frame_started_ns = 0;
     c.state = Connection::State::Free;
@@ -466,7 +483,8 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
 void Worker::close_if_answered(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     if (c.state != Connection::State::Open || !(c.peer_done || c.framing_lost)) return;
-    if (c.out.empty() && c.stash_head == kNoBuffer) close_connection(index);
+    if (c.out.empty() && c.stash_head == kNoBuffer && !(c.tls && c.tls->has_output()))
+        close_connection(index);
 }
 
 void Worker::lose_framing(std::uint32_t index, bool crc) noexcept {
@@ -524,6 +542,15 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
 
 void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
                            std::size_t size) noexcept {
+    if (conns_[index].tls) {
+        tls_input(index, data, size);
+        return;
+    }
+    consume_frames(index, data, size);
+}
+
+void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
+                            std::size_t size) noexcept {
     Connection& c = conns_[index];
     if (c.rtu) return consume_rtu_input(index, data, size);
     c.splitter.feed(codec::Bytes(data, size));
@@ -567,6 +594,12 @@ void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool complet
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     counters_.add(ServerCounters::Requests);
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
+    if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
+        counters_.add(ServerCounters::TlsRoleDenied);
+        queue_exception(c, frame, codec::ExceptionCode::IllegalFunction);
+        mark_dirty(c, index);
+        return true;
+    }
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
@@ -682,6 +715,10 @@ void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
 
 void Worker::flush(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
+    if (c.tls) {
+        tls_flush(index);
+        return;
+    }
     if (c.state != Connection::State::Open || c.send_inflight) return;
     std::size_t size = 0;
     const std::uint8_t* p = c.out.sendable(c.hold_pos, size);
@@ -708,10 +745,13 @@ void Worker::on_send(const io_uring_cqe& cqe) noexcept {
         close_connection(ud.index);
         return;
     }
-    const auto n = static_cast<std::size_t>(cqe.res);
-    counters_.add(ServerCounters::BytesOut, n);
+    auto n = static_cast<std::size_t>(cqe.res);
+    if (c.tls)
+        n = tls_sent(*c.tls, n);
+    else
+        counters_.add(ServerCounters::BytesOut, n);
     counters_.sub(ServerCounters::PendingOutput, n);
-    c.out.consume(pool_, n);
+    if (n != 0) c.out.consume(pool_, n);  // TLS: 0 until a record carrying output is sent
     if (c.out.empty()) c.unanswered = 0;
     if (c.paused && c.out.bytes() <= config_.max_pending_output / 2) {
         c.paused = false;

@@ -95,10 +95,19 @@ class Worker {
     void drop_stash(std::uint32_t index) noexcept;
     // Pauses reading when the output queue is over the cap. True when paused.
     bool check_backpressure(std::uint32_t index) noexcept;
+    // Bytes from the socket: ciphertext goes through tls_input, the rest to consume_frames.
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
     // RTU over TCP (rtu_input.cpp): the same, with RTU frames.
     void consume_rtu_input(std::uint32_t index, const std::uint8_t* data,
                            std::size_t size) noexcept;
+    void consume_frames(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
+    // TLS (worker_tls.cpp): decrypts into consume_frames; encrypts the output queue's head and
+    // sends the ciphertext; a send's ciphertext bytes to the plaintext bytes they complete.
+    void tls_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
+    void tls_flush(std::uint32_t index) noexcept;
+    std::size_t tls_sent(TlsLink& t, std::size_t n) noexcept;
+    // The handshake failed: the alert goes out, then the connection closes.
+    void tls_refuse(std::uint32_t index) noexcept;
     // Tracks when the partial frame the splitter holds began (frame timeout).
     void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
     // Framing was lost: answer what came before, read no more, close once answered.
@@ -164,6 +173,8 @@ class Worker {
     BlockPool pool_;
     std::vector<std::uint16_t> stash_next_;  // per buffer id
     std::vector<std::uint32_t> stash_size_;  // per buffer id
+
+    std::vector<std::uint8_t> tls_plain_;  // decrypted input, one record at a time
 
     ServerCounters counters_;
     std::atomic<int> init_status_{0};

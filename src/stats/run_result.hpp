@@ -116,6 +116,12 @@ struct ConnectionStats {
     std::uint64_t reconnects = 0;  // connects after a connection was lost
     std::uint64_t closed_by_peer = 0;
     std::uint64_t peak_open = 0;  // most open at once (summed over threads' own peaks)
+    // --transport tls: handshakes completed, how many resumed a session, and their latency
+    // (TCP connect done to handshake done).
+    std::uint64_t tls_handshakes = 0;
+    std::uint64_t tls_resumed = 0;
+    std::uint64_t tls_handshake_ns_total = 0;
+    std::uint64_t tls_handshake_ns_max = 0;
 };
 
 // A part of the plan the run could not carry out: every report says so, and thresholds

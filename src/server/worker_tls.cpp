@@ -1,0 +1,109 @@
+// The server worker's TLS path (Modbus/TCP Security): ciphertext in from the recv
+// completions, plaintext frames on to the same splitter and handler as plain TCP, and the
+// output queue's plaintext encrypted just before it is sent.
+#include <sys/socket.h>
+
+#include "net/direct_socket.hpp"
+#include "net/user_data.hpp"
+#include "server/worker.hpp"
+
+namespace mbstorm::server {
+
+void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept {
+    Connection& c = conns_[index];
+    TlsLink& t = *c.tls;
+    t.session.feed(data, size);
+    if (!t.session.established()) {
+        const net::TlsStatus hs = t.session.handshake();
+        if (hs == net::TlsStatus::WantMore) {
+            if (t.session.pending_output() > 0) mark_dirty(c, index);  // our next flight
+            return;
+        }
+        if (hs != net::TlsStatus::Ok) {
+            tls_refuse(index);
+            return;
+        }
+        counters_.add(ServerCounters::TlsHandshakes);
+        if (t.session.resumed()) counters_.add(ServerCounters::TlsResumed);
+        t.allowed = config_.tls_roles.allowed_for(t.session.peer_role());
+    }
+    for (;;) {
+        std::size_t n = 0;
+        const net::TlsStatus st = t.session.read(tls_plain_.data(), tls_plain_.size(), n);
+        if (n > 0) {
+            consume_frames(index, tls_plain_.data(), n);
+            if (c.state != Connection::State::Open || c.framing_lost) return;
+            continue;
+        }
+        if (st == net::TlsStatus::Closed) {
+            // close_notify: like a half-close, what came before is still answered.
+            c.peer_done = true;
+            c.frame_started_ns = 0;
+            if (c.recv_armed) cancel_recv(index);
+        } else if (st == net::TlsStatus::Failed) {
+            close_connection(index);
+            return;
+        }
+        break;
+    }
+    if (t.session.pending_output() > 0) mark_dirty(c, index);  // tickets, key updates
+}
+
+void Worker::tls_refuse(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    counters_.add(ServerCounters::TlsRefused);
+    // Read no more; the alert the handshake left goes out, then close_if_answered closes.
+    c.framing_lost = true;
+    c.frame_started_ns = 0;
+    drop_stash(index);
+    if (c.tls->session.pending_output() > 0)
+        mark_dirty(c, index);
+    else
+        close_connection(index);
+}
+
+void Worker::tls_flush(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    TlsLink& t = *c.tls;
+    if (c.state != Connection::State::Open || c.send_inflight) return;
+    if (t.cipher_sent == t.cipher_out.size()) {
+        t.cipher_out.clear();
+        t.cipher_sent = 0;
+        if (t.session.established() && t.plain_carried == 0) {
+            std::size_t size = 0;
+            const std::uint8_t* p = c.out.sendable(c.hold_pos, size);
+            if (p != nullptr && size > 0) {
+                if (t.session.write(p, size) != net::TlsStatus::Ok) {
+                    close_connection(index);
+                    return;
+                }
+                t.plain_carried = size;
+            }
+        }
+        try {
+            t.session.take_output(t.cipher_out);
+        } catch (...) {
+            close_connection(index);
+            return;
+        }
+        if (t.cipher_out.empty()) return;
+    }
+    io_uring_sqe* sqe = ring_.sqe();
+    if (!sqe) return;
+    io_uring_prep_send(sqe, c.fd, t.cipher_out.data() + t.cipher_sent,
+                       t.cipher_out.size() - t.cipher_sent, MSG_NOSIGNAL);
+    net::use_slot_if(sqe, direct_);
+    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+    c.send_inflight = true;
+}
+
+std::size_t Worker::tls_sent(TlsLink& t, std::size_t n) noexcept {
+    counters_.add(ServerCounters::BytesOut, n);
+    t.cipher_sent += n;
+    if (t.cipher_sent < t.cipher_out.size()) return 0;
+    const std::size_t plain = t.plain_carried;
+    t.plain_carried = 0;
+    return plain;
+}
+
+}  // namespace mbstorm::server
