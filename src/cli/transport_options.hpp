@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "codec/framing.hpp"
+#include "net/serial_port.hpp"
 
 namespace mbstorm::cli {
 
@@ -52,5 +53,8 @@ void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide sid
 std::string check_transport(const TransportOptions& o, std::string_view command);
 
 std::string_view transport_name(TransportKind kind) noexcept;
+
+// The --serial line settings as the serial port takes them.
+net::SerialSettings serial_settings(const TransportOptions& o) noexcept;
 
 }  // namespace mbstorm::cli

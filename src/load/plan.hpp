@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "codec/framing.hpp"
 #include "codec/function_code.hpp"
+#include "net/serial_port.hpp"
 
 namespace mbstorm::load {
 
@@ -71,6 +73,14 @@ struct Plan {
     // list and range syntax); empty: the kernel picks. Each address has its own ephemeral
     // ports, so N addresses hold N times the connections one can towards the target.
     std::string source_addresses;
+
+    // run --serial: load this serial line instead of a TCP target (device empty: TCP). One
+    // master, one request on the line at a time: connections and depth do not apply.
+    struct Serial {
+        std::string device;
+        net::SerialSettings line;
+        codec::Framing framing = codec::Framing::Rtu;
+    } serial;
 
     std::vector<Operation> operations;
 
