@@ -8,6 +8,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -28,6 +29,7 @@
 #include "codec/pdu.hpp"
 #include "load/plan.hpp"
 #include "load/preflight.hpp"
+#include "load/serial_master.hpp"
 #include "load/write_safety.hpp"
 #include "net/socket.hpp"
 
@@ -68,6 +70,7 @@ struct IoOptions {
 // What the options resolve to before anything is sent.
 struct IoPlan {
     net::Endpoint target;
+    std::string peer;  // what the messages name: HOST:PORT or the tty
     codec::Table table = codec::Table::HoldingRegisters;
     std::uint16_t address = 0;
     ValueType type = ValueType::U16;
@@ -208,7 +211,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
            const codec::Response& rsp) {
     nlohmann::json j;
     if (o.json) {
-        j["target"] = p.target.to_string();
+        j["target"] = p.peer;
         j["unit"] = o.unit;
         j["function"] = codec::function_label(p.request.function);
         j["table"] = std::string(codec::table_name(p.table));
@@ -222,8 +225,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
             emit_json();
         }
         fmt::print(stderr, "mbstorm {}: {} ({} to unit {} at {}): {}\n", o.write ? "write" : "read",
-                   p.target.to_string(), codec::function_label(p.request.function), o.unit,
-                   p.address, error);
+                   p.peer, codec::function_label(p.request.function), o.unit, p.address, error);
         return kExitFailed;
     }
     if (rsp.exception != codec::ExceptionCode::None) {
@@ -290,6 +292,68 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
     return kExitOk;
 }
 
+// read/write --serial: the same request and report, one transaction on the line at a time.
+int run_serial_io(const IoOptions& o, IoPlan& p,
+                  const std::array<std::uint8_t, codec::limits::kMaxPdu>& pdu,
+                  std::size_t pdu_size) {
+    const char* name = o.write ? "write" : "read";
+    const auto& device = o.transport.serial_device;
+    p.peer = device;
+    if (!o.target.empty()) return usage_error(name, "--target and --serial exclude each other");
+    if (o.write && !o.allow_writes && !net::is_pseudo_terminal(device))
+        return usage_error(name,
+                           fmt::format("{} is a real serial line: writing to the devices on it "
+                                       "needs --allow-writes",
+                                       device));
+    load::SerialMaster master;
+    if (auto why = master.open(device, serial_settings(o.transport), o.transport.framing_kind());
+        !why.empty())
+        return usage_error(name, why);
+    int exit_code = kExitOk;
+    const auto interval = std::chrono::nanoseconds(o.interval_ns);
+    auto next = std::chrono::steady_clock::now();
+    for (std::uint64_t poll = 1; o.count == 0 || poll <= o.count; ++poll) {
+        codec::Response rsp;
+        codec::Bytes answer;
+        std::int64_t sent_ns = 0;
+        const auto outcome =
+            master.transact(static_cast<std::uint8_t>(o.unit), codec::Bytes(pdu.data(), pdu_size),
+                            static_cast<std::int64_t>(o.timeout_ns), answer, sent_ns);
+        std::string why;
+        switch (outcome) {
+            case load::SerialOutcome::Answered:
+                if (auto err = codec::decode_response(answer, rsp); err != codec::CodecError::Ok)
+                    why = fmt::format("malformed answer ({}): {}", codec::format_hex(answer),
+                                      codec::error_description(err));
+                break;
+            case load::SerialOutcome::Broadcast:
+                break;  // nothing comes back: report() prints what was sent
+            case load::SerialOutcome::Timeout:
+                why = fmt::format("no answer within {} ms", o.timeout_ns / 1'000'000);
+                break;
+            case load::SerialOutcome::BadCheck:
+                why = o.transport.framing == "ascii" ? "the answer's LRC is wrong"
+                                                     : "the answer's CRC is wrong";
+                break;
+            case load::SerialOutcome::BadFrame:
+                why = "the answer was a broken frame";
+                break;
+            case load::SerialOutcome::WrongUnit:
+                why = "the answer came from another unit";
+                break;
+            case load::SerialOutcome::IoError:
+                why = fmt::format("{}: {}", device, std::strerror(master.io_error()));
+                break;
+        }
+        if (report(o, p, poll, why, rsp) != kExitOk) exit_code = kExitFailed;
+        if (outcome == load::SerialOutcome::IoError) break;
+        if (o.count != 0 && poll == o.count) break;
+        next += interval;
+        std::this_thread::sleep_until(next);
+    }
+    return exit_code;
+}
+
 int run_io(const IoOptions& o) {
     const char* name = o.write ? "write" : "read";
     auto usage = [name](std::string_view message) { return usage_error(name, message); };
@@ -303,10 +367,14 @@ int run_io(const IoOptions& o) {
     if (auto fault = request_fault(codec::Bytes(pdu.data(), enc.size)); !fault.empty())
         return usage(fault);
 
+    const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
+    if (o.transport.kind() == TransportKind::Serial) return run_serial_io(o, p, pdu, enc.size);
     std::string error;
+    if (o.target.empty()) return usage("--target is required (or --serial DEVICE)");
     const bool tls_port = o.transport.kind() == TransportKind::Tls;
     if (!net::parse_endpoint(o.target, p.target, &error, tls_port ? 802 : 502))
         return usage(fmt::format("--target '{}': {}", o.target, error));
+    p.peer = p.target.to_string();
     if (o.write) {
         load::Operation op;
         op.function = p.request.function;
@@ -314,7 +382,6 @@ int run_io(const IoOptions& o) {
             load::check_write_safety({op}, load::numeric_address(p.target), o.allow_writes);
         if (!verdict.allowed) return usage(verdict.message);
     }
-    const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     std::shared_ptr<net::TlsContext> tls;
     if (std::string e = client_tls(o.transport, tls); !e.empty()) return usage(e);
     ModbusClient client(o.transport.framing_kind());
@@ -338,8 +405,8 @@ int run_io(const IoOptions& o) {
 }
 
 void add_common_options(CLI::App* cmd, IoOptions& o) {
-    cmd->add_option("--target", o.target, "HOST[:PORT] of the device (port 502 by default)")
-        ->required();
+    cmd->add_option("--target", o.target,
+                    "HOST[:PORT] of the device (port 502 by default); not with --serial");
     cmd->add_option("--unit,-u", o.unit, "unit id (default 1)")->check(CLI::Range(0, 255));
     cmd->add_option("--addr,-a", o.address,
                     "first address: " + std::string(codec::kAddressRuleHelp));
@@ -386,7 +453,8 @@ void add_write_command(CLI::App& app, Action& action) {
                     write_choices(codec::Table::Coils),
                     write_choices(codec::Table::HoldingRegisters), codec::kFunctionCodeForms));
     cmd->add_flag("--allow-writes", o->allow_writes,
-                  "allow writing to a target outside loopback (127.0.0.0/8, ::1)");
+                  "allow writing to a target outside loopback (127.0.0.0/8, ::1), or to a "
+                  "serial line that is not a pseudo-terminal");
     cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });
 }
 

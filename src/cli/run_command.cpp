@@ -16,6 +16,7 @@
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
 #include "load/plan.hpp"
+#include "load/write_safety.hpp"
 #include "scenario/scenario.hpp"
 
 namespace mbstorm::cli {
@@ -130,6 +131,21 @@ int run_load_test(RunOptions& o) {
     if (!o.junit.empty())
         return usage_error("run", "--junit needs a scenario FILE (thresholds are set there)");
     auto& plan = o.plan;
+    if (o.transport.kind() == TransportKind::Serial) {
+        if (!o.target.empty())
+            return usage_error("run", "--target and --serial exclude each other");
+        // One master on the line, one request at a time.
+        plan.serial = {o.transport.serial_device, serial_settings(o.transport),
+                       o.transport.framing_kind()};
+        plan.connections = 1;
+        plan.depth = 1;
+        plan.threads = 1;
+        // A tty that is not a pseudo-terminal has real devices on it.
+        const bool test_line = net::is_pseudo_terminal(plan.serial.device);
+        auto verdict = load::check_write_safety(
+            plan.operations, test_line ? "127.0.0.1" : plan.serial.device, plan.allow_writes);
+        if (!verdict.allowed) return usage_error("run", verdict.message);
+    }
     if (auto problems = load::validate_plan(plan); !problems.empty())
         return usage_error("run", problems.front());
 
@@ -145,8 +161,11 @@ int run_load_test(RunOptions& o) {
     s.slave_threads = o.slave_threads;
     fmt::print(
         stderr, "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
-        o.target.empty() ? std::string("the embedded reference slave (no --target given)")
-                         : o.target,
+        !plan.serial.device.empty()
+            ? fmt::format("serial line {} ({} {})", plan.serial.device,
+                          net::describe(plan.serial.line), codec::framing_name(plan.serial.framing))
+        : o.target.empty() ? std::string("the embedded reference slave (no --target given)")
+                           : o.target,
         plan.connections, plan.connections == 1 ? "" : "s", plan.depth, plan.operations[0].name,
         plan.model == load::LoadModel::OpenLoop ? fmt::format("open loop at {:.0f} tx/s", plan.rate)
                                                 : std::string("closed loop"),
@@ -292,6 +311,8 @@ void add_run_command(CLI::App& app, Action& action) {
             if (std::string e = check_transport(o->transport, "run"); !e.empty())
                 return usage_error("run", e);
             o->depth_given = cmd->count("--depth") != 0;
+            if (!o->scenario_file.empty() && o->transport.kind() == TransportKind::Serial)
+                return usage_error("run", "--serial with a scenario file is not supported yet");
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

@@ -11,6 +11,7 @@
 #include "cli/metrics_endpoint.hpp"
 #include "cli/transport_options.hpp"
 #include "server/run.hpp"
+#include "server/serial_server.hpp"
 #include "server/server.hpp"
 #include "slave/device_yaml.hpp"
 
@@ -36,6 +37,31 @@ struct ServeOptions {
     std::string metrics_listen;
     TransportOptions transport;
 };
+
+// `serve --serial`: the same models and handler on a tty, with a serial bus's manners: unit 0
+// is a broadcast (executed, never answered) and units without a model stay silent.
+int run_serial_serve(const ServeOptions& o, std::unique_ptr<slave::UnitModels> units) {
+    if (!units) units = std::make_unique<slave::UnitModels>(slave::UnitModels::shared());
+    units->broadcast_unit_zero = true;
+    units->unknown_unit_policy = slave::UnknownUnitPolicy::Ignore;
+    server::SerialServerConfig sc;
+    sc.device = o.transport.serial_device;
+    sc.line = serial_settings(o.transport);
+    sc.framing = o.transport.framing_kind();
+    sc.units = units.get();
+    sc.only_unit = o.config.only_unit;
+    sc.simulated = o.config.simulated;
+    server::SerialServer srv(std::move(sc));
+    if (std::string e = srv.open(); !e.empty()) return usage_error("serve", e);
+    fmt::print("mbstorm serve: serving on {}; Ctrl-C stops\n", srv.describe());
+    if (o.config.faults.any())
+        fmt::print(stderr,
+                   "mbstorm serve: warning: fault injection is not applied on a serial "
+                   "line\n");
+    std::fflush(stdout);
+    return server::run_serial_until_signal(srv, o.stats, static_cast<double>(o.duration_ns) / 1e9,
+                                           stdout);
+}
 
 int run_serve(ServeOptions& o) {
     if (std::string e = check_transport(o.transport, "serve"); !e.empty())
@@ -98,6 +124,7 @@ int run_serve(ServeOptions& o) {
                                                        : server::ForeignUnitPolicy::NoAnswer;
     }
 
+    if (o.transport.kind() == TransportKind::Serial) return run_serial_serve(o, std::move(units));
     server::block_stop_signals();
     server::Server srv(c);
     std::string error;

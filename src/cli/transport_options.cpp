@@ -38,6 +38,17 @@ std::string_view transport_name(TransportKind kind) noexcept {
     return "?";
 }
 
+net::SerialSettings serial_settings(const TransportOptions& o) noexcept {
+    net::SerialSettings s;
+    s.baud = o.baud;
+    s.parity = o.parity == "none"  ? net::Parity::None
+               : o.parity == "odd" ? net::Parity::Odd
+                                   : net::Parity::Even;
+    s.data_bits = o.data_bits;
+    s.stop_bits = o.stop_bits;
+    return s;
+}
+
 void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide side) {
     const bool server = side == TransportSide::Server;
     cmd->add_option("--transport", o.transport,
@@ -104,6 +115,12 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
         if (command == "serve" || command == "run" || command == "read" || command == "write")
             return {};
     }
+    // Serial: RTU needs eight data bits (the specification's and the CRC's).
+    if (kind == TransportKind::Serial && o.framing == "rtu" && o.data_bits != 8)
+        return "--framing rtu needs --data-bits 8 (7 data bits suit only ASCII)";
+    if (kind == TransportKind::Serial &&
+        (command == "serve" || command == "run" || command == "read" || command == "write"))
+        return {};
     // Each transport lifts this as it reaches the subcommand.
     return fmt::format("--{} is not supported by {} yet",
                        kind == TransportKind::Serial

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "codec/framing.hpp"
+#include "net/serial_port.hpp"
 #include "net/tls_context.hpp"
 
 namespace mbstorm::cli {
@@ -61,5 +62,7 @@ std::string_view transport_name(TransportKind kind) noexcept;
 // --transport tls on a client: the TLS context from the certificate options into `out` (left
 // empty for other transports). Empty, or why the files cannot be used.
 std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out);
+// The --serial line settings as the serial port takes them.
+net::SerialSettings serial_settings(const TransportOptions& o) noexcept;
 
 }  // namespace mbstorm::cli

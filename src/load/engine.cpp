@@ -1,4 +1,5 @@
 #include "load/engine.hpp"
+#include "load/serial_load.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -603,6 +604,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = fmt::format("invalid plan: {}", fmt::join(errors, "; "));
         return result;
     }
+    if (!plan.serial.device.empty()) return run_serial_load(plan, options);
     const StageSchedule schedule(plan);
     RunSetup setup;
     if (std::string why = prepare_run(plan, options, schedule, setup); !why.empty()) {

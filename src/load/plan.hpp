@@ -11,6 +11,7 @@
 
 #include "codec/framing.hpp"
 #include "codec/function_code.hpp"
+#include "net/serial_port.hpp"
 
 #include "net/tls_context.hpp"
 
@@ -81,6 +82,14 @@ struct Plan {
     std::string source_addresses;
     // Mbap: Modbus TCP. Rtu: RTU over TCP (no transaction ids: depth must be 1).
     codec::Framing framing = codec::Framing::Mbap;
+
+    // run --serial: load this serial line instead of a TCP target (device empty: TCP). One
+    // master, one request on the line at a time: connections and depth do not apply.
+    struct Serial {
+        std::string device;
+        net::SerialSettings line;
+        codec::Framing framing = codec::Framing::Rtu;
+    } serial;
 
     std::vector<Operation> operations;
 

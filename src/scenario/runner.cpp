@@ -66,7 +66,9 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     // The embedded slave's models must outlive the server: declared first, destroyed last.
     std::unique_ptr<slave::UnitModels> units;
     std::unique_ptr<server::Server> embedded;
-    if (s.target.empty()) {
+    if (!plan.serial.device.empty()) {
+        // run --serial: the line is the target (load/serial_load.hpp).
+    } else if (s.target.empty()) {
         const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
         units = std::make_unique<slave::UnitModels>(slave::build_units(s.slave));
         server::ServerConfig sc;

@@ -26,7 +26,7 @@ enum class Outcome : std::uint8_t {
     ValueMismatch,     // read-after-write check saw a different value
     FramingError,      // the answer stream lost MBAP framing (length 0, 1 or > 254, garbage):
                        // the connection was reset with the request outstanding
-    CrcError,          // RTU over TCP: an answer's CRC failed; the connection was reset
+    CrcError,          // RTU (over TCP or serial) or ASCII: an answer's CRC/LRC failed
 };
 inline constexpr std::size_t kOutcomeCount = 13;
 

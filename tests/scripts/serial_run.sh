@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# `mbstorm run --serial` against `mbstorm serve --serial` over a socat pty pair, RTU and ASCII:
+# the run's JSON report counts transactions and latencies as a TCP run's does, every
+# transaction is answered, and the server saw exactly the run's requests. Then a unit nobody
+# serves: every transaction times out.
+#   bash serial_run.sh <mbstorm-binary> <scripts-dir>
+set -u
+mbstorm=$1
+scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
+source "$scripts/lib/peer.bash"
+source "$scripts/lib/serial.bash"
+work=$(mktemp -d)
+trap 'stop_server; stop_pty_pair; rm -rf "$work"' EXIT
+
+command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
+fail=0
+for framing in rtu ascii; do
+  rm -f "$work/line_a" "$work/line_b"
+  start_pty_pair "$work" || { echo "FAIL: socat made no pty pair"; exit 1; }
+  start_serial_serve "$work/serve.out" "$mbstorm" "$work/line_a" --framing "$framing" \
+    --baud 115200 --only-unit 1 ||
+    { echo "FAIL: serve --serial did not start"; cat "$work/serve.out.err"; exit 1; }
+  timeout -k 5 60 "$mbstorm" run --serial "$work/line_b" --framing "$framing" --baud 115200 \
+    --fc 3 --addr 0 --count 10 --transactions 200 -d 0 --json "$work/$framing.json" \
+    >"$work/run.out" 2>&1
+  code=$?
+  timeout -k 5 60 "$mbstorm" run --serial "$work/line_b" --framing "$framing" --baud 115200 \
+    --unit 9 --timeout 50ms --transactions 5 -d 0 --json "$work/silent.json" >>"$work/run.out" 2>&1
+  stop_server
+  server=$(grep '^serial:' "$work/serve.out")
+  /usr/bin/python3 - "$work/$framing.json" "$work/silent.json" "$server" "$code" "$framing" <<'PY' || { fail=1; sed 's/^/  /' "$work/run.out"; }
+import json, sys
+run, silent, server, code, framing = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), sys.argv[3], sys.argv[4], sys.argv[5]
+problems = []
+if code != "0": problems.append(f"run exit {code}")
+t = run["totals"]
+if t["transactions"] != 200 or t["ok"] != 200: problems.append(f"totals {t}")
+if run["latency"]["count"] != 200: problems.append(f"latency count {run['latency']['count']}")
+if not server.startswith("serial: 200 requests, 200 responses (0 exceptions)"): problems.append(f"server: {server}")
+if silent["outcomes"]["timeout"] != 5: problems.append(f"silent unit: {silent['outcomes']}")
+print(("FAIL " if problems else "ok   ") + f"{framing}: 200 transactions, p50 {run['latency']['percentiles_ns']['50'] / 1e3:.0f} us, p99 {run['latency']['percentiles_ns']['99'] / 1e3:.0f} us")
+for p in problems: print("  " + p)
+sys.exit(1 if problems else 0)
+PY
+  stop_pty_pair
+done
+exit $fail
