@@ -1,5 +1,5 @@
 // RTU over TCP input: RTU frames (address, PDU, CRC) cut from the stream by the codec's length
-// inference, then served like MBAP frames (Worker::on_frame writes the RTU answer). No
+// inference, then served like MBAP frames (Worker::serve_frame writes the RTU answer). No
 // transaction ids: answers go out in request order, as they always do here.
 #include "server/worker.hpp"
 
@@ -23,7 +23,7 @@ void Worker::consume_rtu_input(std::uint32_t index, const std::uint8_t* data,
                 lose_framing(index, c.rtu->error() == codec::CodecError::BadCrc);
                 return;
             case codec::RtuSplitter::Status::Frame:
-                if (!on_frame(c, index, frame)) return;
+                if (!serve_frame(c, index, frame)) return;
                 completed = true;
                 break;
         }

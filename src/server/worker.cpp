@@ -591,6 +591,11 @@ void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool complet
     }
 }
 
+bool Worker::serve_frame(Connection& c, std::uint32_t index,
+                         const codec::TcpFrame& frame) noexcept {
+    return on_frame(c, index, frame);
+}
+
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     counters_.add(ServerCounters::Requests);
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
