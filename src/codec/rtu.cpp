@@ -37,8 +37,6 @@ constexpr CrcTables make_crc_tables() {
 
 constexpr CrcTables kCrcTables = make_crc_tables();
 
-constexpr std::size_t kMinRtuAdu = 4;  // address, function code, CRC
-
 constexpr RtuLength known(std::size_t size) noexcept {
     if (size > limits::kMaxRtuAdu) return {RtuLength::Status::TooLong, size};
     return {RtuLength::Status::Known, size};

@@ -12,6 +12,9 @@
 
 namespace mbstorm::codec {
 
+// The shortest RTU frame: address, function code, CRC.
+inline constexpr std::size_t kMinRtuAdu = 4;
+
 // CRC-16/MODBUS (reflected polynomial 0xA001, initial value 0xFFFF). Pass a previous result
 // as `crc` to continue over several pieces.
 std::uint16_t crc16(Bytes data, std::uint16_t crc = 0xFFFF) noexcept;

@@ -8,7 +8,6 @@
 namespace mbstorm::codec {
 
 namespace {
-constexpr std::size_t kMinRtuAdu = 4;  // address, function code, CRC
 
 bool ends_in_its_crc(const std::uint8_t* p, std::size_t size) noexcept {
     if (size < kMinRtuAdu) return false;

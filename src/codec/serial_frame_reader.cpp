@@ -9,7 +9,7 @@
 namespace mbstorm::codec {
 
 using Result = SerialFrameReader::Result;
-using Kind = SerialFrameReader::Result::Kind;
+using ReadKind = SerialFrameReader::Result::Kind;
 
 void SerialFrameReader::feed(Bytes data, bool after_gap) noexcept {
     if (framing_ == Framing::Rtu && after_gap && size_ != 0 && !discarding_) {
@@ -41,7 +41,7 @@ Result SerialFrameReader::next(SerialFrame& frame, bool silent) noexcept {
         if (!silent) return {};
         // The silence ends what was being dropped; report it once.
         Result r;
-        if (pending_error_ != CodecError::Ok) r = {Kind::Error, pending_error_, dropped_};
+        if (pending_error_ != CodecError::Ok) r = {ReadKind::Error, pending_error_, dropped_};
         discarding_ = false;
         pending_error_ = CodecError::Ok;
         dropped_ = 0;
@@ -57,7 +57,7 @@ void SerialFrameReader::consume(std::size_t n) noexcept {
 }
 
 Result SerialFrameReader::drop_all(CodecError why) noexcept {
-    Result r{Kind::Error, why, size_};
+    Result r{ReadKind::Error, why, size_};
     size_ = 0;
     return r;
 }
@@ -103,7 +103,7 @@ Result SerialFrameReader::next_rtu(SerialFrame& frame, bool silent) noexcept {
     frame.address = rtu.address;
     frame.pdu = rtu.pdu;
     frame.adu = rtu.adu;
-    return {Kind::Frame, CodecError::Ok, 0};
+    return {ReadKind::Frame, CodecError::Ok, 0};
 }
 
 Result SerialFrameReader::next_ascii(SerialFrame& frame, bool silent) noexcept {
@@ -115,7 +115,7 @@ Result SerialFrameReader::next_ascii(SerialFrame& frame, bool silent) noexcept {
         // Bytes outside a frame: line noise.
         const auto n = static_cast<std::size_t>(start - begin);
         consume(n);
-        return {Kind::Error, CodecError::MissingStart, n};
+        return {ReadKind::Error, CodecError::MissingStart, n};
     }
     const std::uint8_t* lf = std::find(begin + 1, end, static_cast<std::uint8_t>('\n'));
     const std::uint8_t* restart = std::find(begin + 1, lf, static_cast<std::uint8_t>(':'));
@@ -123,7 +123,7 @@ Result SerialFrameReader::next_ascii(SerialFrame& frame, bool silent) noexcept {
         // A new frame began before this one ended: this one is lost.
         const auto n = static_cast<std::size_t>(restart - begin);
         consume(n);
-        return {Kind::Error, CodecError::MissingEnd, n};
+        return {ReadKind::Error, CodecError::MissingEnd, n};
     }
     if (lf == end) {
         if (size_ > limits::kMaxAsciiAdu) return drop_all(CodecError::FrameTooLong);
@@ -133,17 +133,17 @@ Result SerialFrameReader::next_ascii(SerialFrame& frame, bool silent) noexcept {
     const auto text_size = static_cast<std::size_t>(lf - begin) + 1;
     if (text_size > limits::kMaxAsciiAdu) {
         consume(text_size);
-        return {Kind::Error, CodecError::FrameTooLong, text_size};
+        return {ReadKind::Error, CodecError::FrameTooLong, text_size};
     }
     std::memcpy(frame_.data(), begin, text_size);
     consume(text_size);
     AsciiFrame ascii;
     const CodecError e = decode_ascii_frame(Bytes(frame_.data(), text_size), binary_, ascii);
-    if (e != CodecError::Ok) return {Kind::Error, e, text_size};
+    if (e != CodecError::Ok) return {ReadKind::Error, e, text_size};
     frame.address = ascii.address;
     frame.pdu = ascii.pdu;
     frame.adu = Bytes(frame_.data(), text_size);
-    return {Kind::Frame, CodecError::Ok, 0};
+    return {ReadKind::Frame, CodecError::Ok, 0};
 }
 
 }  // namespace mbstorm::codec

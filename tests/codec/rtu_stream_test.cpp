@@ -12,7 +12,7 @@ namespace {
 
 using Bytes8 = std::vector<std::uint8_t>;
 
-Bytes8 with_crc(Bytes8 frame) {
+Bytes8 rtu_frame_with_crc(Bytes8 frame) {
     const std::uint16_t crc = crc16(Bytes(frame.data(), frame.size()));
     frame.push_back(static_cast<std::uint8_t>(crc & 0xFF));
     frame.push_back(static_cast<std::uint8_t>(crc >> 8));
@@ -47,10 +47,10 @@ Cut cut(RtuSplitter& s, const Bytes8& stream, std::size_t piece) {
 }
 
 TEST(RtuSplitter, CutsPipelinedRequestsWhateverTheSegmentSizes) {
-    const Bytes8 read = with_crc({0x11, 0x03, 0x00, 0x6B, 0x00, 0x03});
+    const Bytes8 read = rtu_frame_with_crc({0x11, 0x03, 0x00, 0x6B, 0x00, 0x03});
     const Bytes8 write =
-        with_crc({0x11, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02});
-    const Bytes8 status = with_crc({0x01, 0x07});
+        rtu_frame_with_crc({0x11, 0x10, 0x00, 0x01, 0x00, 0x02, 0x04, 0x00, 0x0A, 0x01, 0x02});
+    const Bytes8 status = rtu_frame_with_crc({0x01, 0x07});
     Bytes8 stream;
     for (const Bytes8* f : {&read, &write, &status, &read})
         stream.insert(stream.end(), f->begin(), f->end());
@@ -68,8 +68,8 @@ TEST(RtuSplitter, CutsPipelinedRequestsWhateverTheSegmentSizes) {
 }
 
 TEST(RtuSplitter, CutsResponsesIncludingExceptions) {
-    const Bytes8 regs = with_crc({0x11, 0x03, 0x06, 0x02, 0x2B, 0x00, 0x00, 0x00, 0x64});
-    const Bytes8 exc = with_crc({0x11, 0x83, 0x02});
+    const Bytes8 regs = rtu_frame_with_crc({0x11, 0x03, 0x06, 0x02, 0x2B, 0x00, 0x00, 0x00, 0x64});
+    const Bytes8 exc = rtu_frame_with_crc({0x11, 0x83, 0x02});
     Bytes8 stream = regs;
     stream.insert(stream.end(), exc.begin(), exc.end());
     for (std::size_t piece : {1u, 4u, 100u}) {
@@ -83,7 +83,7 @@ TEST(RtuSplitter, CutsResponsesIncludingExceptions) {
 }
 
 TEST(RtuSplitter, BadCrcIsFatalAfterTheGoodFramesBeforeIt) {
-    const Bytes8 good = with_crc({0x01, 0x03, 0x00, 0x00, 0x00, 0x01});
+    const Bytes8 good = rtu_frame_with_crc({0x01, 0x03, 0x00, 0x00, 0x00, 0x01});
     Bytes8 bad = good;
     bad.back() ^= 0x01;
     Bytes8 stream = good;
@@ -115,7 +115,7 @@ TEST(RtuSplitter, ByteCountPastTheRtuLimitIsFatal) {
 }
 
 TEST(RtuSplitter, UnknownFunctionEndsWhereItsCrcHolds) {
-    const Bytes8 odd = with_crc({0x01, 0x41, 0x12, 0x34});
+    const Bytes8 odd = rtu_frame_with_crc({0x01, 0x41, 0x12, 0x34});
     RtuSplitter s;
     Cut c = cut(s, odd, odd.size());
     ASSERT_FALSE(c.fatal);
@@ -129,8 +129,8 @@ TEST(RtuSplitter, UnknownFunctionEndsWhereItsCrcHolds) {
 }
 
 TEST(RtuSplitter, UnknownFunctionFollowedByAnotherFrameInOneChunkIsTwoFrames) {
-    const Bytes8 odd = with_crc({0x01, 0x41, 0x12, 0x34, 0x56});
-    const Bytes8 read = with_crc({0x01, 0x03, 0x00, 0x00, 0x00, 0x01});
+    const Bytes8 odd = rtu_frame_with_crc({0x01, 0x41, 0x12, 0x34, 0x56});
+    const Bytes8 read = rtu_frame_with_crc({0x01, 0x03, 0x00, 0x00, 0x00, 0x01});
     Bytes8 stream = odd;
     stream.insert(stream.end(), read.begin(), read.end());
     for (std::size_t piece : {1u, 6u, 100u}) {
