@@ -35,7 +35,7 @@ std::unique_ptr<server::Server> start_rtu() {
 }
 
 // FC03 x `quantity` from 0 on unit 1; its answer is 5 + 2 * quantity bytes.
-Frame read_holding(std::uint8_t quantity) {
+Frame rtu_read_holding(std::uint8_t quantity) {
     return with_crc({1, 3, 0, 0, 0, quantity});
 }
 
@@ -55,13 +55,13 @@ TEST(RtuOverTcp, AnswersPipelinedAndFragmentedRequestsInOrder) {
     Client c(*srv);
     Frame burst;
     for (std::uint8_t q = 1; q <= 5; ++q) {
-        const Frame f = read_holding(q);
+        const Frame f = rtu_read_holding(q);
         burst.insert(burst.end(), f.begin(), f.end());
     }
     ASSERT_TRUE(c.send_all(burst));
     for (std::uint8_t q = 1; q <= 5; ++q) expect_read_answer(c.recv_n(5u + 2u * q), q);
     // Byte by byte.
-    const Frame one = read_holding(2);
+    const Frame one = rtu_read_holding(2);
     for (std::uint8_t b : one) ASSERT_TRUE(c.send_all(&b, 1));
     expect_read_answer(c.recv_n(9), 2);
     EXPECT_EQ(srv->stats().transactions, 6u);
@@ -81,8 +81,8 @@ TEST(RtuOverTcp, BadCrcClosesAfterAnsweringWhatCameBefore) {
     auto srv = start_rtu();
     Client bad(*srv);
     Client good(*srv);
-    Frame stream = read_holding(1);
-    Frame broken = read_holding(1);
+    Frame stream = rtu_read_holding(1);
+    Frame broken = rtu_read_holding(1);
     broken.back() ^= 0xFF;
     stream.insert(stream.end(), broken.begin(), broken.end());
     ASSERT_TRUE(bad.send_all(stream));
@@ -91,7 +91,7 @@ TEST(RtuOverTcp, BadCrcClosesAfterAnsweringWhatCameBefore) {
     EXPECT_TRUE(test::eventually([&] { return srv->stats().crc_errors == 1; }));
     EXPECT_EQ(srv->stats().bad_framing_closes, 0u);
     // Other connections go on.
-    ASSERT_TRUE(good.send_all(read_holding(3)));
+    ASSERT_TRUE(good.send_all(rtu_read_holding(3)));
     expect_read_answer(good.recv_n(11), 3);
 }
 
@@ -99,7 +99,7 @@ TEST(RtuOverTcp, MbapOnAnRtuPortIsNotAnswered) {
     auto srv = start_rtu();
     Client c(*srv);
     // An MBAP read: to an RTU reader, address 0x00 with function 0x01 and a wrong CRC.
-    ASSERT_TRUE(c.send_all(test::read_holding(1, 1, 0, 10)));
+    ASSERT_TRUE(c.send_all(test::rtu_read_holding(1, 1, 0, 10)));
     EXPECT_TRUE(c.closed_by_peer());
     EXPECT_EQ(srv->stats().transactions, 0u);
 }
