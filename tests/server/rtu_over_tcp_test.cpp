@@ -99,7 +99,7 @@ TEST(RtuOverTcp, MbapOnAnRtuPortIsNotAnswered) {
     auto srv = start_rtu();
     Client c(*srv);
     // An MBAP read: to an RTU reader, address 0x00 with function 0x01 and a wrong CRC.
-    ASSERT_TRUE(c.send_all(test::rtu_read_holding(1, 1, 0, 10)));
+    ASSERT_TRUE(c.send_all(test::read_holding(1, 1, 0, 10)));
     EXPECT_TRUE(c.closed_by_peer());
     EXPECT_EQ(srv->stats().transactions, 0u);
 }
