@@ -100,10 +100,8 @@ bool write_output(const std::string& path, const std::string& text) {
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
-    net::Endpoint target;
-    if (!resolve_fuzz_target(o.target, o.allow_remote, target, error))
-        return usage_error("fuzz", error);
-    c.connector = std::make_shared<netfuzz::TcpConnector>(target);
+    c.connector = make_fuzz_connector(o.target, o.allow_remote, o.transport, error);
+    if (!c.connector) return usage_error("fuzz", error);
     if (o.duration_ns == 0 && o.cases == 0)
         return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
     if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);

@@ -26,4 +26,24 @@ bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoi
     return true;
 }
 
+std::shared_ptr<netfuzz::Connector> make_fuzz_connector(const std::string& target,
+                                                        bool allow_remote,
+                                                        const TransportOptions& transport,
+                                                        std::string& error) {
+    // Each transport adds its own case here as it reaches fuzz and replay.
+    switch (transport.kind()) {
+        case TransportKind::Tcp: {
+            net::Endpoint endpoint;
+            if (!resolve_fuzz_target(target, allow_remote, endpoint, error)) return nullptr;
+            return std::make_shared<netfuzz::TcpConnector>(endpoint);
+        }
+        case TransportKind::RtuOverTcp:
+        case TransportKind::Tls:
+        case TransportKind::Serial:
+            break;
+    }
+    error = "this transport cannot be fuzzed yet";
+    return nullptr;
+}
+
 }  // namespace mbstorm::cli

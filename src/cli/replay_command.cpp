@@ -27,14 +27,14 @@ struct ReplayOptions {
 };
 
 int run_replay(const ReplayOptions& o) {
-    net::Endpoint endpoint;
     std::string error;
-    if (!resolve_fuzz_target(o.target, o.allow_remote, endpoint, error)) {
+    const std::shared_ptr<netfuzz::Connector> connector =
+        make_fuzz_connector(o.target, o.allow_remote, o.transport, error);
+    if (!connector) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
-    netfuzz::TcpConnector tcp(endpoint);
-    netfuzz::Connector& target = tcp;
+    netfuzz::Connector& target = *connector;
     netfuzz::Finding f;
     if (!netfuzz::load_finding(o.finding, f, error)) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
