@@ -834,6 +834,13 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
             record(t, stats::Outcome::Timeout, 0, now);
         });
         if (expired == 0) continue;
+        if (c.rtu) {
+            // No transaction ids: on this connection the late answer would pass for the next
+            // request's. A fresh connection leaves it nowhere to land.
+            drop_socket(c);
+            schedule_reconnect(index, now);
+            continue;
+        }
         refill(index, now);
     }
 }

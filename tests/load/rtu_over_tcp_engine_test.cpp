@@ -1,5 +1,6 @@
 // The load engine speaking RTU over TCP: against the in-process reference slave in RTU mode,
-// against a peer whose answers fail their CRC (a class of its own, then a fresh connection),
+// against a peer whose answers fail their CRC (a class of its own, then a fresh connection) or
+// come after the timeout (a fresh connection too),
 // and the plan check that keeps RTU at one outstanding request per connection.
 #include <gtest/gtest.h>
 #include <poll.h>
@@ -8,6 +9,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -79,10 +81,12 @@ TEST(RtuOverTcpEngine, MbapEngineAgainstAnRtuSlaveGetsNoAnswers) {
     EXPECT_EQ(r.run.counters.ok(), 0u);
 }
 
-// Answers every RTU read with a frame whose CRC is wrong, on every connection it accepts.
-class BadCrcPeer {
+// A hand-written RTU-over-TCP slave: `answer(request number, request, fd)` decides what each
+// request gets (requests are numbered across all connections, from 0).
+class ScriptedRtuPeer {
   public:
-    BadCrcPeer() {
+    using Answer = std::function<void(int n, const std::uint8_t* request, int fd)>;
+    explicit ScriptedRtuPeer(Answer answer) : answer_(std::move(answer)) {
         net::Endpoint ep;
         net::parse_endpoint("127.0.0.1:0", ep);
         net::ListenOptions lo;
@@ -95,7 +99,7 @@ class BadCrcPeer {
         port_ = ntohs(reinterpret_cast<sockaddr_in*>(&a)->sin_port);
         thread_ = std::thread([this] { serve(); });
     }
-    ~BadCrcPeer() {
+    ~ScriptedRtuPeer() {
         stop_ = true;
         thread_.join();
     }
@@ -105,6 +109,7 @@ class BadCrcPeer {
   private:
     void serve() {
         std::vector<net::UniqueFd> conns;
+        int requests = 0;
         const auto end = std::chrono::steady_clock::now() + 30s;
         while (!stop_ && std::chrono::steady_clock::now() < end) {
             std::vector<pollfd> ps{{listener_.get(), POLLIN, 0}};
@@ -121,24 +126,29 @@ class BadCrcPeer {
                 if (!(ps[i].revents & (POLLIN | POLLHUP))) continue;
                 std::uint8_t buf[256];
                 const ssize_t n = ::recv(ps[i].fd, buf, sizeof buf, 0);
-                if (n < 8) continue;
-                // Unit, 03, 8 bytes of registers, then a CRC that is off by one.
-                std::uint8_t answer[13] = {buf[0], 3, 8};
-                const std::uint16_t crc = codec::crc16(codec::Bytes(answer, 11)) ^ 1u;
-                answer[11] = static_cast<std::uint8_t>(crc & 0xFF);
-                answer[12] = static_cast<std::uint8_t>(crc >> 8);
-                (void)::send(ps[i].fd, answer, sizeof answer, MSG_NOSIGNAL);
+                if (n >= 8) answer_(requests++, buf, ps[i].fd);
             }
         }
     }
+    Answer answer_;
     net::UniqueFd listener_;
     std::uint16_t port_ = 0;
     std::atomic<bool> stop_{false};
     std::thread thread_;
 };
 
+// Unit, 03, eight bytes of registers and the CRC, XORed with `crc_flip` (1: a wrong CRC).
+void send_read_answer(int fd, std::uint8_t unit, std::uint16_t crc_flip) {
+    std::uint8_t answer[13] = {unit, 3, 8};
+    const std::uint16_t crc = codec::crc16(codec::Bytes(answer, 11)) ^ crc_flip;
+    answer[11] = static_cast<std::uint8_t>(crc & 0xFF);
+    answer[12] = static_cast<std::uint8_t>(crc >> 8);
+    (void)::send(fd, answer, sizeof answer, MSG_NOSIGNAL);
+}
+
 TEST(RtuOverTcpEngine, BadCrcIsItsOwnErrorClassAndTheConnectionIsRenewed) {
-    BadCrcPeer peer;
+    ScriptedRtuPeer peer(
+        [](int, const std::uint8_t* request, int fd) { send_read_answer(fd, request[0], 1); });
     Plan plan = rtu_plan(peer.port());
     plan.connections = 1;
     plan.transactions = 5;
@@ -151,6 +161,28 @@ TEST(RtuOverTcpEngine, BadCrcIsItsOwnErrorClassAndTheConnectionIsRenewed) {
     EXPECT_EQ(r.crc_errors, 5u);
     EXPECT_EQ(r.framing_errors, 0u);
     EXPECT_GE(peer.accepted.load(), 5);
+}
+
+TEST(RtuOverTcpEngine, ATimedOutRequestRenewsTheConnectionSoItsLateAnswerPassesForNoOther) {
+    // RTU answers carry no transaction id: on the same connection, the first request's late
+    // answer would be taken for the second request's, and the second's for nothing.
+    ScriptedRtuPeer peer([](int n, const std::uint8_t* request, int fd) {
+        if (n == 0) std::this_thread::sleep_for(300ms);
+        send_read_answer(fd, request[0], 0);
+    });
+    Plan plan = rtu_plan(peer.port());
+    plan.connections = 1;
+    plan.transactions = 5;
+    plan.transaction_timeout = 100ms;
+    plan.reconnect_backoff_min = 1ms;
+    plan.reconnect_backoff_max = 10ms;
+    const LoadResult r = run_load(plan);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.counters.count(Outcome::Timeout), 1u);
+    EXPECT_EQ(r.run.counters.ok(), 4u);
+    EXPECT_EQ(r.late_responses, 0u);
+    EXPECT_EQ(r.run.counters.stray_responses(), 0u);
+    EXPECT_EQ(peer.accepted.load(), 2);
 }
 
 TEST(RtuOverTcpEngine, PlanRefusesPipelining) {
