@@ -176,7 +176,8 @@ void add_serve_command(CLI::App& app, Action& action) {
                         "close connections idle this long (default: never)");
     add_duration_option(cmd, "--frame-timeout", o->frame_timeout_ns,
                         "close a connection whose started frame is not complete this long after "
-                        "its first byte (default 10s; 0: no bound)");
+                        "its first byte, or a TLS handshake not done this long after it began "
+                        "(default 10s; 0: no bound)");
     cmd->add_option("--max-outstanding", o->config.max_outstanding,
                     "answer requests beyond this many unanswered ones per connection with "
                     "exception 06 (0: no cap)")

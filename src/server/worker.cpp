@@ -584,6 +584,10 @@ void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool complet
         return;
     }
     if (c.frame_started_ns != 0 && !completed) return;  // the same frame, still arriving
+    start_frame_clock(c, index);
+}
+
+void Worker::start_frame_clock(Connection& c, std::uint32_t index) noexcept {
     c.frame_started_ns = now_;
     if (config_.frame_timeout_ms != 0 && !c.in_partial_list) {
         c.in_partial_list = true;

@@ -110,6 +110,8 @@ class Worker {
     void tls_refuse(std::uint32_t index) noexcept;
     // Tracks when the partial frame the splitter holds began (frame timeout).
     void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
+    // Times what arrived so far against --frame-timeout (a frame, or a TLS handshake).
+    void start_frame_clock(Connection& c, std::uint32_t index) noexcept;
     // Framing was lost: answer what came before, read no more, close once answered.
     // `crc`: an RTU frame's CRC failed (counted as such, not as a bad length).
     void lose_framing(std::uint32_t index, bool crc = false) noexcept;

@@ -16,6 +16,9 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
     if (!t.session.established()) {
         const net::TlsStatus hs = t.session.handshake();
         if (hs == net::TlsStatus::WantMore) {
+            // A handshake that stalls holds a TLS session: --frame-timeout bounds it like a
+            // frame that stops half-way (counted as a slow frame).
+            if (c.frame_started_ns == 0) start_frame_clock(c, index);  // from its first bytes
             if (t.session.pending_output() > 0) mark_dirty(c, index);  // our next flight
             return;
         }
@@ -23,6 +26,7 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
             tls_refuse(index);
             return;
         }
+        c.frame_started_ns = 0;  // the handshake is done; frames are timed from here on
         counters_.add(ServerCounters::TlsHandshakes);
         if (t.session.resumed()) counters_.add(ServerCounters::TlsResumed);
         t.allowed = config_.tls_roles.allowed_for(t.session.peer_role());
