@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "codec/rtu.hpp"
@@ -166,8 +167,14 @@ TEST(RtuOverTcpEngine, BadCrcIsItsOwnErrorClassAndTheConnectionIsRenewed) {
 TEST(RtuOverTcpEngine, ATimedOutRequestRenewsTheConnectionSoItsLateAnswerPassesForNoOther) {
     // RTU answers carry no transaction id: on the same connection, the first request's late
     // answer would be taken for the second request's, and the second's for nothing.
-    ScriptedRtuPeer peer([](int n, const std::uint8_t* request, int fd) {
-        if (n == 0) std::this_thread::sleep_for(300ms);
+    // The first answer is held back past the timeout and sent just before the second one, on
+    // the first request's connection.
+    ScriptedRtuPeer peer([held_fd = -1](int n, const std::uint8_t* request, int fd) mutable {
+        if (n == 0) {
+            held_fd = fd;
+            return;
+        }
+        if (held_fd >= 0) send_read_answer(std::exchange(held_fd, -1), request[0], 0);
         send_read_answer(fd, request[0], 0);
     });
     Plan plan = rtu_plan(peer.port());
