@@ -16,7 +16,6 @@
 #include "codec/function_code.hpp"
 #include "codec/values.hpp"
 #include "load/plan.hpp"
-#include "load/write_safety.hpp"
 #include "scenario/scenario.hpp"
 
 namespace mbstorm::cli {
@@ -140,11 +139,7 @@ int run_load_test(RunOptions& o) {
         plan.connections = 1;
         plan.depth = 1;
         plan.threads = 1;
-        // A tty that is not a pseudo-terminal has real devices on it.
-        const bool test_line = net::is_pseudo_terminal(plan.serial.device);
-        auto verdict = load::check_write_safety(
-            plan.operations, test_line ? "127.0.0.1" : plan.serial.device, plan.allow_writes);
-        if (!verdict.allowed) return usage_error("run", verdict.message);
+        // Writes to a tty that is not a pseudo-terminal need leave: the engine checks.
     }
     if (auto problems = load::validate_plan(plan); !problems.empty())
         return usage_error("run", problems.front());
@@ -190,6 +185,18 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     }
     ScenarioRunRequest r;
     if (auto e = client_tls(o.transport, r.tls); !e.empty()) return usage_error("run", e);
+    if (o.transport.kind() == TransportKind::Serial) {
+        if (cmd.count("--target") != 0)
+            return usage_error("run", "--target and --serial exclude each other");
+        for (const char* flag : {"--connections", "--depth", "--threads"}) {
+            if (cmd.count(flag) != 0)
+                return usage_error("run", fmt::format("{} does not apply to a serial line (one "
+                                                      "master, one request at a time)",
+                                                      flag));
+        }
+        r.serial = {o.transport.serial_device, serial_settings(o.transport),
+                    o.transport.framing_kind()};
+    }
     r.tls_resume = o.transport.tls_resume;
     r.file = o.scenario_file;
     r.print = o.print_scenario;
@@ -311,8 +318,6 @@ void add_run_command(CLI::App& app, Action& action) {
             if (std::string e = check_transport(o->transport, "run"); !e.empty())
                 return usage_error("run", e);
             o->depth_given = cmd->count("--depth") != 0;
-            if (!o->scenario_file.empty() && o->transport.kind() == TransportKind::Serial)
-                return usage_error("run", "--serial with a scenario file is not supported yet");
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };
     });

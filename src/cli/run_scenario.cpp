@@ -238,18 +238,29 @@ int run_scenario_file(const ScenarioRunRequest& request) {
                            "--transport tls needs a target (the embedded slave is plain TCP)");
     s.plan.tls = request.tls;
     s.plan.tls_resume = request.tls_resume;
+    if (!request.serial.device.empty()) {
+        // One master on the line, one request at a time (see serial_load.hpp).
+        s.target.clear();
+        s.plan.serial = request.serial;
+        s.plan.connections = 1;
+        s.plan.depth = 1;
+        s.plan.threads = 1;
+    }
 
     const auto& plan = s.plan;
-    fmt::print(stderr,
-               "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
-               "{}{}\n",
-               s.name, request.file,
-               s.target.empty() ? " against the embedded reference slave (no target given)" : "",
-               plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
-               plan.connections == 1 ? "" : "s", plan.depth,
-               plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
-               s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
-               fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
+    fmt::print(
+        stderr,
+        "mbstorm run: scenario '{}' ({}){}: {} operation{}, {} connection{} x depth {}, {}, "
+        "{}{}\n",
+        s.name, request.file,
+        !plan.serial.device.empty()
+            ? fmt::format(" on serial line {}", plan.serial.device)
+            : (s.target.empty() ? " against the embedded reference slave (no target given)" : ""),
+        plan.operations.size(), plan.operations.size() == 1 ? "" : "s", plan.connections,
+        plan.connections == 1 ? "" : "s", plan.depth,
+        plan.model == load::LoadModel::OpenLoop ? "open loop" : "closed loop",
+        s.stages.empty() ? "" : fmt::format("{} stages, ", s.stages.size()),
+        fmt::format("{:.3g}s", std::chrono::duration<double>(s.total_duration()).count()));
 
     return run_resolved_scenario(s, request);
 }

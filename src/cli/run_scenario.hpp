@@ -22,6 +22,7 @@ struct ScenarioRunRequest {
     std::optional<std::chrono::system_clock::time_point> start_at;  // --start-at
     std::shared_ptr<net::TlsContext> tls;                           // --transport tls
     bool tls_resume = false;
+    load::Plan::Serial serial;  // --serial: the line replaces the scenario's target
 };
 
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.

@@ -17,6 +17,7 @@
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
 #include "net/features.hpp"
+#include "net/serial_port.hpp"
 #include "net/source_addresses.hpp"
 
 namespace mbstorm::load {
@@ -381,6 +382,36 @@ std::string prepare_run(const Plan& plan, const EngineOptions& options,
                                      setup.direct);
 }
 
+// run --serial: one master on the line, one request at a time; writes need leave unless the
+// line is a pseudo-terminal (a test). "" when the plan can run, else why not.
+std::string prepare_serial_run(const Plan& plan, RunSetup& setup) {
+    const bool test_line = net::is_pseudo_terminal(plan.serial.device);
+    setup.verdict = check_write_safety(
+        plan.operations, test_line ? "127.0.0.1" : plan.serial.device, plan.allow_writes);
+    if (!setup.verdict.allowed) return setup.verdict.message;
+    setup.capacity = 1;
+    setup.threads = 1;
+    return {};
+}
+
+// What the serial line measured, as merge_results gathers the workers'.
+void take_serial_results(SerialRunner& line, LoadResult& result) {
+    stats::RunResult& run = result.run;
+    run.operations = std::move(line.operations);
+    for (const auto& op : run.operations) run.latency.add(op.latency);
+    run.counters = line.counters;
+    run.schedule_lag.target = line.target_lag;
+    run.connections.opened = 1;
+    run.connections.peak_open = 1;
+    for (std::size_t i = 0; i < line.stages.size() && i < run.stages.size(); ++i) {
+        run.stages[i].latency.add(line.stages[i].latency);
+        run.stages[i].counters.add(line.stages[i].counters);
+        run.stages[i].operations = std::move(line.stages[i].operations);
+    }
+    result.crc_errors = line.bad_checks;
+    result.error = line.fatal_error;
+}
+
 // The run's clock: connections open at once; requests (warm-up first) wait for --start-at, if
 // any; a start-at already past starts at once and is remembered as lateness.
 struct RunClock {
@@ -418,7 +449,7 @@ class RunWatch {
   public:
     RunWatch(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
              const RunClock& clock, stats::IntervalTimeline& timeline,
-             const std::vector<std::unique_ptr<Worker>>& workers, std::size_t max_intervals)
+             std::function<std::uint32_t()> open_now, std::size_t max_intervals)
         : plan_(plan),
           options_(options),
           schedule_(schedule),
@@ -427,7 +458,7 @@ class RunWatch {
               clock.wall_start +
               std::chrono::duration_cast<std::chrono::system_clock::duration>(plan.warmup)),
           timeline_(timeline),
-          workers_(workers),
+          open_now_(std::move(open_now)),
           max_intervals_(max_intervals) {
         open_by_interval_.reserve(max_intervals);
         fresh_.reserve(64);
@@ -472,11 +503,7 @@ class RunWatch {
     const OutageWatch& outages() const { return outages_; }
 
   private:
-    std::uint32_t open_now() const {
-        std::uint32_t open = 0;
-        for (auto& w : workers_) open += w->open_connections.load(std::memory_order_relaxed);
-        return open;
-    }
+    std::uint32_t open_now() const { return open_now_(); }
 
     void watch_outages(std::int64_t now) {
         const bool wanted =
@@ -546,7 +573,7 @@ class RunWatch {
     const RunWindow window_;
     const std::chrono::system_clock::time_point measure_start_wall_;
     stats::IntervalTimeline& timeline_;
-    const std::vector<std::unique_ptr<Worker>>& workers_;
+    const std::function<std::uint32_t()> open_now_;  // connections open across the workers
     const std::size_t max_intervals_;
     std::function<void(const stats::IntervalHistograms&)> hand_over_;
     OutageWatch outages_;
@@ -596,6 +623,23 @@ void describe_run(const Plan& plan, const EngineOptions& options, const StageSch
     }
 }
 
+// What a serial run adds to the metadata: the line is the target, one request at a time.
+void describe_serial_run(const Plan& plan, const StageSchedule& schedule, const SerialRunner& line,
+                         LoadResult& result) {
+    stats::RunMetadata& meta = result.run.metadata;
+    meta.target = line.describe();
+    meta.notes.push_back(fmt::format("serial line {}: one request at a time", meta.target));
+    if (!schedule.empty() && schedule.peak_connections() > 1)
+        meta.notes.push_back(
+            "serial line: one master, so the stages' connection counts only start (above 0) "
+            "or stop (0) it; their rates apply");
+    if (line.bad_checks != 0)
+        result.warnings.push_back(
+            fmt::format("{} answer{} with a bad {} (counted as crc_error)", line.bad_checks,
+                        line.bad_checks == 1 ? "" : "s",
+                        plan.serial.framing == codec::Framing::Ascii ? "LRC" : "CRC"));
+}
+
 }  // namespace
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options) {
@@ -604,10 +648,12 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.error = fmt::format("invalid plan: {}", fmt::join(errors, "; "));
         return result;
     }
-    if (!plan.serial.device.empty()) return run_serial_load(plan, options);
+    const bool serial = !plan.serial.device.empty();
     const StageSchedule schedule(plan);
     RunSetup setup;
-    if (std::string why = prepare_run(plan, options, schedule, setup); !why.empty()) {
+    if (std::string why =
+            serial ? prepare_serial_run(plan, setup) : prepare_run(plan, options, schedule, setup);
+        !why.empty()) {
         result.error = std::move(why);
         return result;
     }
@@ -630,20 +676,48 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         options.live->prepare(plan, setup.threads);
         options.live->set_running(true);
     }
-    std::vector<std::unique_ptr<Worker>> workers = make_workers(
-        plan, setup.endpoint, setup.sources, setup.threads, setup.capacity, clock.window, schedule,
-        WorkerLinks{options, abort, any_connected, timeline, setup.direct});
+    // The workers: io_uring rings over TCP, or the one master of a serial line.
+    std::vector<std::unique_ptr<Worker>> workers;
+    std::unique_ptr<SerialRunner> line;
+    std::function<std::uint32_t()> open_now;
+    if (serial) {
+        line = std::make_unique<SerialRunner>(SerialRunSetup{
+            &plan, &options, &schedule, &timeline,
+            options.live != nullptr ? options.live->worker(0) : nullptr, clock.window.start_ns,
+            clock.window.measure_start_ns, clock.window.end_ns, &abort});
+        if (std::string why = line->open(); !why.empty()) {
+            if (options.live != nullptr) options.live->set_running(false);
+            result.error = std::move(why);
+            return result;
+        }
+        open_now = [&line] { return line->open_connections(); };
+    } else {
+        workers = make_workers(plan, setup.endpoint, setup.sources, setup.threads, setup.capacity,
+                               clock.window, schedule,
+                               WorkerLinks{options, abort, any_connected, timeline, setup.direct});
+        open_now = [&workers] {
+            std::uint32_t open = 0;
+            for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);
+            return open;
+        };
+    }
 
     std::atomic<std::uint32_t> finished{0};
     std::vector<std::thread> pool;
     pool.reserve(setup.threads);
+    if (line) {
+        pool.emplace_back([&finished, &line] {
+            line->run();
+            finished.fetch_add(1);
+        });
+    }
     for (auto& w : workers) {
         pool.emplace_back([&finished, worker = w.get()] {
             worker->run();
             finished.fetch_add(1);
         });
     }
-    RunWatch watch(plan, options, schedule, clock, timeline, workers, max_intervals);
+    RunWatch watch(plan, options, schedule, clock, timeline, open_now, max_intervals);
     while (finished.load() < setup.threads) {
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
         watch.look(abort.load() || (options.stop && options.stop->load(std::memory_order_relaxed)));
@@ -654,13 +728,18 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     watch.drain_histograms();
 
     describe_stages(plan, schedule, result.run.stages);
-    merge_results(plan, workers, result);
     std::int64_t finished_ns = clock.window.measure_start_ns;
+    if (line) {
+        take_serial_results(*line, result);
+        finished_ns = std::max(finished_ns, line->finished_ns);
+    } else {
+        merge_results(plan, workers, result);
+    }
     for (auto& w : workers) {
         finished_ns = std::max(finished_ns, w->finished_ns);
         if (result.error.empty() && !w->fatal_error.empty()) result.error = w->fatal_error;
     }
-    if (result.error.empty() && !any_connected.load()) {
+    if (result.error.empty() && !line && !any_connected.load()) {
         // The run ended before a connect attempt even failed (a silent address and a run
         // shorter than the connect timeout): still an unreachable target.
         result.error = fmt::format(
@@ -674,6 +753,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
 
     stats::RunMetadata& meta = result.run.metadata;
     describe_run(plan, options, schedule, setup, clock, finished_ns, meta);
+    if (line) describe_serial_run(plan, schedule, *line, result);
     result.run.timeline = timeline.summaries();
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
     auto& series = result.run.timeline;

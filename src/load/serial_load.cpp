@@ -3,15 +3,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cstring>
-#include <vector>
 
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "load/operation_generator.hpp"
 #include "load/response_check.hpp"
-#include "load/serial_master.hpp"
 #include "net/clock.hpp"
 
 namespace mbstorm::load {
@@ -36,82 +33,118 @@ stats::Outcome outcome_of(SerialOutcome o) noexcept {
     return stats::Outcome::Malformed;
 }
 
+// The request and answer as they went on the wire: unit, PDU and CRC (RTU); ASCII frames are
+// about twice as long, but the report counts Modbus bytes alike for every framing.
+constexpr std::size_t kUnitAndCheck = 3;
+
 }  // namespace
 
-LoadResult run_serial_load(const Plan& plan, const EngineOptions& options) {
-    LoadResult out;
-    SerialMaster master;
-    if (auto why = master.open(plan.serial.device, plan.serial.line, plan.serial.framing);
-        !why.empty()) {
-        out.error = why;
-        return out;
+SerialRunner::SerialRunner(const SerialRunSetup& setup)
+    : setup_(setup),
+      interval_(setup.timeline->interval_ns(), stats::Histogram::kOneHourNs,
+                setup.timeline->tags()),
+      open_loop_(setup.plan->model == LoadModel::OpenLoop) {
+    for (const Operation& op : setup_.plan->operations) {
+        stats::OperationResult r;
+        r.name = op.name.empty() ? std::string(codec::function_name(op.function)) : op.name;
+        r.function_code = op.function;
+        operations.push_back(std::move(r));
     }
-    stats::RunResult& r = out.run;
-    auto& meta = r.metadata;
-    meta.tool_version = options.tool_version;
-    meta.target = master.describe();
-    meta.threads = 1;
-    meta.connections = 1;
-    meta.depth = 1;
-    const bool open_loop = plan.model == LoadModel::OpenLoop && plan.rate > 0;
-    meta.model = open_loop ? stats::LoadModel::Open : stats::LoadModel::Closed;
-    meta.rate_per_second = open_loop ? plan.rate : 0.0;
-    meta.requested_duration_ns = static_cast<std::uint64_t>(plan.duration.count());
-    meta.warmup_ns = static_cast<std::uint64_t>(plan.warmup.count());
-    meta.start_time = std::chrono::system_clock::now();
-    meta.notes.push_back(fmt::format("serial line {}: one request at a time", master.describe()));
-    for (const Operation& op : plan.operations) {
-        stats::OperationResult o;
-        o.name = op.name;
-        o.function_code = op.function;
-        r.operations.push_back(std::move(o));
+    stages.resize(setup_.schedule->stages());
+    // As the engine's workers: per-stage operations only for mixes.
+    if (operations.size() > 1) {
+        for (auto& stage : stages) {
+            for (const auto& op : operations) {
+                stats::OperationResult r;
+                r.name = op.name;
+                r.function_code = op.function_code;
+                stage.operations.push_back(std::move(r));
+            }
+        }
     }
-    r.connections.opened = 1;
-    r.connections.peak_open = 1;
+}
+
+std::string SerialRunner::open() {
+    const Plan& plan = *setup_.plan;
+    return master_.open(plan.serial.device, plan.serial.line, plan.serial.framing);
+}
+
+std::int64_t SerialRunner::pace(std::int64_t now) noexcept {
+    const Plan& plan = *setup_.plan;
+    const StageSchedule& schedule = *setup_.schedule;
+    // Offsets before the end of warm-up read as the first stage's start.
+    const StageTargets wanted =
+        schedule.empty()
+            ? StageTargets{0, plan.rate, 1}
+            : schedule.at(next_send_ != 0 && open_loop_ ? next_send_ - setup_.measure_start_ns
+                                                        : now - setup_.measure_start_ns);
+    // A stage with no connection: the master stays off the line.
+    if (wanted.connections == 0 || (open_loop_ && wanted.rate <= 0)) {
+        next_send_ = 0;
+        return -1;
+    }
+    if (!open_loop_) return 0;
+    if (next_send_ == 0) next_send_ = now;
+    return std::max<std::int64_t>(next_send_ - now, 0);
+}
+
+void SerialRunner::run() noexcept {
+    const Plan& plan = *setup_.plan;
+    open_.store(1, std::memory_order_relaxed);
+    if (setup_.live != nullptr) {
+        setup_.live->connections_opened.add();
+        setup_.live->open_connections.set(1);
+    }
+    if (setup_.start_ns > net::now_ns()) net::sleep_until_ns(setup_.start_ns);  // --start-at
 
     OperationGenerator generator(plan.operations, plan.seed);
     std::vector<std::uint8_t> adu(max_request_size(plan.operations) + codec::limits::kMbapHeader);
-    const std::int64_t start = net::now_ns();
-    const std::int64_t measure_from = start + plan.warmup.count();
-    const std::int64_t end = plan.duration.count() > 0 ? measure_from + plan.duration.count() : 0;
+    const std::int64_t measure_from = setup_.measure_start_ns;
     const std::int64_t timeout_ns = plan.transaction_timeout.count();
-    const std::int64_t interval_ns = open_loop ? static_cast<std::int64_t>(1e9 / plan.rate) : 0;
-    const std::int64_t progress_every = std::max<std::int64_t>(options.progress_interval_ns, 1000);
-    std::int64_t next_send = start;
-    std::int64_t next_progress = measure_from + progress_every;
-    std::uint64_t measured_sends = 0, interval_index = 0, interval_errors = 0, interval_done = 0;
-    stats::Histogram interval_latency;
+    std::uint64_t measured_sends = 0;
     std::uint16_t tid = 0;
-    std::uint64_t bad_checks = 0;
     for (;;) {
-        if (options.stop && options.stop->load(std::memory_order_relaxed)) break;
+        if (setup_.options->stop && setup_.options->stop->load(std::memory_order_relaxed)) break;
+        if (setup_.abort && setup_.abort->load(std::memory_order_relaxed)) break;
         std::int64_t now = net::now_ns();
-        if (end != 0 && now >= end) break;
+        if (now >= setup_.end_ns) break;
         if (plan.transactions != 0 && measured_sends >= plan.transactions) break;
-        if (open_loop) {
-            if (next_send > now) net::sleep_until_ns(next_send);
-            now = net::now_ns();
-            const std::int64_t lag = now - next_send;
+        if (now >= measure_from)
+            interval_.tick(static_cast<std::uint64_t>(now - measure_from), *setup_.timeline, 0);
+        const std::int64_t wait = pace(now);
+        if (wait != 0) {
+            // Nothing to send yet: sleep in short steps, so stops and stage changes are seen.
+            const std::int64_t step = wait < 0 ? net::kNsPerMs : std::min(wait, 10 * net::kNsPerMs);
+            net::sleep_until_ns(std::min(now + step, setup_.end_ns));
+            continue;
+        }
+        std::int64_t intended = now;
+        if (open_loop_) {
+            intended = next_send_;
+            const std::int64_t lag = now - intended;
             if (lag > plan.late_threshold.count() && now >= measure_from) {
-                // The line was busy with the previous transaction: the target's doing.
-                auto& l = r.schedule_lag.target;
-                ++l.late_sends;
-                l.total_lag_ns += static_cast<std::uint64_t>(lag);
-                l.max_lag_ns = std::max(l.max_lag_ns, static_cast<std::uint64_t>(lag));
+                // The line was still busy with the previous transaction: the target's doing.
+                ++target_lag.late_sends;
+                target_lag.total_lag_ns += static_cast<std::uint64_t>(lag);
+                target_lag.max_lag_ns =
+                    std::max(target_lag.max_lag_ns, static_cast<std::uint64_t>(lag));
             }
-            next_send += interval_ns;
+            const double rate = setup_.schedule->empty()
+                                    ? plan.rate
+                                    : setup_.schedule->at(intended - measure_from).rate;
+            next_send_ += static_cast<std::int64_t>(1e9 / rate);
         }
         RequestInfo info;
         const std::size_t size = generator.next(++tid, adu, info);
         if (size <= codec::limits::kMbapHeader) {
-            out.error = "the operation could not be encoded";
-            return out;
+            fatal_error = "the operation could not be encoded";
+            break;
         }
         const codec::Bytes pdu(adu.data() + codec::limits::kMbapHeader,
                                size - codec::limits::kMbapHeader);
         codec::Bytes answer;
         std::int64_t sent_ns = 0;
-        const SerialOutcome so = master.transact(info.unit_id, pdu, timeout_ns, answer, sent_ns);
+        const SerialOutcome so = master_.transact(info.unit_id, pdu, timeout_ns, answer, sent_ns);
         const std::int64_t done = net::now_ns();
         stats::Outcome outcome = outcome_of(so);
         codec::Response rsp;
@@ -120,66 +153,72 @@ LoadResult run_serial_load(const Plan& plan, const EngineOptions& options) {
             frame.header = {tid, 0, static_cast<std::uint16_t>(answer.size() + 1), info.unit_id};
             frame.pdu = answer;
             outcome = check_response(info, frame, rsp);
-            if (outcome == stats::Outcome::Ok && options.verifier.check &&
-                !options.verifier.check(options.verifier.context, info, rsp))
+            if (outcome == stats::Outcome::Ok && setup_.options->verifier.check &&
+                !setup_.options->verifier.check(setup_.options->verifier.context, info, rsp))
                 outcome = stats::Outcome::ValueMismatch;
         }
         if (so == SerialOutcome::BadCheck) ++bad_checks;
         if (sent_ns >= measure_from) {
             ++measured_sends;
-            auto& op = r.operations[info.op_index];
-            for (stats::OutcomeCounters* c : {&r.counters, &op.counters}) {
-                ++c->transactions_sent;
-                c->bytes_sent += pdu.size() + 3;
-                c->bytes_received += answer.size() + 3;
-                if (outcome == stats::Outcome::Exception)
-                    c->record_exception(static_cast<std::uint8_t>(rsp.exception));
-                else
-                    c->record(outcome);
-            }
-            const bool answered =
-                outcome == stats::Outcome::Ok || outcome == stats::Outcome::Exception;
-            if (answered && so == SerialOutcome::Answered) {
-                const auto latency = static_cast<std::uint64_t>(done - sent_ns);
-                r.latency.record(latency);
-                op.latency.record(latency);
-                interval_latency.record(latency);
-            }
-            ++interval_done;
-            if (stats::is_error(outcome)) ++interval_errors;
+            if (done >= measure_from)
+                interval_.tick(static_cast<std::uint64_t>(done - measure_from), *setup_.timeline,
+                               0);
+            // Open loop: latency from the intended send time, so a busy line is not hidden.
+            const std::int64_t from = open_loop_ ? intended : sent_ns;
+            const bool timed =
+                so == SerialOutcome::Answered &&
+                (outcome == stats::Outcome::Ok || outcome == stats::Outcome::Exception);
+            record(info, outcome, static_cast<std::uint8_t>(rsp.exception), timed,
+                   static_cast<std::uint64_t>(std::max<std::int64_t>(done - from, 0)),
+                   pdu.size() + kUnitAndCheck, answer.size() + kUnitAndCheck, from);
         }
         if (so == SerialOutcome::IoError) {
-            out.error = fmt::format("{}: {}", plan.serial.device, std::strerror(master.io_error()));
+            fatal_error =
+                fmt::format("{}: {}", plan.serial.device, std::strerror(master_.io_error()));
             break;
         }
-        if (options.on_progress && done >= next_progress) {
-            ProgressSnapshot p;
-            p.interval_index = interval_index++;
-            p.elapsed_seconds = static_cast<double>(done - start) / 1e9;
-            p.transactions_per_second =
-                static_cast<double>(interval_done) * 1e9 / static_cast<double>(progress_every);
-            p.p50_ns = interval_latency.value_at_percentile(50.0);
-            p.p99_ns = interval_latency.value_at_percentile(99.0);
-            p.max_ns = interval_latency.max();
-            p.errors = interval_errors;
-            p.total_transactions = r.counters.completed();
-            p.open_connections = 1;
-            options.on_progress(p);
-            interval_latency.reset();
-            interval_done = interval_errors = 0;
-            next_progress += progress_every;
+    }
+    finished_ns = net::now_ns();
+    if (finished_ns >= measure_from) interval_.flush(*setup_.timeline, 0);
+    open_.store(0, std::memory_order_relaxed);
+    if (setup_.live != nullptr) setup_.live->open_connections.set(0);
+}
+
+void SerialRunner::record(const RequestInfo& info, stats::Outcome outcome, std::uint8_t exception,
+                          bool timed, std::uint64_t latency_ns, std::size_t sent_bytes,
+                          std::size_t received_bytes, std::int64_t from) noexcept {
+    auto count = [&](stats::OutcomeCounters& c) {
+        ++c.transactions_sent;
+        c.bytes_sent += sent_bytes;
+        c.bytes_received += received_bytes;
+        if (outcome == stats::Outcome::Exception)
+            c.record_exception(exception);
+        else
+            c.record(outcome);
+    };
+    stats::OperationResult& op = operations[info.op_index];
+    count(counters);
+    count(op.counters);
+    if (timed) op.latency.record(latency_ns);
+    if (!setup_.schedule->empty()) {
+        stats::StageResult& stage =
+            stages[setup_.schedule->stage_at(from - setup_.measure_start_ns)];
+        count(stage.counters);
+        if (timed) stage.latency.record(latency_ns);
+        if (!stage.operations.empty()) {
+            count(stage.operations[info.op_index].counters);
+            if (timed) stage.operations[info.op_index].latency.record(latency_ns);
         }
     }
-    const std::int64_t finished = net::now_ns();
-    meta.measured_duration_ns =
-        finished > measure_from ? static_cast<std::uint64_t>(finished - measure_from) : 0;
-    if (bad_checks != 0)
-        out.warnings.push_back(
-            fmt::format("{} answer{} with a bad {} (counted as malformed)", bad_checks,
-                        bad_checks == 1 ? "" : "s",
-                        plan.serial.framing == codec::Framing::Ascii ? "LRC" : "CRC"));
-    out.ok = out.error.empty();
-    return out;
+    if (timed) interval_.record_latency(latency_ns, info.op_index);
+    interval_.record_transaction(outcome != stats::Outcome::Ok);
+    if (setup_.live != nullptr) {
+        LiveOperationCells& cells = setup_.live->operations[info.op_index];
+        cells.sent.add();
+        cells.bytes_sent.add(sent_bytes);
+        cells.bytes_received.add(received_bytes);
+        setup_.live->record(info.op_index, outcome, exception, timed, latency_ns);
+    }
 }
 
 }  // namespace mbstorm::load

@@ -2,7 +2,8 @@
 # `mbstorm run --serial` against `mbstorm serve --serial` over a socat pty pair, RTU and ASCII:
 # the run's JSON report counts transactions and latencies as a TCP run's does, every
 # transaction is answered, and the server saw exactly the run's requests. Then a unit nobody
-# serves: every transaction times out.
+# serves: every transaction times out. Last, a scenario file on the line: two open-loop stages
+# at their own rates, thresholds, --timeline and --hlog, as a TCP run has them.
 #   bash serial_run.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -44,4 +45,47 @@ sys.exit(1 if problems else 0)
 PY
   stop_pty_pair
 done
+
+# A scenario written for TCP (4 connections) run on the line: one master, the stages' rates.
+cat >"$work/stages.yaml" <<'YAML'
+name: serial-stages
+connections: 4
+rate: 50
+timeout: 200ms
+stages:
+  - {name: slow, duration: 1s, rate: 50, ramp: constant}
+  - {name: fast, duration: 1s, rate: 150, ramp: constant}
+operations:
+  - {function: read_holding_registers, address: 0-9, quantity: 4}
+thresholds:
+  - timeouts == 0
+YAML
+rm -f "$work/line_a" "$work/line_b"
+start_pty_pair "$work" || { echo "FAIL: socat made no pty pair"; exit 1; }
+start_serial_serve "$work/serve.out" "$mbstorm" "$work/line_a" --baud 115200 ||
+  { echo "FAIL: serve --serial did not start"; cat "$work/serve.out.err"; exit 1; }
+timeout -k 5 60 "$mbstorm" run "$work/stages.yaml" --serial "$work/line_b" --baud 115200 \
+  --json "$work/stages.json" --timeline "$work/timeline.jsonl" --hlog "$work/run.hlog" \
+  >"$work/run.out" 2>&1
+code=$?
+stop_server
+/usr/bin/python3 - "$work/stages.json" "$work/timeline.jsonl" "$work/run.hlog" "$code" <<'PY' || { fail=1; sed 's/^/  /' "$work/run.out"; }
+import json, sys
+run = json.load(open(sys.argv[1]))
+timeline = [json.loads(l) for l in open(sys.argv[2]) if l.strip()]
+hlog = [l for l in open(sys.argv[3]) if l[:1].isdigit()]
+problems = []
+if sys.argv[4] != "0": problems.append(f"run exit {sys.argv[4]}")
+stages = {s["name"]: s["totals"]["transactions"] for s in run["stages"]}
+# Open loop at 50/s then 150/s for a second each; 15% of slack for the pty's scheduling.
+if not 42 <= stages.get("slow", 0) <= 58: problems.append(f"stage slow: {stages}")
+if not 127 <= stages.get("fast", 0) <= 173: problems.append(f"stage fast: {stages}")
+if sum(i["transactions"] for i in timeline) != run["totals"]["transactions"]:
+    problems.append(f"timeline {[i['transactions'] for i in timeline]} vs {run['totals']}")
+if len(hlog) < 2: problems.append(f"{len(hlog)} interval lines in the hlog")
+if run["thresholds"][0]["passed"] is not True: problems.append(f"thresholds {run['thresholds']}")
+print(("FAIL " if problems else "ok   ") + f"scenario on the line: stages {stages}, {len(timeline)} timeline intervals, {len(hlog)} hlog intervals")
+for p in problems: print("  " + p)
+sys.exit(1 if problems else 0)
+PY
 exit $fail
