@@ -51,13 +51,11 @@ int run_serial_serve(const ServeOptions& o, std::unique_ptr<slave::UnitModels> u
     sc.units = units.get();
     sc.only_unit = o.config.only_unit;
     sc.simulated = o.config.simulated;
+    sc.faults = o.config.faults;
     server::SerialServer srv(std::move(sc));
     if (std::string e = srv.open(); !e.empty()) return usage_error("serve", e);
     fmt::print("mbstorm serve: serving on {}; Ctrl-C stops\n", srv.describe());
-    if (o.config.faults.any())
-        fmt::print(stderr,
-                   "mbstorm serve: warning: fault injection is not applied on a serial "
-                   "line\n");
+    if (o.config.faults.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     std::fflush(stdout);
     return server::run_serial_until_signal(srv, o.stats, static_cast<double>(o.duration_ns) / 1e9,
                                            stdout);

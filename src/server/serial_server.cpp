@@ -33,7 +33,9 @@ void add(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) noexcept {
 
 }  // namespace
 
-SerialServer::SerialServer(SerialServerConfig config) : config_(std::move(config)) {}
+SerialServer::SerialServer(SerialServerConfig config)
+    : config_(std::move(config)),
+      faults_(config_.faults, 0, static_cast<std::uint64_t>(net::now_ns())) {}
 
 std::string SerialServer::open() {
     if (config_.units == nullptr) return "the serial server needs its unit models";
@@ -50,8 +52,9 @@ SerialServerStats SerialServer::stats() const noexcept {
         return c.load(std::memory_order_relaxed);
     };
     const auto& c = counters_;
-    return {get(c.requests),      get(c.responses),  get(c.exceptions),    get(c.broadcasts),
-            get(c.not_addressed), get(c.bad_checks), get(c.broken_frames), get(c.noise_bytes)};
+    return {get(c.requests),      get(c.responses),   get(c.exceptions),    get(c.broadcasts),
+            get(c.not_addressed), get(c.bad_checks),  get(c.broken_frames), get(c.noise_bytes),
+            get(c.fault_delayed), get(c.fault_silent)};
 }
 
 std::string SerialServer::run(const std::atomic<bool>& stop) {
@@ -115,7 +118,34 @@ void SerialServer::serve_frame(std::uint8_t address, codec::Bytes pdu) {
     }
     add(counters_.requests);
     std::array<std::uint8_t, slave::kMinOutput> out{};
-    const slave::HandleResult r = slave::handle_request(address, pdu, *config_.units, out);
+    slave::HandleResult r;
+    // Broadcasts are never answered: nothing to fault.
+    const slave::FaultDecision fault =
+        faults_.enabled() && address != 0 ? faults_.decide() : slave::FaultDecision{};
+    switch (fault.action) {
+        case slave::FaultDecision::Action::Drop:
+        case slave::FaultDecision::Action::NoAnswer:
+            add(counters_.fault_silent);
+            return;
+        case slave::FaultDecision::Action::Exception:
+            out[0] = static_cast<std::uint8_t>((pdu.empty() ? 0 : pdu[0]) | codec::kExceptionBit);
+            out[1] = static_cast<std::uint8_t>(fault.exception);
+            r.size = 2;
+            r.outcome = slave::Outcome::Exception;
+            r.exception = fault.exception;
+            break;
+        case slave::FaultDecision::Action::Answer:
+            r = slave::handle_request(address, pdu, *config_.units, out);
+            break;
+    }
+    if (faults_.enabled() && address != 0) {
+        const auto now = static_cast<std::uint64_t>(net::now_ns());
+        const std::uint64_t release = faults_.held_until(now + fault.delay_ns);
+        if (release > now) {
+            add(counters_.fault_delayed);
+            net::sleep_until_ns(static_cast<std::int64_t>(release));  // the bus waits too
+        }
+    }
     if (address == 0) add(counters_.broadcasts);
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) {
         if (address != 0) add(counters_.not_addressed);
@@ -139,9 +169,9 @@ namespace {
 std::string format_serial_stats(const SerialServerStats& s) {
     return fmt::format(
         "{} requests, {} responses ({} exceptions), {} broadcasts, {} not addressed, {} CRC/LRC "
-        "errors, {} broken frames ({} bytes dropped)",
+        "errors, {} broken frames ({} bytes dropped), faults: {} delayed, {} unanswered",
         s.requests, s.responses, s.exceptions, s.broadcasts, s.not_addressed, s.bad_checks,
-        s.broken_frames, s.noise_bytes);
+        s.broken_frames, s.noise_bytes, s.fault_delayed, s.fault_silent);
 }
 
 }  // namespace

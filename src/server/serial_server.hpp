@@ -15,6 +15,7 @@
 #include "codec/bytes.hpp"
 #include "codec/framing.hpp"
 #include "net/serial_port.hpp"
+#include "slave/faults.hpp"
 #include "slave/simulator.hpp"
 
 namespace mbstorm::slave {
@@ -35,6 +36,9 @@ struct SerialServerConfig {
     std::vector<slave::SimulatedInput> simulated;
     // ASCII's inter-character timeout (the specification's default is one second).
     std::int64_t ascii_timeout_ns = 1'000'000'000;
+    // Fault injection as on TCP. A bus has no connection to drop: a drop is an unanswered
+    // request there too. A delay holds the bus, as a slow device does.
+    slave::FaultConfig faults;
 };
 
 struct SerialServerStats {
@@ -46,6 +50,8 @@ struct SerialServerStats {
     std::uint64_t bad_checks = 0;     // CRC (RTU) or LRC (ASCII) errors
     std::uint64_t broken_frames = 0;  // truncated, overlong, broken by a silence, bad hex
     std::uint64_t noise_bytes = 0;    // bytes dropped with the above
+    std::uint64_t fault_delayed = 0;  // answers held back by --delay or a stall
+    std::uint64_t fault_silent = 0;   // requests left unanswered by --no-answer-rate/--drop-rate
 };
 
 class SerialServer {
@@ -64,9 +70,11 @@ class SerialServer {
 
     SerialServerConfig config_;
     net::SerialPort port_;
+    slave::FaultInjector faults_;
     struct Counters {
         std::atomic<std::uint64_t> requests{0}, responses{0}, exceptions{0}, broadcasts{0},
-            not_addressed{0}, bad_checks{0}, broken_frames{0}, noise_bytes{0};
+            not_addressed{0}, bad_checks{0}, broken_frames{0}, noise_bytes{0}, fault_delayed{0},
+            fault_silent{0};
     } counters_;
 };
 

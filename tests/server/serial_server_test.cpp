@@ -60,7 +60,7 @@ std::vector<std::uint8_t> read_for(int fd, std::size_t want, int timeout_ms) {
 
 class SerialServerTest : public ::testing::Test {
   protected:
-    void start(codec::Framing framing) {
+    void start(codec::Framing framing, slave::FaultConfig faults = {}) {
         ASSERT_GE(pty.master, 0);
         int flags = ::fcntl(pty.master, F_GETFL);
         ::fcntl(pty.master, F_SETFL, flags | O_NONBLOCK);
@@ -73,6 +73,7 @@ class SerialServerTest : public ::testing::Test {
         c.framing = framing;
         c.units = &units;
         c.only_unit = 1;
+        c.faults = faults;
         server_ = std::make_unique<server::SerialServer>(c);
         ASSERT_EQ(server_->open(), "");
         thread_ = std::thread([this] { error_ = server_->run(stop_); });
@@ -132,6 +133,36 @@ TEST_F(SerialServerTest, RtuExceptionsBroadcastsOtherUnitsAndBadCrc) {
     EXPECT_EQ(s.not_addressed, 1u);
     EXPECT_EQ(s.broadcasts, 1u);
     EXPECT_EQ(s.exceptions, 1u);
+}
+
+TEST_F(SerialServerTest, FaultsAnswerLateWithAnExceptionOrNotAtAll) {
+    // A fixed 150 ms delay and exception 06 for every request: the answer is late and wrong.
+    slave::FaultConfig late_and_busy;
+    late_and_busy.delay = {slave::DelayConfig::Kind::Fixed, 150'000'000, 0, 0, 0};
+    late_and_busy.exception_rate = 1.0;
+    late_and_busy.exception_code = codec::ExceptionCode::ServerDeviceBusy;
+    start(codec::Framing::Rtu, late_and_busy);
+    const std::int64_t sent = net::now_ns();
+    send(rtu(1, {0x03, 0x00, 0x05, 0x00, 0x01}));
+    EXPECT_EQ(read_for(pty.master, 5, 5000), rtu(1, {0x83, 0x06}));
+    EXPECT_GE(net::now_ns() - sent, 150'000'000);
+    // A broadcast is never answered, fault or not, and still executed.
+    send(rtu(0, {0x06, 0x00, 0x07, 0xBE, 0xEF}));
+    EXPECT_TRUE(read_for(pty.master, 1, 300).empty());
+    EXPECT_EQ(units.model_at(0).holding_registers().get(7), 0xBEEF);
+    auto s = server_->stats();
+    EXPECT_EQ(s.exceptions, 1u);
+    EXPECT_EQ(s.fault_delayed, 1u);
+}
+
+TEST_F(SerialServerTest, NoAnswerAndDropFaultsLeaveTheRequestUnanswered) {
+    slave::FaultConfig silent;
+    silent.no_answer_rate = 1.0;
+    start(codec::Framing::Rtu, silent);
+    send(rtu(1, {0x03, 0x00, 0x05, 0x00, 0x01}));
+    EXPECT_TRUE(read_for(pty.master, 1, 300).empty());
+    EXPECT_EQ(server_->stats().fault_silent, 1u);
+    EXPECT_EQ(server_->stats().responses, 0u);
 }
 
 TEST_F(SerialServerTest, AsciiRequestGetsAnAsciiAnswer) {
