@@ -10,6 +10,7 @@
 #include "cli/duration_option.hpp"
 #include "cli/metrics_endpoint.hpp"
 #include "cli/transport_options.hpp"
+#include "net/kernel_tls.hpp"
 #include "server/run.hpp"
 #include "server/serial_server.hpp"
 #include "server/server.hpp"
@@ -131,6 +132,7 @@ int run_serve(ServeOptions& o) {
                srv.threads(), srv.threads() == 1 ? "" : "s", srv.describe_io());
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
+    if (c.tls) fmt::print("mbstorm serve: {}\n", net::describe_tls_path());
     std::fflush(stdout);
     net::HttpServer metrics;
     if (!o.metrics_listen.empty() &&

@@ -17,6 +17,7 @@
 #include "load/write_safety.hpp"
 #include "net/clock.hpp"
 #include "net/features.hpp"
+#include "net/kernel_tls.hpp"
 #include "net/serial_port.hpp"
 #include "net/source_addresses.hpp"
 
@@ -754,6 +755,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     stats::RunMetadata& meta = result.run.metadata;
     describe_run(plan, options, schedule, setup, clock, finished_ns, meta);
     if (line) describe_serial_run(plan, schedule, *line, result);
+    if (plan.tls) meta.notes.push_back(net::describe_tls_path());
     result.run.timeline = timeline.summaries();
     result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
     auto& series = result.run.timeline;

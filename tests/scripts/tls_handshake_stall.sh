@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A TLS handshake that stops half-way (a slowloris on port 802) holds a TLS session on the
 # slave: `mbstorm serve --transport tls` closes it after --frame-timeout, like a frame that
-# stops half-way, and keeps serving everyone else meanwhile.
+# stops half-way, and keeps serving everyone else meanwhile. It also says how TLS records are
+# encrypted (the kernel TLS offload probe).
 #   bash tls_handshake_stall.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -36,4 +37,8 @@ kill -INT "$server_pid"; wait "$server_pid" 2>/dev/null; server_pid=""
 if grep -q "1 closed for a slow frame" "$work/serve.out" "$work/serve.out.err"; then
   echo "ok   counted as a slow frame"
 else echo "FAIL: serve's summary does not count it"; cat "$work/serve.out"*; fail=1; fi
+# serve says how TLS records are encrypted (userspace OpenSSL; kernel offload probed).
+if grep -q "TLS records encrypted by OpenSSL in userspace" "$work/serve.out"; then
+  echo "ok   serve names the TLS path: $(grep -o 'over io_uring.*' "$work/serve.out")"
+else echo "FAIL: serve does not say how TLS is done"; cat "$work/serve.out"; fail=1; fi
 exit $fail

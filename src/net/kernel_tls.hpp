@@ -1,0 +1,23 @@
+// Whether the kernel offers TLS offload (kTLS: the "tls" upper-layer protocol on a TCP
+// socket), found by trying it once per process on a loopback connection. With it, the
+// record layer could move into the kernel after the handshake and io_uring would carry
+// plaintext; without it (this project's CI kernel has no tls module), OpenSSL encrypts in
+// userspace over io_uring, which is the path mbstorm uses today either way.
+#pragma once
+
+#include <string>
+
+namespace mbstorm::net {
+
+struct KernelTls {
+    bool available = false;
+    std::string detail;  // why not (e.g. "TCP_ULP tls: No such file or directory")
+};
+
+// Probes on first call (thread-safe), cached afterwards.
+const KernelTls& kernel_tls() noexcept;
+
+// One sentence for reports: how TLS records are encrypted in this process, and why.
+std::string describe_tls_path();
+
+}  // namespace mbstorm::net
