@@ -9,6 +9,7 @@
 #include "codec/mbap.hpp"
 #include "load/operation_generator.hpp"
 #include "load/response_check.hpp"
+#include "load/result_rows.hpp"
 #include "net/clock.hpp"
 
 namespace mbstorm::load {
@@ -44,24 +45,8 @@ SerialRunner::SerialRunner(const SerialRunSetup& setup)
       interval_(setup.timeline->interval_ns(), stats::Histogram::kOneHourNs,
                 setup.timeline->tags()),
       open_loop_(setup.plan->model == LoadModel::OpenLoop) {
-    for (const Operation& op : setup_.plan->operations) {
-        stats::OperationResult r;
-        r.name = op.name.empty() ? std::string(codec::function_name(op.function)) : op.name;
-        r.function_code = op.function;
-        operations.push_back(std::move(r));
-    }
-    stages.resize(setup_.schedule->stages());
-    // As the engine's workers: per-stage operations only for mixes.
-    if (operations.size() > 1) {
-        for (auto& stage : stages) {
-            for (const auto& op : operations) {
-                stats::OperationResult r;
-                r.name = op.name;
-                r.function_code = op.function_code;
-                stage.operations.push_back(std::move(r));
-            }
-        }
-    }
+    operations = operation_rows(setup_.plan->operations);
+    stages = stage_rows(setup_.schedule->stages(), operations);
 }
 
 std::string SerialRunner::open() {

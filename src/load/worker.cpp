@@ -13,6 +13,7 @@
 #include <system_error>
 
 #include "load/response_check.hpp"
+#include "load/result_rows.hpp"
 #include "load/rng.hpp"
 #include "load/thread_share.hpp"
 #include "net/clock.hpp"
@@ -48,27 +49,8 @@ Worker::Worker(WorkerSetup setup)
       lag_(plan_.late_threshold.count()),
       interval_(setup_.timeline->interval_ns(), stats::Histogram::kOneHourNs,
                 setup_.timeline->tags()) {
-    operations.reserve(plan_.operations.size());
-    for (const Operation& op : plan_.operations) {
-        stats::OperationResult r;
-        r.name = op.name.empty() ? std::string(codec::function_name(op.function)) : op.name;
-        r.function_code = op.function;
-        operations.push_back(std::move(r));
-    }
-    if (setup_.schedule != nullptr) {
-        stages.resize(setup_.schedule->stages());
-        // A one-operation mix would repeat every stage row: per-stage operations only for mixes.
-        if (operations.size() > 1) {
-            for (auto& stage : stages) {
-                for (const auto& op : operations) {
-                    stats::OperationResult r;
-                    r.name = op.name;
-                    r.function_code = op.function_code;
-                    stage.operations.push_back(std::move(r));
-                }
-            }
-        }
-    }
+    operations = operation_rows(plan_.operations);
+    if (setup_.schedule != nullptr) stages = stage_rows(setup_.schedule->stages(), operations);
     rate_ = setup_.rate;
     active_ = setup_.connections;
     const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
