@@ -117,6 +117,19 @@ std::string ModbusClient::receive(std::uint8_t* out, std::size_t capacity, std::
     return send_tls_output(deadline);  // a key update's answer, if any
 }
 
+std::string ModbusClient::take_answer(const codec::TcpFrame& frame, std::uint8_t unit,
+                                      codec::Response& response) {
+    buffer_.assign(frame.pdu.begin(), frame.pdu.end());
+    if (frame.header.unit_id != unit)
+        return fmt::format("the answer names unit {}, not {}", frame.header.unit_id, unit);
+    const auto err = codec::decode_response(buffer_, response);
+    if (err != codec::CodecError::Ok) {
+        return fmt::format("malformed answer ({}): {}", codec::format_hex(buffer_),
+                           codec::error_description(err));
+    }
+    return {};
+}
+
 std::string ModbusClient::transact(std::uint8_t unit, codec::Bytes request, int timeout_ms,
                                    codec::Response& response) {
     if (framing_ == codec::Framing::Rtu) return transact_rtu(unit, request, timeout_ms, response);
@@ -138,16 +151,7 @@ std::string ModbusClient::transact(std::uint8_t unit, codec::Bytes request, int 
         if (status == codec::MbapSplitter::Status::Frame) {
             // An answer to an earlier, timed-out request is not ours: skip it.
             if (frame.header.transaction_id != tid) continue;
-            buffer_.assign(frame.pdu.begin(), frame.pdu.end());
-            if (frame.header.unit_id != unit) {
-                return fmt::format("the answer names unit {}, not {}", frame.header.unit_id, unit);
-            }
-            auto err = codec::decode_response(buffer_, response);
-            if (err != codec::CodecError::Ok) {
-                return fmt::format("malformed answer ({}): {}", codec::format_hex(buffer_),
-                                   codec::error_description(err));
-            }
-            return {};
+            return take_answer(frame, unit, response);
         }
         std::size_t n = 0;
         if (auto why = receive(chunk.data(), chunk.size(), n, deadline, timeout_ms); !why.empty())
@@ -175,16 +179,7 @@ std::string ModbusClient::transact_rtu(std::uint8_t unit, codec::Bytes request, 
             return fmt::format("malformed answer: {}", codec::error_description(splitter.error()));
         }
         if (status == codec::RtuSplitter::Status::Frame) {
-            buffer_.assign(frame.pdu.begin(), frame.pdu.end());
-            if (frame.header.unit_id != unit) {
-                return fmt::format("the answer names unit {}, not {}", frame.header.unit_id, unit);
-            }
-            auto err = codec::decode_response(buffer_, response);
-            if (err != codec::CodecError::Ok) {
-                return fmt::format("malformed answer ({}): {}", codec::format_hex(buffer_),
-                                   codec::error_description(err));
-            }
-            return {};
+            return take_answer(frame, unit, response);
         }
         std::size_t n = 0;
         if (auto why = receive(chunk.data(), chunk.size(), n, deadline, timeout_ms); !why.empty())

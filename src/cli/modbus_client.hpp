@@ -11,6 +11,7 @@
 
 #include "codec/bytes.hpp"
 #include "codec/framing.hpp"
+#include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
 #include "net/socket.hpp"
 #include "net/tls_session.hpp"
@@ -36,6 +37,9 @@ class ModbusClient {
   private:
     std::string transact_rtu(std::uint8_t unit, codec::Bytes request, int timeout_ms,
                              codec::Response& response);
+    // The answer `frame` carries for `unit`, decoded into `response`: "" or why it is not one.
+    std::string take_answer(const codec::TcpFrame& frame, std::uint8_t unit,
+                            codec::Response& response);
     codec::Framing framing_;
     using Deadline = std::chrono::steady_clock::time_point;
     // The bytes to the socket (through the TLS session when there is one); "" or why not.
