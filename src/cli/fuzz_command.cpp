@@ -164,7 +164,8 @@ int run_fuzz(const FuzzOptions& o) {
     if (const int sig = g_stop_signal.load(); sig != 0 && r.stop_reason == "interrupted")
         r.stop_reason = fmt::format("interrupted by {}", signal_name(sig));
     if (!r.started) {
-        fmt::print(stderr, "mbstorm fuzz: {}: {}\n", c.target_text, r.error);
+        fmt::print(stderr, "mbstorm fuzz: {}: {}{}\n", c.target_text, r.error,
+                   connector_failure(*c.connector));
         return kExitUsage;
     }
     const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};

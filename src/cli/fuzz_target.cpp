@@ -4,11 +4,13 @@
 
 #include <cstring>
 
+#include "netfuzz/tls_link.hpp"
+
 namespace mbstorm::cli {
 
 bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
-                         std::string& error) {
-    if (!net::parse_endpoint(text, out, &error, 502)) return false;
+                         std::string& error, std::uint16_t default_port) {
+    if (!net::parse_endpoint(text, out, &error, default_port)) return false;
     bool loopback = false;
     if (out.family() == AF_INET) {
         const auto* a = reinterpret_cast<const sockaddr_in*>(&out.addr);
@@ -37,13 +39,27 @@ std::shared_ptr<netfuzz::Connector> make_fuzz_connector(const std::string& targe
             if (!resolve_fuzz_target(target, allow_remote, endpoint, error)) return nullptr;
             return std::make_shared<netfuzz::TcpConnector>(endpoint);
         }
+        case TransportKind::Tls: {
+            net::Endpoint endpoint;
+            if (!resolve_fuzz_target(target, allow_remote, endpoint, error, 802)) return nullptr;
+            std::shared_ptr<net::TlsContext> ctx;
+            if (error = client_tls(transport, ctx); !error.empty()) return nullptr;
+            return std::make_shared<netfuzz::TlsConnector>(endpoint, std::move(ctx),
+                                                           transport.tls_resume);
+        }
         case TransportKind::RtuOverTcp:
-        case TransportKind::Tls:
         case TransportKind::Serial:
             break;
     }
     error = "this transport cannot be fuzzed yet";
     return nullptr;
+}
+
+std::string connector_failure(const netfuzz::Connector& connector) {
+    if (const auto* tls = dynamic_cast<const netfuzz::TlsConnector*>(&connector)) {
+        if (std::string why = tls->last_failure(); !why.empty()) return " (" + why + ")";
+    }
+    return {};
 }
 
 }  // namespace mbstorm::cli

@@ -2,6 +2,7 @@
 // --allow-remote is given (fuzzing changes a device's outputs).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -13,7 +14,7 @@ namespace mbstorm::cli {
 
 // False with `error` for an unparsable target or a remote one without permission.
 bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
-                         std::string& error);
+                         std::string& error, std::uint16_t default_port = 502);
 
 // What `fuzz` and `replay` open links with: the --target (checked as above) reached over the
 // chosen transport. Null with `error` when the target or the transport options cannot be used.
@@ -21,5 +22,9 @@ std::shared_ptr<netfuzz::Connector> make_fuzz_connector(const std::string& targe
                                                         bool allow_remote,
                                                         const TransportOptions& transport,
                                                         std::string& error);
+
+// Why the connector's last link could not be opened or broke, beyond an errno (a TLS
+// handshake's refusal, an alert), as " (...)"; empty when it has nothing to add.
+std::string connector_failure(const netfuzz::Connector& connector);
 
 }  // namespace mbstorm::cli

@@ -56,8 +56,8 @@ int run_replay(const ReplayOptions& o) {
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.
             if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
-                fmt::print(stderr, "mbstorm replay: {} does not accept connections\n",
-                           target.describe());
+                fmt::print(stderr, "mbstorm replay: {} does not accept connections{}\n",
+                           target.describe(), connector_failure(target));
                 return kExitUsage;
             }
             e = netfuzz::execute_case(replayed, target, f.profile, ex);

@@ -112,7 +112,8 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
         (command == "serve" || command == "run" || command == "read" || command == "write"))
         return {};
     if (kind == TransportKind::Tls) {
-        if (command == "serve" || command == "run" || command == "read" || command == "write")
+        if (command == "serve" || command == "run" || command == "read" || command == "write" ||
+            command == "fuzz" || command == "replay")
             return {};
     }
     // Serial: RTU needs eight data bits (the specification's and the CRC's).
