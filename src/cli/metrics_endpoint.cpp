@@ -95,6 +95,17 @@ std::string format_serve_metrics(const server::ServerStats& s) {
     counter("mbstorm_slave_accept_out_of_descriptors_total",
             "Accepts that failed for lack of file descriptors.", s.accept_fd_exhausted);
     gauge("mbstorm_slave_pending_output_bytes", "Bytes queued for sending now.", s.pending_output);
+    // Modbus/TCP Security (--transport tls); zero on other transports.
+    counter("mbstorm_slave_tls_handshakes_total", "TLS handshakes completed.", s.tls_handshakes);
+    counter("mbstorm_slave_tls_resumptions_total", "TLS handshakes that resumed a session.",
+            s.tls_resumed);
+    counter("mbstorm_slave_tls_handshake_failures_total",
+            "TLS connections refused at the handshake (certificate, role, protocol).",
+            s.tls_refused);
+    counter("mbstorm_slave_tls_role_refusals_total",
+            "Requests answered with exception 01 because the client's role may not use the "
+            "function.",
+            s.tls_role_denied);
     return w.text();
 }
 

@@ -55,7 +55,7 @@ int run_serial_serve(const ServeOptions& o, std::unique_ptr<slave::UnitModels> u
     sc.faults = o.config.faults;
     server::SerialServer srv(std::move(sc));
     if (std::string e = srv.open(); !e.empty()) return usage_error("serve", e);
-    fmt::print("mbstorm serve: serving on {}; Ctrl-C stops\n", srv.describe());
+    fmt::print("mbstorm serve: serving on {} (serial); Ctrl-C stops\n", srv.describe());
     if (o.config.faults.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     std::fflush(stdout);
     return server::run_serial_until_signal(srv, o.stats, static_cast<double>(o.duration_ns) / 1e9,
@@ -88,6 +88,13 @@ int run_serve(ServeOptions& o) {
             return usage_error("serve", e.what());
         }
         c.faults = device->faults;
+        // The device's role rules join --tls-role's (a role named in both may use either list).
+        if (o.transport.kind() == TransportKind::Tls)
+            for (const auto& [role, set] : device->tls_roles) c.tls_roles.allow(role, set);
+        else if (!device->tls_roles.empty())
+            fmt::print(stderr,
+                       "mbstorm serve: warning: the device file's tls_roles apply only with "
+                       "--transport tls\n");
         units = std::make_unique<slave::UnitModels>(slave::build_units(*device));
         c.units = units.get();
         c.simulated = device->simulated;
@@ -128,8 +135,10 @@ int run_serve(ServeOptions& o) {
     server::Server srv(c);
     std::string error;
     if (!srv.start(&error)) return usage_error("serve", error);
-    fmt::print("mbstorm serve: listening on {} ({} thread{}, {}); Ctrl-C stops\n", srv.endpoint(),
-               srv.threads(), srv.threads() == 1 ? "" : "s", srv.describe_io());
+    // The endpoint first, then the transport: scripts take the word after "listening on".
+    fmt::print("mbstorm serve: listening on {} ({}, {} thread{}, {}); Ctrl-C stops\n",
+               srv.endpoint(), transport_name(o.transport.kind()), srv.threads(),
+               srv.threads() == 1 ? "" : "s", srv.describe_io());
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     if (c.tls) fmt::print("mbstorm serve: {}\n", net::describe_tls_path());

@@ -11,11 +11,12 @@
 #include <utility>
 #include <vector>
 
+#include "codec/function_set.hpp"
 #include "net/tls_session.hpp"
 
 namespace mbstorm::server {
 
-using FunctionSet = std::bitset<256>;
+using FunctionSet = codec::FunctionSet;
 
 // Which function codes each role (from the client certificate's role extension) may use.
 // Empty: every role may use every function. Otherwise a role not listed may use none, and a

@@ -556,6 +556,32 @@ void parse_faults(const Parser& p, const YAML::Node& n, FaultConfig& f) {
     if (const std::string problem = validate(f); !problem.empty()) p.fail(n, problem);
 }
 
+// `tls_roles: {Operator: "1-6,15,16", Viewer: [1, 2, 3, 4]}`: a list per role, read by the
+// codec's one parser of function code lists (serve --tls-role uses it too).
+void parse_tls_roles(const Parser& p, const YAML::Node& n, DeviceDescription& d) {
+    if (!n.IsMap())
+        p.fail(n,
+               "tls_roles maps each role to the function codes it may use, e.g. "
+               "{Operator: \"1-6,15,16\", Viewer: \"1-4\"}");
+    for (const auto& kv : n) {
+        const std::string role = p.scalar(kv.first, "role");
+        if (role.empty()) p.fail(kv.first, "tls_roles: an empty role name");
+        for (const auto& [known, set] : d.tls_roles)
+            if (known == role) p.fail(kv.first, "tls_roles: role '" + role + "' given twice");
+        std::string list;
+        if (kv.second.IsSequence()) {
+            for (const auto& item : kv.second)
+                list += (list.empty() ? "" : ",") + p.scalar(item, "function code");
+        } else {
+            list = p.scalar(kv.second, "function codes");
+        }
+        codec::FunctionSet set;
+        if (const std::string why = codec::parse_function_set(list, set); !why.empty())
+            p.fail(kv.second, "tls_roles." + role + ": " + why);
+        d.tls_roles.emplace_back(role, set);
+    }
+}
+
 DeviceDescription parse_document(const Parser& p, const YAML::Node& root) {
     DeviceDescription d;
     if (root.IsNull()) return d;  // an empty document is the default device
@@ -573,7 +599,8 @@ DeviceDescription parse_document(const Parser& p, const YAML::Node& root) {
                                                   "init",
                                                   "counters",
                                                   "simulate",
-                                                  "faults"};
+                                                  "faults",
+                                                  "tls_roles"};
     p.each_key(root, "device description", kKnown,
                [&](const std::string& key, const YAML::Node& v) {
                    keys[key] = v;
@@ -640,6 +667,7 @@ DeviceDescription parse_document(const Parser& p, const YAML::Node& root) {
     if (has("counters")) parse_counters(p, keys["counters"], layout, d);
     if (has("simulate")) parse_simulate(p, keys["simulate"], layout, d.simulated);
     if (has("faults")) parse_faults(p, keys["faults"], d.faults);
+    if (has("tls_roles")) parse_tls_roles(p, keys["tls_roles"], d);
     return d;
 }
 

@@ -9,8 +9,10 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
+#include "codec/function_set.hpp"
 #include "slave/data_model.hpp"
 #include "slave/faults.hpp"
 #include "slave/simulator.hpp"
@@ -60,6 +62,9 @@ struct DeviceDescription {
     std::vector<ReadCounterSpec> read_counters;
     std::vector<SimulatedInput> simulated;  // includes interval counters (Waveform::Counter)
     FaultConfig faults;
+    // Modbus/TCP Security: the function codes each client role may use (`tls_roles:`, the
+    // same lists as serve --tls-role); applied when the device is served over TLS.
+    std::vector<std::pair<std::string, codec::FunctionSet>> tls_roles;
 };
 
 // The YAML keys of the named identification objects (`identification:`), in object-id order.

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "codec/address.hpp"
+#include "codec/function_set.hpp"
 
 namespace mbstorm::slave {
 
@@ -302,6 +303,11 @@ void emit_device_yaml(YAML::Emitter& out, const DeviceDescription& d) {
     emit_simulate(out, d.simulated);
     out << YAML::Key << "faults" << YAML::Value;
     emit_faults(out, d.faults);
+    out << YAML::Key << "tls_roles" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (const auto& [role, set] : d.tls_roles)
+        out << YAML::Key << YAML::DoubleQuoted << role << YAML::Value << YAML::DoubleQuoted
+            << codec::format_function_set(set);
+    out << YAML::EndMap;
     out << YAML::EndMap;
 }
 

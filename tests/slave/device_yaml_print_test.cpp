@@ -39,6 +39,7 @@ void expect_same(const DeviceDescription& a, const DeviceDescription& b) {
     EXPECT_EQ(a.units, b.units);
     EXPECT_EQ(a.unknown_unit, b.unknown_unit);
     EXPECT_EQ(a.broadcast_unit_zero, b.broadcast_unit_zero);
+    EXPECT_EQ(a.tls_roles, b.tls_roles);
 
     ASSERT_EQ(a.init.size(), b.init.size());
     for (std::size_t i = 0; i < a.init.size(); ++i) {
@@ -165,6 +166,7 @@ faults:
   drop_rate: 0.0001
   no_answer_rate: 0.3
   seed: 42
+tls_roles: {Operator: "1-6,15,16", "Read only": [1, 2, 3, 4]}
 )";
 
 TEST(DeviceYamlPrint, EveryKeyRoundTrips) {
@@ -175,6 +177,9 @@ TEST(DeviceYamlPrint, EveryKeyRoundTrips) {
     EXPECT_NE(printed.find("interval_ms: 0.125"), std::string::npos) << printed;
     EXPECT_NE(printed.find("period_ms: 60000.5"), std::string::npos) << printed;
     EXPECT_NE(printed.find("0x80: \"first\""), std::string::npos) << printed;
+    EXPECT_NE(printed.find("tls_roles: {\"Operator\": \"1-6,15-16\", \"Read only\": \"1-4\"}"),
+              std::string::npos)
+        << printed;
 }
 
 TEST(DeviceYamlPrint, ExampleFileRoundTrips) {
@@ -245,6 +250,7 @@ TEST(DeviceYamlPrint, DefaultDeviceShowsEveryDefault) {
              "drop_rate: 0",
              "no_answer_rate: 0",
              "seed: 30789020475683437",  // 0x6d6273746f726d, "mbstorm"
+             "tls_roles: {}",
          }) {
         EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
     }

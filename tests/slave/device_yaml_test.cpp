@@ -106,6 +106,28 @@ faults:
               5'000'000u);
 }
 
+TEST(DeviceYaml, TlsRolesListFunctionCodesPerRoleLikeTheTlsRoleFlag) {
+    const DeviceDescription d = parse_device_yaml(R"(
+tls_roles:
+  Operator: "1-6,15,16"
+  Viewer: [1, 2, 0x03, "4"]
+)");
+    ASSERT_EQ(d.tls_roles.size(), 2u);
+    EXPECT_EQ(d.tls_roles[0].first, "Operator");
+    EXPECT_EQ(codec::format_function_set(d.tls_roles[0].second), "1-6,15-16");
+    EXPECT_EQ(d.tls_roles[1].first, "Viewer");
+    EXPECT_EQ(codec::format_function_set(d.tls_roles[1].second), "1-4");
+    EXPECT_TRUE(parse_device_yaml("").tls_roles.empty());
+    std::string e = error_of("tls_roles:\n  Operator: \"1-6,300\"\n");
+    EXPECT_NE(e.find("dev.yaml:2:13: tls_roles.Operator: bad function code or range '300'"),
+              std::string::npos)
+        << e;
+    e = error_of("tls_roles: [Operator]\n");
+    EXPECT_NE(e.find("tls_roles maps each role"), std::string::npos) << e;
+    e = error_of("tls_roles: {Viewer: \"\"}\n");
+    EXPECT_NE(e.find("empty list"), std::string::npos) << e;
+}
+
 TEST(DeviceYaml, DuplicateKeysAreRejectedAndUnknownKeysListTheValidOnes) {
     std::string e = error_of("tables:\n  coils: 10\n  coils: 20\n");
     EXPECT_NE(e.find("dev.yaml:3:3: duplicate key 'coils' in tables"), std::string::npos) << e;
