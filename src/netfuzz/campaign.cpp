@@ -23,6 +23,7 @@
 #include "net/clock.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
+#include "netfuzz/cross_transport.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
@@ -824,6 +825,16 @@ CampaignResult Campaign::run() {
             lost_at_first_look = true;
             break;
         }
+    }
+    // The other transport spoken to the port (plaintext to TLS, TLS to plain): once each,
+    // alone, before the generator's cases (counted with the first looks).
+    for (Case& c : cross_transport_cases(*options_.connector, result_.profile)) {
+        if (lost_at_first_look || out_of_budget() || !can_afford(1)) break;
+        c.number = ++generated;
+        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        ++result_.cases;
+        ++result_.first_looks;
+        lost_at_first_look = isolate(std::move(c)) == Outcome::Lost;
     }
     std::set<std::uint64_t> requeued_once;
     std::size_t rounds = 0;

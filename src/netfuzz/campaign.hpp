@@ -65,7 +65,7 @@ struct CampaignResult {
     std::uint64_t duplicates = 0;     // cases that showed an already known root cause (hits)
     std::uint64_t unconfirmed = 0;    // suspects that did not reproduce alone
     std::uint64_t skipped_known = 0;  // cases not sent: they would re-trigger a known crash/hang
-    std::uint64_t first_looks = 0;    // cases 1..n: what discovery hinted at, run alone first
+    std::uint64_t first_looks = 0;    // cases 1..n, alone: discovery's hints, other transport
     std::uint64_t requeued = 0;       // cases sent again after a lane broke before them
     std::uint64_t restarts = 0;       // times the target went down and came back
     std::uint64_t deaths = 0;         // times the target was seen down

@@ -20,7 +20,8 @@ constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::C
     "half-close",    "half-close-answered", "burst-split",
     "partial-hold",  "exception-stall",     "flood",
     "stateful-same", "stateful-cross",      "recorded-mutation",
-    "naive-random"};
+    "naive-random",  "plaintext-to-tls",    "plaintext-in-tls-session",
+    "tls-to-plain"};
 
 }  // namespace
 

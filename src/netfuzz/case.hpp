@@ -36,6 +36,11 @@ enum class MutationClass : std::uint8_t {
     StatefulCross,      // write on one connection, read back on another
     RecordedMutation,   // bit flips and field splices of recorded valid traffic
     NaiveRandom,        // baseline: random PDU bytes in a valid MBAP frame
+    // The other transport spoken to the port (netfuzz/cross_transport.hpp): the server must
+    // refuse or close that connection and go on serving the others.
+    PlaintextToTls,      // plain Modbus/TCP on a fresh TCP connection to a TLS port
+    PlaintextInSession,  // plain Modbus/TCP between the records of an established TLS session
+    TlsToPlain,          // a TLS ClientHello (and more records) to a plain Modbus/TCP port
     Count
 };
 

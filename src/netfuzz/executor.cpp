@@ -15,6 +15,7 @@
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
+#include "netfuzz/cross_transport.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -677,6 +678,7 @@ ProbeResult probe_target(Connector& target, const TargetProfile& profile, int ti
 
 Execution execute_case(const Case& c, Connector& target, const TargetProfile& profile,
                        const ExecOptions& options) {
+    if (is_cross_transport(c.cls)) return execute_cross_transport(c, target, profile, options);
     CaseRunner r(target, profile, options);
     return r.run(c);
 }

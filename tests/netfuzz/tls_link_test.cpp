@@ -1,7 +1,8 @@
 // The fuzzer's TLS link (netfuzz/tls_link) against `mbstorm serve --transport tls`, with
 // certificates made by openssl(1) (tests/scripts/lib/tls_certs.bash): MBAP through the
 // session, decrypted bytes poll() cannot see, resumption, refusals, a silent peer, close_notify
-// as the half-close, and the plain TCP connection beside the session.
+// as the half-close, and the plain TCP connection beside the session; and the cases that speak
+// the other transport to the port (netfuzz/cross_transport).
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -17,7 +18,9 @@
 #include "fuzz_test_support.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/campaign.hpp"
+#include "netfuzz/cross_transport.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/finding.hpp"
 #include "netfuzz/tls_link.hpp"
 
 namespace mbstorm::netfuzz {
@@ -261,6 +264,90 @@ TEST_F(TlsLinkTest, DiscoveryAndACaseRunOverTheSession) {
     one.steps.push_back(Step{Op::Send, 0, 0, 0, read_request(0x0042)});
     const Execution e = execute_case(one, *c, profile, ExecOptions{});
     EXPECT_FALSE(e.verdict) << e.verdict.summary;
+}
+
+TEST_F(TlsLinkTest, PlaintextCasesFindNothingOnAServerThatRefusesThem) {
+    auto c = connector("operator");
+    TargetProfile profile;
+    std::string error;
+    ASSERT_TRUE(discover_target(*c, 1, 2000, profile, error)) << error;
+    const std::vector<Case> cases = cross_transport_cases(*c, profile);
+    ASSERT_EQ(cases.size(), 7u);
+    for (const Case& k : cases) {
+        ASSERT_TRUE(k.cls == MutationClass::PlaintextToTls ||
+                    k.cls == MutationClass::PlaintextInSession);
+        const Execution e = execute_case(k, *c, profile, ExecOptions{});
+        EXPECT_FALSE(e.verdict) << class_name(k.cls) << ": " << e.verdict.summary;
+        EXPECT_FALSE(e.down_before);
+        // The server refused the connection: it ended, no Modbus answer came.
+        bool ended = false;
+        for (const TraceEvent& t : e.trace)
+            ended = ended || (t.conn == 0 &&
+                              (t.kind == TraceKind::PeerClosed || t.kind == TraceKind::Reset));
+        EXPECT_TRUE(ended) << class_name(k.cls);
+    }
+}
+
+TEST_F(TlsLinkTest, TlsCasesFindNothingOnAPlainServer) {
+    std::unique_ptr<test::Target> plain_server;
+    const std::string at = test::start_reference_slave(plain_server);
+    ASSERT_FALSE(at.empty());
+    net::Endpoint e;
+    std::string error;
+    ASSERT_TRUE(net::parse_endpoint(at, e, &error, 502));
+    TcpConnector plain(e);
+    TargetProfile profile;
+    ASSERT_TRUE(discover_target(plain, 1, 2000, profile, error)) << error;
+    const std::vector<Case> cases = cross_transport_cases(plain, profile);
+    ASSERT_EQ(cases.size(), 4u);
+    for (const Case& k : cases) {
+        EXPECT_EQ(k.cls, MutationClass::TlsToPlain);
+        ASSERT_FALSE(k.steps.empty());
+        EXPECT_EQ(k.steps[0].bytes[0], 0x16);  // a TLS handshake record
+        const Execution x = execute_case(k, plain, profile, ExecOptions{});
+        EXPECT_FALSE(x.verdict) << x.verdict.summary;
+    }
+}
+
+// A TLS port that also serves plain Modbus/TCP (tests/scripts/tls_plaintext_too_server.py):
+// the plaintext case is answered, which is the finding, and the saved finding replays to the
+// same fault.
+TEST_F(TlsLinkTest, ATlsPortThatAnswersPlaintextIsAFindingThatReplays) {
+    if (::access("/usr/bin/python3", X_OK) != 0) GTEST_SKIP() << "no /usr/bin/python3";
+    test::Target broken(
+        {"/usr/bin/python3",
+         std::string(MBSTORM_SOURCE_DIR) + "/tests/scripts/tls_plaintext_too_server.py", *dir_});
+    const std::string line = broken.wait_for_line("PORT ");
+    ASSERT_FALSE(line.empty());
+    net::Endpoint e;
+    std::string error;
+    ASSERT_TRUE(net::parse_endpoint("127.0.0.1:" + line.substr(5), e, &error, 802));
+    auto ctx = net::TlsContext::create(
+        net::TlsSide::Client, {file("operator.pem"), file("operator.key"), file("ca.pem")}, error);
+    ASSERT_TRUE(ctx) << error;
+    TlsConnector posing(e, ctx, false);
+    TargetProfile profile;
+    profile.probe_pdu = {0x03, 0x00, 0x00, 0x00, 0x01};
+    const std::vector<Case> cases = cross_transport_cases(posing, profile);
+    ASSERT_FALSE(cases.empty());
+    const Case& plaintext = cases.front();
+    ASSERT_EQ(plaintext.cls, MutationClass::PlaintextToTls);
+    const Execution x = execute_case(plaintext, posing, profile, ExecOptions{});
+    EXPECT_EQ(x.verdict.oracle, Oracle::SpecDeviation) << x.verdict.summary;
+    EXPECT_EQ(x.verdict.rule, "tls-port-answers-plaintext");
+    Finding f;
+    f.id = 1;
+    f.verdict = x.verdict;
+    f.fuzz_case = f.original_case = plaintext;
+    f.profile = profile;
+    f.trace = x.trace;
+    const std::string dir = *dir_ + "/finding";
+    ASSERT_TRUE(save_finding(f, dir, error)) << error;
+    Finding loaded;
+    ASSERT_TRUE(load_finding(dir, loaded, error)) << error;
+    EXPECT_EQ(loaded.fuzz_case.cls, MutationClass::PlaintextToTls);
+    const Execution again = execute_case(loaded.fuzz_case, posing, loaded.profile, ExecOptions{});
+    EXPECT_TRUE(same_fault(again.verdict, f.verdict)) << again.verdict.summary;
 }
 
 }  // namespace

@@ -1,0 +1,13 @@
+// The first flight of a TLS client, made by OpenSSL without a certificate: the bytes a TLS
+// client opens a connection with, for sending where TLS is not spoken.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+namespace mbstorm::net {
+
+// A ClientHello record offering TLS 1.2 and 1.3 (or 1.2 alone); empty if OpenSSL fails.
+std::vector<std::uint8_t> tls_client_hello(bool tls12_only);
+
+}  // namespace mbstorm::net
