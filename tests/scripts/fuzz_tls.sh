@@ -110,7 +110,7 @@ if ! /usr/bin/python3 -c 'import pymodbus.server' 2>/dev/null; then
 fi
 start_server "$work/py.out" /usr/bin/python3 "$scripts/tls_pymodbus_server.py" "$work" \
   --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
-out=$(timeout -k 5 40 "$mbstorm" fuzz --target "127.0.0.1:$port" "${operator[@]}" --seconds 4 \
+out=$(timeout -k 5 40 "$mbstorm" fuzz --target "127.0.0.1:$port" "${operator[@]}" --seconds 3 \
       --seed 5 -q --max-connections 64 --out "$work/py" 2>&1); rc=$?
 if [ "$rc" != 0 ] && [ "$rc" != 1 ]; then
   echo "FAIL fuzz pymodbus over TLS: exit $rc"; sed 's/^/  /' <<<"$out" | head -40; fail=1
