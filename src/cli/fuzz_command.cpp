@@ -192,10 +192,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
     cmd->add_option(
-           "--target", o->target,
-           "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted "
-           "(required; loopback unless --allow-remote)")
-        ->required();
+        "--target", o->target,
+        "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted "
+        "(required but with --serial; loopback unless --allow-remote)");
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     cmd->add_option("--unit", o->unit, "unit id the target answers")
         ->check(CLI::Range(0, 255))
@@ -244,6 +243,8 @@ void add_fuzz_command(CLI::App& app, Action& action) {
         action = [o] {
             if (std::string e = check_transport(o->transport, "fuzz"); !e.empty())
                 return usage_error("fuzz", e);
+            if (o->target.empty() && o->transport.kind() != TransportKind::Serial)
+                return usage_error("fuzz", "--target is required");
             return run_fuzz(*o);
         };
     });

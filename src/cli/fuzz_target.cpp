@@ -4,6 +4,7 @@
 
 #include <cstring>
 
+#include "netfuzz/serial_link.hpp"
 #include "netfuzz/tls_link.hpp"
 
 namespace mbstorm::cli {
@@ -47,9 +48,15 @@ std::shared_ptr<netfuzz::Connector> make_fuzz_connector(const std::string& targe
             return std::make_shared<netfuzz::TlsConnector>(endpoint, std::move(ctx),
                                                            transport.tls_resume);
         }
-        case TransportKind::RtuOverTcp:
+        case TransportKind::RtuOverTcp: {
+            net::Endpoint endpoint;
+            if (!resolve_fuzz_target(target, allow_remote, endpoint, error)) return nullptr;
+            return std::make_shared<netfuzz::TcpConnector>(endpoint, codec::Framing::Rtu);
+        }
         case TransportKind::Serial:
-            break;
+            // A tty is local by nature; --target is not used.
+            return std::make_shared<netfuzz::SerialConnector>(
+                transport.serial_device, serial_settings(transport), transport.framing_kind());
     }
     error = "this transport cannot be fuzzed yet";
     return nullptr;

@@ -40,6 +40,23 @@ int run_replay(const ReplayOptions& o) {
         fmt::print(stderr, "mbstorm replay: {}\n", error);
         return kExitUsage;
     }
+    // The case's bytes are framed as the transport it was found over framed them.
+    if (f.profile.framing != target.framing() || f.profile.serial_line != target.serial_line()) {
+        auto over = [](codec::Framing framing, bool serial) {
+            return framing == codec::Framing::Mbap ? std::string(
+                                                         "Modbus TCP (MBAP: --transport "
+                                                         "tcp or tls)")
+                   : serial ? fmt::format("a serial line (--serial DEVICE --framing {})",
+                                          codec::framing_name(framing))
+                            : std::string("RTU over TCP (--transport rtu-over-tcp)");
+        };
+        fmt::print(stderr,
+                   "mbstorm replay: the finding was found over {}; replay it over the same, not "
+                   "over {}\n",
+                   over(f.profile.framing, f.profile.serial_line),
+                   over(target.framing(), target.serial_line()));
+        return kExitUsage;
+    }
     fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.describe());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
     if (!f.note.empty()) fmt::print("note: {}\n", f.note);
@@ -92,8 +109,7 @@ void add_replay_command(CLI::App& app, Action& action) {
     cmd->add_option("finding", o->finding, "finding folder (or its finding.json)")->required();
     cmd->add_option("--target", o->target,
                     "server to replay against: HOST[:PORT], [IPv6]:PORT or an IPv6 "
-                    "address, port 502 if omitted (required)")
-        ->required();
+                    "address, port 502 if omitted (required but with --serial)");
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout (default: the finding's)");
     cmd->add_option("--runs", o->runs, "replay this many times and report k of n")
@@ -105,6 +121,8 @@ void add_replay_command(CLI::App& app, Action& action) {
         action = [o] {
             if (std::string e = check_transport(o->transport, "replay"); !e.empty())
                 return usage_error("replay", e);
+            if (o->target.empty() && o->transport.kind() != TransportKind::Serial)
+                return usage_error("replay", "--target is required");
             return run_replay(*o);
         };
     });

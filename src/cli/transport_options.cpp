@@ -109,7 +109,8 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
     if (kind == TransportKind::Tcp) return {};
     // RTU over TCP.
     if (kind == TransportKind::RtuOverTcp &&
-        (command == "serve" || command == "run" || command == "read" || command == "write"))
+        (command == "serve" || command == "run" || command == "read" || command == "write" ||
+         command == "fuzz" || command == "replay"))
         return {};
     if (kind == TransportKind::Tls) {
         if (command == "serve" || command == "run" || command == "read" || command == "write" ||
@@ -120,7 +121,8 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
     if (kind == TransportKind::Serial && o.framing == "rtu" && o.data_bits != 8)
         return "--framing rtu needs --data-bits 8 (7 data bits suit only ASCII)";
     if (kind == TransportKind::Serial &&
-        (command == "serve" || command == "run" || command == "read" || command == "write"))
+        (command == "serve" || command == "run" || command == "read" || command == "write" ||
+         command == "fuzz" || command == "replay"))
         return {};
     // Each transport lifts this as it reaches the subcommand.
     return fmt::format("--{} is not supported by {} yet",

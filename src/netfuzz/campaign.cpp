@@ -27,6 +27,7 @@
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 // Defined below; the campaign keeps one RestartCommand for the whole run.
@@ -49,14 +50,54 @@ std::pair<std::size_t, std::size_t> size_of(const Case& c) {
     return {c.steps.size(), bytes};
 }
 
-Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit) {
-    return frame_pdu(pdu, tid, unit);
+Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit,
+             codec::Framing framing = codec::Framing::Mbap) {
+    return frame_pdu(pdu, tid, unit, framing);
+}
+
+// RTU and ASCII (no transaction ids): each frame in turn on one link, its answer awaited (or
+// the timeout) before the next goes out. The answers' PDUs by frame.
+std::vector<Pdu> one_by_one(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
+                            bool& connected) {
+    std::vector<Pdu> answers(frames.size());
+    int error = 0;
+    const std::unique_ptr<Link> link = target.open(timeout_ms, error);
+    connected = link != nullptr;
+    if (!link) return answers;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        if (link->send(frames[i].data(), frames[i].size()) !=
+            static_cast<ssize_t>(frames[i].size()))
+            return answers;
+        Pdu in;
+        const std::int64_t deadline = net::now_ns() + timeout_ms * net::kNsPerMs;
+        for (;;) {
+            const std::int64_t left = (deadline - net::now_ns()) / net::kNsPerMs;
+            if (left <= 0) break;
+            if (!wait_readable(*link, static_cast<int>(left))) continue;
+            std::uint8_t buf[1024];
+            const ssize_t n = link->recv(buf, sizeof buf);
+            if (n == -EAGAIN) continue;
+            if (n <= 0) return answers;
+            in.insert(in.end(), buf, buf + n);
+            WireFrame f;
+            const WireCut cut = cut_frame(in, target.framing(), false, 0, f);
+            if (cut == WireCut::Lost) return answers;
+            if (cut == WireCut::Frame) {
+                if (f.discard.empty())
+                    answers[i].assign(f.mbap.begin() + lim::kMbapHeader, f.mbap.end());
+                break;
+            }
+        }
+    }
+    return answers;
 }
 
 // Sends all frames at once on one connection and collects answers by transaction id until
 // the last one is answered, the connection closes or the time is up.
 std::vector<Pdu> pipeline(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
                           bool& connected) {
+    if (target.framing() != codec::Framing::Mbap)
+        return one_by_one(target, frames, timeout_ms, connected);
     std::vector<Pdu> answers(frames.size());
     int error = 0;
     const std::unique_ptr<Link> link = target.open(timeout_ms, error);
@@ -161,9 +202,11 @@ std::vector<Case> first_looks(const TargetProfile& profile) {
         Case c;
         c.cls = MutationClass::ValidLimits;
         c.function = pdu[0];
-        c.steps.push_back(Step{Op::Send, 0, 0, 0, frame_of(pdu, 0x0F00 + pdu[0], profile.unit)});
+        c.steps.push_back(
+            Step{Op::Send, 0, 0, 0, frame_of(pdu, 0x0F00 + pdu[0], profile.unit, profile.framing)});
         out.push_back(std::move(c));  // not pipelinable: runs alone
     }
+    if (profile.framing != codec::Framing::Mbap) return out;  // no protocol id to set
     Case pid;
     pid.cls = MutationClass::ProtocolId;
     pid.function = profile.probe_pdu[0];
@@ -206,7 +249,7 @@ std::string culprit_of(const std::string& rule) {
 // The frames a case sends on its first connection, put back together: for a transport case
 // (split, drip, ...) the requests it delivers in the end. False when the bytes are not a clean
 // run of complete frames or the case uses other steps.
-bool reassemble(const Case& c, Case& plain) {
+bool reassemble(const Case& c, Case& plain, codec::Framing framing) {
     std::vector<std::uint8_t> bytes;
     for (const Step& s : c.steps) {
         if (s.op == Op::Send && s.conn == 0)
@@ -214,17 +257,12 @@ bool reassemble(const Case& c, Case& plain) {
         else if (s.op != Op::SideProbe && (s.op != Op::Await || s.conn != 0))
             return false;
     }
-    std::size_t off = 0, frames = 0;
-    while (bytes.size() - off > lim::kMbapHeader) {
-        const std::size_t size = codec::announced_adu_size(bytes.data() + off);
-        if (size <= lim::kMbapHeader || size > bytes.size() - off) return false;
-        off += size;
-        ++frames;
-    }
-    if (off != bytes.size() || frames == 0) return false;
+    std::size_t off = 0;
+    const auto views = request_views(bytes, framing, off);
+    if (off != bytes.size() || views.empty() || views[0].size() <= lim::kMbapHeader) return false;
     plain = Case{};
-    plain.cls = frames > 1 ? MutationClass::Coalesced : MutationClass::ValidLimits;
-    plain.function = bytes[lim::kMbapHeader];
+    plain.cls = views.size() > 1 ? MutationClass::Coalesced : MutationClass::ValidLimits;
+    plain.function = views[0][lim::kMbapHeader];
     plain.number = c.number;
     plain.pipelinable = true;
     plain.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(bytes)});
@@ -236,14 +274,11 @@ template <class Visit>
 void for_each_request(const Case& c, const TargetProfile& profile, Visit&& visit) {
     for (const Step& s : c.steps) {
         if (s.op != Op::Send) continue;
-        std::size_t off = 0;
-        while (s.bytes.size() - off > lim::kMbapHeader) {
-            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
-            if (size > s.bytes.size() - off) break;
+        std::size_t consumed = 0;
+        for (const Pdu& view : request_views(s.bytes, profile.framing, consumed)) {
             RequestInfo info;
-            describe_request(codec::Bytes(s.bytes.data() + off, size), profile, info);
+            describe_request(view, profile, info);
             if (!visit(info)) return;
-            off += size;
         }
     }
 }
@@ -254,7 +289,8 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
     std::vector<std::string> out;
     if (is_transport_class(c.cls)) out.push_back(culprit_text(c.cls, nullptr));
     Case plain;
-    const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
+    const Case& framed =
+        is_transport_class(c.cls) && reassemble(c, plain, profile.framing) ? plain : c;
     if (&framed == &c && is_transport_class(c.cls)) return out;
     for_each_request(framed, profile, [&](const RequestInfo& info) {
         out.push_back(culprit_text(framed.cls, &info));
@@ -267,7 +303,8 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
 // Whether any frame the case delivers has a PDU of the wrong length for its function code.
 bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
     Case plain;
-    const Case& framed = is_transport_class(c.cls) && reassemble(c, plain) ? plain : c;
+    const Case& framed =
+        is_transport_class(c.cls) && reassemble(c, plain, profile.framing) ? plain : c;
     bool found = false;
     for_each_request(framed, profile, [&](const RequestInfo& info) {
         found = pdu_length_mismatch(info);
@@ -497,7 +534,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
     Case plain;
     if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang ||
          ex.verdict.oracle == Oracle::UnexpectedClose) &&
-        is_transport_class(c.cls) && reassemble(c, plain)) {
+        is_transport_class(c.cls) && reassemble(c, plain, result_.profile.framing)) {
         if (!bring_back(ex, key)) return Outcome::Lost;
         if (!can_afford(1)) {
             ++result_.suspects_left;
@@ -622,7 +659,10 @@ void Campaign::record(const Case& c, Execution ex) {
     f.variants[variant_of(f.verdict, c)] = 1;
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
-    if (options_.minimize) {
+    if (options_.minimize && result_.profile.framing != codec::Framing::Mbap) {
+        // The minimiser cuts and shrinks MBAP frames; RTU and ASCII cases are kept as found.
+        f.minimize_note = "not minimised: RTU and ASCII cases are kept as found";
+    } else if (options_.minimize) {
         Execution last;
         bool lost = false, cut = false, restart_budget = false;
         auto reproduces = [&](const Case& candidate) {
@@ -742,7 +782,9 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
 }
 
 void Campaign::check_capacity_once() {
-    if (capacity_checked_ || options_.max_connections == 0 || !can_afford(4)) return;
+    if (capacity_checked_ || options_.max_connections == 0 || !can_afford(4) ||
+        options_.connector->max_links() <= 1)  // a serial line: one link is all there is
+        return;
     capacity_checked_ = true;
     const CapacityResult cr =
         check_capacity(*options_.connector, result_.profile, options_.max_connections,
@@ -810,6 +852,10 @@ CampaignResult Campaign::run() {
     go.state = options_.state;
     go.dict_words = options_.dict_words;
     go.dict_tokens = options_.dict_tokens;
+    go.framing = result_.profile.framing;
+    go.serial_line = result_.profile.serial_line;
+    go.intercharacter_us =
+        static_cast<std::uint32_t>(options_.connector->intercharacter_timeout_ns() / 1000);
     gen_ = std::make_unique<Generator>(go);
     make_batch_runner();
     std::uint64_t generated = 0;
@@ -997,12 +1043,16 @@ CampaignResult Campaign::run() {
             ++result_.requeued;
             requeue.push_back(piped[ci]);
         }
-        for (std::size_t i = 0; !lost && i < alone.size(); ++i) {
+        std::size_t ran_alone = 0;
+        for (std::size_t i = 0; !lost && i < alone.size(); ++i, ++ran_alone) {
             if (!can_afford(1)) break;
             if (isolate(alone[i]) == Outcome::Lost) lost = true;
         }
         result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
-        result_.cases += fresh;
+        // RTU/ASCII: every case runs alone, so the ones the deadline left unrun were not cases.
+        const bool all_alone = result_.profile.framing != codec::Framing::Mbap;
+        result_.cases += all_alone ? std::min(fresh, ran_alone) : fresh;
+        if (all_alone && ran_alone < alone.size() && !lost) break;
         progress(false);
         if (lost) break;
         if (++rounds == 1) check_capacity_once();
@@ -1029,6 +1079,9 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
                      std::string& error) {
     profile = TargetProfile{};
     profile.unit = unit;
+    profile.framing = target.framing();
+    profile.serial_line = target.serial_line();
+    const bool framed = profile.framing != codec::Framing::Mbap;
     // Probe candidates, most common first.
     using codec::FunctionCode;
     std::vector<Pdu> probes;
@@ -1038,7 +1091,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
         probes.push_back(canonical_request(*codec::function_info(codec::to_byte(fc))));
     std::vector<Pdu> frames;
     for (std::size_t i = 0; i < probes.size(); ++i)
-        frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit));
+        frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit, profile.framing));
     bool connected = false;
     auto answers = pipeline(target, frames, timeout_ms, connected);
     if (!connected) {
@@ -1059,12 +1112,24 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
     }
     // Does it drop what is pipelined behind a request it answers with an exception? Then
     // everything below goes one request at a time.
-    answers = pipeline(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
-                       timeout_ms, connected);
-    profile.drops_after_exception =
-        answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
+    // (RTU and ASCII send one request at a time: nothing is pipelined to be dropped.)
+    if (!framed) {
+        answers =
+            pipeline(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
+                     timeout_ms, connected);
+        profile.drops_after_exception =
+            answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
+    }
     std::vector<Pdu> pdus = canonical_requests();
-    if (!profile.drops_after_exception) {
+    if (framed) {
+        // One request at a time: every undefined code asked in turn would cost a timeout each
+        // where the target stays silent to them, so they are assumed unsupported.
+        pdus.push_back(profile.probe_pdu);
+        frames.clear();
+        for (std::size_t i = 0; i < pdus.size(); ++i)
+            frames.push_back(frame_of(pdus[i], 0, unit, profile.framing));
+        answers = pipeline(target, frames, timeout_ms, connected);
+    } else if (!profile.drops_after_exception) {
         for (unsigned fc = 0; fc < 256; ++fc)
             if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
                 pdus.push_back(Pdu{static_cast<std::uint8_t>(fc)});

@@ -13,6 +13,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -71,8 +72,11 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
             const ssize_t n = h.link->recv(buf, sizeof buf);
             if (n > 0) {
                 h.in.insert(h.in.end(), buf, buf + n);
-                if (h.in.size() >= lim::kMbapHeader &&
-                    h.in.size() >= codec::announced_adu_size(h.in.data())) {
+                WireFrame answer;
+                if (profile.framing != codec::Framing::Mbap
+                        ? cut_frame(h.in, profile.framing, false, 0, answer) == WireCut::Frame
+                        : h.in.size() >= lim::kMbapHeader &&
+                              h.in.size() >= codec::announced_adu_size(h.in.data())) {
                     h.state = ConnState::Answered;
                     h.in.clear();
                 }

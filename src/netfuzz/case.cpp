@@ -13,15 +13,35 @@ namespace mbstorm::netfuzz {
 namespace {
 
 constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::Count)> kNames = {
-    "valid-limits",  "invalid-values",      "unknown-function",
-    "unit-id",       "transaction-id",      "protocol-id",
-    "mbap-length",   "trailing-bytes",      "truncated",
-    "split",         "coalesced",           "drip",
-    "half-close",    "half-close-answered", "burst-split",
-    "partial-hold",  "exception-stall",     "flood",
-    "stateful-same", "stateful-cross",      "recorded-mutation",
-    "naive-random",  "plaintext-to-tls",    "plaintext-in-tls-session",
-    "tls-to-plain"};
+    "valid-limits",
+    "invalid-values",
+    "unknown-function",
+    "unit-id",
+    "transaction-id",
+    "protocol-id",
+    "mbap-length",
+    "trailing-bytes",
+    "truncated",
+    "split",
+    "coalesced",
+    "drip",
+    "half-close",
+    "half-close-answered",
+    "burst-split",
+    "partial-hold",
+    "exception-stall",
+    "flood",
+    "stateful-same",
+    "stateful-cross",
+    "recorded-mutation",
+    "naive-random",
+    "plaintext-to-tls",
+    "plaintext-in-tls-session",
+    "tls-to-plain",
+    "bad-checksum",
+    "broken-silence",
+    "no-silence",
+    "noise"};
 
 }  // namespace
 
@@ -50,6 +70,10 @@ bool is_transport_class(MutationClass c) noexcept {
         case MutationClass::BurstSplit:
         case MutationClass::PartialHold:
         case MutationClass::Flood:
+        case MutationClass::BadChecksum:
+        case MutationClass::BrokenSilence:
+        case MutationClass::NoSilence:
+        case MutationClass::Noise:
             return true;
         default:
             return false;

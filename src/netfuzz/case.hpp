@@ -41,6 +41,10 @@ enum class MutationClass : std::uint8_t {
     PlaintextToTls,      // plain Modbus/TCP on a fresh TCP connection to a TLS port
     PlaintextInSession,  // plain Modbus/TCP between the records of an established TLS session
     TlsToPlain,          // a TLS ClientHello (and more records) to a plain Modbus/TCP port
+    BadChecksum,         // RTU/ASCII: a frame with a wrong CRC or LRC (to be discarded)
+    BrokenSilence,       // serial RTU: a frame split by a gap longer than 1.5 characters
+    NoSilence,           // serial: two frames without the 3.5-character silence between them
+    Noise,               // serial: noise bytes on the line before a frame
     Count
 };
 

@@ -333,7 +333,10 @@ std::vector<Case> cross_transport_cases(const Connector& target, const TargetPro
         out.push_back(std::move(inside));
         return out;
     }
-    if (dynamic_cast<const TcpConnector*>(&target) == nullptr) return out;
+    // A plain Modbus/TCP port only: an RTU-over-TCP port has a framing of its own.
+    if (dynamic_cast<const TcpConnector*>(&target) == nullptr ||
+        target.framing() != codec::Framing::Mbap)
+        return out;
     // TLS where plain Modbus/TCP is spoken: ClientHellos (TLS 1.3 and 1.2), one held after its
     // record header, and one followed by the records a session goes on with.
     for (const bool tls12 : {false, true}) {

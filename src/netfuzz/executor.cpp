@@ -16,6 +16,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/cross_transport.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -37,6 +38,9 @@ struct Pending {
     bool probe = false;
     std::int64_t sent_ns = 0, answered_ns = 0;
     std::size_t rsp_offset = 0, rsp_size = 0;  // in Conn::received
+    // RTU/ASCII: gave up waiting for its answer (a later frame may then be answered)
+    bool expired = false;
+    std::string_view discard;  // RTU/ASCII: why a conforming reader drops it
 };
 
 struct Conn {
@@ -48,6 +52,10 @@ struct Conn {
     std::size_t parsed = 0, rparsed = 0;
     std::vector<Pending> pending;
     std::vector<std::pair<std::size_t, std::size_t>> unmatched;  // responses nobody asked for
+    // RTU/ASCII: the MBAP views of the frames sent and received, which Pending's offsets
+    // point into (for MBAP they point into `sent` and `received`)
+    std::vector<std::uint8_t> sview, rview;
+    bool bad_response_check = false;  // RTU/ASCII: an answer's CRC/LRC failed
 };
 
 // Runs one case alone on its own connections and judges it; `BatchRunner` (batch.cpp) runs many
@@ -70,6 +78,23 @@ class CaseRunner {
     void parse_sent(Conn& c);
     void read_conn(std::uint8_t index);
     void parse_received(Conn& c);
+    // RTU and ASCII framing (no transaction ids: one request in flight per link).
+    bool framed() const noexcept { return profile_.framing != codec::Framing::Mbap; }
+    const std::vector<std::uint8_t>& sent_frames(const Conn& c) const noexcept {
+        return framed() ? c.sview : c.sent;
+    }
+    const std::vector<std::uint8_t>& received_frames(const Conn& c) const noexcept {
+        return framed() ? c.rview : c.received;
+    }
+    void parse_sent_framed(Conn& c);
+    void parse_received_framed(Conn& c);
+    void add_framed_request(Conn& c, std::size_t size, const std::vector<std::uint8_t>& view,
+                            std::string_view discard);
+    // A serial line's silence ends a started RTU frame: what was sent of it is a broken frame.
+    void close_partial(Conn& c);
+    // One request in flight per link: waits for the answer to the one before (or, for one
+    // that must or may be silent, a short while), then gives up on it.
+    void await_in_flight(std::uint8_t index);
     // Pumps input until `done()` or the deadline. Returns false on timeout.
     template <typename Done>
     bool pump(std::int64_t deadline, Done done);
@@ -96,6 +121,7 @@ class CaseRunner {
     bool any_connect_ = false;
     bool flooded_ = false;
     std::vector<SideProbe> side_probes_;
+    std::uint16_t view_tid_ = 1;  // RTU/ASCII: transaction ids of the MBAP views
 };
 
 bool CaseRunner::ensure_open(std::uint8_t index) {
@@ -118,6 +144,9 @@ bool CaseRunner::ensure_open(std::uint8_t index) {
 void CaseRunner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes) {
     Conn& c = conns_[index];
     if (!ensure_open(index) || c.closed || c.shut) return;
+    if (profile_.serial_line && profile_.framing == codec::Framing::Rtu) close_partial(c);
+    if (framed() && c.parsed == c.sent.size()) await_in_flight(index);
+    if (c.closed) return;
     std::size_t done = 0;
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
     while (done < bytes.size()) {
@@ -152,6 +181,10 @@ void CaseRunner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>&
 // Cuts what we sent into request frames; anything that cannot be framed desynchronises the
 // stream (the server's view of frame boundaries is then unknown, so no probe follows).
 void CaseRunner::parse_sent(Conn& c) {
+    if (framed()) {
+        parse_sent_framed(c);
+        return;
+    }
     while (!c.desync && c.sent.size() - c.parsed >= lim::kMbapHeader) {
         const std::uint8_t* p = c.sent.data() + c.parsed;
         const codec::MbapHeader h = codec::read_mbap_header(p);
@@ -201,6 +234,10 @@ void CaseRunner::read_conn(std::uint8_t index) {
 }
 
 void CaseRunner::parse_received(Conn& c) {
+    if (framed()) {
+        parse_received_framed(c);
+        return;
+    }
     const std::int64_t now = net::now_ns();
     while (!c.framing_lost && c.received.size() - c.rparsed >= lim::kMbapHeader) {
         const codec::MbapHeader h = codec::read_mbap_header(c.received.data() + c.rparsed);
@@ -225,10 +262,123 @@ void CaseRunner::parse_received(Conn& c) {
     }
 }
 
+void CaseRunner::add_framed_request(Conn& c, std::size_t size,
+                                    const std::vector<std::uint8_t>& view,
+                                    std::string_view discard) {
+    Pending pd;
+    pd.offset = c.sview.size();
+    pd.size = view.size();
+    pd.tid = codec::load_be16(view.data());
+    pd.discard = discard;
+    const std::uint8_t unit = view[lim::kMbapHeader - 1];
+    if (!discard.empty()) {
+        pd.expect = Expect::MustBeSilent;
+    } else if (unit == 0 && profile_.serial_line) {
+        pd.expect = Expect::MustBeSilent;  // a broadcast: executed, never answered
+        pd.discard = "broadcast";
+    } else if (unit != profile_.unit || view.size() == lim::kMbapHeader) {
+        pd.expect = Expect::MayBeSilent;
+    }
+    c.sview.insert(c.sview.end(), view.begin(), view.end());
+    c.pending.push_back(pd);
+    c.parsed += size;
+}
+
+void CaseRunner::parse_sent_framed(Conn& c) {
+    while (!c.desync && c.parsed < c.sent.size()) {
+        WireFrame f;
+        const WireCut cut =
+            cut_frame(codec::Bytes(c.sent).subspan(c.parsed), profile_.framing, true, view_tid_, f);
+        const codec::Bytes rest = codec::Bytes(c.sent).subspan(c.parsed);
+        if (profile_.framing == codec::Framing::Rtu &&
+            (cut != WireCut::Frame || !f.discard.empty()) && rtu_crc_ok(rest)) {
+            // A PDU longer or shorter than its function code says, sent as one frame with its
+            // CRC: a reader that frames by length sees a bad CRC (or waits), one that frames by
+            // silence an invalid request. Either may stay silent; the stream's boundaries are
+            // lost for the first kind, so over TCP nothing after it is owed.
+            add_framed_request(c, rest.size(),
+                               mbap_view(rest[0], rest.subspan(1, rest.size() - 3), view_tid_++),
+                               {});
+            if (c.pending.back().expect == Expect::Answer)
+                c.pending.back().expect = Expect::MayBeSilent;
+            if (!profile_.serial_line) c.desync = true;
+            return;
+        }
+        if (cut == WireCut::NeedMore) return;
+        if (cut == WireCut::Lost) {
+            if (!profile_.serial_line) {
+                c.desync = true;  // nothing tells the server where a frame ends either
+                return;
+            }
+            close_partial(c);  // on a line, the silence after it ends it
+            return;
+        }
+        ++view_tid_;
+        if (f.discard == "noise") {
+            c.parsed += f.size;  // skipped by any reader looking for ':'; owed nothing
+            continue;
+        }
+        add_framed_request(c, f.size, f.mbap, f.discard);
+    }
+}
+
+void CaseRunner::close_partial(Conn& c) {
+    if (c.desync || c.parsed >= c.sent.size()) return;
+    const codec::Bytes rest = codec::Bytes(c.sent).subspan(c.parsed);
+    add_framed_request(c, rest.size(), mbap_view(rest[0], rest.subspan(1), view_tid_++),
+                       "broken-frame");
+}
+
+void CaseRunner::parse_received_framed(Conn& c) {
+    const std::int64_t now = net::now_ns();
+    while (!c.framing_lost && c.rparsed < c.received.size()) {
+        // The answer belongs to the one request in flight.
+        Pending* in_flight = nullptr;
+        for (Pending& pd : c.pending) {
+            if (pd.answered_ns == 0 && !pd.expired) {
+                in_flight = &pd;
+                break;
+            }
+        }
+        WireFrame f;
+        const WireCut cut = cut_frame(codec::Bytes(c.received).subspan(c.rparsed), profile_.framing,
+                                      false, in_flight ? in_flight->tid : 0, f);
+        if (cut == WireCut::NeedMore) return;
+        if (cut == WireCut::Lost || !f.discard.empty()) {
+            c.framing_lost = true;
+            c.bad_response_check = cut == WireCut::Frame;
+            return;
+        }
+        const std::size_t offset = c.rview.size();
+        c.rview.insert(c.rview.end(), f.mbap.begin(), f.mbap.end());
+        if (in_flight) {
+            in_flight->answered_ns = now;
+            in_flight->rsp_offset = offset;
+            in_flight->rsp_size = f.mbap.size();
+        } else {
+            c.unmatched.emplace_back(offset, f.mbap.size());
+        }
+        c.rparsed += f.size;
+    }
+}
+
+void CaseRunner::await_in_flight(std::uint8_t index) {
+    Conn& c = conns_[index];
+    for (std::size_t k = 0; k < c.pending.size(); ++k) {
+        if (c.pending[k].answered_ns || c.pending[k].expired) continue;
+        // A frame owed silence is watched as long as one owed an answer: a slow slave's late
+        // answer to it would otherwise be taken for the next request's.
+        pump(net::now_ns() + std::int64_t{options_.timeout_ms} * net::kNsPerMs,
+             [&] { return c.pending[k].answered_ns != 0 || c.closed; });
+        if (!c.pending[k].answered_ns) c.pending[k].expired = true;
+        if (c.closed) return;
+    }
+}
+
 bool CaseRunner::answered(const Conn& c) const {
     if (c.closed || c.framing_lost || !c.unmatched.empty()) return true;
     for (const Pending& pd : c.pending)
-        if (pd.expect == Expect::Answer && pd.answered_ns == 0) return false;
+        if (pd.expect == Expect::Answer && pd.answered_ns == 0 && !pd.expired) return false;
     return true;
 }
 
@@ -296,7 +446,18 @@ void CaseRunner::judge(const Case& c) {
         Conn& cn = conns_[i];
         if (!cn.opened) continue;
         if (cn.closed || cn.shut || cn.desync) need_fresh_probe = true;
-        if (cn.framing_lost) {
+        if (cn.framing_lost && framed()) {
+            consider(Verdict{
+                Oracle::MalformedResponse,
+                cn.bad_response_check ? "response-check-failed" : "response-framing", -1,
+                fmt::format("response framing lost on connection {}: {}", i,
+                            cn.bad_response_check
+                                ? std::string(profile_.framing == codec::Framing::Rtu ? "bad CRC"
+                                                                                      : "bad LRC")
+                                : std::string("no frame can start here")),
+                "well-framed answers with a good CRC/LRC",
+                hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
+        } else if (cn.framing_lost) {
             consider(Verdict{
                 Oracle::MalformedResponse, "response-framing", -1,
                 fmt::format("response framing lost on connection {}: MBAP length {}", i,
@@ -306,10 +467,13 @@ void CaseRunner::judge(const Case& c) {
         // An answer nobody asked for, on a connection that carried a request of the wrong
         // length, is the target framing that request by its function code.
         bool length_mismatch_sent = false;
+        const std::vector<std::uint8_t>& sent_frames_of = sent_frames(cn);
+        const std::vector<std::uint8_t>& received_frames_of = received_frames(cn);
         for (const Pending& pd : cn.pending) {
             if (pd.probe || pd.size < lim::kMbapHeader) continue;
             RequestInfo sent;
-            describe_request(codec::Bytes(cn.sent.data() + pd.offset, pd.size), profile_, sent);
+            describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_,
+                             sent);
             length_mismatch_sent = length_mismatch_sent || pdu_length_mismatch(sent);
         }
         for (const auto& [off, size] : cn.unmatched) {
@@ -319,19 +483,19 @@ void CaseRunner::judge(const Case& c) {
             // Whose answer it most likely is: an unanswered request of the same function.
             int fc = -1;
             if (size > lim::kMbapHeader) {
-                const std::uint8_t rfc = cn.received[off + lim::kMbapHeader] & 0x7F;
+                const std::uint8_t rfc = received_frames_of[off + lim::kMbapHeader] & 0x7F;
                 for (const Pending& pd : cn.pending)
                     if (!pd.answered_ns && pd.size > lim::kMbapHeader &&
-                        cn.sent[pd.offset + lim::kMbapHeader] == rfc)
+                        sent_frames_of[pd.offset + lim::kMbapHeader] == rfc)
                         fc = rfc;
             }
             consider(Verdict{Oracle::MalformedResponse,
                              length_mismatch_sent ? kStreamLostRule : "unmatched-transaction-id",
                              fc,
                              fmt::format("response with transaction id {:04X} matches no request",
-                                         codec::load_be16(cn.received.data() + off)),
+                                         codec::load_be16(received_frames_of.data() + off)),
                              fmt::format("transaction ids {}", tids),
-                             hex(codec::Bytes(cn.received.data() + off, size))});
+                             hex(codec::Bytes(received_frames_of.data() + off, size))});
         }
         infos[i].resize(cn.pending.size());
         // The case's own request before the current one on this connection, and whether it
@@ -343,10 +507,15 @@ void CaseRunner::judge(const Case& c) {
         for (std::size_t k = 0; k < cn.pending.size(); ++k) {
             const Pending& pd = cn.pending[k];
             RequestInfo& info = infos[i][k];
-            describe_request(codec::Bytes(cn.sent.data() + pd.offset, pd.size), profile_, info);
+            describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_,
+                             info);
+            if (framed()) {  // the frame's own expectation: a discarded or broadcast frame
+                info.expect = pd.expect;
+                info.discard = pd.discard;
+            }
             bool exception = false;
             if (pd.answered_ns) {
-                const codec::Bytes rsp(cn.received.data() + pd.rsp_offset, pd.rsp_size);
+                const codec::Bytes rsp(received_frames_of.data() + pd.rsp_offset, pd.rsp_size);
                 consider(judge_response(info, rsp, profile_));
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
                                                rsp.subspan(lim::kMbapHeader)});
@@ -379,6 +548,10 @@ void CaseRunner::judge(const Case& c) {
             const std::string what = pd.probe ? std::string("the in-stream liveness probe")
                                               : fmt::format("request {}", hex(info.pdu, 16));
             const bool closed = cn.closed;
+            // RTU over TCP: after a frame it must discard (a bad CRC) a server may close the
+            // stream, whose frame boundaries it can no longer trust; it must not answer it.
+            if (closed && framed() && !profile_.serial_line && before && !before->discard.empty())
+                continue;
             std::string rule;
             const RequestInfo* blamed = pd.probe ? before : &info;
             if (cn.shut) {
@@ -474,7 +647,7 @@ void CaseRunner::side_probe() {
         if (!cn.desync && cn.sent.size() > cn.parsed) during = "partial-frame";
         for (const Pending& pd : cn.pending)
             if (pd.answered_ns && pd.rsp_size > lim::kMbapHeader &&
-                (cn.received[pd.rsp_offset + lim::kMbapHeader] & codec::kExceptionBit) &&
+                (received_frames(cn)[pd.rsp_offset + lim::kMbapHeader] & codec::kExceptionBit) &&
                 during != "partial-frame")
                 during = "exception";
     }
@@ -529,6 +702,7 @@ Execution CaseRunner::run(const Case& c) {
     for (std::size_t i = 0; i < conns_.size(); ++i) {
         Conn& cn = conns_[i];
         if (!cn.opened || !cn.link || cn.closed) continue;
+        if (profile_.serial_line && profile_.framing == codec::Framing::Rtu) close_partial(cn);
         if (!cn.shut && !cn.desync && cn.parsed == cn.sent.size()) {
             std::uint16_t tid = 0xFADE;
             while (std::any_of(cn.pending.begin(), cn.pending.end(),
@@ -641,7 +815,7 @@ int connect_with_timeout(const net::Endpoint& target, int timeout_ms) noexcept {
 }
 
 std::vector<std::uint8_t> probe_frame(const TargetProfile& profile, std::uint16_t tid) {
-    return frame_pdu(profile.probe_pdu, tid, profile.unit);
+    return frame_pdu(profile.probe_pdu, tid, profile.unit, profile.framing);
 }
 
 ProbeResult probe_target(Connector& target, const TargetProfile& profile, int timeout_ms) {
@@ -667,7 +841,14 @@ ProbeResult probe_target(Connector& target, const TargetProfile& profile, int ti
             return ProbeResult::Closed;
         }
         have += static_cast<std::size_t>(n);
-        if (have >= lim::kMbapHeader) {
+        if (profile.framing != codec::Framing::Mbap) {
+            WireFrame frame;
+            const WireCut cut =
+                cut_frame(codec::Bytes(buf, have), profile.framing, false, 0, frame);
+            if (cut == WireCut::Lost || (cut == WireCut::Frame && !frame.discard.empty()))
+                return ProbeResult::BadAnswer;
+            if (cut == WireCut::Frame) return ProbeResult::Ok;
+        } else if (have >= lim::kMbapHeader) {
             const codec::MbapHeader h = codec::read_mbap_header(buf);
             if (h.length < 2 || h.length > lim::kMaxMbapLength) return ProbeResult::BadAnswer;
             if (have >= codec::adu_size(h)) return ProbeResult::Ok;

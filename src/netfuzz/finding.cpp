@@ -135,7 +135,7 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         if (!e.note.empty()) ev["note"] = e.note;
         trace.push_back(std::move(ev));
     }
-    const json j = {
+    json j = {
         {"schema", 1},
         {"id", f.id},
         {"oracle", oracle_name(f.verdict.oracle)},
@@ -167,6 +167,11 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"original_case", {{"steps", steps_of(f.original_case)}}},
         {"trace", trace},
     };
+    // The framing the case's bytes are in (MBAP when absent): replay needs the same.
+    if (f.profile.framing != codec::Framing::Mbap) {
+        j["profile"]["framing"] = codec::framing_name(f.profile.framing);
+        j["profile"]["serial_line"] = f.profile.serial_line;
+    }
     auto write = [&](const std::string& name, const std::string& text) {
         std::ofstream o(dir + "/" + name, std::ios::trunc);
         o << text;
@@ -229,6 +234,14 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
             throw std::runtime_error("bad probe");
         parse_list(p.value("unsupported", ""), out.profile.unsupported);
         parse_list(p.value("extended", ""), out.profile.extended);
+        const std::string framing = p.value("framing", "mbap");
+        if (framing == "rtu")
+            out.profile.framing = codec::Framing::Rtu;
+        else if (framing == "ascii")
+            out.profile.framing = codec::Framing::Ascii;
+        else if (framing != "mbap")
+            throw std::runtime_error("unknown framing");
+        out.profile.serial_line = p.value("serial_line", false);
         out.hits = j.value("hits", std::uint64_t{1});
         auto load_steps = [](const json& steps, Case& c) {
             for (const json& s : steps) {

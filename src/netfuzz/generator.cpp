@@ -377,6 +377,7 @@ void Generator::next(Case& out) {
         if (s.op == Op::Send && out.cls != MutationClass::StatefulSame &&
             out.cls != MutationClass::StatefulCross)
             relocate_writes(s.bytes.data(), s.bytes.size(), options_.state);
+    adapt_to_framing(out);
 }
 
 void Generator::naive(Case& out) {

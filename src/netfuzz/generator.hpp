@@ -26,6 +26,11 @@ struct GeneratorOptions {
     // tokens spliced into requests.
     std::vector<std::uint16_t> dict_words;
     std::vector<std::vector<std::uint8_t>> dict_tokens;
+    // RTU or ASCII: cases are made in MBAP as always, then reframed (cases that only mean
+    // something in MBAP give way to the framing's own transport mutations), and run alone.
+    codec::Framing framing = codec::Framing::Mbap;
+    bool serial_line = false;             // a serial line: one link, silences delimit frames
+    std::uint32_t intercharacter_us = 0;  // the line's t1.5 (serial only)
 };
 
 // 16-bit values worth writing and reading back: boundaries, sign bits, all-ones patterns and
@@ -57,6 +62,8 @@ class Generator {
     const std::vector<std::uint8_t>& valid_seed();
     std::uint16_t tid() noexcept { return tid_++; }
     bool deprioritised(const Case& c) const noexcept;
+    void adapt_to_framing(Case& out);
+    void framing_transport(Case& out);
 
     GeneratorOptions options_;
     Rng rng_;

@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "codec/framing.hpp"
 #include "net/socket.hpp"
 
 namespace mbstorm::netfuzz {
@@ -35,9 +36,16 @@ struct Connector {
     // How many links the target can have open at once (a serial line: 1).
     virtual unsigned max_links() const noexcept { return UINT32_MAX; }
     virtual std::string describe() const = 0;
+    // How requests and answers are framed on its links.
+    virtual codec::Framing framing() const noexcept { return codec::Framing::Mbap; }
+    // A serial line: frames are delimited by silences, each send() is one frame's worth of
+    // the line after the inter-frame silence, and a gap inside a frame breaks it.
+    virtual bool serial_line() const noexcept { return false; }
+    // The serial line's inter-character timeout (t1.5) in ns; 0 elsewhere.
+    virtual std::int64_t intercharacter_timeout_ns() const noexcept { return 0; }
 };
 
-// Modbus TCP (or RTU over TCP): a plain non-blocking TCP socket with TCP_NODELAY.
+// Modbus TCP or RTU over TCP: a plain non-blocking TCP socket with TCP_NODELAY.
 class TcpLink final : public Link {
   public:
     explicit TcpLink(net::UniqueFd fd) noexcept : fd_(std::move(fd)) {}
@@ -52,13 +60,17 @@ class TcpLink final : public Link {
 
 class TcpConnector final : public Connector {
   public:
-    explicit TcpConnector(const net::Endpoint& target) : target_(target) {}
+    explicit TcpConnector(const net::Endpoint& target,
+                          codec::Framing framing = codec::Framing::Mbap)
+        : target_(target), framing_(framing) {}
     std::unique_ptr<Link> open(int timeout_ms, int& error) override;
     std::string describe() const override { return target_.to_string(); }
+    codec::Framing framing() const noexcept override { return framing_; }
     const net::Endpoint& target() const noexcept { return target_; }
 
   private:
     net::Endpoint target_;
+    codec::Framing framing_;
 };
 
 // Waits up to `timeout_ms` for `link` to be readable (or to hold buffered input). False on

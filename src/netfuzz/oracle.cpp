@@ -148,6 +148,11 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
     const codec::MbapHeader h = codec::read_mbap_header(rsp.data());
     const codec::Bytes pdu = rsp.subspan(codec::limits::kMbapHeader);
     const std::string seen = hex(rsp);
+    if (rq.expect == Expect::MustBeSilent && !rq.discard.empty()) {
+        return make(Oracle::SpecDeviation, fmt::format("answers-{}", rq.discard), rq,
+                    fmt::format("answered a frame it must discard ({})", rq.discard),
+                    "no answer: the frame is discarded", seen);
+    }
     if (rq.expect == Expect::MustBeSilent) {
         return make(Oracle::SpecDeviation, "answers-nonzero-protocol-id", rq,
                     fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "codec/framing.hpp"
 #include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
 #include "netfuzz/case.hpp"
@@ -57,6 +58,11 @@ struct TargetProfile {
     // It drops requests pipelined behind one it answers with an exception (libmodbus flushes
     // its socket after an exception): such requests are sent only after that answer.
     bool drops_after_exception = false;
+    // How frames are framed (the connector's): MBAP, or RTU/ASCII, where there are no
+    // transaction ids, so one request is in flight per link and its answer is the next frame.
+    codec::Framing framing = codec::Framing::Mbap;
+    // A serial line: silences delimit frames, unit 0 is a broadcast nobody answers.
+    bool serial_line = false;
 };
 
 // Addresses (holding registers and coils) that only stateful cases write; every other write
@@ -87,6 +93,9 @@ struct RequestInfo {
     codec::Request request;
     codec::RequestStatus status;  // status.exception != None: the exception owed
     Expect expect = Expect::Answer;
+    // Why a conforming reader discards the frame ("bad-crc", "broken-frame", "broadcast", ...;
+    // RTU and ASCII only): an answer to it is a deviation named after it.
+    std::string_view discard;
 };
 
 // What kind of request a frame is, for root-cause rules: "valid", "invalid" (the codec owes

@@ -82,11 +82,18 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
             EXPECT_FALSE(a >= kStateBase && a < kStateBase + kStateSpan) << hex(s.bytes);
         }
     }
-    // All but naive and those that speak the other transport (the campaign runs them itself).
+    // All but naive, those that speak the other transport (the campaign runs them itself) and
+    // the four of RTU/ASCII framing (generator_framing.cpp).
     std::size_t generated = 0;
     for (std::size_t i = 0; i < static_cast<std::size_t>(MutationClass::Count); ++i) {
         const auto k = static_cast<MutationClass>(i);
-        generated += k != MutationClass::NaiveRandom && !is_cross_transport(k);
+        const bool framing_only = k == MutationClass::BadChecksum ||
+                                  k == MutationClass::BrokenSilence ||
+                                  k == MutationClass::NoSilence || k == MutationClass::Noise;
+        if (framing_only) {
+            EXPECT_EQ(classes.count(k), 0u) << class_name(k);
+        }
+        generated += k != MutationClass::NaiveRandom && !is_cross_transport(k) && !framing_only;
     }
     EXPECT_EQ(classes.size(), generated);
 }

@@ -1,0 +1,282 @@
+// The fuzzer in RTU and ASCII framing: frames cut from what was sent and received (with their
+// MBAP views for the oracle), the generator's reframed cases and transport mutations, and the
+// executor's verdicts over RTU over TCP against a slave in this test that either discards a
+// frame with a bad CRC (conforming) or answers it.
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <set>
+#include <thread>
+#include <vector>
+
+#include "codec/mbap.hpp"
+#include "codec/rtu.hpp"
+#include "net/socket.hpp"
+#include "netfuzz/case.hpp"
+#include "netfuzz/executor.hpp"
+#include "netfuzz/generator.hpp"
+#include "netfuzz/link.hpp"
+#include "netfuzz/wire.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+const Bytes kRead = {0x03, 0x00, 0x10, 0x00, 0x02};
+
+TEST(WireCut, RtuRequestByFunctionCodeWithItsView) {
+    Bytes f = frame_pdu(kRead, 0, 7, codec::Framing::Rtu);
+    const Bytes next = frame_pdu({0x06, 0, 1, 0, 2}, 0, 7, codec::Framing::Rtu);
+    Bytes stream = f;
+    stream.insert(stream.end(), next.begin(), next.end());
+    WireFrame w;
+    ASSERT_EQ(cut_frame(stream, codec::Framing::Rtu, true, 0x42, w), WireCut::Frame);
+    EXPECT_EQ(w.size, f.size());
+    EXPECT_TRUE(w.discard.empty());
+    EXPECT_EQ(w.mbap, frame_pdu(kRead, 0x42, 7));
+    // Cut short: more is needed.
+    EXPECT_EQ(cut_frame(codec::Bytes(f.data(), 5), codec::Framing::Rtu, true, 0, w),
+              WireCut::NeedMore);
+}
+
+TEST(WireCut, RtuBadCrcIsToBeDiscarded) {
+    Bytes f = frame_pdu(kRead, 0, 1, codec::Framing::Rtu);
+    f.back() ^= 0x01;
+    WireFrame w;
+    ASSERT_EQ(cut_frame(f, codec::Framing::Rtu, true, 0, w), WireCut::Frame);
+    EXPECT_EQ(w.discard, "bad-crc");
+    EXPECT_EQ(w.size, f.size());
+}
+
+TEST(WireCut, RtuUnknownFunctionEndsAtItsCrc) {
+    const Bytes f = frame_pdu({0x41, 0xAA, 0xBB}, 0, 1, codec::Framing::Rtu);
+    WireFrame w;
+    ASSERT_EQ(cut_frame(f, codec::Framing::Rtu, true, 0, w), WireCut::Frame);
+    EXPECT_EQ(w.size, f.size());
+    EXPECT_TRUE(w.discard.empty());
+}
+
+TEST(WireCut, RtuResponseLengths) {
+    const Bytes rsp = frame_pdu({0x03, 0x04, 0, 1, 0, 2}, 0, 1, codec::Framing::Rtu);
+    const Bytes exc = frame_pdu({0x83, 0x02}, 0, 1, codec::Framing::Rtu);
+    WireFrame w;
+    ASSERT_EQ(cut_frame(rsp, codec::Framing::Rtu, false, 9, w), WireCut::Frame);
+    EXPECT_EQ(w.size, rsp.size());
+    EXPECT_EQ(w.mbap, frame_pdu({0x03, 0x04, 0, 1, 0, 2}, 9, 1));
+    ASSERT_EQ(cut_frame(exc, codec::Framing::Rtu, false, 0, w), WireCut::Frame);
+    EXPECT_EQ(w.size, 5u);
+}
+
+TEST(WireCut, AsciiFramesNoiseAndBadLrc) {
+    const Bytes f = frame_pdu(kRead, 0, 0x11, codec::Framing::Ascii);
+    WireFrame w;
+    ASSERT_EQ(cut_frame(f, codec::Framing::Ascii, true, 3, w), WireCut::Frame);
+    EXPECT_EQ(w.size, f.size());
+    EXPECT_TRUE(w.discard.empty());
+    EXPECT_EQ(w.mbap, frame_pdu(kRead, 3, 0x11));
+    Bytes noisy = {'x', 'y'};
+    noisy.insert(noisy.end(), f.begin(), f.end());
+    ASSERT_EQ(cut_frame(noisy, codec::Framing::Ascii, true, 0, w), WireCut::Frame);
+    EXPECT_EQ(w.discard, "noise");
+    EXPECT_EQ(w.size, 2u);
+    std::size_t consumed = 0;
+    EXPECT_EQ(request_views(noisy, codec::Framing::Ascii, consumed).size(), 1u);
+    EXPECT_EQ(consumed, noisy.size());
+    Bytes bad = f;
+    bad[bad.size() - 3] = bad[bad.size() - 3] == '0' ? '1' : '0';
+    ASSERT_EQ(cut_frame(bad, codec::Framing::Ascii, true, 0, w), WireCut::Frame);
+    EXPECT_EQ(w.discard, "bad-lrc");
+    EXPECT_EQ(cut_frame(codec::Bytes(f.data(), 6), codec::Framing::Ascii, true, 0, w),
+              WireCut::NeedMore);
+}
+
+TEST(WireReframe, MbapFrameAsRtuAndAscii) {
+    const Bytes m = frame_pdu(kRead, 0x1234, 5);
+    EXPECT_EQ(reframe(m, codec::Framing::Rtu), frame_pdu(kRead, 0, 5, codec::Framing::Rtu));
+    EXPECT_EQ(reframe(m, codec::Framing::Ascii), frame_pdu(kRead, 0, 5, codec::Framing::Ascii));
+    EXPECT_EQ(reframe(m, codec::Framing::Mbap), m);
+}
+
+// Every case the generator makes in `framing` runs alone and holds no MBAP: what it sends cuts
+// into frames of that framing (or is one frame in pieces).
+std::set<MutationClass> generate(codec::Framing framing, bool serial, std::vector<Case>& out) {
+    GeneratorOptions o;
+    o.seed = 7;
+    o.framing = framing;
+    o.serial_line = serial;
+    o.intercharacter_us = serial ? 860 : 0;
+    o.isolated_per_mille = 300;
+    Generator g(o);
+    std::set<MutationClass> classes;
+    for (int i = 0; i < 3000; ++i) {
+        Case c;
+        g.next(c);
+        classes.insert(c.cls);
+        out.push_back(std::move(c));
+    }
+    return classes;
+}
+
+TEST(GeneratorFraming, RtuOverTcpCasesAreRtuAndRunAlone) {
+    std::vector<Case> cases;
+    const auto classes = generate(codec::Framing::Rtu, false, cases);
+    for (MutationClass mbap_only :
+         {MutationClass::TransactionId, MutationClass::ProtocolId, MutationClass::MbapLength,
+          MutationClass::TrailingBytes, MutationClass::Coalesced, MutationClass::BurstSplit})
+        EXPECT_EQ(classes.count(mbap_only), 0u) << class_name(mbap_only);
+    EXPECT_EQ(classes.count(MutationClass::BadChecksum), 1u);
+    EXPECT_EQ(classes.count(MutationClass::Split), 1u);
+    EXPECT_EQ(classes.count(MutationClass::BrokenSilence), 0u);  // a stream has no silences
+    for (const Case& c : cases) {
+        EXPECT_FALSE(c.pipelinable);
+        // Whole frames, each with its CRC (a wrong one for bad-checksum), one per send; the
+        // pieces of a split frame put back together are one frame.
+        const bool pieces = c.cls == MutationClass::Split || c.cls == MutationClass::Drip ||
+                            c.cls == MutationClass::PartialHold;
+        if (c.cls == MutationClass::HalfClose || c.cls == MutationClass::Truncated) continue;
+        Bytes all;
+        for (const Step& s : c.steps) {
+            if (s.op != Op::Send) continue;
+            all.insert(all.end(), s.bytes.begin(), s.bytes.end());
+            if (pieces) continue;
+            EXPECT_EQ(rtu_crc_ok(s.bytes), c.cls != MutationClass::BadChecksum)
+                << class_name(c.cls);
+        }
+        if (pieces) {
+            EXPECT_TRUE(rtu_crc_ok(all)) << class_name(c.cls);
+        }
+    }
+}
+
+TEST(GeneratorFraming, SerialLinesGetSilenceAndNoiseMutationsOnOneLink) {
+    for (codec::Framing framing : {codec::Framing::Rtu, codec::Framing::Ascii}) {
+        std::vector<Case> cases;
+        const auto classes = generate(framing, true, cases);
+        EXPECT_EQ(classes.count(MutationClass::BadChecksum), 1u);
+        EXPECT_EQ(classes.count(MutationClass::NoSilence), 1u);
+        EXPECT_EQ(classes.count(MutationClass::Noise), 1u);
+        EXPECT_EQ(classes.count(MutationClass::BrokenSilence),
+                  framing == codec::Framing::Rtu ? 1u : 0u);
+        for (const Case& c : cases) {
+            for (const Step& s : c.steps) {
+                EXPECT_EQ(s.conn, 0) << class_name(c.cls);
+                EXPECT_NE(s.op, Op::Flood);
+                EXPECT_NE(s.op, Op::SideProbe);
+            }
+            if (c.cls == MutationClass::BrokenSilence) {
+                ASSERT_EQ(c.steps.size(), 2u);
+                EXPECT_GT(c.steps[1].delay_us, 860u);  // longer than t1.5
+            }
+        }
+    }
+}
+
+// A slave for RTU over TCP in a thread: answers every frame with exception 01 (illegal
+// function), and a frame with a bad CRC too unless it `discards` those as it should.
+class RtuSlave {
+  public:
+    explicit RtuSlave(bool discards_bad_crc) : discards_(discards_bad_crc) {
+        fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
+        ::listen(fd_, 16);
+        socklen_t len = sizeof a;
+        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
+        port_ = ntohs(a.sin_port);
+        thread_ = std::thread([this] { serve(); });
+    }
+    ~RtuSlave() {
+        stop_ = true;
+        thread_.join();
+        ::close(fd_);
+    }
+    std::string endpoint() const { return "127.0.0.1:" + std::to_string(port_); }
+
+  private:
+    void serve() {
+        std::vector<int> conns;
+        std::vector<Bytes> bufs;
+        for (int rounds = 0; !stop_ && rounds < 20000; ++rounds) {
+            std::vector<pollfd> ps{{fd_, POLLIN, 0}};
+            for (int c : conns) ps.push_back({c, POLLIN, 0});
+            if (::poll(ps.data(), ps.size(), 20) <= 0) continue;
+            if (ps[0].revents & POLLIN) {
+                conns.push_back(::accept(fd_, nullptr, nullptr));
+                bufs.emplace_back();
+            }
+            for (std::size_t i = 0; i < conns.size(); ++i) {
+                if (!(ps[i + 1].revents & (POLLIN | POLLHUP))) continue;
+                std::uint8_t b[512];
+                const ssize_t n = ::recv(conns[i], b, sizeof b, 0);
+                if (n <= 0) {
+                    ::close(conns[i]);
+                    conns.erase(conns.begin() + static_cast<std::ptrdiff_t>(i));
+                    bufs.erase(bufs.begin() + static_cast<std::ptrdiff_t>(i));
+                    break;
+                }
+                bufs[i].insert(bufs[i].end(), b, b + n);
+                WireFrame w;
+                while (cut_frame(bufs[i], codec::Framing::Rtu, true, 0, w) == WireCut::Frame) {
+                    const Bytes frame(bufs[i].begin(),
+                                      bufs[i].begin() + static_cast<std::ptrdiff_t>(w.size));
+                    bufs[i].erase(bufs[i].begin(),
+                                  bufs[i].begin() + static_cast<std::ptrdiff_t>(w.size));
+                    if (!w.discard.empty() && discards_) continue;
+                    const Bytes answer =
+                        frame_pdu({static_cast<std::uint8_t>(frame[1] | 0x80), 0x01}, 0, frame[0],
+                                  codec::Framing::Rtu);
+                    (void)!::send(conns[i], answer.data(), answer.size(), MSG_NOSIGNAL);
+                }
+            }
+        }
+        for (int c : conns) ::close(c);
+    }
+    bool discards_;
+    int fd_ = -1;
+    int port_ = 0;
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+};
+
+Execution run_bad_crc_case(RtuSlave& slave) {
+    net::Endpoint e;
+    EXPECT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    TcpConnector connector(e, codec::Framing::Rtu);
+    TargetProfile profile;
+    profile.framing = codec::Framing::Rtu;
+    profile.probe_pdu = kRead;
+    Case c;
+    c.cls = MutationClass::BadChecksum;
+    Bytes f = frame_pdu(kRead, 0, 1, codec::Framing::Rtu);
+    f.back() ^= 0x10;
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, f});
+    ExecOptions o;
+    o.timeout_ms = 400;
+    return execute_case(c, connector, profile, o);
+}
+
+TEST(ExecutorFraming, SlaveThatDiscardsABadCrcAndAnswersTheNextFrameIsClean) {
+    RtuSlave slave(true);
+    const Execution e = run_bad_crc_case(slave);
+    EXPECT_FALSE(e.verdict) << e.verdict.summary;
+    // The in-stream probe after it was answered.
+    bool answered = false;
+    for (const TraceEvent& t : e.trace) answered = answered || t.kind == TraceKind::Recv;
+    EXPECT_TRUE(answered);
+}
+
+TEST(ExecutorFraming, AnswerToABadCrcIsASpecDeviation) {
+    RtuSlave slave(false);
+    const Execution e = run_bad_crc_case(slave);
+    EXPECT_EQ(e.verdict.oracle, Oracle::SpecDeviation);
+    EXPECT_EQ(e.verdict.rule, "answers-bad-crc");
+}
+
+}  // namespace
+}  // namespace mbstorm::netfuzz
