@@ -1052,6 +1052,9 @@ CampaignResult Campaign::run() {
         // RTU/ASCII: every case runs alone, so the ones the deadline left unrun were not cases.
         const bool all_alone = result_.profile.framing != codec::Framing::Mbap;
         result_.cases += all_alone ? std::min(fresh, ran_alone) : fresh;
+        if (all_alone)
+            for (std::size_t i = ran_alone; i < alone.size(); ++i)
+                --result_.cases_by_class[static_cast<std::size_t>(alone[i].cls)];
         if (all_alone && ran_alone < alone.size() && !lost) break;
         progress(false);
         if (lost) break;

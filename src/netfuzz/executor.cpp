@@ -144,8 +144,19 @@ bool CaseRunner::ensure_open(std::uint8_t index) {
 void CaseRunner::send_bytes(std::uint8_t index, const std::vector<std::uint8_t>& bytes) {
     Conn& c = conns_[index];
     if (!ensure_open(index) || c.closed || c.shut) return;
-    if (profile_.serial_line && profile_.framing == codec::Framing::Rtu) close_partial(c);
-    if (framed() && c.parsed == c.sent.size()) await_in_flight(index);
+    bool await = framed() && c.parsed == c.sent.size();
+    if (profile_.serial_line && profile_.framing == codec::Framing::Rtu &&
+        c.parsed < c.sent.size()) {
+        // The line's silence before these bytes ended the frame they were to finish: a
+        // broken frame. Its answer is waited for only if these bytes are a frame of their
+        // own (noise, then a frame); the rest of a frame split by a gap goes out at once, so
+        // the gap stays as the case made it.
+        close_partial(c);
+        WireFrame whole;
+        await = cut_frame(bytes, profile_.framing, true, 0, whole) == WireCut::Frame &&
+                whole.size == bytes.size() && whole.discard.empty();
+    }
+    if (await) await_in_flight(index);
     if (c.closed) return;
     std::size_t done = 0;
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <pty.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <filesystem>
 #include <set>
 #include <thread>
 #include <vector>
@@ -18,8 +20,10 @@
 #include "net/socket.hpp"
 #include "netfuzz/case.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/finding.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/link.hpp"
+#include "netfuzz/serial_link.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -276,6 +280,124 @@ TEST(ExecutorFraming, AnswerToABadCrcIsASpecDeviation) {
     const Execution e = run_bad_crc_case(slave);
     EXPECT_EQ(e.verdict.oracle, Oracle::SpecDeviation);
     EXPECT_EQ(e.verdict.rule, "answers-bad-crc");
+}
+
+// A slave on a pseudo-terminal (the test holds the pty's master side) that cuts RTU frames by
+// length alone, so it ignores silences: it answers every frame it cuts with exception 01, and
+// a frame with a bad CRC too unless it `discards` those.
+class PtySlave {
+  public:
+    explicit PtySlave(bool discards_bad_crc) : discards_(discards_bad_crc) {
+        int slave = -1;
+        char name[128] = {};
+        if (::openpty(&pty_, &slave, name, nullptr, nullptr) != 0) return;
+        ::close(slave);
+        path_ = name;
+        thread_ = std::thread([this] { serve(); });
+    }
+    ~PtySlave() {
+        stop_ = true;
+        if (thread_.joinable()) thread_.join();
+        if (pty_ >= 0) ::close(pty_);
+    }
+    const std::string& path() const { return path_; }
+
+  private:
+    void serve() {
+        Bytes buf;
+        for (int rounds = 0; !stop_ && rounds < 20000; ++rounds) {
+            pollfd p{pty_, POLLIN, 0};
+            if (::poll(&p, 1, 10) <= 0) continue;
+            std::uint8_t b[512];
+            const ssize_t n = ::read(pty_, b, sizeof b);
+            if (n <= 0) continue;
+            buf.insert(buf.end(), b, b + n);
+            WireFrame w;
+            while (cut_frame(buf, codec::Framing::Rtu, true, 0, w) == WireCut::Frame) {
+                const Bytes frame(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(w.size));
+                buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(w.size));
+                if (!w.discard.empty() && discards_) continue;
+                const Bytes answer = frame_pdu({static_cast<std::uint8_t>(frame[1] | 0x80), 0x01},
+                                               0, frame[0], codec::Framing::Rtu);
+                (void)!::write(pty_, answer.data(), answer.size());
+            }
+        }
+    }
+    bool discards_;
+    int pty_ = -1;
+    std::string path_;
+    std::atomic<bool> stop_{false};
+    std::thread thread_;
+};
+
+Execution run_on_line(PtySlave& slave, const Case& c) {
+    net::SerialSettings line;
+    line.parity = net::Parity::None;
+    line.baud = 115200;
+    SerialConnector connector(slave.path(), line, codec::Framing::Rtu);
+    EXPECT_EQ(connector.max_links(), 1u);
+    TargetProfile profile;
+    profile.framing = codec::Framing::Rtu;
+    profile.serial_line = true;
+    profile.probe_pdu = kRead;
+    ExecOptions o;
+    o.timeout_ms = 300;
+    return execute_case(c, connector, profile, o);
+}
+
+TEST(SerialFraming, BadCrcOnALineIsDiscardedByAConformingSlave) {
+    Case c;
+    c.cls = MutationClass::BadChecksum;
+    Bytes f = frame_pdu(kRead, 0, 1, codec::Framing::Rtu);
+    f[f.size() - 2] ^= 0x04;
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, f});
+    PtySlave good(true);
+    ASSERT_FALSE(good.path().empty());
+    const Execution clean = run_on_line(good, c);
+    EXPECT_FALSE(clean.verdict) << clean.verdict.summary;
+    PtySlave bad(false);
+    const Execution e = run_on_line(bad, c);
+    EXPECT_EQ(e.verdict.rule, "answers-bad-crc") << e.verdict.summary;
+}
+
+TEST(SerialFraming, SlaveThatIgnoresAGapInsideAFrameAnswersABrokenFrame) {
+    Case c;
+    c.cls = MutationClass::BrokenSilence;
+    const Bytes f = frame_pdu(kRead, 0, 1, codec::Framing::Rtu);
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin(), f.begin() + 3}});
+    c.steps.push_back(Step{Op::Send, 0, 2000, 0, {f.begin() + 3, f.end()}});
+    PtySlave slave(true);
+    ASSERT_FALSE(slave.path().empty());
+    const Execution e = run_on_line(slave, c);
+    EXPECT_EQ(e.verdict.oracle, Oracle::SpecDeviation) << e.verdict.summary;
+    EXPECT_EQ(e.verdict.rule, "answers-broken-frame");
+}
+
+// A finding keeps the framing and the line it was found over (replay refuses another), and
+// one saved before framings existed loads as MBAP.
+TEST(FindingFraming, FramingAndLineSurviveSaveAndLoad) {
+    Finding f;
+    f.verdict = Verdict{Oracle::SpecDeviation, "answers-bad-crc", 0x03, "s", "e", "x"};
+    f.fuzz_case.cls = MutationClass::BadChecksum;
+    f.fuzz_case.steps = {Step{Op::Send, 0, 0, 0, frame_pdu(kRead, 0, 1, codec::Framing::Ascii)}};
+    f.profile.probe_pdu = kRead;
+    f.profile.framing = codec::Framing::Ascii;
+    f.profile.serial_line = true;
+    const auto dir = (std::filesystem::temp_directory_path() / "mbstorm-finding-framing").string();
+    std::string err;
+    ASSERT_TRUE(save_finding(f, dir, err)) << err;
+    Finding g;
+    ASSERT_TRUE(load_finding(dir, g, err)) << err;
+    EXPECT_EQ(g.profile.framing, codec::Framing::Ascii);
+    EXPECT_TRUE(g.profile.serial_line);
+    EXPECT_EQ(g.fuzz_case.cls, MutationClass::BadChecksum);
+    f.profile = TargetProfile{};
+    f.profile.probe_pdu = kRead;
+    ASSERT_TRUE(save_finding(f, dir, err)) << err;
+    ASSERT_TRUE(load_finding(dir, g, err)) << err;
+    EXPECT_EQ(g.profile.framing, codec::Framing::Mbap);
+    EXPECT_FALSE(g.profile.serial_line);
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
