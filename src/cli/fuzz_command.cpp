@@ -193,8 +193,8 @@ void add_fuzz_command(CLI::App& app, Action& action) {
         "fuzz", "Fuzz a Modbus TCP server: crashes, hangs, spec deviations, with reproducers");
     cmd->add_option(
         "--target", o->target,
-        "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted "
-        "(required but with --serial; loopback unless --allow-remote)");
+        "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted (802 "
+        "with --transport tls; required but with --serial; loopback unless --allow-remote)");
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     cmd->add_option("--unit", o->unit, "unit id the target answers")
         ->check(CLI::Range(0, 255))

@@ -109,7 +109,8 @@ void add_replay_command(CLI::App& app, Action& action) {
     cmd->add_option("finding", o->finding, "finding folder (or its finding.json)")->required();
     cmd->add_option("--target", o->target,
                     "server to replay against: HOST[:PORT], [IPv6]:PORT or an IPv6 "
-                    "address, port 502 if omitted (required but with --serial)");
+                    "address, port 502 if omitted (802 with --transport tls; required but with "
+                    "--serial)");
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
     add_duration_option(cmd, "--timeout", o->timeout_ns, "answer timeout (default: the finding's)");
     cmd->add_option("--runs", o->runs, "replay this many times and report k of n")
