@@ -51,6 +51,9 @@ Worker::Worker(WorkerSetup setup)
                 setup_.timeline->tags()) {
     operations = operation_rows(plan_.operations);
     if (setup_.schedule != nullptr) stages = stage_rows(setup_.schedule->stages(), operations);
+    // One operation: its run-long histogram is the sum of the intervals' histograms, folded in
+    // as each interval ends, so an answer's latency is recorded once instead of twice.
+    if (operations.size() == 1) interval_.fold_into(&operations.front().latency);
     rate_ = setup_.rate;
     active_ = setup_.connections;
     const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
@@ -834,15 +837,16 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
     const std::int64_t from = open_loop_ ? t.intended_ns : t.sent_ns;
     const auto latency = static_cast<std::uint64_t>(std::max<std::int64_t>(now - from, 0));
     const bool answered = has_response(outcome);
-    auto count = [&](stats::OperationResult& into) {
+    auto count = [&](stats::OperationResult& into, bool with_latency) {
         if (outcome == stats::Outcome::Exception) {
             into.counters.record_exception(exception_code);
         } else {
             into.counters.record(outcome);
         }
-        if (answered) into.latency.record(latency);
+        if (answered && with_latency) into.latency.record(latency);
     };
-    count(operations[t.request.op_index]);
+    // A single operation's latencies reach its histogram through the interval recorder.
+    count(operations[t.request.op_index], operations.size() != 1);
     if (setup_.live != nullptr)
         setup_.live->record(t.request.op_index, outcome, exception_code, answered, latency);
     if (setup_.schedule != nullptr) {
@@ -855,7 +859,7 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
             stage.counters.record(outcome);
         }
         if (answered) stage.latency.record(latency);
-        if (!stage.operations.empty()) count(stage.operations[t.request.op_index]);
+        if (!stage.operations.empty()) count(stage.operations[t.request.op_index], true);
     }
     if (answered) interval_.record_latency(latency, t.request.op_index);
     interval_.record_transaction(outcome != stats::Outcome::Ok);

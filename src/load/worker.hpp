@@ -137,8 +137,11 @@ class Worker {
     void flush() noexcept;
     void begin_sending(std::int64_t now) noexcept;  // at setup_.start_ns
     void sweep_timeouts(std::int64_t now) noexcept;
-    void record(const Transaction& t, stats::Outcome outcome, std::uint8_t exception_code,
-                std::int64_t now) noexcept;
+    // Inlined where it is called (all in worker.cpp): as a call, its saved registers and
+    // arguments were 16-20 of the engine's ~540 instructions per transaction.
+    [[gnu::always_inline]] inline void record(const Transaction& t, stats::Outcome outcome,
+                                              std::uint8_t exception_code,
+                                              std::int64_t now) noexcept;
 
     WorkerSetup setup_;
     const Plan& plan_;

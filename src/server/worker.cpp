@@ -559,6 +559,7 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
     for (;;) {
         switch (c.splitter.next(frame)) {
             case codec::MbapSplitter::Status::NeedMore:
+                flush_tally();
                 counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
                 note_partial_frame(c, index, completed);
                 return;
@@ -568,10 +569,14 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
                 break;
             case codec::MbapSplitter::Status::Fatal:
                 // The frames before this one are answered; the connection closes after that.
+                flush_tally();
                 lose_framing(index);
                 return;
             case codec::MbapSplitter::Status::Frame:
-                if (!on_frame(c, index, frame)) return;
+                if (!on_frame(c, index, frame)) {
+                    flush_tally();
+                    return;
+                }
                 completed = true;
                 break;
         }
@@ -597,11 +602,20 @@ void Worker::start_frame_clock(Connection& c, std::uint32_t index) noexcept {
 
 bool Worker::serve_frame(Connection& c, std::uint32_t index,
                          const codec::TcpFrame& frame) noexcept {
-    return on_frame(c, index, frame);
+    const bool open = on_frame(c, index, frame);
+    flush_tally();
+    return open;
+}
+
+void Worker::flush_tally() noexcept {
+    counters_.add(ServerCounters::Requests, tally_.requests);
+    counters_.add(ServerCounters::Transactions, tally_.transactions);
+    counters_.add(ServerCounters::PendingOutput, tally_.pending_output);
+    tally_ = {};
 }
 
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
-    counters_.add(ServerCounters::Requests);
+    ++tally_.requests;
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
     if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
         counters_.add(ServerCounters::TlsRoleDenied);
@@ -629,6 +643,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         decision = faults_.decide();
         if (decision.action == slave::FaultDecision::Action::Drop) {
             counters_.add(ServerCounters::FaultDrops);
+            flush_tally();  // before the close takes the connection's output off PendingOutput
             close_connection(index);
             return false;
         }
@@ -653,14 +668,17 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     try {
         p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu);
     } catch (...) {
+        flush_tally();
         close_connection(index);
         return false;
     }
     const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
     const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
-    const slave::HandleResult r =
-        units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
-               : slave::handle_request(frame.pdu, model_, pdu_out);
+    slave::HandleResult r;
+    if (units_ || !slave::read_registers_inline(frame.pdu, model_, pdu_out.data(), r)) {
+        r = units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
+                   : slave::handle_request(frame.pdu, model_, pdu_out);
+    }
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
     std::size_t n;
     if (c.rtu) {
@@ -671,8 +689,8 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         n = codec::limits::kMbapHeader + r.size;
     }
     c.out.commit(n);
-    counters_.add(ServerCounters::PendingOutput, n);
-    counters_.add(ServerCounters::Transactions);
+    tally_.pending_output += n;
+    ++tally_.transactions;
     if (r.outcome == slave::Outcome::Exception)
         counters_.add_exception(static_cast<std::uint8_t>(r.exception));
     ++c.unanswered;
@@ -697,8 +715,8 @@ void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
         codec::write_exception_frame(p, frame, code);
     }
     c.out.commit(n);
-    counters_.add(ServerCounters::PendingOutput, n);
-    counters_.add(ServerCounters::Transactions);
+    tally_.pending_output += n;
+    ++tally_.transactions;
     counters_.add_exception(static_cast<std::uint8_t>(code));
 }
 

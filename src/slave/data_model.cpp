@@ -1,6 +1,7 @@
 #include "slave/data_model.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -116,11 +117,23 @@ RegisterTable::RegisterTable(std::uint32_t size)
 std::uint16_t RegisterTable::mask_write(std::uint16_t address, std::uint16_t and_mask,
                                         std::uint16_t or_mask) noexcept {
     std::atomic<std::uint16_t>& reg = regs_[address];
-    std::uint16_t current = reg.load(std::memory_order_relaxed);
+    std::uint16_t stored = reg.load(std::memory_order_relaxed);
     std::uint16_t next;
     do {
+        const std::uint16_t current = wire(stored);
         next = static_cast<std::uint16_t>((current & and_mask) | (or_mask & ~and_mask));
-    } while (!reg.compare_exchange_weak(current, next, std::memory_order_relaxed));
+    } while (!reg.compare_exchange_weak(stored, wire(next), std::memory_order_relaxed));
+    return next;
+}
+
+std::uint16_t RegisterTable::add(std::uint16_t address, std::uint16_t delta) noexcept {
+    // Wire order does not add: a compare-and-swap loop, as for mask_write.
+    std::atomic<std::uint16_t>& reg = regs_[address];
+    std::uint16_t stored = reg.load(std::memory_order_relaxed);
+    std::uint16_t next;
+    do {
+        next = static_cast<std::uint16_t>(wire(stored) + delta);
+    } while (!reg.compare_exchange_weak(stored, wire(next), std::memory_order_relaxed));
     return next;
 }
 
@@ -128,7 +141,9 @@ void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
                              const std::uint8_t* in) noexcept {
     std::atomic<std::uint16_t>* dst = regs_.get() + address;
     for (std::uint32_t i = 0; i < quantity; ++i) {
-        dst[i].store(codec::load_be16(in + 2 * i), std::memory_order_relaxed);
+        std::uint16_t value;  // the request's bytes are wire order, as the table keeps them
+        std::memcpy(&value, in + 2 * i, sizeof value);
+        dst[i].store(value, std::memory_order_relaxed);
     }
 }
 
@@ -150,7 +165,7 @@ void RegisterTable::bump_read_counters(std::uint16_t address, std::uint16_t quan
     auto it = std::lower_bound(read_counters_.begin(), read_counters_.end(), address,
                                [](const ReadCounter& c, std::uint16_t a) { return c.address < a; });
     for (; it != read_counters_.end() && it->address < end; ++it) {
-        regs_[it->address].fetch_add(it->step, std::memory_order_relaxed);
+        add(it->address, it->step);
     }
 }
 

@@ -85,7 +85,9 @@ class BitTable {
     std::uint32_t size_;
 };
 
-// One register table (input or holding registers): one atomic 16-bit word per register.
+// One register table (input or holding registers): one atomic 16-bit word per register, held
+// in wire (big-endian) byte order, so a read request copies each register's two bytes as they
+// are (the answer's bytes are the table's) and only get/set/add/mask_write swap them.
 class RegisterTable {
   public:
     explicit RegisterTable(std::uint32_t size);
@@ -95,34 +97,42 @@ class RegisterTable {
         return std::uint32_t{address} + quantity <= size_;
     }
     std::uint16_t get(std::uint16_t address) const noexcept {
-        return regs_[address].load(std::memory_order_relaxed);
+        return wire(regs_[address].load(std::memory_order_relaxed));
     }
     void set(std::uint16_t address, std::uint16_t value) noexcept {
-        regs_[address].store(value, std::memory_order_relaxed);
+        regs_[address].store(wire(value), std::memory_order_relaxed);
     }
     // Atomically applies (current AND and_mask) OR (or_mask AND NOT and_mask); returns the result.
     std::uint16_t mask_write(std::uint16_t address, std::uint16_t and_mask,
                              std::uint16_t or_mask) noexcept;
-    std::uint16_t add(std::uint16_t address, std::uint16_t delta) noexcept {
-        return static_cast<std::uint16_t>(
-            regs_[address].fetch_add(delta, std::memory_order_relaxed) + delta);
-    }
+    // Atomically adds delta (modulo 2^16); returns the result.
+    std::uint16_t add(std::uint16_t address, std::uint16_t delta) noexcept;
 
     // Copies registers to `out` big-endian, first bumping any read counter in range.
     // Precondition: contains(address, quantity).
-    // Inline, four registers a round, one load, byte swap and 16-bit store each: as a called
-    // loop of byte stores it was a fifth of the slave's instructions at FC03 x 10.
-    void read_be(std::uint16_t address, std::uint16_t quantity, std::uint8_t* out) noexcept {
+    // Inline, four registers a round, one 16-bit load and store each (the table holds wire
+    // order): as a called loop of byte stores it was a fifth of the slave's instructions at
+    // FC03 x 10, and the byte swap per register another 10 of the ~280 per transaction.
+    [[gnu::always_inline]] void read_be(std::uint16_t address, std::uint16_t quantity,
+                                        std::uint8_t* out) noexcept {
         if (has_read_counters_) bump_read_counters(address, quantity);
+        // Pointers stepped once a round: indices recomputed per register cost a third more.
         const std::atomic<std::uint16_t>* src = regs_.get() + address;
-        std::uint32_t i = 0;
-        for (; i + 4 <= quantity; i += 4) {
-            store_be(out + 2 * i, src[i]);
-            store_be(out + 2 * i + 2, src[i + 1]);
-            store_be(out + 2 * i + 4, src[i + 2]);
-            store_be(out + 2 * i + 6, src[i + 3]);
+        const std::atomic<std::uint16_t>* const rounds_end = src + (quantity & ~3u);
+        for (; src != rounds_end; src += 4, out += 8) {
+            store_be(out, src[0]);
+            store_be(out + 2, src[1]);
+            store_be(out + 4, src[2]);
+            store_be(out + 6, src[3]);
         }
-        for (; i < quantity; ++i) store_be(out + 2 * i, src[i]);
+        // The rest (0-3) without a loop: a pair, then one.
+        if (quantity & 2) {
+            store_be(out, src[0]);
+            store_be(out + 2, src[1]);
+            src += 2;
+            out += 4;
+        }
+        if (quantity & 1) store_be(out, src[0]);
     }
     // Stores big-endian values from `in`. Precondition: contains(address, quantity).
     void write_be(std::uint16_t address, std::uint16_t quantity, const std::uint8_t* in) noexcept;
@@ -133,9 +143,13 @@ class RegisterTable {
     bool has_read_counters() const noexcept { return !read_counters_.empty(); }
 
   private:
+    // Host order <-> wire order (its own inverse).
+    static constexpr std::uint16_t wire(std::uint16_t v) noexcept {
+        if constexpr (std::endian::native == std::endian::little) return __builtin_bswap16(v);
+        return v;
+    }
     static void store_be(std::uint8_t* out, const std::atomic<std::uint16_t>& reg) noexcept {
-        std::uint16_t value = reg.load(std::memory_order_relaxed);
-        if constexpr (std::endian::native == std::endian::little) value = __builtin_bswap16(value);
+        const std::uint16_t value = reg.load(std::memory_order_relaxed);  // already wire order
         std::memcpy(out, &value, sizeof value);
     }
     struct ReadCounter {

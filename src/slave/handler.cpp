@@ -19,9 +19,7 @@ namespace limits = codec::limits;
 // stall store forwarding (about half the time of an FC03 x10 request).
 #define MBSTORM_HOT [[gnu::always_inline]] inline
 
-constexpr std::uint8_t kReceiveEvent = 0x80;
 constexpr std::uint8_t kReceiveBroadcastEvent = 0xC0;
-constexpr std::uint8_t kSendEvent = 0x40;
 
 MBSTORM_HOT HandleResult answer(std::uint8_t function, std::size_t size,
                                 bool wrote = false) noexcept {
@@ -444,40 +442,13 @@ HandleResult handle_one(codec::Bytes request, DataModel& model, std::uint8_t* ou
     return r;
 }
 
-// FC03/FC04 that the general path would answer normally (5 bytes, quantity 1..125, inside the
-// table): the request of nearly every load test. Answered here without building a
-// codec::Request, with the same bytes and the same diagnostics as handle_one; anything else
-// (including every request owed an exception) returns false and takes the general path.
-MBSTORM_HOT bool read_registers_fast(codec::Bytes request, DataModel& m, std::uint8_t* out,
-                                     HandleResult& result) noexcept {
-    if (request.size() != 5) return false;
-    const std::uint8_t function = request[0];
-    const bool holding = function == static_cast<std::uint8_t>(FunctionCode::ReadHoldingRegisters);
-    if (!holding && function != static_cast<std::uint8_t>(FunctionCode::ReadInputRegisters))
-        return false;
-    const std::uint16_t address = codec::load_be16(request.data() + 1);
-    const std::uint16_t quantity = codec::load_be16(request.data() + 3);
-    RegisterTable& table = holding ? m.holding_registers() : m.input_registers();
-    if (static_cast<std::uint16_t>(quantity - 1u) >= limits::kMaxReadRegisters ||
-        !table.contains(address, quantity))
-        return false;
-    const bool track = m.track_diagnostics();
-    const std::uint64_t seq = track ? m.diagnostics().begin_message() : 0;
-    out[0] = function;
-    out[1] = static_cast<std::uint8_t>(2 * quantity);
-    table.read_be(address, quantity, out + 2);
-    if (track) m.diagnostics().end_message(seq, kReceiveEvent, kSendEvent);
-    result = answer(function, 2 + 2 * std::size_t{quantity});
-    return true;
-}
-
 }  // namespace
 
 HandleResult handle_request(codec::Bytes request, DataModel& model,
                             codec::MutableBytes out) noexcept {
     if (out.size() < kMinOutput || request.empty()) return HandleResult{};
     HandleResult r;
-    if (read_registers_fast(request, model, out.data(), r)) return r;
+    if (read_registers_inline(request, model, out.data(), r)) return r;
     return handle_one(request, model, out.data(), false);
 }
 
@@ -502,7 +473,7 @@ HandleResult handle_request(std::uint8_t unit_id, codec::Bytes request, const Un
     DataModel* model = units.find(unit_id);
     if (model != nullptr) {
         HandleResult r;
-        if (read_registers_fast(request, *model, out.data(), r)) return r;
+        if (read_registers_inline(request, *model, out.data(), r)) return r;
         return handle_one(request, *model, out.data(), false);
     }
     switch (units.unknown_unit_policy) {

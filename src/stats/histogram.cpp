@@ -48,7 +48,8 @@ Histogram::Histogram(const Histogram& other)
       total_count_(other.total_count_),
       saturated_(other.saturated_),
       min_(other.min_),
-      max_(other.max_) {
+      max_(other.max_),
+      beyond_max_(other.beyond_max_) {
     std::memcpy(counts_.get(), other.counts_.get(), counts_length_ * sizeof(std::uint64_t));
 }
 
@@ -65,6 +66,7 @@ Histogram& Histogram::operator=(const Histogram& other) {
     saturated_ = other.saturated_;
     min_ = other.min_;
     max_ = other.max_;
+    beyond_max_ = other.beyond_max_;
     return *this;
 }
 
@@ -126,21 +128,34 @@ void Histogram::record_corrected(std::uint64_t value, std::uint64_t expected_int
 
 void Histogram::add(const Histogram& other) noexcept {
     if (other.total_count_ == 0) return;
+    const std::size_t first = other.first_used_index();
+    const std::size_t last = other.last_used_index();
     if (other.counts_length_ == counts_length_) {
-        for (std::size_t i = 0; i < counts_length_; ++i) counts_[i] += other.counts_[i];
+        for (std::size_t i = first; i <= last; ++i) counts_[i] += other.counts_[i];
         total_count_ += other.total_count_;
         saturated_ += other.saturated_;
         min_ = std::min(min_, other.min_);
         max_ = std::max(max_, other.max_);
+        beyond_max_ = beyond_max_ || other.beyond_max_;
         return;
     }
     // Same sub-bucket structure, different length: index i means the same range in both.
-    for (std::size_t i = 0; i < other.counts_length_; ++i) {
+    for (std::size_t i = first; i <= last; ++i) {
         if (other.counts_[i] != 0) record_n(value_at_index(i), other.counts_[i]);
     }
     saturated_ += other.saturated_;
     min_ = std::min(min_, std::min(other.min_, highest_trackable_));
     max_ = std::max(max_, std::min(other.max_, highest_trackable_));
+}
+
+std::size_t Histogram::first_used_index() const noexcept {
+    if (total_count_ == 0) return 1;
+    return beyond_max_ ? 0 : counts_index(min_);
+}
+
+std::size_t Histogram::last_used_index() const noexcept {
+    if (total_count_ == 0) return 0;
+    return beyond_max_ ? counts_length_ - 1 : std::min(counts_index(max_), counts_length_ - 1);
 }
 
 void Histogram::add_at_index(std::size_t index, std::uint64_t count) noexcept {
@@ -150,6 +165,7 @@ void Histogram::add_at_index(std::size_t index, std::uint64_t count) noexcept {
     const std::uint64_t low = value_at_index(index);
     min_ = std::min(min_, low);
     max_ = std::max(max_, std::min(highest_equivalent(low), highest_trackable_));
+    if (index > counts_index(max_)) beyond_max_ = true;
 }
 
 void Histogram::narrow_extremes(std::uint64_t exact_min, std::uint64_t exact_max) noexcept {
@@ -161,7 +177,10 @@ void Histogram::narrow_extremes(std::uint64_t exact_min, std::uint64_t exact_max
 }
 
 void Histogram::reset() noexcept {
-    std::fill_n(counts_.get(), counts_length_, std::uint64_t{0});
+    const std::size_t first = first_used_index();
+    const std::size_t last = last_used_index();
+    if (first <= last) std::fill(counts_.get() + first, counts_.get() + last + 1, std::uint64_t{0});
+    beyond_max_ = false;
     total_count_ = 0;
     saturated_ = 0;
     min_ = UINT64_MAX;
@@ -171,7 +190,7 @@ void Histogram::reset() noexcept {
 double Histogram::mean() const noexcept {
     if (total_count_ == 0) return 0.0;
     long double sum = 0.0L;
-    for (std::size_t i = 0; i < counts_length_; ++i) {
+    for (std::size_t i = first_used_index(), last = last_used_index(); i <= last; ++i) {
         if (counts_[i] == 0) continue;
         sum += static_cast<long double>(counts_[i]) *
                static_cast<long double>(median_equivalent(value_at_index(i)));
@@ -183,7 +202,7 @@ double Histogram::stddev() const noexcept {
     if (total_count_ == 0) return 0.0;
     const long double mu = mean();
     long double deviation_total = 0.0L;
-    for (std::size_t i = 0; i < counts_length_; ++i) {
+    for (std::size_t i = first_used_index(), last = last_used_index(); i <= last; ++i) {
         if (counts_[i] == 0) continue;
         const long double dev = static_cast<long double>(median_equivalent(value_at_index(i))) - mu;
         deviation_total += dev * dev * static_cast<long double>(counts_[i]);
@@ -195,7 +214,7 @@ std::uint64_t Histogram::value_at_percentile(double percentile) const noexcept {
     if (total_count_ == 0) return 0;
     const std::uint64_t rank = rank_for_percentile(percentile, total_count_);
     std::uint64_t cumulative = 0;
-    for (std::size_t i = 0; i < counts_length_; ++i) {
+    for (std::size_t i = first_used_index(), last = last_used_index(); i <= last; ++i) {
         cumulative += counts_[i];
         if (cumulative >= rank) return within_recorded(highest_equivalent(value_at_index(i)));
     }

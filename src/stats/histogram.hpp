@@ -105,6 +105,12 @@ class Histogram {
         // value | mask keeps everything below kSubBucketCount in bucket 0.
         return 64 - std::countl_zero(value | kSubBucketMask) - (kSubBucketHalfCountMagnitude + 1);
     }
+    // The counts indices that can be non-zero, [first, last] (first > last when empty): the
+    // buckets between min() and max(), so merges, resets and percentiles touch the recorded
+    // range instead of all counts_length() counts (about 34,000 for one hour).
+    std::size_t first_used_index() const noexcept;
+    std::size_t last_used_index() const noexcept;
+
     static std::size_t counts_index(std::uint64_t value) noexcept {
         const int bucket = bucket_index(value);
         const auto sub_bucket = static_cast<std::size_t>(value >> bucket);
@@ -121,6 +127,9 @@ class Histogram {
     std::uint64_t saturated_ = 0;
     std::uint64_t min_ = UINT64_MAX;
     std::uint64_t max_ = 0;
+    // add_at_index put a count above max()'s bucket (a decoded histogram wider than this
+    // one's trackable range): the used range is then every index.
+    bool beyond_max_ = false;
 };
 
 // One step of HdrHistogram's percentile iteration.

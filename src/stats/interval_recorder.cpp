@@ -34,6 +34,7 @@ IntervalRecorder::IntervalRecorder(std::uint64_t interval_ns, std::uint64_t high
 
 void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
                                  std::uint32_t contributor) noexcept {
+    if (total_ != nullptr) total_->add(histogram_);
     timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
     current_index_ = now_offset_ns / interval_ns_;
@@ -41,6 +42,7 @@ void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& 
 }
 
 void IntervalRecorder::flush(IntervalTimeline& timeline, std::uint32_t contributor) noexcept {
+    if (total_ != nullptr) total_->add(histogram_);
     timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
 }

@@ -82,6 +82,11 @@ class IntervalRecorder {
         errors_ += error ? 1 : 0;
     }
 
+    // Every interval's all-operations histogram is also added into `total` when the interval
+    // ends (roll-over, flush), so a caller that keeps a run-long histogram of the same
+    // latencies records each once, here, instead of twice. nullptr: no such total.
+    void fold_into(Histogram* total) noexcept { total_ = total; }
+
     // Cheap when no boundary passed (one compare). Otherwise contributes the current
     // interval to timeline as worker `contributor` and starts the interval holding now.
     void tick(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
@@ -106,6 +111,7 @@ class IntervalRecorder {
     std::uint64_t next_boundary_ns_;
     Histogram histogram_;
     std::vector<Histogram> tagged_;
+    Histogram* total_ = nullptr;  // fold_into()
     std::uint64_t transactions_ = 0;
     std::uint64_t errors_ = 0;
 };

@@ -79,6 +79,10 @@ TEST(Server, PipelinedBurstOfThousandInOneSend) {
     auto s = srv->stats();
     EXPECT_EQ(s.transactions, 1000u);
     EXPECT_EQ(s.bytes_in, 12000u);
+    // Counted per frame loop rather than per frame (issue #18): the same totals.
+    EXPECT_EQ(s.requests, 1000u);
+    EXPECT_EQ(s.requests_by_function[3], 1000u);
+    EXPECT_EQ(s.pending_output, 0u);
 }
 
 TEST(Server, ByteByByteFragments) {

@@ -85,6 +85,32 @@ TEST(RegisterTable, ReadCountersBumpOnlyWhenCovered) {
     EXPECT_THROW(table.add_read_counter(100, 1), std::out_of_range);
 }
 
+TEST(RegisterTable, ValuesReadTheSameThroughEveryAccessor) {
+    // The table keeps wire byte order (issue #18): get/set/add/mask_write see host values,
+    // read_be/write_be the bytes of the wire, for every quantity the copy unrolls (1-9).
+    RegisterTable table(64);
+    for (std::uint16_t a = 0; a < 16; ++a)
+        table.set(a, static_cast<std::uint16_t>(0x0102 * (a + 1)));
+    for (std::uint16_t quantity = 1; quantity <= 9; ++quantity) {
+        std::uint8_t out[32] = {};
+        table.read_be(3, quantity, out);
+        for (std::uint16_t i = 0; i < quantity; ++i)
+            ASSERT_EQ(codec::load_be16(out + 2 * i), table.get(static_cast<std::uint16_t>(3 + i)))
+                << quantity << " " << i;
+        EXPECT_EQ(out[2 * quantity], 0) << "wrote past the quantity " << quantity;
+    }
+    const std::uint8_t in[] = {0xAB, 0xCD, 0x00, 0x01};
+    table.write_be(40, 2, in);
+    EXPECT_EQ(table.get(40), 0xABCD);
+    EXPECT_EQ(table.get(41), 0x0001);
+    table.set(50, 0xFFFF);
+    EXPECT_EQ(table.add(50, 2), 0x0001);  // modulo 2^16
+    EXPECT_EQ(table.get(50), 0x0001);
+    EXPECT_EQ(table.add(50, 0x00FF), 0x0100);  // the carry crosses the byte boundary
+    EXPECT_EQ(table.mask_write(40, 0x00F2, 0x0025), (0xABCD & 0x00F2) | (0x0025 & ~0x00F2));
+    EXPECT_EQ(table.get(40), (0xABCD & 0x00F2) | (0x0025 & ~0x00F2));
+}
+
 TEST(DataModel, FifoHelpersRespectLimits) {
     ModelConfig c;
     c.sizes.holding_registers = 10;

@@ -1,4 +1,4 @@
-// FC03/FC04 reads take a shortcut past the general decoder (handler.cpp, read_registers_fast):
+// FC03/FC04 reads take a shortcut past the general decoder (handler.hpp, read_registers_inline):
 // these check that every read, taken or refused by the shortcut, is answered as the spec and
 // the general path say, with the same diagnostics, around every edge the shortcut tests.
 #include <gtest/gtest.h>

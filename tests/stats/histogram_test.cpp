@@ -253,6 +253,39 @@ TEST(Histogram, ResetClearsEverything) {
     EXPECT_EQ(h.max(), 7 * kUs);
 }
 
+TEST(Histogram, ResetClearsACountDecodedAboveTheTrackableRange) {
+    // A decoded histogram can hold a count past max()'s bucket (add_at_index of an index
+    // beyond this histogram's highest trackable value): merges and resets must still see it.
+    Histogram h(1'000'000);
+    const std::size_t top = h.counts_length() - 1;
+    h.add_at_index(top, 3);
+    ASSERT_GT(top, Histogram::counts_index(h.max()));
+    Histogram merged(1'000'000);
+    merged.add(h);
+    EXPECT_EQ(merged.count_at_index(top), 3u);
+    h.reset();
+    for (std::size_t i = 0; i < h.counts_length(); ++i) ASSERT_EQ(h.count_at_index(i), 0u);
+}
+
+TEST(Histogram, ReusedAfterResetGivesTheSameAnswersAsAFreshOne) {
+    // Resets clear only the used range; a histogram reused over many intervals (the interval
+    // recorder) must answer exactly like a new one.
+    Histogram reused;
+    for (std::uint64_t v = kUs; v < kS; v *= 7) reused.record(v);
+    reused.reset();
+    Histogram fresh;
+    for (std::uint64_t v : {3 * kUs, 40 * kUs, 41 * kUs, 900 * kUs}) {
+        reused.record(v);
+        fresh.record(v);
+    }
+    for (double p : {0.0, 25.0, 50.0, 99.0, 100.0})
+        EXPECT_EQ(reused.value_at_percentile(p), fresh.value_at_percentile(p)) << p;
+    EXPECT_DOUBLE_EQ(reused.mean(), fresh.mean());
+    EXPECT_DOUBLE_EQ(reused.stddev(), fresh.stddev());
+    for (std::size_t i = 0; i < fresh.counts_length(); ++i)
+        ASSERT_EQ(reused.count_at_index(i), fresh.count_at_index(i)) << i;
+}
+
 TEST(Histogram, CopyIsDeep) {
     Histogram a;
     a.record(5 * kMs);

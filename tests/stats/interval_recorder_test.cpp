@@ -43,6 +43,26 @@ TEST(IntervalTimeline, SingleWorkerProducesOneSummaryPerInterval) {
     EXPECT_EQ(timeline.latest()->index, 2u);
 }
 
+TEST(IntervalRecorder, FoldsEveryIntervalIntoTheRunTotalOnce) {
+    IntervalTimeline timeline(kSecond, 1, 100);
+    IntervalRecorder rec(kSecond);
+    Histogram total;
+    rec.fold_into(&total);
+    rec.record_latency(5 * kOneMs);
+    rec.record_latency(7 * kOneMs);
+    rec.tick(kSecond + 1, timeline, 0);  // interval 0 folded in
+    EXPECT_EQ(total.total_count(), 2u);
+    rec.record_latency(900 * kOneMs);
+    rec.tick(kSecond + 2, timeline, 0);  // same interval: nothing folded yet
+    EXPECT_EQ(total.total_count(), 2u);
+    rec.flush(timeline, 0);
+    rec.flush(timeline, 0);  // an empty interval adds nothing
+    EXPECT_EQ(total.total_count(), 3u);
+    EXPECT_EQ(total.min(), 5 * kOneMs);
+    EXPECT_EQ(total.max(), 900 * kOneMs);
+    EXPECT_EQ(total.value_at_percentile(50.0), Histogram::highest_equivalent(7 * kOneMs));
+}
+
 TEST(IntervalTimeline, WaitsForEveryWorkerBeforeSummarizing) {
     IntervalTimeline timeline(kSecond, 2, 100);
     IntervalRecorder a(kSecond), b(kSecond);
