@@ -48,7 +48,7 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/
       spec-deviation:answers-nonzero-protocol-id spec-deviation:invalid-request-answered-normally \
       spec-deviation:exception-02-where-03-owed spec-deviation:exception-04-where-01-owed \
       spec-deviation:exception-03-where-01-owed spec-deviation:exception-04-where-03-owed \
-      spec-deviation:exception-04-where-02-owed \
+      spec-deviation:exception-04-where-02-owed spec-deviation:answers-tls-as-modbus \
       unexpected-close:close-with-request-pending unexpected-close:closes-after-exception \
       malformed-response:undecodable-response malformed-response:unmatched-transaction-id \
       unexpected-close:stream-lost-after-pdu-length-mismatch \
@@ -64,6 +64,7 @@ if [ -x "$libmodbus_server" ]; then
   if start_server "$work/lm.out" "$libmodbus_server" --seconds 120; then
     fuzz_peer libmodbus \
       spec-deviation:answers-nonzero-protocol-id spec-deviation:exception-02-where-03-owed \
+      spec-deviation:answers-tls-as-modbus \
       unexpected-close:close-with-request-pending hang:drops-requests-after-exception \
       hang:drops-requests-after hang:no-answer malformed-response:unmatched-transaction-id \
       unexpected-close:stream-lost-after-pdu-length-mismatch \
