@@ -32,8 +32,11 @@ import json, sys
 j = json.load(open(sys.argv[1]))
 by = j.get("cases_by_class", {})
 # The line's own mutations among them (every case on a line runs alone: tens, not thousands).
+# Which of them a few seconds draw varies (36 cases in 4 s on a quiet machine, fewer on a busy
+# one): one of the line's classes at least.
+line_classes = ("bad-checksum", "broken-silence", "no-silence", "noise")
 ok = (sys.argv[2] == "0" and j["started"] and j["cases"] > 10 and not j["findings"]
-      and by.get("bad-checksum", 0) > 0)
+      and sum(by.get(c, 0) for c in line_classes) > 0)
 print(("ok   " if ok else "FAIL ") + f"{sys.argv[3]}: mbstorm serve --serial: {j['cases']} cases, "
       f"{len(j['findings'])} findings, exit {sys.argv[2]}, classes {by}"
       + "".join(f"\n  {f['root_cause']}: {f['summary']}" for f in j["findings"]))
