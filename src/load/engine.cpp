@@ -537,6 +537,9 @@ class RunWatch {
         for (stats::IntervalSummary& iv : fresh_) {
             const auto iv_end = static_cast<std::int64_t>(iv.start_offset_ns + iv.duration_ns);
             if (window_.measure_start_ns + iv_end > whole_before) break;
+            // The run's last interval may still take in the sliver after the end
+            // (fit_timeline_to_run): it goes out after the run, with it.
+            if (window_.measure_start_ns + iv_end >= window_.end_ns) break;
             complete_interval(iv);
             options_.on_interval(iv, measure_start_wall_);
             ++streamed_;
