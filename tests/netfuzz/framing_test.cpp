@@ -210,11 +210,13 @@ class RtuSlave {
             std::vector<pollfd> ps{{fd_, POLLIN, 0}};
             for (int c : conns) ps.push_back({c, POLLIN, 0});
             if (::poll(ps.data(), ps.size(), 20) <= 0) continue;
+            // Only the connections polled above (a new one joins the next round).
+            const std::size_t polled = conns.size();
             if (ps[0].revents & POLLIN) {
                 conns.push_back(::accept(fd_, nullptr, nullptr));
                 bufs.emplace_back();
             }
-            for (std::size_t i = 0; i < conns.size(); ++i) {
+            for (std::size_t i = 0; i < polled; ++i) {
                 if (!(ps[i + 1].revents & (POLLIN | POLLHUP))) continue;
                 std::uint8_t b[512];
                 const ssize_t n = ::recv(conns[i], b, sizeof b, 0);
