@@ -230,13 +230,7 @@ ssize_t TlsLink::send_beside_session(const std::uint8_t* data, std::size_t size,
 }
 
 std::unique_ptr<Link> TlsConnector::open_plain(int timeout_ms, int& error) {
-    const int fd = connect_with_timeout(target_, timeout_ms);
-    if (fd < 0) {
-        error = -fd;
-        return nullptr;
-    }
-    error = 0;
-    return std::make_unique<TcpLink>(net::UniqueFd(fd));
+    return TcpConnector(target_).open(timeout_ms, error);
 }
 
 std::unique_ptr<Link> TlsConnector::open(int timeout_ms, int& error) {
