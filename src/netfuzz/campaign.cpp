@@ -138,6 +138,9 @@ std::vector<Pdu> pipeline(Connector& target, const std::vector<Pdu>& frames, int
     return answers;
 }
 
+// A finding that rests on a line's timing counts only if this many re-runs alone repeat it.
+constexpr unsigned kTimingConfirmations = 2;
+
 // Each crash root cause may cost at most this many target restarts (finding it, confirming
 // it, minimising it).
 constexpr unsigned kMaxRestartsPerCause = 3;
@@ -360,6 +363,7 @@ class Campaign {
     bool settle(const std::string& cause = "");
     // After a run that crashed the target or hung it as a whole: either of the above.
     bool bring_back(const Execution& ex, const std::string& cause);
+    bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
@@ -589,6 +593,8 @@ Campaign::Outcome Campaign::isolate(Case c) {
         }
     }
     if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
+    if (!ex.target_down && depends_on_line_timing(c.cls) && !reproduces_every_time(c, key))
+        return up_ ? Outcome::Clean : Outcome::Lost;
     if (ex.target_down) {
         // A death is a crash only if the case, replayed alone, kills the target again.
         ++result_.deaths;
@@ -641,6 +647,24 @@ Campaign::Outcome Campaign::isolate(Case c) {
     }
     record(c, std::move(ex));
     return up_ ? Outcome::Fired : Outcome::Lost;
+}
+
+bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
+    for (unsigned run = 0; run < kTimingConfirmations; ++run) {
+        if (!can_afford(1)) {
+            ++result_.suspects_left;
+            return false;
+        }
+        ++result_.isolated_runs;
+        const Execution again = execute_case(c, *options_.connector, result_.profile, exec_);
+        const bool same = again.verdict && root_cause_key(again.verdict) == key;
+        if (!bring_back(again, same ? key : "")) return false;
+        if (!same) {
+            ++result_.unconfirmed;
+            return false;
+        }
+    }
+    return true;
 }
 
 void Campaign::record(const Case& c, Execution ex) {

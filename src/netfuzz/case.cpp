@@ -60,6 +60,10 @@ bool class_from_name(std::string_view name, MutationClass& out) noexcept {
     return false;
 }
 
+bool depends_on_line_timing(MutationClass c) noexcept {
+    return c == MutationClass::BrokenSilence || c == MutationClass::Noise;
+}
+
 bool is_transport_class(MutationClass c) noexcept {
     switch (c) {
         case MutationClass::MbapLength:

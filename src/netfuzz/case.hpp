@@ -52,6 +52,9 @@ std::string_view class_name(MutationClass c) noexcept;
 // Classes whose faults lie in how bytes arrive (splits, drips, half-closes, lying lengths,
 // floods) rather than in what a request asks: their root causes are keyed by the class.
 bool is_transport_class(MutationClass c) noexcept;
+// Classes whose verdict rests on a silence on a serial line: how long the slave saw it is up to
+// the scheduler (a busy machine may deliver both sides of a gap in one read).
+bool depends_on_line_timing(MutationClass c) noexcept;
 bool class_from_name(std::string_view name, MutationClass& out) noexcept;
 
 enum class Op : std::uint8_t {

@@ -11,7 +11,7 @@ scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/serial.bash"
 work=$(mktemp -d)
-trap 'stop_server; stop_pty_pair; rm -rf "$work"' EXIT
+trap 'stop_server; stop_pty_pair; [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"' EXIT
 
 command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
 # bounded SECONDS COMMAND...: COMMAND, killed if it outlives SECONDS.
