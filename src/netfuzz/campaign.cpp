@@ -683,9 +683,9 @@ void Campaign::record(const Case& c, Execution ex) {
     f.variants[variant_of(f.verdict, c)] = 1;
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
-    if (options_.minimize && result_.profile.framing != codec::Framing::Mbap) {
-        // The minimiser cuts and shrinks MBAP frames; RTU and ASCII cases are kept as found.
-        f.minimize_note = "not minimised: RTU and ASCII cases are kept as found";
+    if (options_.minimize && depends_on_line_timing(c.cls)) {
+        // Confirmed, but each try would again be at the scheduler's mercy.
+        f.minimize_note = "not minimised: its verdict rests on a silence's length";
     } else if (options_.minimize) {
         Execution last;
         bool lost = false, cut = false, restart_budget = false;
@@ -718,8 +718,8 @@ void Campaign::record(const Case& c, Execution ex) {
         // frames only.
         Case small = minimize_case(
             c, reproduces,
-            costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget,
-            !costly);
+            costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget, !costly,
+            result_.profile.framing);
         if (size_of(small) < size_of(c) && last.verdict) {
             f.fuzz_case = std::move(small);
             f.verdict = last.verdict;

@@ -5,22 +5,40 @@
 #include "codec/bytes.hpp"
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 
-Case split_frames(const Case& c) {
+namespace {
+
+// The whole frame at the start of `bytes` in `framing`, if one is there and a conforming reader
+// takes it (not a frame broken on purpose): its size, else 0.
+std::size_t whole_frame_at(codec::Bytes bytes, codec::Framing framing) {
+    if (framing == codec::Framing::Mbap) {
+        if (bytes.size() < codec::limits::kMbapHeader) return 0;
+        const std::size_t size = codec::announced_adu_size(bytes.data());
+        return size > 6u && size <= bytes.size() ? size : 0;
+    }
+    WireFrame w;
+    if (cut_frame(bytes, framing, true, 0, w) != WireCut::Frame || !w.discard.empty()) return 0;
+    return w.size;
+}
+
+}  // namespace
+
+Case split_frames(const Case& c, codec::Framing framing) {
     Case out = c;
     out.steps.clear();
     for (const Step& s : c.steps) {
-        if (s.op != Op::Send || s.bytes.size() < codec::limits::kMbapHeader) {
+        if (s.op != Op::Send) {
             out.steps.push_back(s);
             continue;
         }
         std::size_t off = 0;
         std::vector<Step> parts;
-        while (s.bytes.size() - off >= codec::limits::kMbapHeader) {
-            const std::size_t size = codec::announced_adu_size(s.bytes.data() + off);
-            if (size > s.bytes.size() - off || size <= 6u) break;
+        while (off < s.bytes.size()) {
+            const std::size_t size = whole_frame_at(codec::Bytes(s.bytes).subspan(off), framing);
+            if (size == 0) break;
             parts.push_back(Step{Op::Send,
                                  s.conn,
                                  parts.empty() ? s.delay_us : 0u,
@@ -71,33 +89,50 @@ void drop_steps(Case& best, const Reproduces& reproduces, unsigned& budget) {
     }
 }
 
-bool is_one_frame(const std::vector<std::uint8_t>& bytes) {
-    return bytes.size() > codec::limits::kMbapHeader &&
-           bytes.size() == codec::announced_adu_size(bytes.data());
+bool is_one_frame(const std::vector<std::uint8_t>& bytes, codec::Framing framing) {
+    return !bytes.empty() && whole_frame_at(bytes, framing) == bytes.size();
 }
 
-// The frame with its PDU cut to `pdu_size` bytes and its MBAP length field to match.
-std::vector<std::uint8_t> cut_frame(const std::vector<std::uint8_t>& frame, std::size_t pdu_size) {
-    std::vector<std::uint8_t> out(
-        frame.begin(),
-        frame.begin() + static_cast<std::ptrdiff_t>(codec::limits::kMbapHeader + pdu_size));
-    codec::store_be16(out.data() + 4, static_cast<std::uint16_t>(1 + pdu_size));
-    return out;
+// The frame with its PDU cut to `pdu_size` bytes, its length field (MBAP) or its CRC / LRC
+// (RTU, ASCII) made to match.
+std::vector<std::uint8_t> with_pdu_cut(const std::vector<std::uint8_t>& frame, std::size_t pdu_size,
+                                       codec::Framing framing) {
+    std::vector<std::uint8_t> mbap = frame;
+    if (framing != codec::Framing::Mbap) {
+        WireFrame w;
+        (void)cut_frame(frame, framing, true, 0, w);  // whole: is_one_frame said so
+        mbap = std::move(w.mbap);
+    }
+    mbap.resize(codec::limits::kMbapHeader + pdu_size);
+    codec::store_be16(mbap.data() + 4, static_cast<std::uint16_t>(1 + pdu_size));
+    return framing == codec::Framing::Mbap ? mbap : reframe(mbap, framing);
+}
+
+// The PDU's size in a whole frame.
+std::size_t pdu_size_of(const std::vector<std::uint8_t>& frame, codec::Framing framing) {
+    if (framing == codec::Framing::Mbap) return frame.size() - codec::limits::kMbapHeader;
+    WireFrame w;
+    (void)cut_frame(frame, framing, true, 0, w);
+    return w.mbap.size() - codec::limits::kMbapHeader;
 }
 
 // Byte level: the shortest tail of each well-framed send's PDU that still makes the oracle
 // fire, found by bisection (each candidate stays a well-framed ADU, so it still pipelines).
-void shorten_frames(Case& best, const Reproduces& reproduces, unsigned& budget) {
+void shorten_frames(Case& best, const Reproduces& reproduces, unsigned& budget,
+                    codec::Framing framing) {
     for (std::size_t i = 0; i < best.steps.size() && budget > 0; ++i) {
-        if (best.steps[i].op != Op::Send || !is_one_frame(best.steps[i].bytes)) continue;
-        std::size_t keep = best.steps[i].bytes.size() - codec::limits::kMbapHeader;
+        if (best.steps[i].op != Op::Send || !is_one_frame(best.steps[i].bytes, framing)) continue;
+        std::size_t keep = pdu_size_of(best.steps[i].bytes, framing);
         std::size_t shortest = 1;  // the function code stays
         while (shortest < keep && budget > 0) {
             const std::size_t size = shortest + (keep - shortest) / 2;
             Case candidate = best;
-            candidate.steps[i].bytes = cut_frame(best.steps[i].bytes, size);
-            --budget;
-            if (reproduces(candidate)) {
+            candidate.steps[i].bytes = with_pdu_cut(best.steps[i].bytes, size, framing);
+            // An RTU reader that infers the length from the function code would wait for the
+            // rest of this one: it is not a shorter frame, and not worth a run.
+            const bool whole = is_one_frame(candidate.steps[i].bytes, framing);
+            if (whole) --budget;
+            if (whole && reproduces(candidate)) {
                 best = std::move(candidate);
                 keep = size;
             } else {
@@ -110,8 +145,8 @@ void shorten_frames(Case& best, const Reproduces& reproduces, unsigned& budget) 
 }  // namespace
 
 Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned budget,
-                   bool byte_level) {
-    Case best = split_frames(original);
+                   bool byte_level, codec::Framing framing) {
+    Case best = split_frames(original, framing);
     if (best.steps.size() != original.steps.size()) {
         if (budget > 0 && reproduces(best)) {
             --budget;
@@ -121,7 +156,7 @@ Case minimize_case(const Case& original, const Reproduces& reproduces, unsigned 
         }
     }
     drop_steps(best, reproduces, budget);
-    if (byte_level) shorten_frames(best, reproduces, budget);
+    if (byte_level) shorten_frames(best, reproduces, budget, framing);
     return best;
 }
 

@@ -10,6 +10,7 @@
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/oracle.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -292,6 +293,61 @@ TEST(Minimize, LeavesDeliberatelyMisframedBytesAlone) {
         40);
     EXPECT_EQ(small.steps[0].bytes, bytes);
     EXPECT_EQ(runs, 0);
+}
+
+// Over RTU and ASCII the same cuts apply to the frame inside its CRC or LRC: each candidate is
+// a whole frame a conforming reader takes (over RTU, a length the function code allows), and a
+// frame broken on purpose is left alone.
+TEST(Minimize, CutsRtuAndAsciiFramesKeepingTheirChecksums) {
+    for (const codec::Framing framing : {codec::Framing::Rtu, codec::Framing::Ascii}) {
+        // 0x64, a user-defined code: no length rule, so RTU readers end it at its CRC.
+        const auto user =
+            reframe(adu(0, {0x64, 0x12, 0x34, 0x00, 0x04, 0x08, 1, 2, 3, 4}), framing);
+        const auto fc03 = reframe(adu(0, {0x03, 0, 0, 0, 1}), framing);
+        const auto fc16 = reframe(adu(0, {0x10, 0, 0, 0, 1, 2, 0xAB, 0xCD}), framing);
+        Case c;
+        std::vector<std::uint8_t> all = fc03;
+        all.insert(all.end(), user.begin(), user.end());
+        all.insert(all.end(), fc16.begin(), fc16.end());
+        c.steps.push_back(Step{Op::Send, 0, 0, 0, all});
+        const Case small = minimize_case(
+            c,
+            [&](const Case& k) {
+                bool user_fault = false, write_fault = false;
+                for (const Step& st : k.steps) {
+                    std::size_t used = 0;
+                    const auto views = request_views(st.bytes, framing, used);
+                    EXPECT_EQ(used, st.bytes.size());  // whole frames, checksums right
+                    for (const auto& v : views) {
+                        user_fault = user_fault || (v.size() >= 10 && v[7] == 0x64 &&
+                                                    v[8] == 0x12 && v[9] == 0x34);
+                        write_fault = write_fault || (v.size() >= 8 && v[7] == 0x10);
+                    }
+                }
+                return user_fault && write_fault;
+            },
+            60, true, framing);
+        ASSERT_EQ(small.steps.size(), 2u);
+        EXPECT_EQ(small.steps[0].bytes, reframe(adu(0, {0x64, 0x12, 0x34}), framing));
+        // FC16 says how long it is: over RTU only the whole frame is one; ASCII ends at its LF.
+        EXPECT_EQ(small.steps[1].bytes,
+                  framing == codec::Framing::Rtu ? fc16 : reframe(adu(0, {0x10}), framing));
+
+        Case broken;
+        auto bad = user;
+        bad[bad.size() - (framing == codec::Framing::Rtu ? 1 : 3)] ^= 0x01;  // CRC / LRC digit
+        broken.steps.push_back(Step{Op::Send, 0, 0, 0, bad});
+        int runs = 0;
+        const Case kept = minimize_case(
+            broken,
+            [&](const Case&) {
+                ++runs;
+                return true;
+            },
+            40, true, framing);
+        EXPECT_EQ(kept.steps[0].bytes, bad);
+        EXPECT_EQ(runs, 0);
+    }
 }
 
 TEST(Finding, SaveLoadRoundTrip) {
