@@ -17,19 +17,13 @@
 #include "scenario/expect.hpp"
 #include "scenario/threshold.hpp"
 #include "slave/device_yaml.hpp"
+#include "yaml/positioned_error.hpp"
 
 namespace mbstorm::scenario {
 
-class ScenarioError : public std::runtime_error {
+class ScenarioError : public yaml::PositionedError {
   public:
-    ScenarioError(const std::string& message, int line, int column)
-        : std::runtime_error(message), line_(line), column_(column) {}
-    int line() const noexcept { return line_; }      // 1-based, 0 when unknown
-    int column() const noexcept { return column_; }  // 1-based, 0 when unknown
-
-  private:
-    int line_;
-    int column_;
+    using PositionedError::PositionedError;
 };
 
 // One stage of a staged run. `rate` / `connections` are the values reached at the end of the

@@ -16,6 +16,7 @@
 #include "slave/data_model.hpp"
 #include "slave/faults.hpp"
 #include "slave/simulator.hpp"
+#include "yaml/positioned_error.hpp"
 
 namespace YAML {
 class Node;
@@ -23,16 +24,9 @@ class Node;
 
 namespace mbstorm::slave {
 
-class DeviceYamlError : public std::runtime_error {
+class DeviceYamlError : public yaml::PositionedError {
   public:
-    DeviceYamlError(const std::string& message, int line, int column)
-        : std::runtime_error(message), line_(line), column_(column) {}
-    int line() const noexcept { return line_; }      // 1-based, 0 when unknown
-    int column() const noexcept { return column_; }  // 1-based, 0 when unknown
-
-  private:
-    int line_;
-    int column_;
+    using PositionedError::PositionedError;
 };
 
 // Initial contents: `words` (registers, or 0/1 for bit tables) stored from `address` on.
