@@ -36,7 +36,8 @@ stop_server
 if ! /usr/bin/python3 -c 'import pymodbus.server, pymodbus.transaction' 2>/dev/null; then
   echo "pymodbus not available: skipped that peer"; exit $fail
 fi
-start_server "$work/py.out" /usr/bin/python3 "$scripts/rtu_over_tcp_pymodbus.py" server 60 ||
+start_server "$work/py.out" /usr/bin/python3 "$scripts/../../bench/peers/pymodbus_server.py" \
+  --framer rtu --seconds 60 ||
   { echo "FAIL: pymodbus RTU over TCP server did not start"; exit 1; }
 bounded 40 "$mbstorm" fuzz --transport rtu-over-tcp --target "127.0.0.1:$port" --seconds 5 \
   --seed 3 --timeout 300ms -q --out "$work/py" --json "$work/py.json" >"$work/py.log" 2>&1

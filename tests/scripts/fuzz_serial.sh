@@ -10,10 +10,7 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/serial.bash"
-work=$(mktemp -d)
-trap 'stop_server; stop_pty_pair; [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"' EXIT
-
-command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
+serial_prologue
 # bounded SECONDS COMMAND...: COMMAND, killed if it outlives SECONDS.
 bounded() { timeout -k 5 "$@"; }
 

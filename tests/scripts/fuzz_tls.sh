@@ -2,7 +2,7 @@
 # `mbstorm fuzz` and `replay` over --transport tls (Modbus/TCP Security), with a CA and
 # certificates the test makes with openssl:
 #  - `mbstorm serve --transport tls` fuzzed for a few seconds: no findings;
-#  - pymodbus 3.0's TLS server (tests/scripts/tls_pymodbus_server.py, SOCKET framer) fuzzed:
+#  - pymodbus 3.0's TLS server (bench/peers/pymodbus_server.py --tls, SOCKET framer) fuzzed:
 #    whatever it finds is reported with a reproducer, and `replay --transport tls` reproduces
 #    it (findings against pymodbus are pymodbus's, not this test's failures);
 #  - a device whose TLS port serves plain Modbus/TCP too: a finding replay reproduces;
@@ -15,11 +15,7 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/tls_certs.bash"
-work=$(mktemp -d)
-trap 'stop_server; rm -rf "$work"' EXIT
-
-make_tls_certs "$work" || { echo "FAIL: openssl could not make the certificates"; exit 1; }
-tls=(--transport tls --tls-ca "$work/ca.pem")
+tls_prologue
 operator=("${tls[@]}" --tls-cert "$work/operator.pem" --tls-key "$work/operator.key")
 fail=0
 
@@ -108,8 +104,8 @@ stop_server
 if ! /usr/bin/python3 -c 'import pymodbus.server' 2>/dev/null; then
   echo "skip: pymodbus not installed"; exit $((fail ? 1 : 77))
 fi
-start_server "$work/py.out" /usr/bin/python3 "$scripts/tls_pymodbus_server.py" "$work" \
-  --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
+start_server "$work/py.out" /usr/bin/python3 "$scripts/../../bench/peers/pymodbus_server.py" \
+  --tls "$work" --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
 out=$(timeout -k 5 40 "$mbstorm" fuzz --target "127.0.0.1:$port" "${operator[@]}" --seconds 3 \
       --seed 5 -q --max-connections 64 --out "$work/py" 2>&1); rc=$?
 if [ "$rc" != 0 ] && [ "$rc" != 1 ]; then

@@ -33,7 +33,8 @@ timeout 60 /usr/bin/python3 "$scripts/rtu_over_tcp_pymodbus.py" client "$port" |
 kill "$serve_pid"; wait "$serve_pid" 2>/dev/null; serve_pid=""
 
 # 2. mbstorm run -> pymodbus server (RTU framer), with a capture for tshark when it may.
-start_server "$work/peer.out" /usr/bin/python3 "$scripts/rtu_over_tcp_pymodbus.py" server 60 \
+start_server "$work/peer.out" /usr/bin/python3 "$scripts/../../bench/peers/pymodbus_server.py" \
+  --framer rtu --seconds 60 \
   || { echo "FAIL pymodbus RTU server did not start"; exit 1; }
 capturing=0
 if command -v tshark >/dev/null; then

@@ -1,15 +1,11 @@
 #!/usr/bin/python3
-"""RTU over TCP with pymodbus 3.0 (Debian) as the independent peer.
+"""RTU over TCP with pymodbus 3.0 (Debian) as the independent peer (its server is
+bench/peers/pymodbus_server.py --framer rtu).
 
   rtu_over_tcp_pymodbus.py client PORT   pymodbus's RTU-framer TCP client against a server on
                                          PORT: writes and reads back registers and coils, reads
                                          inputs, and expects exception 02 for a bad address.
-  rtu_over_tcp_pymodbus.py server [S]    pymodbus's TCP server with its RTU framer, 1000 of each
-                                         table; prints "PORT <n>" once listening, runs S seconds.
 Exits 0 when every check passes, 1 otherwise (each failure printed)."""
-import asyncio
-import logging
-import socket
 import sys
 
 from pymodbus.transaction import ModbusRtuFramer
@@ -49,32 +45,5 @@ def client(port):
     return 1 if failures else 0
 
 
-async def server(seconds):
-    from pymodbus.datastore import (ModbusSequentialDataBlock, ModbusServerContext,
-                                    ModbusSlaveContext)
-    from pymodbus.server import StartAsyncTcpServer
-    logging.disable(logging.CRITICAL)
-    block = lambda: ModbusSequentialDataBlock(0, [0] * 1000)
-    store = ModbusSlaveContext(di=block(), co=block(), hr=block(), ir=block())
-    context = ModbusServerContext(slaves=store, single=True)
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    srv = await StartAsyncTcpServer(context, address=("127.0.0.1", port), framer=ModbusRtuFramer,
-                                    defer_start=True)
-    task = asyncio.create_task(srv.serve_forever())
-    for _ in range(200):  # wait until it listens
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.1):
-                break
-        except OSError:
-            await asyncio.sleep(0.05)
-    print(f"PORT {port}", flush=True)
-    await asyncio.sleep(seconds)
-    task.cancel()
-
-
 if __name__ == "__main__":
-    if sys.argv[1] == "client":
-        sys.exit(client(int(sys.argv[2])))
-    asyncio.run(server(float(sys.argv[2]) if len(sys.argv) > 2 else 60))
+    sys.exit(client(int(sys.argv[2])))

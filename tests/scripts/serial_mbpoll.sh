@@ -8,11 +8,8 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/serial.bash"
-work=$(mktemp -d)
-trap 'stop_server; stop_pty_pair; rm -rf "$work"' EXIT
-
+serial_prologue
 command -v mbpoll >/dev/null || { echo "skip: mbpoll not installed"; exit 77; }
-command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
 start_pty_pair "$work" || { echo "FAIL: socat made no pty pair"; exit 1; }
 start_serial_serve "$work/serve.out" "$mbstorm" "$work/line_a" --baud 19200 --parity even \
   --only-unit 17 || { echo "FAIL: serve --serial did not start"; cat "$work/serve.out.err"; exit 1; }

@@ -8,10 +8,7 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/serial.bash"
-work=$(mktemp -d)
-trap 'stop_server; stop_pty_pair; rm -rf "$work"' EXIT
-
-command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
+serial_prologue
 
 # A device with 100 holding registers: reads past them answer exception 02.
 printf 'tables: {holding_registers: 100}\n' >"$work/device.yaml"

@@ -10,10 +10,8 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/serial.bash"
-work=$(mktemp -d)
-trap 'stop_server; stop_pty_pair; rm -rf "$work"' EXIT
+serial_prologue
 
-command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
 fail=0
 for framing in rtu ascii; do
   rm -f "$work/line_a" "$work/line_b"

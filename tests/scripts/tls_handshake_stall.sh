@@ -9,10 +9,8 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/tls_certs.bash"
-work=$(mktemp -d)
-trap 'exec 3>&- 2>/dev/null; stop_server; rm -rf "$work"' EXIT
-make_tls_certs "$work" || { echo "FAIL: openssl could not make the certificates"; exit 1; }
-tls=(--transport tls --tls-ca "$work/ca.pem")
+tls_prologue
+trap 'exec 3>&- 2>/dev/null; stop_server; rm -rf "$work"' EXIT  # and the stalled client's socket
 start_mbstorm_serve "$work/serve.out" "$mbstorm" "${tls[@]}" --tls-cert "$work/server.pem" \
   --tls-key "$work/server.key" --frame-timeout 500ms -t 1 -d 30 ||
   { echo "FAIL: serve did not start"; cat "$work/serve.out"*; exit 1; }

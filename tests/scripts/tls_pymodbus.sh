@@ -12,14 +12,10 @@ mbstorm=$1
 scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
 source "$scripts/lib/peer.bash"
 source "$scripts/lib/tls_certs.bash"
-work=$(mktemp -d)
-trap 'stop_server; rm -rf "$work"' EXIT
-
 if ! /usr/bin/python3 -c 'import pymodbus.client, pymodbus.server' 2>/dev/null; then
   echo "skip: pymodbus not installed"; exit 77
 fi
-make_tls_certs "$work" || { echo "FAIL: openssl could not make the certificates"; exit 1; }
-tls=(--transport tls --tls-ca "$work/ca.pem")
+tls_prologue
 fail=0
 # expect <name> <wanted exit code> <wanted text> <mbstorm args...>
 expect() {
@@ -56,8 +52,8 @@ fi
 stop_server
 
 # 2. mbstorm run -> pymodbus TLS server.
-start_server "$work/py.out" /usr/bin/python3 "$scripts/tls_pymodbus_server.py" "$work" \
-  --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
+start_server "$work/py.out" /usr/bin/python3 "$scripts/../../bench/peers/pymodbus_server.py" \
+  --tls "$work" --seconds 60 || { echo "FAIL: pymodbus TLS server did not start"; exit 1; }
 client=("${tls[@]}" --tls-cert "$work/operator.pem" --tls-key "$work/operator.key")
 expect "write to pymodbus" 0 "wrote 2 register(s)" write "${client[@]}" \
   --target "127.0.0.1:$port" --addr 40021 1234 5678

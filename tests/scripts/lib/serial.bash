@@ -1,6 +1,15 @@
 # Sourced by the serial script tests: a pseudo-terminal pair joined by socat, a null-modem
 # cable with no baud-rate timing of its own.
 #
+#   serial_prologue
+# What every serial script begins with: $work, a folder removed at exit (kept when KEEP_WORK is
+# set) with the server and socat stopped, and a skip (exit 77) when socat is missing.
+serial_prologue() {
+  work=$(mktemp -d)
+  trap 'stop_server; stop_pty_pair; [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"' EXIT
+  command -v socat >/dev/null || { echo "skip: socat not installed"; exit 77; }
+}
+
 #   start_pty_pair DIR
 # Starts socat with two ptys linked as DIR/line_a and DIR/line_b; sets $socat_pid. Returns
 # non-zero if the links do not appear within 5 s.

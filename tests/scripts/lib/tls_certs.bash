@@ -1,5 +1,16 @@
 # Sourced by the TLS script tests: a throwaway CA and certificates made with openssl(1).
 #
+#   tls_prologue
+# What every TLS script begins with: $work, a folder removed at exit (kept when KEEP_WORK is
+# set) with the server stopped, the certificates below made in it, and $tls, the client's
+# options for them (--transport tls --tls-ca ...). Fails the script when openssl cannot.
+tls_prologue() {
+  work=$(mktemp -d)
+  trap 'stop_server; [ -n "${KEEP_WORK:-}" ] || rm -rf "$work"' EXIT
+  make_tls_certs "$work" || { echo "FAIL: openssl could not make the certificates"; exit 1; }
+  tls=(--transport tls --tls-ca "$work/ca.pem")
+}
+
 #   make_tls_certs DIR
 # Writes into DIR: ca.pem (the CA), server.pem/.key (127.0.0.1), operator.pem/.key and
 # viewer.pem/.key (clients whose Modbus/TCP Security role extension, OID
