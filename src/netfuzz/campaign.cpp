@@ -363,6 +363,8 @@ class Campaign {
     bool settle(const std::string& cause = "");
     // After a run that crashed the target or hung it as a whole: either of the above.
     bool bring_back(const Execution& ex, const std::string& cause);
+    // A finding as first seen: the case and what it did.
+    Finding found(const Case& c, Execution ex) const;
     bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
     void record_lost_batch(const std::vector<Case>& batch);
@@ -599,14 +601,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
         // A death is a crash only if the case, replayed alone, kills the target again.
         ++result_.deaths;
         if (!recover(key)) {
-            Finding f;
-            f.found_after_s = elapsed();
-            f.verdict = ex.verdict;
-            f.fuzz_case = f.original_case = c;
-            f.case_number = c.number;
-            f.trace = std::move(ex.trace);
-            f.original_steps = c.steps.size();
-            f.variants[variant_of(f.verdict, c)] = 1;
+            Finding f = found(c, std::move(ex));
             f.confirmed = false;
             f.note =
                 "the target went down after this case and did not come back, so it could "
@@ -631,14 +626,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
         }
         ++result_.deaths;
         if (!recover(key)) {
-            Finding f;
-            f.found_after_s = elapsed();
-            f.verdict = again.verdict;
-            f.fuzz_case = f.original_case = c;
-            f.case_number = c.number;
-            f.trace = std::move(again.trace);
-            f.original_steps = c.steps.size();
-            f.variants[variant_of(f.verdict, c)] = 1;
+            Finding f = found(c, std::move(again));
             f.note = "confirmed (killed the target twice); not minimised: it did not come back";
             keep(std::move(f));
             return Outcome::Lost;
@@ -647,6 +635,18 @@ Campaign::Outcome Campaign::isolate(Case c) {
     }
     record(c, std::move(ex));
     return up_ ? Outcome::Fired : Outcome::Lost;
+}
+
+Finding Campaign::found(const Case& c, Execution ex) const {
+    Finding f;
+    f.found_after_s = elapsed();
+    f.verdict = std::move(ex.verdict);
+    f.fuzz_case = f.original_case = c;
+    f.case_number = c.number;
+    f.trace = std::move(ex.trace);
+    f.original_steps = c.steps.size();
+    f.variants[variant_of(f.verdict, c)] = 1;
+    return f;
 }
 
 bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
@@ -673,14 +673,7 @@ void Campaign::record(const Case& c, Execution ex) {
     const Oracle oracle = ex.verdict.oracle;
     const bool crash = oracle == Oracle::Crash;
     const bool costly = crash || oracle == Oracle::Hang;
-    Finding f;
-    f.found_after_s = elapsed();  // when it was seen, not when minimising it ended
-    f.verdict = ex.verdict;
-    f.fuzz_case = f.original_case = c;
-    f.case_number = c.number;
-    f.trace = std::move(ex.trace);
-    f.original_steps = c.steps.size();
-    f.variants[variant_of(f.verdict, c)] = 1;
+    Finding f = found(c, std::move(ex));  // seen now, not when minimising it ends
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
     if (options_.minimize && depends_on_line_timing(c.cls)) {
