@@ -385,8 +385,15 @@ TEST(EngineSourceAddresses, ConnectionsAreSpreadRoundRobinAndSeenByTheServerFrom
     std::map<std::string, int> seen;
     std::set<std::string> ports;
     std::thread watch([&] {
-        // Every connection is open well within a second on loopback; look a few times.
-        for (int i = 0; i < 10 && seen.size() < 3; ++i) {
+        // Every connection is open well within a second on loopback; look until all six are
+        // (all three addresses seen is not enough: on a busy machine an address's second
+        // connection may still be connecting).
+        auto open = [&] {
+            int n = 0;
+            for (const auto& [address, count] : seen) n += count;
+            return n;
+        };
+        for (int i = 0; i < 12 && open() < 6; ++i) {
             std::this_thread::sleep_for(100ms);
             ports.clear();
             seen = peers_of_port(server->port(), &ports);
