@@ -1,5 +1,7 @@
 #include "cli/run_output.hpp"
 
+#include "cli/duration_option.hpp"
+
 #include <fmt/format.h>
 
 #include "cli/commands.hpp"
@@ -33,6 +35,11 @@ void add_run_identity_options(CLI::App* cmd, OutputFiles& files) {
     cmd->add_option("--metrics-listen", files.metrics_listen,
                     "serve live metrics at http://HOST:PORT/metrics (Prometheus text format) "
                     "while the run goes; port 0: any free port, printed on stderr");
+    add_duration_option(cmd, "--metrics-linger", files.metrics_linger_ns,
+                        "after the run, keep --metrics-listen up with the final values (the "
+                        "running gauge at 0) until one scrape has taken them, for at most this "
+                        "long (e.g. a scrape interval and a bit); Ctrl-C ends it early")
+        ->needs(cmd->get_option("--metrics-listen"));
 }
 
 std::string stdout_conflict(const OutputFiles& files) {

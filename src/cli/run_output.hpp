@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -22,6 +23,9 @@ struct OutputFiles {
     std::string test_id;
     // --metrics-listen HOST:PORT: serve live metrics (Prometheus) while the run goes.
     std::string metrics_listen;
+    // --metrics-linger: after the run, keep /metrics up with the final values until a scrape
+    // has taken them, for at most this long (0: the endpoint ends with the run).
+    std::uint64_t metrics_linger_ns = 0;
     // JUnit XML of a scenario's thresholds: not a flag of add_output_options, set from the
     // scenario request with the scenario's name as the suite.
     std::string junit;

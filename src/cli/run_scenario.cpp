@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdio>
 #include <random>
+#include <thread>
 #include <utility>
 
 #include "cli/commands.hpp"
@@ -77,6 +78,25 @@ void announce_start(std::chrono::system_clock::time_point at) {
                           : fmt::format("{:.1f}s ago: starting at once", -ahead));
 }
 
+// --metrics-linger: the final values stay up until one scrape after the end has read them (a
+// scraper whose interval falls after the run would otherwise never see them), at most `ns`.
+void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::uint64_t>& scrapes,
+                         std::uint64_t ns) {
+    const std::uint64_t before = scrapes.load(std::memory_order_relaxed);
+    fmt::print(stderr,
+               "mbstorm run: final metrics at http://{}/metrics until scraped (at most {:.0f}s)\n",
+               metrics.address(), static_cast<double>(ns) / 1e9);
+    std::fflush(stderr);
+    signal(SIGINT, on_scenario_stop_signal);
+    signal(SIGTERM, on_scenario_stop_signal);
+    const auto until = std::chrono::steady_clock::now() + std::chrono::nanoseconds(ns);
+    while (scrapes.load(std::memory_order_relaxed) == before && !g_scenario_stop.load() &&
+           std::chrono::steady_clock::now() < until)
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+}
+
 }  // namespace
 
 int print_flag_scenario(const load::Plan& plan, const std::string& target) {
@@ -124,9 +144,12 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     load::LiveMetrics live(request.outputs.test_id,
                            shard.count != 0 ? fmt::format("{}", shard.index) : std::string());
     net::HttpServer metrics;
+    std::atomic<std::uint64_t> scrapes{0};  // /metrics answers, for --metrics-linger
     if (!request.outputs.metrics_listen.empty() &&
-        !start_metrics_endpoint(metrics, request.outputs.metrics_listen, "run",
-                                [&live] { return report::format_load_metrics(live.snapshot()); }))
+        !start_metrics_endpoint(metrics, request.outputs.metrics_listen, "run", [&live, &scrapes] {
+            scrapes.fetch_add(1, std::memory_order_relaxed);
+            return report::format_load_metrics(live.snapshot());
+        }))
         return kExitUsage;
     g_scenario_stop = false;
     g_scenario_signal = 0;
@@ -215,6 +238,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                    signal_name(stopped_by), exit_code_for_signal(stopped_by));
         if (code != kExitUsage) code = exit_code_for_signal(stopped_by);
     }
+    if (metrics.running() && request.outputs.metrics_linger_ns != 0 && stopped_by == 0)
+        linger_for_a_scrape(metrics, scrapes, request.outputs.metrics_linger_ns);
     return code;
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # run --metrics-listen and serve --metrics-listen serve /metrics (Prometheus text format 0.0.4)
 # while they run, on a port they print when given port 0; other paths are 404; run's final
-# totals are the --json report's.
+# totals are the --json report's; with --metrics-linger the run's endpoint outlives the run
+# until a scrape has taken its final values.
 #   bash metrics_endpoint.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -45,6 +46,26 @@ wait "$run_pid"; run_code=$?; run_pid=""
 check "run exits 0 ($run_code)" "[ '$run_code' = 0 ]"
 json_total=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["totals"]["transactions"])' "$work/run.json")
 check "the run's endpoint is gone with it" "! curl -s -o /dev/null '$run_url'"
+
+# --metrics-linger: the endpoint outlives the run until one scrape has taken the final values
+# (the running gauge at 0, the totals the --json report's), then the run exits.
+"$mbstorm" run --target "$slave" -d 1s -R 500 -c 1 -q --test-id linger --metrics-listen \
+  127.0.0.1:0 --metrics-linger 20s --json "$work/linger.json" >"$work/linger.out" \
+  2>"$work/linger.err" &
+run_pid=$!
+wait_for 's/.*final metrics at \(http:[^ ]*\) until scraped.*/\1/p' "$work/linger.err" ||
+  { echo "FAIL --metrics-linger kept no endpoint after the run"; cat "$work/linger.err"; exit 1; }
+linger_url=$found
+check "the run's reports are written before it lingers" "[ -s '$work/linger.json' ]"
+curl -sS -o "$work/linger.prom" "$linger_url"
+check "after the run, running is 0" "[ \"\$(sample '$work/linger.prom' 'mbstorm_running{test=\"linger\"}')\" = 0 ]"
+linger_total=$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["totals"]["transactions"])' "$work/linger.json")
+linger_ok=$(sample "$work/linger.prom" 'mbstorm_transactions_total{test="linger",operation="read_holding_registers",function="read_holding_registers",unit="1",outcome="ok"}')
+check "the lingering totals are the report's ($linger_ok = $linger_total)" "[ '$linger_ok' = '$linger_total' ]"
+for _ in $(seq 50); do kill -0 "$run_pid" 2>/dev/null || break; sleep 0.1; done
+check "one scrape after the end lets the run exit" "! kill -0 $run_pid 2>/dev/null"
+wait "$run_pid"; linger_code=$?; run_pid=""
+check "the lingering run exits 0 ($linger_code)" "[ '$linger_code' = 0 ]"
 
 curl -s -o "$work/serve.prom" "$serve_url"
 requests=$(sample "$work/serve.prom" 'mbstorm_slave_requests_total{function="read_holding_registers"}')
