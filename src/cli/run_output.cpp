@@ -122,6 +122,15 @@ int judge_run(const load::LoadResult& result) {
                    "pending at the end)\n",
                    c.transactions_sent, c.errors(), stats::outcome_name(worst),
                    result.pending_at_end);
+        const stats::ConnectionStats& conns = result.run.connections;
+        if (worst == stats::Outcome::ConnectionClosed && conns.tls_handshakes > 0)
+            // TLS 1.3: the client's handshake ends before the server has checked its
+            // certificate, and some servers (pymodbus) refuse it by closing, without an alert.
+            fmt::print(stderr,
+                       "mbstorm run: {} TLS handshakes completed and the target closed the "
+                       "connections without an answer: it may refuse the client certificate or "
+                       "its role (check --tls-cert, --tls-key and the CA the target trusts)\n",
+                       conns.tls_handshakes);
         return kExitFailed;
     }
     if (result.target_lost_at_end) {
