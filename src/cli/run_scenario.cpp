@@ -184,6 +184,15 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         if (!hlog.started())
             hlog.start(start.time_since_epoch().count() != 0 ? start
                                                              : std::chrono::system_clock::now());
+        // Each stage's whole histogram last, tagged: the per-stage table of a merge.
+        for (const stats::StageResult& stage : result.run.stages) {
+            hlog.write_interval(
+                report::hlog_stage_tag(stage.index),
+                static_cast<double>(stage.start_offset_ns) / 1e9,
+                static_cast<double>(stage.end_offset_ns - stage.start_offset_ns) / 1e9,
+                stage.latency);
+            hlog.end_interval();
+        }
         if (!hlog.close(error)) {
             fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
                        error);

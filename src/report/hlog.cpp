@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -51,6 +52,22 @@ std::string hlog_tag(std::string_view name) {
     for (char& c : tag)
         if (c == ',' || c == ' ' || c == '\t' || c == '\r' || c == '\n') c = '_';
     return tag;
+}
+
+namespace {
+constexpr std::string_view kStageTagPrefix = "stage:";
+}
+
+std::string hlog_stage_tag(std::uint32_t stage_index) {
+    return fmt::format("{}{}", kStageTagPrefix, stage_index);
+}
+
+std::uint32_t stage_of_hlog_tag(std::string_view tag) {
+    if (tag.substr(0, kStageTagPrefix.size()) != kStageTagPrefix) return 0;
+    tag.remove_prefix(kStageTagPrefix.size());
+    std::uint32_t index = 0;
+    const auto [end, ec] = std::from_chars(tag.data(), tag.data() + tag.size(), index);
+    return ec == std::errc() && end == tag.data() + tag.size() ? index : 0;
 }
 
 std::string hlog_identity_text(const HlogIdentity& identity) {

@@ -27,6 +27,11 @@ namespace mbstorm::report {
 
 // A tag may hold no comma or white space (they separate a line's fields): those become '_'.
 std::string hlog_tag(std::string_view name);
+// The tag of a stage's whole histogram, written once per stage at the end of a staged run
+// (start and length the stage's), so that `mbstorm merge` can rebuild the per-stage table.
+std::string hlog_stage_tag(std::uint32_t stage_index);
+// The stage index of such a tag, or 0 when `tag` is not one.
+std::uint32_t stage_of_hlog_tag(std::string_view tag);
 
 class HlogWriter {
   public:

@@ -175,7 +175,21 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
             std::string e = th.at("expression").get<std::string>();
             if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
         }
-        out.stages = doc.at("stages").size();
+        for (const json& st : doc.at("stages")) {
+            stats::StageResult stage;
+            stage.index = st.at("index").get<std::uint32_t>();
+            stage.name = st.at("name").get<std::string>();
+            stage.start_offset_ns = ns_from_s(st.at("start_offset_s").get<double>());
+            stage.end_offset_ns = ns_from_s(st.at("end_offset_s").get<double>());
+            stage.rate_from = st.at("target_rate_from_per_s").get<double>();
+            stage.rate_to = st.at("target_rate_to_per_s").get<double>();
+            stage.connections_from = st.at("target_connections_from").get<std::uint32_t>();
+            stage.connections_to = st.at("target_connections_to").get<std::uint32_t>();
+            read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
+            out.stage_min_ns.push_back(st.at("latency").at("min_ns").get<std::uint64_t>());
+            out.stage_max_ns.push_back(st.at("latency").at("max_ns").get<std::uint64_t>());
+            out.summary.stages.push_back(std::move(stage));
+        }
     } catch (const std::exception& e) {
         error =
             fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what());
@@ -365,6 +379,21 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     out.timeline_interval_ns = interval;
     out.operations = first.summary.operations;
     for (auto& op : out.operations) op.counters.reset();
+    // Stages: names, places and counts from the JSONs, latencies from each log's stage lines.
+    bool stages_merge = !first.summary.stages.empty();
+    for (const auto& s : shards)
+        stages_merge = stages_merge && s.summary.stages.size() == first.summary.stages.size();
+    if (stages_merge) {
+        out.stages = first.summary.stages;
+        for (auto& st : out.stages) {
+            st.counters.reset();
+            st.rate_from = st.rate_to = 0.0;
+            st.connections_from = st.connections_to = 0;
+        }
+    }
+    std::vector<std::uint64_t> stage_min(out.stages.size(), UINT64_MAX),
+        stage_max(out.stages.size(), 0);
+    std::vector<std::string> without_stage_lines;
 
     std::map<std::int64_t, MergedInterval> timeline;
     std::uint64_t min_ns = UINT64_MAX, max_ns = 0;
@@ -383,6 +412,19 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
                 op_min[i] = std::min(op_min[i], s.op_min_ns[i]);
                 op_max[i] = std::max(op_max[i], s.op_max_ns[i]);
+            }
+        }
+        for (std::size_t i = 0; i < out.stages.size(); ++i) {
+            const stats::StageResult& from = s.summary.stages[i];
+            stats::StageResult& into = out.stages[i];
+            into.counters.add(from.counters);
+            into.rate_from += from.rate_from;
+            into.rate_to += from.rate_to;
+            into.connections_from += from.connections_from;
+            into.connections_to += from.connections_to;
+            if (s.stage_max_ns[i] != 0 || s.stage_min_ns[i] != 0) {
+                stage_min[i] = std::min(stage_min[i], s.stage_min_ns[i]);
+                stage_max[i] = std::max(stage_max[i], s.stage_max_ns[i]);
             }
         }
         if (s.latency_count != 0) {
@@ -418,7 +460,13 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             into.open_connections += iv.open_connections;
         }
         std::uint64_t logged = 0;
+        bool stage_lines = false;
         for (const auto& line : s.log.intervals) {
+            if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
+                stage_lines = true;
+                if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
+                continue;
+            }
             if (line.tag.empty()) {
                 out.latency.add(line.histogram);
                 timeline[slot(line.start_s)].latency.add(line.histogram);
@@ -428,6 +476,7 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             for (auto& op : out.operations)
                 if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
         }
+        if (!out.stages.empty() && !stage_lines) without_stage_lines.push_back(name_of(s));
         if (logged != s.latency_count)
             r.warnings.push_back(fmt::format(
                 "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
@@ -437,6 +486,8 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     out.latency.narrow_extremes(min_ns, max_ns);
     for (std::size_t i = 0; i < out.operations.size(); ++i)
         out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
+    for (std::size_t i = 0; i < out.stages.size(); ++i)
+        out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
     if (!timeline.empty()) {
         const std::int64_t last = timeline.rbegin()->first;
         for (std::int64_t k = std::max<std::int64_t>(0, timeline.begin()->first); k <= last; ++k) {
@@ -457,12 +508,21 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
         "timeline on wall-clock time from {}",
         shards.size(), m.test_id, format_utc(origin_time)));
-    for (const auto& s : shards) {
-        if (s.stages == 0) continue;
+    const bool any_stages = std::any_of(
+        shards.begin(), shards.end(), [](const ShardRun& s) { return !s.summary.stages.empty(); });
+    if (!without_stage_lines.empty()) {
+        r.warnings.push_back(fmt::format(
+            "no per-stage table: the interval log of {} holds no stage histograms (an mbstorm "
+            "that did not write them); the timeline shows the stages",
+            without_stage_lines.front()));
+        out.stages.clear();
+    } else if (any_stages && !stages_merge) {
         r.warnings.push_back(
-            "the runs had stages: the merged report has no per-stage table (the interval logs "
-            "hold no stage histograms); the timeline shows the stages");
-        break;
+            "no per-stage table: the runs do not have the same stages; the timeline shows them");
+    } else if (stages_merge) {
+        m.notes.push_back(
+            "per-stage table: each run's stage histograms (its interval log's stage lines) "
+            "added, stage by stage, on each run's own clock");
     }
     r.threshold_expressions = first.threshold_expressions;
     r.ok = true;

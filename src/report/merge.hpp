@@ -25,7 +25,8 @@ namespace mbstorm::report {
 struct ShardRun {
     std::string json_path;  // for messages
     std::string hlog_path;
-    stats::RunResult summary;  // from the JSON; histograms empty (they come from the log)
+    // From the JSON, stages included; histograms empty (they come from the log).
+    stats::RunResult summary;
     double measure_start_epoch_s = 0.0;
     int shard_index = -1;  // -1: a plain run
     int shard_count = 0;
@@ -33,10 +34,10 @@ struct ShardRun {
     int significant_digits = 0;
     std::uint64_t lowest_discernible_ns = 0;
     std::vector<std::string> threshold_expressions;  // as the run judged them
-    std::size_t stages = 0;                          // stages in the JSON (not merged)
     // Exact extremes from the JSON (the logs only know buckets): whole run, then by operation.
     std::uint64_t min_ns = 0, max_ns = 0, latency_count = 0;
     std::vector<std::uint64_t> op_min_ns, op_max_ns;
+    std::vector<std::uint64_t> stage_min_ns, stage_max_ns;  // by stage (summary.stages)
     Hlog log;
 };
 

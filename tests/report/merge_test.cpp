@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace mbstorm::report {
@@ -205,6 +206,86 @@ TEST(Merge, RefusesWhatIsNotOneWholeTest) {
               "the other shards of their test");
 
     EXPECT_EQ(refused({}), "no runs to merge");
+}
+
+// Two stages of 1 s and 2 s over a run of make_shard's: each stage's counts from the JSON and its
+// histogram, one "stage:N" line of the log, as `run --hlog` writes them at the end.
+void add_stages(ShardRun& s, std::mt19937_64& rng, std::vector<stats::Histogram>& all_by_stage) {
+    all_by_stage.resize(2);
+    for (std::uint32_t k = 1; k <= 2; ++k) {
+        stats::StageResult st;
+        st.index = k;
+        st.name = k == 1 ? "warm" : "peak";
+        st.start_offset_ns = k == 1 ? 0 : kSecond;
+        st.end_offset_ns = k == 1 ? kSecond : 3 * kSecond;
+        st.rate_from = st.rate_to = k * 100.0;
+        st.connections_from = st.connections_to = 4;
+        HlogInterval line;
+        line.tag = hlog_stage_tag(k);
+        line.start_s = static_cast<double>(st.start_offset_ns) / 1e9;
+        line.length_s = static_cast<double>(st.end_offset_ns - st.start_offset_ns) / 1e9;
+        std::uint64_t lo = UINT64_MAX, hi = 0;
+        for (int i = 0; i < 500 * static_cast<int>(k); ++i) {
+            const std::uint64_t v = 2000 + rng() % 9'000'000;
+            line.histogram.record(v);
+            all_by_stage[k - 1].record(v);
+            st.counters.record(stats::Outcome::Ok);
+            ++st.counters.transactions_sent;
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+        }
+        s.stage_min_ns.push_back(lo);
+        s.stage_max_ns.push_back(hi);
+        s.summary.stages.push_back(std::move(st));
+        s.log.intervals.push_back(std::move(line));
+    }
+}
+
+TEST(Merge, StagesAddUpStageByStageFromTheLogsStageLines) {
+    std::mt19937_64 rng(11);
+    stats::Histogram all, all_read;
+    std::vector<stats::Histogram> by_stage;
+    std::vector<ShardRun> v;
+    for (const char* id : {"a", "b"}) {
+        v.push_back(make_shard(id, 1000.0, 3, rng, all, all_read));
+        add_stages(v.back(), rng, by_stage);
+    }
+    const MergeOutcome r = merge_shards(v);
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    ASSERT_EQ(r.run.stages.size(), 2u);
+    const auto& peak = r.run.stages[1];
+    EXPECT_EQ(peak.name, "peak");
+    EXPECT_EQ(peak.counters.ok(), 2000u);
+    EXPECT_EQ(peak.rate_to, 400.0);  // each shard's share, added
+    EXPECT_EQ(peak.connections_to, 8u);
+    EXPECT_EQ(peak.start_offset_ns, kSecond);
+    expect_same_histogram(r.run.stages[0].latency, by_stage[0]);
+    expect_same_histogram(peak.latency, by_stage[1]);
+    // The stage lines are not latencies of the whole run (no "log holds more" warning above)
+    // nor of an operation.
+    EXPECT_EQ(r.run.latency.total_count(), 6000u);
+    expect_same_histogram(r.run.latency, all);
+
+    // A run whose log has no stage lines (an older mbstorm): no table, and a warning.
+    std::erase_if(v[1].log.intervals,
+                  [](const HlogInterval& line) { return stage_of_hlog_tag(line.tag) != 0; });
+    const MergeOutcome older = merge_shards(v);
+    ASSERT_TRUE(older.ok);
+    EXPECT_TRUE(older.run.stages.empty());
+    ASSERT_EQ(older.warnings.size(), 1u);
+    EXPECT_NE(older.warnings[0].find("no per-stage table: the interval log of b.json"),
+              std::string::npos)
+        << older.warnings[0];
+}
+
+TEST(Merge, StageTagsRoundTrip) {
+    EXPECT_EQ(hlog_stage_tag(3), "stage:3");
+    EXPECT_EQ(stage_of_hlog_tag("stage:3"), 3u);
+    EXPECT_EQ(stage_of_hlog_tag("stage:"), 0u);
+    EXPECT_EQ(stage_of_hlog_tag("stage:3x"), 0u);
+    EXPECT_EQ(stage_of_hlog_tag("read"), 0u);
+    EXPECT_EQ(stage_of_hlog_tag(""), 0u);
 }
 
 TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {

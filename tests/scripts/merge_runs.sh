@@ -98,4 +98,51 @@ import json; d = json.load(open("b.json")); d["test"]["histogram"]["significant_
 json.dump(d, open("b2.json", "w"))'
 refused "different histogram settings" a.json a.hlog b2.json b.hlog
 refused "m.json: not a run's JSON summary mbstorm merge can read: it is a merged result (2 runs)" m.json a.json a.hlog
+
+# Stages: two runs of a staged scenario merge into one per-stage table (each stage's counts
+# added, its latencies the runs' stage histograms from their logs' stage lines, added).
+cat >staged.yaml <<'YAML'
+name: staged
+connections: 2
+depth: 2
+rate: 400
+operations:
+  - {name: read, function: read_holding_registers, address: 0-99, quantity: 10}
+stages:
+  - {name: low, duration: 1s, rate: 400, ramp: constant}
+  - {name: high, duration: 1s, rate: 800, ramp: constant}
+YAML
+pids=()
+for r in s1 s2; do
+  "$mbstorm" run staged.yaml --target "127.0.0.1:$port" -q --test-id staged --json "$r.json" \
+    --hlog "$r.hlog" >"$r.out" 2>"$r.err" &
+  pids+=($!)
+done
+wait "${pids[@]}"
+"$mbstorm" merge s1.json s1.hlog s2.json s2.hlog --json sm.json >out 2>err
+code=$?
+/usr/bin/python3 - s1.json s2.json sm.json "$code" <<'PY' || fail=1
+import json, sys
+a, b, m = (json.load(open(p)) for p in sys.argv[1:4])
+problems = [] if sys.argv[4] == "0" else [f"merge exit {sys.argv[4]}"]
+if len(m["stages"]) != 2:
+    problems.append(f"{len(m['stages'])} merged stages, expected 2")
+for i, st in enumerate(m["stages"][:2]):
+    for key, got, want in (
+            ("totals.transactions", st["totals"]["transactions"],
+             a["stages"][i]["totals"]["transactions"] + b["stages"][i]["totals"]["transactions"]),
+            ("latency.count", st["latency"]["count"],
+             a["stages"][i]["latency"]["count"] + b["stages"][i]["latency"]["count"]),
+            ("latency.max_ns", st["latency"]["max_ns"],
+             max(a["stages"][i]["latency"]["max_ns"], b["stages"][i]["latency"]["max_ns"])),
+            ("target_rate_to_per_s", st["target_rate_to_per_s"],
+             a["stages"][i]["target_rate_to_per_s"] + b["stages"][i]["target_rate_to_per_s"])):
+        if got != want: problems.append(f"stage {st['name']} {key}: merged {got}, expected {want}")
+if m["latency"]["count"] != a["latency"]["count"] + b["latency"]["count"]:
+    problems.append("the stage lines were counted as latencies of the whole run")
+if problems:
+    print("FAIL " + "\nFAIL ".join(problems)); sys.exit(1)
+print("ok   staged runs merge into a per-stage table: " + ", ".join(
+    f"{st['name']} {st['totals']['transactions']} tx" for st in m["stages"]))
+PY
 exit $fail

@@ -73,7 +73,11 @@ run = json.load(open(sys.argv[1]))
 timeline = [json.loads(l) for l in open(sys.argv[2]) if l.strip()]
 hlog = [l for l in open(sys.argv[3]) if l[:1].isdigit()]
 problems = []
-if sys.argv[4] != "0": problems.append(f"run exit {sys.argv[4]}")
+# A busy machine may fall short of the schedule: the run then fails its "plan carried out"
+# threshold (exit 1), rightly; any other failure is one.
+short_only = [t["expression"] for t in run["thresholds"] if not t["passed"]] == ["plan carried out"]
+if sys.argv[4] != "0" and not (sys.argv[4] == "1" and short_only):
+    problems.append(f"run exit {sys.argv[4]}")
 stages = {s["name"]: s["totals"]["transactions"] for s in run["stages"]}
 # Open loop at 50/s then 150/s for a second each: never more than asked (10% for the edges),
 # and the second stage at least twice the first even on a busy machine.
