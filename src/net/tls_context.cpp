@@ -6,6 +6,9 @@
 #include <openssl/ssl.h>
 #include <openssl/x509v3.h>
 
+#include "net/kernel_tls.hpp"
+#include "net/ktls_offload.hpp"
+
 namespace mbstorm::net {
 
 namespace {
@@ -102,6 +105,9 @@ std::shared_ptr<TlsContext> TlsContext::create(TlsSide side, const TlsFiles& fil
         // The client keeps the sessions itself (TlsSession::saved_session).
         SSL_CTX_set_session_cache_mode(ctx, SSL_SESS_CACHE_CLIENT | SSL_SESS_CACHE_NO_INTERNAL);
     }
+    // The traffic secrets for a kernel hand-off come from the keylog callback: set only
+    // where the kernel could take them (it costs a line of hex per secret per handshake).
+    if (kernel_tls().available) KtlsTracker::prepare_context(ctx);
     return out;
 }
 

@@ -153,6 +153,33 @@ SSL_SESSION* TlsSession::saved_session() const noexcept {
     return s;
 }
 
+void TlsSession::track_for_offload() {
+    if (ssl_ == nullptr || ktls_) return;
+    ktls_ = std::make_unique<KtlsTracker>();
+    ktls_->attach(ssl_);
+}
+
+KtlsReadiness TlsSession::offload_readiness() const noexcept {
+    KtlsReadiness r;
+    if (ssl_ == nullptr) return r;
+    r.established = established_;
+    r.client = ctx_->side() == TlsSide::Client;
+    r.version = SSL_version(ssl_);
+    r.cipher = ktls_cipher_of(ssl_);
+    r.pending_input = BIO_ctrl_pending(in_) > 0 || SSL_has_pending(ssl_) != 0;
+    r.pending_output = BIO_ctrl_pending(out_) > 0;
+    if (ktls_) {
+        r.peer_records = ktls_->records(false);
+        r.key_updated = ktls_->key_updated();
+        r.have_secrets = ktls_->have_secrets();
+    }
+    return r;
+}
+
+bool TlsSession::offload_params(KtlsParams& out) const noexcept {
+    return ssl_ != nullptr && ktls_ && ktls_->derive(ssl_, out);
+}
+
 void free_tls_session(SSL_SESSION* session) noexcept {
     SSL_SESSION_free(session);
 }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "net/ktls_offload.hpp"
 #include "net/tls_context.hpp"
 
 using SSL_SESSION = struct ssl_session_st;
@@ -56,6 +57,14 @@ class TlsSession {
     // A session to resume later (the caller owns the reference), nullptr when none.
     SSL_SESSION* saved_session() const noexcept;
 
+    // Kernel TLS hand-off: counts records and keeps the traffic secrets from here on (call
+    // before the handshake, on a session whose context had KtlsTracker::prepare_context).
+    void track_for_offload();
+    // What the hand-off decision rests on now (kernel_available and real_fd left false).
+    KtlsReadiness offload_readiness() const noexcept;
+    // The hand-off parameters now; false when not tracked or not derivable.
+    bool offload_params(KtlsParams& out) const noexcept;
+
   private:
     TlsStatus fail(int rc) noexcept;
 
@@ -65,6 +74,7 @@ class TlsSession {
     BIO* out_ = nullptr;  // ciphertext to the peer (owned by ssl_)
     bool established_ = false;
     std::string error_;
+    std::unique_ptr<KtlsTracker> ktls_;  // only when the kernel could take the records
 };
 
 void free_tls_session(SSL_SESSION* session) noexcept;
