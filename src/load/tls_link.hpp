@@ -24,6 +24,10 @@ struct TlsLink {
     std::vector<std::uint8_t> cipher;        // ciphertext of the send in flight
     SSL_SESSION* saved = nullptr;            // --tls-resume: offered on the next connect
     std::int64_t handshake_started_ns = 0;
+    // The kernel's TLS carries this connection's records (ktls_offload.hpp): plaintext both
+    // ways through the plain paths from here on; the session stays only to be resumed.
+    bool kernel = false;
+    bool stays_in_userspace = false;  // the hand-off was refused for good
 };
 
 }  // namespace mbstorm::load

@@ -19,6 +19,7 @@
 #include "net/clock.hpp"
 #include "net/direct_socket.hpp"
 #include "net/features.hpp"
+#include "net/kernel_tls.hpp"
 #include "net/user_data.hpp"
 
 namespace mbstorm::load {
@@ -117,6 +118,10 @@ bool Worker::setup_io() noexcept {
     }
     multishot_ = features.multishot_recv;
     direct_ = setup_.direct_descriptors;
+    // The kernel's TLS needs a socket setsockopt can reach (not a direct descriptor) and a
+    // hand-off with no recv in flight (single-shot recvs): worth more than either.
+    ktls_ = plan_.tls && net::kernel_tls().available;
+    if (ktls_) multishot_ = direct_ = false;
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
     if (const int rc = ring_.init(options); rc < 0) {
@@ -569,7 +574,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     }
     if (cqe.res > 0 && has_buffer) {
         codec::Bytes input(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
-        if (c.tls && !tls_input(index, input, now)) {
+        if (c.tls && !c.tls->kernel && !tls_input(index, input, now)) {
             buf_ring_.recycle(buffer_id);
             if ((c.state == Connection::State::Handshaking || c.state == Connection::State::Open) &&
                 !c.recv_armed)
@@ -614,6 +619,9 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         return;
     }
     if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
+    // The kernel's TLS passes no record but data: close_notify, an alert, or a TLS 1.3
+    // KeyUpdate it cannot follow end the connection like a close, counted.
+    if (cqe.res == -EIO && c.tls && c.tls->kernel) ++connection_stats.tls_offload_errors;
     ++connection_stats.closed_by_peer;
     if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);
@@ -690,7 +698,8 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
         io_uring_sqe* sqe = ring_.sqe();
-        const std::uint8_t* base = c.tls ? c.tls->cipher.data() : c.inflight_data();
+        const std::uint8_t* base =
+            c.tls && !c.tls->kernel ? c.tls->cipher.data() : c.inflight_data();
         io_uring_prep_send(sqe, c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
                            MSG_NOSIGNAL);
         net::use_slot_if(sqe, direct_);
@@ -788,7 +797,7 @@ void Worker::flush() noexcept {
         Connection& c = connections_[index];
         c.dirty = false;
         if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) return;
-        if (c.tls) {
+        if (c.tls && !c.tls->kernel) {
             tls_send_queued(index);
             return;
         }

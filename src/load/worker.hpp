@@ -125,6 +125,9 @@ class Worker {
     void tls_refused(const std::string& why) noexcept;  // an alert before any answer: stop
     // A handshake gets the connect timeout too: a peer that accepts and never answers fails.
     void tls_check_handshake_time(std::uint32_t index, std::int64_t now) noexcept;
+    // Hands the record layer to the kernel when it can take it now (ktls_offload.hpp).
+    // False when a half-done hand-off closed the connection.
+    bool tls_offload(std::uint32_t index, std::int64_t now) noexcept;
 
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
@@ -157,6 +160,7 @@ class Worker {
     net::BufRing buf_ring_;  // declared after ring_: unregistered before the ring goes
     bool multishot_ = true;
     bool direct_ = false;  // sockets are slots of ring_'s file table (slot = connection index)
+    bool ktls_ = false;    // TLS connections are handed to the kernel's TLS when they can be
 
     std::vector<Connection> connections_;
     OperationGenerator generator_;

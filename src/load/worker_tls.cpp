@@ -26,6 +26,14 @@ void Worker::tls_begin(std::uint32_t index, std::int64_t now) noexcept {
         on_connect(index, -EPROTO, now);
         return;
     }
+    t.kernel = t.stays_in_userspace = false;
+    if (ktls_) {
+        try {
+            t.session->track_for_offload();
+        } catch (...) {
+            t.stays_in_userspace = true;  // no memory for the tracker: OpenSSL keeps the records
+        }
+    }
     c.state = Connection::State::Handshaking;
     t.handshake_started_ns = now;
     c.splitter.reset();
@@ -82,6 +90,49 @@ bool Worker::tls_input(std::uint32_t index, codec::Bytes& data, std::int64_t now
     if (size > 0) tls_answered_ = true;
     tls_pump(index);  // tickets, key updates
     data = codec::Bytes(tls_plain_.data(), size);
+    return !ktls_ || tls_offload(index, now);
+}
+
+bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    TlsLink& t = *c.tls;
+    // Only while every byte of ciphertext is in OpenSSL or in the kernel's queue: no recv in
+    // flight (single-shot recvs with kTLS: this is the completion of the last one) and no
+    // send of ours (its ciphertext must reach the wire before the kernel's records).
+    if (t.kernel || t.stays_in_userspace || c.state != Connection::State::Open || c.recv_armed ||
+        c.send_in_flight || !t.session)
+        return true;
+    net::KtlsReadiness r = t.session->offload_readiness();
+    r.kernel_available = true;
+    r.real_fd = !direct_;
+    switch (net::ktls_decide(r)) {
+        case net::KtlsRefusal::None:
+            break;
+        case net::KtlsRefusal::PendingInput:
+        case net::KtlsRefusal::PendingOutput:
+        case net::KtlsRefusal::AwaitingPeerRecord:
+            return true;  // the next answer tries again
+        default:
+            t.stays_in_userspace = true;
+            return true;
+    }
+    net::KtlsParams params;
+    if (!t.session->offload_params(params)) {
+        t.stays_in_userspace = true;
+        return true;
+    }
+    bool changed = false;
+    if (net::install_ktls(c.fd, params, changed) != 0) {
+        t.stays_in_userspace = true;
+        if (changed) {  // TX is the kernel's, RX is not: neither side can go on
+            ++connection_stats.tls_offload_errors;
+            close_connection(index, now, stats::Outcome::ConnectionClosed);
+            return false;
+        }
+        return true;
+    }
+    t.kernel = true;
+    ++connection_stats.tls_offloaded;
     return true;
 }
 

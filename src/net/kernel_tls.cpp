@@ -52,8 +52,9 @@ const KernelTls& kernel_tls() noexcept {
 std::string describe_tls_path() {
     const KernelTls& k = kernel_tls();
     if (k.available)
-        return "TLS records encrypted by OpenSSL in userspace over io_uring (the kernel offers "
-               "TLS offload, which mbstorm does not use yet)";
+        return "TLS records encrypted by OpenSSL in userspace over io_uring until each "
+               "handshake ends, then by the kernel's TLS offload on the connections it can take "
+               "(counted as offloaded)";
     return "TLS records encrypted by OpenSSL in userspace over io_uring (no kernel TLS offload "
            "here: " +
            k.detail + ")";

@@ -1,8 +1,8 @@
 // Whether the kernel offers TLS offload (kTLS: the "tls" upper-layer protocol on a TCP
 // socket), found by trying it once per process on a loopback connection. With it, the
 // record layer could move into the kernel after the handshake and io_uring would carry
-// plaintext; without it (this project's CI kernel has no tls module), OpenSSL encrypts in
-// userspace over io_uring, which is the path mbstorm uses today either way.
+// plaintext (ktls_offload.hpp does the hand-off); without it (this project's CI kernel has no
+// tls module), OpenSSL encrypts in userspace over io_uring throughout.
 #pragma once
 
 #include <string>

@@ -179,9 +179,9 @@ KtlsRefusal ktls_decide(const KtlsReadiness& r) noexcept {
     if (r.version == TLS1_3_VERSION && !r.have_secrets) return KtlsRefusal::NoSecrets;
     if (r.pending_input) return KtlsRefusal::PendingInput;
     if (r.pending_output) return KtlsRefusal::PendingOutput;
-    // A TLS 1.3 server sends its NewSessionTickets after the handshake, before any answer:
-    // once one record under the application keys is in, no ticket is left in flight.
-    if (r.client && r.version == TLS1_3_VERSION && r.peer_records == 0)
+    // A TLS 1.3 server sends its NewSessionTickets after the handshake, before any answer
+    // (how many, it does not say): once an answer is in, no ticket is left in flight.
+    if (r.client && r.version == TLS1_3_VERSION && r.peer_data_records == 0)
         return KtlsRefusal::AwaitingPeerRecord;
     return KtlsRefusal::None;
 }
@@ -211,6 +211,8 @@ void KtlsTracker::on_message(int write_p, int, int content_type, const void* buf
             t->records_[dir] = 0;
         else
             ++t->records_[dir];
+    } else if (content_type == SSL3_RT_INNER_CONTENT_TYPE) {
+        if (dir == 0 && bytes[0] == SSL3_RT_APPLICATION_DATA) ++t->data_records_read_;
     } else if (content_type == SSL3_RT_HANDSHAKE && bytes[0] == SSL3_MT_KEY_UPDATE) {
         t->key_updated_ = true;
     }
@@ -315,14 +317,16 @@ std::size_t ktls_crypto_info(int version, KtlsCipher cipher, const KtlsKeys& key
     return 0;
 }
 
-int install_ktls(int fd, const KtlsParams& params) noexcept {
+int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept {
     static constexpr char kUlp[] = "tls";
     std::uint8_t info[kKtlsCryptoInfoMax];
+    changed = false;
     if (::setsockopt(fd, SOL_TCP, TCP_ULP, kUlp, sizeof kUlp - 1) != 0) return -errno;
     std::size_t size = ktls_crypto_info(params.version, params.cipher, params.tx, info);
     if (size == 0) return -EINVAL;
     int rc = ::setsockopt(fd, SOL_TLS, TLS_TX, info, static_cast<socklen_t>(size));
     if (rc == 0) {
+        changed = true;
         size = ktls_crypto_info(params.version, params.cipher, params.rx, info);
         rc = ::setsockopt(fd, SOL_TLS, TLS_RX, info, static_cast<socklen_t>(size));
     }

@@ -65,7 +65,7 @@ struct KtlsReadiness {
     KtlsCipher cipher = KtlsCipher::None;
     bool pending_input = false;
     bool pending_output = false;
-    std::uint64_t peer_records = 0;  // records received under the current keys
+    std::uint64_t peer_data_records = 0;  // application-data records received (TLS 1.3)
     bool key_updated = false;
     bool have_secrets = false;
 };
@@ -82,6 +82,8 @@ class KtlsTracker {
     void attach(SSL* ssl) noexcept;
 
     std::uint64_t records(bool write) const noexcept { return records_[write ? 1 : 0]; }
+    // TLS 1.3 application-data records received (not tickets, not key updates).
+    std::uint64_t data_records_read() const noexcept { return data_records_read_; }
     bool key_updated() const noexcept { return key_updated_; }
     bool have_secrets() const noexcept {
         return client_secret_size_ > 0 && server_secret_size_ > 0;
@@ -97,6 +99,7 @@ class KtlsTracker {
     static void on_keylog(const SSL* ssl, const char* line);
 
     std::array<std::uint64_t, 2> records_{};  // [read, write]: since the last key change
+    std::uint64_t data_records_read_ = 0;
     bool key_updated_ = false;
     std::array<std::uint8_t, 48> client_secret_{};
     std::array<std::uint8_t, 48> server_secret_{};
@@ -112,8 +115,9 @@ inline constexpr std::size_t kKtlsCryptoInfoMax = 64;
 std::size_t ktls_crypto_info(int version, KtlsCipher cipher, const KtlsKeys& keys,
                              std::uint8_t* out) noexcept;
 
-// TCP_ULP "tls", then SOL_TLS TLS_TX and TLS_RX on `fd`: 0, or -errno (the connection is
-// then unusable for TLS: TX may be installed already; close it).
-int install_ktls(int fd, const KtlsParams& params) noexcept;
+// TCP_ULP "tls", then SOL_TLS TLS_TX and TLS_RX on `fd`: 0, or -errno. `changed` says
+// whether TX was installed: if so (and RX failed) the connection cannot go on and must
+// close; if not, the socket still passes OpenSSL's ciphertext through unchanged.
+int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept;
 
 }  // namespace mbstorm::net

@@ -169,7 +169,7 @@ KtlsReadiness TlsSession::offload_readiness() const noexcept {
     r.pending_input = BIO_ctrl_pending(in_) > 0 || SSL_has_pending(ssl_) != 0;
     r.pending_output = BIO_ctrl_pending(out_) > 0;
     if (ktls_) {
-        r.peer_records = ktls_->records(false);
+        r.peer_data_records = ktls_->data_records_read();
         r.key_updated = ktls_->key_updated();
         r.have_secrets = ktls_->have_secrets();
     }

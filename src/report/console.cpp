@@ -150,6 +150,11 @@ std::string format_console_report(const stats::RunResult& r) {
             static_cast<double>(cs.tls_handshake_ns_total) /
                 static_cast<double>(cs.tls_handshakes) / 1e6,
             static_cast<double>(cs.tls_handshake_ns_max) / 1e6);
+        out += fmt::format(
+            "            records by kernel TLS on {} connections ({} ended by a non-data "
+            "record), by userspace OpenSSL on {}\n",
+            format_count(cs.tls_offloaded), format_count(cs.tls_offload_errors),
+            format_count(cs.tls_handshakes - cs.tls_offloaded));
     }
     for (const auto& line : schedule_lines(r)) out += fmt::format("Schedule    {}\n", line);
     if (!r.shortfalls.empty()) {

@@ -39,6 +39,8 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     tls_resumed += o.tls_resumed;
     tls_refused += o.tls_refused;
     tls_role_denied += o.tls_role_denied;
+    tls_offloaded += o.tls_offloaded;
+    tls_offload_errors += o.tls_offload_errors;
     for (std::size_t i = 0; i < requests_by_function.size(); ++i)
         requests_by_function[i] += o.requests_by_function[i];
     return *this;
@@ -76,6 +78,8 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.tls_resumed = v(TlsResumed);
     s.tls_refused = v(TlsRefused);
     s.tls_role_denied = v(TlsRoleDenied);
+    s.tls_offloaded = v(TlsOffloaded);
+    s.tls_offload_errors = v(TlsOffloadErrors);
     for (std::size_t i = 0; i < by_function_.size(); ++i)
         s.requests_by_function[i] = by_function_[i].load(std::memory_order_relaxed);
     return s;
@@ -132,8 +136,12 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
            (t.tls_handshakes + t.tls_refused == 0
                 ? std::string()
                 : fmt::format("  tls: {} handshakes ({} resumed), {} refused at the handshake, {} "
-                              "requests denied to their role (01)\n",
-                              t.tls_handshakes, t.tls_resumed, t.tls_refused, t.tls_role_denied));
+                              "requests denied to their role (01); records by the kernel on {} "
+                              "connections ({} ended by a non-data record), userspace OpenSSL "
+                              "on {}\n",
+                              t.tls_handshakes, t.tls_resumed, t.tls_refused, t.tls_role_denied,
+                              t.tls_offloaded, t.tls_offload_errors,
+                              t.tls_handshakes - t.tls_offloaded));
 }
 
 }  // namespace mbstorm::server

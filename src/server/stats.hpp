@@ -38,6 +38,11 @@ struct ServerStats {
     std::uint64_t tls_resumed = 0;          // of them, sessions resumed
     std::uint64_t tls_refused = 0;          // closed at the handshake (certificate, role, protocol)
     std::uint64_t tls_role_denied = 0;  // requests answered 01: the role may not use the function
+    // Of the handshakes, connections handed to the kernel's TLS (the rest stayed in userspace
+    // OpenSSL), and offloaded connections ended by a record the kernel does not pass as data
+    // (close_notify, an alert, a TLS 1.3 KeyUpdate) or by a hand-off that failed half-way.
+    std::uint64_t tls_offloaded = 0;
+    std::uint64_t tls_offload_errors = 0;
     std::array<std::uint64_t, 256> requests_by_function{};  // well-framed requests, by code byte
 
     std::uint64_t exceptions_total() const noexcept;
@@ -74,6 +79,8 @@ class ServerCounters {
         TlsResumed,
         TlsRefused,
         TlsRoleDenied,
+        TlsOffloaded,
+        TlsOffloadErrors,
         kCount
     };
 

@@ -50,6 +50,10 @@ struct TlsLink {
     // they leave the queue once all of cipher_out has been sent.
     std::size_t plain_carried = 0;
     const FunctionSet* allowed = nullptr;  // nullptr: every function
+    // The kernel's TLS carries the records (ktls_offload.hpp): plaintext both ways from here
+    // on, through the plain paths; the session stays for the role and is never used again.
+    bool kernel = false;
+    bool stays_in_userspace = false;  // the hand-off was refused for good
 };
 
 }  // namespace mbstorm::server

@@ -12,6 +12,7 @@
 #include "net/clock.hpp"
 #include "net/direct_socket.hpp"
 #include "net/features.hpp"
+#include "net/kernel_tls.hpp"
 #include "net/socket.hpp"
 #include "net/user_data.hpp"
 #include "slave/handler.hpp"
@@ -66,7 +67,12 @@ int Worker::setup() noexcept {
         buf_ring_.init(ring_.get(), kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
     multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && f.multishot_recv;
     multishot_accept_ = config_.use_multishot_accept && f.multishot_accept;
-    direct_ = table_slots_ > 0 && net::register_socket_table(ring_.get(), table_slots_) == 0;
+    // The kernel's TLS needs a socket setsockopt can reach (not a direct descriptor) and a
+    // hand-off with no recv in flight (single-shot recvs): worth more than either.
+    ktls_ = config_.tls && net::kernel_tls().available;
+    if (ktls_) multishot_recv_ = false;
+    direct_ =
+        !ktls_ && table_slots_ > 0 && net::register_socket_table(ring_.get(), table_slots_) == 0;
     try {
         std::size_t expect = config_.max_connections ? config_.max_connections : 1024;
         expect = std::min<std::size_t>(expect, 65536);
@@ -357,6 +363,7 @@ void Worker::admit(int fd) noexcept {
     if (config_.tls) {
         try {
             c.tls = std::make_unique<TlsLink>(config_.tls);
+            if (ktls_) c.tls->session.track_for_offload();
         } catch (...) {
             c.tls.reset();
         }
@@ -463,6 +470,12 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
             c.peer_done = true;
             c.frame_started_ns = 0;  // a partial frame can no longer complete: not timed
             if (c.recv_armed) cancel_recv(ud.index);
+        } else if (cqe.res == -EIO && c.tls && c.tls->kernel) {
+            // The kernel's TLS passes no record but data (close_notify, an alert, a TLS 1.3
+            // KeyUpdate it cannot follow): the input ends there, counted; answers still go.
+            counters_.add(ServerCounters::TlsOffloadErrors);
+            c.peer_done = true;
+            c.frame_started_ns = 0;
         } else if (cqe.res != -ENOBUFS && cqe.res != -ECANCELED && cqe.res != -EINTR) {
             close_connection(ud.index);
         }
@@ -542,7 +555,7 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
 
 void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
                            std::size_t size) noexcept {
-    if (conns_[index].tls) {
+    if (conns_[index].tls && !conns_[index].tls->kernel) {
         tls_input(index, data, size);
         return;
     }
@@ -742,7 +755,7 @@ void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
 
 void Worker::flush(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
-    if (c.tls) {
+    if (c.tls && !c.tls->kernel) {
         tls_flush(index);
         return;
     }
@@ -773,7 +786,7 @@ void Worker::on_send(const io_uring_cqe& cqe) noexcept {
         return;
     }
     auto n = static_cast<std::size_t>(cqe.res);
-    if (c.tls)
+    if (c.tls && !c.tls->kernel)
         n = tls_sent(*c.tls, n);
     else
         counters_.add(ServerCounters::BytesOut, n);

@@ -108,6 +108,8 @@ class Worker {
     std::size_t tls_sent(TlsLink& t, std::size_t n) noexcept;
     // The handshake failed: the alert goes out, then the connection closes.
     void tls_refuse(std::uint32_t index) noexcept;
+    // Hands the record layer to the kernel when it can take it now (ktls_offload.hpp).
+    void tls_offload(std::uint32_t index) noexcept;
     // Tracks when the partial frame the splitter holds began (frame timeout).
     void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
     // Times what arrived so far against --frame-timeout (a frame, or a TLS handshake).
@@ -156,6 +158,7 @@ class Worker {
     bool multishot_accept_ = false;
     unsigned table_slots_ = 0;
     bool direct_ = false;  // Connection::fd is a slot of ring_'s file table
+    bool ktls_ = false;    // TLS connections are handed to the kernel's TLS after the handshake
     int stop_fd_ = -1;
     std::uint64_t stop_value_ = 0;
     int mail_fd_ = -1;  // eventfd: another worker asked for an eviction

@@ -51,6 +51,51 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
         break;
     }
     if (t.session.pending_output() > 0) mark_dirty(c, index);  // tickets, key updates
+    if (ktls_) tls_offload(index);
+}
+
+void Worker::tls_offload(std::uint32_t index) noexcept {
+    Connection& c = conns_[index];
+    TlsLink& t = *c.tls;
+    // Only while every byte of ciphertext is in OpenSSL or in the kernel's queue: no recv in
+    // flight (single-shot recvs with kTLS: this is the completion of the last one) and none
+    // stashed, none of ours unsent (the TLS 1.3 tickets go first), no plaintext half-way
+    // through a record.
+    if (t.kernel || t.stays_in_userspace || c.state != Connection::State::Open || c.recv_armed ||
+        c.stash_head != kNoBuffer || c.send_inflight || t.has_output() || t.plain_carried != 0 ||
+        c.peer_done || c.framing_lost)
+        return;
+    net::KtlsReadiness r = t.session.offload_readiness();
+    r.kernel_available = true;
+    r.real_fd = !direct_;
+    switch (net::ktls_decide(r)) {
+        case net::KtlsRefusal::None:
+            break;
+        case net::KtlsRefusal::PendingInput:
+        case net::KtlsRefusal::PendingOutput:
+        case net::KtlsRefusal::AwaitingPeerRecord:
+            return;  // the next input tries again
+        default:
+            t.stays_in_userspace = true;
+            return;
+    }
+    net::KtlsParams params;
+    if (!t.session.offload_params(params)) {
+        t.stays_in_userspace = true;
+        return;
+    }
+    bool changed = false;
+    const int rc = net::install_ktls(c.fd, params, changed);
+    if (rc != 0) {
+        t.stays_in_userspace = true;
+        if (changed) {  // TX is the kernel's, RX is not: neither side can go on
+            counters_.add(ServerCounters::TlsOffloadErrors);
+            close_connection(index);
+        }
+        return;
+    }
+    t.kernel = true;
+    counters_.add(ServerCounters::TlsOffloaded);
 }
 
 void Worker::tls_refuse(std::uint32_t index) noexcept {
