@@ -376,7 +376,9 @@ std::string prepare_run(const Plan& plan, const EngineOptions& options,
     if (std::string why = resolve_sources(plan, setup.endpoint, setup.sources); !why.empty())
         return why;
     setup.capacity = schedule.peak_connections();
-    setup.direct = options.use_direct_descriptors && net::features().direct_descriptors;
+    // The kernel's TLS (where there is one) needs descriptors setsockopt can reach.
+    setup.direct = options.use_direct_descriptors && net::features().direct_descriptors &&
+                   !(plan.tls && net::kernel_tls().available);
     setup.threads = effective_threads(plan);
     // Threads left to the engine: as many rings as the connections' socket tables need.
     if (setup.direct && plan.threads == 0)

@@ -118,10 +118,10 @@ bool Worker::setup_io() noexcept {
     }
     multishot_ = features.multishot_recv;
     direct_ = setup_.direct_descriptors;
-    // The kernel's TLS needs a socket setsockopt can reach (not a direct descriptor) and a
-    // hand-off with no recv in flight (single-shot recvs): worth more than either.
+    // The kernel's TLS needs a hand-off with no recv in flight (single-shot recvs) and a
+    // socket setsockopt can reach (the engine gives no direct descriptors then).
     ktls_ = plan_.tls && net::kernel_tls().available;
-    if (ktls_) multishot_ = direct_ = false;
+    if (ktls_) multishot_ = false;
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
     if (const int rc = ring_.init(options); rc < 0) {

@@ -498,6 +498,45 @@ TEST_F(KtlsOffloadTest, ALiveSessionReportsWhatKeepsItInUserspace) {
     }
 }
 
+// A TLS 1.3 key update before the hand-off leaves the tracked secrets stale: both ends see it
+// (raw OpenSSL here: TlsSession has no call that asks for a key update).
+TEST_F(KtlsOffloadTest, AKeyUpdateIsSeenByBothEnds) {
+    auto server_ctx = context(TlsSide::Server, TLS1_3_VERSION, "TLS_AES_128_GCM_SHA256");
+    auto client_ctx = context(TlsSide::Client, TLS1_3_VERSION, "TLS_AES_128_GCM_SHA256");
+    KtlsTracker server_track;
+    KtlsTracker client_track;
+    SSL* s = SSL_new(server_ctx->get());
+    SSL* c = SSL_new(client_ctx->get());
+    ASSERT_TRUE(s != nullptr && c != nullptr);
+    BIO* client_end = nullptr;
+    BIO* server_end = nullptr;
+    ASSERT_EQ(BIO_new_bio_pair(&client_end, 0, &server_end, 0), 1);
+    SSL_set_bio(c, client_end, client_end);
+    SSL_set_bio(s, server_end, server_end);
+    SSL_set_connect_state(c);
+    SSL_set_accept_state(s);
+    server_track.attach(s);
+    client_track.attach(c);
+    for (int i = 0; i < 20 && !(SSL_is_init_finished(s) && SSL_is_init_finished(c)); ++i) {
+        SSL_do_handshake(c);
+        SSL_do_handshake(s);
+    }
+    ASSERT_TRUE(SSL_is_init_finished(s) && SSL_is_init_finished(c));
+    char buf[16];
+    EXPECT_LE(SSL_read(c, buf, sizeof buf), 0);  // the tickets; no data
+    EXPECT_FALSE(client_track.key_updated());
+    EXPECT_FALSE(server_track.key_updated());
+    EXPECT_TRUE(client_track.have_secrets());
+
+    ASSERT_EQ(SSL_key_update(c, SSL_KEY_UPDATE_REQUESTED), 1);
+    ASSERT_EQ(SSL_write(c, "x", 1), 1);  // the KeyUpdate goes out first
+    EXPECT_EQ(SSL_read(s, buf, sizeof buf), 1);
+    EXPECT_TRUE(client_track.key_updated());
+    EXPECT_TRUE(server_track.key_updated());
+    SSL_free(c);
+    SSL_free(s);
+}
+
 // Without the kernel's TLS (this machine), the hand-off fails before it touches the socket:
 // the connection goes on with OpenSSL's ciphertext as before.
 TEST(KtlsInstall, WithoutTheKernelsTlsTheSocketIsLeftAsItWas) {
