@@ -125,6 +125,9 @@ bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
     if (net::install_ktls(c.fd, params, changed) != 0) {
         t.stays_in_userspace = true;
         if (changed) {  // TX is the kernel's, RX is not: neither side can go on
+            // A kernel that takes one direction and not the other would do it to every
+            // connection: the ones after this stay in userspace.
+            ktls_ = false;
             ++connection_stats.tls_offload_errors;
             close_connection(index, now, stats::Outcome::ConnectionClosed);
             return false;

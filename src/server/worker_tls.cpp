@@ -89,6 +89,9 @@ void Worker::tls_offload(std::uint32_t index) noexcept {
     if (rc != 0) {
         t.stays_in_userspace = true;
         if (changed) {  // TX is the kernel's, RX is not: neither side can go on
+            // A kernel that takes one direction and not the other would do it to every
+            // connection: the ones after this stay in userspace.
+            ktls_ = false;
             counters_.add(ServerCounters::TlsOffloadErrors);
             close_connection(index);
         }
