@@ -4,6 +4,7 @@
 #include <netinet/tcp.h>
 #include <sys/socket.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 
@@ -42,11 +43,18 @@ KernelTls probe() {
     return k;
 }
 
+std::atomic<bool> pretend_available{false};
+
 }  // namespace
 
 const KernelTls& kernel_tls() noexcept {
     static const KernelTls k = probe();
-    return k;
+    static const KernelTls pretended{true, "pretended by a test"};
+    return pretend_available.load(std::memory_order_relaxed) ? pretended : k;
+}
+
+void pretend_kernel_tls_for_testing(bool available) noexcept {
+    pretend_available.store(available, std::memory_order_relaxed);
 }
 
 std::string describe_tls_path() {

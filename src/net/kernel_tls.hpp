@@ -17,6 +17,10 @@ struct KernelTls {
 // Probes on first call (thread-safe), cached afterwards.
 const KernelTls& kernel_tls() noexcept;
 
+// Tests only: kernel_tls() says available (true) or the probe's answer again (false), so the
+// hand-off's hooks run on a kernel without the offload (with a fake install_ktls).
+void pretend_kernel_tls_for_testing(bool available) noexcept;
+
 // One sentence for reports: how TLS records are encrypted in this process, and why.
 std::string describe_tls_path();
 

@@ -10,6 +10,7 @@
 #include <openssl/ssl.h>
 #include <sys/socket.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <string_view>
@@ -20,6 +21,8 @@
 
 namespace mbstorm::net {
 namespace {
+
+std::atomic<KtlsInstaller> test_installer{nullptr};
 
 int tracker_index() noexcept {
     static const int index = SSL_get_ex_new_index(0, nullptr, nullptr, nullptr, nullptr);
@@ -317,10 +320,21 @@ std::size_t ktls_crypto_info(int version, KtlsCipher cipher, const KtlsKeys& key
     return 0;
 }
 
+void set_ktls_installer_for_testing(KtlsInstaller installer) noexcept {
+    test_installer.store(installer, std::memory_order_relaxed);
+}
+
 int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept {
     static constexpr char kUlp[] = "tls";
     std::uint8_t info[kKtlsCryptoInfoMax];
     changed = false;
+    if (KtlsInstaller fake = test_installer.load(std::memory_order_relaxed)) {
+        try {
+            return fake(fd, params, changed);
+        } catch (...) {
+            return -EINVAL;
+        }
+    }
     if (::setsockopt(fd, SOL_TCP, TCP_ULP, kUlp, sizeof kUlp - 1) != 0) return -errno;
     std::size_t size = ktls_crypto_info(params.version, params.cipher, params.tx, info);
     if (size == 0) return -EINVAL;

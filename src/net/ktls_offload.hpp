@@ -120,4 +120,8 @@ std::size_t ktls_crypto_info(int version, KtlsCipher cipher, const KtlsKeys& key
 // close; if not, the socket still passes OpenSSL's ciphertext through unchanged.
 int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept;
 
+// Tests only: install_ktls calls `installer` instead (nullptr: the kernel again).
+using KtlsInstaller = int (*)(int fd, const KtlsParams& params, bool& changed);
+void set_ktls_installer_for_testing(KtlsInstaller installer) noexcept;
+
 }  // namespace mbstorm::net
