@@ -10,6 +10,7 @@
 
 #include "net/clock.hpp"
 #include "net/features.hpp"
+#include "net/kernel_tls.hpp"
 #include "net/socket.hpp"
 #include "server/worker.hpp"
 #include "slave/data_model.hpp"
@@ -179,7 +180,10 @@ std::string Server::describe_io() const {
     const net::Features& f = net::features();
     const bool br = config_.use_buf_ring && f.buf_ring;
     std::string s = "io_uring, " + std::to_string(workers_.size()) + " thread(s): ";
-    s += (br && config_.use_multishot_recv && f.multishot_recv) ? "multishot recv" : "recv";
+    // (TLS with the kernel's offload: single-shot recvs, see Worker::setup.)
+    const bool ktls = config_.tls && net::kernel_tls().available;
+    s +=
+        (br && config_.use_multishot_recv && f.multishot_recv && !ktls) ? "multishot recv" : "recv";
     s += br ? " + buffer ring (" + std::to_string(config_.buf_ring_count) + " x " +
                   std::to_string(config_.buf_size) + " B per thread)"
             : " into per-connection buffers";
