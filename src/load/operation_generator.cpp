@@ -92,16 +92,30 @@ OperationGenerator::OperationGenerator(const std::vector<Operation>& operations,
     for (const Operation& op : operations) {
         total += op.weight;
         cumulative_weight_.push_back(total);
-        OpState st{AddressPicker(op), ValuePicker(op.values), max_request_size(op)};
+        OpState st;
+        st.address = AddressPicker(op);
+        st.values = ValuePicker(op.values);
+        st.max_size = max_request_size(op);
         const codec::FunctionInfo* f = codec::function_info(op.function);
         st.read = f != nullptr && f->request == codec::RequestShape::AddressQuantity;
         if (st.read) {
             codec::write_mbap_header(st.read_frame.data(), 0, op.unit_id, 5);
             codec::encode_read_request(op.function, 0, op.quantity,
                                        codec::MutableBytes(st.read_frame).subspan(kHeader));
+            st.read_info.op_index = static_cast<std::uint16_t>(state_.size());
+            st.read_info.function = op.function;
+            st.read_info.unit_id = op.unit_id;
+            st.read_info.quantity = op.quantity;
+            const bool bits = f->response == codec::ResponseShape::Bits;
+            const bool registers = f->response == codec::ResponseShape::Registers;
+            const std::size_t bytes = bits ? (op.quantity + 7u) / 8u : 2u * op.quantity;
+            // A validated plan's reads all fit one answer; anything else gets no fast check.
+            if ((bits || registers) && bytes != 0 && bytes <= 2u * codec::limits::kMaxReadRegisters)
+                st.read_info.answer_bytes = static_cast<std::uint8_t>(bytes);
         }
         state_.push_back(st);
     }
+    single_read_ = state_.size() == 1 && state_.front().read;
 }
 
 std::uint16_t OperationGenerator::pick_operation() noexcept {
@@ -114,11 +128,12 @@ std::uint16_t OperationGenerator::pick_operation() noexcept {
     return static_cast<std::uint16_t>(it - cumulative_weight_.begin());
 }
 
-std::size_t OperationGenerator::next(std::uint16_t transaction_id, codec::MutableBytes out,
-                                     RequestInfo& info) noexcept {
+std::size_t OperationGenerator::next_of_many(std::uint16_t transaction_id, codec::MutableBytes out,
+                                             RequestInfo& info) noexcept {
     if (operations_.empty()) return 0;
     const std::uint16_t op_index = cumulative_weight_.size() == 1 ? 0 : pick_operation();
-    if (state_[op_index].read) return encode_read(op_index, transaction_id, out, info);
+    OpState& st = state_[op_index];
+    if (st.read) return write_read(st, transaction_id, out, info);
     return encode(op_index, transaction_id, out, info);
 }
 
@@ -212,24 +227,6 @@ std::size_t OperationGenerator::encode(std::uint16_t op_index, std::uint16_t tra
     const codec::EncodeResult adu = codec::encode_tcp_frame(
         transaction_id, op.unit_id, codec::Bytes(pdu_out.data(), pdu.size), out);
     return adu.ok() ? adu.size : 0;
-}
-
-std::size_t OperationGenerator::encode_read(std::uint16_t op_index, std::uint16_t transaction_id,
-                                            codec::MutableBytes out, RequestInfo& info) noexcept {
-    const Operation& op = operations_[op_index];
-    OpState& st = state_[op_index];
-    if (out.size() < st.read_frame.size()) return 0;
-    info = RequestInfo{};
-    info.op_index = op_index;
-    info.function = op.function;
-    info.unit_id = op.unit_id;
-    info.address = st.address.next(rng_);
-    info.quantity = op.quantity;
-    std::uint8_t* p = out.data();
-    std::memcpy(p, st.read_frame.data(), st.read_frame.size());
-    codec::store_be16(p, transaction_id);
-    codec::store_be16(p + kHeader + 1, info.address);
-    return st.read_frame.size();
 }
 
 }  // namespace mbstorm::load

@@ -6,10 +6,12 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "codec/bytes.hpp"
 #include "codec/limits.hpp"
+#include "codec/mbap.hpp"
 #include "load/plan.hpp"
 #include "load/request_info.hpp"
 #include "load/rng.hpp"
@@ -68,8 +70,12 @@ class OperationGenerator {
 
     // Encodes the next request ADU with `transaction_id` into `out`. Returns the ADU size, or 0
     // when `out` is too small or the codec refused (never happens for a validated plan).
+    // One FC01-04 operation, the plan of most load tests, is written inline here.
     std::size_t next(std::uint16_t transaction_id, codec::MutableBytes out,
-                     RequestInfo& info) noexcept;
+                     RequestInfo& info) noexcept {
+        if (single_read_) return write_read(state_.front(), transaction_id, out, info);
+        return next_of_many(transaction_id, out, info);
+    }
 
     // Picks an operation index by weight (exposed for tests).
     std::uint16_t pick_operation() noexcept;
@@ -81,16 +87,31 @@ class OperationGenerator {
         AddressPicker address;
         ValuePicker values;
         std::size_t max_size = 0;  // max_request_size(op), precomputed for the hot path
-        // FC01-04: the whole request with transaction id and address 0, which encode_read()
-        // copies and completes; empty for the other functions.
+        // FC01-04: the whole request with transaction id and address 0, which write_read()
+        // copies and completes, and its RequestInfo but for the address; empty for the other
+        // functions.
         std::array<std::uint8_t, 12> read_frame{};
+        RequestInfo read_info;
         bool read = false;
     };
 
-    // FC01-04, the request of most load tests: the 12 bytes written in place, the same bytes
-    // the checked encoders give (the plan's checks already hold for these fields).
-    std::size_t encode_read(std::uint16_t op_index, std::uint16_t transaction_id,
-                            codec::MutableBytes out, RequestInfo& info) noexcept;
+    std::size_t next_of_many(std::uint16_t transaction_id, codec::MutableBytes out,
+                             RequestInfo& info) noexcept;
+
+    // FC01-04, the request of most load tests: the 12 bytes written in place from the
+    // operation's template, the same bytes the checked encoders give (the plan's checks
+    // already hold for these fields).
+    std::size_t write_read(OpState& st, std::uint16_t transaction_id, codec::MutableBytes out,
+                           RequestInfo& info) noexcept {
+        if (out.size() < st.read_frame.size()) return 0;
+        info = st.read_info;
+        info.address = st.address.next(rng_);
+        std::uint8_t* p = out.data();
+        std::memcpy(p, st.read_frame.data(), st.read_frame.size());
+        codec::store_be16(p, transaction_id);
+        codec::store_be16(p + codec::limits::kMbapHeader + 1, info.address);
+        return st.read_frame.size();
+    }
 
     std::size_t encode(std::uint16_t op_index, std::uint16_t transaction_id,
                        codec::MutableBytes out, RequestInfo& info) noexcept;
@@ -98,6 +119,7 @@ class OperationGenerator {
     const std::vector<Operation>& operations_;
     std::vector<std::uint64_t> cumulative_weight_;
     std::vector<OpState> state_;
+    bool single_read_ = false;  // the plan is one FC01-04 operation
     Rng rng_;
     std::array<std::uint8_t, codec::limits::kMaxPdu> payload_{};
 };

@@ -14,6 +14,9 @@ struct RequestInfo {
     std::uint16_t value = 0;         // FC05 (0xFF00/0), FC06 value, FC16 OR mask
     std::uint16_t and_mask = 0;      // FC16
     std::uint16_t sub_function = 0;  // FC08
+    // FC01-04: the byte count of the answer that carries exactly what was asked for, which
+    // is_expected_read_answer() accepts in a few compares; 0 for every other function.
+    std::uint8_t answer_bytes = 0;
 };
 
 }  // namespace mbstorm::load

@@ -14,4 +14,15 @@ namespace mbstorm::load {
 stats::Outcome check_response(const RequestInfo& request, const codec::TcpFrame& frame,
                               codec::Response& rsp) noexcept;
 
+// The answer to nearly every request of a load test, an FC01-04 answer with exactly the data
+// asked for, told in a few compares against what the request expects: check_response() says Ok
+// to every frame this accepts (its payload is frame.pdu.subspan(2)). False says nothing: the
+// frame then takes check_response().
+inline bool is_expected_read_answer(const RequestInfo& request,
+                                    const codec::TcpFrame& frame) noexcept {
+    return request.answer_bytes != 0 && frame.pdu.size() == 2u + request.answer_bytes &&
+           frame.header.unit_id == request.unit_id && frame.pdu[0] == request.function &&
+           frame.pdu[1] == request.answer_bytes;
+}
+
 }  // namespace mbstorm::load

@@ -48,6 +48,7 @@ TEST(ReadFastPaths, GeneratedReadsAreTheCheckedEncodersBytes) {
                 EXPECT_EQ(info.quantity, quantity);
                 EXPECT_EQ(info.op_index, 0);
                 EXPECT_GE(info.address, op.first_address);
+                EXPECT_EQ(info.answer_bytes, fc <= 0x02 ? (quantity + 7) / 8 : 2 * quantity);
             }
         }
     }
@@ -116,6 +117,50 @@ TEST(ReadFastPaths, AnswersAreJudgedAsTheFullCheckJudgesThem) {
     }
     codec::Response rsp;
     EXPECT_EQ(check_response(regs, frame_of(2, cases[0].pdu), rsp), Outcome::WrongUnitId);
+}
+
+// The engine's first look at an answer: a compare against the answer the request expects.
+// Whatever it accepts, the full check calls Ok; it accepts exactly the expected answers.
+TEST(ReadFastPaths, ExpectedAnswersAreWhatTheFullCheckCallsOk) {
+    RequestInfo regs;
+    regs.function = 0x03;
+    regs.unit_id = 1;
+    regs.quantity = 2;
+    regs.answer_bytes = 4;
+    RequestInfo bits = regs;
+    bits.function = 0x01;
+    bits.quantity = 9;
+    bits.answer_bytes = 2;
+    RequestInfo write = regs;  // no expected answer: never accepted here
+    write.function = 0x06;
+    write.answer_bytes = 0;
+    struct Case {
+        const RequestInfo* request;
+        std::uint8_t unit;
+        std::vector<std::uint8_t> pdu;
+        bool expected;
+    };
+    const std::vector<Case> cases = {
+        {&regs, 1, {0x03, 0x04, 0xAA, 0xBB, 0xCC, 0xDD}, true},
+        {&regs, 2, {0x03, 0x04, 0xAA, 0xBB, 0xCC, 0xDD}, false},  // another unit
+        {&regs, 1, {0x04, 0x04, 0xAA, 0xBB, 0xCC, 0xDD}, false},  // another function
+        {&regs, 1, {0x03, 0x02, 0xAA, 0xBB}, false},
+        {&regs, 1, {0x03, 0x04, 0xAA, 0xBB, 0xCC}, false},
+        {&regs, 1, {0x03, 0x05, 0xAA, 0xBB, 0xCC, 0xDD}, false},  // byte count lies
+        {&regs, 1, {0x83, 0x02, 0x00, 0x00, 0x00, 0x00}, false},
+        {&regs, 1, {0x83, 0x02}, false},
+        {&bits, 1, {0x01, 0x02, 0xFF, 0x01}, true},
+        {&bits, 1, {0x01, 0x01, 0xFF}, false},
+        {&write, 1, {0x06, 0x00, 0x01, 0x00, 0x02}, false},
+    };
+    for (const Case& c : cases) {
+        const codec::TcpFrame frame = frame_of(c.unit, c.pdu);
+        EXPECT_EQ(is_expected_read_answer(*c.request, frame), c.expected) << c.pdu.size();
+        codec::Response rsp;
+        if (c.expected) {
+            EXPECT_EQ(check_response(*c.request, frame, rsp), Outcome::Ok);
+        }
+    }
 }
 
 }  // namespace
