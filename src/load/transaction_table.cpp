@@ -18,48 +18,11 @@ TransactionTable::TransactionTable(std::uint32_t depth, std::uint16_t first_id) 
     for (std::uint32_t i = 0; i < size; ++i) slots_[i].sequence = UINT64_MAX;
 }
 
-Transaction* TransactionTable::begin(std::int64_t sent_ns, std::int64_t intended_ns) noexcept {
-    if (outstanding_ > mask_) return nullptr;
-    for (;;) {
-        Transaction& t = slots_[next_sequence_ & mask_];
-        const std::uint64_t sequence = next_sequence_++;
-        if (t.state == Transaction::State::Outstanding) continue;  // held by a slow one: skip id
-        t.sequence = sequence;
-        t.sent_ns = sent_ns;
-        t.intended_ns = intended_ns;
-        t.state = Transaction::State::Outstanding;
-        ++outstanding_;
-        return &t;
-    }
-}
-
 void TransactionTable::cancel(Transaction* t) noexcept {
     if (t == nullptr || t->state != Transaction::State::Outstanding) return;
     t->state = Transaction::State::Free;
     t->sequence = UINT64_MAX;
     --outstanding_;
-}
-
-MatchResult TransactionTable::complete(std::uint16_t transaction_id, Transaction*& out) noexcept {
-    Transaction& t = slots_[transaction_id & mask_];
-    if (t.sequence == UINT64_MAX || t.transaction_id() != transaction_id) {
-        return MatchResult::Unknown;
-    }
-    switch (t.state) {
-        case Transaction::State::Outstanding:
-            t.state = Transaction::State::Answered;
-            --outstanding_;
-            out = &t;
-            return MatchResult::Matched;
-        case Transaction::State::Answered:
-            return MatchResult::Duplicate;
-        case Transaction::State::TimedOut:
-        case Transaction::State::Aborted:
-            return MatchResult::Late;
-        case Transaction::State::Free:
-            break;
-    }
-    return MatchResult::Unknown;
 }
 
 std::int64_t TransactionTable::oldest_sent_ns() noexcept {

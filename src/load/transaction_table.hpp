@@ -9,6 +9,7 @@
 // timeout sweep, which walks from the oldest and stops at the first one still in time.
 #pragma once
 
+#include <climits>
 #include <cstdint>
 #include <memory>
 
@@ -44,12 +45,46 @@ class TransactionTable {
     std::uint16_t next_id() const noexcept { return static_cast<std::uint16_t>(next_sequence_); }
 
     // Starts a transaction; nullptr when capacity() are outstanding. The caller fills
-    // `request` and encodes with transaction_id().
-    Transaction* begin(std::int64_t sent_ns, std::int64_t intended_ns) noexcept;
+    // `request` and encodes with transaction_id(). Inline, like complete(): both run once per
+    // request on the engine's hot path.
+    Transaction* begin(std::int64_t sent_ns, std::int64_t intended_ns) noexcept {
+        if (outstanding_ > mask_) return nullptr;
+        for (;;) {
+            Transaction& t = slots_[next_sequence_ & mask_];
+            const std::uint64_t sequence = next_sequence_++;
+            if (t.state == Transaction::State::Outstanding) continue;  // held by a slow one: skip
+            t.sequence = sequence;
+            t.sent_ns = sent_ns;
+            t.intended_ns = intended_ns;
+            t.state = Transaction::State::Outstanding;
+            ++outstanding_;
+            return &t;
+        }
+    }
 
     // Matches a response id. On Matched the transaction is marked answered; `out` stays valid
     // until the next begin().
-    MatchResult complete(std::uint16_t transaction_id, Transaction*& out) noexcept;
+    MatchResult complete(std::uint16_t transaction_id, Transaction*& out) noexcept {
+        Transaction& t = slots_[transaction_id & mask_];
+        if (t.sequence == UINT64_MAX || t.transaction_id() != transaction_id) {
+            return MatchResult::Unknown;
+        }
+        switch (t.state) {
+            case Transaction::State::Outstanding:
+                t.state = Transaction::State::Answered;
+                --outstanding_;
+                out = &t;
+                return MatchResult::Matched;
+            case Transaction::State::Answered:
+                return MatchResult::Duplicate;
+            case Transaction::State::TimedOut:
+            case Transaction::State::Aborted:
+                return MatchResult::Late;
+            case Transaction::State::Free:
+                break;
+        }
+        return MatchResult::Unknown;
+    }
 
     // Sends back the transaction just begun (e.g. the encoder failed): the id is reusable.
     void cancel(Transaction* t) noexcept;

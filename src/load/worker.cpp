@@ -724,50 +724,68 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (c.queued > 0) dirty_.mark(c.dirty, index);
 }
 
-bool Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept {
+Transaction* Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended,
+                             std::uint32_t& size) noexcept {
     Connection& c = connections_[index];
     const std::uint32_t room = c.send_half - c.queued;
     Transaction* t = c.table.begin(now, intended);
-    if (t == nullptr) return false;
-    std::size_t size = generator_.next(
+    if (t == nullptr) return nullptr;
+    std::size_t written = generator_.next(
         t->transaction_id(), codec::MutableBytes(c.queue_data() + c.queued, room), t->request);
-    if (size == 0) {
+    if (written == 0) {
         c.table.cancel(t);
-        return false;
+        return nullptr;
     }
-    if (c.rtu) size = rtu_request(c, c.queue_data() + c.queued, size, *t);
-    c.queued += static_cast<std::uint32_t>(size);
+    if (c.rtu) written = rtu_request(c, c.queue_data() + c.queued, written, *t);
+    size = static_cast<std::uint32_t>(written);
+    c.queued += size;
     ++outstanding_;
-    if (now >= setup_.measure_start_ns) {
-        ++measured_sent_;
-        stats::OutcomeCounters& op = operations[t->request.op_index].counters;
-        ++op.transactions_sent;
-        op.bytes_sent += size;
-        if (setup_.live != nullptr) {
-            setup_.live->operations[t->request.op_index].sent.add();
-            setup_.live->operations[t->request.op_index].bytes_sent.add(size);
-        }
-        if (setup_.schedule != nullptr) {
-            stats::StageResult& stage =
-                stages[setup_.schedule->stage_at(intended - setup_.measure_start_ns)];
-            ++stage.counters.transactions_sent;
-            stage.counters.bytes_sent += size;
-            if (!stage.operations.empty()) {
-                ++stage.operations[t->request.op_index].counters.transactions_sent;
-                stage.operations[t->request.op_index].counters.bytes_sent += size;
-            }
+    if (now >= setup_.measure_start_ns) ++measured_sent_;
+    dirty_.mark(c.dirty, index);
+    return t;
+}
+
+void Worker::count_sent(std::uint16_t op_index, std::uint64_t count, std::uint64_t bytes,
+                        std::int64_t intended) noexcept {
+    stats::OutcomeCounters& op = operations[op_index].counters;
+    op.transactions_sent += count;
+    op.bytes_sent += bytes;
+    if (setup_.live != nullptr) {
+        setup_.live->operations[op_index].sent.add(count);
+        setup_.live->operations[op_index].bytes_sent.add(bytes);
+    }
+    if (setup_.schedule != nullptr) {
+        stats::StageResult& stage =
+            stages[setup_.schedule->stage_at(intended - setup_.measure_start_ns)];
+        stage.counters.transactions_sent += count;
+        stage.counters.bytes_sent += bytes;
+        if (!stage.operations.empty()) {
+            stage.operations[op_index].counters.transactions_sent += count;
+            stage.operations[op_index].counters.bytes_sent += bytes;
         }
     }
-    dirty_.mark(c.dirty, index);
-    return true;
 }
 
 void Worker::fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept {
     Connection& c = connections_[index];
+    // Every request of this fill is sent (and meant to be sent) now, so they share a stage and
+    // whether they are measured; with one operation they are counted once, together.
+    const bool measured = now >= setup_.measure_start_ns;
+    const bool together = operations.size() == 1;
+    std::uint64_t sent = 0, bytes = 0;
     while (c.state == Connection::State::Open && index < active_ &&
            c.table.outstanding() < plan_.depth && may_send()) {
-        if (!enqueue(index, now, now)) break;
+        std::uint32_t size = 0;
+        const Transaction* t = enqueue(index, now, now, size);
+        if (t == nullptr) break;
+        if (together) {
+            ++sent;
+            bytes += size;
+        } else if (measured) {
+            count_sent(t->request.op_index, 1, size, now);
+        }
     }
+    if (measured && sent != 0) count_sent(0, sent, bytes, now);
 }
 
 void Worker::push_ready(std::uint32_t index) noexcept {
@@ -793,7 +811,10 @@ void Worker::issue_open_loop(std::int64_t now) noexcept {
             c.table.outstanding() >= plan_.depth)
             continue;
         const std::int64_t intended = pacer_.next_intended_ns();
-        if (!enqueue(index, now, intended)) continue;
+        std::uint32_t size = 0;
+        const Transaction* t = enqueue(index, now, intended, size);
+        if (t == nullptr) continue;
+        if (now >= setup_.measure_start_ns) count_sent(t->request.op_index, 1, size, intended);
         lag_.record(intended, now, now >= setup_.measure_start_ns);
         pacer_.advance();
         push_ready(index);

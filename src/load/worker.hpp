@@ -132,7 +132,12 @@ class Worker {
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
     }
-    bool enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended) noexcept;
+    // Queues one request; nullptr when none could be. Counts what the quota counts, not the
+    // per-operation statistics: count_sent() adds those, per request or per fill.
+    Transaction* enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended,
+                         std::uint32_t& size) noexcept;
+    void count_sent(std::uint16_t op_index, std::uint64_t count, std::uint64_t bytes,
+                    std::int64_t intended) noexcept;
     void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
     void refill(std::uint32_t index, std::int64_t now) noexcept;  // after answers or timeouts
     void issue_open_loop(std::int64_t now) noexcept;
