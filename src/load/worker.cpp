@@ -29,6 +29,16 @@ constexpr std::int64_t kMaxSleepNs = 20 * net::kNsPerMs;
 // Ramps move the rate and the connection count this often: smooth enough, cheap enough.
 constexpr std::int64_t kStageUpdateNs = 10 * net::kNsPerMs;
 constexpr std::uint16_t kBufferGroup = 0;
+// Up to this many operations, each answer's latency is recorded once, into its operation's
+// interval histogram (about 270 KB each, per worker); more operations record it twice (into
+// the operation's run-long histogram and the interval's) rather than hold that many more.
+constexpr std::size_t kMaxOperationsRecordedOnce = 16;
+
+std::uint32_t recorder_tags(std::size_t operations, std::uint32_t timeline_tags) noexcept {
+    if (operations > 1 && operations <= kMaxOperationsRecordedOnce)
+        return std::max(timeline_tags, static_cast<std::uint32_t>(operations));
+    return timeline_tags;
+}
 
 bool has_response(stats::Outcome o) noexcept {
     return o != stats::Outcome::Timeout && o != stats::Outcome::ConnectionClosed &&
@@ -49,12 +59,19 @@ Worker::Worker(WorkerSetup setup)
       generator_(plan_.operations, derive_seed(plan_.seed, setup_.index)),
       lag_(plan_.late_threshold.count()),
       interval_(setup_.timeline->interval_ns(), stats::Histogram::kOneHourNs,
-                setup_.timeline->tags()) {
+                recorder_tags(plan_.operations.size(), setup_.timeline->tags())) {
     operations = operation_rows(plan_.operations);
     if (setup_.schedule != nullptr) stages = stage_rows(setup_.schedule->stages(), operations);
-    // One operation: its run-long histogram is the sum of the intervals' histograms, folded in
-    // as each interval ends, so an answer's latency is recorded once instead of twice.
-    if (operations.size() == 1) interval_.fold_into(&operations.front().latency);
+    // An operation's run-long histogram is the sum of the intervals' histograms of it, folded
+    // in as each interval ends, so an answer's latency is recorded once instead of twice.
+    if (operations.size() == 1) {
+        interval_.fold_into(&operations.front().latency);
+    } else if (operations.size() <= kMaxOperationsRecordedOnce) {
+        std::vector<stats::Histogram*> totals;
+        for (stats::OperationResult& op : operations) totals.push_back(&op.latency);
+        interval_.fold_tags_into(std::move(totals));
+        latency_by_operation_ = true;
+    }
     rate_ = setup_.rate;
     active_ = setup_.connections;
     const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
@@ -887,8 +904,9 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
         }
         if (answered && with_latency) into.latency.record(latency);
     };
-    // A single operation's latencies reach its histogram through the interval recorder.
-    count(operations[t.request.op_index], operations.size() != 1);
+    // Up to kMaxOperationsRecordedOnce operations, latencies reach the operation's histogram
+    // through the interval recorder.
+    count(operations[t.request.op_index], operations.size() != 1 && !latency_by_operation_);
     if (setup_.live != nullptr)
         setup_.live->record(t.request.op_index, outcome, exception_code, answered, latency);
     if (setup_.schedule != nullptr) {
@@ -903,7 +921,13 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
         if (answered) stage.latency.record(latency);
         if (!stage.operations.empty()) count(stage.operations[t.request.op_index], true);
     }
-    if (answered) interval_.record_latency(latency, t.request.op_index);
+    if (answered) {
+        if (latency_by_operation_) {
+            interval_.record_tagged(latency, t.request.op_index);
+        } else {
+            interval_.record_latency(latency, t.request.op_index);
+        }
+    }
     interval_.record_transaction(outcome != stats::Outcome::Ok);
 }
 

@@ -176,6 +176,7 @@ class Worker {
     std::int64_t next_stage_update_ns_ = INT64_MAX;
     LagTracker lag_;
     stats::IntervalRecorder interval_;
+    bool latency_by_operation_ = false;  // several operations, recorded once (see the ctor)
 
     net::DirtyList dirty_;              // connections with queued bytes
     std::vector<std::uint32_t> ready_;  // open loop: ring of connections with spare depth

@@ -34,7 +34,7 @@ IntervalRecorder::IntervalRecorder(std::uint64_t interval_ns, std::uint64_t high
 
 void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
                                  std::uint32_t contributor) noexcept {
-    if (total_ != nullptr) total_->add(histogram_);
+    fold();
     timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
     current_index_ = now_offset_ns / interval_ns_;
@@ -42,9 +42,17 @@ void IntervalRecorder::roll_over(std::uint64_t now_offset_ns, IntervalTimeline& 
 }
 
 void IntervalRecorder::flush(IntervalTimeline& timeline, std::uint32_t contributor) noexcept {
-    if (total_ != nullptr) total_->add(histogram_);
+    fold();
     timeline.contribute(contributor, current_index_, histogram_, tagged_, transactions_, errors_);
     clear();
+}
+
+void IntervalRecorder::fold() noexcept {
+    for (std::size_t tag = 0; tag < tag_totals_.size() && tag < tagged_.size(); ++tag) {
+        histogram_.add(tagged_[tag]);
+        if (tag_totals_[tag] != nullptr) tag_totals_[tag]->add(tagged_[tag]);
+    }
+    if (total_ != nullptr) total_->add(histogram_);
 }
 
 void IntervalRecorder::clear() noexcept {

@@ -16,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "stats/histogram.hpp"
@@ -86,6 +87,15 @@ class IntervalRecorder {
     // ends (roll-over, flush), so a caller that keeps a run-long histogram of the same
     // latencies records each once, here, instead of twice. nullptr: no such total.
     void fold_into(Histogram* total) noexcept { total_ = total; }
+    // Several tags, each with a run-long histogram of its own (totals[tag], from a recorder
+    // built with tags >= totals.size()): record_tagged() records a latency once, into its
+    // tag's interval histogram, and at each interval end the tags' histograms are summed into
+    // the all-tags one and each is added into its total. Call before recording; then record
+    // through record_tagged() only (record_latency() would count a latency twice).
+    void fold_tags_into(std::vector<Histogram*> totals) { tag_totals_ = std::move(totals); }
+    void record_tagged(std::uint64_t latency_ns, std::uint32_t tag) noexcept {
+        tagged_[tag].record(latency_ns);
+    }
 
     // Cheap when no boundary passed (one compare). Otherwise contributes the current
     // interval to timeline as worker `contributor` and starts the interval holding now.
@@ -105,13 +115,15 @@ class IntervalRecorder {
   private:
     void roll_over(std::uint64_t now_offset_ns, IntervalTimeline& timeline,
                    std::uint32_t contributor) noexcept;
+    void fold() noexcept;  // the interval's histograms into the totals, at its end
 
     std::uint64_t interval_ns_;
     std::uint64_t current_index_ = 0;
     std::uint64_t next_boundary_ns_;
     Histogram histogram_;
     std::vector<Histogram> tagged_;
-    Histogram* total_ = nullptr;  // fold_into()
+    Histogram* total_ = nullptr;          // fold_into()
+    std::vector<Histogram*> tag_totals_;  // fold_tags_into()
     std::uint64_t transactions_ = 0;
     std::uint64_t errors_ = 0;
 };

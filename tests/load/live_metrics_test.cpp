@@ -103,6 +103,18 @@ TEST(LiveMetrics, EndsEqualToTheReportAndOnlyGrowsMeanwhile) {
         s.operations[0].counters.transactions_sent + s.operations[1].counters.transactions_sent,
         4000u);
     EXPECT_GT(answered, 0u);
+    // Each answer's latency, recorded once into its operation's interval histogram, reaches
+    // the operation's run-long histogram and the timeline exactly once.
+    std::uint64_t in_intervals = 0;
+    for (const auto& interval : r.run.timeline) in_intervals += interval.latency_count;
+    EXPECT_EQ(in_intervals, answered);
+    EXPECT_EQ(r.run.latency.total_count(), answered);
+    for (std::size_t op = 0; op < 2; ++op) {
+        const auto& c = r.run.operations[op].counters;
+        EXPECT_EQ(r.run.operations[op].latency.total_count(),
+                  c.ok() + c.count(stats::Outcome::Exception))
+            << op;
+    }
     EXPECT_EQ(s.connections_opened, r.run.connections.opened);
     EXPECT_EQ(s.connections_failed, r.run.connections.failed);
     EXPECT_EQ(s.in_flight, 0u);

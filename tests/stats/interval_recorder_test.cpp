@@ -63,6 +63,33 @@ TEST(IntervalRecorder, FoldsEveryIntervalIntoTheRunTotalOnce) {
     EXPECT_EQ(total.value_at_percentile(50.0), Histogram::highest_equivalent(7 * kOneMs));
 }
 
+TEST(IntervalRecorder, FoldsEachTagIntoItsOwnTotalAndTheIntervalOnce) {
+    IntervalTimeline timeline(kSecond, 1, 100);
+    IntervalRecorder rec(kSecond, Histogram::kOneHourNs, 2);
+    Histogram first, second;
+    rec.fold_tags_into({&first, &second});
+    rec.record_tagged(5 * kOneMs, 0);
+    rec.record_tagged(7 * kOneMs, 1);
+    rec.record_tagged(9 * kOneMs, 1);
+    rec.tick(kSecond + 1, timeline, 0);
+    EXPECT_EQ(first.total_count(), 1u);
+    EXPECT_EQ(second.total_count(), 2u);
+    rec.record_tagged(900 * kOneMs, 0);
+    rec.flush(timeline, 0);
+    rec.flush(timeline, 0);  // an empty interval adds nothing
+    timeline.finish();
+    EXPECT_EQ(first.total_count(), 2u);
+    EXPECT_EQ(first.max(), 900 * kOneMs);
+    EXPECT_EQ(second.total_count(), 2u);
+    EXPECT_EQ(second.min(), 7 * kOneMs);
+    const auto s = timeline.summaries();
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_EQ(s[0].latency_count, 3u);  // both tags, each latency once
+    EXPECT_EQ(s[0].max_ns, 9 * kOneMs);
+    EXPECT_EQ(s[1].latency_count, 1u);
+    EXPECT_EQ(s[1].max_ns, 900 * kOneMs);
+}
+
 TEST(IntervalTimeline, WaitsForEveryWorkerBeforeSummarizing) {
     IntervalTimeline timeline(kSecond, 2, 100);
     IntervalRecorder a(kSecond), b(kSecond);
