@@ -690,12 +690,14 @@ bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t 
     stats::Outcome outcome = stats::Outcome::Ok;
     std::uint8_t exception_code = 0;
     if (is_expected_read_answer(t->request, frame)) {
-        // The expected answer: the decoded response is built only for a value verifier.
-        if (setup_.verifier.check != nullptr) {
-            response_scratch_ = codec::Response{};
-            response_scratch_.function = t->request.function;
-            response_scratch_.payload = frame.pdu.subspan(2);
+        if (setup_.verifier.check == nullptr) {
+            record(*t, stats::Outcome::Ok, 0, now);  // a constant outcome: its checks fold away
+            return true;
         }
+        // The decoded response is built only for a value verifier.
+        response_scratch_ = codec::Response{};
+        response_scratch_.function = t->request.function;
+        response_scratch_.payload = frame.pdu.subspan(2);
     } else {
         outcome = check_response(t->request, frame, response_scratch_);
         exception_code = static_cast<std::uint8_t>(response_scratch_.exception);
@@ -785,13 +787,19 @@ void Worker::count_sent(std::uint16_t op_index, std::uint64_t count, std::uint64
 
 void Worker::fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept {
     Connection& c = connections_[index];
+    if (c.state != Connection::State::Open || index >= active_ || !may_send()) return;
+    // Nothing in a fill changes the connection's state, whether it is wanted or whether the run
+    // stops, so how many requests it may queue is known before the first: the free depth, and
+    // what is left of a quota (which counts measured sends only).
+    const bool measured = now >= setup_.measure_start_ns;
+    const std::uint32_t outstanding = c.table.outstanding();
+    std::uint64_t budget = outstanding < plan_.depth ? plan_.depth - outstanding : 0;
+    if (quota_ != 0 && measured) budget = std::min(budget, quota_ - measured_sent_);
     // Every request of this fill is sent (and meant to be sent) now, so they share a stage and
     // whether they are measured; with one operation they are counted once, together.
-    const bool measured = now >= setup_.measure_start_ns;
     const bool together = operations.size() == 1;
     std::uint64_t sent = 0, bytes = 0;
-    while (c.state == Connection::State::Open && index < active_ &&
-           c.table.outstanding() < plan_.depth && may_send()) {
+    for (; budget > 0; --budget) {
         std::uint32_t size = 0;
         const Transaction* t = enqueue(index, now, now, size);
         if (t == nullptr) break;
