@@ -133,9 +133,11 @@ class Worker {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
     }
     // Queues one request; nullptr when none could be. Counts what the quota counts, not the
-    // per-operation statistics: count_sent() adds those, per request or per fill.
-    Transaction* enqueue(std::uint32_t index, std::int64_t now, std::int64_t intended,
-                         std::uint32_t& size) noexcept;
+    // per-operation statistics: count_sent() adds those, per request or per fill. Inlined into
+    // its two callers (worker.cpp): as a call its prologue was a tenth of its cost.
+    [[gnu::always_inline]] inline Transaction* enqueue(std::uint32_t index, std::int64_t now,
+                                                       std::int64_t intended,
+                                                       std::uint32_t& size) noexcept;
     void count_sent(std::uint16_t op_index, std::uint64_t count, std::uint64_t bytes,
                     std::int64_t intended) noexcept;
     void fill_closed_loop(std::uint32_t index, std::int64_t now) noexcept;
