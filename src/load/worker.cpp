@@ -604,7 +604,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         for (bool done = false; !done;) {
             switch (c.splitter.next(frame)) {
                 case codec::MbapSplitter::Status::Frame:
-                    on_frame(c, frame, now);
+                    on_answer(c, frame, now);
                     break;
                 case codec::MbapSplitter::Status::BadProtocolId:
                     ++bad_protocol_frames;
@@ -645,6 +645,10 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
 }
 
 bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
+    return on_answer(c, frame, now);
+}
+
+bool Worker::on_answer(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
     Transaction* t = nullptr;
     switch (c.table.complete(frame.header.transaction_id, t)) {
         case MatchResult::Matched:

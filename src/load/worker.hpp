@@ -102,7 +102,12 @@ class Worker {
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
     void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    // An answer's frame: matched to its transaction, checked and recorded. on_answer is the
+    // body, inlined into on_recv's frame loop (as a call, its prologue and epilogue were about
+    // 18 instructions per answer); on_frame is the same for the other files (rtu_io.cpp).
     bool on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept;
+    [[gnu::always_inline]] inline bool on_answer(Connection& c, const codec::TcpFrame& frame,
+                                                 std::int64_t now) noexcept;
     // RTU over TCP (rtu_io.cpp). Feeds received bytes; answers are matched to the one
     // outstanding transaction. Not Ok when framing was lost (BadCrc, FrameTooLong).
     codec::CodecError consume_rtu(Connection& c, const std::uint8_t* data, std::size_t size,
