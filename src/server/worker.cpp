@@ -242,8 +242,8 @@ void Worker::shutdown_all() noexcept {
     }
     std::int64_t until = net::now_ns() + kStopDrainNs;
     auto busy = [this] {
-        for (const Connection& c : conns_)
-            if (c.state == Connection::State::Closing) return true;
+        for (std::uint32_t i = 0; i < conns_.size(); ++i)
+            if (conns_[i].state == Connection::State::Closing) return true;
         return false;
     };
     while (busy() && net::now_ns() < until) {
@@ -572,6 +572,8 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
     for (;;) {
         switch (c.splitter.next(frame)) {
             case codec::MbapSplitter::Status::NeedMore:
+                // One dirty mark per frame loop, not per frame (7 instructions a frame).
+                if (completed) mark_dirty(c, index);
                 flush_tally();
                 counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
                 note_partial_frame(c, index, completed);
@@ -582,6 +584,7 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
                 break;
             case codec::MbapSplitter::Status::Fatal:
                 // The frames before this one are answered; the connection closes after that.
+                if (completed) mark_dirty(c, index);
                 flush_tally();
                 lose_framing(index);
                 return;
@@ -616,6 +619,7 @@ void Worker::start_frame_clock(Connection& c, std::uint32_t index) noexcept {
 bool Worker::serve_frame(Connection& c, std::uint32_t index,
                          const codec::TcpFrame& frame) noexcept {
     const bool open = on_frame(c, index, frame);
+    if (open) mark_dirty(c, index);
     flush_tally();
     return open;
 }
@@ -633,20 +637,17 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
         counters_.add(ServerCounters::TlsRoleDenied);
         queue_exception(c, frame, codec::ExceptionCode::IllegalFunction);
-        mark_dirty(c, index);
         return true;
     }
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
             queue_exception(c, frame, codec::ExceptionCode::GatewayTargetFailedToRespond);
-        mark_dirty(c, index);
         return true;
     }
     if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
         counters_.add(ServerCounters::BusyRejects);
         queue_exception(c, frame, codec::ExceptionCode::ServerDeviceBusy);
-        mark_dirty(c, index);
         return true;
     }
 
@@ -672,7 +673,6 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         }
         if (decision.action == slave::FaultDecision::Action::Exception) {
             queue_exception(c, frame, decision.exception);
-            mark_dirty(c, index);
             return true;
         }
     }
@@ -707,7 +707,6 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     if (r.outcome == slave::Outcome::Exception)
         counters_.add_exception(static_cast<std::uint8_t>(r.exception));
     ++c.unanswered;
-    mark_dirty(c, index);
     return true;
 }
 
