@@ -624,7 +624,15 @@ bool Worker::serve_frame(Connection& c, std::uint32_t index,
     return open;
 }
 
+void Worker::flush_reads() noexcept {
+    if (tally_.reads == 0) return;
+    if (model_.track_diagnostics())
+        model_.diagnostics().note_messages(tally_.reads, slave::kReceiveEvent, slave::kSendEvent);
+    tally_.reads = 0;
+}
+
 void Worker::flush_tally() noexcept {
+    flush_reads();
     counters_.add(ServerCounters::Requests, tally_.requests);
     counters_.add(ServerCounters::Transactions, tally_.transactions);
     counters_.add(ServerCounters::PendingOutput, tally_.pending_output);
@@ -688,7 +696,10 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
     const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
     slave::HandleResult r;
-    if (units_ || !slave::read_registers_inline(frame.pdu, model_, pdu_out.data(), r)) {
+    if (!units_ && slave::read_registers_uncounted(frame.pdu, model_, pdu_out.data(), r)) {
+        ++tally_.reads;
+    } else {
+        flush_reads();  // this request's diagnostics come after the reads before it
         r = units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                    : slave::handle_request(frame.pdu, model_, pdu_out);
     }

@@ -131,7 +131,13 @@ class Worker {
     // The per-frame counters (requests, transactions, bytes queued) summed in tally_ over a
     // frame loop and added to counters_ once at its end: three load-add-store sequences per
     // frame were a twentieth of the server's instructions at FC03 x 10.
+    // Also hands the reads answered inline to the model's diagnostics (flush_reads).
     void flush_tally() noexcept;
+    // The FC03/04 reads answered inline since the last call (slave::read_registers_uncounted),
+    // counted in the model's diagnostics at once: one atomic add per frame loop, not a locked
+    // increment per request. Called before any other request reaches the handler, so its
+    // counters and event log see them.
+    void flush_reads() noexcept;
     void queue_exception(Connection& c, const codec::TcpFrame& frame,
                          codec::ExceptionCode code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
@@ -193,6 +199,7 @@ class Worker {
         std::uint64_t requests = 0;
         std::uint64_t transactions = 0;
         std::uint64_t pending_output = 0;
+        std::uint64_t reads = 0;  // flush_reads()
     };
     FrameTally tally_;  // flush_tally()
     std::atomic<int> init_status_{0};

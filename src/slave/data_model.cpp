@@ -200,6 +200,16 @@ std::uint16_t Diagnostics::comm_event_count() const noexcept {
                                       since_clear(fetches_, base_fetches_));
 }
 
+void Diagnostics::note_messages(std::uint64_t count, std::uint8_t receive_event,
+                                std::uint8_t send_event) noexcept {
+    const std::uint64_t first = messages_.fetch_add(count, std::memory_order_relaxed);
+    const std::uint64_t end = first + count;
+    const auto pair = static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event);
+    // Only the newest kLogPairs survive; older ones would be overwritten at once.
+    for (std::uint64_t seq = count > kLogPairs ? end - kLogPairs : first; seq != end; ++seq)
+        log_[seq % kLogPairs].store(pair, std::memory_order_relaxed);
+}
+
 void Diagnostics::clear_counters() noexcept {
     auto reset = [](const std::atomic<std::uint64_t>& raw, std::atomic<std::uint64_t>& base) {
         base.store(raw.load(std::memory_order_relaxed), std::memory_order_relaxed);

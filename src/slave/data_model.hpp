@@ -197,8 +197,9 @@ class FileStore {
 };
 
 // Serial-line diagnostics (FC08 counters, FC0B comm event counter, FC0C event log), kept
-// cheaply: the handler does one atomic increment per request; every reported counter is a
-// raw monotonic count minus the value it had at the last clear.
+// cheaply: the handler does one atomic increment per request (a server counts the FC03/04
+// reads it answers inline and adds them per frame loop: note_messages); every reported counter
+// is a raw monotonic count minus the value it had at the last clear.
 //
 // Definitions over TCP (there is no shared bus, so "bus" and "server" counts coincide):
 //   bus/server message count   every request handled for this model (including the current one)
@@ -221,6 +222,11 @@ class Diagnostics {
             static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event),
             std::memory_order_relaxed);
     }
+    // `count` requests handled normally, all with the same events, as if each had been
+    // begun and ended in turn: one atomic add for the lot (a locked increment per request was
+    // half of an FC03's handler time) and the log's last min(count, kLogPairs) entries.
+    void note_messages(std::uint64_t count, std::uint8_t receive_event,
+                       std::uint8_t send_event) noexcept;
     void note_exception() noexcept { exceptions_.fetch_add(1, std::memory_order_relaxed); }
     void note_fetch() noexcept { fetches_.fetch_add(1, std::memory_order_relaxed); }
     void note_no_response() noexcept { no_responses_.fetch_add(1, std::memory_order_relaxed); }

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "client_test_support.hpp"
+#include "codec/bytes.hpp"
 #include "net/socket.hpp"
 #include "server/server.hpp"
 #include "server/stats.hpp"
@@ -83,6 +84,39 @@ TEST(Server, PipelinedBurstOfThousandInOneSend) {
     EXPECT_EQ(s.requests, 1000u);
     EXPECT_EQ(s.requests_by_function[3], 1000u);
     EXPECT_EQ(s.pending_output, 0u);
+}
+
+TEST(Server, DiagnosticsSeeTheReadsPipelinedBeforeThem) {
+    // The reads answered inline are counted once per frame loop (issue #18): an FC0C in the
+    // same recv still sees every read before it, and the next recv sees the whole batch.
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    auto bytes = burst(40, 1);
+    const std::vector<std::uint8_t> event_log = {0x01, 0x00, 0x00, 0x00, 0x00, 0x02, 0x01, 0x0C};
+    bytes.insert(bytes.end(), event_log.begin(), event_log.end());
+    bytes.insert(bytes.end(), event_log.begin(), event_log.end());
+    ASSERT_TRUE(c.send_all(bytes));
+    expect_responses(c, 40, 1);
+    for (int round = 0; round < 2; ++round) {
+        // 32 pairs (64 bytes) of log, newest first (send 0x40, receive 0x80): reads, and in
+        // the second answer the first FC0C's own pair too.
+        const auto r = c.recv_n(7 + 8 + 64);
+        ASSERT_EQ(r.size(), 7u + 8u + 64u) << round;
+        const std::uint8_t* pdu = r.data() + 7;
+        EXPECT_EQ(pdu[0], 0x0C);
+        EXPECT_EQ(pdu[1], 6 + 64);
+        EXPECT_EQ(codec::load_be16(pdu + 4), 40) << "event count";  // fetches do not count
+        EXPECT_EQ(codec::load_be16(pdu + 6), 41 + round) << "message count, with itself";
+        for (int i = 0; i < 32; ++i) {
+            EXPECT_EQ(pdu[8 + 2 * i], 0x40) << round << " " << i;
+            EXPECT_EQ(pdu[9 + 2 * i], 0x80) << round << " " << i;
+        }
+    }
+    Client fresh(*srv);
+    ASSERT_TRUE(fresh.send_all(event_log));
+    const auto r = fresh.recv_n(7 + 8 + 64);
+    ASSERT_EQ(r.size(), 7u + 8u + 64u);
+    EXPECT_EQ(codec::load_be16(r.data() + 7 + 6), 43);
 }
 
 TEST(Server, ByteByByteFragments) {
