@@ -687,7 +687,8 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
 
     std::uint8_t* p;
     try {
-        p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu);
+        // The slack: the FC03/04 shortcut copies whole words past the answer's end.
+        p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu + slave::kReadSlack);
     } catch (...) {
         flush_tally();
         close_connection(index);
@@ -696,7 +697,11 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
     const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
     slave::HandleResult r;
-    if (!units_ && slave::read_registers_uncounted(frame.pdu, model_, pdu_out.data(), r)) {
+    // Its copy may overwrite the 6 bytes before the PDU: an MBAP header written afterwards, not
+    // an RTU answer's 1-byte head (the end of the previous answer).
+    static_assert(codec::limits::kMbapHeader >= slave::kReadSlack);
+    if (!units_ && !c.rtu &&
+        slave::read_registers_uncounted(frame.pdu, model_, pdu_out.data(), r)) {
         ++tally_.reads;
     } else {
         flush_reads();  // this request's diagnostics come after the reads before it

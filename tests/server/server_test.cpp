@@ -119,6 +119,40 @@ TEST(Server, DiagnosticsSeeTheReadsPipelinedBeforeThem) {
     EXPECT_EQ(codec::load_be16(r.data() + 7 + 6), 43);
 }
 
+TEST(Server, PipelinedReadsAtEveryWordOffsetAreAnsweredExactly) {
+    // The server copies registers a 64-bit word at a time, overwriting a few bytes either
+    // side of the answer (issue #18): pipelined answers at every start lane and length must
+    // still be exact, headers and neighbours included.
+    auto srv = start(test::test_config());
+    for (std::uint16_t a = 0; a < 64; ++a)
+        srv->model().holding_registers().set(a, static_cast<std::uint16_t>(0x1100 + a * 0x0101));
+    Client c(*srv);
+    std::vector<std::uint8_t> requests;
+    std::vector<std::pair<std::uint16_t, std::uint16_t>> reads;  // address, quantity
+    for (std::uint16_t address = 0; address < 8; ++address)
+        for (std::uint16_t quantity = 1; quantity <= 13; ++quantity) {
+            const auto tid = static_cast<std::uint16_t>(reads.size());
+            auto r = read_holding(tid, 5, address, quantity);
+            requests.insert(requests.end(), r.begin(), r.end());
+            reads.emplace_back(address, quantity);
+        }
+    ASSERT_TRUE(c.send_all(requests));
+    for (std::size_t i = 0; i < reads.size(); ++i) {
+        const auto [address, quantity] = reads[i];
+        const auto r = c.recv_n(test::read_holding_response_size(quantity));
+        ASSERT_EQ(r.size(), test::read_holding_response_size(quantity)) << i;
+        EXPECT_EQ(codec::load_be16(r.data()), i);
+        EXPECT_EQ(codec::load_be16(r.data() + 2), 0);
+        EXPECT_EQ(codec::load_be16(r.data() + 4), 3 + 2 * quantity);
+        EXPECT_EQ(r[6], 5);
+        EXPECT_EQ(r[7], 3);
+        EXPECT_EQ(r[8], 2 * quantity);
+        for (std::uint16_t k = 0; k < quantity; ++k)
+            ASSERT_EQ(codec::load_be16(r.data() + 9 + 2 * k), 0x1100 + (address + k) * 0x0101)
+                << address << " " << quantity << " " << k;
+    }
+}
+
 TEST(Server, ByteByByteFragments) {
     auto srv = start(test::test_config());
     Client c(*srv);
