@@ -39,6 +39,8 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
       index_(index),
       open_connections_(open_connections),
       faults_(config.faults, index, stall_origin_ns) {
+    plain_frames_ =
+        !units_ && !config_.only_unit && config_.max_outstanding == 0 && !faults_.enabled();
     stop_fd_ = eventfd(0, EFD_CLOEXEC);
     mail_fd_ = eventfd(0, EFD_CLOEXEC);
 }
@@ -625,10 +627,18 @@ bool Worker::serve_frame(Connection& c, std::uint32_t index,
 }
 
 void Worker::flush_reads() noexcept {
-    if (tally_.reads == 0) return;
+    // [1]: FC03 (holding registers), [0]: FC04 (input registers).
+    const std::uint64_t holding = tally_.reads_by_function[1];
+    const std::uint64_t input = tally_.reads_by_function[0];
+    if (holding + input == 0) return;
+    counters_.add_request(static_cast<std::uint8_t>(codec::FunctionCode::ReadHoldingRegisters),
+                          holding);
+    counters_.add_request(static_cast<std::uint8_t>(codec::FunctionCode::ReadInputRegisters),
+                          input);
     if (model_.track_diagnostics())
-        model_.diagnostics().note_messages(tally_.reads, slave::kReceiveEvent, slave::kSendEvent);
-    tally_.reads = 0;
+        model_.diagnostics().note_messages(holding + input, slave::kReceiveEvent,
+                                           slave::kSendEvent);
+    tally_.reads_by_function[0] = tally_.reads_by_function[1] = 0;
 }
 
 void Worker::flush_tally() noexcept {
@@ -641,6 +651,29 @@ void Worker::flush_tally() noexcept {
 
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     ++tally_.requests;
+    // The load test's request on a plain server: an FC03/04 answered inline, with none of the
+    // checks below configured (plain_frames_) or owed to this connection (TLS roles, RTU).
+    if (plain_frames_ && !c.tls && !c.rtu) [[likely]] {
+        // The slack: the shortcut copies whole words past the answer's end.
+        if (std::uint8_t* p =
+                c.out.reserve_in_tail(codec::limits::kMaxTcpAdu + slave::kReadSlack)) {
+            slave::HandleResult r;
+            // Its copy may overwrite the 6 bytes before the PDU: the MBAP header, written after.
+            static_assert(codec::limits::kMbapHeader >= slave::kReadSlack);
+            if (slave::read_registers_uncounted(frame.pdu, model_, p + codec::limits::kMbapHeader,
+                                                r)) {
+                ++tally_.reads_by_function[r.function & 1];
+                codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id,
+                                         r.size);
+                const std::size_t n = codec::limits::kMbapHeader + r.size;
+                c.out.commit(n);
+                tally_.pending_output += n;
+                ++tally_.transactions;
+                ++c.unanswered;
+                return true;
+            }
+        }
+    }
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
     if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
         counters_.add(ServerCounters::TlsRoleDenied);
@@ -687,8 +720,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
 
     std::uint8_t* p;
     try {
-        // The slack: the FC03/04 shortcut copies whole words past the answer's end.
-        p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu + slave::kReadSlack);
+        p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu);
     } catch (...) {
         flush_tally();
         close_connection(index);
@@ -697,14 +729,8 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
     const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
     slave::HandleResult r;
-    // Its copy may overwrite the 6 bytes before the PDU: an MBAP header written afterwards, not
-    // an RTU answer's 1-byte head (the end of the previous answer).
-    static_assert(codec::limits::kMbapHeader >= slave::kReadSlack);
-    if (!units_ && !c.rtu &&
-        slave::read_registers_uncounted(frame.pdu, model_, pdu_out.data(), r)) {
-        ++tally_.reads;
-    } else {
-        flush_reads();  // this request's diagnostics come after the reads before it
+    flush_reads();  // this request's diagnostics come after the reads before it
+    if (units_ || !slave::read_registers_inline(frame.pdu, model_, pdu_out.data(), r)) {
         r = units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                    : slave::handle_request(frame.pdu, model_, pdu_out);
     }

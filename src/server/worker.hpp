@@ -133,10 +133,11 @@ class Worker {
     // frame were a twentieth of the server's instructions at FC03 x 10.
     // Also hands the reads answered inline to the model's diagnostics (flush_reads).
     void flush_tally() noexcept;
-    // The FC03/04 reads answered inline since the last call (slave::read_registers_uncounted),
-    // counted in the model's diagnostics at once: one atomic add per frame loop, not a locked
-    // increment per request. Called before any other request reaches the handler, so its
-    // counters and event log see them.
+    // The FC03/04 reads answered by on_frame's shortcut since the last call
+    // (slave::read_registers_uncounted), added to the per-function request counters and to
+    // the model's diagnostics at once: one atomic add per frame loop, not a locked increment
+    // per request. Called before any other request reaches the handler, so its counters and
+    // event log see them.
     void flush_reads() noexcept;
     void queue_exception(Connection& c, const codec::TcpFrame& frame,
                          codec::ExceptionCode code) noexcept;
@@ -153,6 +154,8 @@ class Worker {
     ServerConfig config_;
     slave::DataModel& model_;
     const slave::UnitModels* units_;  // routes by unit id when set
+    // No unit routing, unit filter, outstanding cap or faults: on_frame's shortcut applies.
+    bool plain_frames_ = false;
     int listen_fd_;
     unsigned index_;
     std::atomic<std::uint32_t>& open_connections_;
@@ -199,7 +202,9 @@ class Worker {
         std::uint64_t requests = 0;
         std::uint64_t transactions = 0;
         std::uint64_t pending_output = 0;
-        std::uint64_t reads = 0;  // flush_reads()
+        // FC04 and FC03 answered by the shortcut in on_frame, by function code & 1:
+        // their per-function request counts and diagnostics (flush_reads()).
+        std::uint64_t reads_by_function[2] = {0, 0};
     };
     FrameTally tally_;  // flush_tally()
     std::atomic<int> init_status_{0};

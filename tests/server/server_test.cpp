@@ -153,6 +153,29 @@ TEST(Server, PipelinedReadsAtEveryWordOffsetAreAnsweredExactly) {
     }
 }
 
+TEST(Server, ShortcutReadsAreCountedUnderTheirFunction) {
+    // FC03/04 answered by the frame loop's shortcut are counted per frame loop (issue #18).
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    std::vector<std::uint8_t> requests;
+    for (std::uint16_t i = 0; i < 5; ++i) {
+        auto r = read_holding(i, 1, i, 2);
+        if (i >= 3) r[7] = 0x04;  // read input registers
+        requests.insert(requests.end(), r.begin(), r.end());
+    }
+    const std::vector<std::uint8_t> write = {0, 5, 0, 0, 0, 6, 1, 0x06, 0, 9, 0x12, 0x34};
+    requests.insert(requests.end(), write.begin(), write.end());
+    ASSERT_TRUE(c.send_all(requests));
+    ASSERT_EQ(c.recv_n(5 * test::read_holding_response_size(2) + 12).size(),
+              5 * test::read_holding_response_size(2) + 12);
+    const auto s = srv->stats();
+    EXPECT_EQ(s.requests, 6u);
+    EXPECT_EQ(s.requests_by_function[3], 3u);
+    EXPECT_EQ(s.requests_by_function[4], 2u);
+    EXPECT_EQ(s.requests_by_function[6], 1u);
+    EXPECT_EQ(srv->model().holding_registers().get(9), 0x1234);
+}
+
 TEST(Server, ByteByByteFragments) {
     auto srv = start(test::test_config());
     Client c(*srv);
