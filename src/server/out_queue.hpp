@@ -45,13 +45,7 @@ class OutQueue {
             return tail_->data + tail_->end;
         return reserve_new_block(pool);
     }
-    // reserve() when the tail block has room, else nullptr (never allocates, never throws).
-    std::uint8_t* reserve_in_tail(std::size_t max_size) noexcept {
-        if (tail_ && OutBlock::kCapacity - tail_->end >= max_size) [[likely]]
-            return tail_->data + tail_->end;
-        return nullptr;
-    }
-    // Commits `size` bytes written at the pointer reserve() or reserve_in_tail() returned.
+    // Commits `size` bytes written at the pointer reserve() returned.
     void commit(std::size_t size) noexcept {
         tail_->end += static_cast<std::uint32_t>(size);
         written_ += size;

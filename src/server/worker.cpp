@@ -39,8 +39,8 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
       index_(index),
       open_connections_(open_connections),
       faults_(config.faults, index, stall_origin_ns) {
-    plain_frames_ =
-        !units_ && !config_.only_unit && config_.max_outstanding == 0 && !faults_.enabled();
+    plain_frames_ = !units_ && !config_.only_unit && config_.max_outstanding == 0 &&
+                    !faults_.enabled() && config_.framing == codec::Framing::Mbap;
     stop_fd_ = eventfd(0, EFD_CLOEXEC);
     mail_fd_ = eventfd(0, EFD_CLOEXEC);
 }
@@ -652,11 +652,17 @@ void Worker::flush_tally() noexcept {
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     ++tally_.requests;
     // The load test's request on a plain server: an FC03/04 answered inline, with none of the
-    // checks below configured (plain_frames_) or owed to this connection (TLS roles, RTU).
-    if (plain_frames_ && !c.tls && !c.rtu) [[likely]] {
-        // The slack: the shortcut copies whole words past the answer's end.
-        if (std::uint8_t* p =
-                c.out.reserve_in_tail(codec::limits::kMaxTcpAdu + slave::kReadSlack)) {
+    // checks below configured (plain_frames_: RTU framing among them) or owed to this
+    // connection (TLS roles).
+    if (plain_frames_ && !c.tls) [[likely]] {
+        std::uint8_t* p;
+        try {
+            // The slack: the shortcut copies whole words past the answer's end.
+            p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu + slave::kReadSlack);
+        } catch (...) {
+            p = nullptr;  // the general path below tries again and closes
+        }
+        if (p) {
             slave::HandleResult r;
             // Its copy may overwrite the 6 bytes before the PDU: the MBAP header, written after.
             static_assert(codec::limits::kMbapHeader >= slave::kReadSlack);

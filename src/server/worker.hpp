@@ -154,7 +154,8 @@ class Worker {
     ServerConfig config_;
     slave::DataModel& model_;
     const slave::UnitModels* units_;  // routes by unit id when set
-    // No unit routing, unit filter, outstanding cap or faults: on_frame's shortcut applies.
+    // MBAP framing, no unit routing, unit filter, outstanding cap or faults: on_frame's
+    // shortcut applies (to connections without TLS).
     bool plain_frames_ = false;
     int listen_fd_;
     unsigned index_;

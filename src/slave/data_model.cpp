@@ -213,11 +213,15 @@ std::uint16_t Diagnostics::comm_event_count() const noexcept {
 void Diagnostics::note_messages(std::uint64_t count, std::uint8_t receive_event,
                                 std::uint8_t send_event) noexcept {
     const std::uint64_t first = messages_.fetch_add(count, std::memory_order_relaxed);
-    const std::uint64_t end = first + count;
     const auto pair = static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event);
-    // Only the newest kLogPairs survive; older ones would be overwritten at once.
-    for (std::uint64_t seq = count > kLogPairs ? end - kLogPairs : first; seq != end; ++seq)
-        log_[seq % kLogPairs].store(pair, std::memory_order_relaxed);
+    // Only the newest kLogPairs survive (older ones would be overwritten at once): from the
+    // oldest of those to the end of the ring, then from its start.
+    const std::size_t n = count < kLogPairs ? static_cast<std::size_t>(count) : kLogPairs;
+    const auto from = static_cast<std::size_t>((first + count - n) % kLogPairs);
+    const std::size_t to_end = std::min(n, kLogPairs - from);
+    for (std::size_t i = from; i != from + to_end; ++i)
+        log_[i].store(pair, std::memory_order_relaxed);
+    for (std::size_t i = 0; i != n - to_end; ++i) log_[i].store(pair, std::memory_order_relaxed);
 }
 
 void Diagnostics::clear_counters() noexcept {

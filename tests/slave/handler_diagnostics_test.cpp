@@ -131,11 +131,15 @@ TEST(HandlerDiagnostics, MessagesNotedInABatchCountAndLogAsIfOneByOne) {
 
     // More than the log holds: the newest 32 pairs, the count exact.
     call(m, Pdu(0x03).u16(999).u16(1));
-    m.diagnostics().note_messages(31, kReceiveEvent, 0x42);
+    m.diagnostics().note_messages(31, kReceiveEvent, 0x42);  // wraps around the ring
+    r = call(m, Pdu(0x0C));
+    ASSERT_EQ(r.bytes.size(), 8u + 64u);
+    for (std::size_t i = 8; i < 8 + 62; i += 2) EXPECT_EQ(r.bytes[i], 0x42) << i;
+    EXPECT_EQ(r.bytes[8 + 62], 0x41);  // the exception before them
     m.diagnostics().note_messages(100, kReceiveEvent, kSendEvent);
     r = call(m, Pdu(0x0C));
     ASSERT_EQ(r.bytes.size(), 8u + 64u);
-    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 4 + 1 + 31 + 100 + 1);
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 4 + 1 + 31 + 1 + 100 + 1);
     for (std::size_t i = 8; i < r.bytes.size(); i += 2) {
         EXPECT_EQ(r.bytes[i], 0x40) << i;
         EXPECT_EQ(r.bytes[i + 1], 0x80) << i;
