@@ -101,9 +101,9 @@ class ServerCounters {
         auto& c = exceptions_[code];
         c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     }
-    void add_request(std::uint8_t function_code) noexcept {
+    void add_request(std::uint8_t function_code, std::uint64_t n = 1) noexcept {
         auto& c = by_function_[function_code];
-        c.store(c.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
+        c.store(c.load(std::memory_order_relaxed) + n, std::memory_order_relaxed);
     }
     ServerStats snapshot() const noexcept;
 

@@ -39,6 +39,8 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
       index_(index),
       open_connections_(open_connections),
       faults_(config.faults, index, stall_origin_ns) {
+    plain_frames_ = !units_ && !config_.only_unit && config_.max_outstanding == 0 &&
+                    !faults_.enabled() && config_.framing == codec::Framing::Mbap;
     stop_fd_ = eventfd(0, EFD_CLOEXEC);
     mail_fd_ = eventfd(0, EFD_CLOEXEC);
 }
@@ -242,8 +244,8 @@ void Worker::shutdown_all() noexcept {
     }
     std::int64_t until = net::now_ns() + kStopDrainNs;
     auto busy = [this] {
-        for (const Connection& c : conns_)
-            if (c.state == Connection::State::Closing) return true;
+        for (std::uint32_t i = 0; i < conns_.size(); ++i)
+            if (conns_[i].state == Connection::State::Closing) return true;
         return false;
     };
     while (busy() && net::now_ns() < until) {
@@ -572,6 +574,8 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
     for (;;) {
         switch (c.splitter.next(frame)) {
             case codec::MbapSplitter::Status::NeedMore:
+                // One dirty mark per frame loop, not per frame (7 instructions a frame).
+                if (completed) mark_dirty(c, index);
                 flush_tally();
                 counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
                 note_partial_frame(c, index, completed);
@@ -582,6 +586,7 @@ void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
                 break;
             case codec::MbapSplitter::Status::Fatal:
                 // The frames before this one are answered; the connection closes after that.
+                if (completed) mark_dirty(c, index);
                 flush_tally();
                 lose_framing(index);
                 return;
@@ -616,11 +621,28 @@ void Worker::start_frame_clock(Connection& c, std::uint32_t index) noexcept {
 bool Worker::serve_frame(Connection& c, std::uint32_t index,
                          const codec::TcpFrame& frame) noexcept {
     const bool open = on_frame(c, index, frame);
+    if (open) mark_dirty(c, index);
     flush_tally();
     return open;
 }
 
+void Worker::flush_reads() noexcept {
+    // [1]: FC03 (holding registers), [0]: FC04 (input registers).
+    const std::uint64_t holding = tally_.reads_by_function[1];
+    const std::uint64_t input = tally_.reads_by_function[0];
+    if (holding + input == 0) return;
+    counters_.add_request(static_cast<std::uint8_t>(codec::FunctionCode::ReadHoldingRegisters),
+                          holding);
+    counters_.add_request(static_cast<std::uint8_t>(codec::FunctionCode::ReadInputRegisters),
+                          input);
+    if (model_.track_diagnostics())
+        model_.diagnostics().note_messages(holding + input, slave::kReceiveEvent,
+                                           slave::kSendEvent);
+    tally_.reads_by_function[0] = tally_.reads_by_function[1] = 0;
+}
+
 void Worker::flush_tally() noexcept {
+    flush_reads();
     counters_.add(ServerCounters::Requests, tally_.requests);
     counters_.add(ServerCounters::Transactions, tally_.transactions);
     counters_.add(ServerCounters::PendingOutput, tally_.pending_output);
@@ -629,24 +651,50 @@ void Worker::flush_tally() noexcept {
 
 bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept {
     ++tally_.requests;
+    // The load test's request on a plain server: an FC03/04 answered inline, with none of the
+    // checks below configured (plain_frames_: RTU framing among them) or owed to this
+    // connection (TLS roles).
+    if (plain_frames_ && !c.tls) [[likely]] {
+        std::uint8_t* p;
+        try {
+            // The slack: the shortcut copies whole words past the answer's end.
+            p = c.out.reserve(pool_, codec::limits::kMaxTcpAdu + slave::kReadSlack);
+        } catch (...) {
+            p = nullptr;  // the general path below tries again and closes
+        }
+        if (p) {
+            slave::HandleResult r;
+            // Its copy may overwrite the 6 bytes before the PDU: the MBAP header, written after.
+            static_assert(codec::limits::kMbapHeader >= slave::kReadSlack);
+            if (slave::read_registers_uncounted(frame.pdu, model_, p + codec::limits::kMbapHeader,
+                                                r)) {
+                ++tally_.reads_by_function[r.function & 1];
+                codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id,
+                                         r.size);
+                const std::size_t n = codec::limits::kMbapHeader + r.size;
+                c.out.commit(n);
+                tally_.pending_output += n;
+                ++tally_.transactions;
+                ++c.unanswered;
+                return true;
+            }
+        }
+    }
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
     if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
         counters_.add(ServerCounters::TlsRoleDenied);
         queue_exception(c, frame, codec::ExceptionCode::IllegalFunction);
-        mark_dirty(c, index);
         return true;
     }
     if (config_.only_unit && frame.header.unit_id != *config_.only_unit) {
         counters_.add(ServerCounters::ForeignUnit);
         if (config_.foreign_unit == ForeignUnitPolicy::GatewayException)
             queue_exception(c, frame, codec::ExceptionCode::GatewayTargetFailedToRespond);
-        mark_dirty(c, index);
         return true;
     }
     if (config_.max_outstanding != 0 && c.unanswered >= config_.max_outstanding) {
         counters_.add(ServerCounters::BusyRejects);
         queue_exception(c, frame, codec::ExceptionCode::ServerDeviceBusy);
-        mark_dirty(c, index);
         return true;
     }
 
@@ -672,7 +720,6 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         }
         if (decision.action == slave::FaultDecision::Action::Exception) {
             queue_exception(c, frame, decision.exception);
-            mark_dirty(c, index);
             return true;
         }
     }
@@ -688,6 +735,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
     const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
     slave::HandleResult r;
+    flush_reads();  // this request's diagnostics come after the reads before it
     if (units_ || !slave::read_registers_inline(frame.pdu, model_, pdu_out.data(), r)) {
         r = units_ ? slave::handle_request(frame.header.unit_id, frame.pdu, *units_, pdu_out)
                    : slave::handle_request(frame.pdu, model_, pdu_out);
@@ -707,7 +755,6 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     if (r.outcome == slave::Outcome::Exception)
         counters_.add_exception(static_cast<std::uint8_t>(r.exception));
     ++c.unanswered;
-    mark_dirty(c, index);
     return true;
 }
 

@@ -5,7 +5,6 @@
 
 #include <atomic>
 #include <cstdint>
-#include <deque>
 #include <vector>
 
 #include "net/buf_ring.hpp"
@@ -13,6 +12,7 @@
 #include "net/ring.hpp"
 #include "server/config.hpp"
 #include "server/connection.hpp"
+#include "server/connection_table.hpp"
 #include "server/stats.hpp"
 #include "slave/faults.hpp"
 
@@ -120,7 +120,8 @@ class Worker {
     // Closes a connection whose input is over once every answer has gone out.
     void close_if_answered(std::uint32_t index) noexcept;
     // False when the connection was closed (fault drop).
-    // `c` is conns_[index], passed along so the hot path indexes the deque once per frame.
+    // `c` is conns_[index], passed along so the hot path indexes the table once per frame.
+    // Marks nothing dirty: its callers mark the connection once per frame loop.
     // Inlined into consume_input's loop: the call per frame (saved registers, arguments)
     // cost 28 instructions per transaction at FC03 x 10, 9 % of the server's.
     [[gnu::always_inline]] inline bool on_frame(Connection& c, std::uint32_t index,
@@ -130,7 +131,14 @@ class Worker {
     // The per-frame counters (requests, transactions, bytes queued) summed in tally_ over a
     // frame loop and added to counters_ once at its end: three load-add-store sequences per
     // frame were a twentieth of the server's instructions at FC03 x 10.
+    // Also hands the reads answered inline to the model's diagnostics (flush_reads).
     void flush_tally() noexcept;
+    // The FC03/04 reads answered by on_frame's shortcut since the last call
+    // (slave::read_registers_uncounted), added to the per-function request counters and to
+    // the model's diagnostics at once: one atomic add per frame loop, not a locked increment
+    // per request. Called before any other request reaches the handler, so its counters and
+    // event log see them.
+    void flush_reads() noexcept;
     void queue_exception(Connection& c, const codec::TcpFrame& frame,
                          codec::ExceptionCode code) noexcept;
     void hold_from_here(std::uint32_t index, std::int64_t until_ns) noexcept;
@@ -146,6 +154,9 @@ class Worker {
     ServerConfig config_;
     slave::DataModel& model_;
     const slave::UnitModels* units_;  // routes by unit id when set
+    // MBAP framing, no unit routing, unit filter, outstanding cap or faults: on_frame's
+    // shortcut applies (to connections without TLS).
+    bool plain_frames_ = false;
     int listen_fd_;
     unsigned index_;
     std::atomic<std::uint32_t>& open_connections_;
@@ -172,7 +183,7 @@ class Worker {
     std::int64_t accept_pause_ns_ = 0;  // next pause after EMFILE/ENFILE; reset by an accept
     __kernel_timespec accept_pause_ts_{};
 
-    std::deque<Connection> conns_;  // stable addresses; grows, never shrinks
+    ConnectionTable conns_;  // stable addresses; grows, never shrinks
     std::vector<std::uint32_t> free_slots_;
     net::DirtyList dirty_;
     std::vector<std::uint32_t> rearm_;
@@ -192,6 +203,9 @@ class Worker {
         std::uint64_t requests = 0;
         std::uint64_t transactions = 0;
         std::uint64_t pending_output = 0;
+        // FC04 and FC03 answered by the shortcut in on_frame, by function code & 1:
+        // their per-function request counts and diagnostics (flush_reads()).
+        std::uint64_t reads_by_function[2] = {0, 0};
     };
     FrameTally tally_;  // flush_tally()
     std::atomic<int> init_status_{0};

@@ -112,38 +112,48 @@ void BitTable::write_packed(std::uint16_t address, std::uint16_t quantity,
 // ---- RegisterTable ----
 
 RegisterTable::RegisterTable(std::uint32_t size)
-    : regs_(new std::atomic<std::uint16_t>[checked_size(size) == 0 ? 1 : size]()), size_(size) {}
+    : words_(new std::atomic<std::uint64_t>[(checked_size(size) + 3) / 4 + 1]()), size_(size) {}
 
 std::uint16_t RegisterTable::mask_write(std::uint16_t address, std::uint16_t and_mask,
                                         std::uint16_t or_mask) noexcept {
-    std::atomic<std::uint16_t>& reg = regs_[address];
-    std::uint16_t stored = reg.load(std::memory_order_relaxed);
-    std::uint16_t next;
-    do {
-        const std::uint16_t current = wire(stored);
-        next = static_cast<std::uint16_t>((current & and_mask) | (or_mask & ~and_mask));
-    } while (!reg.compare_exchange_weak(stored, wire(next), std::memory_order_relaxed));
-    return next;
+    return update(address, [and_mask, or_mask](std::uint16_t current) {
+        return static_cast<std::uint16_t>((current & and_mask) | (or_mask & ~and_mask));
+    });
 }
 
 std::uint16_t RegisterTable::add(std::uint16_t address, std::uint16_t delta) noexcept {
-    // Wire order does not add: a compare-and-swap loop, as for mask_write.
-    std::atomic<std::uint16_t>& reg = regs_[address];
-    std::uint16_t stored = reg.load(std::memory_order_relaxed);
-    std::uint16_t next;
-    do {
-        next = static_cast<std::uint16_t>(wire(stored) + delta);
-    } while (!reg.compare_exchange_weak(stored, wire(next), std::memory_order_relaxed));
-    return next;
+    return update(address, [delta](std::uint16_t current) {
+        return static_cast<std::uint16_t>(current + delta);
+    });
 }
 
 void RegisterTable::write_be(std::uint16_t address, std::uint16_t quantity,
                              const std::uint8_t* in) noexcept {
-    std::atomic<std::uint16_t>* dst = regs_.get() + address;
-    for (std::uint32_t i = 0; i < quantity; ++i) {
-        std::uint16_t value;  // the request's bytes are wire order, as the table keeps them
-        std::memcpy(&value, in + 2 * i, sizeof value);
-        dst[i].store(value, std::memory_order_relaxed);
+    // A word at a time: a store when all four of its registers are written, otherwise a
+    // compare-and-swap that keeps the others.
+    std::uint32_t pos = address;
+    for (std::uint32_t done = 0; done < quantity;) {
+        const unsigned first = pos & 3;
+        const std::uint32_t n = std::min<std::uint32_t>(4 - first, quantity - done);
+        std::uint64_t mask = 0, bits = 0;
+        for (std::uint32_t k = 0; k < n; ++k) {
+            std::uint16_t value;  // the request's bytes are wire order, as the table keeps them
+            std::memcpy(&value, in + 2 * (done + k), sizeof value);
+            const unsigned shift = lane_shift(first + k);
+            mask |= std::uint64_t{0xFFFF} << shift;
+            bits |= std::uint64_t{value} << shift;
+        }
+        std::atomic<std::uint64_t>& word = words_[pos >> 2];
+        if (n == 4) {
+            word.store(bits, std::memory_order_relaxed);
+        } else {
+            std::uint64_t old = word.load(std::memory_order_relaxed);
+            while (
+                !word.compare_exchange_weak(old, (old & ~mask) | bits, std::memory_order_relaxed)) {
+            }
+        }
+        pos += n;
+        done += n;
     }
 }
 
@@ -198,6 +208,20 @@ void FileStore::write_be(std::uint16_t file, std::uint16_t record, std::uint16_t
 std::uint16_t Diagnostics::comm_event_count() const noexcept {
     return static_cast<std::uint16_t>(message_count() - exception_count() -
                                       since_clear(fetches_, base_fetches_));
+}
+
+void Diagnostics::note_messages(std::uint64_t count, std::uint8_t receive_event,
+                                std::uint8_t send_event) noexcept {
+    const std::uint64_t first = messages_.fetch_add(count, std::memory_order_relaxed);
+    const auto pair = static_cast<std::uint16_t>((unsigned{receive_event} << 8) | send_event);
+    // Only the newest kLogPairs survive (older ones would be overwritten at once): from the
+    // oldest of those to the end of the ring, then from its start.
+    const std::size_t n = count < kLogPairs ? static_cast<std::size_t>(count) : kLogPairs;
+    const auto from = static_cast<std::size_t>((first + count - n) % kLogPairs);
+    const std::size_t to_end = std::min(n, kLogPairs - from);
+    for (std::size_t i = from; i != from + to_end; ++i)
+        log_[i].store(pair, std::memory_order_relaxed);
+    for (std::size_t i = 0; i != n - to_end; ++i) log_[i].store(pair, std::memory_order_relaxed);
 }
 
 void Diagnostics::clear_counters() noexcept {

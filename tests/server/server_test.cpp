@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "client_test_support.hpp"
+#include "codec/bytes.hpp"
 #include "net/socket.hpp"
 #include "server/server.hpp"
 #include "server/stats.hpp"
@@ -83,6 +84,96 @@ TEST(Server, PipelinedBurstOfThousandInOneSend) {
     EXPECT_EQ(s.requests, 1000u);
     EXPECT_EQ(s.requests_by_function[3], 1000u);
     EXPECT_EQ(s.pending_output, 0u);
+}
+
+TEST(Server, DiagnosticsSeeTheReadsPipelinedBeforeThem) {
+    // The reads answered inline are counted once per frame loop (issue #18): an FC0C in the
+    // same recv still sees every read before it, and the next recv sees the whole batch.
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    auto bytes = burst(40, 1);
+    const std::vector<std::uint8_t> event_log = {0x01, 0x00, 0x00, 0x00, 0x00, 0x02, 0x01, 0x0C};
+    bytes.insert(bytes.end(), event_log.begin(), event_log.end());
+    bytes.insert(bytes.end(), event_log.begin(), event_log.end());
+    ASSERT_TRUE(c.send_all(bytes));
+    expect_responses(c, 40, 1);
+    for (int round = 0; round < 2; ++round) {
+        // 32 pairs (64 bytes) of log, newest first (send 0x40, receive 0x80): reads, and in
+        // the second answer the first FC0C's own pair too.
+        const auto r = c.recv_n(7 + 8 + 64);
+        ASSERT_EQ(r.size(), 7u + 8u + 64u) << round;
+        const std::uint8_t* pdu = r.data() + 7;
+        EXPECT_EQ(pdu[0], 0x0C);
+        EXPECT_EQ(pdu[1], 6 + 64);
+        EXPECT_EQ(codec::load_be16(pdu + 4), 40) << "event count";  // fetches do not count
+        EXPECT_EQ(codec::load_be16(pdu + 6), 41 + round) << "message count, with itself";
+        for (int i = 0; i < 32; ++i) {
+            EXPECT_EQ(pdu[8 + 2 * i], 0x40) << round << " " << i;
+            EXPECT_EQ(pdu[9 + 2 * i], 0x80) << round << " " << i;
+        }
+    }
+    Client fresh(*srv);
+    ASSERT_TRUE(fresh.send_all(event_log));
+    const auto r = fresh.recv_n(7 + 8 + 64);
+    ASSERT_EQ(r.size(), 7u + 8u + 64u);
+    EXPECT_EQ(codec::load_be16(r.data() + 7 + 6), 43);
+}
+
+TEST(Server, PipelinedReadsAtEveryWordOffsetAreAnsweredExactly) {
+    // The server copies registers a 64-bit word at a time, overwriting a few bytes either
+    // side of the answer (issue #18): pipelined answers at every start lane and length must
+    // still be exact, headers and neighbours included.
+    auto srv = start(test::test_config());
+    for (std::uint16_t a = 0; a < 64; ++a)
+        srv->model().holding_registers().set(a, static_cast<std::uint16_t>(0x1100 + a * 0x0101));
+    Client c(*srv);
+    std::vector<std::uint8_t> requests;
+    std::vector<std::pair<std::uint16_t, std::uint16_t>> reads;  // address, quantity
+    for (std::uint16_t address = 0; address < 8; ++address)
+        for (std::uint16_t quantity = 1; quantity <= 13; ++quantity) {
+            const auto tid = static_cast<std::uint16_t>(reads.size());
+            auto r = read_holding(tid, 5, address, quantity);
+            requests.insert(requests.end(), r.begin(), r.end());
+            reads.emplace_back(address, quantity);
+        }
+    ASSERT_TRUE(c.send_all(requests));
+    for (std::size_t i = 0; i < reads.size(); ++i) {
+        const auto [address, quantity] = reads[i];
+        const auto r = c.recv_n(test::read_holding_response_size(quantity));
+        ASSERT_EQ(r.size(), test::read_holding_response_size(quantity)) << i;
+        EXPECT_EQ(codec::load_be16(r.data()), i);
+        EXPECT_EQ(codec::load_be16(r.data() + 2), 0);
+        EXPECT_EQ(codec::load_be16(r.data() + 4), 3 + 2 * quantity);
+        EXPECT_EQ(r[6], 5);
+        EXPECT_EQ(r[7], 3);
+        EXPECT_EQ(r[8], 2 * quantity);
+        for (std::uint16_t k = 0; k < quantity; ++k)
+            ASSERT_EQ(codec::load_be16(r.data() + 9 + 2 * k), 0x1100 + (address + k) * 0x0101)
+                << address << " " << quantity << " " << k;
+    }
+}
+
+TEST(Server, ShortcutReadsAreCountedUnderTheirFunction) {
+    // FC03/04 answered by the frame loop's shortcut are counted per frame loop (issue #18).
+    auto srv = start(test::test_config());
+    Client c(*srv);
+    std::vector<std::uint8_t> requests;
+    for (std::uint16_t i = 0; i < 5; ++i) {
+        auto r = read_holding(i, 1, i, 2);
+        if (i >= 3) r[7] = 0x04;  // read input registers
+        requests.insert(requests.end(), r.begin(), r.end());
+    }
+    const std::vector<std::uint8_t> write = {0, 5, 0, 0, 0, 6, 1, 0x06, 0, 9, 0x12, 0x34};
+    requests.insert(requests.end(), write.begin(), write.end());
+    ASSERT_TRUE(c.send_all(requests));
+    ASSERT_EQ(c.recv_n(5 * test::read_holding_response_size(2) + 12).size(),
+              5 * test::read_holding_response_size(2) + 12);
+    const auto s = srv->stats();
+    EXPECT_EQ(s.requests, 6u);
+    EXPECT_EQ(s.requests_by_function[3], 3u);
+    EXPECT_EQ(s.requests_by_function[4], 2u);
+    EXPECT_EQ(s.requests_by_function[6], 1u);
+    EXPECT_EQ(srv->model().holding_registers().get(9), 0x1234);
 }
 
 TEST(Server, ByteByByteFragments) {

@@ -1,6 +1,8 @@
 // Data model pieces on their own: packed bit tables against a reference, read counters, FIFOs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <random>
 #include <thread>
 #include <vector>
@@ -109,6 +111,82 @@ TEST(RegisterTable, ValuesReadTheSameThroughEveryAccessor) {
     EXPECT_EQ(table.add(50, 0x00FF), 0x0100);  // the carry crosses the byte boundary
     EXPECT_EQ(table.mask_write(40, 0x00F2, 0x0025), (0xABCD & 0x00F2) | (0x0025 & ~0x00F2));
     EXPECT_EQ(table.get(40), (0xABCD & 0x00F2) | (0x0025 & ~0x00F2));
+}
+
+TEST(RegisterTable, ReadsAndWritesMatchAReferenceAcrossWordBoundaries) {
+    // Registers are packed four to a 64-bit word (issue #18): every start lane, every length
+    // that crosses zero to several word boundaries, up to the table's last register (sizes
+    // with and without a partial last word), and nothing written outside the range.
+    for (std::uint32_t size : {1u, 3u, 4u, 62u, 64u, 65536u}) {
+        RegisterTable table(size);
+        std::vector<std::uint16_t> ref(size);
+        std::mt19937 rng(size);
+        for (int round = 0; round < 3000; ++round) {
+            const std::uint32_t quantity = 1 + rng() % std::min<std::uint32_t>(size, 125);
+            const std::uint32_t address = rng() % (size - quantity + 1);
+            SCOPED_TRACE(testing::Message()
+                         << "size " << size << " address " << address << " quantity " << quantity);
+            if (round % 3 == 0) {
+                std::uint8_t in[250];
+                for (std::uint32_t i = 0; i < quantity; ++i) {
+                    ref[address + i] = static_cast<std::uint16_t>(rng());
+                    codec::store_be16(in + 2 * i, ref[address + i]);
+                }
+                table.write_be(static_cast<std::uint16_t>(address),
+                               static_cast<std::uint16_t>(quantity), in);
+            } else if (round % 3 == 1) {
+                const auto a = static_cast<std::uint16_t>(address);
+                ref[a] = static_cast<std::uint16_t>(rng());
+                table.set(a, ref[a]);
+            }
+            std::uint8_t out[4 + 250 + 4];
+            std::memset(out, 0xEE, sizeof out);
+            table.read_be(static_cast<std::uint16_t>(address), static_cast<std::uint16_t>(quantity),
+                          out + 4);
+            for (std::uint32_t i = 0; i < quantity; ++i)
+                ASSERT_EQ(codec::load_be16(out + 4 + 2 * i), ref[address + i]) << i;
+            for (std::uint32_t i = 0; i < 4; ++i) {
+                ASSERT_EQ(out[i], 0xEE) << "wrote before the range";
+                ASSERT_EQ(out[4 + 2 * quantity + i], 0xEE) << "wrote past the range";
+            }
+            // By whole words: the same bytes, and at most kWordSlack bytes either side touched.
+            constexpr std::size_t kGuard = RegisterTable::kWordSlack + 2;
+            std::uint8_t words[kGuard + 250 + kGuard];
+            std::memset(words, 0xEE, sizeof words);
+            table.read_be_words(static_cast<std::uint16_t>(address),
+                                static_cast<std::uint16_t>(quantity), words + kGuard);
+            ASSERT_EQ(std::memcmp(words + kGuard, out + 4, 2 * quantity), 0);
+            for (std::uint32_t i = 0; i < 2; ++i) {
+                ASSERT_EQ(words[i], 0xEE) << "more than the slack before";
+                ASSERT_EQ(words[kGuard + 2 * quantity + RegisterTable::kWordSlack + i], 0xEE)
+                    << "more than the slack after";
+            }
+            const auto probe = static_cast<std::uint16_t>(rng() % size);
+            ASSERT_EQ(table.get(probe), ref[probe]) << probe;
+        }
+    }
+}
+
+TEST(RegisterTable, WritersOfNeighboursInOneWordLoseNothing) {
+    // Four registers share a word: a write to one is a compare-and-swap that must keep the
+    // concurrent writes to the other three.
+    RegisterTable table(8);
+    constexpr int kIterations = 20'000;
+    std::vector<std::thread> threads;
+    for (unsigned t = 0; t < 4; ++t) {
+        threads.emplace_back([&, t] {
+            const auto own = static_cast<std::uint16_t>(2 + t);  // straddles words 0 and 1
+            for (int i = 0; i < kIterations; ++i) {
+                table.add(own, 1);
+                table.set(own, static_cast<std::uint16_t>(table.get(own) + 1));
+                table.mask_write(own, 0xFFFF, 0);  // unchanged
+            }
+        });
+    }
+    for (auto& t : threads) t.join();
+    for (std::uint16_t a = 2; a < 6; ++a) EXPECT_EQ(table.get(a), 2 * kIterations) << a;
+    EXPECT_EQ(table.get(0), 0);
+    EXPECT_EQ(table.get(7), 0);
 }
 
 TEST(DataModel, FifoHelpersRespectLimits) {

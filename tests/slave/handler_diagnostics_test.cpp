@@ -117,6 +117,41 @@ TEST(HandlerDiagnostics, EventLogNewestFirst) {
     EXPECT_EQ(r.bytes[11], 0x80);
 }
 
+TEST(HandlerDiagnostics, MessagesNotedInABatchCountAndLogAsIfOneByOne) {
+    // A server notes the FC03/04 reads it answers inline once per frame loop (issue #18).
+    DataModel m(small_config());
+    call(m, Pdu(0x03).u16(999).u16(1));  // receive 0x80, send 0x41
+    m.diagnostics().note_messages(2, kReceiveEvent, kSendEvent);
+    Reply r = call(m, Pdu(0x0C));
+    ASSERT_EQ(r.bytes.size(), 8u + 6u);
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 4);  // message count incl. this one
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 4), 2);  // the two noted reads
+    const std::vector<std::uint8_t> newest_first = {0x40, 0x80, 0x40, 0x80, 0x41, 0x80};
+    EXPECT_EQ(std::vector<std::uint8_t>(r.bytes.begin() + 8, r.bytes.end()), newest_first);
+
+    // More than the log holds: the newest 32 pairs, the count exact.
+    call(m, Pdu(0x03).u16(999).u16(1));
+    m.diagnostics().note_messages(31, kReceiveEvent, 0x42);  // wraps around the ring
+    r = call(m, Pdu(0x0C));
+    ASSERT_EQ(r.bytes.size(), 8u + 64u);
+    for (std::size_t i = 8; i < 8 + 62; i += 2) EXPECT_EQ(r.bytes[i], 0x42) << i;
+    EXPECT_EQ(r.bytes[8 + 62], 0x41);  // the exception before them
+    m.diagnostics().note_messages(100, kReceiveEvent, kSendEvent);
+    r = call(m, Pdu(0x0C));
+    ASSERT_EQ(r.bytes.size(), 8u + 64u);
+    EXPECT_EQ(codec::load_be16(r.bytes.data() + 6), 4 + 1 + 31 + 1 + 100 + 1);
+    for (std::size_t i = 8; i < r.bytes.size(); i += 2) {
+        EXPECT_EQ(r.bytes[i], 0x40) << i;
+        EXPECT_EQ(r.bytes[i + 1], 0x80) << i;
+    }
+    m.diagnostics().note_messages(100, kReceiveEvent, kSendEvent);
+    m.diagnostics().note_messages(1, kReceiveEvent, 0x42);
+    r = call(m, Pdu(0x0C));
+    ASSERT_EQ(r.bytes.size(), 8u + 64u);
+    EXPECT_EQ(r.bytes[8], 0x42);
+    EXPECT_EQ(r.bytes[10], 0x40);
+}
+
 TEST(HandlerDiagnostics, EventLogHoldsAtMost64Bytes) {
     DataModel m(small_config());
     for (int i = 0; i < 100; ++i) call(m, Pdu(0x06).u16(0).u16(static_cast<unsigned>(i)));
