@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-fuzz_seconds=${MBSTORM_FUZZ_SECONDS:-6}
+fuzz_seconds=${MBSTORM_FUZZ_SECONDS:-4}
 jobs=${MBSTORM_JOBS:-$(nproc)}
 step() { printf '\n=== %s (%ss elapsed)\n' "$*" "$SECONDS"; }
 
