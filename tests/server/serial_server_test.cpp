@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "client_test_support.hpp"
 #include "codec/ascii.hpp"
 #include "codec/rtu.hpp"
 #include "net/clock.hpp"
@@ -83,6 +84,11 @@ class SerialServerTest : public ::testing::Test {
         if (thread_.joinable()) thread_.join();
         EXPECT_EQ(error_, "");
     }
+    // The server counts an answer once it is written, so the master may read it first: wait
+    // for the count to catch up before judging the counters.
+    void wait_for_responses(std::uint64_t n) {
+        EXPECT_TRUE(test::eventually([&] { return server_->stats().responses >= n; }));
+    }
     void send(const std::vector<std::uint8_t>& bytes) {
         ASSERT_EQ(::write(pty.master, bytes.data(), bytes.size()),
                   static_cast<ssize_t>(bytes.size()));
@@ -107,6 +113,7 @@ TEST_F(SerialServerTest, RtuReadIsAnsweredAfterTheInterFrameSilence) {
     // cannot answer before the request has left the (emulated) wire and the silence passed.
     net::SerialSettings line;
     EXPECT_GE(elapsed, net::interframe_silence_ns(line));
+    wait_for_responses(1);
     EXPECT_EQ(server_->stats().requests, 1u);
     EXPECT_EQ(server_->stats().responses, 1u);
 }
@@ -128,6 +135,7 @@ TEST_F(SerialServerTest, RtuExceptionsBroadcastsOtherUnitsAndBadCrc) {
     // Unsupported function: exception 01, answered.
     send(rtu(1, {0x09, 0x00}));
     EXPECT_EQ(read_for(pty.master, 5, 5000), rtu(1, {0x89, 0x01}));
+    wait_for_responses(1);
     const auto s = server_->stats();
     EXPECT_EQ(s.bad_checks, 1u);
     EXPECT_EQ(s.not_addressed, 1u);
