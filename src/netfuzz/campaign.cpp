@@ -349,6 +349,13 @@ class Campaign {
     }
 
     Finding* known(const Verdict& v);
+    // A verdict as this target's behaviour explains it (see refuses_length_mismatch_).
+    Verdict understood(Verdict v) const;
+    // Runs a case alone and judges it as understood().
+    Execution run_alone(const Case& c);
+    // Asked once, of the first close blamed on a request of the wrong length: does the target
+    // close on that frame by itself, before anything follows it?
+    void ask_how_length_mismatch_closes(const Case& c);
     void hit(Finding& f, const Verdict& v, const Case& c);
     bool would_retrigger(const Case& c) const;
     void learn_costly(const Finding& f);
@@ -390,8 +397,16 @@ class Campaign {
     std::uint64_t last_cases_ = 0;
     bool up_ = true;
     bool capacity_checked_ = false;
-    bool settle_restarted_ = false;   // the last settle() ended in a restart
-    bool stream_lost_known_ = false;  // a stream-lost-after-pdu-length-mismatch finding exists
+    bool settle_restarted_ = false;  // the last settle() ended in a restart
+    // A request of the wrong length is known to break the connection (the stream is lost, or
+    // the target closes on such a frame): more of them only show it again.
+    bool length_mismatch_known_ = false;
+    // How the target closes after a request of the wrong length, once asked: a close says the
+    // stream was lost only if the target waited for bytes the frame did not have. One that
+    // closes on the frame alone refuses the request, as it may any request it cannot use
+    // (pymodbus 3.0 does both): one root cause, close-with-request-pending/invalid-request.
+    enum class LengthMismatchClose { NotAsked, RefusesTheFrame, LosesTheStream };
+    LengthMismatchClose length_mismatch_close_ = LengthMismatchClose::NotAsked;
     mutable std::uint64_t length_mismatch_seen_ = 0;
     Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
     std::string last_key_;               // and its root cause
@@ -400,8 +415,75 @@ class Campaign {
 };
 
 Finding* Campaign::known(const Verdict& v) {
-    const auto it = by_key_.find(root_cause_key(v));
+    const auto it = by_key_.find(root_cause_key(understood(v)));
     return it == by_key_.end() ? nullptr : &result_.findings[it->second];
+}
+
+bool is_stream_lost_close(const Verdict& v) {
+    return v.oracle == Oracle::UnexpectedClose && rule_stem(v.rule) == kStreamLostRule;
+}
+
+Verdict Campaign::understood(Verdict v) const {
+    if (length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame && is_stream_lost_close(v)) {
+        v.rule = kClosesOnInvalidRequestRule;
+        v.summary += " (it closes on such a frame alone, before anything follows it)";
+    }
+    return v;
+}
+
+Execution Campaign::run_alone(const Case& c) {
+    Execution ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    ex.verdict = understood(std::move(ex.verdict));
+    return ex;
+}
+
+// The frame alone, then a valid request this long after it: a target that frames by function
+// code is still waiting for the missing bytes (libmodbus waits 500 ms), one that refuses the
+// frame has closed (pymodbus: within a millisecond).
+constexpr std::uint32_t kRefusalWaitUs = 100'000;
+
+void Campaign::ask_how_length_mismatch_closes(const Case& c) {
+    if (length_mismatch_close_ != LengthMismatchClose::NotAsked) return;
+    if (result_.profile.framing != codec::Framing::Mbap) {
+        length_mismatch_close_ = LengthMismatchClose::LosesTheStream;
+        return;
+    }
+    std::vector<std::uint8_t> frame;
+    for (const Step& s : c.steps) {
+        if (s.op != Op::Send) continue;
+        std::size_t consumed = 0;
+        for (const Pdu& view : request_views(s.bytes, result_.profile.framing, consumed)) {
+            RequestInfo info;
+            describe_request(view, result_.profile, info);
+            if (!pdu_length_mismatch(info)) continue;
+            frame.assign(view.begin(), view.end());
+            break;
+        }
+        if (!frame.empty()) break;
+    }
+    if (frame.size() <= lim::kMbapHeader || !can_afford(1)) return;  // not asked yet
+    Case question;
+    question.cls = MutationClass::MbapLength;
+    question.function = frame[lim::kMbapHeader];
+    question.number = c.number;
+    question.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(frame)});
+    question.steps.push_back(
+        Step{Op::Send, 0, kRefusalWaitUs, 0, probe_frame(result_.profile, 0x7E57)});
+    ++result_.isolated_runs;
+    const Execution ex = execute_case(question, *options_.connector, result_.profile, exec_);
+    std::int64_t closed_us = -1, second_send_us = -1;
+    int sends = 0;
+    for (const TraceEvent& e : ex.trace) {
+        if (e.conn != 0) continue;
+        if (e.kind == TraceKind::Send && ++sends == 2) second_send_us = e.t_us;
+        if ((e.kind == TraceKind::PeerClosed || e.kind == TraceKind::Reset) && closed_us < 0)
+            closed_us = e.t_us;
+    }
+    const bool refused = closed_us >= 0 && (second_send_us < 0 || closed_us < second_send_us);
+    length_mismatch_close_ =
+        refused ? LengthMismatchClose::RefusesTheFrame : LengthMismatchClose::LosesTheStream;
+    if (refused) length_mismatch_known_ = true;
+    bring_back(ex, "");
 }
 
 void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
@@ -414,7 +496,7 @@ bool Campaign::would_retrigger(const Case& c) const {
     // Once the target is known to lose the stream on a request of the wrong length, each such
     // request costs a broken connection (and the target's pause) to show it again: only one in
     // 16 is still sent, for what else it may hit in the handler.
-    if (stream_lost_known_ && carries_length_mismatch(c, result_.profile))
+    if (length_mismatch_known_ && carries_length_mismatch(c, result_.profile))
         return ++length_mismatch_seen_ % 16 != 0;
     if (costly_culprits_.empty()) return false;
     for (const std::string& k : culprits(c, result_.profile))
@@ -423,7 +505,7 @@ bool Campaign::would_retrigger(const Case& c) const {
 }
 
 void Campaign::learn_costly(const Finding& f) {
-    if (rule_stem(f.verdict.rule) == kStreamLostRule) stream_lost_known_ = true;
+    if (rule_stem(f.verdict.rule) == kStreamLostRule) length_mismatch_known_ = true;
     const Oracle o = f.oracle();
     if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
     const std::string culprit = culprit_of(f.verdict.rule);
@@ -527,6 +609,11 @@ Campaign::Outcome Campaign::isolate(Case c) {
         }
     }
     if (!ex.verdict) return Outcome::Clean;
+    if (is_stream_lost_close(ex.verdict)) {
+        ask_how_length_mismatch_closes(c);
+        if (!up_) return Outcome::Lost;
+        ex.verdict = understood(std::move(ex.verdict));
+    }
     last_oracle_ = ex.verdict.oracle;
     last_key_ = root_cause_key(ex.verdict);
     std::string key = last_key_;
@@ -547,7 +634,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        Execution whole = execute_case(plain, *options_.connector, result_.profile, exec_);
+        Execution whole = run_alone(plain);
         if (whole.verdict.oracle == ex.verdict.oracle) {
             // The content: judge it as the plain case (its death confirms a crash).
             c = std::move(plain);
@@ -579,7 +666,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        ex = execute_case(c, *options_.connector, result_.profile, exec_);
+        ex = run_alone(c);
         if (!ex.verdict || root_cause_key(ex.verdict) != key) {
             ++result_.unconfirmed;
             if (ex.target_down) {
@@ -614,7 +701,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
             return Outcome::Clean;
         }
         ++result_.isolated_runs;
-        Execution again = execute_case(c, *options_.connector, result_.profile, exec_);
+        Execution again = run_alone(c);
         const bool same = again.verdict && root_cause_key(again.verdict) == key;
         if (!same) {
             ++result_.unattributed_deaths;
@@ -656,7 +743,7 @@ bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
             return false;
         }
         ++result_.isolated_runs;
-        const Execution again = execute_case(c, *options_.connector, result_.profile, exec_);
+        const Execution again = run_alone(c);
         const bool same = again.verdict && root_cause_key(again.verdict) == key;
         if (!bring_back(again, same ? key : "")) return false;
         if (!same) {
@@ -693,7 +780,7 @@ void Campaign::record(const Case& c, Execution ex) {
                 return false;
             }
             ++result_.isolated_runs;
-            Execution e = execute_case(candidate, *options_.connector, result_.profile, exec_);
+            Execution e = run_alone(candidate);
             // The same fault, not merely the same oracle: else it drifted to another bug.
             // (the detail naming the request may change as the case shrinks: see same_fault)
             const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
@@ -953,7 +1040,11 @@ CampaignResult Campaign::run() {
         for (const LaneBreak& b : br.breaks) {
             std::vector<std::string> keys;
             const std::string close = b.closed ? "unexpected-close:" : "hang:";
-            if (b.length_mismatch) keys.push_back(fmt::format("stream:{}", kStreamLostRule));
+            if (b.length_mismatch)
+                keys.push_back(length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame &&
+                                       b.closed
+                                   ? fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule)
+                                   : fmt::format("stream:{}", kStreamLostRule));
             if (b.has_previous && b.previous_exception)
                 keys.push_back(close + (b.closed ? "closes-after-exception"
                                                  : "drops-requests-after-exception"));

@@ -194,12 +194,15 @@ Verdict CrossRunner::answered_verdict(MutationClass cls) const {
         if (size > received_.size() - off) break;
         if (std::find(tids.begin(), tids.end(), h.transaction_id) != tids.end()) {
             const std::string seen = hex(codec::Bytes(received_.data() + off, size));
+            // A TLS record's minor version byte (1 to 4) is the high byte of the protocol id
+            // its bytes read as: answering them is answering a frame a conforming server
+            // discards, whatever else it misreads.
             if (cls == MutationClass::TlsToPlain)
                 return Verdict{Oracle::SpecDeviation,
-                               "answers-tls-as-modbus",
+                               "answers-nonzero-protocol-id",
                                -1,
                                "the plain Modbus/TCP port answered the bytes of a TLS "
-                               "ClientHello as a Modbus request",
+                               "ClientHello as a Modbus request (their protocol id is not 0)",
                                "no answer: the bytes are no Modbus/TCP frame (protocol id != 0); "
                                "the connection closed or ignored",
                                seen};
@@ -230,8 +233,12 @@ void CrossRunner::judge(const Case& c) {
     for (const Probe& p : side_probes_) {
         if (p.result == ProbeResult::ConnectFailed) continue;  // the fresh probe judges that
         if (p.result == ProbeResult::Ok && p.ms < stall_ms) continue;
+        // To a plain Modbus/TCP server, TLS bytes are a frame that never finishes: a stall
+        // they cause is the one a started frame causes.
+        const std::string_view held =
+            c.cls == MutationClass::TlsToPlain ? "partial-frame" : class_name(c.cls);
         consider(Verdict{
-            Oracle::Hang, fmt::format("stalls-other-connections({})", class_name(c.cls)), -1,
+            Oracle::Hang, fmt::format("stalls-other-connections({})", held), -1,
             fmt::format(
                 "a concurrent connection {} ({} ms) while another held {}",
                 p.result == ProbeResult::Ok ? std::string("was answered late")

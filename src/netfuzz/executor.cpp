@@ -578,7 +578,7 @@ void CaseRunner::judge(const Case& c) {
             } else if (closed && !pd.probe && request_kind(info) != "valid") {
                 // Closing on a request it cannot use is one policy of the server's framing,
                 // whatever the function code.
-                rule = "close-with-request-pending/invalid-request";
+                rule = kClosesOnInvalidRequestRule;
             } else if (!pd.probe || !before) {
                 rule = fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
                                    culprit_text(c, pd.probe ? nullptr : &info));

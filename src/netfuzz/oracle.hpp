@@ -119,6 +119,10 @@ bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexc
 // close, silence, an answer with a transaction id nobody sent), it is that one root cause.
 bool pdu_length_mismatch(const RequestInfo& info) noexcept;
 inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mismatch";
+// A server that closes the connection on a request it cannot use (whatever its function code):
+// one policy of its framing.
+inline constexpr const char* kClosesOnInvalidRequestRule =
+    "close-with-request-pending/invalid-request";
 
 // Fills `info` for one complete, well-framed request ADU.
 void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept;

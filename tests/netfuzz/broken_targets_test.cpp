@@ -85,6 +85,32 @@ INSTANTIATE_TEST_SUITE_P(
 
 namespace {
 
+// A target that frames by the MBAP length and closes on a request too short or too long for its
+// function code (pymodbus 3.0 does): the close comes before anything follows the frame, so the
+// stream was not lost. One root cause, whether the request was of the wrong length or
+// well-framed and undecodable (a byte count that disagrees), not a lost stream besides.
+TEST(RefusingTarget, ClosingOnARequestOfTheWrongLengthIsNotALostStream) {
+    mbstorm::test::Target* raw = nullptr;
+    const std::string target = mbstorm::test::start_broken(raw, "broken_server_refuse");
+    std::unique_ptr<mbstorm::test::Target> server(raw);
+    ASSERT_FALSE(target.empty()) << "broken_server_refuse did not start";
+    const std::string dir = mbstorm::test::temp_dir("refuse");
+    const auto run = run_mbstorm("fuzz --target " + target +
+                                 " --seed 7 --cases 20000 --timeout 300ms -q --out " + dir +
+                                 "/findings --json " + dir + "/summary.json");
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    std::ifstream in(dir + "/summary.json");
+    const auto summary = nlohmann::json::parse(in);
+    int refusals = 0;
+    for (const auto& f : summary.at("findings")) {
+        const std::string key = f.at("root_cause").get<std::string>();
+        EXPECT_EQ(key.rfind("stream:", 0), std::string::npos) << f.dump(2);
+        if (key == "unexpected-close:close-with-request-pending/invalid-request") ++refusals;
+    }
+    EXPECT_EQ(refusals, 1) << run.output;
+    std::filesystem::remove_all(dir);
+}
+
 // A target that answers 06 (busy) to most requests: the summary says most cases were wasted
 // (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings".
 TEST(BusyTarget, WastedCasesAreReportedAndTheFuzzerSlowsDown) {
