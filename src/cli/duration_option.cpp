@@ -91,16 +91,18 @@ CLI::Option* add_number_option(CLI::App* cmd, const std::string& name, double& v
 }
 
 CLI::Option* add_count_option(CLI::App* cmd, const std::string& name, std::uint64_t& value,
-                              const std::string& description) {
+                              const std::string& description, std::uint64_t min) {
     return cmd
         ->add_option_function<std::string>(
             name,
-            [&value, name](const std::string& text) {
+            [&value, name, min](const std::string& text) {
                 std::uint64_t v = 0;
                 auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-                if (ec != std::errc() || end != text.data() + text.size() || v == 0)
+                if (ec != std::errc() || end != text.data() + text.size() || v < min)
                     throw CLI::ValidationError(
-                        name, "'" + text + "' is not a whole number of at least 1");
+                        name, min == 0 ? fmt::format("'{}' is not a whole number", text)
+                                       : fmt::format("'{}' is not a whole number of at least {}",
+                                                     text, min));
                 value = v;
             },
             description)

@@ -23,8 +23,9 @@ CLI::Option* add_rate_option(CLI::App* cmd, const std::string& name, double& fra
 CLI::Option* add_number_option(CLI::App* cmd, const std::string& name, double& value, double min,
                                double max, const std::string& description);
 
-// Adds an option taking a whole number of at least 1 (a count).
+// Adds an option taking a whole number of at least `min` (a count; a limit whose 0 means none
+// takes min 0). Signs, fractions and trailing text are usage errors.
 CLI::Option* add_count_option(CLI::App* cmd, const std::string& name, std::uint64_t& value,
-                              const std::string& description);
+                              const std::string& description, std::uint64_t min = 1);
 
 }  // namespace mbstorm::cli

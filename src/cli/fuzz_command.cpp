@@ -36,6 +36,7 @@ struct FuzzOptions {
     std::uint64_t seed = 1;
     std::uint64_t duration_ns = 0;
     std::uint64_t cases = 0;
+    std::uint64_t max_findings = 0;  // 0: no limit
     std::uint64_t timeout_ns = 1'000'000'000;
     unsigned lanes = 4;
     unsigned isolated_per_mille = 10;
@@ -132,6 +133,7 @@ int run_fuzz(const FuzzOptions& o) {
     c.seed = o.seed;
     c.max_cases = o.cases;
     c.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
+    c.max_findings = static_cast<std::size_t>(o.max_findings);
     c.timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     c.lanes = o.lanes;
     c.isolated_per_mille = o.isolated_per_mille;
@@ -205,6 +207,11 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     add_duration_option(cmd, "--seconds,--duration,-d", o->duration_ns,
                         "stop after this long (60, 2s, 1m30s; a bare number is seconds)");
     add_count_option(cmd, "--cases", o->cases, "stop after this many cases");
+    add_count_option(cmd, "--max-findings", o->max_findings,
+                     "stop once this many distinct findings (root causes) are saved, the last "
+                     "one minimised; 1 stops at the first (default 0: no limit; --seconds or "
+                     "--cases still bound the run)",
+                     0);
     add_duration_option(cmd, "--timeout", o->timeout_ns,
                         "answer timeout: longer is a hang (default 1s)");
     cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")

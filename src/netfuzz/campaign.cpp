@@ -334,8 +334,12 @@ class Campaign {
     std::int64_t remaining_ns() const {
         return deadline_ ? deadline_ - net::now_ns() : std::numeric_limits<std::int64_t>::max();
     }
+    // The finding that reaches --max-findings is minimised and saved before this turns true.
+    bool enough_findings() const {
+        return options_.max_findings && result_.findings.size() >= options_.max_findings;
+    }
     bool out_of_budget() const {
-        if (stopped()) return true;
+        if (stopped() || enough_findings()) return true;
         if (options_.max_cases && result_.cases >= options_.max_cases) return true;
         return remaining_ns() <= 0;
     }
@@ -966,7 +970,7 @@ CampaignResult Campaign::run() {
     std::vector<Case> requeue, piped, alone;
     bool lost_at_first_look = false;
     for (Case& c : first_looks(result_.profile)) {
-        if (!can_afford(1)) break;
+        if (enough_findings() || !can_afford(1)) break;
         c.number = ++generated;
         ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
         ++result_.cases;
@@ -1115,7 +1119,7 @@ CampaignResult Campaign::run() {
             bool found = false;
             for (std::size_t k = 0; k < candidates.size(); ++k) {
                 const std::size_t ci = candidates[k];
-                if (found || !can_afford(1)) {
+                if (found || enough_findings() || !can_afford(1)) {
                     later.push_back(ci);
                     continue;
                 }
@@ -1134,6 +1138,7 @@ CampaignResult Campaign::run() {
         } else {
             later = br.requeue;
             for (std::size_t k = 0; k < suspects.size(); ++k) {
+                if (enough_findings()) break;
                 if (!can_afford(1)) {
                     result_.suspects_left += suspects.size() - k;
                     break;
@@ -1153,7 +1158,7 @@ CampaignResult Campaign::run() {
         }
         std::size_t ran_alone = 0;
         for (std::size_t i = 0; !lost && i < alone.size(); ++i, ++ran_alone) {
-            if (!can_afford(1)) break;
+            if (enough_findings() || !can_afford(1)) break;
             if (isolate(alone[i]) == Outcome::Lost) lost = true;
         }
         result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
@@ -1165,14 +1170,16 @@ CampaignResult Campaign::run() {
                 --result_.cases_by_class[static_cast<std::size_t>(alone[i].cls)];
         if (all_alone && ran_alone < alone.size() && !lost) break;
         progress(false);
-        if (lost) break;
+        if (lost || enough_findings()) break;
         if (++rounds == 1) check_capacity_once();
     }
     if (result_.stop_reason.empty()) {
-        result_.stop_reason = stopped() ? "interrupted"
-                              : (options_.max_cases && result_.cases >= options_.max_cases)
-                                  ? "case limit reached"
-                                  : "time limit reached";
+        result_.stop_reason =
+            stopped() ? "interrupted"
+            : enough_findings()
+                ? fmt::format("finding limit reached (--max-findings {})", options_.max_findings)
+            : (options_.max_cases && result_.cases >= options_.max_cases) ? "case limit reached"
+                                                                          : "time limit reached";
     }
     // Restarts per root cause, including those charged to a guise it had before minimising.
     for (const auto& [key, n] : restarts_by_cause_) {

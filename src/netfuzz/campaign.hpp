@@ -3,7 +3,7 @@
 // (oracle and violated rule; every other case showing it is a hit with its variant), skip
 // cases that would only re-trigger a known crash or hang, survive crashes by restarting the
 // target, and keep --seconds as a deadline for everything, confirmation and minimisation
-// included.
+// included. --max-findings ends it early, once the finding that reaches it is written out.
 #pragma once
 
 #include <array>
@@ -26,8 +26,9 @@ struct CampaignOptions {
     std::string target_text;
     std::uint8_t unit = 1;
     std::uint64_t seed = 1;
-    std::uint64_t max_cases = 0;  // 0: no bound
-    double max_seconds = 0;       // 0: no bound
+    std::uint64_t max_cases = 0;   // 0: no bound
+    double max_seconds = 0;        // 0: no bound
+    std::size_t max_findings = 0;  // stop once this many root causes are recorded (0: no bound)
     int timeout_ms = 1000;
     unsigned lanes = 4;
     unsigned lane_depth = 48;  // cases per lane per round

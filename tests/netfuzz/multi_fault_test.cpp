@@ -1,7 +1,8 @@
 // The fuzzer's precision and budget on a target with many bugs at once
 // (tests/tools/multi_fault_server.cpp: 11 planted bugs, crashes among them, restarted by the
 // fuzzer's --restart-cmd): with a fixed seed every bug is found, each exactly once, no crash
-// costs more than 3 restarts, and the run keeps its deadline.
+// costs more than 3 restarts, and the run keeps its deadline. --max-findings ends it at the
+// last planted bug instead of at the deadline.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -19,7 +20,7 @@ using mbstorm::test::run_mbstorm;
 using mbstorm::test::tool_path;
 
 // The last planted bug falls at about 41 s on a quiet machine (bench/README.md): 90 s leaves
-// room for a busy one.
+// room for a busy one, and --max-findings (the number of planted bugs) ends the run there.
 constexpr int kSeconds = 90;
 constexpr int kServerLifetimeSeconds = 400;
 
@@ -51,8 +52,9 @@ TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
         " </dev/null >/dev/null 2>&1 &";
     const auto run =
         run_mbstorm("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed 1 --seconds " +
-                        std::to_string(kSeconds) + " -q --out " + dir + "/findings --json " + dir +
-                        "/summary.json --restart-cmd '" + restart_cmd + "'",
+                        std::to_string(kSeconds) + " --max-findings " +
+                        std::to_string(kPlanted.size()) + " -q --out " + dir + "/findings --json " +
+                        dir + "/summary.json --restart-cmd '" + restart_cmd + "'",
                     kSeconds + 60);
     ASSERT_EQ(run.exit_code, 1) << run.output;
     std::ifstream in(dir + "/summary.json");
@@ -68,6 +70,10 @@ TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
     }
     for (const std::string& bug : kPlanted) EXPECT_EQ(found[bug], 1) << bug << "\n" << run.output;
     EXPECT_EQ(s.at("findings").size(), kPlanted.size()) << run.output;
+    // Ended at the last planted bug, not at the deadline.
+    EXPECT_EQ(s.at("stop_reason"),
+              "finding limit reached (--max-findings " + std::to_string(kPlanted.size()) + ")")
+        << run.output;
     // Three crashes and a whole-server hang (restarted when it outlasts --restart-wait): each
     // may cost at most three restarts.
     EXPECT_LE(s.at("restarts").get<unsigned>(), 4u * 3u) << run.output;
