@@ -11,13 +11,12 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdlib>
-#include <filesystem>
 #include <map>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "../support/tls_test_support.hpp"
 #include "load/engine.hpp"
 #include "net/kernel_tls.hpp"
 #include "net/ktls_offload.hpp"
@@ -56,23 +55,11 @@ int refuse_after_recording(int fd, const net::KtlsParams& params, bool& changed)
     return -ENOENT;  // what TCP_ULP "tls" says without the module
 }
 
-class TlsOffloadEngine : public ::testing::Test {
+class TlsOffloadEngine : public test::TlsCertsTest {
   protected:
-    static void SetUpTestSuite() {
-        dir_ = new std::string(std::filesystem::temp_directory_path() /
-                               ("mbstorm-ktls-engine-" + std::to_string(::getpid())));
-        std::filesystem::create_directories(*dir_);
-        const std::string cmd = std::string("bash -c 'source ") + MBSTORM_SOURCE_DIR +
-                                "/tests/scripts/lib/tls_certs.bash && make_tls_certs " + *dir_ +
-                                "'";
-        made_ = std::system(cmd.c_str()) == 0;
-    }
-    static void TearDownTestSuite() {
-        std::filesystem::remove_all(*dir_);
-        delete dir_;
-    }
     void SetUp() override {
-        if (!made_) GTEST_SKIP() << "openssl could not make the test certificates";
+        TlsCertsTest::SetUp();
+        if (IsSkipped()) return;
         if (net::kernel_tls().available) GTEST_SKIP() << "this kernel has the offload itself";
         net::pretend_kernel_tls_for_testing(true);
         net::set_ktls_installer_for_testing(&refuse_after_recording);
@@ -83,23 +70,7 @@ class TlsOffloadEngine : public ::testing::Test {
         net::set_ktls_installer_for_testing(nullptr);
         net::pretend_kernel_tls_for_testing(false);
     }
-    static std::string file(const std::string& name) { return *dir_ + "/" + name; }
-    static std::shared_ptr<net::TlsContext> context(net::TlsSide side, int max_version) {
-        const std::string who = side == net::TlsSide::Server ? "server" : "operator";
-        std::string error;
-        auto ctx = net::TlsContext::create(
-            side, {file(who + ".pem"), file(who + ".key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
-        if (ctx) SSL_CTX_set_max_proto_version(ctx->get(), max_version);
-        return ctx;
-    }
-
-    static std::string* dir_;
-    static bool made_;
 };
-
-std::string* TlsOffloadEngine::dir_ = nullptr;
-bool TlsOffloadEngine::made_ = false;
 
 TEST_F(TlsOffloadEngine, EveryConnectionReachesAHandOffThatAgreesWithItsPeer) {
     for (const int version : {TLS1_3_VERSION, TLS1_2_VERSION}) {
@@ -111,7 +82,7 @@ TEST_F(TlsOffloadEngine, EveryConnectionReachesAHandOffThatAgreesWithItsPeer) {
         server::ServerConfig config;
         config.listen = "127.0.0.1:0";
         config.threads = 1;
-        config.tls = context(net::TlsSide::Server, TLS1_3_VERSION);
+        config.tls = context(net::TlsSide::Server, "server");
         ASSERT_TRUE(config.tls);
         server::Server srv(config);
         std::string error;
@@ -121,7 +92,7 @@ TEST_F(TlsOffloadEngine, EveryConnectionReachesAHandOffThatAgreesWithItsPeer) {
         Plan plan;
         plan.host = "127.0.0.1";
         plan.port = srv.port();
-        plan.tls = context(net::TlsSide::Client, version);
+        plan.tls = context(net::TlsSide::Client, "operator", version);
         ASSERT_TRUE(plan.tls);
         Operation op;
         op.name = "read";

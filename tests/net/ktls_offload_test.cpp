@@ -9,14 +9,13 @@
 #include <openssl/evp.h>
 #include <openssl/ssl.h>
 
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
 
+#include "../support/tls_test_support.hpp"
 #include "net/kernel_tls.hpp"
 #include "net/ktls_offload.hpp"
 #include "net/socket.hpp"
@@ -158,38 +157,18 @@ void expect_same(const KtlsKeys& a, const KtlsKeys& b, const char* what) {
     EXPECT_EQ(a.seq, b.seq) << what;
 }
 
-class KtlsOffloadTest : public ::testing::Test {
-  protected:
-    static void SetUpTestSuite() {
-        dir_ = new std::string(std::filesystem::temp_directory_path() /
-                               ("mbstorm-ktls-test-" + std::to_string(::getpid())));
-        std::filesystem::create_directories(*dir_);
-        const std::string cmd = std::string("bash -c 'source ") + MBSTORM_SOURCE_DIR +
-                                "/tests/scripts/lib/tls_certs.bash && make_tls_certs " + *dir_ +
-                                "'";
-        made_ = std::system(cmd.c_str()) == 0;
-    }
-    static void TearDownTestSuite() {
-        std::filesystem::remove_all(*dir_);
-        delete dir_;
-    }
-    void SetUp() override {
-        if (!made_) GTEST_SKIP() << "openssl could not make the test certificates";
-    }
+using test::drain;
+using test::pump;
 
-    static std::string file(const std::string& name) { return *dir_ + "/" + name; }
+class KtlsOffloadTest : public test::TlsCertsTest {
+  protected:
     // Contexts limited to one version and one cipher, tracked for the hand-off.
     static std::shared_ptr<TlsContext> context(TlsSide side, int version, const char* cipher,
                                                int tickets = -1) {
         const bool server = side == TlsSide::Server;
-        const std::string who = server ? "server" : "operator";
-        std::string error;
-        auto ctx = TlsContext::create(
-            side, {file(who + ".pem"), file(who + ".key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
+        auto ctx = TlsCertsTest::context(side, server ? "server" : "operator", version);
         if (!ctx) return ctx;
         SSL_CTX_set_min_proto_version(ctx->get(), version);
-        SSL_CTX_set_max_proto_version(ctx->get(), version);
         if (version == TLS1_3_VERSION)
             EXPECT_EQ(SSL_CTX_set_ciphersuites(ctx->get(), cipher), 1);
         else
@@ -197,32 +176,6 @@ class KtlsOffloadTest : public ::testing::Test {
         if (server && tickets >= 0) SSL_CTX_set_num_tickets(ctx->get(), tickets);
         KtlsTracker::prepare_context(ctx->get());
         return ctx;
-    }
-
-    // Moves ciphertext both ways until neither side has any left (bounded).
-    static void pump(TlsSession& a, TlsSession& b) {
-        Bytes buf;
-        for (int i = 0; i < 10; ++i) {
-            if (!a.established()) a.handshake();
-            if (!b.established()) b.handshake();
-            buf.clear();
-            a.take_output(buf);
-            b.feed(buf.data(), buf.size());
-            const bool a_sent = !buf.empty();
-            if (!b.established()) b.handshake();
-            buf.clear();
-            b.take_output(buf);
-            a.feed(buf.data(), buf.size());
-            if (!a_sent && buf.empty()) return;
-        }
-    }
-    static Bytes drain(TlsSession& s) {
-        std::uint8_t out[512];
-        std::size_t n = 0;
-        Bytes text;
-        while (s.read(out, sizeof out, n) == TlsStatus::Ok && n > 0)
-            text.insert(text.end(), out, out + n);
-        return text;
     }
     // `from` encrypts `text` with OpenSSL; its one record goes to `to`, which must read it.
     static Bytes send_via_openssl(TlsSession& from, TlsSession& to, const std::string& text) {
@@ -234,13 +187,7 @@ class KtlsOffloadTest : public ::testing::Test {
         EXPECT_EQ(drain(to), plain);
         return record;
     }
-
-    static std::string* dir_;
-    static bool made_;
 };
-
-std::string* KtlsOffloadTest::dir_ = nullptr;
-bool KtlsOffloadTest::made_ = false;
 
 struct Case {
     int version;

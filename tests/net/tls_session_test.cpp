@@ -3,87 +3,26 @@
 #include <gtest/gtest.h>
 #include <openssl/ssl.h>
 
-#include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <string>
-#include <vector>
 
+#include "../support/tls_test_support.hpp"
 #include "net/tls_context.hpp"
 #include "net/tls_session.hpp"
 
 namespace mbstorm::net {
 namespace {
 
-class TlsSessionTest : public ::testing::Test {
+using test::drain_text;
+using test::pump;
+
+class TlsSessionTest : public test::TlsCertsTest {
   protected:
-    static void SetUpTestSuite() {
-        dir_ = new std::string(std::filesystem::temp_directory_path() /
-                               ("mbstorm-tls-test-" + std::to_string(::getpid())));
-        std::filesystem::create_directories(*dir_);
-        const std::string cmd = std::string("bash -c 'source ") + MBSTORM_SOURCE_DIR +
-                                "/tests/scripts/lib/tls_certs.bash && make_tls_certs " + *dir_ +
-                                "'";
-        made_ = std::system(cmd.c_str()) == 0;
-    }
-    static void TearDownTestSuite() {
-        std::filesystem::remove_all(*dir_);
-        delete dir_;
-    }
-    void SetUp() override {
-        if (!made_) GTEST_SKIP() << "openssl could not make the test certificates";
-    }
-
-    static std::string file(const std::string& name) { return *dir_ + "/" + name; }
-    static std::shared_ptr<TlsContext> server() {
-        std::string error;
-        auto ctx = TlsContext::create(
-            TlsSide::Server, {file("server.pem"), file("server.key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
-        return ctx;
-    }
+    static std::shared_ptr<TlsContext> server() { return context(TlsSide::Server, "server"); }
     static std::shared_ptr<TlsContext> client(const std::string& who, int max_version = 0) {
-        std::string error;
-        auto ctx = TlsContext::create(
-            TlsSide::Client, {file(who + ".pem"), file(who + ".key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
-        if (ctx && max_version != 0) SSL_CTX_set_max_proto_version(ctx->get(), max_version);
-        return ctx;
+        return context(TlsSide::Client, who, max_version);
     }
-
-    // Moves ciphertext both ways until neither side has any left (bounded).
-    static void pump(TlsSession& a, TlsSession& b) {
-        std::vector<std::uint8_t> buf;
-        for (int i = 0; i < 10; ++i) {
-            if (!a.established()) a.handshake();
-            if (!b.established()) b.handshake();
-            buf.clear();
-            a.take_output(buf);
-            b.feed(buf.data(), buf.size());
-            const bool a_sent = !buf.empty();
-            if (!b.established()) b.handshake();
-            buf.clear();
-            b.take_output(buf);
-            a.feed(buf.data(), buf.size());
-            if (!a_sent && buf.empty()) return;
-        }
-    }
-    // Reads what `s` has decrypted (processing tickets on the way).
-    static std::string drain(TlsSession& s) {
-        std::uint8_t out[256];
-        std::size_t n = 0;
-        std::string text;
-        while (s.read(out, sizeof out, n) == TlsStatus::Ok && n > 0)
-            text.append(reinterpret_cast<const char*>(out), n);
-        return text;
-    }
-
-    static std::string* dir_;
-    static bool made_;
 };
-
-std::string* TlsSessionTest::dir_ = nullptr;
-bool TlsSessionTest::made_ = false;
 
 TEST_F(TlsSessionTest, MutualHandshakeCarriesDataAndTheClientsRole) {
     for (const int version : {TLS1_3_VERSION, TLS1_2_VERSION}) {
@@ -98,7 +37,7 @@ TEST_F(TlsSessionTest, MutualHandshakeCarriesDataAndTheClientsRole) {
         ASSERT_EQ(c.write(reinterpret_cast<const std::uint8_t*>(request.data()), request.size()),
                   TlsStatus::Ok);
         pump(c, s);
-        EXPECT_EQ(drain(s), request);
+        EXPECT_EQ(drain_text(s), request);
     }
 }
 
@@ -107,7 +46,7 @@ TEST_F(TlsSessionTest, ServerRefusesAClientWithoutARoleOrOfAnotherCa) {
         TlsSession s(server());
         TlsSession c(client(who));
         pump(c, s);
-        drain(c);  // TLS 1.3: the client learns of the refusal after its own handshake
+        drain_text(c);  // TLS 1.3: the client learns of the refusal after its own handshake
         EXPECT_FALSE(s.established()) << who;
         EXPECT_FALSE(s.error().empty()) << who;
     }
@@ -121,7 +60,7 @@ TEST_F(TlsSessionTest, ASavedSessionIsResumed) {
         TlsSession s(server_ctx);
         TlsSession c(client_ctx);
         pump(c, s);
-        drain(c);  // the TLS 1.3 tickets
+        drain_text(c);  // the TLS 1.3 tickets
         EXPECT_FALSE(c.resumed());
         saved = c.saved_session();
         ASSERT_NE(saved, nullptr);
