@@ -96,20 +96,9 @@ std::string format_serve_metrics(const server::ServerStats& s) {
             "Accepts that failed for lack of file descriptors.", s.accept_fd_exhausted);
     gauge("mbstorm_slave_pending_output_bytes", "Bytes queued for sending now.", s.pending_output);
     // Modbus/TCP Security (--transport tls); zero on other transports.
-    counter("mbstorm_slave_tls_handshakes_total", "TLS handshakes completed.", s.tls_handshakes);
-    counter("mbstorm_slave_tls_resumptions_total", "TLS handshakes that resumed a session.",
-            s.tls_resumed);
-    // (No userspace counter: handshakes minus offloaded would go down at each hand-off.)
-    counter("mbstorm_slave_tls_offloaded_total",
-            "TLS connections handed to the kernel's TLS after the handshake (the other "
-            "handshakes' records stay in userspace OpenSSL).",
-            s.tls_offloaded);
-    counter("mbstorm_slave_tls_offload_errors_total",
-            "Offloaded TLS connections ended by a record the kernel does not pass as data.",
-            s.tls_offload_errors);
-    counter("mbstorm_slave_tls_handshake_failures_total",
-            "TLS connections refused at the handshake (certificate, role, protocol).",
-            s.tls_refused);
+    report::write_tls_counters(
+        w, "mbstorm_slave_", none,
+        {s.tls_handshakes, s.tls_resumed, s.tls_refused, s.tls_offloaded, s.tls_offload_errors});
     counter("mbstorm_slave_tls_role_refusals_total",
             "Requests answered with exception 01 because the client's role may not use the "
             "function.",

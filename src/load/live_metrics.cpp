@@ -61,6 +61,12 @@ stats::LiveLoad LiveMetrics::snapshot() const {
         out.connections_closed_by_peer += w->connections_closed_by_peer.get();
         out.open_connections += w->open_connections.get();
         out.in_flight += w->in_flight.get();
+        out.tls.handshakes += w->tls_handshakes.get();
+        out.tls.resumed += w->tls_resumed.get();
+        out.tls.handshake_failures += w->tls_handshake_failures.get();
+        out.tls.handshake_ns_total += w->tls_handshake_ns.get();
+        out.tls.offloaded += w->tls_offloaded.get();
+        out.tls.offload_errors += w->tls_offload_errors.get();
     }
     return out;
 }

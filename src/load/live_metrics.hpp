@@ -61,6 +61,8 @@ struct LiveWorkerCells {
     LiveCell stray_bytes;
     LiveCell connections_opened, connections_failed, connections_closed_by_peer;
     LiveCell open_connections, in_flight;  // gauges
+    LiveCell tls_handshakes, tls_resumed, tls_handshake_failures, tls_handshake_ns;
+    LiveCell tls_offloaded, tls_offload_errors;
 };
 
 class LiveMetrics {

@@ -449,7 +449,11 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         return;
     }
     ++connection_stats.failed;
-    if (setup_.live != nullptr) setup_.live->connections_failed.add();
+    if (setup_.live != nullptr) {
+        setup_.live->connections_failed.add();
+        // The TLS path fails its handshakes (refused, malformed, too slow) with -EPROTO.
+        if (c.tls && result == -EPROTO) setup_.live->tls_handshake_failures.add();
+    }
     close_socket(c);
     c.state = Connection::State::Waiting;
     c.generation = net::next_generation(c.generation);
@@ -638,7 +642,10 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
     // The kernel's TLS passes no record but data: close_notify, an alert, or a TLS 1.3
     // KeyUpdate it cannot follow end the connection like a close, counted.
-    if (cqe.res == -EIO && c.tls && c.tls->kernel) ++connection_stats.tls_offload_errors;
+    if (cqe.res == -EIO && c.tls && c.tls->kernel) {
+        ++connection_stats.tls_offload_errors;
+        if (setup_.live != nullptr) setup_.live->tls_offload_errors.add();
+    }
     ++connection_stats.closed_by_peer;
     if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);

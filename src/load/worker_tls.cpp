@@ -63,6 +63,11 @@ bool Worker::tls_input(std::uint32_t index, codec::Bytes& data, std::int64_t now
         connection_stats.tls_handshake_ns_total += took;
         connection_stats.tls_handshake_ns_max =
             std::max(connection_stats.tls_handshake_ns_max, took);
+        if (setup_.live != nullptr) {
+            setup_.live->tls_handshakes.add();
+            if (session.resumed()) setup_.live->tls_resumed.add();
+            setup_.live->tls_handshake_ns.add(took);
+        }
         on_connect(index, 0, now);
         if (c.state != Connection::State::Open) return false;
     }
@@ -129,6 +134,7 @@ bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
             // connection: the ones after this stay in userspace.
             ktls_ = false;
             ++connection_stats.tls_offload_errors;
+            if (setup_.live != nullptr) setup_.live->tls_offload_errors.add();
             close_connection(index, now, stats::Outcome::ConnectionClosed);
             return false;
         }
@@ -136,6 +142,7 @@ bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
     }
     t.kernel = true;
     ++connection_stats.tls_offloaded;
+    if (setup_.live != nullptr) setup_.live->tls_offloaded.add();
     return true;
 }
 

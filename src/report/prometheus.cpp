@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <iterator>
+#include <utility>
 
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
@@ -107,6 +109,30 @@ std::string function_label(std::uint8_t fc) {
 }
 
 }  // namespace
+
+void write_tls_counters(PrometheusWriter& w, std::string_view prefix, PromLabels labels,
+                        const PromTlsCounters& tls) {
+    const std::pair<const char*, const char*> families[] = {
+        {"tls_handshakes_total", "TLS handshakes completed."},
+        {"tls_resumptions_total", "TLS handshakes that resumed a session."},
+        // (No userspace counter: handshakes minus offloaded would go down at each hand-off.)
+        {"tls_offloaded_total",
+         "TLS connections handed to the kernel's TLS after the handshake (the other "
+         "handshakes' records stay in userspace OpenSSL)."},
+        {"tls_offload_errors_total",
+         "Offloaded TLS connections ended by a record the kernel does not pass as data."},
+        {"tls_handshake_failures_total",
+         "TLS connections that ended at the handshake: refused (certificate, role), a protocol "
+         "error, or (run) no handshake within the connect timeout."},
+    };
+    const std::uint64_t values[] = {tls.handshakes, tls.resumptions, tls.offloaded,
+                                    tls.offload_errors, tls.handshake_failures};
+    for (std::size_t i = 0; i < std::size(families); ++i) {
+        const std::string name = fmt::format("{}{}", prefix, families[i].first);
+        w.family(name, "counter", families[i].second);
+        w.sample(name, labels, values[i]);
+    }
+}
 
 std::string format_load_metrics(const stats::LiveLoad& live) {
     PrometheusWriter w;
@@ -213,6 +239,16 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
     w.family("mbstorm_achieved_transactions_per_second", "gauge",
              "Transactions that ended per second over the last full interval.");
     w.sample("mbstorm_achieved_transactions_per_second", run_only, live.achieved_rate);
+
+    const stats::LiveTls& tls = live.tls;
+    write_tls_counters(
+        w, "mbstorm_", run_only,
+        {tls.handshakes, tls.resumed, tls.handshake_failures, tls.offloaded, tls.offload_errors});
+    w.family("mbstorm_tls_handshake_seconds_total", "counter",
+             "Time from TCP connect to TLS handshake done, summed over the completed handshakes "
+             "(divided by mbstorm_tls_handshakes_total: the mean).");
+    w.sample("mbstorm_tls_handshake_seconds_total", run_only,
+             static_cast<double>(tls.handshake_ns_total) / 1e9);
     return w.text();
 }
 

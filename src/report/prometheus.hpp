@@ -56,6 +56,19 @@ class PrometheusWriter {
 // "0.000025", "1", "2.5": a bound in nanoseconds as seconds, shortest exact form.
 std::string seconds_text(std::uint64_t ns);
 
+// The TLS counters `run` and `serve` both export (--transport tls; zero on other transports),
+// named prefix + "tls_handshakes_total" and so on: one list of names and meanings for both.
+struct PromTlsCounters {
+    std::uint64_t handshakes = 0;
+    std::uint64_t resumptions = 0;
+    std::uint64_t handshake_failures = 0;
+    std::uint64_t offloaded = 0;
+    std::uint64_t offload_errors = 0;
+};
+// prefix: "mbstorm_" (run) or "mbstorm_slave_" (serve).
+void write_tls_counters(PrometheusWriter& w, std::string_view prefix, PromLabels labels,
+                        const PromTlsCounters& tls);
+
 // `mbstorm run`'s metrics (names: docs/metrics.md).
 std::string format_load_metrics(const stats::LiveLoad& live);
 

@@ -21,6 +21,16 @@ struct LiveOperation {
     std::uint64_t latency_sum_ns = 0;
 };
 
+// --transport tls: zero on other transports.
+struct LiveTls {
+    std::uint64_t handshakes = 0;          // completed
+    std::uint64_t resumed = 0;             // of them, sessions resumed
+    std::uint64_t handshake_failures = 0;  // ended at the handshake (certificate, protocol, time)
+    std::uint64_t handshake_ns_total = 0;  // TCP connect done to handshake done, summed
+    std::uint64_t offloaded = 0;           // of the handshakes, handed to the kernel's TLS
+    std::uint64_t offload_errors = 0;      // offloaded connections ended by a non-data record
+};
+
 struct LiveLoad {
     std::string test_id;  // --test-id; empty when not given
     std::string shard;    // run --shard I/N: "I"; empty for a whole run
@@ -34,6 +44,7 @@ struct LiveLoad {
     double target_rate = 0;       // open loop: transactions per second asked for now
     double achieved_rate = 0;     // transactions per second over the last full interval
     bool running = false;         // false before the run starts and once it ended
+    LiveTls tls;
 };
 
 }  // namespace mbstorm::stats

@@ -44,6 +44,12 @@ stats::LiveLoad sample_live() {
     live.open_connections = 4;
     live.target_rate = 1000;
     live.achieved_rate = 998.5;
+    live.tls = {.handshakes = 4,
+                .resumed = 1,
+                .handshake_failures = 2,
+                .handshake_ns_total = 6'000'000,
+                .offloaded = 3,
+                .offload_errors = 1};
     return live;
 }
 
@@ -108,6 +114,31 @@ TEST(Prometheus, LoadMetricsCarryTheirLabelsAndCounts) {
     EXPECT_THAT(text, HasSubstr("mbstorm_achieved_transactions_per_second{"));
     EXPECT_THAT(text, HasSubstr("} 998.5\n"));
     EXPECT_THAT(text, HasSubstr("# TYPE mbstorm_transaction_latency_seconds histogram\n"));
+}
+
+// run's TLS counters are serve's names with run's prefix and labels: one list serves both.
+TEST(Prometheus, TlsCountersAreNamedAlikeForRunAndServe) {
+    const std::string run = format_load_metrics(sample_live());
+    const std::string labels = R"({test="soak \"A\"\\1"})";
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_handshakes_total" + labels + " 4\n"));
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_resumptions_total" + labels + " 1\n"));
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_handshake_failures_total" + labels + " 2\n"));
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_offloaded_total" + labels + " 3\n"));
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_offload_errors_total" + labels + " 1\n"));
+    EXPECT_THAT(run, HasSubstr("mbstorm_tls_handshake_seconds_total" + labels + " 0.006\n"));
+
+    PrometheusWriter w;
+    write_tls_counters(w, "mbstorm_slave_", {}, {4, 1, 2, 3, 1});
+    const std::string serve = w.text();
+    for (const char* name :
+         {"tls_handshakes_total", "tls_resumptions_total", "tls_handshake_failures_total",
+          "tls_offloaded_total", "tls_offload_errors_total"}) {
+        const std::string family = std::string("# TYPE mbstorm_slave_") + name + " counter\n";
+        EXPECT_THAT(serve, HasSubstr(family));
+        EXPECT_THAT(run, HasSubstr(std::string("# TYPE mbstorm_") + name + " counter\n"));
+    }
+    EXPECT_THAT(serve, HasSubstr("mbstorm_slave_tls_handshakes_total 4\n"));
+    EXPECT_THAT(serve, HasSubstr("mbstorm_slave_tls_handshake_failures_total 2\n"));
 }
 
 // A shard of a distributed run labels every series with its index, after the test, so that
