@@ -107,38 +107,16 @@ bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
     if (t.kernel || t.stays_in_userspace || c.state != Connection::State::Open || c.recv_armed ||
         c.send_in_flight || !t.session)
         return true;
-    net::KtlsReadiness r = t.session->offload_readiness();
-    r.kernel_available = true;
-    r.real_fd = !direct_;
-    switch (net::ktls_decide(r)) {
-        case net::KtlsRefusal::None:
-            break;
-        case net::KtlsRefusal::PendingInput:
-        case net::KtlsRefusal::PendingOutput:
-        case net::KtlsRefusal::AwaitingPeerRecord:
-            return true;  // the next answer tries again
-        default:
-            t.stays_in_userspace = true;
-            return true;
-    }
-    net::KtlsParams params;
-    if (!t.session->offload_params(params)) {
+    const net::KtlsHandOffResult handed = net::ktls_hand_off(*t.session, c.fd, !direct_);
+    if (handed == net::KtlsHandOffResult::Later) return true;  // the next answer tries again
+    if (handed != net::KtlsHandOffResult::Done) {
         t.stays_in_userspace = true;
-        return true;
-    }
-    bool changed = false;
-    if (net::install_ktls(c.fd, params, changed) != 0) {
-        t.stays_in_userspace = true;
-        if (changed) {  // TX is the kernel's, RX is not: neither side can go on
-            // A kernel that takes one direction and not the other would do it to every
-            // connection: the ones after this stay in userspace.
-            ktls_ = false;
-            ++connection_stats.tls_offload_errors;
-            if (setup_.live != nullptr) setup_.live->tls_offload_errors.add();
-            close_connection(index, now, stats::Outcome::ConnectionClosed);
-            return false;
-        }
-        return true;
+        if (handed == net::KtlsHandOffResult::Userspace) return true;
+        ktls_ = false;  // Broken: the connections after this one stay in userspace
+        ++connection_stats.tls_offload_errors;
+        if (setup_.live != nullptr) setup_.live->tls_offload_errors.add();
+        close_connection(index, now, stats::Outcome::ConnectionClosed);
+        return false;
     }
     t.kernel = true;
     ++connection_stats.tls_offloaded;

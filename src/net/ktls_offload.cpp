@@ -15,6 +15,8 @@
 #include <cstring>
 #include <string_view>
 
+#include "net/tls_session.hpp"
+
 #ifndef SOL_TLS
 #define SOL_TLS 282
 #endif
@@ -347,6 +349,28 @@ int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept {
     const int error = rc == 0 ? 0 : -errno;
     OPENSSL_cleanse(info, sizeof info);
     return error;
+}
+
+KtlsHandOffResult ktls_hand_off(const TlsSession& session, int fd, bool real_fd) noexcept {
+    KtlsReadiness r = session.offload_readiness();
+    r.kernel_available = true;
+    r.real_fd = real_fd;
+    switch (ktls_decide(r)) {
+        case KtlsRefusal::None:
+            break;
+        case KtlsRefusal::PendingInput:
+        case KtlsRefusal::PendingOutput:
+        case KtlsRefusal::AwaitingPeerRecord:
+            return KtlsHandOffResult::Later;
+        default:
+            return KtlsHandOffResult::Userspace;
+    }
+    KtlsParams params;
+    if (!session.offload_params(params)) return KtlsHandOffResult::Userspace;
+    bool changed = false;
+    if (install_ktls(fd, params, changed) != 0)
+        return changed ? KtlsHandOffResult::Broken : KtlsHandOffResult::Userspace;
+    return KtlsHandOffResult::Done;
 }
 
 }  // namespace mbstorm::net

@@ -120,6 +120,24 @@ std::size_t ktls_crypto_info(int version, KtlsCipher cipher, const KtlsKeys& key
 // close; if not, the socket still passes OpenSSL's ciphertext through unchanged.
 int install_ktls(int fd, const KtlsParams& params, bool& changed) noexcept;
 
+class TlsSession;
+
+// What one try at handing a connection to the kernel came to.
+enum class KtlsHandOffResult : unsigned char {
+    Later,      // not at this moment (bytes in OpenSSL, the peer's tickets): try at the next input
+    Userspace,  // never for this connection: OpenSSL keeps its records
+    Done,       // the kernel has the record layer both ways: the socket carries plaintext
+    // The kernel took the send side and refused the receive side: the connection cannot go
+    // on. A kernel that does this would do it to every connection: hand off no more.
+    Broken,
+};
+
+// The hand-off of `session`, established on socket `fd`, when the kernel can take it now
+// (ktls_decide, offload_params, install_ktls). The caller has checked that the kernel has the
+// offload and that none of the connection's bytes are in flight either way; real_fd: false
+// for an io_uring direct descriptor (setsockopt cannot reach it).
+KtlsHandOffResult ktls_hand_off(const TlsSession& session, int fd, bool real_fd) noexcept;
+
 // Tests only: install_ktls calls `installer` instead (nullptr: the kernel again).
 using KtlsInstaller = int (*)(int fd, const KtlsParams& params, bool& changed);
 void set_ktls_installer_for_testing(KtlsInstaller installer) noexcept;

@@ -65,33 +65,12 @@ void Worker::tls_offload(std::uint32_t index) noexcept {
         c.stash_head != kNoBuffer || c.send_inflight || t.has_output() || t.plain_carried != 0 ||
         c.peer_done || c.framing_lost)
         return;
-    net::KtlsReadiness r = t.session.offload_readiness();
-    r.kernel_available = true;
-    r.real_fd = !direct_;
-    switch (net::ktls_decide(r)) {
-        case net::KtlsRefusal::None:
-            break;
-        case net::KtlsRefusal::PendingInput:
-        case net::KtlsRefusal::PendingOutput:
-        case net::KtlsRefusal::AwaitingPeerRecord:
-            return;  // the next input tries again
-        default:
-            t.stays_in_userspace = true;
-            return;
-    }
-    net::KtlsParams params;
-    if (!t.session.offload_params(params)) {
+    const net::KtlsHandOffResult handed = net::ktls_hand_off(t.session, c.fd, !direct_);
+    if (handed == net::KtlsHandOffResult::Later) return;  // the next input tries again
+    if (handed != net::KtlsHandOffResult::Done) {
         t.stays_in_userspace = true;
-        return;
-    }
-    bool changed = false;
-    const int rc = net::install_ktls(c.fd, params, changed);
-    if (rc != 0) {
-        t.stays_in_userspace = true;
-        if (changed) {  // TX is the kernel's, RX is not: neither side can go on
-            // A kernel that takes one direction and not the other would do it to every
-            // connection: the ones after this stay in userspace.
-            ktls_ = false;
+        if (handed == net::KtlsHandOffResult::Broken) {
+            ktls_ = false;  // the connections after this one stay in userspace
             counters_.add(ServerCounters::TlsOffloadErrors);
             close_connection(index);
         }

@@ -9,6 +9,7 @@
 #include <openssl/evp.h>
 #include <openssl/ssl.h>
 
+#include <cerrno>
 #include <cstring>
 #include <memory>
 #include <ostream>
@@ -443,6 +444,55 @@ TEST_F(KtlsOffloadTest, ALiveSessionReportsWhatKeepsItInUserspace) {
         pump(c, s);
         EXPECT_EQ(decide(s), KtlsRefusal::NoSecrets);
     }
+}
+
+// What install_ktls does in ktls_hand_off's test: says what it was given, then what the test
+// asks of it.
+int g_installs = 0;
+int g_install_result = 0;
+bool g_install_changes = false;
+int fake_install(int fd, const KtlsParams& params, bool& changed) {
+    ++g_installs;
+    EXPECT_EQ(fd, 7);
+    EXPECT_NE(params.cipher, KtlsCipher::None);
+    changed = g_install_changes;
+    return g_install_result;
+}
+
+// ktls_hand_off, the one hand-off both the slave's and the engine's workers call: not now
+// while bytes wait, never where the kernel cannot take it, done or broken as the kernel answers.
+TEST_F(KtlsOffloadTest, AHandOffIsLaterUserspaceDoneOrBroken) {
+    struct Installer {  // the kernel again when the test ends, however it ends
+        Installer() { set_ktls_installer_for_testing(&fake_install); }
+        ~Installer() { set_ktls_installer_for_testing(nullptr); }
+    } installer;
+    g_installs = 0;
+    TlsSession s(context(TlsSide::Server, TLS1_3_VERSION, "TLS_AES_128_GCM_SHA256"));
+    TlsSession c(context(TlsSide::Client, TLS1_3_VERSION, "TLS_AES_128_GCM_SHA256"));
+    s.track_for_offload();
+    c.track_for_offload();
+    pump(c, s);
+    drain(c);
+    EXPECT_EQ(ktls_hand_off(c, 7, true), KtlsHandOffResult::Later);       // no answer yet
+    EXPECT_EQ(ktls_hand_off(s, 7, false), KtlsHandOffResult::Userspace);  // a direct descriptor
+    const Bytes request = bytes_of("request");
+    ASSERT_EQ(c.write(request.data(), request.size()), TlsStatus::Ok);
+    Bytes record;
+    c.take_output(record);
+    s.feed(record.data(), record.size());
+    EXPECT_EQ(ktls_hand_off(s, 7, true), KtlsHandOffResult::Later);  // unread input
+    drain(s);
+    EXPECT_EQ(g_installs, 0);
+    g_install_result = -ENOENT;  // no tls module: nothing changed
+    g_install_changes = false;
+    EXPECT_EQ(ktls_hand_off(s, 7, true), KtlsHandOffResult::Userspace);
+    g_install_result = -EINVAL;  // TX installed, RX refused
+    g_install_changes = true;
+    EXPECT_EQ(ktls_hand_off(s, 7, true), KtlsHandOffResult::Broken);
+    g_install_result = 0;
+    g_install_changes = true;
+    EXPECT_EQ(ktls_hand_off(s, 7, true), KtlsHandOffResult::Done);
+    EXPECT_EQ(g_installs, 3);
 }
 
 // A TLS 1.3 key update before the hand-off leaves the tracked secrets stale: both ends see it
