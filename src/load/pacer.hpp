@@ -4,6 +4,7 @@
 // queueing delay (coordinated omission). LagTracker counts the sends that left late.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "load/plan.hpp"
@@ -49,7 +50,12 @@ class Pacer {
 
 // Counts late sends by cause. A send is blamed on the target when, since the last send that
 // left on time, the schedule was found due with no connection able to take it (every in-flight
-// window full, or none open); otherwise on the engine.
+// window full, or none open), and it left later than the engine itself had fallen behind;
+// otherwise on the engine. (An engine that stalled sends its backlog at once when it wakes: a
+// backlog longer than the windows fills them with requests the target has only just been
+// given, and the sends still due wait for those. They are as late as the engine made them,
+// not the target: only a send later than every one of the engine's own late sends waited for
+// a target that was slow to answer.)
 class LagTracker {
   public:
     explicit LagTracker(std::int64_t threshold_ns = 1'000'000) noexcept
@@ -61,10 +67,13 @@ class LagTracker {
         const std::int64_t lag = actual_ns - intended_ns;
         if (lag <= threshold_) {
             waiting_for_target_ = false;
+            engine_behind_ns_ = 0;
             return;
         }
+        const bool target = waiting_for_target_ && lag > engine_behind_ns_ + threshold_;
+        if (!target) engine_behind_ns_ = std::max(engine_behind_ns_, lag);
         if (!measured) return;
-        stats::LagCounts& into = waiting_for_target_ ? lag_.target : lag_.engine;
+        stats::LagCounts& into = target ? lag_.target : lag_.engine;
         ++into.late_sends;
         into.total_lag_ns += static_cast<std::uint64_t>(lag);
         if (static_cast<std::uint64_t>(lag) > into.max_lag_ns)
@@ -78,6 +87,8 @@ class LagTracker {
   private:
     std::int64_t threshold_;
     bool waiting_for_target_ = false;
+    // The largest lag of the engine's own late sends since the last send on time.
+    std::int64_t engine_behind_ns_ = 0;
     stats::ScheduleLag lag_;
 };
 

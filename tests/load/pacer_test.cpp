@@ -95,5 +95,34 @@ TEST(LagTracker, BlamesTheTargetOnlyWhileSendsWaitedForAFreeWindow) {
     EXPECT_EQ(lag.late_sends(), 4u);
 }
 
+// An engine that stalled 130 ms at 1,000/s sends its backlog at once when it wakes: 128 sends,
+// late by 130 ms down to 3 ms, fill both windows of 64. The sends still due then wait for the
+// answers to requests the target has only just been given: as late as the engine made them,
+// not the target's. (EngineHonestNumbers.AStalledEngineIsBlamedNotTheTarget failed on this
+// when a loaded machine stretched its stalls.) A send later than the engine ever fell behind
+// did wait for the target.
+TEST(LagTracker, ABacklogThatFillsTheWindowsIsTheEnginesNotTheTargets) {
+    constexpr std::int64_t ms = 1'000'000;
+    LagTracker lag(ms);
+    for (std::int64_t i = 0; i < 128; ++i) lag.record(i * ms, 130 * ms);
+    lag.note_window_full();
+    lag.record(128 * ms, 132 * ms);  // the first answers came 2 ms after the backlog left
+    lag.record(129 * ms, 132 * ms);
+    EXPECT_EQ(lag.lag().engine.late_sends, 130u);
+    EXPECT_EQ(lag.lag().target.late_sends, 0u);
+    // The target stops answering: the next send waits 200 ms, far past the engine's backlog.
+    lag.note_window_full();
+    lag.record(130 * ms, 330 * ms);
+    EXPECT_EQ(lag.lag().target.late_sends, 1u);
+    EXPECT_EQ(lag.lag().target.max_lag_ns, static_cast<std::uint64_t>(200 * ms));
+    // On time again: the engine's backlog is worked off, and the next window full is the
+    // target's from the first late send.
+    lag.record(331 * ms, 331 * ms);
+    lag.note_window_full();
+    lag.record(332 * ms, 335 * ms);
+    EXPECT_EQ(lag.lag().target.late_sends, 2u);
+    EXPECT_EQ(lag.lag().engine.late_sends, 130u);
+}
+
 }  // namespace
 }  // namespace mbstorm::load
