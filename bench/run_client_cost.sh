@@ -36,15 +36,17 @@ server_cpu_ticks() { awk '{print $14 + $15}' "/proc/$server_pid/stat"; }
 server_reads() { awk '/^syscr/ {print $2}' "/proc/$server_pid/io"; }
 hz=$(getconf CLK_TCK)
 
-# Runs one client under time(1); prints its transaction count.
+# Runs one client, its user and system CPU seconds into $work/time (bash's time keyword);
+# prints its transaction count.
+TIMEFORMAT='%U %S'
 run_client() {
   if [ "$1" = pair ]; then
-    /usr/bin/time -f "%U %S" -o "$work/time" taskset -c 1 "$client" --port "$port" \
-      --connections "$connections" --depth "$depth" --seconds "$secs" --warmup 0 >"$work/pair.out" 2>/dev/null
+    { time taskset -c 1 "$client" --port "$port" --connections "$connections" --depth "$depth" \
+      --seconds "$secs" --warmup 0 >"$work/pair.out" 2>/dev/null; } 2>"$work/time"
     echo $(($(sed -n 's/^RESULT tps=\([0-9]*\).*/\1/p' "$work/pair.out") * secs))
   else
-    /usr/bin/time -f "%U %S" -o "$work/time" taskset -c 1 "$mbstorm" run --target "127.0.0.1:$port" \
-      --threads 1 -c "$connections" --depth "$depth" -d "${secs}s" -q --json "$work/run.json" >/dev/null 2>&1
+    { time taskset -c 1 "$mbstorm" run --target "127.0.0.1:$port" --threads 1 -c "$connections" \
+      --depth "$depth" -d "${secs}s" -q --json "$work/run.json" >/dev/null 2>&1; } 2>"$work/time"
     /usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["totals"]["transactions"])' "$work/run.json"
   fi
 }
