@@ -20,21 +20,38 @@ struct Planted {
     std::set<std::string> classes;  // any of these (empty: any)
 };
 
+// A planted-fault server, fuzzed with a fixed seed: what the run printed and its JSON summary.
+struct FuzzedServer {
+    FuzzedServer(const char* name, const std::string& bounds) {
+        mbstorm::test::Target* raw = nullptr;
+        target = mbstorm::test::start_broken(raw, name);
+        server.reset(raw);
+        if (target.empty()) return;
+        dir = mbstorm::test::temp_dir(name);
+        run = run_mbstorm("fuzz --target " + target + " --seed 7 " + bounds +
+                          " --timeout 300ms --out " + dir + "/findings --json " + dir +
+                          "/summary.json");
+        std::ifstream in(dir + "/summary.json");
+        summary = nlohmann::json::parse(in, nullptr, false);
+    }
+    ~FuzzedServer() {
+        if (!dir.empty()) std::filesystem::remove_all(dir);
+    }
+    std::unique_ptr<mbstorm::test::Target> server;
+    std::string target, dir;
+    mbstorm::test::CommandResult run;
+    nlohmann::json summary;
+};
+
 class BrokenTarget : public ::testing::TestWithParam<Planted> {};
 
 TEST_P(BrokenTarget, PlantedFaultIsFoundAndReplays) {
     const Planted& p = GetParam();
-    mbstorm::test::Target* raw = nullptr;
-    const std::string target = mbstorm::test::start_broken(raw, p.server);
-    std::unique_ptr<mbstorm::test::Target> server(raw);
-    ASSERT_FALSE(target.empty()) << p.server << " did not start";
-    const std::string dir = mbstorm::test::temp_dir(p.server);
-    const auto run = run_mbstorm("fuzz --target " + target +
-                                 " --seed 7 --cases 20000 --timeout 300ms -q --out " + dir +
-                                 "/findings --json " + dir + "/summary.json");
+    const FuzzedServer fuzzed(p.server, "--cases 20000 -q");
+    ASSERT_FALSE(fuzzed.target.empty()) << p.server << " did not start";
+    const auto& [target, run, summary] = std::tie(fuzzed.target, fuzzed.run, fuzzed.summary);
     ASSERT_EQ(run.exit_code, 1) << run.output;
-    std::ifstream in(dir + "/summary.json");
-    const auto summary = nlohmann::json::parse(in);
+    ASSERT_FALSE(summary.is_discarded()) << run.output;
     std::string folder;
     for (const auto& f : summary.at("findings")) {
         if (!p.oracles.count(f.at("oracle").get<std::string>())) continue;
@@ -57,7 +74,6 @@ TEST_P(BrokenTarget, PlantedFaultIsFoundAndReplays) {
         EXPECT_EQ(replay.exit_code, 1) << replay.output;
         EXPECT_NE(replay.output.find("REPRODUCES"), std::string::npos) << replay.output;
     }
-    std::filesystem::remove_all(dir);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -90,42 +106,27 @@ namespace {
 // stream was not lost. One root cause, whether the request was of the wrong length or
 // well-framed and undecodable (a byte count that disagrees), not a lost stream besides.
 TEST(RefusingTarget, ClosingOnARequestOfTheWrongLengthIsNotALostStream) {
-    mbstorm::test::Target* raw = nullptr;
-    const std::string target = mbstorm::test::start_broken(raw, "broken_server_refuse");
-    std::unique_ptr<mbstorm::test::Target> server(raw);
-    ASSERT_FALSE(target.empty()) << "broken_server_refuse did not start";
-    const std::string dir = mbstorm::test::temp_dir("refuse");
-    const auto run = run_mbstorm("fuzz --target " + target +
-                                 " --seed 7 --cases 20000 --timeout 300ms -q --out " + dir +
-                                 "/findings --json " + dir + "/summary.json");
-    ASSERT_EQ(run.exit_code, 1) << run.output;
-    std::ifstream in(dir + "/summary.json");
-    const auto summary = nlohmann::json::parse(in);
+    const FuzzedServer fuzzed("broken_server_refuse", "--cases 20000 -q");
+    ASSERT_FALSE(fuzzed.target.empty()) << "broken_server_refuse did not start";
+    ASSERT_EQ(fuzzed.run.exit_code, 1) << fuzzed.run.output;
+    ASSERT_FALSE(fuzzed.summary.is_discarded()) << fuzzed.run.output;
     int refusals = 0;
-    for (const auto& f : summary.at("findings")) {
+    for (const auto& f : fuzzed.summary.at("findings")) {
         const std::string key = f.at("root_cause").get<std::string>();
         EXPECT_EQ(key.rfind("stream:", 0), std::string::npos) << f.dump(2);
         if (key == "unexpected-close:close-with-request-pending/invalid-request") ++refusals;
     }
-    EXPECT_EQ(refusals, 1) << run.output;
-    std::filesystem::remove_all(dir);
+    EXPECT_EQ(refusals, 1) << fuzzed.run.output;
 }
 
 // A target that answers 06 (busy) to most requests: the summary says most cases were wasted
 // (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings". 1000
 // cases (2 s) give about 1,900 pipelined answers, three quarters of them busy.
 TEST(BusyTarget, WastedCasesAreReportedAndTheFuzzerSlowsDown) {
-    mbstorm::test::Target* raw = nullptr;
-    const std::string target = mbstorm::test::start_broken(raw, "broken_server_busy");
-    std::unique_ptr<mbstorm::test::Target> server(raw);
-    ASSERT_FALSE(target.empty()) << "broken_server_busy did not start";
-    const std::string dir = mbstorm::test::temp_dir("busy");
-    const auto run = run_mbstorm("fuzz --target " + target +
-                                 " --seed 7 --cases 1000 --seconds 20 --timeout 300ms --out " +
-                                 dir + "/findings --json " + dir + "/summary.json");
-    std::ifstream in(dir + "/summary.json");
-    ASSERT_TRUE(in.good()) << run.output;
-    const auto summary = nlohmann::json::parse(in);
+    const FuzzedServer fuzzed("broken_server_busy", "--cases 1000 --seconds 20");
+    ASSERT_FALSE(fuzzed.target.empty()) << "broken_server_busy did not start";
+    const auto& [run, summary] = std::tie(fuzzed.run, fuzzed.summary);
+    ASSERT_FALSE(summary.is_discarded()) << run.output;
     const auto answers = summary.at("answers").get<std::uint64_t>();
     const auto busy = summary.at("busy_answers").get<std::uint64_t>();
     EXPECT_GT(answers, 16u) << run.output;
@@ -135,7 +136,6 @@ TEST(BusyTarget, WastedCasesAreReportedAndTheFuzzerSlowsDown) {
     // Busy is a legal answer to any request: it is never a finding by itself.
     for (const auto& f : summary.at("findings"))
         EXPECT_EQ(f.at("rule").get<std::string>().find("busy"), std::string::npos) << f.dump();
-    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
