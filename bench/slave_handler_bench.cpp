@@ -71,6 +71,11 @@ slave::DataModel& shared_model() {
     static slave::DataModel model{slave::ModelConfig{}};
     return model;
 }
+// Reads from two threads of one model: what they share besides the registers (the diagnostics
+// counters) shows here.
+void BM_Fc03Read10SharedModel(benchmark::State& s) {
+    run_on(s, kFc3x10, shared_model());
+}
 void BM_Fc06WriteOneSharedWord(benchmark::State& s) {
     std::vector<std::uint8_t> request = kFc6Write;
     request[2] = static_cast<std::uint8_t>(0x64 + s.thread_index());
@@ -85,4 +90,5 @@ BENCHMARK(BM_Fc10Write10);
 BENCHMARK(BM_Fc01Read100);
 BENCHMARK(BM_Fc06WriteOne);
 BENCHMARK(BM_Fc10Write3Unaligned);
+BENCHMARK(BM_Fc03Read10SharedModel)->Threads(1)->Threads(2);
 BENCHMARK(BM_Fc06WriteOneSharedWord)->Threads(1)->Threads(2);
