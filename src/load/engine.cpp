@@ -91,6 +91,7 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.connections.closed_by_peer += w->connection_stats.closed_by_peer;
         run.connections.tls_handshakes += w->connection_stats.tls_handshakes;
         run.connections.tls_resumed += w->connection_stats.tls_resumed;
+        run.connections.tls_handshake_failures += w->connection_stats.tls_handshake_failures;
         run.connections.tls_offloaded += w->connection_stats.tls_offloaded;
         run.connections.tls_offload_errors += w->connection_stats.tls_offload_errors;
         run.connections.tls_handshake_ns_total += w->connection_stats.tls_handshake_ns_total;

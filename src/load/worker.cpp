@@ -449,10 +449,12 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         return;
     }
     ++connection_stats.failed;
+    // The TLS path fails its handshakes (refused, malformed, too slow) with -EPROTO.
+    const bool handshake_failed = c.tls && result == -EPROTO;
+    if (handshake_failed) ++connection_stats.tls_handshake_failures;
     if (setup_.live != nullptr) {
         setup_.live->connections_failed.add();
-        // The TLS path fails its handshakes (refused, malformed, too slow) with -EPROTO.
-        if (c.tls && result == -EPROTO) setup_.live->tls_handshake_failures.add();
+        if (handshake_failed) setup_.live->tls_handshake_failures.add();
     }
     close_socket(c);
     c.state = Connection::State::Waiting;

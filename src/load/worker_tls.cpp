@@ -127,7 +127,10 @@ bool Worker::tls_offload(std::uint32_t index, std::int64_t now) noexcept {
 void Worker::tls_refused(const std::string& why) noexcept {
     // TLS 1.3 ends the client's handshake before the server has checked its certificate: a
     // refusal arrives as an alert after it, before any answer. (A close without an alert
-    // proves nothing: fault-injecting servers close before answering too.)
+    // proves nothing: fault-injecting servers close before answering too.) It is the server's
+    // half of a handshake that failed, counted as such.
+    ++connection_stats.tls_handshake_failures;
+    if (setup_.live != nullptr) setup_.live->tls_handshake_failures.add();
     fatal_error = fmt::format("cannot talk to {}: TLS session refused: {}", setup_.target, why);
     setup_.abort->store(true);
 }

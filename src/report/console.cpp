@@ -142,11 +142,11 @@ std::string format_console_report(const stats::RunResult& r) {
     if (r.connections.tls_handshakes != 0) {
         const auto& cs = r.connections;
         out += fmt::format(
-            "TLS         {} handshakes ({:.0f}/s), {} resumed, latency mean {:.3f} ms, max {:.3f} "
-            "ms\n",
+            "TLS         {} handshakes ({:.0f}/s), {} resumed, {} failed, latency mean {:.3f} ms, "
+            "max {:.3f} ms\n",
             format_count(cs.tls_handshakes),
             static_cast<double>(cs.tls_handshakes) / (seconds > 0 ? seconds : 1.0),
-            format_count(cs.tls_resumed),
+            format_count(cs.tls_resumed), format_count(cs.tls_handshake_failures),
             static_cast<double>(cs.tls_handshake_ns_total) /
                 static_cast<double>(cs.tls_handshakes) / 1e6,
             static_cast<double>(cs.tls_handshake_ns_max) / 1e6);

@@ -222,6 +222,7 @@ std::string format_json(const stats::RunResult& r, int indent) {
           {"tls_resumed", r.connections.tls_resumed},
           {"tls_handshake_ns_total", r.connections.tls_handshake_ns_total},
           {"tls_handshake_ns_max", r.connections.tls_handshake_ns_max},
+          {"tls_handshake_failures", r.connections.tls_handshake_failures},
           {"tls_offloaded", r.connections.tls_offloaded},
           {"tls_offload_errors", r.connections.tls_offload_errors}}},
         {"plan_carried_out", r.shortfalls.empty()},

@@ -161,6 +161,14 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         cs.reconnects = c.at("reconnects").get<std::uint64_t>();
         cs.closed_by_peer = c.at("closed_by_peer").get<std::uint64_t>();
         cs.peak_open = c.at("peak_open").get<std::uint64_t>();
+        // TLS counters (written by every run; absent from reports older than them: 0).
+        cs.tls_handshakes = c.value("tls_handshakes", std::uint64_t{0});
+        cs.tls_resumed = c.value("tls_resumed", std::uint64_t{0});
+        cs.tls_handshake_ns_total = c.value("tls_handshake_ns_total", std::uint64_t{0});
+        cs.tls_handshake_ns_max = c.value("tls_handshake_ns_max", std::uint64_t{0});
+        cs.tls_handshake_failures = c.value("tls_handshake_failures", std::uint64_t{0});
+        cs.tls_offloaded = c.value("tls_offloaded", std::uint64_t{0});
+        cs.tls_offload_errors = c.value("tls_offload_errors", std::uint64_t{0});
         for (const json& s : doc.at("plan_shortfalls")) {
             stats::PlanShortfall p;
             p.what = s.at("what").get<std::string>();
@@ -439,6 +447,14 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         c.reconnects += s.summary.connections.reconnects;
         c.closed_by_peer += s.summary.connections.closed_by_peer;
         c.peak_open += s.summary.connections.peak_open;
+        c.tls_handshakes += s.summary.connections.tls_handshakes;
+        c.tls_resumed += s.summary.connections.tls_resumed;
+        c.tls_handshake_ns_total += s.summary.connections.tls_handshake_ns_total;
+        c.tls_handshake_ns_max =
+            std::max(c.tls_handshake_ns_max, s.summary.connections.tls_handshake_ns_max);
+        c.tls_handshake_failures += s.summary.connections.tls_handshake_failures;
+        c.tls_offloaded += s.summary.connections.tls_offloaded;
+        c.tls_offload_errors += s.summary.connections.tls_offload_errors;
         for (auto p : s.summary.shortfalls) {
             p.text = fmt::format("run {}: {}", sm.run_id, p.text);
             out.shortfalls.push_back(std::move(p));

@@ -122,6 +122,9 @@ struct ConnectionStats {
     std::uint64_t tls_resumed = 0;
     std::uint64_t tls_handshake_ns_total = 0;
     std::uint64_t tls_handshake_ns_max = 0;
+    // Connects that ended at the handshake: refused, malformed or past the connect timeout
+    // (counted in `failed` too).
+    std::uint64_t tls_handshake_failures = 0;
     // Of the handshakes, connections handed to the kernel's TLS (the rest stayed in userspace
     // OpenSSL), and offloaded connections ended by a record the kernel does not pass as data
     // (close_notify, an alert, a TLS 1.3 KeyUpdate) or by a hand-off that failed half-way.

@@ -187,6 +187,31 @@ TEST_F(RunMetricsTls, ARefusedHandshakeIsCountedAsAFailure) {
     EXPECT_LE(failures, 3.0);
     EXPECT_EQ(sample(text, "mbstorm_tls_handshakes_total" + labels), 0.0);
     EXPECT_EQ(sample(text, "mbstorm_connections_failed_total" + labels), failures);
+    // The report counts them as the endpoint did.
+    EXPECT_EQ(static_cast<double>(r.run.connections.tls_handshake_failures), failures);
+}
+
+// Under TLS 1.3 the client's handshake ends before the slave has checked its certificate: the
+// refusal comes as an alert after it, before any answer. It is a handshake failure all the same.
+TEST_F(RunMetricsTls, ACertificateRefusedAfterATls13HandshakeIsCountedAsAFailure) {
+    ASSERT_TRUE(start_slave());
+    load::Plan plan = tls_plan(slave_->port());
+    plan.tls = context(net::TlsSide::Client, "rogue", TLS1_3_VERSION);
+    ASSERT_TRUE(plan.tls);
+    plan.duration = 5s;  // ended by the refusal at once
+    load::LiveMetrics live("tls13-refused");
+    net::HttpServer http;
+    ASSERT_TRUE(start_endpoint(http, live));
+    load::EngineOptions options;
+    options.live = &live;
+    const load::LoadResult r = load::run_load(plan, options);
+    EXPECT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("TLS session refused"), std::string::npos) << r.error;
+    EXPECT_GE(r.run.connections.tls_handshake_failures, 1u);
+    const std::string text = scrape(http.address());
+    EXPECT_EQ(sample(text, R"(mbstorm_tls_handshake_failures_total{test="tls13-refused"})"),
+              static_cast<double>(r.run.connections.tls_handshake_failures))
+        << text;
 }
 
 }  // namespace

@@ -116,6 +116,33 @@ TEST(Merge, CountsAddAndPercentilesAreThoseOfOneHistogramFedEveryValue) {
     EXPECT_EQ(run.metadata.measured_duration_ns, 3 * kSecond);
 }
 
+TEST(Merge, TlsCountersAddUpAndTheLongestHandshakeIsTheLongestOfAll) {
+    std::mt19937_64 rng(7);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> shards;
+    for (const char* id : {"a", "b"}) {
+        shards.push_back(make_shard(id, 1000.0, 1, rng, all, all_read));
+        auto& c = shards.back().summary.connections;
+        c.tls_handshakes = 4;
+        c.tls_resumed = 2;
+        c.tls_handshake_ns_total = 4'000'000;
+        c.tls_handshake_ns_max = id[0] == 'a' ? 1'500'000 : 2'500'000;
+        c.tls_handshake_failures = 1;
+        c.tls_offloaded = 3;
+        c.tls_offload_errors = 1;
+    }
+    const MergeOutcome merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok) << merged.error;
+    const auto& c = merged.run.connections;
+    EXPECT_EQ(c.tls_handshakes, 8u);
+    EXPECT_EQ(c.tls_resumed, 4u);
+    EXPECT_EQ(c.tls_handshake_ns_total, 8'000'000u);
+    EXPECT_EQ(c.tls_handshake_ns_max, 2'500'000u);
+    EXPECT_EQ(c.tls_handshake_failures, 2u);
+    EXPECT_EQ(c.tls_offloaded, 6u);
+    EXPECT_EQ(c.tls_offload_errors, 2u);
+}
+
 TEST(Merge, TimelineLinesUpOnWallClockTime) {
     std::mt19937_64 rng(8);
     stats::Histogram all, all_read;
