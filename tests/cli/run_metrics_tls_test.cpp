@@ -99,6 +99,29 @@ class RunMetricsTls : public test::TlsCertsTest {
     }
 
     std::unique_ptr<server::Server> slave_;
+
+    // A run whose client certificate (of another CA) the slave refuses, the live endpoint up:
+    // its result and what the endpoint said after it (labelled test=`label`).
+    struct RefusedRun {
+        load::LoadResult result;
+        std::string scraped;
+    };
+    RefusedRun run_refused(int tls_version, const std::string& label) {
+        RefusedRun out;
+        if (!start_slave()) return out;
+        load::Plan plan = tls_plan(slave_->port());
+        plan.tls = context(net::TlsSide::Client, "rogue", tls_version);
+        if (!plan.tls) return out;
+        plan.duration = 5s;  // ended by the refusal at once
+        load::LiveMetrics live(label);
+        net::HttpServer http;
+        if (!start_endpoint(http, live)) return out;
+        load::EngineOptions options;
+        options.live = &live;
+        out.result = load::run_load(plan, options);
+        out.scraped = scrape(http.address());
+        return out;
+    }
 };
 
 TEST_F(RunMetricsTls, TheLiveEndpointCountsHandshakesWhileTheRunGoesAndEndsAtTheReport) {
@@ -166,21 +189,9 @@ TEST_F(RunMetricsTls, TheLiveEndpointCountsHandshakesWhileTheRunGoesAndEndsAtThe
 // A client certificate of another CA: the slave refuses it at the handshake (TLS 1.2, where
 // the refusal ends the client's own handshake), which the endpoint counts as a failure.
 TEST_F(RunMetricsTls, ARefusedHandshakeIsCountedAsAFailure) {
-    ASSERT_TRUE(start_slave());
-    load::Plan plan = tls_plan(slave_->port());
-    plan.tls = context(net::TlsSide::Client, "rogue", TLS1_2_VERSION);
-    ASSERT_TRUE(plan.tls);
-    plan.duration = 5s;  // ended by the failure at once
-    load::LiveMetrics live("tls-refused");
-    net::HttpServer http;
-    ASSERT_TRUE(start_endpoint(http, live));
-    load::EngineOptions options;
-    options.live = &live;
-    const load::LoadResult r = load::run_load(plan, options);
+    const auto [r, text] = run_refused(TLS1_2_VERSION, "tls-refused");
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.error.find("TLS handshake failed"), std::string::npos) << r.error;
-
-    const std::string text = scrape(http.address());
     const std::string labels = R"({test="tls-refused"})";
     const double failures = sample(text, "mbstorm_tls_handshake_failures_total" + labels);
     EXPECT_GE(failures, 1.0) << text;
@@ -194,21 +205,10 @@ TEST_F(RunMetricsTls, ARefusedHandshakeIsCountedAsAFailure) {
 // Under TLS 1.3 the client's handshake ends before the slave has checked its certificate: the
 // refusal comes as an alert after it, before any answer. It is a handshake failure all the same.
 TEST_F(RunMetricsTls, ACertificateRefusedAfterATls13HandshakeIsCountedAsAFailure) {
-    ASSERT_TRUE(start_slave());
-    load::Plan plan = tls_plan(slave_->port());
-    plan.tls = context(net::TlsSide::Client, "rogue", TLS1_3_VERSION);
-    ASSERT_TRUE(plan.tls);
-    plan.duration = 5s;  // ended by the refusal at once
-    load::LiveMetrics live("tls13-refused");
-    net::HttpServer http;
-    ASSERT_TRUE(start_endpoint(http, live));
-    load::EngineOptions options;
-    options.live = &live;
-    const load::LoadResult r = load::run_load(plan, options);
+    const auto [r, text] = run_refused(TLS1_3_VERSION, "tls13-refused");
     EXPECT_FALSE(r.ok);
     EXPECT_NE(r.error.find("TLS session refused"), std::string::npos) << r.error;
     EXPECT_GE(r.run.connections.tls_handshake_failures, 1u);
-    const std::string text = scrape(http.address());
     EXPECT_EQ(sample(text, R"(mbstorm_tls_handshake_failures_total{test="tls13-refused"})"),
               static_cast<double>(r.run.connections.tls_handshake_failures))
         << text;
