@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-fuzz_seconds=${MBSTORM_FUZZ_SECONDS:-4}
+fuzz_seconds=${MBSTORM_FUZZ_SECONDS:-2}
 jobs=${MBSTORM_JOBS:-$(nproc)}
 # The suites spend about two fifths of their time waiting (on servers, peers, timeouts), so
 # they run two per core: on 2 cores the release suite took 227 s with 2 at once, 170 s with 3

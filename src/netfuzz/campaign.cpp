@@ -353,7 +353,7 @@ class Campaign {
     }
 
     Finding* known(const Verdict& v);
-    // A verdict as this target's behaviour explains it (see refuses_length_mismatch_).
+    // A verdict as this target's behaviour explains it (see length_mismatch_close_).
     Verdict understood(Verdict v) const;
     // Runs a case alone and judges it as understood().
     Execution run_alone(const Case& c);
