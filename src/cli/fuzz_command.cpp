@@ -15,6 +15,7 @@
 #include "cli/transport_options.hpp"
 #include "codec/function_code.hpp"
 #include "netfuzz/campaign.hpp"
+#include "netfuzz/device_model.hpp"
 #include "netfuzz/dictionary.hpp"
 #include "netfuzz/outputs.hpp"
 #include "report/files.hpp"
@@ -49,6 +50,9 @@ struct FuzzOptions {
     bool quiet = false;
     std::string dict;
     std::string state_range = "0x6000-0x6FFF";
+    bool state_given = false;
+    std::string map, model;
+    bool no_model = false;
     std::uint32_t max_connections = 4096;
     TransportOptions transport;
 };
@@ -106,6 +110,14 @@ int run_fuzz(const FuzzOptions& o) {
     if (o.duration_ns == 0 && o.cases == 0)
         return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
     if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);
+    c.state_given = o.state_given;
+    if (!o.map.empty() + !o.model.empty() + o.no_model > 1)
+        return usage_error("fuzz", "--map, --model and --no-model exclude each other");
+    if (!o.map.empty() && !netfuzz::parse_map(o.map, c.model, error))
+        return usage_error("fuzz", error);
+    if (!o.model.empty() && !netfuzz::load_model(o.model, c.model, error))
+        return usage_error("fuzz", error);
+    c.learn_model = !o.no_model;
     if (!o.dict.empty()) {
         netfuzz::Dictionary d;
         if (!netfuzz::load_dictionary(o.dict, d, error)) return usage_error("fuzz", error);
@@ -240,13 +252,23 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "holding registers/coils that stateful cases write and read back: FIRST-LAST "
                     "or 'all' (the whole map; only if nothing else writes there)")
         ->capture_default_str();
+    cmd->add_option("--map", o->map,
+                    "the device's register map, if you have it: TABLE=FIRST-LAST,... with TABLE "
+                    "coils, discrete, input or holding (e.g. holding=1000-1099,coils=200-263); "
+                    "default: learned by asking before fuzzing");
+    cmd->add_option("--model", o->model,
+                    "a device model saved by an earlier run (its --out folder's model.json) "
+                    "instead of learning it again");
+    cmd->add_flag("--no-model", o->no_model,
+                  "do not learn the device's map: cases are not aimed inside it");
     cmd->add_option("--max-connections", o->max_connections,
                     "connection-capacity check: hold up to this many connections at once (0: "
                     "skip the check)")
         ->check(CLI::Range(0u, 1000000u))
         ->capture_default_str();
     add_transport_options(cmd, o->transport, TransportSide::Client);
-    cmd->callback([o, &action] {
+    cmd->callback([o, cmd, &action] {
+        o->state_given = cmd->count("--state-range") > 0;
         action = [o] {
             if (std::string e = check_transport(o->transport, "fuzz"); !e.empty())
                 return usage_error("fuzz", e);

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
+#include <fstream>
 #include <cerrno>
 #include <cstdlib>
 #include <limits>
@@ -21,8 +23,11 @@
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
+#include "netfuzz/ask.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
+#include "netfuzz/death_watch.hpp"
+#include "netfuzz/device_model.hpp"
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
@@ -53,89 +58,6 @@ std::pair<std::size_t, std::size_t> size_of(const Case& c) {
 Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit,
              codec::Framing framing = codec::Framing::Mbap) {
     return frame_pdu(pdu, tid, unit, framing);
-}
-
-// RTU and ASCII (no transaction ids): each frame in turn on one link, its answer awaited (or
-// the timeout) before the next goes out. The answers' PDUs by frame.
-std::vector<Pdu> one_by_one(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
-                            bool& connected) {
-    std::vector<Pdu> answers(frames.size());
-    int error = 0;
-    const std::unique_ptr<Link> link = target.open(timeout_ms, error);
-    connected = link != nullptr;
-    if (!link) return answers;
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-        if (link->send(frames[i].data(), frames[i].size()) !=
-            static_cast<ssize_t>(frames[i].size()))
-            return answers;
-        Pdu in;
-        const std::int64_t deadline = net::now_ns() + timeout_ms * net::kNsPerMs;
-        for (;;) {
-            const std::int64_t left = (deadline - net::now_ns()) / net::kNsPerMs;
-            if (left <= 0) break;
-            if (!wait_readable(*link, static_cast<int>(left))) continue;
-            std::uint8_t buf[1024];
-            const ssize_t n = link->recv(buf, sizeof buf);
-            if (n == -EAGAIN) continue;
-            if (n <= 0) return answers;
-            in.insert(in.end(), buf, buf + n);
-            WireFrame f;
-            const WireCut cut = cut_frame(in, target.framing(), false, 0, f);
-            if (cut == WireCut::Lost) return answers;
-            if (cut == WireCut::Frame) {
-                if (f.discard.empty())
-                    answers[i].assign(f.mbap.begin() + lim::kMbapHeader, f.mbap.end());
-                break;
-            }
-        }
-    }
-    return answers;
-}
-
-// Sends all frames at once on one connection and collects answers by transaction id until
-// the last one is answered, the connection closes or the time is up.
-std::vector<Pdu> pipeline(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
-                          bool& connected) {
-    if (target.framing() != codec::Framing::Mbap)
-        return one_by_one(target, frames, timeout_ms, connected);
-    std::vector<Pdu> answers(frames.size());
-    int error = 0;
-    const std::unique_ptr<Link> link = target.open(timeout_ms, error);
-    connected = link != nullptr;
-    if (!link) return answers;
-    Pdu out;
-    for (const Pdu& f : frames) out.insert(out.end(), f.begin(), f.end());
-    std::size_t sent = 0;
-    Pdu in;
-    std::size_t pos = 0;
-    const std::int64_t deadline = net::now_ns() + timeout_ms * net::kNsPerMs;
-    while (net::now_ns() < deadline && answers.back().empty()) {
-        pollfd p{link->poll_fd(), static_cast<short>(POLLIN | (sent < out.size() ? POLLOUT : 0)),
-                 0};
-        const bool buffered = link->has_buffered_input();
-        if (::poll(&p, 1, buffered ? 0 : 20) <= 0 && !buffered) continue;
-        if (p.revents & POLLOUT) {
-            const ssize_t n = link->send(out.data() + sent, out.size() - sent);
-            if (n > 0) sent += static_cast<std::size_t>(n);
-        }
-        if ((p.revents & (POLLIN | POLLHUP | POLLERR)) || buffered) {
-            std::uint8_t buf[8192];
-            const ssize_t n = link->recv(buf, sizeof buf);
-            if (n <= 0 && n != -EAGAIN) break;
-            if (n > 0) in.insert(in.end(), buf, buf + n);
-            while (in.size() - pos >= lim::kMbapHeader) {
-                const auto h = codec::read_mbap_header(in.data() + pos);
-                if (h.length < 2 || h.length > lim::kMaxMbapLength) return answers;
-                if (in.size() - pos < codec::adu_size(h)) break;
-                if (h.transaction_id < answers.size())
-                    answers[h.transaction_id].assign(
-                        in.begin() + static_cast<std::ptrdiff_t>(pos + 7),
-                        in.begin() + static_cast<std::ptrdiff_t>(pos + codec::adu_size(h)));
-                pos += codec::adu_size(h);
-            }
-        }
-    }
-    return answers;
 }
 
 // A finding that rests on a line's timing counts only if this many re-runs alone repeat it.
@@ -384,6 +306,12 @@ class Campaign {
     void progress(bool force);
     void set_drops_after_exception();
     void make_batch_runner();
+    // Learns the device's map (or takes the user's) and saves it beside the findings.
+    void know_the_device();
+    // Opens the sentinels, if the target serves a fresh connection while they are open.
+    void arm_watch();
+    // Whether a case is owed an exception the target pauses after (rationed: 1 in 8 sent).
+    bool rationed(const Case& c);
 
     const CampaignOptions& options_;
     const ProgressFn& on_progress_;
@@ -395,6 +323,7 @@ class Campaign {
     std::map<std::string, unsigned> restarts_by_cause_;
     std::unique_ptr<Generator> gen_;
     std::unique_ptr<BatchRunner> batch_;
+    std::unique_ptr<DeathWatch> watch_;
     RestartCommand restart_;
     ExecOptions exec_;
     std::int64_t last_progress_ = 0;
@@ -416,6 +345,7 @@ class Campaign {
     std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
+    std::uint64_t rationed_seen_ = 0;
 };
 
 Finding* Campaign::known(const Verdict& v) {
@@ -565,6 +495,7 @@ bool Campaign::recover(const std::string& cause) {
     ++result_.restarts;
     if (!cause.empty()) ++restarts_by_cause_[cause];
     up_ = true;
+    if (watch_) watch_->arm();
     return true;
 }
 
@@ -577,6 +508,7 @@ bool Campaign::settle(const std::string& cause) {
     if (wait_for_target_with(none, *options_.connector, result_.profile, "",
                              options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
         up_ = true;
+        if (watch_ && !watch_->armed()) watch_->arm();
         return true;
     }
     if (remaining_ns() <= 0) return false;
@@ -896,7 +828,7 @@ void Campaign::check_capacity_once() {
     capacity_checked_ = true;
     const CapacityResult cr =
         check_capacity(*options_.connector, result_.profile, options_.max_connections,
-                       options_.timeout_ms, deadline_);
+                       options_.timeout_ms, deadline_, watch_.get());
     result_.capacity_held = cr.held;
     if (cr.verdict && !known(cr.verdict)) {
         Finding f;
@@ -907,7 +839,8 @@ void Campaign::check_capacity_once() {
             Op::Flood,
             0,
             0,
-            static_cast<std::uint16_t>(std::min<std::uint32_t>(cr.held + cr.refused + 64, 0xFFFF)),
+            static_cast<std::uint16_t>(std::min<std::uint32_t>(
+                std::max(cr.opened, cr.held + cr.refused + 64), 0xFFFF)),
             {}});
         f.original_case = f.fuzz_case;
         f.original_steps = 1;
@@ -921,6 +854,8 @@ void Campaign::check_capacity_once() {
     if (cr.target_down) {
         ++result_.deaths;
         recover(cr.verdict ? root_cause_key(cr.verdict) : "");
+    } else if (watch_) {
+        watch_->arm();  // a target at its limit may have closed some of them
     }
 }
 
@@ -941,6 +876,62 @@ void Campaign::progress(bool force) {
     on_progress_(p);
 }
 
+// Learning the map gets at most a fifth of the run, and never more than this.
+constexpr double kLearnBudgetS = 20;
+
+void Campaign::know_the_device() {
+    if (!options_.model.empty()) {
+        result_.model = options_.model;
+    } else if (options_.learn_model && !options_.naive) {
+        LearnOptions lo;
+        lo.timeout_ms = options_.timeout_ms;
+        const double budget_s = options_.max_seconds > 0
+                                    ? std::min(options_.max_seconds / 5, kLearnBudgetS)
+                                    : kLearnBudgetS;
+        lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
+        lo.hints = options_.dict_words;
+        // One request at a time on a serial line or RTU/ASCII: a coarser sweep.
+        if (result_.profile.framing != codec::Framing::Mbap) lo.stride = 256;
+        LearnStats st;
+        result_.model = learn_device_model(*options_.connector, result_.profile, lo, &st);
+        result_.learn_seconds = st.seconds;
+        result_.learn_requests = st.requests;
+    }
+    if (result_.model.source.empty() || options_.out_dir.empty()) return;
+    std::error_code ec;
+    std::filesystem::create_directories(options_.out_dir, ec);
+    std::ofstream(options_.out_dir + "/model.json") << model_to_json(result_.model);
+}
+
+void Campaign::arm_watch() {
+    // A serial line has one link; a target that serves one connection at a time would be
+    // blocked by an idle one.
+    if (!options_.death_watch || options_.connector->max_links() <= 1) return;
+    watch_ = std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms);
+    if (!watch_->arm() ||
+        probe_target(*options_.connector, result_.profile, options_.timeout_ms) != ProbeResult::Ok) {
+        watch_.reset();
+        return;
+    }
+    result_.death_watch = true;
+    exec_.watch = watch_.get();
+}
+
+bool Campaign::rationed(const Case& c) {
+    const DeviceModel& m = result_.model;
+    if (!m.pauses_after_exceptions()) return false;
+    bool pauses = false;
+    for_each_request(c, result_.profile, [&](const RequestInfo& info) {
+        const std::uint8_t fc = info.pdu.empty() ? 0 : info.pdu[0];
+        std::size_t code = static_cast<std::size_t>(info.status.exception);
+        if (result_.profile.unsupported[fc]) code = 1;
+        pauses = owes_exception(info, result_.profile) && code < m.exception_pause_ms.size() &&
+                 m.exception_pause_ms[code] > 0;
+        return !pauses;
+    });
+    return pauses && ++rationed_seen_ % 8 != 0;
+}
+
 CampaignResult Campaign::run() {
     start_ = net::now_ns();
     last_progress_ = start_;
@@ -950,14 +941,20 @@ CampaignResult Campaign::run() {
                          result_.error))
         return result_;
     result_.started = true;
+    know_the_device();
     exec_.timeout_ms = options_.timeout_ms;
     exec_.state = options_.state;
+    // A known map: stateful cases write inside it, and every read-back in a case run alone is
+    // checked (nothing else writes while it runs), unless the user chose the range.
+    if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
     GeneratorOptions go;
     go.seed = options_.seed;
     go.unit = options_.unit;
     go.naive = options_.naive;
     go.isolated_per_mille = options_.isolated_per_mille;
-    go.state = options_.state;
+    go.state = exec_.state;
+    go.model = &result_.model;
+    go.unsupported = result_.profile.unsupported;
     go.dict_words = options_.dict_words;
     go.dict_tokens = options_.dict_tokens;
     go.framing = result_.profile.framing;
@@ -966,6 +963,7 @@ CampaignResult Campaign::run() {
         static_cast<std::uint32_t>(options_.connector->intercharacter_timeout_ns() / 1000);
     gen_ = std::make_unique<Generator>(go);
     make_batch_runner();
+    arm_watch();
     std::uint64_t generated = 0;
     std::vector<Case> requeue, piped, alone;
     bool lost_at_first_look = false;
@@ -1008,12 +1006,17 @@ CampaignResult Campaign::run() {
         }
         requeue.clear();
         std::size_t fresh = 0;
+        if (watch_) watch_->refresh();
         for (std::size_t tries = 0; piped.size() + alone.size() < n && tries < 8 * n; ++tries) {
             Case c;
             gen_->next(c);
             c.number = ++generated;
             if (would_retrigger(c)) {
                 ++result_.skipped_known;
+                continue;
+            }
+            if (rationed(c)) {
+                ++result_.rationed;
                 continue;
             }
             ++fresh;
@@ -1071,10 +1074,15 @@ CampaignResult Campaign::run() {
         std::sort(suspects.begin(), suspects.end());
         suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
         bool lost = false, whole_target = false, died = false, settled_by_restart = false;
-        if (br.connect_failed || br.lane_lost) {
+        const bool broke = br.connect_failed || br.lane_lost;
+        // The sentinels see a death a supervisor hides from the probe below.
+        const bool watched_death = watch_ && watch_->died(broke ? 200 : 0);
+        if (broke || watched_death) {
             batch_->close_all();
             const ProbeResult pr =
-                probe_target(*options_.connector, result_.profile, options_.timeout_ms);
+                watched_death
+                    ? ProbeResult::Closed
+                    : probe_target(*options_.connector, result_.profile, options_.timeout_ms);
             if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
                 whole_target = died = true;
                 ++result_.deaths;
@@ -1211,7 +1219,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
     for (std::size_t i = 0; i < probes.size(); ++i)
         frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit, profile.framing));
     bool connected = false;
-    auto answers = pipeline(target, frames, timeout_ms, connected);
+    auto answers = ask_pipelined(target, frames, timeout_ms, connected);
     if (!connected) {
         error = "cannot connect to the target";
         return false;
@@ -1233,7 +1241,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
     // (RTU and ASCII send one request at a time: nothing is pipelined to be dropped.)
     if (!framed) {
         answers =
-            pipeline(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
+            ask_pipelined(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
                      timeout_ms, connected);
         profile.drops_after_exception =
             answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
@@ -1246,7 +1254,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
         frames.clear();
         for (std::size_t i = 0; i < pdus.size(); ++i)
             frames.push_back(frame_of(pdus[i], 0, unit, profile.framing));
-        answers = pipeline(target, frames, timeout_ms, connected);
+        answers = ask_pipelined(target, frames, timeout_ms, connected);
     } else if (!profile.drops_after_exception) {
         for (unsigned fc = 0; fc < 256; ++fc)
             if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
@@ -1255,7 +1263,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
         frames.clear();
         for (std::size_t i = 0; i < pdus.size(); ++i)
             frames.push_back(frame_of(pdus[i], static_cast<std::uint16_t>(i), unit));
-        answers = pipeline(target, frames, timeout_ms, connected);
+        answers = ask_pipelined(target, frames, timeout_ms, connected);
     } else {
         // Undefined codes are assumed unsupported (no vendor extensions learned): asking each
         // would cost the target's pause after every exception.
@@ -1263,7 +1271,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
         answers.assign(pdus.size(), {});
         for (std::size_t i = 0; i + 1 < pdus.size(); ++i)
             answers[i] =
-                pipeline(target, {frame_of(pdus[i], 0, unit)}, timeout_ms, connected).front();
+                ask_pipelined(target, {frame_of(pdus[i], 0, unit)}, timeout_ms, connected).front();
     }
     // Silence counts only where the stream went on (the probe behind them was answered).
     const bool stream_went_on = profile.drops_after_exception || !answers.back().empty();

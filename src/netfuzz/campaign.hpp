@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "net/socket.hpp"
+#include "netfuzz/device_model.hpp"
 #include "netfuzz/finding.hpp"
 #include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
@@ -35,6 +36,13 @@ struct CampaignOptions {
     unsigned isolated_per_mille = 10;
     bool naive = false;  // baseline random-frame generator
     StateRange state;    // where stateful cases write and read back (--state-range)
+    bool state_given = false;  // --state-range was given: kept even when a model is known
+    // The device's map given by the user (--map, --model); empty: learned before fuzzing
+    // (but with `naive`), within a fifth of --seconds and at most kLearnBudgetS.
+    DeviceModel model;
+    bool learn_model = true;
+    // Idle sentinel connections that tell a death a supervisor hides (netfuzz/death_watch.hpp).
+    bool death_watch = true;
     std::vector<std::uint16_t> dict_words;               // --dict: 16-bit entries
     std::vector<std::vector<std::uint8_t>> dict_tokens;  // --dict: longer entries
     std::uint32_t max_connections = 4096;  // capacity oracle cap (0: no capacity check)
@@ -60,6 +68,11 @@ struct CampaignResult {
     bool started = false;  // false: discovery failed (see error)
     std::string error;
     TargetProfile profile;
+    DeviceModel model;  // what was known of the device's map (learned or given)
+    double learn_seconds = 0;
+    std::uint64_t learn_requests = 0;
+    bool death_watch = false;  // sentinels were held (the target serves them concurrently)
+    std::uint64_t rationed = 0;  // cases not sent: owed an exception that costs a pause
     std::vector<Finding> findings;
     std::uint64_t cases = 0;
     std::uint64_t batched_cases = 0, isolated_runs = 0;

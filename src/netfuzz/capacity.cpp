@@ -13,6 +13,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/death_watch.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -106,7 +107,7 @@ std::uint32_t connection_budget() {
 
 CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
                               std::uint32_t max_connections, int timeout_ms,
-                              std::int64_t deadline_ns) {
+                              std::int64_t deadline_ns, DeathWatch* watch) {
     CapacityResult out;
     max_connections = std::min({max_connections, connection_budget(), target.max_links()});
     std::vector<Held> conns;
@@ -130,6 +131,18 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
         // whole step: slow is not unserved.
         const int wait_ms = 3 * timeout_ms + 2 * static_cast<int>(conns.size() - from);
         const std::size_t silent = probe_all(conns, from, profile, wait_ms, deadline_ns);
+        out.opened = static_cast<std::uint32_t>(conns.size());
+        if (watch && watch->died(50)) {
+            out.target_down = true;
+            out.verdict = Verdict{
+                Oracle::Crash, "target-down/capacity", -1,
+                fmt::format("the target's process died with {} connections opened (every idle "
+                            "connection it held was closed at once)",
+                            conns.size()),
+                "the target refuses or closes connections beyond its limit and keeps running",
+                fmt::format("all connections dropped at {} open", conns.size())};
+            return out;
+        }
         if (out_of_time()) break;
         std::uint32_t refused = 0;
         for (const Held& h : conns) refused += h.state == ConnState::Refused;

@@ -41,7 +41,9 @@ constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::C
     "bad-checksum",
     "broken-silence",
     "no-silence",
-    "noise"};
+    "noise",
+    "in-map",
+    "map-edge"};
 
 }  // namespace
 

@@ -45,6 +45,10 @@ enum class MutationClass : std::uint8_t {
     BrokenSilence,       // serial RTU: a frame split by a gap longer than 1.5 characters
     NoSilence,           // serial: two frames without the 3.5-character silence between them
     Noise,               // serial: noise bytes on the line before a frame
+    // From the device model (netfuzz/device_model.hpp): requests inside the target's map, so
+    // that the code behind each address check runs.
+    InMap,    // a request inside the map, valid but for at most one field
+    MapEdge,  // each edge of each valid range: first, last, one before, one past
     Count
 };
 

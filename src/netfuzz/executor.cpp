@@ -16,6 +16,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/cross_transport.hpp"
+#include "netfuzz/death_watch.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -529,7 +530,8 @@ void CaseRunner::judge(const Case& c) {
                 const codec::Bytes rsp(received_frames_of.data() + pd.rsp_offset, pd.rsp_size);
                 consider(judge_response(info, rsp, profile_));
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
-                                               rsp.subspan(lim::kMbapHeader)});
+                                               rsp.subspan(lim::kMbapHeader),
+                                               static_cast<std::uint8_t>(i)});
                 // Not a normal answer: an exception, or a function code that is not the
                 // request's (libmodbus answers 0x39 for an unknown 0xB9), which a server may
                 // follow with the same flush as an exception.
@@ -620,7 +622,17 @@ void CaseRunner::judge(const Case& c) {
                                 stall_threshold_ms()),
                     fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
     }
-    if (need_fresh_probe) {
+    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20)) {
+        // The process died, whatever brought it back: every connection it held is gone.
+        event(kFreshConn, TraceKind::FreshProbe, {}, "every idle sentinel connection dropped");
+        out_.target_down = true;
+        candidate = fresh_probe_verdict(ProbeResult::Closed);
+        candidate.summary =
+            "the target's process died: every idle connection it held was closed at once";
+        const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
+        candidate.rule += "/" + culprit_text(c, at);
+        candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
+    } else if (need_fresh_probe) {
         ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
         if (r == ProbeResult::Closed || r == ProbeResult::ConnectFailed) {

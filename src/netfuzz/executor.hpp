@@ -38,9 +38,14 @@ struct TraceEvent {
     std::string note;
 };
 
+class DeathWatch;
+
 struct ExecOptions {
     int timeout_ms = 1000;  // answer timeout (hang oracle)
     StateRange state;       // where read-after-write is checked
+    // Armed sentinels (netfuzz/death_watch.hpp): the target's process died during the case
+    // when they all drop, even if a supervisor had it back before the fresh probe. Null: none.
+    DeathWatch* watch = nullptr;
 };
 
 struct Execution {

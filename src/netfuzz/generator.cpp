@@ -364,9 +364,20 @@ void Generator::next(Case& out) {
             return;
         }
         const std::uint32_t roll = rng_.below(1000);
+        // With a model, a share of the cases is aimed inside the device's map (most of them
+        // on a target that pauses after exceptions, so that its run is not spent waiting).
+        const std::uint32_t aimed =
+            !has_model() ? 0 : options_.model->pauses_after_exceptions() ? 700 : 400;
+        const std::uint32_t rest = roll < options_.isolated_per_mille
+                                       ? roll
+                                       : (roll - options_.isolated_per_mille) % 1000;
         if (roll < options_.isolated_per_mille)
             isolated(out);
-        else if (roll < options_.isolated_per_mille + 150)
+        else if (rest < aimed / 5)
+            map_edge(out);
+        else if (rest < aimed)
+            in_map(out);
+        else if (rest < aimed + 150)
             mutate_recorded(out);
         else
             structured(out);
@@ -636,13 +647,16 @@ void Generator::burst_split(Case& out) {
 
 void Generator::stateful(Case& out, bool cross) {
     out.cls = cross ? MutationClass::StatefulCross : MutationClass::StatefulSame;
-    const std::uint16_t base = state_address(130);
     const std::uint8_t writes[] = {kWriteSingleCoil,        kWriteSingleRegister,
                                    kWriteMultipleCoils,     kWriteMultipleRegisters,
                                    kWriteMultipleRegisters, kReadWriteMultipleRegisters,
                                    kMaskWriteRegister};
     const std::uint8_t fc = rng_.pick(writes);
     out.function = fc;
+    // Where the device keeps data when its map is known; else the state range.
+    const bool coil_write = fc == kWriteSingleCoil || fc == kWriteMultipleCoils;
+    const std::uint16_t base = has_model() ? model_address(coil_write, 8) : state_address(130);
+    const std::uint32_t room = has_model() ? 8 : 0x10000;
     std::vector<std::uint8_t> w{fc};
     std::uint16_t qty = 1;
     bool coils = false;
@@ -658,7 +672,8 @@ void Generator::stateful(Case& out, bool cross) {
             break;
         case kWriteMultipleCoils: {
             coils = true;
-            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteCoils));
+            qty = static_cast<std::uint16_t>(
+                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteCoils)));
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>((qty + 7) / 8));
@@ -666,7 +681,8 @@ void Generator::stateful(Case& out, bool cross) {
             break;
         }
         case kWriteMultipleRegisters: {
-            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxWriteRegisters));
+            qty = static_cast<std::uint16_t>(
+                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteRegisters)));
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>(2 * qty));
@@ -674,10 +690,12 @@ void Generator::stateful(Case& out, bool cross) {
             break;
         }
         case kReadWriteMultipleRegisters: {
-            qty = static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwWriteRegisters));
+            qty = static_cast<std::uint16_t>(
+                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwWriteRegisters)));
             // Read back an overlapping range in the same request, then again separately.
             const std::uint16_t rq =
-                static_cast<std::uint16_t>(1 + rng_.below(lim::kMaxRwReadRegisters));
+                static_cast<std::uint16_t>(
+                    1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
             put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
             const std::uint32_t end = std::min<std::uint32_t>(
                 0x10000u, std::uint32_t{options_.state.base} + options_.state.span);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "netfuzz/case.hpp"
+#include "netfuzz/device_model.hpp"
 #include "netfuzz/oracle.hpp"
 #include "netfuzz/rng.hpp"
 
@@ -31,6 +32,11 @@ struct GeneratorOptions {
     codec::Framing framing = codec::Framing::Mbap;
     bool serial_line = false;             // a serial line: one link, silences delimit frames
     std::uint32_t intercharacter_us = 0;  // the line's t1.5 (serial only)
+    // The device's map (null or empty: none known). With one, a share of cases is aimed
+    // inside it (in-map, map-edge) and stateful cases write where the device keeps data.
+    const DeviceModel* model = nullptr;
+    // Function codes the target answered 01 at discovery: not aimed at the map.
+    std::array<bool, 256> unsupported{};
 };
 
 // 16-bit values worth writing and reading back: boundaries, sign bits, all-ones patterns and
@@ -55,6 +61,13 @@ class Generator {
     void mutate_recorded(Case& out);
     void stateful(Case& out, bool cross);
     void burst_split(Case& out);
+    // Model-aimed cases (generator_map.cpp).
+    bool has_model() const noexcept { return options_.model && !options_.model->empty(); }
+    void in_map(Case& out);
+    void map_edge(Case& out);
+    bool pick_map_function(std::uint8_t& fc);
+    void build_edges();
+    std::uint16_t model_address(bool coils, std::uint16_t room);
     std::uint16_t word();  // an interesting or dictionary word
     std::uint16_t state_address(std::uint16_t room);
     std::vector<std::uint8_t> frame(const std::vector<std::uint8_t>& pdu, std::uint8_t unit);
@@ -77,6 +90,8 @@ class Generator {
     std::uint32_t unit_cursor_ = 0;  // pairwise walk: unit-id classes x function codes
     std::vector<std::vector<std::size_t>> seeds_by_function_;  // valid seed indexes per FC
     std::uint16_t tid_;
+    std::vector<std::vector<std::uint8_t>> edges_;  // map-edge PDUs, walked in turn
+    std::size_t edge_cursor_ = 0;
     std::array<std::uint32_t, 256 * static_cast<std::size_t>(MutationClass::Count) / 32 + 1>
         deprioritised_{};
 };

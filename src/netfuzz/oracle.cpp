@@ -336,6 +336,8 @@ struct WriteRecord {
     std::vector<std::optional<std::uint16_t>> values;  // nullopt: unknown
     std::int64_t sent = 0, acked = 0;                  // acked 0: no normal answer
     const RequestInfo* self = nullptr;
+    std::uint8_t conn = 0;
+    bool mask = false;  // FC16: its value follows from the one before it
 };
 
 // The values a write request stores (nullopt where they depend on unknown state).
@@ -374,12 +376,100 @@ std::optional<WriteRecord> write_of(const RequestInfo& rq) {
             break;
         case codec::RequestShape::MaskWrite:
             w.address = q.address;
-            w.values = {std::nullopt};  // depends on the old value
+            w.values = {std::nullopt};  // depends on the old value: see resolve_masks
+            w.mask = true;
             break;
         default:
             return {};
     }
     return w;
+}
+
+// A mask write stores (old AND and_mask) OR (or_mask AND NOT and_mask) (v1.1b3, 6.16): its
+// value is known when an acknowledged write before it left a known value at its address.
+void resolve_masks(std::vector<WriteRecord>& writes) {
+    for (WriteRecord& m : writes) {
+        if (!m.mask || !m.acked) continue;
+        const WriteRecord* latest = nullptr;
+        for (const WriteRecord& w : writes) {
+            if (&w == &m || w.coils || !w.acked || w.acked > m.sent) continue;
+            if (m.address < w.address || m.address >= w.address + w.values.size()) continue;
+            if (!latest || w.acked > latest->acked) latest = &w;
+        }
+        if (!latest) continue;
+        const auto& old = latest->values[m.address - latest->address];
+        if (!old) continue;
+        const codec::Request& q = m.self->request;
+        m.values[0] = static_cast<std::uint16_t>((*old & q.and_mask) | (q.or_mask & ~q.and_mask));
+    }
+}
+
+// One read's values against the latest acknowledged write of each address it covers, among
+// writes on its own connection or on the others.
+Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& writes,
+                   const StateRange& state, bool other_connection) {
+    const RequestInfo& rq = *e.request;
+    if (rq.status.error != codec::CodecError::Ok || e.answered_ns == 0 ||
+        e.response_pdu.size() < 2 || (e.response_pdu[0] & codec::kExceptionBit))
+        return {};
+    // Readers of the tables stateful cases write: coils and holding registers.
+    const std::uint8_t fc = rq.request.function;
+    const auto table = codec::function_table(fc);
+    const bool coils = table == codec::Table::Coils;
+    if (!coils && table != codec::Table::HoldingRegisters) return {};
+    if (!codec::response_is(fc, codec::ResponseShape::Bits) &&
+        !codec::response_is(fc, codec::ResponseShape::Registers))
+        return {};
+    const std::uint16_t start = rq.request.address;
+    const codec::Bytes data = e.response_pdu.subspan(2);
+    for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {
+        const std::uint32_t a = start + i;
+        if (!state.contains(a)) continue;
+        const WriteRecord* latest = nullptr;
+        std::size_t latest_index = 0;
+        bool ambiguous = false;
+        for (const WriteRecord& w : writes) {
+            if (w.coils != coils || a < w.address || a >= w.address + w.values.size()) continue;
+            if (w.self == &rq) {  // FC17 writes before it reads
+                latest = &w;
+                latest_index = a - w.address;
+                continue;
+            }
+            const bool before = w.acked != 0 && w.acked <= e.sent_ns;
+            const bool overlaps = w.sent < e.answered_ns && !before;
+            if (overlaps) ambiguous = true;
+            if (before && (!latest || (latest->self != &rq && w.acked > latest->acked))) {
+                latest = &w;
+                latest_index = a - w.address;
+            }
+        }
+        if (ambiguous || !latest || !latest->values[latest_index]) continue;
+        if ((latest->conn != e.conn) != other_connection) continue;
+        const std::uint16_t want = *latest->values[latest_index];
+        std::uint16_t got;
+        if (coils) {
+            if (i / 8 >= data.size()) continue;
+            got = (data[i / 8] >> (i % 8)) & 1;
+        } else {
+            if (2 * i + 1 >= data.size()) continue;
+            got = load_be16(data.data() + 2 * i);
+        }
+        if (got == want) continue;
+        const std::uint8_t writer = latest->self->request.function;
+        return make(Oracle::SpecDeviation,
+                    fmt::format("read-after-write-mismatch{}({})/fc{:02X}",
+                                other_connection ? "-other-connection" : "",
+                                coils ? "coils" : "holding-registers", writer),
+                    *latest->self,
+                    fmt::format("read-after-write mismatch{}: {} {:04X} wrote {:04X}, read "
+                                "back {:04X}",
+                                other_connection ? " on another connection" : "",
+                                coils ? "coil" : "holding register", a, want, got),
+                    fmt::format("{:04X} (written by {}, acknowledged)", want,
+                                codec::function_label(writer)),
+                    fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
+    }
+    return {};
 }
 
 }  // namespace
@@ -393,71 +483,16 @@ Verdict Shadow::check(std::vector<Event>& events, const StateRange& state) {
                             !(e.response_pdu[0] & codec::kExceptionBit);
         w->sent = e.sent_ns;
         w->acked = normal ? e.answered_ns : 0;
+        w->conn = e.conn;
         if (!normal)
             for (auto& v : w->values) v.reset();
         writes.push_back(std::move(*w));
     }
     if (writes.empty()) return {};
-    for (const Event& e : events) {
-        const RequestInfo& rq = *e.request;
-        if (rq.status.error != codec::CodecError::Ok || e.answered_ns == 0 ||
-            e.response_pdu.size() < 2 || (e.response_pdu[0] & codec::kExceptionBit))
-            continue;
-        // Readers of the tables stateful cases write: coils and holding registers.
-        const std::uint8_t fc = rq.request.function;
-        const auto table = codec::function_table(fc);
-        const bool coils = table == codec::Table::Coils;
-        if (!coils && table != codec::Table::HoldingRegisters) continue;
-        if (!codec::response_is(fc, codec::ResponseShape::Bits) &&
-            !codec::response_is(fc, codec::ResponseShape::Registers))
-            continue;
-        const std::uint16_t start = rq.request.address;
-        const codec::Bytes data = e.response_pdu.subspan(2);
-        for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {
-            const std::uint32_t a = start + i;
-            if (!state.contains(a)) continue;
-            const WriteRecord* latest = nullptr;
-            std::size_t latest_index = 0;
-            bool ambiguous = false;
-            for (const WriteRecord& w : writes) {
-                if (w.coils != coils || a < w.address || a >= w.address + w.values.size()) continue;
-                if (w.self == &rq) {  // FC17 writes before it reads
-                    latest = &w;
-                    latest_index = a - w.address;
-                    continue;
-                }
-                const bool before = w.acked != 0 && w.acked <= e.sent_ns;
-                const bool overlaps = w.sent < e.answered_ns && !before;
-                if (overlaps) ambiguous = true;
-                if (before && (!latest || (latest->self != &rq && w.acked > latest->acked))) {
-                    latest = &w;
-                    latest_index = a - w.address;
-                }
-            }
-            if (ambiguous || !latest || !latest->values[latest_index]) continue;
-            const std::uint16_t want = *latest->values[latest_index];
-            std::uint16_t got;
-            if (coils) {
-                if (i / 8 >= data.size()) continue;
-                got = (data[i / 8] >> (i % 8)) & 1;
-            } else {
-                if (2 * i + 1 >= data.size()) continue;
-                got = load_be16(data.data() + 2 * i);
-            }
-            if (got != want) {
-                return make(Oracle::SpecDeviation,
-                            fmt::format("read-after-write-mismatch({})",
-                                        coils ? "coils" : "holding-registers"),
-                            *latest->self,
-                            fmt::format("read-after-write mismatch: {} {:04X} wrote {:04X}, read "
-                                        "back {:04X}",
-                                        coils ? "coil" : "holding register", a, want, got),
-                            fmt::format("{:04X} (written by {}, acknowledged)", want,
-                                        codec::function_label(latest->self->request.function)),
-                            fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
-            }
-        }
-    }
+    resolve_masks(writes);
+    for (const bool other_connection : {false, true})
+        for (const Event& e : events)
+            if (Verdict v = check_read(e, writes, state, other_connection)) return v;
     return {};
 }
 

@@ -144,8 +144,12 @@ class Shadow {
         std::int64_t sent_ns;
         std::int64_t answered_ns;  // 0: no answer
         codec::Bytes response_pdu;
+        std::uint8_t conn = 0;  // the connection it went out on
     };
-    // Events in any order; returns the first mismatch.
+    // Events in any order; returns the first mismatch, read on the writer's own connection
+    // first. A value only other connections read wrong is a fault of its own
+    // (read-after-write-mismatch-other-connection). The writer's function code ends the rule:
+    // a mask write that stores the wrong value and a plain write that does are two faults.
     static Verdict check(std::vector<Event>& events, const StateRange& state);
 };
 

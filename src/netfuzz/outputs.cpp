@@ -79,6 +79,11 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"target_lost", r.target_lost},
         {"stop_reason", r.stop_reason},
         {"cases_by_class", classes},
+        {"model", r.model.source.empty() ? json(nullptr) : json::parse(model_to_json(r.model))},
+        {"learn_seconds", r.learn_seconds},
+        {"learn_requests", r.learn_requests},
+        {"death_watch", r.death_watch},
+        {"rationed", r.rationed},
         {"findings", findings}};
     return j.dump(2) + "\n";
 }
@@ -180,6 +185,25 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
         "  target deaths: {} ({} restarts, {} not repeatable alone); repeats of known root "
         "causes: {}; cases skipped as known crash/hang: {}; unconfirmed suspects: {}\n",
         r.deaths, r.restarts, r.unattributed_deaths, r.duplicates, r.skipped_known, r.unconfirmed);
+    if (!r.model.source.empty()) {
+        std::string model = format_model(r.model);
+        if (r.model.source == "learned")
+            model.insert(model.find(')'),
+                         fmt::format("; {} requests in {:.2f} s", r.learn_requests, r.learn_seconds));
+        for (std::size_t at = 0; at < model.size(); at = model.find('\n', at) + 1)
+            model.insert(at, "  ");
+        s += model;
+    }
+    s += fmt::format(
+        "  deaths seen by idle sentinel connections: {}\n",
+        r.death_watch ? "yes (a crash is a crash even when a supervisor restarts the target)"
+                      : "no (the target does not serve an idle connection beside another, or "
+                        "a serial line)");
+    if (r.rationed)
+        s += fmt::format(
+            "  {} case(s) owed an exception the target pauses after were not sent (1 in 8 "
+            "is)\n",
+            r.rationed);
     if (r.profile.drops_after_exception)
         s += "  the target drops requests pipelined behind an exception: those were sent one "
              "at a time\n";

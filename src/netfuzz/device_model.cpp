@@ -1,0 +1,570 @@
+#include "netfuzz/device_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "codec/exception_code.hpp"
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+#include "codec/mbap.hpp"
+#include "net/clock.hpp"
+#include "netfuzz/ask.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+namespace lim = codec::limits;
+using Pdu = std::vector<std::uint8_t>;
+using codec::Table;
+
+constexpr std::array<Table, kTableCount> kTables = {Table::Coils, Table::DiscreteInputs,
+                                                    Table::InputRegisters, Table::HoldingRegisters};
+
+// The read function code of each table and the most items one read may take (v1.1b3).
+std::uint8_t read_function(Table t) noexcept {
+    switch (t) {
+        case Table::Coils:
+            return 0x01;
+        case Table::DiscreteInputs:
+            return 0x02;
+        case Table::InputRegisters:
+            return 0x04;
+        case Table::HoldingRegisters:
+            return 0x03;
+    }
+    return 0x03;
+}
+
+std::uint16_t spec_max_read(Table t) noexcept {
+    const bool bits = t == Table::Coils || t == Table::DiscreteInputs;
+    return bits ? lim::kMaxReadBits : lim::kMaxReadRegisters;
+}
+
+Pdu pdu5(std::uint8_t fc, std::uint16_t a, std::uint16_t b) {
+    Pdu p{fc, 0, 0, 0, 0};
+    codec::store_be16(p.data() + 1, a);
+    codec::store_be16(p.data() + 3, b);
+    return p;
+}
+
+bool parse_address(const std::string& s, std::uint16_t& out) {
+    try {
+        std::size_t used = 0;
+        const unsigned long v = std::stoul(s, &used, 0);
+        if (used != s.size() || v > 0xFFFF) return false;
+        out = static_cast<std::uint16_t>(v);
+        return true;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
+bool table_from_name(const std::string& name, Table& out) {
+    static const std::pair<const char*, Table> names[] = {
+        {"coils", Table::Coils},
+        {"discrete-inputs", Table::DiscreteInputs},
+        {"discrete", Table::DiscreteInputs},
+        {"input-registers", Table::InputRegisters},
+        {"input", Table::InputRegisters},
+        {"holding-registers", Table::HoldingRegisters},
+        {"holding", Table::HoldingRegisters}};
+    for (const auto& [n, t] : names)
+        if (name == n) {
+            out = t;
+            return true;
+        }
+    return false;
+}
+
+}  // namespace
+
+std::string_view writes_stick_name(WritesStick w) noexcept {
+    switch (w) {
+        case WritesStick::Unknown:
+            return "unknown";
+        case WritesStick::Yes:
+            return "yes";
+        case WritesStick::No:
+            return "no";
+        case WritesStick::Refused:
+            return "refused";
+    }
+    return "unknown";
+}
+
+std::string_view table_label(Table t) noexcept {
+    switch (t) {
+        case Table::Coils:
+            return "coils";
+        case Table::DiscreteInputs:
+            return "discrete-inputs";
+        case Table::InputRegisters:
+            return "input-registers";
+        case Table::HoldingRegisters:
+            return "holding-registers";
+    }
+    return "?";
+}
+
+bool TableModel::contains(std::uint32_t address) const noexcept {
+    return range_of(address) != nullptr;
+}
+
+const AddressRange* TableModel::range_of(std::uint32_t address) const noexcept {
+    for (const AddressRange& r : ranges)
+        if (address >= r.first && address <= r.last) return &r;
+    return nullptr;
+}
+
+std::uint32_t TableModel::entries() const noexcept {
+    std::uint32_t n = 0;
+    for (const AddressRange& r : ranges) n += r.size();
+    return n;
+}
+
+bool DeviceModel::empty() const noexcept {
+    return std::all_of(tables.begin(), tables.end(),
+                       [](const TableModel& t) { return t.ranges.empty(); });
+}
+
+bool DeviceModel::pauses_after_exceptions() const noexcept {
+    return exception_pause_ms[1] > 0 || exception_pause_ms[3] > 0 || exception_pause_ms[4] > 0;
+}
+
+void normalise(std::vector<AddressRange>& ranges) {
+    std::sort(ranges.begin(), ranges.end(),
+              [](const AddressRange& a, const AddressRange& b) { return a.first < b.first; });
+    std::vector<AddressRange> out;
+    for (const AddressRange& r : ranges) {
+        if (!out.empty() && std::uint32_t{r.first} <= std::uint32_t{out.back().last} + 1)
+            out.back().last = std::max(out.back().last, r.last);
+        else
+            out.push_back(r);
+    }
+    ranges = std::move(out);
+}
+
+bool parse_map(const std::string& text, DeviceModel& out, std::string& error) {
+    out = DeviceModel{};
+    out.source = "--map";
+    std::stringstream in(text);
+    std::string entry;
+    while (std::getline(in, entry, ',')) {
+        const auto eq = entry.find('=');
+        Table t{};
+        if (eq == std::string::npos || !table_from_name(entry.substr(0, eq), t)) {
+            error = fmt::format(
+                "--map entry '{}': expected TABLE=FIRST-LAST, TABLE one of coils, discrete, "
+                "input, holding (e.g. holding=1000-1099,coils=200-263)",
+                entry);
+            return false;
+        }
+        const std::string span = entry.substr(eq + 1);
+        const auto dash = span.find('-');
+        AddressRange r;
+        const bool ok = dash == std::string::npos
+                            ? parse_address(span, r.first)
+                            : parse_address(span.substr(0, dash), r.first) &&
+                                  parse_address(span.substr(dash + 1), r.last);
+        if (dash == std::string::npos) r.last = r.first;
+        if (!ok || r.last < r.first) {
+            error = fmt::format(
+                "--map entry '{}': expected FIRST-LAST protocol addresses 0..65535, FIRST <= LAST",
+                entry);
+            return false;
+        }
+        out.table(t).ranges.push_back(r);
+    }
+    for (TableModel& t : out.tables) normalise(t.ranges);
+    if (out.empty()) {
+        error = "--map: no table given (e.g. holding=1000-1099,coils=200-263)";
+        return false;
+    }
+    return true;
+}
+
+std::string model_to_json(const DeviceModel& m) {
+    using nlohmann::json;
+    json tables = json::object();
+    for (Table t : kTables) {
+        const TableModel& tm = m.table(t);
+        json ranges = json::array();
+        for (const AddressRange& r : tm.ranges) ranges.push_back({r.first, r.last});
+        tables[std::string(table_label(t))] = {{"ranges", ranges},
+                                               {"entries", tm.entries()},
+                                               {"max_quantity", tm.max_quantity},
+                                               {"writes_stick", writes_stick_name(tm.writes)}};
+    }
+    json pauses = json::object();
+    for (std::size_t code = 1; code < m.exception_pause_ms.size(); ++code)
+        pauses[fmt::format("{:02X}", code)] = m.exception_pause_ms[code];
+    const json j = {{"source", m.source},
+                    {"tables", tables},
+                    {"units", m.units},
+                    {"exception_pause_ms", pauses},
+                    {"partial", m.partial}};
+    return j.dump(2) + "\n";
+}
+
+bool model_from_json(const std::string& text, DeviceModel& out, std::string& error) {
+    using nlohmann::json;
+    out = DeviceModel{};
+    const json j = json::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("tables") || !j["tables"].is_object()) {
+        error = "not a device model (a JSON object with \"tables\", as fuzz writes model.json)";
+        return false;
+    }
+    try {
+        for (const auto& [name, tj] : j["tables"].items()) {
+            Table t{};
+            if (!table_from_name(name, t)) {
+                error = fmt::format("unknown table '{}'", name);
+                return false;
+            }
+            TableModel& tm = out.table(t);
+            for (const auto& r : tj.at("ranges")) {
+                const auto first = r.at(0).get<std::uint32_t>(), last = r.at(1).get<std::uint32_t>();
+                if (last > 0xFFFF || first > last) {
+                    error = fmt::format("{}: range {}-{} is not within 0..65535", name, first, last);
+                    return false;
+                }
+                tm.ranges.push_back(AddressRange{static_cast<std::uint16_t>(first),
+                                                 static_cast<std::uint16_t>(last)});
+            }
+            normalise(tm.ranges);
+            tm.max_quantity = tj.value("max_quantity", std::uint16_t{0});
+            const std::string w = tj.value("writes_stick", std::string("unknown"));
+            for (WritesStick ws : {WritesStick::Yes, WritesStick::No, WritesStick::Refused})
+                if (w == writes_stick_name(ws)) tm.writes = ws;
+        }
+        if (j.contains("units")) out.units = j["units"].get<std::vector<std::uint8_t>>();
+        if (j.contains("exception_pause_ms"))
+            for (const auto& [code, ms] : j["exception_pause_ms"].items()) {
+                const unsigned long c = std::stoul(code, nullptr, 16);
+                if (c >= 1 && c < out.exception_pause_ms.size())
+                    out.exception_pause_ms[c] = ms.get<std::uint32_t>();
+            }
+    } catch (const std::exception& e) {
+        error = fmt::format("bad device model: {}", e.what());
+        return false;
+    }
+    return true;
+}
+
+bool load_model(const std::string& path, DeviceModel& out, std::string& error) {
+    std::ifstream in(path);
+    if (!in) {
+        error = fmt::format("--model {}: cannot read it", path);
+        return false;
+    }
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!model_from_json(text.str(), out, error)) {
+        error = fmt::format("--model {}: {}", path, error);
+        return false;
+    }
+    out.source = path;
+    return true;
+}
+
+std::string format_model(const DeviceModel& m) {
+    std::string s = fmt::format("Device model ({}{})\n", m.source, m.partial ? ", partial" : "");
+    for (Table t : kTables) {
+        const TableModel& tm = m.table(t);
+        std::string ranges;
+        for (const AddressRange& r : tm.ranges)
+            ranges += fmt::format("{}{}", ranges.empty() ? "" : ", ",
+                                  r.first == r.last ? fmt::format("{}", r.first)
+                                                    : fmt::format("{}-{}", r.first, r.last));
+        if (ranges.empty()) ranges = "none";
+        s += fmt::format("  {:<18} {} ({} entries)", table_label(t), ranges, tm.entries());
+        if (tm.max_quantity) s += fmt::format(", reads up to {}", tm.max_quantity);
+        if (tm.writes != WritesStick::Unknown)
+            s += fmt::format(", writes stick: {}", writes_stick_name(tm.writes));
+        s += "\n";
+    }
+    if (!m.units.empty()) {
+        std::string units;
+        for (std::size_t i = 0; i < m.units.size() && i < 12; ++i)
+            units += fmt::format("{}{}", i ? ", " : "", m.units[i]);
+        if (m.units.size() > 12) units += fmt::format(" ... ({} in all)", m.units.size());
+        s += fmt::format("  units answering    {}\n", units);
+    }
+    std::string pauses;
+    for (std::size_t code = 1; code < m.exception_pause_ms.size(); ++code)
+        if (m.exception_pause_ms[code])
+            pauses += fmt::format("{}{:02X}: {} ms", pauses.empty() ? "" : ", ", code,
+                                  m.exception_pause_ms[code]);
+    s += fmt::format("  exception pauses   {}\n", pauses.empty() ? "none" : pauses);
+    return s;
+}
+
+namespace {
+
+// Asks the target many requests, pipelined in chunks; requests an exception made the target
+// drop are asked again, behind it.
+class Asker {
+  public:
+    Asker(Connector& target, const TargetProfile& profile, const LearnOptions& o,
+          std::int64_t deadline, LearnStats& stats)
+        : target_(target), profile_(profile), options_(o), deadline_(deadline), stats_(stats) {}
+
+    bool out_of_time() const { return deadline_ && net::now_ns() >= deadline_; }
+    std::vector<Pdu> ask(const std::vector<Pdu>& pdus, std::uint8_t unit);
+    std::vector<Pdu> ask(const std::vector<Pdu>& pdus) { return ask(pdus, profile_.unit); }
+    Pdu ask_one(const Pdu& pdu) { return ask(std::vector<Pdu>{pdu}).front(); }
+    // Round trip of one request on a fresh connection, in ms (the answer in `answer`).
+    double timed(const Pdu& pdu, Pdu& answer);
+    const TargetProfile& profile() const { return profile_; }
+
+  private:
+    Connector& target_;
+    const TargetProfile& profile_;
+    const LearnOptions& options_;
+    std::int64_t deadline_;
+    LearnStats& stats_;
+};
+
+std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
+    std::vector<Pdu> answers(pdus.size());
+    const std::size_t chunk = profile_.framing == codec::Framing::Mbap ? 256 : 1;
+    std::size_t next = 0;
+    while (next < pdus.size() && !out_of_time()) {
+        const std::size_t n = std::min(chunk, pdus.size() - next);
+        std::vector<Pdu> frames;
+        for (std::size_t i = 0; i < n; ++i)
+            frames.push_back(frame_pdu(pdus[next + i], static_cast<std::uint16_t>(i), unit,
+                                       profile_.framing));
+        bool connected = false;
+        std::vector<Pdu> got = ask_pipelined(target_, frames, options_.timeout_ms, connected);
+        stats_.requests += n;
+        if (!connected) break;
+        // Everything up to the first unanswered request after an exception is settled; a target
+        // that drops what follows an exception is asked the rest again.
+        std::size_t settled = n;
+        for (std::size_t i = 0; i + 1 < n; ++i) {
+            const bool exception = got[i].size() == 2 && (got[i][0] & codec::kExceptionBit);
+            if (exception && got[i + 1].empty()) {
+                settled = i + 1;
+                break;
+            }
+        }
+        for (std::size_t i = 0; i < settled; ++i) answers[next + i] = std::move(got[i]);
+        next += settled;
+    }
+    return answers;
+}
+
+double Asker::timed(const Pdu& pdu, Pdu& answer) {
+    const std::int64_t t0 = net::now_ns();
+    answer = ask_one(pdu);
+    return static_cast<double>(net::now_ns() - t0) / 1e6;
+}
+
+bool normal_answer(const Pdu& a, std::uint8_t fc) { return !a.empty() && a[0] == fc; }
+
+std::uint8_t exception_of(const Pdu& a) {
+    return a.size() == 2 && (a[0] & codec::kExceptionBit) ? a[1] : 0;
+}
+
+// Addresses a sweep asks first: the user's, then where vendors start their maps.
+std::vector<std::uint32_t> sample_addresses(const LearnOptions& o) {
+    std::set<std::uint32_t> s;
+    for (std::uint16_t h : o.hints) s.insert(h);
+    for (std::uint32_t base : {0u, 100u, 1000u, 2000u, 3000u, 4000u, 5000u, 10000u, 20000u,
+                               30000u, 40000u, 50000u}) {
+        s.insert(base);
+        s.insert(base + 1);
+    }
+    const std::uint32_t stride = std::max<std::uint32_t>(1, o.stride);
+    for (std::uint32_t a = 0; a < 0x10000; a += stride) s.insert(a);
+    s.insert(0xFFFF);
+    return {s.begin(), s.end()};
+}
+
+// Which of `addresses` a read of one item at each answers normally.
+std::vector<bool> readable(Asker& asker, std::uint8_t fc, const std::vector<std::uint32_t>& addrs) {
+    std::vector<Pdu> pdus;
+    for (std::uint32_t a : addrs) pdus.push_back(pdu5(fc, static_cast<std::uint16_t>(a), 1));
+    const std::vector<Pdu> got = asker.ask(pdus);
+    std::vector<bool> ok(addrs.size());
+    for (std::size_t i = 0; i < addrs.size(); ++i) ok[i] = normal_answer(got[i], fc);
+    return ok;
+}
+
+// The table's valid ranges: a sweep, then every address between a readable sample and an
+// unreadable neighbour, so that each edge is exact.
+std::vector<AddressRange> learn_ranges(Asker& asker, std::uint8_t fc, const LearnOptions& o) {
+    std::vector<std::uint32_t> addrs = sample_addresses(o);
+    std::vector<bool> ok = readable(asker, fc, addrs);
+    std::vector<std::uint32_t> edges;
+    for (std::size_t i = 0; i + 1 < addrs.size(); ++i)
+        if (ok[i] != ok[i + 1])
+            for (std::uint32_t a = addrs[i] + 1; a < addrs[i + 1]; ++a) edges.push_back(a);
+    const std::vector<bool> edge_ok = readable(asker, fc, edges);
+    std::vector<std::pair<std::uint32_t, bool>> all;
+    for (std::size_t i = 0; i < addrs.size(); ++i) all.emplace_back(addrs[i], ok[i]);
+    for (std::size_t i = 0; i < edges.size(); ++i) all.emplace_back(edges[i], edge_ok[i]);
+    std::sort(all.begin(), all.end());
+    std::vector<AddressRange> ranges;
+    bool open = false;
+    for (const auto& [a, good] : all) {
+        if (good && !open) ranges.push_back(AddressRange{static_cast<std::uint16_t>(a), 0});
+        if (good) ranges.back().last = static_cast<std::uint16_t>(a);
+        open = good;
+    }
+    normalise(ranges);
+    return ranges;
+}
+
+// The most items one read at the start of the largest range takes: all it can hold, else a
+// binary search (each refusal may cost the target's pause, so only where needed).
+std::uint16_t learn_max_quantity(Asker& asker, Table t, const TableModel& tm) {
+    const auto largest = std::max_element(
+        tm.ranges.begin(), tm.ranges.end(),
+        [](const AddressRange& a, const AddressRange& b) { return a.size() < b.size(); });
+    if (largest == tm.ranges.end()) return 0;
+    const std::uint8_t fc = read_function(t);
+    std::uint32_t good = 1, bad = std::min<std::uint32_t>(largest->size(), spec_max_read(t));
+    if (normal_answer(asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(bad))),
+                      fc))
+        return static_cast<std::uint16_t>(bad);
+    while (bad - good > 1 && !asker.out_of_time()) {
+        const std::uint32_t mid = (good + bad) / 2;
+        const bool ok =
+            normal_answer(asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(mid))),
+                          fc);
+        (ok ? good : bad) = mid;
+    }
+    return static_cast<std::uint16_t>(good);
+}
+
+// Reads one item, writes another value, reads it back, restores the first.
+WritesStick learn_writes(Asker& asker, Table t, const TableModel& tm) {
+    if (tm.ranges.empty()) return WritesStick::Unknown;
+    const bool coils = t == Table::Coils;
+    const std::uint8_t read_fc = read_function(t), write_fc = coils ? 0x05 : 0x06;
+    if (asker.profile().unsupported[write_fc]) return WritesStick::Refused;
+    const std::uint16_t at = tm.ranges.front().first;
+    const Pdu before = asker.ask_one(pdu5(read_fc, at, 1));
+    if (!normal_answer(before, read_fc) || before.size() < 3) return WritesStick::Unknown;
+    std::uint16_t old = 0, fresh = 0;
+    if (coils) {
+        old = before[2] & 1 ? 0xFF00 : 0x0000;
+        fresh = old ? 0x0000 : 0xFF00;
+    } else {
+        if (before.size() < 4) return WritesStick::Unknown;
+        old = codec::load_be16(before.data() + 2);
+        fresh = static_cast<std::uint16_t>(old ^ 0x5A5A);
+    }
+    const Pdu written = asker.ask_one(pdu5(write_fc, at, fresh));
+    if (!normal_answer(written, write_fc))
+        return exception_of(written) ? WritesStick::Refused : WritesStick::Unknown;
+    const Pdu after = asker.ask_one(pdu5(read_fc, at, 1));
+    asker.ask_one(pdu5(write_fc, at, old));
+    if (!normal_answer(after, read_fc) || after.size() < 3) return WritesStick::Unknown;
+    const std::uint16_t got = coils ? (after[2] & 1 ? 0xFF00 : 0x0000)
+                                    : (after.size() >= 4 ? codec::load_be16(after.data() + 2) : 0);
+    return got == fresh ? WritesStick::Yes : WritesStick::No;
+}
+
+void learn_units(Connector& target, const TargetProfile& p, int timeout_ms, DeviceModel& m,
+                 LearnStats& st) {
+    if (p.framing != codec::Framing::Mbap) {
+        m.units = {p.unit};
+        return;
+    }
+    // All 256 at once: a unit the target ignores costs one timeout for all of them.
+    std::vector<Pdu> frames;
+    for (unsigned u = 0; u < 256; ++u)
+        frames.push_back(frame_pdu(p.probe_pdu, static_cast<std::uint16_t>(u),
+                                   static_cast<std::uint8_t>(u), p.framing));
+    bool connected = false;
+    const std::vector<Pdu> got = ask_pipelined(target, frames, timeout_ms, connected);
+    st.requests += frames.size();
+    for (unsigned u = 0; u < 256; ++u)
+        if (!got[u].empty()) m.units.push_back(static_cast<std::uint8_t>(u));
+}
+
+// A request owed exception `code` (from what the model knows), if one can be made.
+bool request_owing(const DeviceModel& m, std::uint8_t code, Pdu& out) {
+    for (Table t : kTables) {
+        const TableModel& tm = m.table(t);
+        if (tm.ranges.empty()) continue;
+        const std::uint8_t fc = read_function(t);
+        if (code == 3) {
+            out = pdu5(fc, tm.ranges.front().first, 0);
+            return true;
+        }
+        if (code == 2 && tm.entries() < 0x10000) {
+            const std::uint32_t past = tm.ranges.back().last + 1u;
+            const std::uint16_t at = past <= 0xFFFF ? static_cast<std::uint16_t>(past)
+                                                    : static_cast<std::uint16_t>(
+                                                          tm.ranges.front().first - 1);
+            out = pdu5(fc, at, 1);
+            return true;
+        }
+    }
+    return false;
+}
+
+// What each exception costs: its round trip and the next request's, against two normal ones.
+void learn_pauses(Asker& asker, DeviceModel& m, std::uint8_t unsupported_fc) {
+    Pdu answer;
+    const Pdu& probe = asker.profile().probe_pdu;
+    double normal = asker.timed(probe, answer);
+    normal = std::min(normal, asker.timed(probe, answer));
+    for (std::uint8_t code : {std::uint8_t{1}, std::uint8_t{2}, std::uint8_t{3}}) {
+        Pdu rq;
+        if (code == 1) {
+            if (!unsupported_fc) continue;
+            rq = Pdu{unsupported_fc};
+        } else if (!request_owing(m, code, rq)) {
+            continue;
+        }
+        const double t = asker.timed(rq, answer) + asker.timed(probe, answer);
+        const double extra = t - 2 * normal;
+        if (exception_of(answer) == 0 && extra > 20)  // the probe itself was answered
+            m.exception_pause_ms[code] = static_cast<std::uint32_t>(extra);
+        if (asker.out_of_time()) return;
+    }
+}
+
+}  // namespace
+
+DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
+                               const LearnOptions& options, LearnStats* stats) {
+    LearnStats local;
+    LearnStats& st = stats ? *stats : local;
+    const std::int64_t t0 = net::now_ns();
+    const std::int64_t deadline = options.budget_ns ? t0 + options.budget_ns : 0;
+    Asker asker(target, profile, options, deadline, st);
+    DeviceModel m;
+    m.source = "learned";
+    for (Table t : kTables) {
+        const std::uint8_t fc = read_function(t);
+        if (profile.unsupported[fc] || asker.out_of_time()) continue;
+        m.table(t).ranges = learn_ranges(asker, fc, options);
+    }
+    for (Table t : kTables) {
+        if (asker.out_of_time()) break;
+        TableModel& tm = m.table(t);
+        tm.max_quantity = learn_max_quantity(asker, t, tm);
+        if (t == Table::Coils || t == Table::HoldingRegisters) tm.writes = learn_writes(asker, t, tm);
+    }
+    std::uint8_t unsupported_fc = 0;
+    for (unsigned fc = 0x41; fc < 0x7F && !unsupported_fc; ++fc)
+        if (profile.unsupported[fc]) unsupported_fc = static_cast<std::uint8_t>(fc);
+    if (!asker.out_of_time()) learn_pauses(asker, m, unsupported_fc);
+    if (!asker.out_of_time()) learn_units(target, profile, options.timeout_ms, m, st);
+    m.partial = asker.out_of_time();
+    st.seconds = static_cast<double>(net::now_ns() - t0) / 1e9;
+    return m;
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,95 @@
+// What the fuzzer knows of the device's data model: which addresses of each of the four tables
+// answer, how many items one read may take, whether writes stick, which unit ids answer and
+// what an exception costs. Learned before fuzzing (learn_device_model), given by hand (--map)
+// or read back from an earlier run's model.json (--model), so that most cases land inside the
+// map and the code behind each address check runs: real devices have small, sparse maps that
+// do not start at 0, and a request outside them only ever meets exception 02.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "codec/table.hpp"
+#include "netfuzz/link.hpp"
+#include "netfuzz/oracle.hpp"
+
+namespace mbstorm::netfuzz {
+
+struct AddressRange {
+    std::uint16_t first = 0, last = 0;  // inclusive
+    std::uint32_t size() const noexcept { return std::uint32_t{last} - first + 1; }
+    bool operator==(const AddressRange&) const = default;
+};
+
+enum class WritesStick : std::uint8_t { Unknown, Yes, No, Refused };
+std::string_view writes_stick_name(WritesStick w) noexcept;
+
+struct TableModel {
+    std::vector<AddressRange> ranges;  // valid addresses: sorted, disjoint, not adjacent
+    std::uint16_t max_quantity = 0;    // most items one read was seen to take (0: unknown)
+    WritesStick writes = WritesStick::Unknown;  // coils and holding registers only
+
+    bool contains(std::uint32_t address) const noexcept;
+    // The range holding `address`, or null.
+    const AddressRange* range_of(std::uint32_t address) const noexcept;
+    std::uint32_t entries() const noexcept;
+};
+
+inline constexpr std::size_t kTableCount = 4;
+std::string_view table_label(codec::Table t) noexcept;  // "coils", "holding-registers", ...
+
+struct DeviceModel {
+    std::string source;  // "learned", "--map", or the file it was read from
+    std::array<TableModel, kTableCount> tables{};
+    std::vector<std::uint8_t> units;  // unit ids seen answering (empty: not asked)
+    // What an exception costs the target, in ms of extra delay, by exception code (index 1..4):
+    // libmodbus sleeps its response timeout and flushes after 01 and 03, not after 02.
+    std::array<std::uint32_t, 5> exception_pause_ms{};
+    bool partial = false;  // learning ran out of its time budget
+
+    TableModel& table(codec::Table t) noexcept { return tables[static_cast<std::size_t>(t)]; }
+    const TableModel& table(codec::Table t) const noexcept {
+        return tables[static_cast<std::size_t>(t)];
+    }
+    bool empty() const noexcept;  // no table has a known address
+    // True when any exception but 02 makes the target pause: cases owed one are rationed.
+    bool pauses_after_exceptions() const noexcept;
+};
+
+// Sorts and merges adjacent or overlapping ranges.
+void normalise(std::vector<AddressRange>& ranges);
+
+// --map: comma-separated TABLE=FIRST-LAST or TABLE=ADDRESS entries (a table may repeat), TABLE
+// one of coils, discrete-inputs (discrete), input-registers (input), holding-registers
+// (holding); decimal or 0x hex protocol addresses. False with `error` on a bad entry.
+bool parse_map(const std::string& text, DeviceModel& out, std::string& error);
+
+// The model as JSON (an object; see docs/fuzz.md) and back.
+std::string model_to_json(const DeviceModel& m);
+bool model_from_json(const std::string& text, DeviceModel& out, std::string& error);
+bool load_model(const std::string& path, DeviceModel& out, std::string& error);
+
+// Lines for the summary: one per table, then units and pauses.
+std::string format_model(const DeviceModel& m);
+
+struct LearnOptions {
+    int timeout_ms = 1000;
+    std::int64_t budget_ns = 0;  // 0: no bound; else learning stops (partial) after this long
+    std::uint32_t stride = 16;   // sweep step: ranges shorter than this may be missed
+    std::vector<std::uint16_t> hints;  // addresses to try first (--dict words)
+};
+
+struct LearnStats {
+    std::uint64_t requests = 0;
+    double seconds = 0;
+};
+
+// Learns the model by asking: the unit ids that answer, every table's valid ranges (a sweep,
+// then each edge found exactly), the largest read accepted, whether writes stick (a read, a
+// write of another value, a read back, the old value restored), and what an exception costs.
+DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
+                               const LearnOptions& options, LearnStats* stats = nullptr);
+
+}  // namespace mbstorm::netfuzz

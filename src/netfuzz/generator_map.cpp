@@ -1,0 +1,252 @@
+// Cases aimed at the device's map (netfuzz/device_model.hpp): a request inside a valid range,
+// valid but for at most one field, so that the code behind the target's address check runs
+// (byte counts trusted once the address is good, a second range checked less carefully than
+// the first); and every edge of every range, for every function code that takes an address.
+#include <algorithm>
+
+#include "codec/function_code.hpp"
+#include "codec/limits.hpp"
+#include "codec/mbap.hpp"
+#include "netfuzz/generator.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+namespace lim = codec::limits;
+using Pdu = std::vector<std::uint8_t>;
+using codec::RequestShape;
+
+void put16(Pdu& p, std::uint32_t v) {
+    p.push_back(static_cast<std::uint8_t>(v >> 8));
+    p.push_back(static_cast<std::uint8_t>(v));
+}
+
+// The most items one request of this shape may carry (v1.1b3).
+std::uint32_t item_limit(RequestShape shape, bool bits) {
+    switch (shape) {
+        case RequestShape::AddressQuantity:
+            return bits ? lim::kMaxReadBits : lim::kMaxReadRegisters;
+        case RequestShape::MultipleCoils:
+            return lim::kMaxWriteCoils;
+        case RequestShape::MultipleRegisters:
+            return lim::kMaxWriteRegisters;
+        case RequestShape::ReadWriteRegisters:
+            return lim::kMaxRwWriteRegisters;
+        case RequestShape::FunctionOnly:
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::MaskWrite:
+        case RequestShape::FifoPointer:
+        case RequestShape::MeiTransport:
+            return 1;
+    }
+    return 1;
+}
+
+// A valid request of `fc` for `quantity` items at `address` (the write range of FC17 at
+// `second`), values from `value`.
+template <class Value>
+Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity,
+               std::uint16_t second, Value&& value) {
+    const codec::FunctionInfo* info = codec::function_info(fc);
+    Pdu p{fc};
+    switch (info->request) {
+        case RequestShape::AddressQuantity:
+            put16(p, address);
+            put16(p, quantity);
+            break;
+        case RequestShape::SingleCoil:
+            put16(p, address);
+            put16(p, value() & 1 ? 0xFF00 : 0x0000);
+            break;
+        case RequestShape::SingleRegister:
+            put16(p, address);
+            put16(p, value());
+            break;
+        case RequestShape::MultipleCoils:
+            put16(p, address);
+            put16(p, quantity);
+            p.push_back(static_cast<std::uint8_t>((quantity + 7) / 8));
+            for (int i = 0; i < (quantity + 7) / 8; ++i) p.push_back(static_cast<std::uint8_t>(value()));
+            break;
+        case RequestShape::MultipleRegisters:
+            put16(p, address);
+            put16(p, quantity);
+            p.push_back(static_cast<std::uint8_t>(2 * quantity));
+            for (int i = 0; i < quantity; ++i) put16(p, value());
+            break;
+        case RequestShape::MaskWrite:
+            put16(p, address);
+            put16(p, value());
+            put16(p, value());
+            break;
+        case RequestShape::ReadWriteRegisters:
+            put16(p, address);
+            put16(p, quantity);
+            put16(p, second);
+            put16(p, quantity);
+            p.push_back(static_cast<std::uint8_t>(2 * quantity));
+            for (int i = 0; i < quantity; ++i) put16(p, value());
+            break;
+        case RequestShape::FifoPointer:
+            put16(p, address);
+            break;
+        case RequestShape::FunctionOnly:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::MeiTransport:
+            break;  // no address: never asked for (see addressed())
+    }
+    return p;
+}
+
+bool addressed(std::uint8_t fc) {
+    const codec::FunctionInfo* info = codec::function_info(fc);
+    if (!info || !info->table) return false;
+    switch (info->request) {
+        case RequestShape::AddressQuantity:
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+        case RequestShape::MultipleCoils:
+        case RequestShape::MultipleRegisters:
+        case RequestShape::MaskWrite:
+        case RequestShape::ReadWriteRegisters:
+        case RequestShape::FifoPointer:
+            return true;
+        case RequestShape::FunctionOnly:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::MeiTransport:
+            return false;
+    }
+    return false;
+}
+
+bool bit_table(codec::Table t) {
+    return t == codec::Table::Coils || t == codec::Table::DiscreteInputs;
+}
+
+}  // namespace
+
+bool Generator::pick_map_function(std::uint8_t& fc) {
+    std::vector<std::uint8_t> usable;
+    for (const codec::FunctionInfo& info : codec::public_functions()) {
+        const std::uint8_t code = codec::to_byte(info.code);
+        if (!addressed(code) || options_.unsupported[code]) continue;
+        if (options_.model->table(*info.table).ranges.empty()) continue;
+        usable.push_back(code);
+    }
+    if (usable.empty()) return false;
+    fc = usable[rng_.below(static_cast<std::uint32_t>(usable.size()))];
+    return true;
+}
+
+std::uint16_t Generator::model_address(bool coils, std::uint16_t room) {
+    const TableModel& tm =
+        options_.model->table(coils ? codec::Table::Coils : codec::Table::HoldingRegisters);
+    if (tm.ranges.empty()) return state_address(room);
+    const AddressRange& r = tm.ranges[rng_.below(static_cast<std::uint32_t>(tm.ranges.size()))];
+    const std::uint32_t span = r.size() > room ? r.size() - room + 1 : 1;
+    return static_cast<std::uint16_t>(r.first + rng_.below(span));
+}
+
+void Generator::in_map(Case& out) {
+    std::uint8_t fc = 0;
+    if (!pick_map_function(fc)) return structured(out);
+    const codec::FunctionInfo* info = codec::function_info(fc);
+    const TableModel& tm = options_.model->table(*info->table);
+    const AddressRange& r = tm.ranges[rng_.below(static_cast<std::uint32_t>(tm.ranges.size()))];
+    const std::uint32_t spec_limit = item_limit(info->request, bit_table(*info->table));
+    const std::uint32_t limit = std::min(spec_limit, r.size());
+    // Mostly few items: a small quantity is where off-by-ones live, and it fits anywhere.
+    const std::uint32_t q = rng_.chance(2) ? 1 + rng_.below(std::min<std::uint32_t>(limit, 8))
+                                           : 1 + rng_.below(limit);
+    const auto at = static_cast<std::uint16_t>(r.first + rng_.below(r.size() - q + 1));
+    const std::uint16_t second = model_address(false, static_cast<std::uint16_t>(q));
+    Pdu p = request_at(fc, at, static_cast<std::uint16_t>(q), second, [this] { return word(); });
+    // One field made wrong in most cases (a pausing target gets fewer: see GeneratorOptions).
+    const std::uint32_t odds = options_.model->pauses_after_exceptions() ? 4 : 3;
+    if (rng_.below(odds) < 2 && p.size() >= 5) {
+        const std::uint32_t end = at + q;  // one past the last item asked
+        switch (rng_.below(6)) {
+            case 0:  // quantity: 0, one more than allowed, or all ones
+            {
+                const std::uint16_t wrong[] = {0, static_cast<std::uint16_t>(spec_limit + 1), 0xFFFF};
+                codec::store_be16(p.data() + 3, rng_.pick(wrong));
+            }
+                break;
+            case 1:  // the range runs one past the end of the block
+                if (p.size() > 5 || info->request == RequestShape::AddressQuantity)
+                    codec::store_be16(p.data() + 3,
+                                      static_cast<std::uint16_t>(q + (r.last + 1u - end) + 1));
+                break;
+            case 2:  // the address one before the block or one past it
+                codec::store_be16(p.data() + 1, static_cast<std::uint16_t>(
+                                                    rng_.chance(2) ? r.first - 1u : r.last + 1u));
+                break;
+            case 3:  // byte count one off (writes of many items)
+                if (p.size() > 6) p[5] = static_cast<std::uint8_t>(p[5] + (rng_.chance(2) ? 1 : -1));
+                break;
+            case 4:  // the data one byte short or long, the counts as they were
+                if (rng_.chance(2))
+                    p.pop_back();
+                else if (p.size() < lim::kMaxPdu)
+                    p.push_back(rng_.byte());
+                break;
+            default:  // FC17's second range past its block, the first valid; else a value
+                if (info->request == RequestShape::ReadWriteRegisters)
+                    codec::store_be16(p.data() + 5, static_cast<std::uint16_t>(
+                                                        second + rng_.below(limit + 1) + 1));
+                else if (p.size() >= 5)
+                    codec::store_be16(p.data() + 3, word());
+                break;
+        }
+    }
+    out.cls = MutationClass::InMap;
+    out.function = fc;
+    out.pipelinable = true;
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(p, options_.unit)});
+}
+
+void Generator::build_edges() {
+    auto value = [this] { return word(); };
+    for (const codec::FunctionInfo& info : codec::public_functions()) {
+        const std::uint8_t fc = codec::to_byte(info.code);
+        if (!addressed(fc) || options_.unsupported[fc]) continue;
+        const TableModel& tm = options_.model->table(*info.table);
+        const std::uint32_t limit = item_limit(info.request, bit_table(*info.table));
+        for (const AddressRange& r : tm.ranges) {
+            const auto q = static_cast<std::uint16_t>(std::min(limit, r.size()));
+            const auto last_start = static_cast<std::uint16_t>(r.last - q + 1);
+            const std::uint16_t inside = model_address(false, 1);
+            // First, last, one before, one past (one item); the block to its last item and one
+            // item further.
+            const std::pair<std::uint32_t, std::uint32_t> edges[] = {
+                {r.first, 1}, {r.last, 1},          {r.first - 1u, 1},
+                {r.last + 1u, 1}, {last_start, q}, {last_start + 1u, q}};
+            for (const auto& [a, n] : edges) {
+                if (a > 0xFFFF || (n > 1 && limit == 1)) continue;
+                const auto addr = static_cast<std::uint16_t>(a);
+                edges_.push_back(request_at(fc, addr, static_cast<std::uint16_t>(n), inside, value));
+                // FC17: the write range at the same edge, its read range valid.
+                if (info.request == RequestShape::ReadWriteRegisters)
+                    edges_.push_back(
+                        request_at(fc, inside, static_cast<std::uint16_t>(n), addr, value));
+            }
+        }
+    }
+}
+
+void Generator::map_edge(Case& out) {
+    if (edges_.empty()) build_edges();
+    if (edges_.empty()) return in_map(out);
+    const Pdu& p = edges_[edge_cursor_++ % edges_.size()];
+    out.cls = MutationClass::MapEdge;
+    out.function = p[0];
+    out.pipelinable = true;
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(p, options_.unit)});
+}
+
+}  // namespace mbstorm::netfuzz
