@@ -308,6 +308,8 @@ class Campaign {
     void make_batch_runner();
     // Learns the device's map (or takes the user's) and saves it beside the findings.
     void know_the_device();
+    // Liveness probes read the first address of the map (an answer, not an exception).
+    void use_probe_inside_the_map();
     // Opens the sentinels, if the target serves a fresh connection while they are open.
     void arm_watch();
     // Whether a case is owed an exception the target pauses after (rationed: 1 in 8 sent).
@@ -346,6 +348,7 @@ class Campaign {
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
     std::uint64_t rationed_seen_ = 0;
+    std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
 
 Finding* Campaign::known(const Verdict& v) {
@@ -876,7 +879,7 @@ void Campaign::progress(bool force) {
     on_progress_(p);
 }
 
-// Learning the map gets at most a fifth of the run, and never more than this.
+// Learning the map gets at most a tenth of the run, and never more than this.
 constexpr double kLearnBudgetS = 20;
 
 void Campaign::know_the_device() {
@@ -886,7 +889,7 @@ void Campaign::know_the_device() {
         LearnOptions lo;
         lo.timeout_ms = options_.timeout_ms;
         const double budget_s = options_.max_seconds > 0
-                                    ? std::min(options_.max_seconds / 5, kLearnBudgetS)
+                                    ? std::min(options_.max_seconds / 10, kLearnBudgetS)
                                     : kLearnBudgetS;
         lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
         lo.hints = options_.dict_words;
@@ -896,11 +899,31 @@ void Campaign::know_the_device() {
         result_.model = learn_device_model(*options_.connector, result_.profile, lo, &st);
         result_.learn_seconds = st.seconds;
         result_.learn_requests = st.requests;
+        learned_killers_ = std::move(st.stream_killers);
     }
+    use_probe_inside_the_map();
     if (result_.model.source.empty() || options_.out_dir.empty()) return;
     std::error_code ec;
     std::filesystem::create_directories(options_.out_dir, ec);
     std::ofstream(options_.out_dir + "/model.json") << model_to_json(result_.model);
+}
+
+void Campaign::use_probe_inside_the_map() {
+    using codec::Table;
+    for (const auto& [table, fc] : {std::pair{Table::HoldingRegisters, std::uint8_t{0x03}},
+                                    std::pair{Table::InputRegisters, std::uint8_t{0x04}},
+                                    std::pair{Table::Coils, std::uint8_t{0x01}},
+                                    std::pair{Table::DiscreteInputs, std::uint8_t{0x02}}}) {
+        const TableModel& tm = result_.model.table(table);
+        if (tm.ranges.empty() || result_.profile.unsupported[fc]) continue;
+        const std::uint16_t at = tm.ranges.front().first;
+        const Pdu probe = {fc, static_cast<std::uint8_t>(at >> 8), static_cast<std::uint8_t>(at),
+                           0, 1};
+        if (probe == result_.profile.probe_pdu) return;
+        result_.profile.probe_pdu = probe;
+        make_batch_runner();  // it probes with the profile's request
+        return;
+    }
 }
 
 void Campaign::arm_watch() {
@@ -941,19 +964,14 @@ CampaignResult Campaign::run() {
                          result_.error))
         return result_;
     result_.started = true;
-    know_the_device();
     exec_.timeout_ms = options_.timeout_ms;
     exec_.state = options_.state;
-    // A known map: stateful cases write inside it, and every read-back in a case run alone is
-    // checked (nothing else writes while it runs), unless the user chose the range.
-    if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
     GeneratorOptions go;
     go.seed = options_.seed;
     go.unit = options_.unit;
     go.naive = options_.naive;
     go.isolated_per_mille = options_.isolated_per_mille;
     go.state = exec_.state;
-    go.model = &result_.model;
     go.unsupported = result_.profile.unsupported;
     go.dict_words = options_.dict_words;
     go.dict_tokens = options_.dict_tokens;
@@ -987,6 +1005,34 @@ CampaignResult Campaign::run() {
         ++result_.cases;
         ++result_.first_looks;
         lost_at_first_look = isolate(std::move(c)) == Outcome::Lost;
+    }
+    // What discovery hinted at has been looked at: now learn the map (a slow target must not
+    // hide those hints behind its learning).
+    if (!lost_at_first_look && !out_of_budget()) {
+        know_the_device();
+        // A known map: stateful cases write inside it, and every read-back in a case run alone
+        // is checked (nothing else writes while it runs), unless the user chose the range.
+        if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
+        gen_->use_model(&result_.model, exec_.state);
+        // What killed the stream while learning, alone, first (at most 8).
+        learned_killers_.resize(std::min<std::size_t>(learned_killers_.size(), 8));
+        for (const Pdu& pdu : learned_killers_) {
+            if (out_of_budget() || !can_afford(1)) break;
+            Case c;
+            c.cls = MutationClass::MapEdge;
+            c.function = pdu[0];
+            c.number = ++generated;
+            c.steps.push_back(
+                Step{Op::Send, 0, 0, 0, frame_of(pdu, 0x0E00, result_.profile.unit,
+                                                 result_.profile.framing)});
+            ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+            ++result_.cases;
+            ++result_.first_looks;
+            if (isolate(std::move(c)) == Outcome::Lost) {
+                lost_at_first_look = true;
+                break;
+            }
+        }
     }
     std::set<std::uint64_t> requeued_once;
     std::size_t rounds = 0;
@@ -1230,6 +1276,12 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
             break;
         }
     }
+    // A device whose map does not start at 0 answers every probe above with an exception:
+    // 02 (its address check) will do until the model gives a read inside the map.
+    for (std::size_t i = 0; i < probes.size() && profile.probe_pdu.empty(); ++i)
+        if (answers[i].size() == 2 && answers[i][0] == (probes[i][0] | codec::kExceptionBit) &&
+            answers[i][1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress))
+            profile.probe_pdu = probes[i];
     if (profile.probe_pdu.empty()) {
         error = fmt::format(
             "the target does not answer unit {} (tried 0x03, 0x04, 0x01, 0x02, 0x11 and 0x08)",

@@ -38,7 +38,7 @@ struct CampaignOptions {
     StateRange state;    // where stateful cases write and read back (--state-range)
     bool state_given = false;  // --state-range was given: kept even when a model is known
     // The device's map given by the user (--map, --model); empty: learned before fuzzing
-    // (but with `naive`), within a fifth of --seconds and at most kLearnBudgetS.
+    // (but with `naive`), within a tenth of --seconds and at most 20 s.
     DeviceModel model;
     bool learn_model = true;
     // Idle sentinel connections that tell a death a supervisor hides (netfuzz/death_watch.hpp).

@@ -1,6 +1,7 @@
 #include "netfuzz/device_model.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/ask.hpp"
+#include "netfuzz/executor.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -323,6 +325,10 @@ class Asker {
     const TargetProfile& profile() const { return profile_; }
 
   private:
+    // After a stream died: whether the target answers again (a supervisor may restart it).
+    bool came_back();
+    static constexpr unsigned kMaxLearnDeaths = 8;
+    unsigned deaths_ = 0;
     Connector& target_;
     const TargetProfile& profile_;
     const LearnOptions& options_;
@@ -334,8 +340,11 @@ std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
     std::vector<Pdu> answers(pdus.size());
     const std::size_t chunk = profile_.framing == codec::Framing::Mbap ? 256 : 1;
     std::size_t next = 0;
+    // After the stream died in a pipelined chunk, its requests go one at a time until past
+    // the one that did it (a server may die before sending the answers it had made).
+    std::size_t careful_until = 0;
     while (next < pdus.size() && !out_of_time()) {
-        const std::size_t n = std::min(chunk, pdus.size() - next);
+        const std::size_t n = std::min(next < careful_until ? 1 : chunk, pdus.size() - next);
         std::vector<Pdu> frames;
         for (std::size_t i = 0; i < n; ++i)
             frames.push_back(frame_pdu(pdus[next + i], static_cast<std::uint16_t>(i), unit,
@@ -343,21 +352,46 @@ std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
         bool connected = false;
         std::vector<Pdu> got = ask_pipelined(target_, frames, options_.timeout_ms, connected);
         stats_.requests += n;
-        if (!connected) break;
-        // Everything up to the first unanswered request after an exception is settled; a target
-        // that drops what follows an exception is asked the rest again.
+        if (!connected && !came_back()) break;
+        if (!connected) continue;
         std::size_t settled = n;
         for (std::size_t i = 0; i + 1 < n; ++i) {
+            // A target that drops what follows an exception is asked the rest again.
             const bool exception = got[i].size() == 2 && (got[i][0] & codec::kExceptionBit);
             if (exception && got[i + 1].empty()) {
                 settled = i + 1;
                 break;
             }
+            // Nothing answered from here on: the stream died at this request (learning may
+            // crash a target too). It is kept for the campaign to look at first; the rest is
+            // asked again once the target is back.
+            if (got[i].empty() && std::all_of(got.begin() + static_cast<std::ptrdiff_t>(i),
+                                              got.end(), [](const Pdu& a) { return a.empty(); })) {
+                settled = i;
+                careful_until = next + n;
+                if (!came_back()) settled = n;
+                break;
+            }
+        }
+        // One request alone and no answer, not even on the probe after it: it killed the stream.
+        if (n == 1 && got[0].empty() && probe_target(target_, profile_, options_.timeout_ms) !=
+                                            ProbeResult::Ok) {
+            stats_.stream_killers.push_back(pdus[next]);
+            if (!came_back()) break;
         }
         for (std::size_t i = 0; i < settled; ++i) answers[next + i] = std::move(got[i]);
         next += settled;
     }
     return answers;
+}
+
+bool Asker::came_back() {
+    if (++deaths_ > kMaxLearnDeaths) return false;
+    for (int wait_ms = 20; wait_ms < 2000 && !out_of_time(); wait_ms *= 2) {
+        if (probe_target(target_, profile_, options_.timeout_ms) == ProbeResult::Ok) return true;
+        ::usleep(static_cast<useconds_t>(wait_ms) * 1000);
+    }
+    return false;
 }
 
 double Asker::timed(const Pdu& pdu, Pdu& answer) {
@@ -516,7 +550,13 @@ bool request_owing(const DeviceModel& m, std::uint8_t code, Pdu& out) {
 // What each exception costs: its round trip and the next request's, against two normal ones.
 void learn_pauses(Asker& asker, DeviceModel& m, std::uint8_t unsupported_fc) {
     Pdu answer;
-    const Pdu& probe = asker.profile().probe_pdu;
+    // A read inside the map: the discovery probe may itself be answered with 02.
+    Pdu probe = asker.profile().probe_pdu;
+    for (Table t : kTables)
+        if (!m.table(t).ranges.empty()) {
+            probe = pdu5(read_function(t), m.table(t).ranges.front().first, 1);
+            break;
+        }
     double normal = asker.timed(probe, answer);
     normal = std::min(normal, asker.timed(probe, answer));
     for (std::uint8_t code : {std::uint8_t{1}, std::uint8_t{2}, std::uint8_t{3}}) {

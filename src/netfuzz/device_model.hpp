@@ -84,6 +84,9 @@ struct LearnOptions {
 struct LearnStats {
     std::uint64_t requests = 0;
     double seconds = 0;
+    // Requests after which the target answered nothing more (it closed, died or hung): the
+    // campaign looks at each alone before anything else.
+    std::vector<std::vector<std::uint8_t>> stream_killers;
 };
 
 // Learns the model by asking: the unit ids that answer, every table's valid ranges (a sweep,

@@ -655,8 +655,8 @@ void Generator::stateful(Case& out, bool cross) {
     out.function = fc;
     // Where the device keeps data when its map is known; else the state range.
     const bool coil_write = fc == kWriteSingleCoil || fc == kWriteMultipleCoils;
-    const std::uint16_t base = has_model() ? model_address(coil_write, 8) : state_address(130);
-    const std::uint32_t room = has_model() ? 8 : 0x10000;
+    const std::uint16_t base = has_model() ? model_address(coil_write, 0) : state_address(130);
+    const std::uint32_t room = has_model() ? map_room(coil_write, base) : 0x10000;
     std::vector<std::uint8_t> w{fc};
     std::uint16_t qty = 1;
     bool coils = false;

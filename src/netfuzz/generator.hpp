@@ -48,6 +48,13 @@ class Generator {
     explicit Generator(const GeneratorOptions& options);
 
     void next(Case& out);
+    // The device's map, once known (the campaign learns it after its first looks), and the
+    // state range that goes with it. Null or empty: none.
+    void use_model(const DeviceModel* model, const StateRange& state) {
+        options_.model = model;
+        options_.state = state;
+        edges_.clear();
+    }
     // A class that crashed or hung the target is drawn 16 times less often from now on.
     void deprioritise(std::uint8_t function, MutationClass cls);
 
@@ -67,7 +74,10 @@ class Generator {
     void map_edge(Case& out);
     bool pick_map_function(std::uint8_t& fc);
     void build_edges();
+    // An address in the map's coils or holding registers: with `room` items after it in the
+    // same range, or (room 0) near a range's start, where most of the range lies ahead.
     std::uint16_t model_address(bool coils, std::uint16_t room);
+    std::uint32_t map_room(bool coils, std::uint16_t address) const;
     std::uint16_t word();  // an interesting or dictionary word
     std::uint16_t state_address(std::uint16_t room);
     std::vector<std::uint8_t> frame(const std::vector<std::uint8_t>& pdu, std::uint8_t unit);

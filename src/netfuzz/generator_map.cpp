@@ -148,8 +148,16 @@ std::uint16_t Generator::model_address(bool coils, std::uint16_t room) {
         options_.model->table(coils ? codec::Table::Coils : codec::Table::HoldingRegisters);
     if (tm.ranges.empty()) return state_address(room);
     const AddressRange& r = tm.ranges[rng_.below(static_cast<std::uint32_t>(tm.ranges.size()))];
+    if (room == 0) return static_cast<std::uint16_t>(r.first + rng_.below(std::min(r.size(), 16u)));
     const std::uint32_t span = r.size() > room ? r.size() - room + 1 : 1;
     return static_cast<std::uint16_t>(r.first + rng_.below(span));
+}
+
+std::uint32_t Generator::map_room(bool coils, std::uint16_t address) const {
+    const TableModel& tm =
+        options_.model->table(coils ? codec::Table::Coils : codec::Table::HoldingRegisters);
+    const AddressRange* r = tm.range_of(address);
+    return r ? std::uint32_t{r->last} - address + 1 : 1;
 }
 
 void Generator::in_map(Case& out) {

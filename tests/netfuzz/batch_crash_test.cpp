@@ -75,7 +75,7 @@ TEST(BatchCrash, LostTargetAfterPipelinedCrashIsReportedAsUnconfirmedBatchFindin
     // Every case pipelined (--transport-share 0): the planted crash can only hit in a batch.
     const auto run = run_bounded("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed " +
                                  std::to_string(kSeed) +
-                                 " --transport-share 0 --timeout 300ms --cases 1000000 "
+                                 " --transport-share 0 --no-model --timeout 300ms --cases 1000000 "
                                  "--seconds 60 -q --restart-wait 1s --out " +
                                  dir + "/findings --json " + dir + "/summary.json --junit " + dir +
                                  "/fuzz.xml --sarif " + dir + "/fuzz.sarif");

@@ -83,8 +83,9 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
             EXPECT_FALSE(a >= kStateBase && a < kStateBase + kStateSpan) << hex(s.bytes);
         }
     }
-    // All but naive, those that speak the other transport (the campaign runs them itself) and
-    // the four of RTU/ASCII framing (generator_framing.cpp).
+    // All but naive, those that speak the other transport (the campaign runs them itself),
+    // the four of RTU/ASCII framing (generator_framing.cpp) and the two aimed at a device
+    // model (none given here: GeneratorAimed below).
     std::size_t generated = 0;
     for (std::size_t i = 0; i < static_cast<std::size_t>(MutationClass::Count); ++i) {
         const auto k = static_cast<MutationClass>(i);
@@ -94,7 +95,10 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
         if (framing_only) {
             EXPECT_EQ(classes.count(k), 0u) << class_name(k);
         }
-        generated += k != MutationClass::NaiveRandom && !is_cross_transport(k) && !framing_only;
+        const bool model_only = k == MutationClass::InMap || k == MutationClass::MapEdge;
+        EXPECT_TRUE(!model_only || classes.count(k) == 0) << class_name(k);
+        generated += k != MutationClass::NaiveRandom && !is_cross_transport(k) && !framing_only &&
+                     !model_only;
     }
     EXPECT_EQ(classes.size(), generated);
 }

@@ -33,7 +33,7 @@ const std::set<std::string> kPlanted = {
     "spec-deviation:answers-nonzero-protocol-id",                   // 5
     "spec-deviation:exception-02-where-03-owed",                    // 6
     "hang:no-answer/fc07",                                          // 7
-    "spec-deviation:read-after-write-mismatch(holding-registers)",  // 8
+    "spec-deviation:read-after-write-mismatch(holding-registers)/fc17",  // 8
     "hang:stalls-other-connections(partial-frame)",                 // 9
     "hang:capacity/accepted-connections-unserved",                  // 10
     "unexpected-close:drops-answers-on-half-close",                 // 11

@@ -1,0 +1,244 @@
+// The device model: --map parsing, model.json round trips, learning a sparse map that does not
+// start at 0 (tests/tools/sparse_device_server: holding 1000-1039 and 1060-1099, input
+// 3000-3015, coils 200-263, discrete 500-531, units 1 and 255, a 100 ms pause after 01 and 03),
+// and the idle sentinels that tell a crash a supervisor hides.
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "fuzz_test_support.hpp"
+#include "netfuzz/campaign.hpp"
+#include "netfuzz/death_watch.hpp"
+#include "netfuzz/device_model.hpp"
+#include "netfuzz/executor.hpp"
+#include "netfuzz/generator.hpp"
+#include "codec/mbap.hpp"
+
+namespace {
+
+using mbstorm::codec::Table;
+using namespace mbstorm::netfuzz;
+
+std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list) {
+    std::vector<AddressRange> out;
+    for (auto [a, b] : list)
+        out.push_back(AddressRange{static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(b)});
+    return out;
+}
+
+TEST(DeviceModelMap, ParsesTablesRangesAndSingleAddresses) {
+    DeviceModel m;
+    std::string error;
+    ASSERT_TRUE(parse_map("holding=1000-1039,holding=1060-1099,coils=0x00C8-263,input=3000",
+                          m, error))
+        << error;
+    EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{1000, 1039}, {1060, 1099}}));
+    EXPECT_EQ(m.table(Table::Coils).ranges, ranges({{200, 263}}));
+    EXPECT_EQ(m.table(Table::InputRegisters).ranges, ranges({{3000, 3000}}));
+    EXPECT_TRUE(m.table(Table::DiscreteInputs).ranges.empty());
+    EXPECT_EQ(m.table(Table::HoldingRegisters).entries(), 80u);
+    EXPECT_TRUE(m.table(Table::HoldingRegisters).contains(1039));
+    EXPECT_FALSE(m.table(Table::HoldingRegisters).contains(1040));
+}
+
+TEST(DeviceModelMap, AdjacentRangesMergeAndBadEntriesAreRefused) {
+    DeviceModel m;
+    std::string error;
+    ASSERT_TRUE(parse_map("holding=10-19,holding=20-29,holding=5-12", m, error)) << error;
+    EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{5, 29}}));
+    for (const char* bad : {"", "registers=1-2", "holding=5-1", "holding=1-70000", "holding",
+                            "coils=x"}) {
+        EXPECT_FALSE(parse_map(bad, m, error)) << bad;
+        EXPECT_NE(error.find("--map"), std::string::npos) << error;
+    }
+}
+
+TEST(DeviceModelJson, RoundTripsEverythingItSays) {
+    DeviceModel m;
+    m.source = "learned";
+    m.table(Table::HoldingRegisters).ranges = ranges({{1000, 1039}, {1060, 1099}});
+    m.table(Table::HoldingRegisters).max_quantity = 40;
+    m.table(Table::HoldingRegisters).writes = WritesStick::Yes;
+    m.table(Table::Coils).ranges = ranges({{200, 263}});
+    m.table(Table::Coils).writes = WritesStick::Refused;
+    m.units = {1, 255};
+    m.exception_pause_ms[3] = 100;
+    DeviceModel back;
+    std::string error;
+    ASSERT_TRUE(model_from_json(model_to_json(m), back, error)) << error;
+    EXPECT_EQ(back.table(Table::HoldingRegisters).ranges, m.table(Table::HoldingRegisters).ranges);
+    EXPECT_EQ(back.table(Table::HoldingRegisters).max_quantity, 40);
+    EXPECT_EQ(back.table(Table::HoldingRegisters).writes, WritesStick::Yes);
+    EXPECT_EQ(back.table(Table::Coils).writes, WritesStick::Refused);
+    EXPECT_EQ(back.units, m.units);
+    EXPECT_EQ(back.exception_pause_ms, m.exception_pause_ms);
+    EXPECT_TRUE(back.pauses_after_exceptions());
+    EXPECT_FALSE(model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}", back,
+                                 error));
+    EXPECT_FALSE(model_from_json("[]", back, error));
+}
+
+struct SparseDevice {
+    std::unique_ptr<mbstorm::test::Target> process;
+    std::unique_ptr<TcpConnector> connector;
+    TargetProfile profile;
+
+    bool start() {
+        process = std::make_unique<mbstorm::test::Target>(std::vector<std::string>{
+            mbstorm::test::tool_path("sparse_device_server"), "--port", "0", "--respawn",
+            "--restart-delay-ms", "20", "--exit-after-s", "120"});
+        const std::string line = process->wait_for_line("PORT ");
+        if (line.empty()) return false;
+        mbstorm::net::Endpoint ep;
+        std::string error;
+        if (!mbstorm::net::parse_endpoint("127.0.0.1:" + line.substr(5), ep)) return false;
+        connector = std::make_unique<TcpConnector>(ep);
+        return discover_target(*connector, 1, 1000, profile, error);
+    }
+};
+
+TEST(LearnDeviceModel, FindsASparseMapThatDoesNotStartAtZero) {
+    SparseDevice d;
+    ASSERT_TRUE(d.start());
+    LearnStats stats;
+    const DeviceModel m = learn_device_model(*d.connector, d.profile, LearnOptions{}, &stats);
+    EXPECT_FALSE(m.partial);
+    EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{1000, 1039}, {1060, 1099}}));
+    EXPECT_EQ(m.table(Table::InputRegisters).ranges, ranges({{3000, 3015}}));
+    EXPECT_EQ(m.table(Table::Coils).ranges, ranges({{200, 263}}));
+    EXPECT_EQ(m.table(Table::DiscreteInputs).ranges, ranges({{500, 531}}));
+    EXPECT_EQ(m.table(Table::HoldingRegisters).max_quantity, 40);
+    EXPECT_EQ(m.table(Table::Coils).max_quantity, 64);
+    EXPECT_EQ(m.table(Table::HoldingRegisters).writes, WritesStick::Yes);
+    EXPECT_EQ(m.table(Table::Coils).writes, WritesStick::Yes);
+    EXPECT_EQ(m.units, (std::vector<std::uint8_t>{1, 255}));
+    // 100 ms after 01 and 03, nothing after 02.
+    EXPECT_GE(m.exception_pause_ms[3], 60u);
+    EXPECT_EQ(m.exception_pause_ms[2], 0u);
+    EXPECT_TRUE(m.pauses_after_exceptions());
+    EXPECT_GT(stats.requests, 4000u);
+}
+
+TEST(DeathWatch, AllSentinelsDroppingIsADeathEvenWhenTheTargetIsBackAtOnce) {
+    SparseDevice d;
+    ASSERT_TRUE(d.start());
+    DeathWatch watch(*d.connector, 3, 1000);
+    ASSERT_TRUE(watch.arm());
+    EXPECT_FALSE(watch.died(50)) << "nothing happened yet";
+    // Bug 1 of the sparse device: FC10 inside the map with a byte count that disagrees.
+    Case crash;
+    crash.steps.push_back(Step{Op::Send, 0, 0, 0,
+                               frame_pdu({0x10, 0x03, 0xE8, 0x00, 0x02, 0x02, 0, 1}, 1, 1)});
+    ExecOptions eo;
+    eo.watch = &watch;
+    const Execution ex = execute_case(crash, *d.connector, d.profile, eo);
+    EXPECT_TRUE(ex.target_down);
+    EXPECT_EQ(ex.verdict.oracle, Oracle::Crash) << ex.verdict.summary;
+    EXPECT_EQ(ex.verdict.rule, "target-down/fc10");
+    EXPECT_FALSE(watch.armed());
+    // The supervisor had it back within milliseconds: a fresh probe alone would have seen
+    // nothing.
+    ProbeResult back = ProbeResult::ConnectFailed;
+    for (int i = 0; i < 100 && back != ProbeResult::Ok; ++i) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        back = probe_target(*d.connector, d.profile, 1000);
+    }
+    EXPECT_EQ(back, ProbeResult::Ok);
+    ASSERT_TRUE(watch.arm());
+    // A harmless case: no death.
+    Case read;
+    read.steps.push_back(Step{Op::Send, 0, 0, 0, frame_pdu({0x03, 0x03, 0xE8, 0x00, 0x02}, 2, 1)});
+    const Execution fine = execute_case(read, *d.connector, d.profile, eo);
+    EXPECT_FALSE(fine.verdict) << fine.verdict.summary;
+    EXPECT_TRUE(watch.armed());
+}
+
+TEST(GeneratorAimed, CasesLandInsideTheMapAndOnEveryEdge) {
+    DeviceModel m;
+    std::string error;
+    ASSERT_TRUE(parse_map("holding=1000-1039,holding=1060-1099,coils=200-263", m, error));
+    GeneratorOptions o;
+    o.seed = 3;
+    Generator g(o);
+    g.use_model(&m, StateRange{0, 0x10000});
+    std::size_t in_map = 0, inside = 0;
+    std::set<std::uint16_t> edge_addresses;
+    Case c;
+    for (int i = 0; i < 20000; ++i) {
+        g.next(c);
+        if (c.cls != MutationClass::InMap && c.cls != MutationClass::MapEdge) continue;
+        const std::vector<std::uint8_t>& f = c.steps.at(0).bytes;
+        ASSERT_GE(f.size(), 10u);
+        const std::uint8_t fc = f[7];
+        const std::uint16_t a = mbstorm::codec::load_be16(f.data() + 8);
+        const auto table = mbstorm::codec::function_table(fc);
+        ASSERT_TRUE(table) << hex(f);
+        if (c.cls == MutationClass::MapEdge) {
+            if (fc == 0x03) edge_addresses.insert(a);
+            continue;
+        }
+        ++in_map;
+        inside += m.table(*table).contains(a);
+    }
+    // The in-map share (4 in 10 cases) and, but for the one-before/one-past mutation, inside.
+    EXPECT_GT(in_map, 5000u);
+    EXPECT_GT(inside * 10, in_map * 8) << inside << " of " << in_map;
+    // FC03 at each edge of both holding ranges: first, last, one before, one past, and the
+    // last full read's start (and one further).
+    for (std::uint16_t a : {999, 1000, 1039, 1040, 1059, 1060, 1099, 1100})
+        EXPECT_TRUE(edge_addresses.count(a)) << a;
+}
+
+TEST(ShadowMaskWrite, AWrongMaskWriteResultIsAMismatchNamedAfterTheMaskWrite) {
+    TargetProfile p;
+    auto info = [&](std::vector<std::uint8_t> pdu, std::uint16_t tid) {
+        RequestInfo r;
+        static std::vector<std::vector<std::uint8_t>> keep;
+        keep.push_back(frame_pdu(pdu, tid, 1));
+        describe_request(keep.back(), p, r);
+        return r;
+    };
+    // 06: 1000 := 00F0; 16: AND 0F0F, OR F000; read back. Owed: (00F0 & 0F0F) | (F000 & F0F0)
+    // = 0000 | F000 = F000. The planted bug stores (00F0 & 0F0F) | F000 = F000 too, so use
+    // OR 0F00: owed (00F0 & 0F0F) | (0F00 & F0F0) = 0000; the bug stores 0F00.
+    const RequestInfo w = info({0x06, 0x03, 0xE8, 0x00, 0xF0}, 1);
+    const RequestInfo mask = info({0x16, 0x03, 0xE8, 0x0F, 0x0F, 0x0F, 0x00}, 2);
+    const RequestInfo read = info({0x03, 0x03, 0xE8, 0x00, 0x01}, 3);
+    const std::vector<std::uint8_t> w_ok = {0x06, 0x03, 0xE8, 0x00, 0xF0};
+    const std::vector<std::uint8_t> mask_ok = {0x16, 0x03, 0xE8, 0x0F, 0x0F, 0x0F, 0x00};
+    for (const std::uint16_t stored : {0x0000, 0x0F00}) {
+        const std::vector<std::uint8_t> got = {0x03, 0x02, static_cast<std::uint8_t>(stored >> 8),
+                                               static_cast<std::uint8_t>(stored)};
+        std::vector<Shadow::Event> events = {{&w, 10, 20, w_ok, 0},
+                                             {&mask, 30, 40, mask_ok, 0},
+                                             {&read, 50, 60, got, 0}};
+        const Verdict v = Shadow::check(events, StateRange{0, 0x10000});
+        if (stored == 0x0000) {
+            EXPECT_FALSE(v) << v.summary;
+        } else {
+            EXPECT_EQ(v.oracle, Oracle::SpecDeviation);
+            EXPECT_EQ(v.rule, "read-after-write-mismatch(holding-registers)/fc16") << v.summary;
+        }
+    }
+}
+
+TEST(ShadowMaskWrite, AValueOnlyAnotherConnectionReadsWrongIsItsOwnFault) {
+    TargetProfile p;
+    std::vector<std::vector<std::uint8_t>> frames = {frame_pdu({0x06, 0x04, 0x24, 0x12, 0x34}, 1, 1),
+                                                     frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 2, 1),
+                                                     frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 3, 1)};
+    RequestInfo w, same, other;
+    describe_request(frames[0], p, w);
+    describe_request(frames[1], p, same);
+    describe_request(frames[2], p, other);
+    const std::vector<std::uint8_t> ack = {0x06, 0x04, 0x24, 0x12, 0x34};
+    const std::vector<std::uint8_t> good = {0x03, 0x02, 0x12, 0x34};
+    const std::vector<std::uint8_t> old = {0x03, 0x02, 0x04, 0x24};
+    std::vector<Shadow::Event> events = {
+        {&w, 10, 20, ack, 0}, {&same, 30, 40, good, 0}, {&other, 30, 40, old, 1}};
+    const Verdict v = Shadow::check(events, StateRange{0, 0x10000});
+    EXPECT_EQ(v.rule, "read-after-write-mismatch-other-connection(holding-registers)/fc06")
+        << v.summary;
+}
+
+}  // namespace
