@@ -10,6 +10,7 @@
 #include "cli/fuzz_target.hpp"
 #include "cli/transport_options.hpp"
 #include "netfuzz/campaign.hpp"
+#include "netfuzz/death_watch.hpp"
 #include "netfuzz/executor.hpp"
 #include "netfuzz/finding.hpp"
 
@@ -62,6 +63,11 @@ int run_replay(const ReplayOptions& o) {
     if (!f.note.empty()) fmt::print("note: {}\n", f.note);
     netfuzz::ExecOptions ex;
     ex.timeout_ms = o.timeout_ns ? static_cast<int>(o.timeout_ns / 1'000'000) : f.timeout_ms;
+    ex.state = f.state;
+    // Idle sentinels, as in the run: a crash replays as a crash under a supervisor too.
+    netfuzz::DeathWatch watch(target, 3, ex.timeout_ms, &f.profile);
+    const bool watched = target.max_links() > 1 && watch.arm();
+    if (watched) ex.watch = &watch;
     unsigned reproduced = 0;
     const netfuzz::Case& replayed = o.original ? f.original_case : f.fuzz_case;
     if (replayed.steps.empty()) {
@@ -69,6 +75,7 @@ int run_replay(const ReplayOptions& o) {
         return kExitUsage;
     }
     for (unsigned i = 0; i < std::max(1u, o.runs); ++i) {
+        if (watched && !watch.armed()) watch.arm();
         netfuzz::Execution e = netfuzz::execute_case(replayed, target, f.profile, ex);
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.

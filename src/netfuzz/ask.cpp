@@ -58,7 +58,7 @@ std::vector<Pdu> one_by_one(Connector& target, const std::vector<Pdu>& frames, i
 // Sends all frames at once on one connection and collects answers by transaction id until
 // the last one is answered, the connection closes or the time is up.
 std::vector<Pdu> ask_pipelined(Connector& target, const std::vector<Pdu>& frames, int timeout_ms,
-                          bool& connected) {
+                               bool& connected) {
     if (target.framing() != codec::Framing::Mbap)
         return one_by_one(target, frames, timeout_ms, connected);
     std::vector<Pdu> answers(frames.size());

@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <cctype>
-#include <filesystem>
-#include <fstream>
 #include <cerrno>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <memory>
@@ -26,9 +26,9 @@
 #include "netfuzz/ask.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
+#include "netfuzz/cross_transport.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
-#include "netfuzz/cross_transport.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
@@ -770,6 +770,7 @@ void Campaign::keep(Finding f) {
     f.target = options_.target_text;
     f.seed = options_.seed;
     f.timeout_ms = options_.timeout_ms;
+    f.state = exec_.state;
     if (f.verdict.culprit_fc >= 0)
         f.fuzz_case.function = static_cast<std::uint8_t>(f.verdict.culprit_fc);
     if (!options_.out_dir.empty()) {
@@ -838,13 +839,13 @@ void Campaign::check_capacity_once() {
         f.found_after_s = elapsed();
         f.verdict = cr.verdict;
         f.fuzz_case.cls = MutationClass::Flood;
-        f.fuzz_case.steps.push_back(Step{
-            Op::Flood,
-            0,
-            0,
-            static_cast<std::uint16_t>(std::min<std::uint32_t>(
-                std::max(cr.opened, cr.held + cr.refused + 64), 0xFFFF)),
-            {}});
+        f.fuzz_case.steps.push_back(
+            Step{Op::Flood,
+                 0,
+                 0,
+                 static_cast<std::uint16_t>(std::min<std::uint32_t>(
+                     std::max(cr.opened, cr.held + cr.refused + 64), 0xFFFF)),
+                 {}});
         f.original_case = f.fuzz_case;
         f.original_steps = 1;
         f.variants["capacity check"] = 1;
@@ -885,7 +886,9 @@ constexpr double kLearnBudgetS = 20;
 void Campaign::know_the_device() {
     if (!options_.model.empty()) {
         result_.model = options_.model;
-    } else if (options_.learn_model && !options_.naive) {
+    } else if (options_.learn_model && !options_.naive && !result_.profile.serial_line) {
+        // Not on a serial line: one request at a time at its baud rate, a sweep would take
+        // most of a run (give --map there).
         LearnOptions lo;
         lo.timeout_ms = options_.timeout_ms;
         const double budget_s = options_.max_seconds > 0
@@ -917,8 +920,8 @@ void Campaign::use_probe_inside_the_map() {
         const TableModel& tm = result_.model.table(table);
         if (tm.ranges.empty() || result_.profile.unsupported[fc]) continue;
         const std::uint16_t at = tm.ranges.front().first;
-        const Pdu probe = {fc, static_cast<std::uint8_t>(at >> 8), static_cast<std::uint8_t>(at),
-                           0, 1};
+        const Pdu probe = {fc, static_cast<std::uint8_t>(at >> 8), static_cast<std::uint8_t>(at), 0,
+                           1};
         if (probe == result_.profile.probe_pdu) return;
         result_.profile.probe_pdu = probe;
         make_batch_runner();  // it probes with the profile's request
@@ -930,9 +933,10 @@ void Campaign::arm_watch() {
     // A serial line has one link; a target that serves one connection at a time would be
     // blocked by an idle one.
     if (!options_.death_watch || options_.connector->max_links() <= 1) return;
-    watch_ = std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms);
-    if (!watch_->arm() ||
-        probe_target(*options_.connector, result_.profile, options_.timeout_ms) != ProbeResult::Ok) {
+    watch_ =
+        std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms, &result_.profile);
+    if (!watch_->arm() || probe_target(*options_.connector, result_.profile, options_.timeout_ms) !=
+                              ProbeResult::Ok) {
         watch_.reset();
         return;
     }
@@ -1023,8 +1027,8 @@ CampaignResult Campaign::run() {
             c.function = pdu[0];
             c.number = ++generated;
             c.steps.push_back(
-                Step{Op::Send, 0, 0, 0, frame_of(pdu, 0x0E00, result_.profile.unit,
-                                                 result_.profile.framing)});
+                Step{Op::Send, 0, 0, 0,
+                     frame_of(pdu, 0x0E00, result_.profile.unit, result_.profile.framing)});
             ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
             ++result_.cases;
             ++result_.first_looks;
@@ -1292,9 +1296,9 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
     // everything below goes one request at a time.
     // (RTU and ASCII send one request at a time: nothing is pipelined to be dropped.)
     if (!framed) {
-        answers =
-            ask_pipelined(target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
-                     timeout_ms, connected);
+        answers = ask_pipelined(
+            target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
+            timeout_ms, connected);
         profile.drops_after_exception =
             answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
     }

@@ -34,8 +34,8 @@ struct CampaignOptions {
     unsigned lanes = 4;
     unsigned lane_depth = 48;  // cases per lane per round
     unsigned isolated_per_mille = 10;
-    bool naive = false;  // baseline random-frame generator
-    StateRange state;    // where stateful cases write and read back (--state-range)
+    bool naive = false;        // baseline random-frame generator
+    StateRange state;          // where stateful cases write and read back (--state-range)
     bool state_given = false;  // --state-range was given: kept even when a model is known
     // The device's map given by the user (--map, --model); empty: learned before fuzzing
     // (but with `naive`), within a tenth of --seconds and at most 20 s.
@@ -71,7 +71,7 @@ struct CampaignResult {
     DeviceModel model;  // what was known of the device's map (learned or given)
     double learn_seconds = 0;
     std::uint64_t learn_requests = 0;
-    bool death_watch = false;  // sentinels were held (the target serves them concurrently)
+    bool death_watch = false;    // sentinels were held (the target serves them concurrently)
     std::uint64_t rationed = 0;  // cases not sent: owed an exception that costs a pause
     std::vector<Finding> findings;
     std::uint64_t cases = 0;

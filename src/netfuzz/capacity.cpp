@@ -12,8 +12,8 @@
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
-#include "netfuzz/executor.hpp"
 #include "netfuzz/death_watch.hpp"
+#include "netfuzz/executor.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -135,7 +135,9 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
         if (watch && watch->died(50)) {
             out.target_down = true;
             out.verdict = Verdict{
-                Oracle::Crash, "target-down/capacity", -1,
+                Oracle::Crash,
+                "target-down/capacity",
+                -1,
                 fmt::format("the target's process died with {} connections opened (every idle "
                             "connection it held was closed at once)",
                             conns.size()),

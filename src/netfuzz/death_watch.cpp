@@ -5,6 +5,7 @@
 #include <cerrno>
 
 #include "net/clock.hpp"
+#include "netfuzz/executor.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -16,6 +17,7 @@ bool DeathWatch::arm() {
         if (link) links_.push_back(std::move(link));
     }
     armed_at_ = net::now_ns();
+    if (profile_ && !links_.empty()) probe_target(target_, *profile_, timeout_ms_);
     return !links_.empty();
 }
 

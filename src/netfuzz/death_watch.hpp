@@ -11,13 +11,18 @@
 #include <vector>
 
 #include "netfuzz/link.hpp"
+#include "netfuzz/oracle.hpp"
 
 namespace mbstorm::netfuzz {
 
 class DeathWatch {
   public:
-    explicit DeathWatch(Connector& target, unsigned sentinels = 3, int timeout_ms = 1000)
-        : target_(target), count_(sentinels), timeout_ms_(timeout_ms) {}
+    // With a `profile`, arm() waits for a fresh connection's probe to be answered, so that the
+    // target has accepted the sentinels before it (a connection still in the listen backlog
+    // outlives a crashed process and goes to its successor).
+    explicit DeathWatch(Connector& target, unsigned sentinels = 3, int timeout_ms = 1000,
+                        const TargetProfile* profile = nullptr)
+        : target_(target), count_(sentinels), timeout_ms_(timeout_ms), profile_(profile) {}
 
     // Opens the sentinels (closing any left). False when none could be opened.
     bool arm();
@@ -39,6 +44,7 @@ class DeathWatch {
     Connector& target_;
     unsigned count_;
     int timeout_ms_;
+    const TargetProfile* profile_;
     std::vector<std::unique_ptr<Link>> links_;
     std::int64_t armed_at_ = 0;
     std::uint64_t deaths_ = 0;

@@ -230,9 +230,11 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
             }
             TableModel& tm = out.table(t);
             for (const auto& r : tj.at("ranges")) {
-                const auto first = r.at(0).get<std::uint32_t>(), last = r.at(1).get<std::uint32_t>();
+                const auto first = r.at(0).get<std::uint32_t>(),
+                           last = r.at(1).get<std::uint32_t>();
                 if (last > 0xFFFF || first > last) {
-                    error = fmt::format("{}: range {}-{} is not within 0..65535", name, first, last);
+                    error =
+                        fmt::format("{}: range {}-{} is not within 0..65535", name, first, last);
                     return false;
                 }
                 tm.ranges.push_back(AddressRange{static_cast<std::uint16_t>(first),
@@ -347,8 +349,8 @@ std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
         const std::size_t n = std::min(next < careful_until ? 1 : chunk, pdus.size() - next);
         std::vector<Pdu> frames;
         for (std::size_t i = 0; i < n; ++i)
-            frames.push_back(frame_pdu(pdus[next + i], static_cast<std::uint16_t>(i), unit,
-                                       profile_.framing));
+            frames.push_back(
+                frame_pdu(pdus[next + i], static_cast<std::uint16_t>(i), unit, profile_.framing));
         bool connected = false;
         std::vector<Pdu> got = ask_pipelined(target_, frames, options_.timeout_ms, connected);
         stats_.requests += n;
@@ -374,8 +376,8 @@ std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
             }
         }
         // One request alone and no answer, not even on the probe after it: it killed the stream.
-        if (n == 1 && got[0].empty() && probe_target(target_, profile_, options_.timeout_ms) !=
-                                            ProbeResult::Ok) {
+        if (n == 1 && got[0].empty() &&
+            probe_target(target_, profile_, options_.timeout_ms) != ProbeResult::Ok) {
             stats_.stream_killers.push_back(pdus[next]);
             if (!came_back()) break;
         }
@@ -400,7 +402,9 @@ double Asker::timed(const Pdu& pdu, Pdu& answer) {
     return static_cast<double>(net::now_ns() - t0) / 1e6;
 }
 
-bool normal_answer(const Pdu& a, std::uint8_t fc) { return !a.empty() && a[0] == fc; }
+bool normal_answer(const Pdu& a, std::uint8_t fc) {
+    return !a.empty() && a[0] == fc;
+}
 
 std::uint8_t exception_of(const Pdu& a) {
     return a.size() == 2 && (a[0] & codec::kExceptionBit) ? a[1] : 0;
@@ -410,8 +414,8 @@ std::uint8_t exception_of(const Pdu& a) {
 std::vector<std::uint32_t> sample_addresses(const LearnOptions& o) {
     std::set<std::uint32_t> s;
     for (std::uint16_t h : o.hints) s.insert(h);
-    for (std::uint32_t base : {0u, 100u, 1000u, 2000u, 3000u, 4000u, 5000u, 10000u, 20000u,
-                               30000u, 40000u, 50000u}) {
+    for (std::uint32_t base :
+         {0u, 100u, 1000u, 2000u, 3000u, 4000u, 5000u, 10000u, 20000u, 30000u, 40000u, 50000u}) {
         s.insert(base);
         s.insert(base + 1);
     }
@@ -465,14 +469,12 @@ std::uint16_t learn_max_quantity(Asker& asker, Table t, const TableModel& tm) {
     if (largest == tm.ranges.end()) return 0;
     const std::uint8_t fc = read_function(t);
     std::uint32_t good = 1, bad = std::min<std::uint32_t>(largest->size(), spec_max_read(t));
-    if (normal_answer(asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(bad))),
-                      fc))
+    if (normal_answer(asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(bad))), fc))
         return static_cast<std::uint16_t>(bad);
     while (bad - good > 1 && !asker.out_of_time()) {
         const std::uint32_t mid = (good + bad) / 2;
-        const bool ok =
-            normal_answer(asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(mid))),
-                          fc);
+        const bool ok = normal_answer(
+            asker.ask_one(pdu5(fc, largest->first, static_cast<std::uint16_t>(mid))), fc);
         (ok ? good : bad) = mid;
     }
     return static_cast<std::uint16_t>(good);
@@ -537,9 +539,9 @@ bool request_owing(const DeviceModel& m, std::uint8_t code, Pdu& out) {
         }
         if (code == 2 && tm.entries() < 0x10000) {
             const std::uint32_t past = tm.ranges.back().last + 1u;
-            const std::uint16_t at = past <= 0xFFFF ? static_cast<std::uint16_t>(past)
-                                                    : static_cast<std::uint16_t>(
-                                                          tm.ranges.front().first - 1);
+            const std::uint16_t at = past <= 0xFFFF
+                                         ? static_cast<std::uint16_t>(past)
+                                         : static_cast<std::uint16_t>(tm.ranges.front().first - 1);
             out = pdu5(fc, at, 1);
             return true;
         }
@@ -595,7 +597,8 @@ DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
         if (asker.out_of_time()) break;
         TableModel& tm = m.table(t);
         tm.max_quantity = learn_max_quantity(asker, t, tm);
-        if (t == Table::Coils || t == Table::HoldingRegisters) tm.writes = learn_writes(asker, t, tm);
+        if (t == Table::Coils || t == Table::HoldingRegisters)
+            tm.writes = learn_writes(asker, t, tm);
     }
     std::uint8_t unsupported_fc = 0;
     for (unsigned fc = 0x41; fc < 0x7F && !unsupported_fc; ++fc)

@@ -27,8 +27,8 @@ enum class WritesStick : std::uint8_t { Unknown, Yes, No, Refused };
 std::string_view writes_stick_name(WritesStick w) noexcept;
 
 struct TableModel {
-    std::vector<AddressRange> ranges;  // valid addresses: sorted, disjoint, not adjacent
-    std::uint16_t max_quantity = 0;    // most items one read was seen to take (0: unknown)
+    std::vector<AddressRange> ranges;           // valid addresses: sorted, disjoint, not adjacent
+    std::uint16_t max_quantity = 0;             // most items one read was seen to take (0: unknown)
     WritesStick writes = WritesStick::Unknown;  // coils and holding registers only
 
     bool contains(std::uint32_t address) const noexcept;
@@ -76,8 +76,8 @@ std::string format_model(const DeviceModel& m);
 
 struct LearnOptions {
     int timeout_ms = 1000;
-    std::int64_t budget_ns = 0;  // 0: no bound; else learning stops (partial) after this long
-    std::uint32_t stride = 16;   // sweep step: ranges shorter than this may be missed
+    std::int64_t budget_ns = 0;        // 0: no bound; else learning stops (partial) after this long
+    std::uint32_t stride = 16;         // sweep step: ranges shorter than this may be missed
     std::vector<std::uint16_t> hints;  // addresses to try first (--dict words)
 };
 

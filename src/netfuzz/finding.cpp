@@ -158,6 +158,7 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"note", f.note},
         {"original_steps", f.original_steps},
         {"timeout_ms", f.timeout_ms},
+        {"state_range", {f.state.base, f.state.span}},
         {"profile",
          {{"unit", f.profile.unit},
           {"probe", to_hex(f.profile.probe_pdu)},
@@ -224,6 +225,13 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         out.target = j.value("target", "");
         out.seed = j.value("seed", std::uint64_t{0});
         out.timeout_ms = j.value("timeout_ms", 1000);
+        if (j.contains("state_range") && j["state_range"].is_array() &&
+            j["state_range"].size() == 2) {
+            const auto base = j["state_range"][0].get<std::uint32_t>();
+            const auto span = j["state_range"][1].get<std::uint32_t>();
+            if (base <= 0xFFFF && span >= 1 && span <= 0x10000)
+                out.state = StateRange{static_cast<std::uint16_t>(base), span};
+        }
         out.minimized = j.value("minimized", false);
         out.confirmed = j.value("confirmed", true);
         out.note = j.value("note", "");

@@ -48,6 +48,8 @@ struct Finding {
     unsigned restarts = 0;      // target restarts this root cause cost (finding, confirming,
                                 // minimising it)
     int timeout_ms = 1000;
+    // Where its run checked reads after writes: replay checks the same range.
+    StateRange state;
     std::string folder;  // where it was saved ("" if not saved)
 
     Oracle oracle() const noexcept { return verdict.oracle; }

@@ -366,11 +366,11 @@ void Generator::next(Case& out) {
         const std::uint32_t roll = rng_.below(1000);
         // With a model, a share of the cases is aimed inside the device's map (most of them
         // on a target that pauses after exceptions, so that its run is not spent waiting).
-        const std::uint32_t aimed =
-            !has_model() ? 0 : options_.model->pauses_after_exceptions() ? 700 : 400;
-        const std::uint32_t rest = roll < options_.isolated_per_mille
-                                       ? roll
-                                       : (roll - options_.isolated_per_mille) % 1000;
+        const std::uint32_t aimed = !has_model()                                ? 0
+                                    : options_.model->pauses_after_exceptions() ? 700
+                                                                                : 400;
+        const std::uint32_t rest =
+            roll < options_.isolated_per_mille ? roll : (roll - options_.isolated_per_mille) % 1000;
         if (roll < options_.isolated_per_mille)
             isolated(out);
         else if (rest < aimed / 5)
@@ -693,9 +693,8 @@ void Generator::stateful(Case& out, bool cross) {
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwWriteRegisters)));
             // Read back an overlapping range in the same request, then again separately.
-            const std::uint16_t rq =
-                static_cast<std::uint16_t>(
-                    1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
+            const std::uint16_t rq = static_cast<std::uint16_t>(
+                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
             put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
             const std::uint32_t end = std::min<std::uint32_t>(
                 0x10000u, std::uint32_t{options_.state.base} + options_.state.span);

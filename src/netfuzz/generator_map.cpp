@@ -48,8 +48,8 @@ std::uint32_t item_limit(RequestShape shape, bool bits) {
 // A valid request of `fc` for `quantity` items at `address` (the write range of FC17 at
 // `second`), values from `value`.
 template <class Value>
-Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity,
-               std::uint16_t second, Value&& value) {
+Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity, std::uint16_t second,
+               Value&& value) {
     const codec::FunctionInfo* info = codec::function_info(fc);
     Pdu p{fc};
     switch (info->request) {
@@ -69,7 +69,8 @@ Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity,
             put16(p, address);
             put16(p, quantity);
             p.push_back(static_cast<std::uint8_t>((quantity + 7) / 8));
-            for (int i = 0; i < (quantity + 7) / 8; ++i) p.push_back(static_cast<std::uint8_t>(value()));
+            for (int i = 0; i < (quantity + 7) / 8; ++i)
+                p.push_back(static_cast<std::uint8_t>(value()));
             break;
         case RequestShape::MultipleRegisters:
             put16(p, address);
@@ -169,8 +170,8 @@ void Generator::in_map(Case& out) {
     const std::uint32_t spec_limit = item_limit(info->request, bit_table(*info->table));
     const std::uint32_t limit = std::min(spec_limit, r.size());
     // Mostly few items: a small quantity is where off-by-ones live, and it fits anywhere.
-    const std::uint32_t q = rng_.chance(2) ? 1 + rng_.below(std::min<std::uint32_t>(limit, 8))
-                                           : 1 + rng_.below(limit);
+    const std::uint32_t q =
+        rng_.chance(2) ? 1 + rng_.below(std::min<std::uint32_t>(limit, 8)) : 1 + rng_.below(limit);
     const auto at = static_cast<std::uint16_t>(r.first + rng_.below(r.size() - q + 1));
     const std::uint16_t second = model_address(false, static_cast<std::uint16_t>(q));
     Pdu p = request_at(fc, at, static_cast<std::uint16_t>(q), second, [this] { return word(); });
@@ -181,10 +182,10 @@ void Generator::in_map(Case& out) {
         switch (rng_.below(6)) {
             case 0:  // quantity: 0, one more than allowed, or all ones
             {
-                const std::uint16_t wrong[] = {0, static_cast<std::uint16_t>(spec_limit + 1), 0xFFFF};
+                const std::uint16_t wrong[] = {0, static_cast<std::uint16_t>(spec_limit + 1),
+                                               0xFFFF};
                 codec::store_be16(p.data() + 3, rng_.pick(wrong));
-            }
-                break;
+            } break;
             case 1:  // the range runs one past the end of the block
                 if (p.size() > 5 || info->request == RequestShape::AddressQuantity)
                     codec::store_be16(p.data() + 3,
@@ -195,7 +196,8 @@ void Generator::in_map(Case& out) {
                                                     rng_.chance(2) ? r.first - 1u : r.last + 1u));
                 break;
             case 3:  // byte count one off (writes of many items)
-                if (p.size() > 6) p[5] = static_cast<std::uint8_t>(p[5] + (rng_.chance(2) ? 1 : -1));
+                if (p.size() > 6)
+                    p[5] = static_cast<std::uint8_t>(p[5] + (rng_.chance(2) ? 1 : -1));
                 break;
             case 4:  // the data one byte short or long, the counts as they were
                 if (rng_.chance(2))
@@ -232,12 +234,13 @@ void Generator::build_edges() {
             // First, last, one before, one past (one item); the block to its last item and one
             // item further.
             const std::pair<std::uint32_t, std::uint32_t> edges[] = {
-                {r.first, 1}, {r.last, 1},          {r.first - 1u, 1},
+                {r.first, 1},     {r.last, 1},     {r.first - 1u, 1},
                 {r.last + 1u, 1}, {last_start, q}, {last_start + 1u, q}};
             for (const auto& [a, n] : edges) {
                 if (a > 0xFFFF || (n > 1 && limit == 1)) continue;
                 const auto addr = static_cast<std::uint16_t>(a);
-                edges_.push_back(request_at(fc, addr, static_cast<std::uint16_t>(n), inside, value));
+                edges_.push_back(
+                    request_at(fc, addr, static_cast<std::uint16_t>(n), inside, value));
                 // FC17: the write range at the same edge, its read range valid.
                 if (info.request == RequestShape::ReadWriteRegisters)
                     edges_.push_back(

@@ -188,17 +188,17 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     if (!r.model.source.empty()) {
         std::string model = format_model(r.model);
         if (r.model.source == "learned")
-            model.insert(model.find(')'),
-                         fmt::format("; {} requests in {:.2f} s", r.learn_requests, r.learn_seconds));
+            model.insert(model.find(')'), fmt::format("; {} requests in {:.2f} s", r.learn_requests,
+                                                      r.learn_seconds));
         for (std::size_t at = 0; at < model.size(); at = model.find('\n', at) + 1)
             model.insert(at, "  ");
         s += model;
     }
-    s += fmt::format(
-        "  deaths seen by idle sentinel connections: {}\n",
-        r.death_watch ? "yes (a crash is a crash even when a supervisor restarts the target)"
-                      : "no (the target does not serve an idle connection beside another, or "
-                        "a serial line)");
+    s += fmt::format("  deaths seen by idle sentinel connections: {}\n",
+                     r.death_watch
+                         ? "yes (a crash is a crash even when a supervisor restarts the target)"
+                         : "no (the target does not serve an idle connection beside another, or "
+                           "a serial line)");
     if (r.rationed)
         s += fmt::format(
             "  {} case(s) owed an exception the target pauses after were not sent (1 in 8 "

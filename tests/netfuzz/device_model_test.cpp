@@ -6,13 +6,13 @@
 
 #include <memory>
 
+#include "codec/mbap.hpp"
 #include "fuzz_test_support.hpp"
 #include "netfuzz/campaign.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/executor.hpp"
 #include "netfuzz/generator.hpp"
-#include "codec/mbap.hpp"
 
 namespace {
 
@@ -29,8 +29,8 @@ std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list
 TEST(DeviceModelMap, ParsesTablesRangesAndSingleAddresses) {
     DeviceModel m;
     std::string error;
-    ASSERT_TRUE(parse_map("holding=1000-1039,holding=1060-1099,coils=0x00C8-263,input=3000",
-                          m, error))
+    ASSERT_TRUE(
+        parse_map("holding=1000-1039,holding=1060-1099,coils=0x00C8-263,input=3000", m, error))
         << error;
     EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{1000, 1039}, {1060, 1099}}));
     EXPECT_EQ(m.table(Table::Coils).ranges, ranges({{200, 263}}));
@@ -46,8 +46,8 @@ TEST(DeviceModelMap, AdjacentRangesMergeAndBadEntriesAreRefused) {
     std::string error;
     ASSERT_TRUE(parse_map("holding=10-19,holding=20-29,holding=5-12", m, error)) << error;
     EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{5, 29}}));
-    for (const char* bad : {"", "registers=1-2", "holding=5-1", "holding=1-70000", "holding",
-                            "coils=x"}) {
+    for (const char* bad :
+         {"", "registers=1-2", "holding=5-1", "holding=1-70000", "holding", "coils=x"}) {
         EXPECT_FALSE(parse_map(bad, m, error)) << bad;
         EXPECT_NE(error.find("--map"), std::string::npos) << error;
     }
@@ -73,8 +73,8 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     EXPECT_EQ(back.units, m.units);
     EXPECT_EQ(back.exception_pause_ms, m.exception_pause_ms);
     EXPECT_TRUE(back.pauses_after_exceptions());
-    EXPECT_FALSE(model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}", back,
-                                 error));
+    EXPECT_FALSE(
+        model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}", back, error));
     EXPECT_FALSE(model_from_json("[]", back, error));
 }
 
@@ -122,13 +122,13 @@ TEST(LearnDeviceModel, FindsASparseMapThatDoesNotStartAtZero) {
 TEST(DeathWatch, AllSentinelsDroppingIsADeathEvenWhenTheTargetIsBackAtOnce) {
     SparseDevice d;
     ASSERT_TRUE(d.start());
-    DeathWatch watch(*d.connector, 3, 1000);
+    DeathWatch watch(*d.connector, 3, 1000, &d.profile);
     ASSERT_TRUE(watch.arm());
     EXPECT_FALSE(watch.died(50)) << "nothing happened yet";
     // Bug 1 of the sparse device: FC10 inside the map with a byte count that disagrees.
     Case crash;
-    crash.steps.push_back(Step{Op::Send, 0, 0, 0,
-                               frame_pdu({0x10, 0x03, 0xE8, 0x00, 0x02, 0x02, 0, 1}, 1, 1)});
+    crash.steps.push_back(
+        Step{Op::Send, 0, 0, 0, frame_pdu({0x10, 0x03, 0xE8, 0x00, 0x02, 0x02, 0, 1}, 1, 1)});
     ExecOptions eo;
     eo.watch = &watch;
     const Execution ex = execute_case(crash, *d.connector, d.profile, eo);
@@ -209,9 +209,8 @@ TEST(ShadowMaskWrite, AWrongMaskWriteResultIsAMismatchNamedAfterTheMaskWrite) {
     for (const std::uint16_t stored : {0x0000, 0x0F00}) {
         const std::vector<std::uint8_t> got = {0x03, 0x02, static_cast<std::uint8_t>(stored >> 8),
                                                static_cast<std::uint8_t>(stored)};
-        std::vector<Shadow::Event> events = {{&w, 10, 20, w_ok, 0},
-                                             {&mask, 30, 40, mask_ok, 0},
-                                             {&read, 50, 60, got, 0}};
+        std::vector<Shadow::Event> events = {
+            {&w, 10, 20, w_ok, 0}, {&mask, 30, 40, mask_ok, 0}, {&read, 50, 60, got, 0}};
         const Verdict v = Shadow::check(events, StateRange{0, 0x10000});
         if (stored == 0x0000) {
             EXPECT_FALSE(v) << v.summary;
@@ -224,9 +223,10 @@ TEST(ShadowMaskWrite, AWrongMaskWriteResultIsAMismatchNamedAfterTheMaskWrite) {
 
 TEST(ShadowMaskWrite, AValueOnlyAnotherConnectionReadsWrongIsItsOwnFault) {
     TargetProfile p;
-    std::vector<std::vector<std::uint8_t>> frames = {frame_pdu({0x06, 0x04, 0x24, 0x12, 0x34}, 1, 1),
-                                                     frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 2, 1),
-                                                     frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 3, 1)};
+    std::vector<std::vector<std::uint8_t>> frames = {
+        frame_pdu({0x06, 0x04, 0x24, 0x12, 0x34}, 1, 1),
+        frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 2, 1),
+        frame_pdu({0x03, 0x04, 0x24, 0x00, 0x01}, 3, 1)};
     RequestInfo w, same, other;
     describe_request(frames[0], p, w);
     describe_request(frames[1], p, same);

@@ -26,17 +26,17 @@ constexpr int kServerLifetimeSeconds = 400;
 
 // One root cause per planted bug (see the server's header comment for the numbers).
 const std::set<std::string> kPlanted = {
-    "crash:target-down/fc0F",                                       // 1
-    "crash:target-down/fc16",                                       // 2
-    "crash:target-down/fc2B",                                       // 3
-    "hang:whole-server-hang/fc14",                                  // 4
-    "spec-deviation:answers-nonzero-protocol-id",                   // 5
-    "spec-deviation:exception-02-where-03-owed",                    // 6
-    "hang:no-answer/fc07",                                          // 7
+    "crash:target-down/fc0F",                                            // 1
+    "crash:target-down/fc16",                                            // 2
+    "crash:target-down/fc2B",                                            // 3
+    "hang:whole-server-hang/fc14",                                       // 4
+    "spec-deviation:answers-nonzero-protocol-id",                        // 5
+    "spec-deviation:exception-02-where-03-owed",                         // 6
+    "hang:no-answer/fc07",                                               // 7
     "spec-deviation:read-after-write-mismatch(holding-registers)/fc17",  // 8
-    "hang:stalls-other-connections(partial-frame)",                 // 9
-    "hang:capacity/accepted-connections-unserved",                  // 10
-    "unexpected-close:drops-answers-on-half-close",                 // 11
+    "hang:stalls-other-connections(partial-frame)",                      // 9
+    "hang:capacity/accepted-connections-unserved",                       // 10
+    "unexpected-close:drops-answers-on-half-close",                      // 11
 };
 
 TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
