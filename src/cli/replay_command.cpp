@@ -66,8 +66,7 @@ int run_replay(const ReplayOptions& o) {
     ex.state = f.state;
     // Idle sentinels, as in the run: a crash replays as a crash under a supervisor too.
     netfuzz::DeathWatch watch(target, 3, ex.timeout_ms, &f.profile);
-    const bool watched = target.max_links() > 1 && watch.arm();
-    if (watched) ex.watch = &watch;
+    const bool can_watch = target.max_links() > 1;
     unsigned reproduced = 0;
     const netfuzz::Case& replayed = o.original ? f.original_case : f.fuzz_case;
     if (replayed.steps.empty()) {
@@ -75,7 +74,12 @@ int run_replay(const ReplayOptions& o) {
         return kExitUsage;
     }
     for (unsigned i = 0; i < std::max(1u, o.runs); ++i) {
-        if (watched && !watch.armed()) watch.arm();
+        if (can_watch && !watch.armed()) {
+            // A target a supervisor restarts may still be coming back from the last run.
+            netfuzz::wait_for_target(target, f.profile, "", 2000, ex.timeout_ms);
+            watch.arm();
+        }
+        ex.watch = watch.armed() ? &watch : nullptr;
         netfuzz::Execution e = netfuzz::execute_case(replayed, target, f.profile, ex);
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.

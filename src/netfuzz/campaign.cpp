@@ -18,6 +18,7 @@
 #include <thread>
 #include <utility>
 
+#include "codec/error.hpp"
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
@@ -208,9 +209,11 @@ void for_each_request(const Case& c, const TargetProfile& profile, Visit&& visit
     }
 }
 
-// What a case's culprit would be called: each frame's, and its class for transport cases
-// (whose frames, once delivered, may be at fault as well as the way they arrived).
-std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
+// What a case's culprits would be, each with what is wrong with its request: "fc10/valid",
+// "fc10/invalid/byte_count_mismatch" (the codec's first complaint). A crash on one field of a
+// handler says nothing of its other fields or of its valid requests, so only requests with
+// the same signature are skipped once it is known.
+std::vector<std::string> signatures(const Case& c, const TargetProfile& profile) {
     std::vector<std::string> out;
     if (is_transport_class(c.cls)) out.push_back(culprit_text(c.cls, nullptr));
     Case plain;
@@ -218,7 +221,12 @@ std::vector<std::string> culprits(const Case& c, const TargetProfile& profile) {
         is_transport_class(c.cls) && reassemble(c, plain, profile.framing) ? plain : c;
     if (&framed == &c && is_transport_class(c.cls)) return out;
     for_each_request(framed, profile, [&](const RequestInfo& info) {
-        out.push_back(culprit_text(framed.cls, &info));
+        std::string s = culprit_text(framed.cls, &info);
+        if (s.rfind("fc", 0) == 0) {
+            s += fmt::format("/{}", request_kind(info));
+            if (!info.status.ok()) s += fmt::format("/{}", codec::error_name(info.status.error));
+        }
+        out.push_back(std::move(s));
         return true;
     });
     if (out.empty()) out.push_back(culprit_text(c.cls, nullptr));
@@ -285,6 +293,8 @@ class Campaign {
     void hit(Finding& f, const Verdict& v, const Case& c);
     bool would_retrigger(const Case& c) const;
     void learn_costly(const Finding& f);
+    // Skips from now on the requests of `c` whose culprit is `culprit`, by signature.
+    void learn_costly_signatures(const std::string& culprit, const Case& c);
     // Runs one case alone and records what it shows.
     Outcome isolate(Case c);
     // The target is down (or was found down): restart it. `cause` (a root-cause key, or "")
@@ -347,7 +357,7 @@ class Campaign {
     std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
-    std::uint64_t rationed_seen_ = 0;
+    std::uint64_t rationed_seen_ = 0, rationed_units_seen_ = 0;
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
 
@@ -427,6 +437,11 @@ void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
     ++f.hits;
     ++f.variants[variant_of(v, c)];
     ++result_.duplicates;
+    // Another request that does it: skipped from now on as well.
+    if (v.oracle == Oracle::Crash || v.oracle == Oracle::Hang) {
+        const std::string culprit = culprit_of(v.rule);
+        if (!culprit.empty() && culprit != "capacity") learn_costly_signatures(culprit, c);
+    }
 }
 
 bool Campaign::would_retrigger(const Case& c) const {
@@ -436,9 +451,28 @@ bool Campaign::would_retrigger(const Case& c) const {
     if (length_mismatch_known_ && carries_length_mismatch(c, result_.profile))
         return ++length_mismatch_seen_ % 16 != 0;
     if (costly_culprits_.empty()) return false;
-    for (const std::string& k : culprits(c, result_.profile))
+    // A stateful case is about its write: its read-backs (FC 03, 01, FC 17 over the window)
+    // are valid requests that would otherwise be skipped once any crash on them is known.
+    const bool stateful =
+        c.cls == MutationClass::StatefulSame || c.cls == MutationClass::StatefulCross;
+    const std::string about = fmt::format("fc{:02X}/", c.function);
+    for (const std::string& k : signatures(c, result_.profile)) {
+        if (stateful && k.rfind(about, 0) != 0) continue;
         if (costly_culprits_.count(k)) return true;
+        // A culprit known without a signature (a transport class, a request not framed).
+        if (costly_culprits_.count(k.substr(0, k.find('/')))) return true;
+    }
     return false;
+}
+
+void Campaign::learn_costly_signatures(const std::string& culprit, const Case& c) {
+    bool any = false;
+    for (const std::string& k : signatures(c, result_.profile))
+        if (k.rfind(culprit + "/", 0) == 0) {
+            costly_culprits_.insert(k);
+            any = true;
+        }
+    if (!any) costly_culprits_.insert(culprit);
 }
 
 void Campaign::learn_costly(const Finding& f) {
@@ -446,7 +480,10 @@ void Campaign::learn_costly(const Finding& f) {
     const Oracle o = f.oracle();
     if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
     const std::string culprit = culprit_of(f.verdict.rule);
-    if (!culprit.empty() && culprit != "capacity") costly_culprits_.insert(culprit);
+    if (!culprit.empty() && culprit != "capacity") {
+        learn_costly_signatures(culprit, f.fuzz_case);
+        if (f.original_case.steps.size()) learn_costly_signatures(culprit, f.original_case);
+    }
     // Hangs without a culprit (stalls of other connections) are charged to their class.
     if (culprit.empty() && o == Oracle::Hang)
         gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
@@ -849,10 +886,19 @@ void Campaign::check_capacity_once() {
         f.original_case = f.fuzz_case;
         f.original_steps = 1;
         f.variants["capacity check"] = 1;
-        f.note = fmt::format(
-            "found by the connection-capacity check (held {} connections, {} refused); the "
-            "reproducer opens that many connections at once and probes each",
-            cr.held, cr.refused);
+        const std::uint16_t flood = f.fuzz_case.steps.front().count;
+        f.note = cr.target_down && cr.opened > cr.held
+                     ? fmt::format(
+                           "found by the connection-capacity check: the target died with {} "
+                           "connections open (all {} held before were answered); the "
+                           "reproducer opens {} connections at once, probes each and holds "
+                           "them until answered",
+                           cr.opened, cr.held, flood)
+                     : fmt::format(
+                           "found by the connection-capacity check (held {} connections, {} "
+                           "refused); the reproducer opens {} connections at once, probes each "
+                           "and holds them until answered",
+                           cr.held, cr.refused, flood);
         keep(std::move(f));
     }
     if (cr.target_down) {
@@ -913,10 +959,19 @@ void Campaign::know_the_device() {
 
 void Campaign::use_probe_inside_the_map() {
     using codec::Table;
-    for (const auto& [table, fc] : {std::pair{Table::HoldingRegisters, std::uint8_t{0x03}},
-                                    std::pair{Table::InputRegisters, std::uint8_t{0x04}},
-                                    std::pair{Table::Coils, std::uint8_t{0x01}},
-                                    std::pair{Table::DiscreteInputs, std::uint8_t{0x02}}}) {
+    // A learned range's neighbours were each refused alone: the oracle holds reads to that.
+    if (result_.model.source == "learned" && !result_.model.partial)
+        for (std::size_t t = 0; t < kTableCount; ++t) {
+            auto& out = result_.profile.unmapped[t];
+            const TableModel& tm = result_.model.tables[t];
+            for (const AddressRange& r : tm.ranges) {
+                if (r.first > 0 && !tm.contains(r.first - 1u)) out.push_back(r.first - 1);
+                if (r.last < 0xFFFF && !tm.contains(r.last + 1u)) out.push_back(r.last + 1);
+            }
+        }
+    for (const Table table :
+         {Table::HoldingRegisters, Table::InputRegisters, Table::Coils, Table::DiscreteInputs}) {
+        const std::uint8_t fc = codec::function_for(table, codec::RequestShape::AddressQuantity);
         const TableModel& tm = result_.model.table(table);
         if (tm.ranges.empty() || result_.profile.unsupported[fc]) continue;
         const std::uint16_t at = tm.ranges.front().first;
@@ -946,6 +1001,16 @@ void Campaign::arm_watch() {
 
 bool Campaign::rationed(const Case& c) {
     const DeviceModel& m = result_.model;
+    // A unit id the device was seen not to answer costs a timeout on a pipelined lane.
+    if (!m.units.empty() && m.units.size() < 256) {
+        bool silent = false;
+        for_each_request(c, result_.profile, [&](const RequestInfo& info) {
+            silent =
+                std::find(m.units.begin(), m.units.end(), info.header.unit_id) == m.units.end();
+            return !silent;
+        });
+        if (silent && ++rationed_units_seen_ % 16 != 0) return true;
+    }
     if (!m.pauses_after_exceptions()) return false;
     bool pauses = false;
     for_each_request(c, result_.profile, [&](const RequestInfo& info) {

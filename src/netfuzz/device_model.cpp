@@ -27,19 +27,10 @@ using codec::Table;
 constexpr std::array<Table, kTableCount> kTables = {Table::Coils, Table::DiscreteInputs,
                                                     Table::InputRegisters, Table::HoldingRegisters};
 
-// The read function code of each table and the most items one read may take (v1.1b3).
+// The read function code of each table (the codec's table) and the most items one read may
+// take (v1.1b3).
 std::uint8_t read_function(Table t) noexcept {
-    switch (t) {
-        case Table::Coils:
-            return 0x01;
-        case Table::DiscreteInputs:
-            return 0x02;
-        case Table::InputRegisters:
-            return 0x04;
-        case Table::HoldingRegisters:
-            return 0x03;
-    }
-    return 0x03;
+    return codec::function_for(t, codec::RequestShape::AddressQuantity);
 }
 
 std::uint16_t spec_max_read(Table t) noexcept {
@@ -484,7 +475,9 @@ std::uint16_t learn_max_quantity(Asker& asker, Table t, const TableModel& tm) {
 WritesStick learn_writes(Asker& asker, Table t, const TableModel& tm) {
     if (tm.ranges.empty()) return WritesStick::Unknown;
     const bool coils = t == Table::Coils;
-    const std::uint8_t read_fc = read_function(t), write_fc = coils ? 0x05 : 0x06;
+    const std::uint8_t read_fc = read_function(t);
+    const std::uint8_t write_fc = codec::function_for(
+        t, coils ? codec::RequestShape::SingleCoil : codec::RequestShape::SingleRegister);
     if (asker.profile().unsupported[write_fc]) return WritesStick::Refused;
     const std::uint16_t at = tm.ranges.front().first;
     const Pdu before = asker.ask_one(pdu5(read_fc, at, 1));
@@ -600,9 +593,10 @@ DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
         if (t == Table::Coils || t == Table::HoldingRegisters)
             tm.writes = learn_writes(asker, t, tm);
     }
+    // A code the specification leaves to users (0x41..0x48): owed 01 unless the device has it.
     std::uint8_t unsupported_fc = 0;
-    for (unsigned fc = 0x41; fc < 0x7F && !unsupported_fc; ++fc)
-        if (profile.unsupported[fc]) unsupported_fc = static_cast<std::uint8_t>(fc);
+    for (unsigned fc = 0x41; fc <= 0x48 && !unsupported_fc; ++fc)
+        if (!profile.extended[fc]) unsupported_fc = static_cast<std::uint8_t>(fc);
     if (!asker.out_of_time()) learn_pauses(asker, m, unsupported_fc);
     if (!asker.out_of_time()) learn_units(target, profile, options.timeout_ms, m, st);
     m.partial = asker.out_of_time();

@@ -435,6 +435,15 @@ void CaseRunner::flood(std::uint16_t count) {
         (void)link->send(f.data(), f.size());
         links.push_back(std::move(link));
     }
+    // All of them held until each is answered (or a timeout): a server that fails at N
+    // connections must have N at once.
+    std::vector<pollfd> waiting;
+    for (const auto& link : links) waiting.push_back(pollfd{link->poll_fd(), POLLIN, 0});
+    const std::int64_t until = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    while (!waiting.empty() && net::now_ns() < until) {
+        if (::poll(waiting.data(), waiting.size(), 20) <= 0) continue;
+        std::erase_if(waiting, [](const pollfd& p) { return p.revents != 0; });
+    }
 }
 
 std::string culprit_text(const Case& c, const RequestInfo* rq) {
@@ -567,7 +576,15 @@ void CaseRunner::judge(const Case& c) {
                 continue;
             std::string rule;
             const RequestInfo* blamed = pd.probe ? before : &info;
-            if (cn.shut) {
+            // A target known to drop what follows an exception, that answered the request
+            // before with one, dropped the rest for that, however long the request was.
+            // (After our half-close, the close that follows is owed.)
+            const bool exception_drop = before && before_exception &&
+                                        profile_.drops_after_exception && (!closed || cn.shut);
+            if (exception_drop) {
+                rule = "drops-requests-after-exception";
+                blamed = before;
+            } else if (cn.shut) {
                 rule = "drops-answers-on-half-close";
             } else if (before && pdu_length_mismatch(*before)) {
                 rule = kStreamLostRule;
@@ -589,7 +606,9 @@ void CaseRunner::judge(const Case& c) {
                                    culprit_text(c, before));
             }
             const int fc = blamed && !blamed->pdu.empty() ? blamed->pdu[0] : -1;
-            if (closed) {
+            // A drop behind an exception is the same fault whether or not our half-close
+            // then (rightly) closed the connection.
+            if (closed && !(exception_drop && cn.shut)) {
                 consider(Verdict{Oracle::UnexpectedClose, std::move(rule), fc,
                                  fmt::format("connection {} {} with {} unanswered{}", i,
                                              cn.reset ? "reset" : "closed", what,

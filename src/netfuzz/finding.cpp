@@ -169,6 +169,9 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"trace", trace},
     };
     // The framing the case's bytes are in (MBAP when absent): replay needs the same.
+    for (std::size_t t = 0; t < f.profile.unmapped.size(); ++t)
+        if (!f.profile.unmapped[t].empty())
+            j["profile"]["unmapped"][std::to_string(t)] = f.profile.unmapped[t];
     if (f.profile.framing != codec::Framing::Mbap) {
         j["profile"]["framing"] = codec::framing_name(f.profile.framing);
         j["profile"]["serial_line"] = f.profile.serial_line;
@@ -250,6 +253,12 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         else if (framing != "mbap")
             throw std::runtime_error("unknown framing");
         out.profile.serial_line = p.value("serial_line", false);
+        if (p.contains("unmapped") && p["unmapped"].is_object())
+            for (const auto& [table, addrs] : p["unmapped"].items()) {
+                const unsigned long t = std::stoul(table);
+                if (t < out.profile.unmapped.size())
+                    out.profile.unmapped[t] = addrs.get<std::vector<std::uint16_t>>();
+            }
         out.hits = j.value("hits", std::uint64_t{1});
         auto load_steps = [](const json& steps, Case& c) {
             for (const json& s : steps) {

@@ -516,15 +516,14 @@ void Generator::mutate_recorded(Case& out) {
 }
 
 void Generator::isolated(Case& out) {
-    const std::uint32_t roll = rng_.below(100);
-    if (roll < 15) {
-        stateful(out, false);
+    // With a model, stateful cases write where the device keeps data: twice as many of them.
+    const std::uint32_t stateful_share = has_model() ? 54 : 27;
+    const std::uint32_t pick = rng_.below(100 + stateful_share - 27);
+    if (pick < stateful_share) {
+        stateful(out, pick >= stateful_share * 15 / 27);
         return;
     }
-    if (roll < 27) {
-        stateful(out, true);
-        return;
-    }
+    const std::uint32_t roll = pick - (stateful_share - 27);
     if (roll < 35) {  // special transaction ids, twice the same on one connection
         const std::uint16_t tids[] = {0x0000, 0x00FF, 0x0100, 0x7FFF, 0x8000, 0xFFFF};
         const auto& pdu = valid_seed();
@@ -607,7 +606,10 @@ void Generator::isolated(Case& out) {
         out.cls = MutationClass::PartialHold;
         const std::uint32_t at = 1 + rng_.below(static_cast<std::uint32_t>(f.size() - 1));
         out.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin(), f.begin() + at}});
-        out.steps.push_back(Step{Op::SideProbe, 0, 0, 0, {}});
+        // Half the time the piece sits idle first: some servers give up waiting on a started
+        // header only after a while, and then block on it.
+        const std::uint32_t idle_us = rng_.chance(2) ? 150'000 : 0;
+        out.steps.push_back(Step{Op::SideProbe, 0, idle_us, 0, {}});
         out.steps.push_back(Step{Op::Send, 0, 0, 0, {f.begin() + at, f.end()}});
         return;
     }

@@ -4,6 +4,7 @@
 // Deterministic: the same seed and the same feedback give the same cases.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -50,10 +51,14 @@ class Generator {
     void next(Case& out);
     // The device's map, once known (the campaign learns it after its first looks), and the
     // state range that goes with it. Null or empty: none.
+    // A target that pauses after exceptions gains nothing from pipelining (it drops what
+    // follows an exception): a tenth of its cases, at least, are stateful and transport ones.
     void use_model(const DeviceModel* model, const StateRange& state) {
         options_.model = model;
         options_.state = state;
         edges_.clear();
+        if (model && model->pauses_after_exceptions())
+            options_.isolated_per_mille = std::max(options_.isolated_per_mille, 100u);
     }
     // A class that crashed or hung the target is drawn 16 times less often from now on.
     void deprioritise(std::uint8_t function, MutationClass cls);
@@ -100,7 +105,12 @@ class Generator {
     std::uint32_t unit_cursor_ = 0;  // pairwise walk: unit-id classes x function codes
     std::vector<std::vector<std::size_t>> seeds_by_function_;  // valid seed indexes per FC
     std::uint16_t tid_;
-    std::vector<std::vector<std::uint8_t>> edges_;  // map-edge PDUs, walked in turn
+    struct Edge {
+        std::uint8_t function;
+        std::uint16_t address, quantity;
+        bool second_range;  // FC17: the write range at the edge
+    };
+    std::vector<Edge> edges_;  // map-edge requests, walked in turn
     std::size_t edge_cursor_ = 0;
     std::array<std::uint32_t, 256 * static_cast<std::size_t>(MutationClass::Count) / 32 + 1>
         deprioritised_{};

@@ -129,6 +129,20 @@ bool bit_table(codec::Table t) {
     return t == codec::Table::Coils || t == codec::Table::DiscreteInputs;
 }
 
+// A write of many items whose quantity says one more or one fewer item (a byte more or fewer
+// for coils: 8 items) than its byte count and data carry, the range still inside the block: a
+// handler that checks the address, then trusts the byte count, runs past its buffer.
+void disagree_on_quantity(Pdu& p, const codec::FunctionInfo& info, const AddressRange& r,
+                          std::uint16_t at, std::uint32_t q) {
+    const bool multi = info.request == RequestShape::MultipleCoils ||
+                       info.request == RequestShape::MultipleRegisters;
+    if (!multi || p.size() < 6) return;
+    const std::uint32_t step = info.request == RequestShape::MultipleCoils ? 8 : 1;
+    const bool room = std::uint32_t{at} + q + step <= std::uint32_t{r.last} + 1;
+    const std::uint32_t wrong = room ? q + step : q > step ? q - step : q;
+    codec::store_be16(p.data() + 3, static_cast<std::uint16_t>(wrong));
+}
+
 }  // namespace
 
 bool Generator::pick_map_function(std::uint8_t& fc) {
@@ -179,7 +193,7 @@ void Generator::in_map(Case& out) {
     const std::uint32_t odds = options_.model->pauses_after_exceptions() ? 4 : 3;
     if (rng_.below(odds) < 2 && p.size() >= 5) {
         const std::uint32_t end = at + q;  // one past the last item asked
-        switch (rng_.below(6)) {
+        switch (rng_.below(7)) {
             case 0:  // quantity: 0, one more than allowed, or all ones
             {
                 const std::uint16_t wrong[] = {0, static_cast<std::uint16_t>(spec_limit + 1),
@@ -198,6 +212,9 @@ void Generator::in_map(Case& out) {
             case 3:  // byte count one off (writes of many items)
                 if (p.size() > 6)
                     p[5] = static_cast<std::uint8_t>(p[5] + (rng_.chance(2) ? 1 : -1));
+                break;
+            case 6:  // the quantity disagrees with byte count and data, its range still inside
+                disagree_on_quantity(p, *info, r, at, q);
                 break;
             case 4:  // the data one byte short or long, the counts as they were
                 if (rng_.chance(2))
@@ -221,30 +238,35 @@ void Generator::in_map(Case& out) {
 }
 
 void Generator::build_edges() {
-    auto value = [this] { return word(); };
     for (const codec::FunctionInfo& info : codec::public_functions()) {
         const std::uint8_t fc = codec::to_byte(info.code);
         if (!addressed(fc) || options_.unsupported[fc]) continue;
         const TableModel& tm = options_.model->table(*info.table);
         const std::uint32_t limit = item_limit(info.request, bit_table(*info.table));
-        for (const AddressRange& r : tm.ranges) {
-            const auto q = static_cast<std::uint16_t>(std::min(limit, r.size()));
-            const auto last_start = static_cast<std::uint16_t>(r.last - q + 1);
-            const std::uint16_t inside = model_address(false, 1);
+        const bool ranged = limit > 1;
+        for (std::size_t k = 0; k < tm.ranges.size(); ++k) {
+            const AddressRange& r = tm.ranges[k];
+            const auto q = std::min(limit, r.size());
+            const std::uint32_t last_start = r.last - q + 1;
             // First, last, one before, one past (one item); the block to its last item and one
             // item further.
-            const std::pair<std::uint32_t, std::uint32_t> edges[] = {
-                {r.first, 1},     {r.last, 1},     {r.first - 1u, 1},
-                {r.last + 1u, 1}, {last_start, q}, {last_start + 1u, q}};
-            for (const auto& [a, n] : edges) {
-                if (a > 0xFFFF || (n > 1 && limit == 1)) continue;
-                const auto addr = static_cast<std::uint16_t>(a);
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> at = {
+                {r.first, 1}, {r.last, 1}, {r.first - 1u, 1}, {r.last + 1u, 1}};
+            if (ranged) {
+                at.emplace_back(last_start, q);
+                at.emplace_back(last_start + 1, q);
+            }
+            // From this block's last item across the hole to the next block's first.
+            if (ranged && k + 1 < tm.ranges.size() && tm.ranges[k + 1].first - r.last + 1u <= limit)
+                at.emplace_back(r.last, tm.ranges[k + 1].first - r.last + 1u);
+            for (const auto& [a, n] : at) {
+                if (a > 0xFFFF) continue;
                 edges_.push_back(
-                    request_at(fc, addr, static_cast<std::uint16_t>(n), inside, value));
+                    Edge{fc, static_cast<std::uint16_t>(a), static_cast<std::uint16_t>(n), false});
                 // FC17: the write range at the same edge, its read range valid.
                 if (info.request == RequestShape::ReadWriteRegisters)
-                    edges_.push_back(
-                        request_at(fc, inside, static_cast<std::uint16_t>(n), addr, value));
+                    edges_.push_back(Edge{fc, static_cast<std::uint16_t>(a),
+                                          static_cast<std::uint16_t>(n), true});
             }
         }
     }
@@ -253,7 +275,12 @@ void Generator::build_edges() {
 void Generator::map_edge(Case& out) {
     if (edges_.empty()) build_edges();
     if (edges_.empty()) return in_map(out);
-    const Pdu& p = edges_[edge_cursor_++ % edges_.size()];
+    const Edge e = edges_[edge_cursor_++ % edges_.size()];
+    // Values drawn afresh at each visit: a device may misbehave at one edge for one value.
+    auto value = [this] { return word(); };
+    const std::uint16_t inside = model_address(false, e.quantity);
+    const Pdu p = e.second_range ? request_at(e.function, inside, e.quantity, e.address, value)
+                                 : request_at(e.function, e.address, e.quantity, inside, value);
     out.cls = MutationClass::MapEdge;
     out.function = p[0];
     out.pipelinable = true;

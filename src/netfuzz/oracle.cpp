@@ -8,6 +8,7 @@
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/rtu.hpp"
+#include "codec/values.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -144,6 +145,30 @@ void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInf
     }
 }
 
+// A normal answer to a read covering an address the device refused alone (profile.unmapped).
+Verdict check_unmapped(const RequestInfo& rq, const TargetProfile& profile) {
+    const codec::Request& q = rq.request;
+    const auto table = codec::function_table(q.function);
+    if (!table || rq.status.error != codec::CodecError::Ok) return {};
+    const bool plain_read = codec::request_is(q.function, codec::RequestShape::AddressQuantity);
+    const bool read_write = codec::request_is(q.function, codec::RequestShape::ReadWriteRegisters);
+    if (!plain_read && !read_write) return {};
+    const auto& unmapped = profile.unmapped[static_cast<std::size_t>(*table)];
+    for (const std::uint16_t a : unmapped) {
+        if (a < q.address || std::uint32_t{a} >= std::uint32_t{q.address} + q.quantity) continue;
+        return make(
+            Oracle::SpecDeviation,
+            fmt::format("unmapped-address-answered-normally({})", codec::table_name(*table)), rq,
+            fmt::format("{}: a read over address {} answered normally, where a read of "
+                        "that address alone gets exception 02",
+                        codec::function_label(q.function), a),
+            "exception 02 (ILLEGAL DATA ADDRESS): the range holds an address the device "
+            "does not have",
+            "a normal response");
+    }
+    return {};
+}
+
 Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProfile& profile) {
     const codec::MbapHeader h = codec::read_mbap_header(rsp.data());
     const codec::Bytes pdu = rsp.subspan(codec::limits::kMbapHeader);
@@ -251,6 +276,7 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         return make(Oracle::MalformedResponse, std::string(rule), rq,
                     fmt::format("{}: {}", codec::function_label(fc), what), expected_text, seen);
     };
+    if (Verdict v = check_unmapped(rq, profile)) return v;
     const int want = codec::expected_read_byte_count(q);
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
         return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
@@ -392,9 +418,12 @@ void resolve_masks(std::vector<WriteRecord>& writes) {
         if (!m.mask || !m.acked) continue;
         const WriteRecord* latest = nullptr;
         for (const WriteRecord& w : writes) {
-            if (&w == &m || w.coils || !w.acked || w.acked > m.sent) continue;
+            // Before it: acknowledged before it went out, or sent before it on its connection
+            // (a server takes one connection's requests in order).
+            const bool before = w.acked <= m.sent || (w.conn == m.conn && w.sent < m.sent);
+            if (&w == &m || w.coils || !w.acked || !before) continue;
             if (m.address < w.address || m.address >= w.address + w.values.size()) continue;
-            if (!latest || w.acked > latest->acked) latest = &w;
+            if (!latest || w.sent > latest->sent) latest = &w;
         }
         if (!latest) continue;
         const auto& old = latest->values[m.address - latest->address];
@@ -438,7 +467,10 @@ Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& write
             const bool before = w.acked != 0 && w.acked <= e.sent_ns;
             const bool overlaps = w.sent < e.answered_ns && !before;
             if (overlaps) ambiguous = true;
-            if (before && (!latest || (latest->self != &rq && w.acked > latest->acked))) {
+            // The later of two: acknowledged later, or in the same reply sent later.
+            const bool later = latest && (w.acked > latest->acked ||
+                                          (w.acked == latest->acked && w.sent > latest->sent));
+            if (before && (!latest || (latest->self != &rq && later))) {
                 latest = &w;
                 latest_index = a - w.address;
             }

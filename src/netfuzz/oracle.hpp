@@ -63,6 +63,10 @@ struct TargetProfile {
     codec::Framing framing = codec::Framing::Mbap;
     // A serial line: silences delimit frames, unit 0 is a broadcast nobody answers.
     bool serial_line = false;
+    // Per table (codec::Table order): addresses a read of one item alone was refused at with
+    // 02 while learning the map (each learned range's neighbours). A read that covers one of
+    // them owes 02 as well: answered normally, it is a deviation.
+    std::array<std::vector<std::uint16_t>, 4> unmapped{};
 };
 
 // Addresses (holding registers and coils) that only stateful cases write; every other write

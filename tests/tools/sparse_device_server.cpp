@@ -9,8 +9,8 @@
 // Like libmodbus, after an exception 01 or 03 it sleeps 100 ms (the whole server) and discards
 // the connection's unread input. Protocol id != 0: dropped; MBAP length < 2 or > 254: closed.
 // The planted bugs (12):
-//   1. crash: FC 10 inside the map with byte count != 2 * quantity aborts (byte count checked
-//      after the address, then trusted)
+//   1. crash: FC 10 inside the map with byte count != 2 * quantity aborts (inside the map the
+//      byte count is trusted; outside it, it is checked and owed 03 as it should be)
 //   2. crash: FC 0F inside the coil map with byte count != ceil(quantity / 8) aborts
 //   3. crash: FC 17 with a valid read range and a write range that starts in a holding block
 //      but runs past its end aborts (only the write start is checked)
@@ -19,7 +19,8 @@
 //      and); the echo is normal
 //   6. stateful: FC 06 writes to 1060-1069 stay in a per-connection cache: other connections
 //      (and later ones) read the old value
-//   7. silent deviation: FC 06 writing 8000 to 1060 gets exception 04 and stores nothing
+//   7. silent deviation: FC 06 writing 8000 to 1060 is answered with an echo of value 0000
+//      and nothing is stored (a value the device drops on one register)
 //   8. whole-server hang: a partial MBAP header (1-6 bytes) idle for 100 ms is finished with a
 //      blocking read of up to 3 s, stalling every other client
 //   9. crash: accepting a 1,025th concurrent connection aborts (select()'s FD_SET overflow)
@@ -189,7 +190,11 @@ Pdu write_single_register(const std::uint8_t* p, std::size_t n, Device& d, Conn&
     const int address = load_be16(p + 1);
     const std::uint16_t value = load_be16(p + 3);
     if (!block_of(kHolding, address)) return exception(0x06, 0x02);
-    if (address == 1060 && value == 0x8000) return exception(0x06, 0x04);  // bug 7
+    if (address == 1060 && value == 0x8000) {  // bug 7: echoes 0000, stores nothing
+        Pdu wrong = echo(p, n);
+        wrong[3] = wrong[4] = 0;
+        return wrong;
+    }
     if (in_cache_range(address))
         c.cached[address - kCachedFirst] = value;  // bug 6: never reaches the store
     else
@@ -201,8 +206,11 @@ Pdu write_multiple_coils(const std::uint8_t* p, std::size_t n, Device& d) {
     if (n < 6 || n != 6u + p[5]) return exception(0x0F, 0x03);
     const int address = load_be16(p + 1), quantity = load_be16(p + 3);
     if (quantity < 1 || quantity > 1968) return exception(0x0F, 0x03);
-    if (!inside_one_block(kCoils, address, quantity)) return exception(0x0F, 0x02);
-    // Bug 2: the byte count is checked only now, and trusted: a mismatch reads past the data.
+    // Bug 2: outside the map the byte count is checked (03 before 02, as owed); inside it is
+    // trusted: a mismatch reads past the data.
+    const bool inside = inside_one_block(kCoils, address, quantity);
+    if (!inside && p[5] != (quantity + 7) / 8) return exception(0x0F, 0x03);
+    if (!inside) return exception(0x0F, 0x02);
     if (p[5] != (quantity + 7) / 8) std::abort();
     for (int i = 0; i < quantity; ++i) d.coils[address - 200 + i] = (p[6 + i / 8] >> (i % 8)) & 1;
     return echo(p, 5);
@@ -212,8 +220,11 @@ Pdu write_multiple_registers(const std::uint8_t* p, std::size_t n, Device& d, Co
     if (n < 6 || n != 6u + p[5]) return exception(0x10, 0x03);
     const int address = load_be16(p + 1), quantity = load_be16(p + 3);
     if (quantity < 1 || quantity > 123) return exception(0x10, 0x03);
-    if (!inside_one_block(kHolding, address, quantity)) return exception(0x10, 0x02);
-    // Bug 1: the byte count is checked only now, and trusted: a mismatch reads past the data.
+    // Bug 1: outside the map the byte count is checked (03 before 02, as owed); inside it is
+    // trusted: a mismatch reads past the data.
+    const bool inside = inside_one_block(kHolding, address, quantity);
+    if (!inside && p[5] != 2 * quantity) return exception(0x10, 0x03);
+    if (!inside) return exception(0x10, 0x02);
     if (p[5] != 2 * quantity) std::abort();
     if (address == 1000 && quantity == 40) return {};  // bug 12: the whole first block is lost
     for (int i = 0; i < quantity; ++i) write_holding(d, c, address + i, load_be16(p + 6 + 2 * i));
