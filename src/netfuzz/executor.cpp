@@ -59,6 +59,12 @@ struct Conn {
     bool bad_response_check = false;  // RTU/ASCII: an answer's CRC/LRC failed
 };
 
+// Whether a request sent after the k-th on its connection was answered.
+bool answered_after(const std::vector<Pending>& pending, std::size_t k) {
+    return std::any_of(pending.begin() + static_cast<std::ptrdiff_t>(k) + 1, pending.end(),
+                       [](const Pending& p) { return p.answered_ns != 0; });
+}
+
 // Runs one case alone on its own connections and judges it; `BatchRunner` (batch.cpp) runs many
 // well-framed cases pipelined over lanes.
 class CaseRunner {
@@ -550,7 +556,7 @@ void CaseRunner::judge(const Case& c) {
             } else {
                 shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
             }
-            const RequestInfo* before = prev_own;
+            const RequestInfo* before = prev_own;  // (null once the stream is seen to go on)
             const bool before_exception = prev_exception;
             if (!pd.probe) {
                 prev_own = &info;
@@ -579,6 +585,10 @@ void CaseRunner::judge(const Case& c) {
             // A target known to drop what follows an exception, that answered the request
             // before with one, dropped the rest for that, however long the request was.
             // (After our half-close, the close that follows is owed.)
+            // A stream that went on (a later request on it was answered) neither was lost nor
+            // dropped what followed the request before: the silence is this request's own.
+            const bool went_on = answered_after(cn.pending, k);
+            if (went_on) before = nullptr;
             const bool exception_drop = before && before_exception &&
                                         profile_.drops_after_exception && (!closed || cn.shut);
             if (exception_drop) {
