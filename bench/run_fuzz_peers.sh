@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Fuzzer precision and budget against servers nobody here wrote (pymodbus 3.0's asyncio server,
-# a libmodbus 3.1 server) and the multi-fault target (tests/tools/multi_fault_server.cpp, 11
-# planted bugs, restarted through --restart-cmd): per peer the wall time against --seconds,
+# a libmodbus 3.1 server, and the same with a sparse map from its unit tests), the second
+# multi-fault target (tests/tools/sparse_device_server.cpp, 12 planted bugs, under its own 20 ms
+# supervisor) and the first (tests/tools/multi_fault_server.cpp, 11 planted bugs, restarted
+# through --restart-cmd): per peer the wall time against --seconds,
 # cases/s, the findings (one line per root cause, for hand triage), restarts per root cause;
 # then, on the multi-fault target, the time to find each planted bug, structured vs --naive.
 # Usage: bench/run_fuzz_peers.sh BUILD_DIR [SECONDS]
@@ -32,6 +34,12 @@ print(f"{name}: --seconds {secs}, wall {wall} s (campaign {j['seconds']:.1f} s),
       f"{j['cases']} cases = {j['cases_per_second']:.0f} cases/s, {len(j['findings'])} findings, "
       f"{j['restarts']} restarts, {j['skipped_known']} skipped as known, "
       f"{j['suspects_left']} suspects left at the deadline")
+m = j.get("model")
+if m:
+    tables = ", ".join(f"{t} {t_['ranges']}" for t, t_ in m["tables"].items() if t_["ranges"])
+    print(f"  model ({j['learn_requests']} requests, {j['learn_seconds']:.2f} s): {tables}; "
+          f"pauses {m['exception_pause_ms']}; {j['rationed']} cases rationed")
+print(f"  cases by class: {j['cases_by_class']}")
 for f in j["findings"]:
     print(f"  #{f['id']:<3} {f['root_cause']:<70} hits {f['hits']:<6} restarts {f['restarts']} "
           f"at {f['found_after_s']:.1f} s")
@@ -42,6 +50,22 @@ PY
 fuzz pymodbus "127.0.0.1:$(wait_port "$work/py.port")"
 "$build/tests/libmodbus_test_server" --seconds $((secs + 60)) > "$work/lm.port" 2>/dev/null &
 fuzz libmodbus "127.0.0.1:$(wait_port "$work/lm.port")"
+
+# libmodbus with a map like its own unit tests' (none at 0): with the model, then without.
+for mode in model no-model; do
+  flag=(); [ "$mode" = no-model ] && flag=(--no-model)
+  "$build/tests/libmodbus_test_server" --seconds $((secs + 60)) --sparse 1 > "$work/lms-$mode.port" 2>/dev/null &
+  fuzz "libmodbus-sparse-$mode" "127.0.0.1:$(wait_port "$work/lms-$mode.port")" "${flag[@]}"
+done
+
+# The second multi-fault target under its own supervisor (restarts within 20 ms, no
+# --restart-cmd): structured, then naive.
+for mode in structured naive; do
+  flag=(); [ "$mode" = naive ] && flag=(--naive)
+  "$build/tests/sparse_device_server" --port 0 --respawn --restart-delay-ms 20 \
+    --exit-after-s $((secs + 60)) > "$work/sd-$mode.port" 2>/dev/null &
+  fuzz "sparse-device-$mode" "127.0.0.1:$(wait_port "$work/sd-$mode.port")" "${flag[@]}"
+done
 
 mf() { echo "$build/tests/multi_fault_server --port $mf_port --exit-after-s $((secs + 60))"; }
 for mode in structured naive; do

@@ -18,7 +18,6 @@
 #include <thread>
 #include <utility>
 
-#include "codec/error.hpp"
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
@@ -209,10 +208,9 @@ void for_each_request(const Case& c, const TargetProfile& profile, Visit&& visit
     }
 }
 
-// What a case's culprits would be, each with what is wrong with its request: "fc10/valid",
-// "fc10/invalid/byte_count_mismatch" (the codec's first complaint). A crash on one field of a
-// handler says nothing of its other fields or of its valid requests, so only requests with
-// the same signature are skipped once it is known.
+// What a case's culprits would be, each with whether its request is valid: "fc10/valid",
+// "fc10/invalid". A crash on a handler's invalid requests says nothing of its valid ones (and
+// the other way round), so only requests of the same kind are skipped once it is known.
 std::vector<std::string> signatures(const Case& c, const TargetProfile& profile) {
     std::vector<std::string> out;
     if (is_transport_class(c.cls)) out.push_back(culprit_text(c.cls, nullptr));
@@ -222,10 +220,7 @@ std::vector<std::string> signatures(const Case& c, const TargetProfile& profile)
     if (&framed == &c && is_transport_class(c.cls)) return out;
     for_each_request(framed, profile, [&](const RequestInfo& info) {
         std::string s = culprit_text(framed.cls, &info);
-        if (s.rfind("fc", 0) == 0) {
-            s += fmt::format("/{}", request_kind(info));
-            if (!info.status.ok()) s += fmt::format("/{}", codec::error_name(info.status.error));
-        }
+        if (s.rfind("fc", 0) == 0) s += fmt::format("/{}", request_kind(info));
         out.push_back(std::move(s));
         return true;
     });
@@ -293,6 +288,9 @@ class Campaign {
     void hit(Finding& f, const Verdict& v, const Case& c);
     bool would_retrigger(const Case& c) const;
     void learn_costly(const Finding& f);
+    // Whether a request of `c` belongs to a handler with a known crash: then it is a hit of
+    // that crash (charged its restart) and the handler is skipped from now on.
+    bool known_crash_of(const Case& c);
     // Skips from now on the requests of `c` whose culprit is `culprit`, by signature.
     void learn_costly_signatures(const std::string& culprit, const Case& c);
     // Runs one case alone and records what it shows.
@@ -358,6 +356,8 @@ class Campaign {
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
     std::uint64_t rationed_seen_ = 0, rationed_units_seen_ = 0;
+    // The case being isolated comes from a pipelined batch that killed the target.
+    bool batch_died_ = false;
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
 
@@ -461,6 +461,21 @@ bool Campaign::would_retrigger(const Case& c) const {
         if (costly_culprits_.count(k)) return true;
         // A culprit known without a signature (a transport class, a request not framed).
         if (costly_culprits_.count(k.substr(0, k.find('/')))) return true;
+    }
+    return false;
+}
+
+bool Campaign::known_crash_of(const Case& c) {
+    for (const std::string& k : signatures(c, result_.profile)) {
+        const std::string culprit = k.substr(0, k.find('/'));
+        const auto it = by_key_.find("crash:target-down/" + culprit);
+        if (it == by_key_.end()) continue;
+        Finding& f = result_.findings[it->second];
+        hit(f, f.verdict, c);
+        ++restarts_by_cause_[it->first];
+        // Crashed by another kind of request too: every request of that handler is skipped.
+        costly_culprits_.insert(culprit);
+        return true;
     }
     return false;
 }
@@ -672,6 +687,11 @@ Campaign::Outcome Campaign::isolate(Case c) {
             keep(std::move(f));
             return Outcome::Lost;
         }
+        // A case from a batch that died killed the target twice already: the batch and now.
+        if (batch_died_) {
+            record(c, std::move(ex));
+            return up_ ? Outcome::Fired : Outcome::Lost;
+        }
         if (!can_afford(1)) {
             ++result_.suspects_left;
             return Outcome::Clean;
@@ -751,7 +771,8 @@ void Campaign::record(const Case& c, Execution ex) {
                 cut = true;
                 return false;
             }
-            if (crash && restarts_by_cause_[key] >= kMaxRestartsPerCause) {
+            // One restart is kept for a batch this crash may still kill (known_crash_of).
+            if (crash && restarts_by_cause_[key] + 1 >= kMaxRestartsPerCause) {
                 restart_budget = true;
                 return false;
             }
@@ -1246,7 +1267,15 @@ CampaignResult Campaign::run() {
                     later.push_back(ci);
                     continue;
                 }
+                // A died batch holding a request of a handler known to crash: that crash
+                // explains it, without killing the target again to ask.
+                if (died && known_crash_of(piped[ci])) {
+                    found = true;
+                    continue;
+                }
+                batch_died_ = died;
                 const Outcome out = isolate(piped[ci]);
+                batch_died_ = false;
                 if (out == Outcome::Lost) {
                     lost = true;
                     break;
