@@ -1446,11 +1446,11 @@ bool wait_for_target_with(RestartCommand& command, Connector& target, const Targ
                           std::int64_t deadline_ns) {
     const std::int64_t wait_ns = std::int64_t{wait_ms} * net::kNsPerMs;
     std::int64_t deadline = net::now_ns() + wait_ns;
-    bool command_running = false;
+    bool command_running = false, was_running = false;
     if (!restart_cmd.empty()) {
         // One copy at a time: a command still running (a slow restart, or the target itself
         // run in the foreground) is waited for, not started again.
-        command_running = command.running();
+        command_running = was_running = command.running();
         if (!command_running) {
             std::string error;
             command_running = command.start(restart_cmd, error);
@@ -1460,11 +1460,21 @@ bool wait_for_target_with(RestartCommand& command, Connector& target, const Targ
         // time); one that does not return (the target in the foreground) gets a minute more.
         if (command_running) deadline += kRestartCommandGraceNs;
     }
+    // A command still running from an earlier restart is the target in the foreground: if it
+    // returns now, the target it ran is the one that died (sentinels see a death before the
+    // process has quite ended), and it is started again, once.
+    bool foreground = was_running;
     int backoff_ms = 20;
     for (;;) {
         if (command_running && command.returned()) {
             command_running = false;
             deadline = net::now_ns() + wait_ns;
+            std::string error;
+            if (foreground && command.start(restart_cmd, error)) {
+                command_running = true;
+                deadline += kRestartCommandGraceNs;
+            }
+            foreground = false;
         }
         if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok)
             return true;

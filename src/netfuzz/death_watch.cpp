@@ -17,7 +17,9 @@ bool DeathWatch::arm() {
         if (link) links_.push_back(std::move(link));
     }
     armed_at_ = net::now_ns();
-    if (profile_ && !links_.empty()) probe_target(target_, *profile_, timeout_ms_);
+    // Answered after them, so they were accepted (a loaded target may take a few tries).
+    for (int i = 0; profile_ && !links_.empty() && i < 3; ++i)
+        if (probe_target(target_, *profile_, timeout_ms_) == ProbeResult::Ok) break;
     return !links_.empty();
 }
 
@@ -50,8 +52,8 @@ bool DeathWatch::died(int wait_ms) {
 }
 
 void DeathWatch::refresh(std::int64_t max_age_ms) {
-    if (links_.empty()) return;
-    if (net::now_ns() - armed_at_ < max_age_ms * net::kNsPerMs) return;
+    // Disarmed (the target could not be reached when last armed): try again.
+    if (!links_.empty() && net::now_ns() - armed_at_ < max_age_ms * net::kNsPerMs) return;
     arm();
 }
 
