@@ -502,6 +502,13 @@ void Campaign::learn_costly(const Finding& f) {
     // Hangs without a culprit (stalls of other connections) are charged to their class.
     if (culprit.empty() && o == Oracle::Hang)
         gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
+    // A server that stalls every client while a frame is unfinished stalls them whatever the
+    // frame: each case delivering one in pieces costs a timeout to show it again.
+    if (f.verdict.rule == "stalls-other-connections(partial-frame)")
+        for (unsigned fc = 0; fc < 256; ++fc)
+            for (const MutationClass cls : {MutationClass::Split, MutationClass::BurstSplit,
+                                            MutationClass::PartialHold, MutationClass::Drip})
+                gen_->deprioritise(static_cast<std::uint8_t>(fc), cls);
     if (f.verdict.rule == "drops-requests-after-exception") set_drops_after_exception();
 }
 

@@ -516,8 +516,12 @@ void Generator::mutate_recorded(Case& out) {
 }
 
 void Generator::isolated(Case& out) {
-    // With a model, stateful cases write where the device keeps data: twice as many of them.
-    const std::uint32_t stateful_share = has_model() ? 54 : 27;
+    // With a model, stateful cases write where the device keeps data: twice as many of them,
+    // and on a target that pauses after exceptions (whose transport cases mostly wait out its
+    // pauses) four times as many.
+    const std::uint32_t stateful_share = !has_model()                                ? 27
+                                         : options_.model->pauses_after_exceptions() ? 108
+                                                                                     : 54;
     const std::uint32_t pick = rng_.below(100 + stateful_share - 27);
     if (pick < stateful_share) {
         stateful(out, pick >= stateful_share * 15 / 27);
