@@ -651,7 +651,12 @@ void CaseRunner::judge(const Case& c) {
                                 stall_threshold_ms()),
                     fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
     }
-    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20)) {
+    // The target closed one of the case's connections (not after our half-close): if it died,
+    // the sentinels' closes are due too, even if the kernel has not delivered them yet.
+    const bool closed_on_us = std::any_of(conns_.begin(), conns_.end(), [](const Conn& cn) {
+        return cn.opened && cn.closed && !cn.shut;
+    });
+    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20, closed_on_us)) {
         // The process died, whatever brought it back: every connection it held is gone.
         event(kFreshConn, TraceKind::FreshProbe, {}, "every idle sentinel connection dropped");
         out_.target_down = true;
