@@ -34,7 +34,7 @@ int DeathWatch::gone(Link& link) {
     }
 }
 
-bool DeathWatch::died(int wait_ms, bool patient) {
+bool DeathWatch::died(int wait_ms) {
     if (links_.empty()) return false;
     const std::int64_t until = net::now_ns() + std::int64_t{wait_ms} * net::kNsPerMs;
     for (;;) {
@@ -45,10 +45,8 @@ bool DeathWatch::died(int wait_ms, bool patient) {
             links_.clear();
             return true;
         }
-        // None gone: alive, unless the caller saw a close (on a loaded machine the kernel may
-        // deliver the other connections' FINs a little later). Some gone: a dying process may
-        // still be closing the others.
-        if ((closed == 0 && !patient) || net::now_ns() >= until) return false;
+        // None gone: alive. Some gone: a dying process may still be closing the others.
+        if (closed == 0 || net::now_ns() >= until) return false;
         ::poll(nullptr, 0, 5);
     }
 }

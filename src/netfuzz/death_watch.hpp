@@ -31,9 +31,7 @@ class DeathWatch {
     // True when every sentinel was closed or reset by the target, waiting up to `wait_ms` for
     // the last of them once one has gone (a dying process closes them one after another). The
     // sentinels are disarmed then: arm() again once the target is back.
-    // `patient`: the caller saw one of its own connections closed, so wait the whole time
-    // even while none of the sentinels has gone yet.
-    bool died(int wait_ms = 100, bool patient = false);
+    bool died(int wait_ms = 100);
     // Replaces sentinels older than `max_age_ms` (a device may close idle connections). Call
     // it only right after died() said no.
     void refresh(std::int64_t max_age_ms = 2000);

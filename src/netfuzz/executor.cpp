@@ -651,24 +651,23 @@ void CaseRunner::judge(const Case& c) {
                                 stall_threshold_ms()),
                     fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
     }
-    // The target closed one of the case's connections (not after our half-close): if it died,
-    // the sentinels' closes are due too, even if the kernel has not delivered them yet.
-    const bool closed_on_us = std::any_of(conns_.begin(), conns_.end(), [](const Conn& cn) {
-        return cn.opened && cn.closed && !cn.shut;
-    });
-    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20, closed_on_us)) {
+    // The fresh probe goes first: on a loaded machine the kernel may deliver the sentinels'
+    // closes a little after the case's own; loopback packets are taken in order, so by the
+    // time the probe is answered they have arrived.
+    ProbeResult r = ProbeResult::Ok;
+    if (need_fresh_probe) {
+        r = probe_target(target_, profile_, options_.timeout_ms);
+        event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
+    }
+    const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
+    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20)) {
         // The process died, whatever brought it back: every connection it held is gone.
         event(kFreshConn, TraceKind::FreshProbe, {}, "every idle sentinel connection dropped");
         out_.target_down = true;
         candidate = fresh_probe_verdict(ProbeResult::Closed);
         candidate.summary =
             "the target's process died: every idle connection it held was closed at once";
-        const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
-        candidate.rule += "/" + culprit_text(c, at);
-        candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
     } else if (need_fresh_probe) {
-        ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
-        event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
         if (r == ProbeResult::Closed || r == ProbeResult::ConnectFailed) {
             // A process that is dying may still complete a connect from its backlog, and a
             // busy one may let a connect wait out a full backlog: look again a moment later
@@ -680,10 +679,11 @@ void CaseRunner::judge(const Case& c) {
         if (r != ProbeResult::Ok) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
             candidate = fresh_probe_verdict(r);
-            const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
-            candidate.rule += "/" + culprit_text(c, at);
-            candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
         }
+    }
+    if (out_.target_down || (need_fresh_probe && r != ProbeResult::Ok)) {
+        candidate.rule += "/" + culprit_text(c, at);
+        candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
     }
     if (candidate)
         candidate.summary =

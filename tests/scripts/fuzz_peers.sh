@@ -51,6 +51,7 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/
       spec-deviation:exception-02-where-03-owed spec-deviation:exception-04-where-01-owed \
       spec-deviation:exception-03-where-01-owed spec-deviation:exception-04-where-03-owed \
       spec-deviation:exception-04-where-02-owed \
+      spec-deviation:unknown-sub-function-not-refused-with-01 \
       unexpected-close:close-with-request-pending unexpected-close:closes-after-exception \
       malformed-response:undecodable-response malformed-response:unmatched-transaction-id \
       hang:stream-lost-after-pdu-length-mismatch \
