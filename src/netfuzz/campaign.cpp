@@ -320,6 +320,9 @@ class Campaign {
     void use_probe_inside_the_map();
     // Opens the sentinels, if the target serves a fresh connection while they are open.
     void arm_watch();
+    // Runs cases alone before the generator's, counted as first looks; true when the target
+    // was lost.
+    bool look_first(std::vector<Case> cases, std::uint64_t& generated);
     // Whether a case is owed an exception the target pauses after (rationed: 1 in 8 sent).
     bool rationed(const Case& c);
 
@@ -1052,6 +1055,18 @@ bool Campaign::rationed(const Case& c) {
     return pauses && ++rationed_seen_ % 8 != 0;
 }
 
+bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {
+    for (Case& c : cases) {
+        if (out_of_budget() || !can_afford(1)) break;
+        c.number = ++generated;
+        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        ++result_.cases;
+        ++result_.first_looks;
+        if (isolate(std::move(c)) == Outcome::Lost) return true;
+    }
+    return false;
+}
+
 CampaignResult Campaign::run() {
     start_ = net::now_ns();
     last_progress_ = start_;
@@ -1081,28 +1096,11 @@ CampaignResult Campaign::run() {
     arm_watch();
     std::uint64_t generated = 0;
     std::vector<Case> requeue, piped, alone;
-    bool lost_at_first_look = false;
-    for (Case& c : first_looks(result_.profile)) {
-        if (enough_findings() || !can_afford(1)) break;
-        c.number = ++generated;
-        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
-        ++result_.cases;
-        ++result_.first_looks;
-        if (isolate(std::move(c)) == Outcome::Lost) {
-            lost_at_first_look = true;
-            break;
-        }
-    }
-    // The other transport spoken to the port (plaintext to TLS, TLS to plain): once each,
-    // alone, before the generator's cases (counted with the first looks).
-    for (Case& c : cross_transport_cases(*options_.connector, result_.profile)) {
-        if (lost_at_first_look || out_of_budget() || !can_afford(1)) break;
-        c.number = ++generated;
-        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
-        ++result_.cases;
-        ++result_.first_looks;
-        lost_at_first_look = isolate(std::move(c)) == Outcome::Lost;
-    }
+    // What discovery hinted at, then the other transport spoken to the port (plaintext to
+    // TLS, TLS to plain), each once, alone, before the generator's cases.
+    bool lost_at_first_look =
+        look_first(first_looks(result_.profile), generated) ||
+        look_first(cross_transport_cases(*options_.connector, result_.profile), generated);
     // What discovery hinted at has been looked at: now learn the map (a slow target must not
     // hide those hints behind its learning).
     if (!lost_at_first_look && !out_of_budget()) {
@@ -1112,24 +1110,18 @@ CampaignResult Campaign::run() {
         if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
         gen_->use_model(&result_.model, exec_.state);
         // What killed the stream while learning, alone, first (at most 8).
-        learned_killers_.resize(std::min<std::size_t>(learned_killers_.size(), 8));
+        std::vector<Case> killers;
         for (const Pdu& pdu : learned_killers_) {
-            if (out_of_budget() || !can_afford(1)) break;
+            if (killers.size() == 8) break;
             Case c;
             c.cls = MutationClass::MapEdge;
             c.function = pdu[0];
-            c.number = ++generated;
             c.steps.push_back(
                 Step{Op::Send, 0, 0, 0,
                      frame_of(pdu, 0x0E00, result_.profile.unit, result_.profile.framing)});
-            ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
-            ++result_.cases;
-            ++result_.first_looks;
-            if (isolate(std::move(c)) == Outcome::Lost) {
-                lost_at_first_look = true;
-                break;
-            }
+            killers.push_back(std::move(c));
         }
+        lost_at_first_look = look_first(std::move(killers), generated);
     }
     std::set<std::uint64_t> requeued_once;
     std::size_t rounds = 0;
