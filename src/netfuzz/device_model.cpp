@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "codec/address.hpp"
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
@@ -43,18 +44,6 @@ Pdu pdu5(std::uint8_t fc, std::uint16_t a, std::uint16_t b) {
     codec::store_be16(p.data() + 1, a);
     codec::store_be16(p.data() + 3, b);
     return p;
-}
-
-bool parse_address(const std::string& s, std::uint16_t& out) {
-    try {
-        std::size_t used = 0;
-        const unsigned long v = std::stoul(s, &used, 0);
-        if (used != s.size() || v > 0xFFFF) return false;
-        out = static_cast<std::uint16_t>(v);
-        return true;
-    } catch (const std::exception&) {
-        return false;
-    }
 }
 
 bool table_from_name(const std::string& name, Table& out) {
@@ -157,20 +146,16 @@ bool parse_map(const std::string& text, DeviceModel& out, std::string& error) {
                 entry);
             return false;
         }
-        const std::string span = entry.substr(eq + 1);
-        const auto dash = span.find('-');
-        AddressRange r;
-        const bool ok = dash == std::string::npos
-                            ? parse_address(span, r.first)
-                            : parse_address(span.substr(0, dash), r.first) &&
-                                  parse_address(span.substr(dash + 1), r.last);
-        if (dash == std::string::npos) r.last = r.first;
-        if (!ok || r.last < r.first) {
-            error = fmt::format(
-                "--map entry '{}': expected FIRST-LAST protocol addresses 0..65535, FIRST <= LAST",
-                entry);
+        // The project's address rule: protocol addresses, or reference numbers of the table
+        // (holding=40001-40100) as a vendor's manual lists them.
+        codec::AddressRange parsed;
+        if (std::string why = codec::parse_address_range(entry.substr(eq + 1), t, parsed);
+            !why.empty() || parsed.last < parsed.first) {
+            error = fmt::format("--map entry '{}': {}", entry,
+                                why.empty() ? "FIRST must not be above LAST" : why);
             return false;
         }
+        const AddressRange r{parsed.first, parsed.last};
         out.table(t).ranges.push_back(r);
     }
     for (TableModel& t : out.tables) normalise(t.ranges);

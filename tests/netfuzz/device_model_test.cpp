@@ -36,6 +36,10 @@ TEST(DeviceModelMap, ParsesTablesRangesAndSingleAddresses) {
     EXPECT_EQ(m.table(Table::Coils).ranges, ranges({{200, 263}}));
     EXPECT_EQ(m.table(Table::InputRegisters).ranges, ranges({{3000, 3000}}));
     EXPECT_TRUE(m.table(Table::DiscreteInputs).ranges.empty());
+    // Reference numbers, as a vendor's manual lists them (the project's address rule).
+    DeviceModel refs;
+    ASSERT_TRUE(parse_map("holding=40001-40010", refs, error)) << error;
+    EXPECT_EQ(refs.table(Table::HoldingRegisters).ranges, ranges({{0, 9}}));
     EXPECT_EQ(m.table(Table::HoldingRegisters).entries(), 80u);
     EXPECT_TRUE(m.table(Table::HoldingRegisters).contains(1039));
     EXPECT_FALSE(m.table(Table::HoldingRegisters).contains(1040));
