@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <memory>
 #include <string>
@@ -47,7 +48,10 @@ std::string scrape(const std::string& address) {
         if (::send(fd, request.data(), request.size(), MSG_NOSIGNAL) ==
             static_cast<ssize_t>(request.size())) {
             char buf[4096];
-            for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0;) response.append(buf, n);
+            // EINTR is no end: io_uring's task work for rings this thread submitted to (the
+            // slave's, the engine's) interrupts a recv that has a timeout.
+            for (ssize_t n; (n = ::recv(fd, buf, sizeof buf, 0)) > 0 || (n < 0 && errno == EINTR);)
+                if (n > 0) response.append(buf, n);
         }
     }
     ::close(fd);
