@@ -344,6 +344,7 @@ void BatchRunner::conclude(Lane& l, Round& round) {
         const Lane::Frame& f = l.frames[first];
         br.unanswered_case = f.case_index;
         br.unanswered_culprit = culprit_text(cases[f.case_index].cls, &f.info);
+        br.unanswered_invalid = request_kind(f.info) != "valid";
         br.length_mismatch = br.length_mismatch || (br.closed && pdu_length_mismatch(f.info));
         round.suspect[f.case_index] = true;
         for (std::size_t k = first + 1; k < l.frames.size(); ++k) {

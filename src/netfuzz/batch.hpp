@@ -30,7 +30,8 @@ struct BatchOptions {
 // none, and the request answered just before it. One of the two is at fault.
 struct LaneBreak {
     std::size_t unanswered_case = 0;
-    std::string unanswered_culprit;  // culprit_text of that request
+    std::string unanswered_culprit;   // culprit_text of that request
+    bool unanswered_invalid = false;  // the codec owes that request an exception
     bool has_previous = false;
     std::size_t previous_case = 0;
     std::string previous_culprit;

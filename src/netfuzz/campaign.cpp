@@ -29,6 +29,7 @@
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
+#include "netfuzz/field_repair.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
@@ -308,6 +309,7 @@ class Campaign {
     Finding found(const Case& c, Execution ex) const;
     bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
+    void repair_fields(Finding& f);
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
     void check_capacity_once();
@@ -762,7 +764,7 @@ bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
 
 void Campaign::record(const Case& c, Execution ex) {
     const std::string key = root_cause_key(ex.verdict);
-    const std::string stem = rule_stem(ex.verdict.rule);
+    const Verdict first = ex.verdict;
     const Oracle oracle = ex.verdict.oracle;
     const bool crash = oracle == Oracle::Crash;
     const bool costly = crash || oracle == Oracle::Hang;
@@ -790,7 +792,7 @@ void Campaign::record(const Case& c, Execution ex) {
             Execution e = run_alone(candidate);
             // The same fault, not merely the same oracle: else it drifted to another bug.
             // (the detail naming the request may change as the case shrinks: see same_fault)
-            const bool same = e.verdict.oracle == oracle && rule_stem(e.verdict.rule) == stem;
+            const bool same = same_fault(first, e.verdict);
             if (e.down_before || e.target_down) {
                 ++result_.deaths;
                 if (!recover(same && e.target_down ? key : "")) lost = true;
@@ -821,6 +823,7 @@ void Campaign::record(const Case& c, Execution ex) {
                 "minimisation stopped: a crash may cost at most {} restarts", kMaxRestartsPerCause);
         }
     }
+    repair_fields(f);
     // The identity is what the minimised reproducer violates: it may turn out to be a root
     // cause already known under another guise (a codec detail that fell away).
     if (Finding* existing = known(f.verdict)) {
@@ -830,6 +833,41 @@ void Campaign::record(const Case& c, Execution ex) {
     }
     by_key_[key] = result_.findings.size();  // the unminimised guise leads here too
     keep(std::move(f));
+}
+
+// Field-level minimisation (field_repair.hpp): "02 where 03 is owed" from a request also
+// outside the map may be a target that never makes the 03 check; with the address inside
+// the map it shows which. Whatever deviation the repaired request still draws is the finding.
+void Campaign::repair_fields(Finding& f) {
+    if (f.verdict.oracle != Oracle::SpecDeviation ||
+        f.verdict.rule.rfind("exception-02-where-", 0) != 0 || result_.model.empty() ||
+        result_.profile.framing != codec::Framing::Mbap || !can_afford(1))
+        return;
+    Case repaired = f.fuzz_case;
+    bool changed = false;
+    for (Step& s : repaired.steps) {
+        if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader ||
+            codec::announced_adu_size(s.bytes.data()) != s.bytes.size() ||
+            s.bytes[lim::kMbapHeader] != f.verdict.culprit_fc)
+            continue;
+        const auto pdu =
+            with_addresses_in_map(codec::Bytes(s.bytes).subspan(lim::kMbapHeader), result_.model);
+        if (!pdu) continue;
+        std::copy(pdu->begin(), pdu->end(), s.bytes.begin() + lim::kMbapHeader);
+        changed = true;
+    }
+    if (!changed) return;
+    ++result_.isolated_runs;
+    Execution e = run_alone(repaired);
+    if ((e.down_before || e.target_down) && !recover("")) return;
+    if (e.verdict.oracle != Oracle::SpecDeviation) return;
+    f.minimize_note +=
+        fmt::format("{}field-level: with its address inside the map, {} became {}",
+                    f.minimize_note.empty() ? "" : "; ", f.verdict.rule, e.verdict.rule);
+    f.fuzz_case = std::move(repaired);
+    f.verdict = std::move(e.verdict);
+    f.trace = std::move(e.trace);
+    f.minimized = true;
 }
 
 void Campaign::keep(Finding f) {
@@ -1187,6 +1225,8 @@ CampaignResult Campaign::run() {
                                        b.closed
                                    ? fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule)
                                    : fmt::format("stream:{}", kStreamLostRule));
+            if (b.closed && b.unanswered_invalid)  // the executor's order (executor.cpp)
+                keys.push_back(fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule));
             if (b.has_previous && b.previous_exception)
                 keys.push_back(close + (b.closed ? "closes-after-exception"
                                                  : "drops-requests-after-exception"));

@@ -516,8 +516,15 @@ void CaseRunner::judge(const Case& c) {
                         sent_frames_of[pd.offset + lim::kMbapHeader] == rfc)
                         fc = rfc;
             }
+            // Nothing complete was sent on it: the target took a started frame for a whole one
+            // (pymodbus's framer answers three bytes of a header with transaction id 0000).
+            bool own_request = false;
+            for (const Pending& pd : cn.pending) own_request = own_request || !pd.probe;
+            const bool partial_only = !own_request && cn.sent.size() > cn.parsed;
             consider(Verdict{Oracle::MalformedResponse,
-                             length_mismatch_sent ? kStreamLostRule : "unmatched-transaction-id",
+                             length_mismatch_sent ? kStreamLostRule
+                             : partial_only       ? kAnswersPartialFrameRule
+                                                  : "unmatched-transaction-id",
                              fc,
                              fmt::format("response with transaction id {:04X} matches no request",
                                          codec::load_be16(received_frames_of.data() + off)),
@@ -601,13 +608,15 @@ void CaseRunner::judge(const Case& c) {
                 blamed = before;
             } else if (!pd.probe && closed && pdu_length_mismatch(info)) {
                 rule = kStreamLostRule;
+            } else if (closed && !pd.probe && request_kind(info) != "valid") {
+                // Closing on a request it cannot use is one policy of the server's framing,
+                // whatever the function code; and it is the likelier cause than the exception
+                // answered before it (pymodbus closes on a short FC 10 however the requests
+                // before it were answered: two findings for one defect, until this came first).
+                rule = kClosesOnInvalidRequestRule;
             } else if (before && before_exception) {
                 rule = closed ? "closes-after-exception" : "drops-requests-after-exception";
                 blamed = before;
-            } else if (closed && !pd.probe && request_kind(info) != "valid") {
-                // Closing on a request it cannot use is one policy of the server's framing,
-                // whatever the function code.
-                rule = kClosesOnInvalidRequestRule;
             } else if (!pd.probe || !before) {
                 rule = fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
                                    culprit_text(c, pd.probe ? nullptr : &info));

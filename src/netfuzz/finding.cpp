@@ -66,10 +66,17 @@ namespace {
 bool any_oracle(const std::string& stem) {
     return stem == kStreamLostRule;
 }
+// A frame in pieces acted on before it was whole (kAnswersPartialFrameRule): a stray answer,
+// a close or silence on the split request.
+bool partial_frame_family(const std::string& rule) {
+    return rule == kAnswersPartialFrameRule || rule == "close-with-request-pending/partial-frame" ||
+           rule == "no-answer/partial-frame";
+}
 }  // namespace
 
 std::string root_cause_key(const Verdict& v) {
     if (any_oracle(rule_stem(v.rule))) return fmt::format("stream:{}", v.rule);
+    if (partial_frame_family(v.rule)) return fmt::format("stream:{}", kPartialFrameFamily);
     return fmt::format("{}:{}", oracle_name(v.oracle), v.rule);
 }
 
@@ -79,6 +86,7 @@ std::string rule_stem(const std::string& rule) {
 }
 
 bool same_fault(const Verdict& a, const Verdict& b) {
+    if (partial_frame_family(a.rule) && partial_frame_family(b.rule)) return true;
     const std::string stem = rule_stem(a.rule);
     return stem == rule_stem(b.rule) && (a.oracle == b.oracle || any_oracle(stem));
 }

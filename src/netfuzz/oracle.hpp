@@ -123,6 +123,11 @@ bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexc
 // close, silence, an answer with a transaction id nobody sent), it is that one root cause.
 bool pdu_length_mismatch(const RequestInfo& info) noexcept;
 inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mismatch";
+// A frame delivered in pieces that the target acted on before it was whole: an answer to a
+// started frame alone, or a close or silence with the split request unanswered. However it
+// shows, it is the target's reassembly: one root cause (finding.cpp keys the family as one).
+inline constexpr const char* kAnswersPartialFrameRule = "answers-partial-frame";
+inline constexpr const char* kPartialFrameFamily = "mishandles-partial-frame";
 // A server that closes the connection on a request it cannot use (whatever its function code):
 // one policy of its framing.
 inline constexpr const char* kClosesOnInvalidRequestRule =

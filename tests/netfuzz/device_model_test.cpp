@@ -12,6 +12,7 @@
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/field_repair.hpp"
 #include "netfuzz/generator.hpp"
 
 namespace {
@@ -243,6 +244,36 @@ TEST(ShadowMaskWrite, AValueOnlyAnotherConnectionReadsWrongIsItsOwnFault) {
     const Verdict v = Shadow::check(events, StateRange{0, 0x10000});
     EXPECT_EQ(v.rule, "read-after-write-mismatch-other-connection(holding-registers)/fc06")
         << v.summary;
+}
+
+}  // namespace
+
+namespace {
+
+// Field-level minimisation: only the address fields move, into the first range of the
+// function's table; requests already inside the map, or without an address, are left alone.
+TEST(FieldRepair, MovesEveryAddressOutsideTheMapToItsTableAndNothingElse) {
+    DeviceModel model;
+    model.table(Table::Coils).ranges = ranges({{200, 263}});
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1039}, {1060, 1099}});
+    // FC 05 at 0x2000 with value 0x1234 (invalid): the value stays wrong, the address moves.
+    const std::vector<std::uint8_t> coil = {0x05, 0x20, 0x00, 0x12, 0x34};
+    const auto moved = with_addresses_in_map(coil, model);
+    ASSERT_TRUE(moved);
+    EXPECT_EQ(*moved, (std::vector<std::uint8_t>{0x05, 0x00, 0xC8, 0x12, 0x34}));
+    // FC 17: both ranges' starts, each only if it is outside.
+    const std::vector<std::uint8_t> rw = {0x17, 0x03, 0xE8, 0x00, 0x01, 0x50,
+                                          0x00, 0x00, 0x01, 0x02, 0xAB, 0xCD};
+    const auto rw_moved = with_addresses_in_map(rw, model);
+    ASSERT_TRUE(rw_moved);
+    EXPECT_EQ(mbstorm::codec::load_be16(rw_moved->data() + 1), 1000);
+    EXPECT_EQ(mbstorm::codec::load_be16(rw_moved->data() + 5), 1000);
+    EXPECT_TRUE(std::equal(rw.begin() + 7, rw.end(), rw_moved->begin() + 7));
+    // Inside already, no address, a table the model knows nothing of, too short: nothing.
+    EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x06, 0x03, 0xE8, 0, 1}, model));
+    EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x08, 0x00, 0x00}, model));
+    EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x04, 0x20, 0x00, 0, 1}, model));
+    EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x05, 0x20}, model));
 }
 
 }  // namespace

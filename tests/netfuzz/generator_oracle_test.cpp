@@ -203,6 +203,71 @@ TEST(Oracle, NormalAnswerChecks) {
     EXPECT_EQ(judge_response(rq, adu(7, {0x83, 0x03}), profile()).oracle, Oracle::SpecDeviation);
 }
 
+// v1.1b3's request flows check quantities and byte counts, never the PDU's length beyond them
+// (FC 07, 0B, 0C, 11 have no 03 branch at all): bytes past what the function code needs may be
+// ignored. pymodbus answering FC 0C with one trailing byte was a false positive (issue #26).
+TEST(Oracle, TrailingBytesMayBeIgnoredButTheRestOfTheRequestIsStillJudged) {
+    RequestInfo rq;
+    const auto comm_event_log = adu(4, {0x0C, 0x55});
+    describe_request(comm_event_log, profile(), rq);
+    ASSERT_EQ(rq.status.error, codec::CodecError::TrailingBytes);
+    EXPECT_FALSE(judge_response(rq, adu(4, {0x0C, 0x06, 0, 0, 0, 0, 0, 0}), profile()));
+    EXPECT_FALSE(judge_response(rq, adu(4, {0x8C, 0x03}), profile()));  // the codec's own reading
+    // FC 10 with one byte past its values, quantity out of range: 03 is owed all the same.
+    const auto too_many = adu(5, {0x10, 0x00, 0x00, 0x00, 0x00, 0x00, 0x77});
+    describe_request(too_many, profile(), rq);
+    EXPECT_EQ(judge_response(rq, adu(5, {0x10, 0x00, 0x00, 0x00, 0x00}), profile()).rule,
+              "invalid-request-answered-normally(owes-03)/fc10");
+    // A read with a trailing byte answered with the wrong data size is still malformed.
+    const auto read = adu(6, {0x03, 0x00, 0x10, 0x00, 0x02, 0x00});
+    describe_request(read, profile(), rq);
+    EXPECT_EQ(judge_response(rq, adu(6, {0x03, 0x02, 1, 2}), profile()).oracle,
+              Oracle::MalformedResponse);
+    EXPECT_FALSE(judge_response(rq, adu(6, {0x03, 0x04, 1, 2, 3, 4}), profile()));
+}
+
+// One finding per missing check: the check that owes the exception, in the handler of the
+// function code. pymodbus ignoring FC 0F's quantity answered both a quantity out of range and a
+// byte count that disagrees (one check in v1.1b3's flow): one rule. FC 14 is another handler.
+TEST(Oracle, AnInvalidRequestAnsweredNormallyIsNamedAfterTheOwedCheckAndTheFunction) {
+    RequestInfo quantity, byte_count, file;
+    describe_request(adu(1, {0x0F, 0x00, 0x00, 0x40, 0x01, 0x01, 0xFF}), profile(), quantity);
+    describe_request(adu(2, {0x0F, 0x00, 0x00, 0x00, 0x08, 0x02, 0xFF, 0x00}), profile(),
+                     byte_count);
+    describe_request(adu(3, {0x14, 0x03, 0x06, 0x00, 0x01}), profile(), file);
+    ASSERT_EQ(quantity.status.error, codec::CodecError::QuantityOutOfRange);
+    ASSERT_EQ(byte_count.status.error, codec::CodecError::ByteCountMismatch);
+    const Verdict a = judge_response(quantity, adu(1, {0x0F, 0x00, 0x00, 0x40, 0x01}), profile());
+    const Verdict b = judge_response(byte_count, adu(2, {0x0F, 0x00, 0x00, 0x00, 0x08}), profile());
+    const Verdict c = judge_response(file, adu(3, {0x14, 0x00}), profile());
+    EXPECT_EQ(a.rule, "invalid-request-answered-normally(owes-03)/fc0F");
+    EXPECT_EQ(root_cause_key(a), root_cause_key(b));
+    EXPECT_EQ(c.rule, "invalid-request-answered-normally(owes-03)/fc14");
+}
+
+// A frame acted on before it was whole shows as an answer to a started frame, or a close or
+// silence on a split request: one root cause (pymodbus's framer: two findings before).
+Verdict verdict(Oracle oracle, std::string rule) {
+    Verdict v;
+    v.oracle = oracle;
+    v.rule = std::move(rule);
+    return v;
+}
+
+TEST(RootCause, AFrameActedOnBeforeItWasWholeIsOneRootCauseHoweverItShows) {
+    const Verdict answered = verdict(Oracle::MalformedResponse, kAnswersPartialFrameRule);
+    const Verdict closed =
+        verdict(Oracle::UnexpectedClose, "close-with-request-pending/partial-frame");
+    const Verdict silent = verdict(Oracle::Hang, "no-answer/partial-frame");
+    EXPECT_EQ(root_cause_key(answered), root_cause_key(closed));
+    EXPECT_EQ(root_cause_key(answered), root_cause_key(silent));
+    EXPECT_TRUE(same_fault(answered, closed));
+    // A whole-server stall on a partial frame is another defect.
+    const Verdict stall = verdict(Oracle::Hang, "stalls-other-connections(partial-frame)");
+    EXPECT_NE(root_cause_key(stall), root_cause_key(closed));
+    EXPECT_FALSE(same_fault(stall, closed));
+}
+
 TEST(Oracle, AnswerToNonZeroProtocolIdIsADeviation) {
     const auto req = adu(3, {0x03, 0, 0, 0, 1}, 1, 0x0001);
     RequestInfo rq;

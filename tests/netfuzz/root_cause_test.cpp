@@ -57,14 +57,25 @@ TEST(RootCause, TheSameWrongExceptionUnderOtherCodecReasonsIsOneRootCause) {
     EXPECT_EQ(root_cause_key(q), root_cause_key(bc));
 }
 
-TEST(RootCause, TwoDifferentViolationsUnderOneFunctionAreTwoRootCauses) {
-    // FC 0F: a byte count that disagrees answered normally; a quantity of 0 answered normally.
+// One root cause per check a handler skips (v1.1b3's flow charts): FC 0F's quantity and byte
+// count are one check (03), its address range another (02). pymodbus, which ignores FC 0F's
+// quantity, once had a finding for each field of the one check.
+TEST(RootCause, TwoChecksUnderOneFunctionAreTwoRootCausesOneCheckIsOne) {
+    // A byte count that disagrees, a quantity of 0, both answered normally: the 03 check.
     const Verdict bc = judge({0x0F, 0, 0, 0, 8, 2, 0xFF, 0}, {0x0F, 0, 0, 0, 8});
     const Verdict q = judge({0x0F, 0, 0, 0, 0, 0}, {0x0F, 0, 0, 0, 0});
+    // Eight coils from 0xFFFC run past 0xFFFF: the 02 check.
+    const Verdict range = judge({0x0F, 0xFF, 0xFC, 0, 8, 1, 0xFF}, {0x0F, 0xFF, 0xFC, 0, 8});
     ASSERT_TRUE(bc);
     ASSERT_TRUE(q);
-    EXPECT_NE(root_cause_key(bc), root_cause_key(q));
-    EXPECT_EQ(rule_stem(bc.rule), rule_stem(q.rule));  // minimisation may move between them
+    ASSERT_TRUE(range);
+    EXPECT_EQ(root_cause_key(bc), root_cause_key(q));
+    EXPECT_NE(root_cause_key(bc), root_cause_key(range));
+    // Another function's handler is another root cause.
+    const Verdict fc10 = judge({0x10, 0, 0, 0, 0, 0}, {0x10, 0, 0, 0, 0});
+    ASSERT_TRUE(fc10);
+    EXPECT_NE(root_cause_key(bc), root_cause_key(fc10));
+    EXPECT_EQ(rule_stem(bc.rule), rule_stem(range.rule));  // minimisation may move between them
 }
 
 TEST(RootCause, CulpritsNameTheHandlerNotTheRequest) {
