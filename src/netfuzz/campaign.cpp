@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <thread>
 #include <utility>
@@ -296,6 +297,13 @@ class Campaign {
     void learn_costly_signatures(const std::string& culprit, const Case& c);
     // Runs one case alone and records what it shows.
     Outcome isolate(Case c);
+    // isolate()'s first run, again after a restart if the target was found down; false when
+    // it stays down.
+    bool first_isolated_run(const Case& c, Execution& ex);
+    std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
+                                                const std::string& key);
+    Outcome record_plain(const Case& plain, Execution whole);
+    std::optional<Outcome> confirm_death(const Case& c, Execution& ex, const std::string& key);
     // The target is down (or was found down): restart it. `cause` (a root-cause key, or "")
     // is charged with the restart.
     bool recover(const std::string& cause);
@@ -327,6 +335,42 @@ class Campaign {
     bool look_first(std::vector<Case> cases, std::uint64_t& generated);
     // Whether a case is owed an exception the target pauses after (rationed: 1 in 8 sent).
     bool rationed(const Case& c);
+
+    // The stages of run().
+    struct Round {
+        std::vector<Case> piped, alone;
+        std::size_t fresh = 0;  // drawn from the generator (the rest were queued again)
+    };
+    // What a batch left of the target.
+    struct AfterBatch {
+        bool whole_target = false;  // died or hung as a whole
+        bool died = false;
+        bool settled_by_restart = false;  // hung, and restarted to end it
+        bool lost = false;                // never came back: the campaign ends
+    };
+    void start_generator();
+    // Learns the map, aims the generator at it, looks first at what killed the stream while
+    // learning; true when the target was lost.
+    bool learn_then_look(std::uint64_t& generated);
+    // Cases queued again first (unless a known crash or hang makes them pointless), then fresh.
+    Round next_round(std::vector<Case>& requeue, std::uint64_t& generated);
+    // Runs a round; false when the campaign ends (target lost, findings enough, line done).
+    bool run_round(Round& r, std::vector<Case>& requeue, std::set<std::uint64_t>& requeued_once);
+    void account_batch(const BatchResult& br, std::int64_t ns, std::size_t cases);
+    // Root-cause keys a broken lane may be a known guise of, likeliest first.
+    std::vector<std::string> lane_break_keys(const LaneBreak& b) const;
+    // Known verdicts and lane breaks counted as hits; the rest: suspects to isolate.
+    std::vector<std::size_t> triage(const BatchResult& br, const std::vector<Case>& piped);
+    AfterBatch target_after_batch(const BatchResult& br, const std::vector<Case>& piped);
+    std::vector<std::size_t> batch_culprit_candidates(const BatchResult& br,
+                                                      const std::vector<std::size_t>& suspects,
+                                                      std::size_t cases) const;
+    // Each true when the target was lost.
+    bool find_batch_culprit(const BatchResult& br, const std::vector<std::size_t>& suspects,
+                            const std::vector<Case>& piped, const AfterBatch& after,
+                            std::vector<std::size_t>& later);
+    bool isolate_suspects(const std::vector<std::size_t>& suspects, const std::vector<Case>& piped);
+    void finish();
 
     const CampaignOptions& options_;
     const ProgressFn& on_progress_;
@@ -592,25 +636,132 @@ bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
     return !whole_server_hang(ex.verdict) || settle(cause);
 }
 
+bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
+    ++result_.isolated_runs;
+    ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    if (!ex.down_before) return true;
+    // Down before this case began: whatever did it is not this case.
+    ++result_.deaths;
+    ++result_.unattributed_deaths;
+    if (!recover("")) return false;
+    ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    if (!ex.down_before) return true;
+    result_.target_lost = true;
+    result_.stop_reason = "the target keeps refusing connections";
+    return false;
+}
+
+// A transport case that crashed, hung or closed the target: were the frames it delivered the
+// culprit, rather than the way they arrived? Sent whole, do they do the same? Nothing when the
+// transport case itself is confirmed (`ex` its run again) and is to be recorded as such.
+std::optional<Campaign::Outcome> Campaign::judge_transport_case(Case& c, Execution& ex,
+                                                                const Case& plain,
+                                                                const std::string& key) {
+    if (!bring_back(ex, key)) return Outcome::Lost;
+    if (!can_afford(1)) {
+        ++result_.suspects_left;
+        return Outcome::Clean;
+    }
+    ++result_.isolated_runs;
+    Execution whole = run_alone(plain);
+    if (whole.verdict.oracle == ex.verdict.oracle) return record_plain(plain, std::move(whole));
+    if (whole.target_down) {
+        ++result_.deaths;
+        if (!recover("")) return Outcome::Lost;
+    }
+    // The way the bytes arrived: confirm the transport case itself.
+    if (!can_afford(1)) {
+        ++result_.suspects_left;
+        return Outcome::Clean;
+    }
+    ++result_.isolated_runs;
+    ex = run_alone(c);
+    if (!ex.verdict || root_cause_key(ex.verdict) != key) {
+        ++result_.unconfirmed;
+        if (ex.target_down) {
+            ++result_.deaths;
+            if (!recover("")) return Outcome::Lost;
+        }
+        return Outcome::Clean;
+    }
+    if (ex.target_down) {
+        ++result_.deaths;
+        if (!recover(key)) return Outcome::Lost;
+        ex.target_down = false;  // confirmed
+    }
+    return std::nullopt;
+}
+
+// The frames of a transport case, sent whole, did the same: judged as the plain case (its
+// death confirms a crash).
+Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
+    const std::string key = root_cause_key(whole.verdict);
+    if (Finding* f = known(whole.verdict)) {
+        hit(*f, whole.verdict, plain);
+        if (!bring_back(whole, key)) return Outcome::Lost;
+        return Outcome::Fired;
+    }
+    if (whole.target_down) {
+        ++result_.deaths;
+        ++restarts_by_cause_[key];  // the transport case's death was this one's too
+        if (!recover(key)) return Outcome::Lost;
+        whole.target_down = false;  // confirmed: it killed the target twice
+    } else if (whole_server_hang(whole.verdict) && !settle(key)) {
+        return Outcome::Lost;
+    }
+    record(plain, std::move(whole));
+    return up_ ? Outcome::Fired : Outcome::Lost;
+}
+
+// A death is a crash only if the case, replayed alone, kills the target again. Nothing when
+// confirmed (`ex` the confirming run) and to be recorded.
+std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Execution& ex,
+                                                         const std::string& key) {
+    ++result_.deaths;
+    if (!recover(key)) {
+        Finding f = found(c, std::move(ex));
+        f.confirmed = false;
+        f.note =
+            "the target went down after this case and did not come back, so it could "
+            "not be replayed to confirm it";
+        keep(std::move(f));
+        return Outcome::Lost;
+    }
+    // A case from a batch that died killed the target twice already: the batch and now.
+    if (batch_died_) return std::nullopt;
+    if (!can_afford(1)) {
+        ++result_.suspects_left;
+        return Outcome::Clean;
+    }
+    ++result_.isolated_runs;
+    Execution again = run_alone(c);
+    const bool same = again.verdict && root_cause_key(again.verdict) == key;
+    if (!same) {
+        ++result_.unattributed_deaths;
+        if (again.target_down) {
+            ++result_.deaths;
+            if (!recover("")) return Outcome::Lost;
+        }
+        return Outcome::Clean;
+    }
+    ++result_.deaths;
+    if (!recover(key)) {
+        Finding f = found(c, std::move(again));
+        f.note = "confirmed (killed the target twice); not minimised: it did not come back";
+        keep(std::move(f));
+        return Outcome::Lost;
+    }
+    ex = std::move(again);
+    return std::nullopt;
+}
+
 Campaign::Outcome Campaign::isolate(Case c) {
     if (would_retrigger(c)) {
         ++result_.skipped_known;
         return Outcome::Skipped;
     }
-    ++result_.isolated_runs;
-    Execution ex = execute_case(c, *options_.connector, result_.profile, exec_);
-    if (ex.down_before) {
-        // Down before this case began: whatever did it is not this case.
-        ++result_.deaths;
-        ++result_.unattributed_deaths;
-        if (!recover("")) return Outcome::Lost;
-        ex = execute_case(c, *options_.connector, result_.profile, exec_);
-        if (ex.down_before) {
-            result_.target_lost = true;
-            result_.stop_reason = "the target keeps refusing connections";
-            return Outcome::Lost;
-        }
-    }
+    Execution ex;
+    if (!first_isolated_run(c, ex)) return Outcome::Lost;
     if (!ex.verdict) return Outcome::Clean;
     if (is_stream_lost_close(ex.verdict)) {
         ask_how_length_mismatch_closes(c);
@@ -619,115 +770,23 @@ Campaign::Outcome Campaign::isolate(Case c) {
     }
     last_oracle_ = ex.verdict.oracle;
     last_key_ = root_cause_key(ex.verdict);
-    std::string key = last_key_;
+    const std::string key = last_key_;
     if (Finding* f = known(ex.verdict)) {
         hit(*f, ex.verdict, c);
         if (!bring_back(ex, key)) return Outcome::Lost;
         return Outcome::Fired;
     }
-    // A transport case that crashed or hung the target: were the frames it delivered the
-    // culprit, rather than the way they arrived? Sent whole, do they do the same?
     Case plain;
     if ((ex.verdict.oracle == Oracle::Crash || ex.verdict.oracle == Oracle::Hang ||
          ex.verdict.oracle == Oracle::UnexpectedClose) &&
         is_transport_class(c.cls) && reassemble(c, plain, result_.profile.framing)) {
-        if (!bring_back(ex, key)) return Outcome::Lost;
-        if (!can_afford(1)) {
-            ++result_.suspects_left;
-            return Outcome::Clean;
-        }
-        ++result_.isolated_runs;
-        Execution whole = run_alone(plain);
-        if (whole.verdict.oracle == ex.verdict.oracle) {
-            // The content: judge it as the plain case (its death confirms a crash).
-            c = std::move(plain);
-            ex = std::move(whole);
-            key = root_cause_key(ex.verdict);
-            if (Finding* f = known(ex.verdict)) {
-                hit(*f, ex.verdict, c);
-                if (!bring_back(ex, key)) return Outcome::Lost;
-                return Outcome::Fired;
-            }
-            if (ex.target_down) {
-                ++result_.deaths;
-                ++restarts_by_cause_[key];  // the transport case's death was this one's too
-                if (!recover(key)) return Outcome::Lost;
-                ex.target_down = false;  // confirmed: it killed the target twice
-            } else if (whole_server_hang(ex.verdict) && !settle(key)) {
-                return Outcome::Lost;
-            }
-            record(c, std::move(ex));
-            return up_ ? Outcome::Fired : Outcome::Lost;
-        }
-        if (whole.target_down) {
-            ++result_.deaths;
-            if (!recover("")) return Outcome::Lost;
-        }
-        // The way the bytes arrived: confirm the transport case itself below.
-        if (!can_afford(1)) {
-            ++result_.suspects_left;
-            return Outcome::Clean;
-        }
-        ++result_.isolated_runs;
-        ex = run_alone(c);
-        if (!ex.verdict || root_cause_key(ex.verdict) != key) {
-            ++result_.unconfirmed;
-            if (ex.target_down) {
-                ++result_.deaths;
-                if (!recover("")) return Outcome::Lost;
-            }
-            return Outcome::Clean;
-        }
-        if (ex.target_down) {
-            ++result_.deaths;
-            if (!recover(key)) return Outcome::Lost;
-            ex.target_down = false;  // confirmed
-        }
+        if (const auto done = judge_transport_case(c, ex, plain, key)) return *done;
     }
     if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
     if (!ex.target_down && depends_on_line_timing(c.cls) && !reproduces_every_time(c, key))
         return up_ ? Outcome::Clean : Outcome::Lost;
-    if (ex.target_down) {
-        // A death is a crash only if the case, replayed alone, kills the target again.
-        ++result_.deaths;
-        if (!recover(key)) {
-            Finding f = found(c, std::move(ex));
-            f.confirmed = false;
-            f.note =
-                "the target went down after this case and did not come back, so it could "
-                "not be replayed to confirm it";
-            keep(std::move(f));
-            return Outcome::Lost;
-        }
-        // A case from a batch that died killed the target twice already: the batch and now.
-        if (batch_died_) {
-            record(c, std::move(ex));
-            return up_ ? Outcome::Fired : Outcome::Lost;
-        }
-        if (!can_afford(1)) {
-            ++result_.suspects_left;
-            return Outcome::Clean;
-        }
-        ++result_.isolated_runs;
-        Execution again = run_alone(c);
-        const bool same = again.verdict && root_cause_key(again.verdict) == key;
-        if (!same) {
-            ++result_.unattributed_deaths;
-            if (again.target_down) {
-                ++result_.deaths;
-                if (!recover("")) return Outcome::Lost;
-            }
-            return Outcome::Clean;
-        }
-        ++result_.deaths;
-        if (!recover(key)) {
-            Finding f = found(c, std::move(again));
-            f.note = "confirmed (killed the target twice); not minimised: it did not come back";
-            keep(std::move(f));
-            return Outcome::Lost;
-        }
-        ex = std::move(again);
-    }
+    if (ex.target_down)
+        if (const auto done = confirm_death(c, ex, key)) return *done;
     record(c, std::move(ex));
     return up_ ? Outcome::Fired : Outcome::Lost;
 }
@@ -1105,17 +1164,7 @@ bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {
     return false;
 }
 
-CampaignResult Campaign::run() {
-    start_ = net::now_ns();
-    last_progress_ = start_;
-    if (options_.max_seconds > 0)
-        deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
-    if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
-                         result_.error))
-        return result_;
-    result_.started = true;
-    exec_.timeout_ms = options_.timeout_ms;
-    exec_.state = options_.state;
+void Campaign::start_generator() {
     GeneratorOptions go;
     go.seed = options_.seed;
     go.unit = options_.unit;
@@ -1130,240 +1179,257 @@ CampaignResult Campaign::run() {
     go.intercharacter_us =
         static_cast<std::uint32_t>(options_.connector->intercharacter_timeout_ns() / 1000);
     gen_ = std::make_unique<Generator>(go);
-    make_batch_runner();
-    arm_watch();
-    std::uint64_t generated = 0;
-    std::vector<Case> requeue, piped, alone;
-    // What discovery hinted at, then the other transport spoken to the port (plaintext to
-    // TLS, TLS to plain), each once, alone, before the generator's cases.
-    bool lost_at_first_look =
-        look_first(first_looks(result_.profile), generated) ||
-        look_first(cross_transport_cases(*options_.connector, result_.profile), generated);
-    // What discovery hinted at has been looked at: now learn the map (a slow target must not
-    // hide those hints behind its learning).
-    if (!lost_at_first_look && !out_of_budget()) {
-        know_the_device();
-        // A known map: stateful cases write inside it, and every read-back in a case run alone
-        // is checked (nothing else writes while it runs), unless the user chose the range.
-        if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
-        gen_->use_model(&result_.model, exec_.state);
-        // What killed the stream while learning, alone, first (at most 8).
-        std::vector<Case> killers;
-        for (const Pdu& pdu : learned_killers_) {
-            if (killers.size() == 8) break;
-            Case c;
-            c.cls = MutationClass::MapEdge;
-            c.function = pdu[0];
-            c.steps.push_back(
-                Step{Op::Send, 0, 0, 0,
-                     frame_of(pdu, 0x0E00, result_.profile.unit, result_.profile.framing)});
-            killers.push_back(std::move(c));
-        }
-        lost_at_first_look = look_first(std::move(killers), generated);
+}
+
+bool Campaign::learn_then_look(std::uint64_t& generated) {
+    know_the_device();
+    // A known map: stateful cases write inside it, and every read-back in a case run alone
+    // is checked (nothing else writes while it runs), unless the user chose the range.
+    if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
+    gen_->use_model(&result_.model, exec_.state);
+    // What killed the stream while learning, alone, first (at most 8).
+    std::vector<Case> killers;
+    for (const Pdu& pdu : learned_killers_) {
+        if (killers.size() == 8) break;
+        Case c;
+        c.cls = MutationClass::MapEdge;
+        c.function = pdu[0];
+        c.steps.push_back(
+            Step{Op::Send, 0, 0, 0,
+                 frame_of(pdu, 0x0E00, result_.profile.unit, result_.profile.framing)});
+        killers.push_back(std::move(c));
     }
-    std::set<std::uint64_t> requeued_once;
-    std::size_t rounds = 0;
-    while (!lost_at_first_look && !out_of_budget()) {
-        const std::size_t round = lanes_ * lane_depth_;
-        std::size_t n = round;
-        if (options_.max_cases) n = std::min<std::uint64_t>(n, options_.max_cases - result_.cases);
-        piped.clear();
-        alone.clear();
-        for (Case& c : requeue) {
-            // Queued before a crash or hang became known: it may carry that culprit.
-            if (would_retrigger(c)) {
-                ++result_.skipped_known;
-                continue;
-            }
-            (c.pipelinable ? piped : alone).push_back(std::move(c));
+    return look_first(std::move(killers), generated);
+}
+
+Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& generated) {
+    std::size_t n = lanes_ * lane_depth_;
+    if (options_.max_cases) n = std::min<std::uint64_t>(n, options_.max_cases - result_.cases);
+    Round r;
+    for (Case& c : requeue) {
+        // Queued before a crash or hang became known: it may carry that culprit.
+        if (would_retrigger(c)) {
+            ++result_.skipped_known;
+            continue;
         }
-        requeue.clear();
-        std::size_t fresh = 0;
-        if (watch_) watch_->refresh();
-        for (std::size_t tries = 0; piped.size() + alone.size() < n && tries < 8 * n; ++tries) {
-            Case c;
-            gen_->next(c);
-            c.number = ++generated;
-            if (would_retrigger(c)) {
-                ++result_.skipped_known;
-                continue;
-            }
-            if (rationed(c)) {
-                ++result_.rationed;
-                continue;
-            }
-            ++fresh;
-            ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
-            (c.pipelinable ? piped : alone).push_back(std::move(c));
+        (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
+    }
+    requeue.clear();
+    if (watch_) watch_->refresh();
+    for (std::size_t tries = 0; r.piped.size() + r.alone.size() < n && tries < 8 * n; ++tries) {
+        Case c;
+        gen_->next(c);
+        c.number = ++generated;
+        if (would_retrigger(c)) {
+            ++result_.skipped_known;
+            continue;
         }
-        const std::int64_t t0 = net::now_ns();
-        BatchResult br = batch_->run(piped);
-        const std::int64_t t1 = net::now_ns();
-        result_.batch_seconds += static_cast<double>(t1 - t0) / 1e9;
-        result_.batched_cases += piped.size();
-        result_.answers += br.answers;
-        result_.busy_answers += br.busy_answers;
-        // A target answering mostly 06 (busy) wastes the cases: thin the lanes and pause.
-        if (br.answers >= 16 && br.busy_answers * 2 > br.answers) {
-            result_.slowed_for_busy = true;
-            lane_depth_ = std::max(1u, lane_depth_ / 2);
-            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        if (rationed(c)) {
+            ++result_.rationed;
+            continue;
         }
-        std::vector<std::size_t> suspects = br.suspects;
-        for (auto& [ci, v] : br.verdicts) {
-            if (Finding* f = known(v))
-                hit(*f, v, piped[ci]);
-            else
-                suspects.push_back(ci);
+        ++r.fresh;
+        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
+    }
+    return r;
+}
+
+std::vector<std::string> Campaign::lane_break_keys(const LaneBreak& b) const {
+    std::vector<std::string> keys;
+    const std::string close = b.closed ? "unexpected-close:" : "hang:";
+    if (b.length_mismatch)
+        keys.push_back(length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame && b.closed
+                           ? fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule)
+                           : fmt::format("stream:{}", kStreamLostRule));
+    if (b.closed && b.unanswered_invalid)  // the executor's order (executor.cpp)
+        keys.push_back(fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule));
+    if (b.has_previous && b.previous_exception)
+        keys.push_back(close +
+                       (b.closed ? "closes-after-exception" : "drops-requests-after-exception"));
+    if (b.has_previous)
+        keys.push_back(close + (b.closed ? "closes-after/" : "drops-requests-after/") +
+                       b.previous_culprit);
+    keys.push_back(close + (b.closed ? "close-with-request-pending/" : "no-answer/") +
+                   b.unanswered_culprit);
+    return keys;
+}
+
+std::vector<std::size_t> Campaign::triage(const BatchResult& br, const std::vector<Case>& piped) {
+    std::vector<std::size_t> suspects = br.suspects;
+    for (const auto& [ci, v] : br.verdicts) {
+        if (Finding* f = known(v))
+            hit(*f, v, piped[ci]);
+        else
+            suspects.push_back(ci);
+    }
+    // A broken lane whose break matches a known root cause needs no re-run.
+    for (const LaneBreak& b : br.breaks) {
+        for (const std::string& k : lane_break_keys(b)) {
+            const auto it = by_key_.find(k);
+            if (it == by_key_.end()) continue;
+            Finding& f = result_.findings[it->second];
+            const std::size_t ci = b.has_previous ? b.previous_case : b.unanswered_case;
+            if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
+            std::erase(suspects, b.previous_case);
+            std::erase(suspects, b.unanswered_case);
+            break;
         }
-        // A broken lane whose break matches a known root cause needs no re-run.
+    }
+    std::sort(suspects.begin(), suspects.end());
+    suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
+    return suspects;
+}
+
+void Campaign::account_batch(const BatchResult& br, std::int64_t ns, std::size_t cases) {
+    result_.batch_seconds += static_cast<double>(ns) / 1e9;
+    result_.batched_cases += cases;
+    result_.answers += br.answers;
+    result_.busy_answers += br.busy_answers;
+    // A target answering mostly 06 (busy) wastes the cases: thin the lanes and pause.
+    if (br.answers >= 16 && br.busy_answers * 2 > br.answers) {
+        result_.slowed_for_busy = true;
+        lane_depth_ = std::max(1u, lane_depth_ / 2);
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+}
+
+Campaign::AfterBatch Campaign::target_after_batch(const BatchResult& br,
+                                                  const std::vector<Case>& piped) {
+    AfterBatch after;
+    const bool broke = br.connect_failed || br.lane_lost;
+    // The sentinels see a death a supervisor hides from the probe below.
+    const bool watched_death = watch_ && watch_->died(broke ? 200 : 0);
+    if (!broke && !watched_death) return after;
+    batch_->close_all();
+    const ProbeResult pr =
+        watched_death ? ProbeResult::Closed
+                      : probe_target(*options_.connector, result_.profile, options_.timeout_ms);
+    if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
+        after.whole_target = after.died = true;
+        ++result_.deaths;
+        if (!recover("")) {
+            // Nothing can be re-run: the batch is all there is to show for it.
+            if (br.lane_lost) record_lost_batch(piped);
+            after.lost = true;
+        }
+    } else if (pr != ProbeResult::Ok) {
+        after.whole_target = true;
+        after.lost = !settle();  // hung and never back: the suspects cannot be judged
+        after.settled_by_restart = settle_restarted_;
+    }
+    return after;
+}
+
+// The target died or hung as a whole: the culprit may be any unanswered frame (a server may
+// not even have answered what came before it). Look at them one by one, lane by lane in turn
+// from where each broke, until a crash or hang shows up; the rest go into `later`.
+std::vector<std::size_t> Campaign::batch_culprit_candidates(
+    const BatchResult& br, const std::vector<std::size_t>& suspects, std::size_t cases) const {
+    std::vector<std::size_t> candidates;
+    std::vector<bool> seen(cases, false);
+    for (std::size_t pos = 0;; ++pos) {
+        bool any = false;
         for (const LaneBreak& b : br.breaks) {
-            std::vector<std::string> keys;
-            const std::string close = b.closed ? "unexpected-close:" : "hang:";
-            if (b.length_mismatch)
-                keys.push_back(length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame &&
-                                       b.closed
-                                   ? fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule)
-                                   : fmt::format("stream:{}", kStreamLostRule));
-            if (b.closed && b.unanswered_invalid)  // the executor's order (executor.cpp)
-                keys.push_back(fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule));
-            if (b.has_previous && b.previous_exception)
-                keys.push_back(close + (b.closed ? "closes-after-exception"
-                                                 : "drops-requests-after-exception"));
-            if (b.has_previous)
-                keys.push_back(close + (b.closed ? "closes-after/" : "drops-requests-after/") +
-                               b.previous_culprit);
-            keys.push_back(close + (b.closed ? "close-with-request-pending/" : "no-answer/") +
-                           b.unanswered_culprit);
-            for (const std::string& k : keys) {
-                const auto it = by_key_.find(k);
-                if (it == by_key_.end()) continue;
-                Finding& f = result_.findings[it->second];
-                const std::size_t ci = b.has_previous ? b.previous_case : b.unanswered_case;
-                if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
-                std::erase(suspects, b.previous_case);
-                std::erase(suspects, b.unanswered_case);
-                break;
-            }
+            if (pos >= b.unanswered.size()) continue;
+            any = true;
+            const std::size_t ci = b.unanswered[pos];
+            if (!seen[ci]) candidates.push_back(ci);
+            seen[ci] = true;
         }
-        std::sort(suspects.begin(), suspects.end());
-        suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-        bool lost = false, whole_target = false, died = false, settled_by_restart = false;
-        const bool broke = br.connect_failed || br.lane_lost;
-        // The sentinels see a death a supervisor hides from the probe below.
-        const bool watched_death = watch_ && watch_->died(broke ? 200 : 0);
-        if (broke || watched_death) {
-            batch_->close_all();
-            const ProbeResult pr =
-                watched_death
-                    ? ProbeResult::Closed
-                    : probe_target(*options_.connector, result_.profile, options_.timeout_ms);
-            if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
-                whole_target = died = true;
-                ++result_.deaths;
-                if (!recover("")) {
-                    // Nothing can be re-run: the batch is all there is to show for it.
-                    if (br.lane_lost) record_lost_batch(piped);
-                    result_.cases += fresh;
-                    break;
-                }
-            } else if (pr != ProbeResult::Ok) {
-                whole_target = true;
-                const bool settled = settle();
-                settled_by_restart = settle_restarted_;
-                if (!settled) {
-                    // Hung and never back: the suspects cannot be judged.
-                    result_.cases += fresh;
-                    break;
-                }
-            }
-        }
-        std::vector<std::size_t> later;  // cases to run again in a later round
-        if (whole_target) {
-            // The target died or hung as a whole: the culprit may be any unanswered frame (a
-            // server may not even have answered what came before it). Look at them one by one,
-            // lane by lane in turn from where each broke, until a crash or hang shows up; the
-            // rest go back into the queue.
-            std::vector<std::size_t> candidates;
-            std::vector<bool> seen(piped.size(), false);
-            for (std::size_t pos = 0;; ++pos) {
-                bool any = false;
-                for (const LaneBreak& b : br.breaks) {
-                    if (pos >= b.unanswered.size()) continue;
-                    any = true;
-                    const std::size_t ci = b.unanswered[pos];
-                    if (!seen[ci]) candidates.push_back(ci);
-                    seen[ci] = true;
-                }
-                if (!any) break;
-            }
-            for (std::size_t ci : suspects)
-                if (!seen[ci]) candidates.push_back(ci);
-            bool found = false;
-            for (std::size_t k = 0; k < candidates.size(); ++k) {
-                const std::size_t ci = candidates[k];
-                if (found || enough_findings() || !can_afford(1)) {
-                    later.push_back(ci);
-                    continue;
-                }
-                // A died batch holding a request of a handler known to crash: that crash
-                // explains it, without killing the target again to ask.
-                if (died && known_crash_of(piped[ci])) {
-                    found = true;
-                    continue;
-                }
-                batch_died_ = died;
-                const Outcome out = isolate(piped[ci]);
-                batch_died_ = false;
-                if (out == Outcome::Lost) {
-                    lost = true;
-                    break;
-                }
-                // A crash or hang explains the batch; anything else keeps looking.
-                found = out == Outcome::Fired &&
-                        (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
-                // The batch's death (or the hang it had to be restarted from) was this one's
-                // doing.
-                if (found && (died || settled_by_restart)) ++restarts_by_cause_[last_key_];
-            }
-        } else {
-            later = br.requeue;
-            for (std::size_t k = 0; k < suspects.size(); ++k) {
-                if (enough_findings()) break;
-                if (!can_afford(1)) {
-                    result_.suspects_left += suspects.size() - k;
-                    break;
-                }
-                const Outcome out = isolate(piped[suspects[k]]);
-                if (out == Outcome::Lost) {
-                    lost = true;
-                    break;
-                }
-                if (out == Outcome::Clean) ++result_.unconfirmed;
-            }
-        }
-        for (std::size_t ci : later) {
-            if (!requeued_once.insert(piped[ci].number).second) continue;
-            ++result_.requeued;
-            requeue.push_back(piped[ci]);
-        }
-        std::size_t ran_alone = 0;
-        for (std::size_t i = 0; !lost && i < alone.size(); ++i, ++ran_alone) {
-            if (enough_findings() || !can_afford(1)) break;
-            if (isolate(alone[i]) == Outcome::Lost) lost = true;
-        }
-        result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
-        // RTU/ASCII: every case runs alone, so the ones the deadline left unrun were not cases.
-        const bool all_alone = result_.profile.framing != codec::Framing::Mbap;
-        result_.cases += all_alone ? std::min(fresh, ran_alone) : fresh;
-        if (all_alone)
-            for (std::size_t i = ran_alone; i < alone.size(); ++i)
-                --result_.cases_by_class[static_cast<std::size_t>(alone[i].cls)];
-        if (all_alone && ran_alone < alone.size() && !lost) break;
-        progress(false);
-        if (lost || enough_findings()) break;
-        if (++rounds == 1) check_capacity_once();
+        if (!any) break;
     }
+    for (std::size_t ci : suspects)
+        if (!seen[ci]) candidates.push_back(ci);
+    return candidates;
+}
+
+bool Campaign::find_batch_culprit(const BatchResult& br, const std::vector<std::size_t>& suspects,
+                                  const std::vector<Case>& piped, const AfterBatch& after,
+                                  std::vector<std::size_t>& later) {
+    bool found = false;
+    for (const std::size_t ci : batch_culprit_candidates(br, suspects, piped.size())) {
+        if (found || enough_findings() || !can_afford(1)) {
+            later.push_back(ci);
+            continue;
+        }
+        // A died batch holding a request of a handler known to crash: that crash explains
+        // it, without killing the target again to ask.
+        if (after.died && known_crash_of(piped[ci])) {
+            found = true;
+            continue;
+        }
+        batch_died_ = after.died;
+        const Outcome out = isolate(piped[ci]);
+        batch_died_ = false;
+        if (out == Outcome::Lost) return true;
+        // A crash or hang explains the batch; anything else keeps looking.
+        found = out == Outcome::Fired &&
+                (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
+        // The batch's death (or the hang it had to be restarted from) was this one's doing.
+        if (found && (after.died || after.settled_by_restart)) ++restarts_by_cause_[last_key_];
+    }
+    return false;
+}
+
+bool Campaign::isolate_suspects(const std::vector<std::size_t>& suspects,
+                                const std::vector<Case>& piped) {
+    for (std::size_t k = 0; k < suspects.size(); ++k) {
+        if (enough_findings()) break;
+        if (!can_afford(1)) {
+            result_.suspects_left += suspects.size() - k;
+            break;
+        }
+        const Outcome out = isolate(piped[suspects[k]]);
+        if (out == Outcome::Lost) return true;
+        if (out == Outcome::Clean) ++result_.unconfirmed;
+    }
+    return false;
+}
+
+bool Campaign::run_round(Round& r, std::vector<Case>& requeue,
+                         std::set<std::uint64_t>& requeued_once) {
+    const std::int64_t t0 = net::now_ns();
+    const BatchResult br = batch_->run(r.piped);
+    const std::int64_t t1 = net::now_ns();
+    account_batch(br, t1 - t0, r.piped.size());
+    const std::vector<std::size_t> suspects = triage(br, r.piped);
+    const AfterBatch after = target_after_batch(br, r.piped);
+    if (after.lost) {
+        result_.cases += r.fresh;
+        return false;
+    }
+    std::vector<std::size_t> later;  // cases to run again in a later round
+    bool lost = false;
+    if (after.whole_target) {
+        lost = find_batch_culprit(br, suspects, r.piped, after, later);
+    } else {
+        later = br.requeue;
+        lost = isolate_suspects(suspects, r.piped);
+    }
+    for (std::size_t ci : later) {
+        if (!requeued_once.insert(r.piped[ci].number).second) continue;
+        ++result_.requeued;
+        requeue.push_back(r.piped[ci]);
+    }
+    std::size_t ran_alone = 0;
+    for (std::size_t i = 0; !lost && i < r.alone.size(); ++i, ++ran_alone) {
+        if (enough_findings() || !can_afford(1)) break;
+        if (isolate(r.alone[i]) == Outcome::Lost) lost = true;
+    }
+    result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
+    // RTU/ASCII: every case runs alone, so the ones the deadline left unrun were not cases.
+    const bool all_alone = result_.profile.framing != codec::Framing::Mbap;
+    result_.cases += all_alone ? std::min(r.fresh, ran_alone) : r.fresh;
+    if (all_alone)
+        for (std::size_t i = ran_alone; i < r.alone.size(); ++i)
+            --result_.cases_by_class[static_cast<std::size_t>(r.alone[i].cls)];
+    if (all_alone && ran_alone < r.alone.size() && !lost) return false;
+    progress(false);
+    return !lost && !enough_findings();
+}
+
+void Campaign::finish() {
     if (result_.stop_reason.empty()) {
         result_.stop_reason =
             stopped() ? "interrupted"
@@ -1379,6 +1445,40 @@ CampaignResult Campaign::run() {
     }
     result_.seconds = elapsed();
     progress(true);
+}
+
+// The stages in order: discover, first looks, learn the device, then rounds of generated
+// cases (run in pipelined batches; suspects, deaths and hangs isolated, confirmed, minimised
+// and recorded) until the budget ends.
+CampaignResult Campaign::run() {
+    start_ = net::now_ns();
+    last_progress_ = start_;
+    if (options_.max_seconds > 0)
+        deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
+    if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
+                         result_.error))
+        return result_;
+    result_.started = true;
+    exec_.timeout_ms = options_.timeout_ms;
+    exec_.state = options_.state;
+    start_generator();
+    make_batch_runner();
+    arm_watch();
+    std::uint64_t generated = 0;
+    // What discovery hinted at, then the other transport spoken to the port (plaintext to
+    // TLS, TLS to plain), each once, alone, before the generator's cases; then the map (a slow
+    // target must not hide those hints behind its learning).
+    bool lost = look_first(first_looks(result_.profile), generated) ||
+                look_first(cross_transport_cases(*options_.connector, result_.profile), generated);
+    if (!lost && !out_of_budget()) lost = learn_then_look(generated);
+    std::vector<Case> requeue;
+    std::set<std::uint64_t> requeued_once;
+    for (std::size_t rounds = 0; !lost && !out_of_budget();) {
+        Round r = next_round(requeue, generated);
+        if (!run_round(r, requeue, requeued_once)) break;
+        if (++rounds == 1) check_capacity_once();
+    }
+    finish();
     return result_;
 }
 

@@ -108,7 +108,33 @@ class CaseRunner {
     bool answered(const Conn& c) const;
     void flood(std::uint16_t count);
     void side_probe();
+    // What judge() gathers across the connections: the worst verdict so far, and whom a
+    // whole-server fault is blamed on.
+    struct Judgement {
+        Verdict candidate;
+        std::vector<std::vector<RequestInfo>> infos;  // per connection, per pending request
+        std::vector<Shadow::Event> shadow;
+        bool need_fresh_probe = false;
+        const RequestInfo* first_unanswered = nullptr;
+        const RequestInfo* last_sent = nullptr;
+        int last_fc = -1;
+        void consider(Verdict v) {
+            if (v && (!candidate || v.oracle < candidate.oracle)) candidate = std::move(v);
+        }
+    };
     void judge(const Case& c);
+    void judge_framing(std::size_t i, const Conn& cn, Judgement& j) const;
+    void judge_unmatched(const Conn& cn, Judgement& j) const;
+    void judge_requests(const Case& c, std::size_t i, const Conn& cn, Judgement& j) const;
+    void judge_silence(const Case& c, std::size_t i, const Conn& cn, std::size_t k,
+                       const RequestInfo& info, const RequestInfo* before, bool before_exception,
+                       Judgement& j) const;
+    std::pair<std::string, const RequestInfo*> silence_rule(const Case& c, const Conn& cn,
+                                                            std::size_t k, const RequestInfo& info,
+                                                            const RequestInfo* before,
+                                                            bool before_exception) const;
+    void judge_side_probes(Judgement& j) const;
+    void judge_target(const Case& c, Judgement& j);
     std::int64_t stall_threshold_ms() const {
         return std::min<std::int64_t>(kStallMs, options_.timeout_ms);
     }
@@ -452,202 +478,202 @@ void CaseRunner::flood(std::uint16_t count) {
     }
 }
 
-std::string culprit_text(const Case& c, const RequestInfo* rq) {
-    return netfuzz::culprit_text(c.cls, rq);
+void CaseRunner::judge_framing(std::size_t i, const Conn& cn, Judgement& j) const {
+    if (!cn.framing_lost) return;
+    if (framed()) {
+        j.consider(Verdict{
+            Oracle::MalformedResponse,
+            cn.bad_response_check ? "response-check-failed" : "response-framing", -1,
+            fmt::format(
+                "response framing lost on connection {}: {}", i,
+                cn.bad_response_check
+                    ? std::string(profile_.framing == codec::Framing::Rtu ? "bad CRC" : "bad LRC")
+                    : std::string("no frame can start here")),
+            "well-framed answers with a good CRC/LRC",
+            hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
+        return;
+    }
+    j.consider(Verdict{Oracle::MalformedResponse, "response-framing", -1,
+                       fmt::format("response framing lost on connection {}: MBAP length {}", i,
+                                   codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
+                       "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
 }
 
-void CaseRunner::judge(const Case& c) {
-    Verdict candidate;
-    auto consider = [&](Verdict v) {
-        if (v && (!candidate || v.oracle < candidate.oracle)) candidate = std::move(v);
-    };
-    std::vector<std::vector<RequestInfo>> infos(conns_.size());
-    std::vector<Shadow::Event> shadow;
-    bool need_fresh_probe = flooded_;
-    // The request a whole-server fault is blamed on: the first one owed an answer that got
-    // none, else the last one sent.
-    const RequestInfo* first_unanswered = nullptr;
-    const RequestInfo* last_sent = nullptr;
-    int last_fc = -1;
-    for (std::size_t i = 0; i < conns_.size(); ++i) {
-        Conn& cn = conns_[i];
-        if (!cn.opened) continue;
-        if (cn.closed || cn.shut || cn.desync) need_fresh_probe = true;
-        if (cn.framing_lost && framed()) {
-            consider(Verdict{
-                Oracle::MalformedResponse,
-                cn.bad_response_check ? "response-check-failed" : "response-framing", -1,
-                fmt::format("response framing lost on connection {}: {}", i,
-                            cn.bad_response_check
-                                ? std::string(profile_.framing == codec::Framing::Rtu ? "bad CRC"
-                                                                                      : "bad LRC")
-                                : std::string("no frame can start here")),
-                "well-framed answers with a good CRC/LRC",
-                hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
-        } else if (cn.framing_lost) {
-            consider(Verdict{
-                Oracle::MalformedResponse, "response-framing", -1,
-                fmt::format("response framing lost on connection {}: MBAP length {}", i,
-                            codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
-                "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
-        }
-        // An answer nobody asked for, on a connection that carried a request of the wrong
-        // length, is the target framing that request by its function code.
-        bool length_mismatch_sent = false;
-        const std::vector<std::uint8_t>& sent_frames_of = sent_frames(cn);
-        const std::vector<std::uint8_t>& received_frames_of = received_frames(cn);
-        for (const Pending& pd : cn.pending) {
-            if (pd.probe || pd.size < lim::kMbapHeader) continue;
-            RequestInfo sent;
-            describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_,
-                             sent);
-            length_mismatch_sent = length_mismatch_sent || pdu_length_mismatch(sent);
-        }
-        for (const auto& [off, size] : cn.unmatched) {
-            std::string tids;
-            for (const Pending& pd : cn.pending)
-                tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
-            // Whose answer it most likely is: an unanswered request of the same function.
-            int fc = -1;
-            if (size > lim::kMbapHeader) {
-                const std::uint8_t rfc = received_frames_of[off + lim::kMbapHeader] & 0x7F;
-                for (const Pending& pd : cn.pending)
-                    if (!pd.answered_ns && pd.size > lim::kMbapHeader &&
-                        sent_frames_of[pd.offset + lim::kMbapHeader] == rfc)
-                        fc = rfc;
-            }
-            // Nothing complete was sent on it: the target took a started frame for a whole one
-            // (pymodbus's framer answers three bytes of a header with transaction id 0000).
-            bool own_request = false;
-            for (const Pending& pd : cn.pending) own_request = own_request || !pd.probe;
-            const bool partial_only = !own_request && cn.sent.size() > cn.parsed;
-            consider(Verdict{Oracle::MalformedResponse,
-                             length_mismatch_sent ? kStreamLostRule
-                             : partial_only       ? kAnswersPartialFrameRule
-                                                  : "unmatched-transaction-id",
-                             fc,
-                             fmt::format("response with transaction id {:04X} matches no request",
-                                         codec::load_be16(received_frames_of.data() + off)),
-                             fmt::format("transaction ids {}", tids),
-                             hex(codec::Bytes(received_frames_of.data() + off, size))});
-        }
-        infos[i].resize(cn.pending.size());
-        // The case's own request before the current one on this connection, and whether it
-        // drew an exception: silence after it is blamed on it.
-        const RequestInfo* prev_own = nullptr;
-        bool prev_exception = false;
-        bool reported = false;  // only the first unanswered request per connection: the
-                                // silence after it follows from it
-        for (std::size_t k = 0; k < cn.pending.size(); ++k) {
-            const Pending& pd = cn.pending[k];
-            RequestInfo& info = infos[i][k];
-            describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_,
-                             info);
-            if (framed()) {  // the frame's own expectation: a discarded or broadcast frame
-                info.expect = pd.expect;
-                info.discard = pd.discard;
-            }
-            bool exception = false;
-            if (pd.answered_ns) {
-                const codec::Bytes rsp(received_frames_of.data() + pd.rsp_offset, pd.rsp_size);
-                consider(judge_response(info, rsp, profile_));
-                shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
-                                               rsp.subspan(lim::kMbapHeader),
-                                               static_cast<std::uint8_t>(i)});
-                // Not a normal answer: an exception, or a function code that is not the
-                // request's (libmodbus answers 0x39 for an unknown 0xB9), which a server may
-                // follow with the same flush as an exception.
-                exception = rsp.size() > lim::kMbapHeader && !info.pdu.empty() &&
-                            ((rsp[lim::kMbapHeader] & codec::kExceptionBit) != 0 ||
-                             rsp[lim::kMbapHeader] != info.pdu[0]);
-            } else {
-                shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
-            }
-            const RequestInfo* before = prev_own;  // (null once the stream is seen to go on)
-            const bool before_exception = prev_exception;
-            if (!pd.probe) {
-                prev_own = &info;
-                prev_exception = exception;
-                last_sent = &info;
-                if (!info.pdu.empty()) last_fc = info.pdu[0];
-            }
-            if (pd.expect != Expect::Answer || pd.answered_ns || reported) continue;
-            // A server may drop what it has not answered when a frame was left unfinished;
-            // complete frames before a clean half-close are still owed their answers.
-            if (cn.desync || (cn.shut && !cn.shut_after_frames)) continue;
-            // Answers that matched nothing or lost framing: the missing answer is already
-            // explained by the malformed response.
-            if (!cn.unmatched.empty() || cn.framing_lost) continue;
-            reported = true;
-            if (!pd.probe && !first_unanswered) first_unanswered = &info;
-            const std::string what = pd.probe ? std::string("the in-stream liveness probe")
-                                              : fmt::format("request {}", hex(info.pdu, 16));
-            const bool closed = cn.closed;
-            // RTU over TCP: after a frame it must discard (a bad CRC) a server may close the
-            // stream, whose frame boundaries it can no longer trust; it must not answer it.
-            if (closed && framed() && !profile_.serial_line && before && !before->discard.empty())
-                continue;
-            std::string rule;
-            const RequestInfo* blamed = pd.probe ? before : &info;
-            // A target known to drop what follows an exception, that answered the request
-            // before with one, dropped the rest for that, however long the request was.
-            // (After our half-close, the close that follows is owed.)
-            // A stream that went on (a later request on it was answered) neither was lost nor
-            // dropped what followed the request before: the silence is this request's own.
-            const bool went_on = answered_after(cn.pending, k);
-            if (went_on) before = nullptr;
-            const bool exception_drop = before && before_exception &&
-                                        profile_.drops_after_exception && (!closed || cn.shut);
-            if (exception_drop) {
-                rule = "drops-requests-after-exception";
-                blamed = before;
-            } else if (cn.shut) {
-                rule = "drops-answers-on-half-close";
-            } else if (before && pdu_length_mismatch(*before)) {
-                rule = kStreamLostRule;
-                blamed = before;
-            } else if (!pd.probe && closed && pdu_length_mismatch(info)) {
-                rule = kStreamLostRule;
-            } else if (closed && !pd.probe && request_kind(info) != "valid") {
-                // Closing on a request it cannot use is one policy of the server's framing,
-                // whatever the function code; and it is the likelier cause than the exception
-                // answered before it (pymodbus closes on a short FC 10 however the requests
-                // before it were answered: two findings for one defect, until this came first).
-                rule = kClosesOnInvalidRequestRule;
-            } else if (before && before_exception) {
-                rule = closed ? "closes-after-exception" : "drops-requests-after-exception";
-                blamed = before;
-            } else if (!pd.probe || !before) {
-                rule = fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
-                                   culprit_text(c, pd.probe ? nullptr : &info));
-            } else {
-                rule = fmt::format("{}/{}", closed ? "closes-after" : "drops-requests-after",
-                                   culprit_text(c, before));
-            }
-            const int fc = blamed && !blamed->pdu.empty() ? blamed->pdu[0] : -1;
-            // A drop behind an exception is the same fault whether or not our half-close
-            // then (rightly) closed the connection.
-            if (closed && !(exception_drop && cn.shut)) {
-                consider(Verdict{Oracle::UnexpectedClose, std::move(rule), fc,
-                                 fmt::format("connection {} {} with {} unanswered{}", i,
-                                             cn.reset ? "reset" : "closed", what,
-                                             cn.shut ? " after our half-close" : ""),
-                                 "an answer, connection kept open", cn.reset ? "reset" : "FIN"});
-            } else {
-                consider(Verdict{Oracle::Hang, std::move(rule), fc,
-                                 fmt::format("no answer to {} within {} ms on open connection {}",
-                                             what, options_.timeout_ms, i),
-                                 "an answer", "silence"});
-            }
-            need_fresh_probe = true;
-        }
+void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
+    // An answer nobody asked for, on a connection that carried a request of the wrong
+    // length, is the target framing that request by its function code.
+    bool length_mismatch_sent = false, own_request = false;
+    const std::vector<std::uint8_t>& sent_frames_of = sent_frames(cn);
+    const std::vector<std::uint8_t>& received_frames_of = received_frames(cn);
+    for (const Pending& pd : cn.pending) {
+        own_request = own_request || !pd.probe;
+        if (pd.probe || pd.size < lim::kMbapHeader) continue;
+        RequestInfo sent;
+        describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_, sent);
+        length_mismatch_sent = length_mismatch_sent || pdu_length_mismatch(sent);
     }
-    consider(Shadow::check(shadow, options_.state));
+    // Nothing complete was sent on it: the target took a started frame for a whole one.
+    // Before the header was whole it is its reassembly (pymodbus's framer answers three bytes
+    // of a header with transaction id 0000); with the header whole but fewer bytes than its
+    // MBAP length, it framed by the function code (libmodbus answers a half-closed FC 15 whose
+    // data never came): the stream-lost root cause.
+    const std::size_t started = cn.sent.size() - cn.parsed;
+    const bool partial_only = !own_request && started > 0;
+    length_mismatch_sent = length_mismatch_sent || (partial_only && started >= lim::kMbapHeader);
+    for (const auto& [off, size] : cn.unmatched) {
+        std::string tids;
+        for (const Pending& pd : cn.pending)
+            tids += fmt::format("{}{:04X}", tids.empty() ? "" : ",", pd.tid);
+        // Whose answer it most likely is: an unanswered request of the same function.
+        int fc = -1;
+        if (size > lim::kMbapHeader) {
+            const std::uint8_t rfc = received_frames_of[off + lim::kMbapHeader] & 0x7F;
+            for (const Pending& pd : cn.pending)
+                if (!pd.answered_ns && pd.size > lim::kMbapHeader &&
+                    sent_frames_of[pd.offset + lim::kMbapHeader] == rfc)
+                    fc = rfc;
+        }
+        j.consider(Verdict{Oracle::MalformedResponse,
+                           length_mismatch_sent ? kStreamLostRule
+                           : partial_only       ? kAnswersPartialFrameRule
+                                                : "unmatched-transaction-id",
+                           fc,
+                           fmt::format("response with transaction id {:04X} matches no request",
+                                       codec::load_be16(received_frames_of.data() + off)),
+                           fmt::format("transaction ids {}", tids),
+                           hex(codec::Bytes(received_frames_of.data() + off, size))});
+    }
+}
+
+// The rule a silence (or close) on the request at `k` breaks, and the request it is blamed on.
+std::pair<std::string, const RequestInfo*> CaseRunner::silence_rule(const Case& c, const Conn& cn,
+                                                                    std::size_t k,
+                                                                    const RequestInfo& info,
+                                                                    const RequestInfo* before,
+                                                                    bool before_exception) const {
+    const Pending& pd = cn.pending[k];
+    const bool closed = cn.closed;
+    const RequestInfo* blamed = pd.probe ? before : &info;
+    // A target known to drop what follows an exception, that answered the request
+    // before with one, dropped the rest for that, however long the request was.
+    // (After our half-close, the close that follows is owed.)
+    // A stream that went on (a later request on it was answered) neither was lost nor
+    // dropped what followed the request before: the silence is this request's own.
+    if (answered_after(cn.pending, k)) before = nullptr;
+    const bool exception_drop =
+        before && before_exception && profile_.drops_after_exception && (!closed || cn.shut);
+    if (exception_drop) return {"drops-requests-after-exception", before};
+    if (cn.shut) return {"drops-answers-on-half-close", blamed};
+    if (before && pdu_length_mismatch(*before)) return {kStreamLostRule, before};
+    if (!pd.probe && closed && pdu_length_mismatch(info)) return {kStreamLostRule, blamed};
+    // Closing on a request it cannot use is one policy of the server's framing, whatever the
+    // function code; and it is the likelier cause than the exception answered before it
+    // (pymodbus closes on a short FC 10 however the requests before it were answered: two
+    // findings for one defect, until this came first).
+    if (closed && !pd.probe && request_kind(info) != "valid")
+        return {kClosesOnInvalidRequestRule, blamed};
+    if (before && before_exception)
+        return {closed ? "closes-after-exception" : "drops-requests-after-exception", before};
+    if (!pd.probe || !before)
+        return {fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
+                            culprit_text(c.cls, pd.probe ? nullptr : &info)),
+                blamed};
+    return {fmt::format("{}/{}", closed ? "closes-after" : "drops-requests-after",
+                        culprit_text(c.cls, before)),
+            blamed};
+}
+
+void CaseRunner::judge_silence(const Case& c, std::size_t i, const Conn& cn, std::size_t k,
+                               const RequestInfo& info, const RequestInfo* before,
+                               bool before_exception, Judgement& j) const {
+    const Pending& pd = cn.pending[k];
+    // RTU over TCP: after a frame it must discard (a bad CRC) a server may close the
+    // stream, whose frame boundaries it can no longer trust; it must not answer it.
+    if (cn.closed && framed() && !profile_.serial_line && before && !before->discard.empty())
+        return;
+    auto [rule, blamed] = silence_rule(c, cn, k, info, before, before_exception);
+    const std::string what = pd.probe ? std::string("the in-stream liveness probe")
+                                      : fmt::format("request {}", hex(info.pdu, 16));
+    const int fc = blamed && !blamed->pdu.empty() ? blamed->pdu[0] : -1;
+    // A drop behind an exception is the same fault whether or not our half-close then
+    // (rightly) closed the connection.
+    const bool exception_drop = rule == "drops-requests-after-exception" && cn.shut;
+    if (cn.closed && !exception_drop) {
+        j.consider(Verdict{
+            Oracle::UnexpectedClose, std::move(rule), fc,
+            fmt::format("connection {} {} with {} unanswered{}", i, cn.reset ? "reset" : "closed",
+                        what, cn.shut ? " after our half-close" : ""),
+            "an answer, connection kept open", cn.reset ? "reset" : "FIN"});
+    } else {
+        j.consider(Verdict{Oracle::Hang, std::move(rule), fc,
+                           fmt::format("no answer to {} within {} ms on open connection {}", what,
+                                       options_.timeout_ms, i),
+                           "an answer", "silence"});
+    }
+    j.need_fresh_probe = true;
+}
+
+void CaseRunner::judge_requests(const Case& c, std::size_t i, const Conn& cn, Judgement& j) const {
+    const std::vector<std::uint8_t>& sent_frames_of = sent_frames(cn);
+    const std::vector<std::uint8_t>& received_frames_of = received_frames(cn);
+    j.infos[i].resize(cn.pending.size());
+    // The case's own request before the current one on this connection, and whether it
+    // drew an exception: silence after it is blamed on it.
+    const RequestInfo* prev_own = nullptr;
+    bool prev_exception = false;
+    bool reported = false;  // only the first unanswered request per connection: the
+                            // silence after it follows from it
+    for (std::size_t k = 0; k < cn.pending.size(); ++k) {
+        const Pending& pd = cn.pending[k];
+        RequestInfo& info = j.infos[i][k];
+        describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_, info);
+        if (framed()) {  // the frame's own expectation: a discarded or broadcast frame
+            info.expect = pd.expect;
+            info.discard = pd.discard;
+        }
+        bool exception = false;
+        if (pd.answered_ns) {
+            const codec::Bytes rsp(received_frames_of.data() + pd.rsp_offset, pd.rsp_size);
+            j.consider(judge_response(info, rsp, profile_));
+            j.shadow.push_back(Shadow::Event{&info, pd.sent_ns, pd.answered_ns,
+                                             rsp.subspan(lim::kMbapHeader),
+                                             static_cast<std::uint8_t>(i)});
+            // Not a normal answer: an exception, or a function code that is not the
+            // request's (libmodbus answers 0x39 for an unknown 0xB9), which a server may
+            // follow with the same flush as an exception.
+            exception = rsp.size() > lim::kMbapHeader && !info.pdu.empty() &&
+                        ((rsp[lim::kMbapHeader] & codec::kExceptionBit) != 0 ||
+                         rsp[lim::kMbapHeader] != info.pdu[0]);
+        } else {
+            j.shadow.push_back(Shadow::Event{&info, pd.sent_ns, 0, {}});
+        }
+        const RequestInfo* before = prev_own;
+        const bool before_exception = prev_exception;
+        if (!pd.probe) {
+            prev_own = &info;
+            prev_exception = exception;
+            j.last_sent = &info;
+            if (!info.pdu.empty()) j.last_fc = info.pdu[0];
+        }
+        if (pd.expect != Expect::Answer || pd.answered_ns || reported) continue;
+        // A server may drop what it has not answered when a frame was left unfinished;
+        // complete frames before a clean half-close are still owed their answers.
+        if (cn.desync || (cn.shut && !cn.shut_after_frames)) continue;
+        // Answers that matched nothing or lost framing: the missing answer is already
+        // explained by the malformed response.
+        if (!cn.unmatched.empty() || cn.framing_lost) continue;
+        reported = true;
+        if (!pd.probe && !j.first_unanswered) j.first_unanswered = &info;
+        judge_silence(c, i, cn, k, info, before, before_exception, j);
+    }
+}
+
+void CaseRunner::judge_side_probes(Judgement& j) const {
     for (const SideProbe& sp : side_probes_) {
         const bool stalled = sp.result != ProbeResult::Ok || sp.ms >= stall_threshold_ms();
         if (!stalled || sp.result == ProbeResult::ConnectFailed) continue;
-        consider(
-            Verdict{Oracle::Hang, fmt::format("stalls-other-connections({})", sp.during), last_fc,
+        j.consider(
+            Verdict{Oracle::Hang, fmt::format("stalls-other-connections({})", sp.during), j.last_fc,
                     fmt::format("a concurrent connection {} ({} ms) while another held {}",
                                 sp.result == ProbeResult::Ok
                                     ? std::string("was answered late")
@@ -660,23 +686,27 @@ void CaseRunner::judge(const Case& c) {
                                 stall_threshold_ms()),
                     fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
     }
+}
+
+// Whether the target is still there (the fresh probe, then the sentinels): a death or a
+// whole-server hang outranks whatever the case's own connections showed.
+void CaseRunner::judge_target(const Case& c, Judgement& j) {
     // The fresh probe goes first: on a loaded machine the kernel may deliver the sentinels'
     // closes a little after the case's own; loopback packets are taken in order, so by the
     // time the probe is answered they have arrived.
     ProbeResult r = ProbeResult::Ok;
-    if (need_fresh_probe) {
+    if (j.need_fresh_probe) {
         r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
     }
-    const RequestInfo* at = first_unanswered ? first_unanswered : last_sent;
-    if (options_.watch && options_.watch->died(need_fresh_probe ? 200 : 20)) {
+    if (options_.watch && options_.watch->died(j.need_fresh_probe ? 200 : 20)) {
         // The process died, whatever brought it back: every connection it held is gone.
         event(kFreshConn, TraceKind::FreshProbe, {}, "every idle sentinel connection dropped");
         out_.target_down = true;
-        candidate = fresh_probe_verdict(ProbeResult::Closed);
-        candidate.summary =
+        j.candidate = fresh_probe_verdict(ProbeResult::Closed);
+        j.candidate.summary =
             "the target's process died: every idle connection it held was closed at once";
-    } else if (need_fresh_probe) {
+    } else if (j.need_fresh_probe) {
         if (r == ProbeResult::Closed || r == ProbeResult::ConnectFailed) {
             // A process that is dying may still complete a connect from its backlog, and a
             // busy one may let a connect wait out a full backlog: look again a moment later
@@ -687,21 +717,41 @@ void CaseRunner::judge(const Case& c) {
         }
         if (r != ProbeResult::Ok) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
-            candidate = fresh_probe_verdict(r);
+            j.candidate = fresh_probe_verdict(r);
         }
     }
-    if (out_.target_down || (need_fresh_probe && r != ProbeResult::Ok)) {
-        candidate.rule += "/" + culprit_text(c, at);
-        candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
+    if (out_.target_down || (j.need_fresh_probe && r != ProbeResult::Ok)) {
+        // The request a whole-server fault is blamed on: the first one owed an answer that
+        // got none, else the last one sent.
+        const RequestInfo* at = j.first_unanswered ? j.first_unanswered : j.last_sent;
+        j.candidate.rule += "/" + culprit_text(c.cls, at);
+        j.candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
     }
-    if (candidate)
-        candidate.summary =
-            candidate.culprit_fc >= 0
-                ? fmt::format(
-                      "{} [{} {}]", candidate.summary, class_name(c.cls),
-                      codec::function_label(static_cast<std::uint8_t>(candidate.culprit_fc)))
-                : fmt::format("{} [{}]", candidate.summary, class_name(c.cls));
-    out_.verdict = std::move(candidate);
+}
+
+void CaseRunner::judge(const Case& c) {
+    Judgement j;
+    j.infos.resize(conns_.size());
+    j.need_fresh_probe = flooded_;
+    for (std::size_t i = 0; i < conns_.size(); ++i) {
+        const Conn& cn = conns_[i];
+        if (!cn.opened) continue;
+        if (cn.closed || cn.shut || cn.desync) j.need_fresh_probe = true;
+        judge_framing(i, cn, j);
+        judge_unmatched(cn, j);
+        judge_requests(c, i, cn, j);
+    }
+    j.consider(Shadow::check(j.shadow, options_.state));
+    judge_side_probes(j);
+    judge_target(c, j);
+    Verdict& v = j.candidate;
+    if (v)
+        v.summary =
+            v.culprit_fc >= 0
+                ? fmt::format("{} [{} {}]", v.summary, class_name(c.cls),
+                              codec::function_label(static_cast<std::uint8_t>(v.culprit_fc)))
+                : fmt::format("{} [{}]", v.summary, class_name(c.cls));
+    out_.verdict = std::move(v);
 }
 
 void CaseRunner::side_probe() {

@@ -230,11 +230,14 @@ TEST(Oracle, TrailingBytesMayBeIgnoredButTheRestOfTheRequestIsStillJudged) {
 // function code. pymodbus ignoring FC 0F's quantity answered both a quantity out of range and a
 // byte count that disagrees (one check in v1.1b3's flow): one rule. FC 14 is another handler.
 TEST(Oracle, AnInvalidRequestAnsweredNormallyIsNamedAfterTheOwedCheckAndTheFunction) {
+    // (RequestInfo holds views of the frames: they stay alive.)
+    const auto quantity_frame = adu(1, {0x0F, 0x00, 0x00, 0x40, 0x01, 0x01, 0xFF});
+    const auto byte_count_frame = adu(2, {0x0F, 0x00, 0x00, 0x00, 0x08, 0x02, 0xFF, 0x00});
+    const auto file_frame = adu(3, {0x14, 0x03, 0x06, 0x00, 0x01});
     RequestInfo quantity, byte_count, file;
-    describe_request(adu(1, {0x0F, 0x00, 0x00, 0x40, 0x01, 0x01, 0xFF}), profile(), quantity);
-    describe_request(adu(2, {0x0F, 0x00, 0x00, 0x00, 0x08, 0x02, 0xFF, 0x00}), profile(),
-                     byte_count);
-    describe_request(adu(3, {0x14, 0x03, 0x06, 0x00, 0x01}), profile(), file);
+    describe_request(quantity_frame, profile(), quantity);
+    describe_request(byte_count_frame, profile(), byte_count);
+    describe_request(file_frame, profile(), file);
     ASSERT_EQ(quantity.status.error, codec::CodecError::QuantityOutOfRange);
     ASSERT_EQ(byte_count.status.error, codec::CodecError::ByteCountMismatch);
     const Verdict a = judge_response(quantity, adu(1, {0x0F, 0x00, 0x00, 0x40, 0x01}), profile());
