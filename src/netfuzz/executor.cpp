@@ -512,14 +512,16 @@ void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
         describe_request(codec::Bytes(sent_frames_of.data() + pd.offset, pd.size), profile_, sent);
         length_mismatch_sent = length_mismatch_sent || pdu_length_mismatch(sent);
     }
-    // Nothing complete was sent on it: the target took a started frame for a whole one.
-    // Before the header was whole it is its reassembly (pymodbus's framer answers three bytes
-    // of a header with transaction id 0000); with the header whole but fewer bytes than its
-    // MBAP length, it framed by the function code (libmodbus answers a half-closed FC 15 whose
-    // data never came): the stream-lost root cause.
+    // Nothing complete was sent on it: the target took a started frame for a whole one. An
+    // answer carrying the started frame's own transaction id read its header and framed it by
+    // the function code, not the MBAP length (libmodbus answers a half-closed FC 15 whose data
+    // never came): the stream-lost root cause. Any other answer is its reassembly decoding
+    // a partial buffer (pymodbus answers a bare header, or three bytes of one, with 0000).
     const std::size_t started = cn.sent.size() - cn.parsed;
     const bool partial_only = !own_request && started > 0;
-    length_mismatch_sent = length_mismatch_sent || (partial_only && started >= lim::kMbapHeader);
+    const int started_tid = partial_only && started >= lim::kMbapHeader
+                                ? codec::load_be16(cn.sent.data() + cn.parsed)
+                                : -1;
     for (const auto& [off, size] : cn.unmatched) {
         std::string tids;
         for (const Pending& pd : cn.pending)
@@ -533,10 +535,11 @@ void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
                     sent_frames_of[pd.offset + lim::kMbapHeader] == rfc)
                     fc = rfc;
         }
+        const int tid = codec::load_be16(received_frames_of.data() + off);
         j.consider(Verdict{Oracle::MalformedResponse,
-                           length_mismatch_sent ? kStreamLostRule
-                           : partial_only       ? kAnswersPartialFrameRule
-                                                : "unmatched-transaction-id",
+                           length_mismatch_sent || tid == started_tid ? kStreamLostRule
+                           : partial_only                             ? kAnswersPartialFrameRule
+                                                                      : "unmatched-transaction-id",
                            fc,
                            fmt::format("response with transaction id {:04X} matches no request",
                                        codec::load_be16(received_frames_of.data() + off)),

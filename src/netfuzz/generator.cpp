@@ -556,6 +556,12 @@ void Generator::isolated(Case& out) {
         out.steps.push_back(Step{Op::SideProbe, 0, 0, 0, {}});
         return;
     }
+    mangled_frame(out, roll);
+}
+
+// A valid frame delivered the wrong way (`roll` in 55..99 picks how): split, lying about its
+// length, cut short, half-closed, held, dripped, or a flood of connections instead.
+void Generator::mangled_frame(Case& out, std::uint32_t roll) {
     const auto& pdu = valid_seed();
     auto f = frame(pdu, options_.unit);
     out.function = pdu[0];
@@ -606,6 +612,12 @@ void Generator::isolated(Case& out) {
         out.steps.push_back(Step{Op::ShutdownWrite, 0, 0, 0, {}});
         return;
     }
+    slow_frame(out, roll, std::move(f));
+}
+
+// A started frame held open while another client probes, dripped a byte at a time, or (no
+// frame at all) a flood of connections.
+void Generator::slow_frame(Case& out, std::uint32_t roll, std::vector<std::uint8_t> f) {
     if (roll < 77) {  // a started frame held open while another client probes
         out.cls = MutationClass::PartialHold;
         const std::uint32_t at = 1 + rng_.below(static_cast<std::uint32_t>(f.size() - 1));
@@ -663,9 +675,20 @@ void Generator::stateful(Case& out, bool cross) {
     const bool coil_write = fc == kWriteSingleCoil || fc == kWriteMultipleCoils;
     const std::uint16_t base = has_model() ? model_address(coil_write, 0) : state_address(130);
     const std::uint32_t room = has_model() ? map_room(coil_write, base) : 0x10000;
-    std::vector<std::uint8_t> w{fc};
     std::uint16_t qty = 1;
     bool coils = false;
+    const std::vector<std::uint8_t> w = stateful_write(out, fc, base, room, qty, coils);
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(w, options_.unit)});
+    out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+    read_back(out, cross, fc, base, qty, coils);
+}
+
+// The write of a stateful case at `base` (steps before it, if it needs any, go to `out`):
+// its PDU, the items it writes and whether they are coils.
+std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, std::uint16_t base,
+                                                    std::uint32_t room, std::uint16_t& qty,
+                                                    bool& coils) {
+    std::vector<std::uint8_t> w{fc};
     switch (fc) {
         case kWriteSingleCoil:
             coils = true;
@@ -712,8 +735,7 @@ void Generator::stateful(Case& out, bool cross) {
             for (int i = 0; i < qty; ++i) put16(w, word());
             break;
         }
-        default:  // 0x16: mask write after a plain write, so the old value is known
-        {
+        case kMaskWriteRegister: {  // after a plain write, so the old value is known
             std::vector<std::uint8_t> pre{0x06};
             put16(pre, base);
             put16(pre, word());
@@ -725,8 +747,13 @@ void Generator::stateful(Case& out, bool cross) {
             break;
         }
     }
-    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(w, options_.unit)});
-    out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+    return w;
+}
+
+// Reads a stateful write back: its exact range and one straddling its start, on the writer's
+// connection (or the other one, `cross`), and on the other one too; FC 17 reads registers.
+void Generator::read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t base,
+                          std::uint16_t qty, bool coils) {
     const std::uint8_t reader = cross ? 1 : 0;
     // Read back: the exact range, and a range straddling its start.
     const std::uint16_t max = coils ? lim::kMaxReadBits : lim::kMaxReadRegisters;

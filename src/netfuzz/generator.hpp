@@ -70,8 +70,14 @@ class Generator {
     void structured(Case& out, MutationClass forced = MutationClass::Count);
     void naive(Case& out);
     void isolated(Case& out);
+    void mangled_frame(Case& out, std::uint32_t roll);
+    void slow_frame(Case& out, std::uint32_t roll, std::vector<std::uint8_t> f);
     void mutate_recorded(Case& out);
     void stateful(Case& out, bool cross);
+    std::vector<std::uint8_t> stateful_write(Case& out, std::uint8_t fc, std::uint16_t base,
+                                             std::uint32_t room, std::uint16_t& qty, bool& coils);
+    void read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t base, std::uint16_t qty,
+                   bool coils);
     void burst_split(Case& out);
     // Model-aimed cases (generator_map.cpp).
     bool has_model() const noexcept { return options_.model && !options_.model->empty(); }

@@ -188,6 +188,193 @@ RequestInfo without_trailing_bytes(const RequestInfo& rq) {
 }
 }  // namespace
 
+namespace {
+
+// What every answer is judged with: the request, the answer's PDU and its text.
+struct Answer {
+    const RequestInfo& rq;
+    const TargetProfile& profile;
+    codec::MbapHeader header;
+    codec::Bytes pdu;
+    std::string seen;
+    std::uint8_t fc;
+    ExceptionCode owed;
+    // A sub-function (FC 08) or MEI type (FC 2B) the codec does not know: 01 is owed, and a
+    // server that answers anything else has one missing check, whatever it answers instead.
+    bool unknown_sub_function;
+    std::string expected_text;
+};
+
+// An answer to what must be discarded, or one whose header or function is not the request's.
+Verdict judge_header(const Answer& a) {
+    const RequestInfo& rq = a.rq;
+    if (rq.expect == Expect::MustBeSilent && !rq.discard.empty()) {
+        return make(Oracle::SpecDeviation, fmt::format("answers-{}", rq.discard), rq,
+                    fmt::format("answered a frame it must discard ({})", rq.discard),
+                    "no answer: the frame is discarded", a.seen);
+    }
+    if (rq.expect == Expect::MustBeSilent) {
+        return make(Oracle::SpecDeviation, "answers-nonzero-protocol-id", rq,
+                    fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),
+                    "no answer: frames with protocol id != 0 are discarded", a.seen);
+    }
+    if (a.header.protocol_id != 0) {
+        return make(Oracle::MalformedResponse, "response-protocol-id", rq,
+                    fmt::format("response carries protocol id {:04X}", a.header.protocol_id),
+                    "protocol id 0000", a.seen);
+    }
+    if (a.header.unit_id != rq.header.unit_id) {
+        return make(Oracle::MalformedResponse, "response-unit-id", rq,
+                    fmt::format("response unit id {} for a request to unit {}", a.header.unit_id,
+                                rq.header.unit_id),
+                    fmt::format("unit id {}", rq.header.unit_id), a.seen);
+    }
+    if (a.pdu.empty() || (a.pdu[0] & 0x7F) != (a.fc & 0x7F)) {
+        return make(Oracle::MalformedResponse, "response-function", rq,
+                    fmt::format("response function 0x{:02X} for request {}",
+                                a.pdu.empty() ? 0 : a.pdu[0], codec::function_label(a.fc)),
+                    fmt::format("function 0x{:02X} or 0x{:02X}", a.fc & 0x7F,
+                                (a.fc & 0x7F) | codec::kExceptionBit),
+                    a.seen);
+    }
+    return {};
+}
+
+// Whether exception `code` is a right answer to the request.
+bool exception_allowed(const Answer& a, std::uint8_t code) {
+    using E = ExceptionCode;
+    const bool foreign_unit = a.rq.header.unit_id != a.profile.unit;
+    if (code == code_of(E::ServerDeviceBusy) ||
+        (foreign_unit && (code == code_of(E::GatewayPathUnavailable) ||
+                          code == code_of(E::GatewayTargetFailedToRespond))))
+        return true;
+    if (a.owed != E::None)
+        return code == code_of(a.owed) || a.profile.unsupported[a.fc] ||
+               (code == code_of(E::IllegalFunction) && sub_function_varies(a.fc)) ||
+               a.profile.extended[a.fc];
+    // A valid request may meet an address the device lacks (02), a device failure (04/05) or
+    // an unsupported function (01). 03 is only a deviation for the plain reads (01-04), where
+    // a valid quantity leaves nothing to object to.
+    return code == code_of(E::IllegalFunction) || code == code_of(E::IllegalDataAddress) ||
+           code == code_of(E::ServerDeviceFailure) || code == code_of(E::Acknowledge) ||
+           (code == code_of(E::IllegalDataValue) &&
+            !codec::request_is(a.fc, codec::RequestShape::AddressQuantity));
+}
+
+Verdict judge_exception(const Answer& a) {
+    if (a.pdu.size() != 2) {
+        return make(Oracle::MalformedResponse, "exception-response-length", a.rq,
+                    fmt::format("exception response of {} bytes (MBAP length {})", a.pdu.size(),
+                                a.header.length),
+                    "the function with its exception bit and one exception code byte", a.seen);
+    }
+    const std::uint8_t code = a.pdu[1];
+    if (exception_allowed(a, code)) return {};
+    const bool none_owed = a.owed == ExceptionCode::None;
+    return make(
+        Oracle::SpecDeviation,
+        // The codec's reason is left out: one wrong check order shows under every
+        // reason that owes the same exception. An unknown sub-function is one missing
+        // check however it is answered (see kSubFunctionNot01Rule).
+        a.unknown_sub_function ? std::string(kSubFunctionNot01Rule)
+        : none_owed            ? fmt::format("exception-{:02X}-to-valid-request", code)
+                               : fmt::format("exception-{:02X}-where-{:02X}-owed", code,
+                                             static_cast<std::uint8_t>(a.owed)),
+        a.rq,
+        fmt::format("{}: {} where {} is owed", codec::function_label(a.fc), exception_text(code),
+                    none_owed ? std::string("a normal response")
+                              : exception_text(static_cast<std::uint8_t>(a.owed))),
+        a.expected_text, a.seen);
+}
+
+// A normal answer's echo against the request, by the function's response shape.
+std::string_view echo_fault(codec::ResponseShape shape, const codec::Response& r,
+                            const codec::Request& q) {
+    using codec::ResponseShape;
+    switch (shape) {
+        case ResponseShape::EchoValue:
+            return r.address != q.address || r.value != q.value ? "echo-differs" : "";
+        case ResponseShape::EchoQuantity:
+            return r.address != q.address || r.quantity != q.quantity ? "echo-differs" : "";
+        case ResponseShape::EchoMask:
+            return r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask
+                       ? "echo-differs"
+                       : "";
+        case ResponseShape::EchoSubFunction:
+            if (r.sub_function != q.sub_function) return "sub-function-not-echoed";
+            if (q.sub_function == 0x0000 &&
+                !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
+                return "query-data-not-echoed";
+            return "";
+        case ResponseShape::MeiObjects:
+            return r.mei_type != q.mei_type ? "mei-type-not-echoed" : "";
+        case ResponseShape::Bits:
+        case ResponseShape::Registers:
+        case ResponseShape::ExceptionStatus:
+        case ResponseShape::EventCounter:
+        case ResponseShape::EventLog:
+        case ResponseShape::ServerId:
+        case ResponseShape::FileRecords:
+        case ResponseShape::FifoValues:
+            return "";  // their data sizes are checked apart
+    }
+    return "";
+}
+
+std::string_view echo_fault_text(std::string_view rule) {
+    if (rule == "sub-function-not-echoed") return "sub-function not echoed";
+    if (rule == "query-data-not-echoed") return "return-query-data did not echo the data";
+    if (rule == "mei-type-not-echoed") return "MEI type not echoed";
+    return "echo differs from the request";
+}
+
+Verdict judge_normal_answer(const Answer& a) {
+    const RequestInfo& rq = a.rq;
+    if (a.owed != ExceptionCode::None && !a.profile.extended[a.fc]) {
+        return make(Oracle::SpecDeviation,
+                    // One finding per missing check: the handler of this function code (its own
+                    // code) skips the check that owes this exception, whichever field failed it
+                    // (v1.1b3 gives FC 0F's quantity and byte count one check: pymodbus ignoring FC
+                    // 0F's quantity showed as two findings, one per field).
+                    a.unknown_sub_function
+                        ? std::string(kSubFunctionNot01Rule)
+                        : fmt::format("invalid-request-answered-normally(owes-{:02X})/fc{:02X}",
+                                      static_cast<std::uint8_t>(a.owed), a.fc),
+                    rq,
+                    fmt::format("{}: invalid request answered normally ({} owed: {})",
+                                codec::function_label(a.fc),
+                                exception_text(static_cast<std::uint8_t>(a.owed)),
+                                codec::error_name(rq.status.error)),
+                    a.expected_text, a.seen);
+    }
+    if (a.profile.extended[a.fc]) return {};
+    codec::Response r;
+    if (const auto err = codec::decode_response(a.pdu, r); err != codec::CodecError::Ok) {
+        return make(Oracle::MalformedResponse,
+                    fmt::format("undecodable-response({})", codec::error_name(err)), rq,
+                    fmt::format("{}: response does not decode: {}", codec::function_label(a.fc),
+                                codec::error_description(err)),
+                    a.expected_text, a.seen);
+    }
+    auto mismatch = [&](std::string_view rule, std::string what) {
+        return make(Oracle::MalformedResponse, std::string(rule), rq,
+                    fmt::format("{}: {}", codec::function_label(a.fc), what), a.expected_text,
+                    a.seen);
+    };
+    if (Verdict v = check_unmapped(rq, a.profile)) return v;
+    const int want = codec::expected_read_byte_count(rq.request);
+    if (want >= 0 && static_cast<int>(r.payload.size()) != want)
+        return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
+                                                      r.payload.size(), want));
+    const codec::FunctionInfo* info = codec::function_info(a.fc);
+    if (!info) return {};
+    const std::string_view fault = echo_fault(info->response, r, rq.request);
+    if (!fault.empty()) return mismatch(fault, std::string(echo_fault_text(fault)));
+    return {};
+}
+
+}  // namespace
+
 Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProfile& profile) {
     if (rq.status.error == codec::CodecError::TrailingBytes && rq.pdu.size() > 1) {
         // 03 for them is right too (the codec's own reading).
@@ -198,168 +385,20 @@ Verdict judge_response(const RequestInfo& rq, codec::Bytes rsp, const TargetProf
         if (refused_03) return {};
         return judge_response(without_trailing_bytes(rq), rsp, profile);
     }
-    const codec::MbapHeader h = codec::read_mbap_header(rsp.data());
-    const codec::Bytes pdu = rsp.subspan(codec::limits::kMbapHeader);
-    const std::string seen = hex(rsp);
-    if (rq.expect == Expect::MustBeSilent && !rq.discard.empty()) {
-        return make(Oracle::SpecDeviation, fmt::format("answers-{}", rq.discard), rq,
-                    fmt::format("answered a frame it must discard ({})", rq.discard),
-                    "no answer: the frame is discarded", seen);
-    }
-    if (rq.expect == Expect::MustBeSilent) {
-        return make(Oracle::SpecDeviation, "answers-nonzero-protocol-id", rq,
-                    fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),
-                    "no answer: frames with protocol id != 0 are discarded", seen);
-    }
-    if (h.protocol_id != 0) {
-        return make(Oracle::MalformedResponse, "response-protocol-id", rq,
-                    fmt::format("response carries protocol id {:04X}", h.protocol_id),
-                    "protocol id 0000", seen);
-    }
-    if (h.unit_id != rq.header.unit_id) {
-        return make(Oracle::MalformedResponse, "response-unit-id", rq,
-                    fmt::format("response unit id {} for a request to unit {}", h.unit_id,
-                                rq.header.unit_id),
-                    fmt::format("unit id {}", rq.header.unit_id), seen);
-    }
-    const std::uint8_t fc = rq.pdu.empty() ? 0 : rq.pdu[0];
-    if (pdu.empty() || (pdu[0] & 0x7F) != (fc & 0x7F)) {
-        return make(Oracle::MalformedResponse, "response-function", rq,
-                    fmt::format("response function 0x{:02X} for request {}",
-                                pdu.empty() ? 0 : pdu[0], codec::function_label(fc)),
-                    fmt::format("function 0x{:02X} or 0x{:02X}", fc & 0x7F,
-                                (fc & 0x7F) | codec::kExceptionBit),
-                    seen);
-    }
     const auto owed = rq.status.exception;
-    // A sub-function (FC 08) or MEI type (FC 2B) the codec does not know: 01 is owed, and a
-    // server that answers anything else has one missing check, whatever it answers instead.
-    const bool unknown_sub_function = rq.status.error == codec::CodecError::UnsupportedSubFunction;
-    const std::string expected_text =
-        owed != ExceptionCode::None ? exception_text(static_cast<std::uint8_t>(owed))
-                                    : fmt::format("a normal response to {}", request_text(rq));
-    if (pdu[0] & codec::kExceptionBit) {
-        if (pdu.size() != 2) {
-            return make(Oracle::MalformedResponse, "exception-response-length", rq,
-                        fmt::format("exception response of {} bytes (MBAP length {})", pdu.size(),
-                                    h.length),
-                        "the function with its exception bit and one exception code byte", seen);
-        }
-        const std::uint8_t code = pdu[1];
-        const bool foreign_unit = rq.header.unit_id != profile.unit;
-        using E = ExceptionCode;
-        bool ok = code == code_of(E::ServerDeviceBusy) ||
-                  (foreign_unit && (code == code_of(E::GatewayPathUnavailable) ||
-                                    code == code_of(E::GatewayTargetFailedToRespond)));
-        if (owed != E::None) {
-            ok = ok || code == code_of(owed) || profile.unsupported[fc] ||
-                 (code == code_of(E::IllegalFunction) && sub_function_varies(fc)) ||
-                 profile.extended[fc];
-        } else {
-            // A valid request may meet an address the device lacks (02), a device failure
-            // (04/05) or an unsupported function (01). 03 is only a deviation for the plain
-            // reads (01-04), where a valid quantity leaves nothing to object to.
-            ok = ok || code == code_of(E::IllegalFunction) ||
-                 code == code_of(E::IllegalDataAddress) ||
-                 code == code_of(E::ServerDeviceFailure) || code == code_of(E::Acknowledge) ||
-                 (code == code_of(E::IllegalDataValue) &&
-                  !codec::request_is(fc, codec::RequestShape::AddressQuantity));
-        }
-        if (!ok) {
-            return make(Oracle::SpecDeviation,
-                        // The codec's reason is left out: one wrong check order shows
-                        // under every reason that owes the same exception. An unknown sub-function
-                        // is one missing check however it is answered (see kSubFunctionNot01Rule).
-                        unknown_sub_function ? std::string(kSubFunctionNot01Rule)
-                        : owed == ExceptionCode::None
-                            ? fmt::format("exception-{:02X}-to-valid-request", code)
-                            : fmt::format("exception-{:02X}-where-{:02X}-owed", code,
-                                          static_cast<std::uint8_t>(owed)),
-                        rq,
-                        fmt::format("{}: {} where {} is owed", codec::function_label(fc),
-                                    exception_text(code),
-                                    owed == ExceptionCode::None
-                                        ? std::string("a normal response")
-                                        : exception_text(static_cast<std::uint8_t>(owed))),
-                        expected_text, seen);
-        }
-        return {};
-    }
-    if (owed != ExceptionCode::None && !profile.extended[fc]) {
-        return make(
-            Oracle::SpecDeviation,
-            // One finding per missing check: the handler of this function code (its own
-            // code) skips the check that owes this exception, whichever field failed it
-            // (v1.1b3 gives FC 0F's quantity and byte count one check: pymodbus ignoring FC
-            // 0F's quantity showed as two findings, one per field).
-            unknown_sub_function
-                ? std::string(kSubFunctionNot01Rule)
-                : fmt::format("invalid-request-answered-normally(owes-{:02X})/fc{:02X}",
-                              static_cast<std::uint8_t>(owed), fc),
-            rq,
-            fmt::format("{}: invalid request answered normally ({} owed: {})",
-                        codec::function_label(fc), exception_text(static_cast<std::uint8_t>(owed)),
-                        codec::error_name(rq.status.error)),
-            expected_text, seen);
-    }
-    if (profile.extended[fc]) return {};
-    codec::Response r;
-    if (const auto err = codec::decode_response(pdu, r); err != codec::CodecError::Ok) {
-        return make(Oracle::MalformedResponse,
-                    fmt::format("undecodable-response({})", codec::error_name(err)), rq,
-                    fmt::format("{}: response does not decode: {}", codec::function_label(fc),
-                                codec::error_description(err)),
-                    expected_text, seen);
-    }
-    const codec::Request& q = rq.request;
-    auto mismatch = [&](std::string_view rule, std::string what) {
-        return make(Oracle::MalformedResponse, std::string(rule), rq,
-                    fmt::format("{}: {}", codec::function_label(fc), what), expected_text, seen);
-    };
-    if (Verdict v = check_unmapped(rq, profile)) return v;
-    const int want = codec::expected_read_byte_count(q);
-    if (want >= 0 && static_cast<int>(r.payload.size()) != want)
-        return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
-                                                      r.payload.size(), want));
-    const codec::FunctionInfo* info = codec::function_info(fc);
-    if (!info) return {};
-    using codec::ResponseShape;
-    switch (info->response) {
-        case ResponseShape::EchoValue:
-            if (r.address != q.address || r.value != q.value)
-                return mismatch("echo-differs", "echo differs from the request");
-            break;
-        case ResponseShape::EchoQuantity:
-            if (r.address != q.address || r.quantity != q.quantity)
-                return mismatch("echo-differs",
-                                "echo of address/quantity differs from the request");
-            break;
-        case ResponseShape::EchoMask:
-            if (r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask)
-                return mismatch("echo-differs", "echo differs from the request");
-            break;
-        case ResponseShape::EchoSubFunction:
-            if (r.sub_function != q.sub_function)
-                return mismatch("sub-function-not-echoed", "sub-function not echoed");
-            if (q.sub_function == 0x0000 &&
-                !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
-                return mismatch("query-data-not-echoed", "return-query-data did not echo the data");
-            break;
-        case ResponseShape::MeiObjects:
-            if (r.mei_type != q.mei_type)
-                return mismatch("mei-type-not-echoed", "MEI type not echoed");
-            break;
-        case ResponseShape::Bits:
-        case ResponseShape::Registers:
-        case ResponseShape::ExceptionStatus:
-        case ResponseShape::EventCounter:
-        case ResponseShape::EventLog:
-        case ResponseShape::ServerId:
-        case ResponseShape::FileRecords:
-        case ResponseShape::FifoValues:
-            break;  // their data sizes were checked above
-    }
-    return {};
+    const Answer a{rq,
+                   profile,
+                   codec::read_mbap_header(rsp.data()),
+                   rsp.subspan(codec::limits::kMbapHeader),
+                   hex(rsp),
+                   static_cast<std::uint8_t>(rq.pdu.empty() ? 0 : rq.pdu[0]),
+                   owed,
+                   rq.status.error == codec::CodecError::UnsupportedSubFunction,
+                   owed != ExceptionCode::None
+                       ? exception_text(static_cast<std::uint8_t>(owed))
+                       : fmt::format("a normal response to {}", request_text(rq))};
+    if (Verdict v = judge_header(a)) return v;
+    return (a.pdu[0] & codec::kExceptionBit) ? judge_exception(a) : judge_normal_answer(a);
 }
 
 void relocate_writes(std::uint8_t* adu, std::size_t size, const StateRange& state) noexcept {
