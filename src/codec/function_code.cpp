@@ -151,6 +151,27 @@ std::uint8_t function_for(Table table, RequestShape shape) noexcept {
     return 0;
 }
 
+AddressFields address_fields(RequestShape shape) noexcept {
+    switch (shape) {
+        case RequestShape::AddressQuantity:
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+        case RequestShape::MultipleCoils:
+        case RequestShape::MultipleRegisters:
+        case RequestShape::MaskWrite:
+        case RequestShape::FifoPointer:
+            return {1, 0};
+        case RequestShape::ReadWriteRegisters:
+            return {1, 5};
+        case RequestShape::FunctionOnly:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::MeiTransport:
+            return {};
+    }
+    return {};
+}
+
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept {
     const FunctionInfo* f = find(fc);
     return f != nullptr && f->request == shape;

@@ -4,6 +4,7 @@
 // switches there are over FunctionCode, so -Wswitch lists what is missing) and a slave handler.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -109,6 +110,14 @@ std::optional<Table> function_table(std::uint8_t fc) noexcept;
 // The function whose request has `shape` and addresses `table`: the read of holding registers
 // (AddressQuantity) is 03, the single write of coils (SingleCoil) 05; 0 when there is none.
 std::uint8_t function_for(Table table, RequestShape shape) noexcept;
+
+// Where a request of `shape` carries its addresses: PDU offsets of the big-endian start
+// address fields (FC 17: the read range's, then the write range's), 0 for none.
+struct AddressFields {
+    std::size_t first = 0, second = 0;
+    bool any() const noexcept { return first != 0; }
+};
+AddressFields address_fields(RequestShape shape) noexcept;
 
 // True when `fc` is public and its request (response) has `shape`.
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept;

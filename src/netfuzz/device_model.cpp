@@ -189,6 +189,17 @@ std::string model_to_json(const DeviceModel& m) {
     return j.dump(2) + "\n";
 }
 
+namespace {
+// A JSON value that must be a whole number in 0..max: anything else (a fraction, a negative
+// number, 3e28: converting those is undefined behaviour) is refused with `what` named.
+std::uint64_t whole_number(const nlohmann::json& v, std::uint64_t max, std::string_view what) {
+    if (!v.is_number_unsigned() || v.get<std::uint64_t>() > max)
+        throw std::runtime_error(
+            fmt::format("{} must be a whole number 0..{}, not {}", what, max, v.dump()));
+    return v.get<std::uint64_t>();
+}
+}  // namespace
+
 bool model_from_json(const std::string& text, DeviceModel& out, std::string& error) {
     using nlohmann::json;
     out = DeviceModel{};
@@ -206,9 +217,9 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
             }
             TableModel& tm = out.table(t);
             for (const auto& r : tj.at("ranges")) {
-                const auto first = r.at(0).get<std::uint32_t>(),
-                           last = r.at(1).get<std::uint32_t>();
-                if (last > 0xFFFF || first > last) {
+                const auto first = whole_number(r.at(0), 0xFFFF, "a range's first address"),
+                           last = whole_number(r.at(1), 0xFFFF, "a range's last address");
+                if (first > last) {
                     error =
                         fmt::format("{}: range {}-{} is not within 0..65535", name, first, last);
                     return false;
@@ -217,17 +228,22 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
                                                  static_cast<std::uint16_t>(last)});
             }
             normalise(tm.ranges);
-            tm.max_quantity = tj.value("max_quantity", std::uint16_t{0});
+            if (tj.contains("max_quantity"))
+                tm.max_quantity = static_cast<std::uint16_t>(
+                    whole_number(tj["max_quantity"], 0xFFFF, "max_quantity"));
             const std::string w = tj.value("writes_stick", std::string("unknown"));
             for (WritesStick ws : {WritesStick::Yes, WritesStick::No, WritesStick::Refused})
                 if (w == writes_stick_name(ws)) tm.writes = ws;
         }
-        if (j.contains("units")) out.units = j["units"].get<std::vector<std::uint8_t>>();
+        if (j.contains("units"))
+            for (const auto& u : j["units"])
+                out.units.push_back(static_cast<std::uint8_t>(whole_number(u, 0xFF, "a unit id")));
         if (j.contains("exception_pause_ms"))
             for (const auto& [code, ms] : j["exception_pause_ms"].items()) {
                 const unsigned long c = std::stoul(code, nullptr, 16);
                 if (c >= 1 && c < out.exception_pause_ms.size())
-                    out.exception_pause_ms[c] = ms.get<std::uint32_t>();
+                    out.exception_pause_ms[c] = static_cast<std::uint32_t>(
+                        whole_number(ms, 0xFFFFFFFF, "an exception pause"));
             }
     } catch (const std::exception& e) {
         error = fmt::format("bad device model: {}", e.what());

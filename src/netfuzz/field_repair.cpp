@@ -4,32 +4,6 @@
 #include "codec/mbap.hpp"
 
 namespace mbstorm::netfuzz {
-namespace {
-
-// PDU offsets of the address fields a request of this shape carries (0: none).
-std::pair<std::size_t, std::size_t> address_offsets(codec::RequestShape shape) noexcept {
-    using codec::RequestShape;
-    switch (shape) {
-        case RequestShape::AddressQuantity:
-        case RequestShape::SingleCoil:
-        case RequestShape::SingleRegister:
-        case RequestShape::MultipleCoils:
-        case RequestShape::MultipleRegisters:
-        case RequestShape::MaskWrite:
-        case RequestShape::FifoPointer:
-            return {1, 0};
-        case RequestShape::ReadWriteRegisters:
-            return {1, 5};  // the read range's start, the write range's start
-        case RequestShape::FunctionOnly:
-        case RequestShape::SubFunction:
-        case RequestShape::FileRecords:
-        case RequestShape::MeiTransport:
-            return {0, 0};
-    }
-    return {0, 0};
-}
-
-}  // namespace
 
 std::optional<std::vector<std::uint8_t>> with_addresses_in_map(codec::Bytes pdu,
                                                                const DeviceModel& model) {
@@ -42,8 +16,8 @@ std::optional<std::vector<std::uint8_t>> with_addresses_in_map(codec::Bytes pdu,
     const std::uint16_t inside = t.ranges.front().first;
     std::vector<std::uint8_t> out(pdu.begin(), pdu.end());
     bool moved = false;
-    const auto [first, second] = address_offsets(info->request);
-    for (const std::size_t at : {first, second}) {
+    const codec::AddressFields fields = codec::address_fields(info->request);
+    for (const std::size_t at : {fields.first, fields.second}) {
         if (at == 0 || out.size() < at + 2) continue;
         if (t.contains(codec::load_be16(out.data() + at))) continue;
         out[at] = static_cast<std::uint8_t>(inside >> 8);

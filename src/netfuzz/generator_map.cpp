@@ -105,24 +105,7 @@ Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity, s
 
 bool addressed(std::uint8_t fc) {
     const codec::FunctionInfo* info = codec::function_info(fc);
-    if (!info || !info->table) return false;
-    switch (info->request) {
-        case RequestShape::AddressQuantity:
-        case RequestShape::SingleCoil:
-        case RequestShape::SingleRegister:
-        case RequestShape::MultipleCoils:
-        case RequestShape::MultipleRegisters:
-        case RequestShape::MaskWrite:
-        case RequestShape::ReadWriteRegisters:
-        case RequestShape::FifoPointer:
-            return true;
-        case RequestShape::FunctionOnly:
-        case RequestShape::SubFunction:
-        case RequestShape::FileRecords:
-        case RequestShape::MeiTransport:
-            return false;
-    }
-    return false;
+    return info && info->table && codec::address_fields(info->request).any();
 }
 
 bool bit_table(codec::Table t) {

@@ -16,7 +16,7 @@ constexpr std::uint32_t kWordSizeBits = 0x10;
 constexpr std::uint32_t kCookieBaseMask = ~std::uint32_t{0xf0};
 constexpr std::size_t kV2HeaderSize = 40;
 // A word is ZigZag LEB128 in at most 9 bytes: 8 of 7 bits, then one of the top 8 bits.
-constexpr std::size_t kMaxWordBytes = 9;
+constexpr int kSevenBitBytes = 8;
 // Largest payload a histogram we can hold may need (every count a full word); more is refused
 // rather than inflated without bound.
 constexpr std::size_t kMaxPayloadBytes = 1u << 20;
@@ -43,7 +43,7 @@ std::uint64_t get_u64(const std::uint8_t* p) {
 void put_word(std::vector<std::uint8_t>& out, std::int64_t value) {
     const std::uint64_t zz =
         (static_cast<std::uint64_t>(value) << 1) ^ static_cast<std::uint64_t>(value >> 63);
-    for (int i = 0; i < 8; ++i) {
+    for (int i = 0; i < kSevenBitBytes; ++i) {
         const std::uint64_t rest = zz >> (7 * (i + 1));
         const auto low7 = static_cast<std::uint8_t>((zz >> (7 * i)) & 0x7f);
         if (rest == 0) {
@@ -60,7 +60,7 @@ void put_word(std::vector<std::uint8_t>& out, std::int64_t value) {
 std::size_t get_word(const std::uint8_t* p, const std::uint8_t* end, std::int64_t& value) {
     std::uint64_t zz = 0;
     std::size_t used = 0;
-    for (int i = 0; i < 8; ++i) {
+    for (int i = 0; i < kSevenBitBytes; ++i) {
         if (p + used >= end) return 0;
         const std::uint8_t b = p[used++];
         zz |= std::uint64_t{b & 0x7fu} << (7 * i);

@@ -83,6 +83,28 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     EXPECT_FALSE(model_from_json("[]", back, error));
 }
 
+// A model.json is a file the user may edit or bring from elsewhere: numbers that do not fit
+// their field (found by fuzz/fuzz_inputs.cpp: 3e28 as an address was undefined behaviour)
+// are refused with the field named, never converted.
+TEST(DeviceModelJson, RefusesNumbersThatDoNotFitTheirField) {
+    DeviceModel back;
+    std::string error;
+    for (const char* bad : {
+             R"({"tables": {"holding": {"ranges": [[3e28, 4e28]]}}})",
+             R"({"tables": {"holding": {"ranges": [[-1, 5]]}}})",
+             R"({"tables": {"holding": {"ranges": [[0, 65536]]}}})",
+             R"({"tables": {"holding": {"ranges": [[0.5, 5]]}}})",
+             R"({"tables": {"holding": {"ranges": [], "max_quantity": 1e9}}})",
+             R"({"tables": {}, "units": [256]})",
+             R"({"tables": {}, "units": [1.5]})",
+             R"({"tables": {}, "exception_pause_ms": {"01": -3}})",
+         }) {
+        error.clear();
+        EXPECT_FALSE(model_from_json(bad, back, error)) << bad;
+        EXPECT_NE(error.find("whole number"), std::string::npos) << bad << ": " << error;
+    }
+}
+
 struct SparseDevice {
     std::unique_ptr<mbstorm::test::Target> process;
     std::unique_ptr<TcpConnector> connector;
