@@ -38,6 +38,22 @@ void set_io_timeouts(int fd) {
     ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
 }
 
+// After an answer to a request not read whole (431): no more to send, and what the client
+// still sends is read and dropped for a moment, so that closing does not reset the connection
+// and throw away the answer with it. Bounded in bytes and time: the server is one thread.
+void close_gracefully(int fd) {
+    ::shutdown(fd, SHUT_WR);
+    const timeval tv{0, 100'000};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    char sink[4096];
+    for (std::size_t drained = 0; drained < 16 * kMaxRequestHead;) {
+        const ssize_t n = ::recv(fd, sink, sizeof sink, 0);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return;
+        drained += static_cast<std::size_t>(n);
+    }
+}
+
 void send_all(int fd, std::string_view bytes) {
     while (!bytes.empty()) {
         const ssize_t n = ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
@@ -132,6 +148,7 @@ void HttpServer::answer(int fd) noexcept {
         if (head.size() > kMaxRequestHead) {
             send_all(fd, http_response({431, "text/plain; charset=utf-8", "request too large\n"},
                                        false));
+            close_gracefully(fd);
             return;
         }
         const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);

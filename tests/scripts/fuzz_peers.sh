@@ -76,6 +76,8 @@ fi
 
 if [ -x "$libmodbus_server" ]; then
   if start_server "$work/lm.out" "$libmodbus_server" --seconds 120; then
+    # Both shown by the first looks, within the first 8 s (bench/README.md).
+    must_find="spec-deviation:answers-nonzero-protocol-id hang:no-answer/fc07" \
     fuzz_peer libmodbus \
       spec-deviation:answers-nonzero-protocol-id spec-deviation:exception-02-where-03-owed \
       unexpected-close:close-with-request-pending hang:drops-requests-after-exception \
