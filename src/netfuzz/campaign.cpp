@@ -318,6 +318,7 @@ class Campaign {
     bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
     void repair_fields(Finding& f);
+    bool move_into_map(Step& s, int fc) const;
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
     void check_capacity_once();
@@ -897,24 +898,44 @@ void Campaign::record(const Case& c, Execution ex) {
 // Field-level minimisation (field_repair.hpp): "02 where 03 is owed" from a request also
 // outside the map may be a target that never makes the 03 check; with the address inside
 // the map it shows which. Whatever deviation the repaired request still draws is the finding.
+// One request frame (any framing) with its addresses moved into the map; false when the
+// step is not one such frame of function `fc`, or nothing moved.
+bool Campaign::move_into_map(Step& s, int fc) const {
+    const codec::Framing framing = result_.profile.framing;
+    if (s.op != Op::Send) return false;
+    std::vector<std::uint8_t> mbap;
+    if (framing == codec::Framing::Mbap) {
+        if (s.bytes.size() <= lim::kMbapHeader ||
+            codec::announced_adu_size(s.bytes.data()) != s.bytes.size())
+            return false;
+        mbap = s.bytes;
+    } else {
+        WireFrame wf;
+        if (cut_frame(s.bytes, framing, true, 0, wf) != WireCut::Frame ||
+            wf.size != s.bytes.size() || !wf.discard.empty())
+            return false;
+        mbap = std::move(wf.mbap);
+    }
+    if (mbap.size() <= lim::kMbapHeader || mbap[lim::kMbapHeader] != fc) return false;
+    const auto pdu =
+        with_addresses_in_map(codec::Bytes(mbap).subspan(lim::kMbapHeader), result_.model);
+    if (!pdu) return false;
+    std::copy(pdu->begin(), pdu->end(), mbap.begin() + lim::kMbapHeader);
+    s.bytes = framing == codec::Framing::Mbap ? std::move(mbap) : reframe(mbap, framing);
+    return true;
+}
+
+// Field-level minimisation (field_repair.hpp): "02 where 03 is owed" from a request also
+// outside the map may be a target that never makes the 03 check; with the address inside
+// the map it shows which. Whatever deviation the repaired request still draws is the finding.
 void Campaign::repair_fields(Finding& f) {
     if (f.verdict.oracle != Oracle::SpecDeviation ||
         f.verdict.rule.rfind("exception-02-where-", 0) != 0 || result_.model.empty() ||
-        result_.profile.framing != codec::Framing::Mbap || !can_afford(1))
+        !can_afford(1))
         return;
     Case repaired = f.fuzz_case;
     bool changed = false;
-    for (Step& s : repaired.steps) {
-        if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader ||
-            codec::announced_adu_size(s.bytes.data()) != s.bytes.size() ||
-            s.bytes[lim::kMbapHeader] != f.verdict.culprit_fc)
-            continue;
-        const auto pdu =
-            with_addresses_in_map(codec::Bytes(s.bytes).subspan(lim::kMbapHeader), result_.model);
-        if (!pdu) continue;
-        std::copy(pdu->begin(), pdu->end(), s.bytes.begin() + lim::kMbapHeader);
-        changed = true;
-    }
+    for (Step& s : repaired.steps) changed = move_into_map(s, f.verdict.culprit_fc) || changed;
     if (!changed) return;
     ++result_.isolated_runs;
     Execution e = run_alone(repaired);
