@@ -14,6 +14,7 @@
 #include "codec/ascii.hpp"
 #include "codec/rtu.hpp"
 #include "net/clock.hpp"
+#include "net/serial_port.hpp"
 #include "server/serial_server.hpp"
 #include "slave/data_model.hpp"
 
@@ -101,6 +102,25 @@ class SerialServerTest : public ::testing::Test {
     std::thread thread_;
     std::string error_;
 };
+
+// The line's timing, pinned to the specification's numbers (Modbus over Serial Line v1.02,
+// 2.5.1.1): t1.5 and t3.5 in characters of start + data + parity + stop bits up to 19200 baud,
+// fixed at 750 us and 1.75 ms above it. (The test below measures against these functions, so
+// it alone would let a wrong t3.5 through.)
+TEST(SerialTiming, SilencesAreTheSpecificationsCharacterTimes) {
+    net::SerialSettings line;  // 19200 8E1: 11 bits a character, 572,916 ns
+    EXPECT_EQ(net::bits_per_character(line), 11u);
+    EXPECT_EQ(net::character_time_ns(line), 572'916);
+    EXPECT_EQ(net::intercharacter_timeout_ns(line), 859'374);
+    EXPECT_EQ(net::interframe_silence_ns(line), 2'005'206);
+    line.baud = 9600;
+    line.parity = net::Parity::None;
+    line.stop_bits = 2;                                      // 11 bits again
+    EXPECT_EQ(net::interframe_silence_ns(line), 4'010'415);  // 1,145,833 ns a character
+    line.baud = 38400;
+    EXPECT_EQ(net::intercharacter_timeout_ns(line), 750'000);
+    EXPECT_EQ(net::interframe_silence_ns(line), 1'750'000);
+}
 
 TEST_F(SerialServerTest, RtuReadIsAnsweredAfterTheInterFrameSilence) {
     start(codec::Framing::Rtu);
