@@ -90,6 +90,9 @@ int run_replay(const ReplayOptions& o) {
             }
             e = netfuzz::execute_case(replayed, target, f.profile, ex);
         }
+        // As the campaign understood what this target does (e.g. closes on a frame of the
+        // wrong length by itself: a refusal, not a lost stream).
+        e.verdict = netfuzz::understood_by(f.profile, std::move(e.verdict));
         // The same root cause (oracle and rule); findings saved before rules existed compare
         // by oracle.
         const bool same = f.verdict.rule.empty() ? e.verdict.oracle == f.oracle()

@@ -421,11 +421,7 @@ bool is_stream_lost_close(const Verdict& v) {
 }
 
 Verdict Campaign::understood(Verdict v) const {
-    if (length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame && is_stream_lost_close(v)) {
-        v.rule = kClosesOnInvalidRequestRule;
-        v.summary += " (it closes on such a frame alone, before anything follows it)";
-    }
-    return v;
+    return understood_by(result_.profile, std::move(v));
 }
 
 Execution Campaign::run_alone(const Case& c) {
@@ -479,7 +475,7 @@ void Campaign::ask_how_length_mismatch_closes(const Case& c) {
     const bool refused = closed_us >= 0 && (second_send_us < 0 || closed_us < second_send_us);
     length_mismatch_close_ =
         refused ? LengthMismatchClose::RefusesTheFrame : LengthMismatchClose::LosesTheStream;
-    if (refused) length_mismatch_known_ = true;
+    if (refused) length_mismatch_known_ = result_.profile.refuses_length_mismatch = true;
     bring_back(ex, "");
 }
 

@@ -180,6 +180,7 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
     for (std::size_t t = 0; t < f.profile.unmapped.size(); ++t)
         if (!f.profile.unmapped[t].empty())
             j["profile"]["unmapped"][std::to_string(t)] = f.profile.unmapped[t];
+    if (f.profile.refuses_length_mismatch) j["profile"]["refuses_length_mismatch"] = true;
     if (f.profile.framing != codec::Framing::Mbap) {
         j["profile"]["framing"] = codec::framing_name(f.profile.framing);
         j["profile"]["serial_line"] = f.profile.serial_line;
@@ -261,6 +262,7 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         else if (framing != "mbap")
             throw std::runtime_error("unknown framing");
         out.profile.serial_line = p.value("serial_line", false);
+        out.profile.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
         if (p.contains("unmapped") && p["unmapped"].is_object())
             for (const auto& [table, addrs] : p["unmapped"].items()) {
                 const unsigned long t = std::stoul(table);

@@ -125,6 +125,16 @@ bool pdu_length_mismatch(const RequestInfo& info) noexcept {
     return false;
 }
 
+Verdict understood_by(const TargetProfile& profile, Verdict v) {
+    const bool stream_lost_close =
+        v.oracle == Oracle::UnexpectedClose && v.rule.rfind(kStreamLostRule, 0) == 0;
+    if (profile.refuses_length_mismatch && stream_lost_close) {
+        v.rule = kClosesOnInvalidRequestRule;
+        v.summary += " (it closes on such a frame alone, before anything follows it)";
+    }
+    return v;
+}
+
 bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexcept {
     if (info.pdu.empty()) return false;
     return !info.status.ok() || profile.unsupported[info.pdu[0]];

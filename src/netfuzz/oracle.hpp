@@ -67,6 +67,11 @@ struct TargetProfile {
     // 02 while learning the map (each learned range's neighbours). A read that covers one of
     // them owes 02 as well: answered normally, it is a deviation.
     std::array<std::vector<std::uint16_t>, 4> unmapped{};
+    // Asked once (campaign.cpp): it closes on a frame of the wrong length by itself, before
+    // anything follows it, as it may close on any request it cannot use (pymodbus 3.0). Such a
+    // close is then close-with-request-pending/invalid-request, not a lost stream: see
+    // understood_by, used by the campaign and by replay alike.
+    bool refuses_length_mismatch = false;
 };
 
 // Addresses (holding registers and coils) that only stateful cases write; every other write
@@ -132,6 +137,9 @@ inline constexpr const char* kPartialFrameFamily = "mishandles-partial-frame";
 // one policy of its framing.
 inline constexpr const char* kClosesOnInvalidRequestRule =
     "close-with-request-pending/invalid-request";
+
+// A verdict as what is known of the target explains it (TargetProfile::refuses_length_mismatch).
+Verdict understood_by(const TargetProfile& profile, Verdict v);
 
 // Fills `info` for one complete, well-framed request ADU.
 void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInfo& info) noexcept;

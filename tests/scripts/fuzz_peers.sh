@@ -68,6 +68,17 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/
       malformed-response:answers-partial-frame hang:no-answer \
       hang:stream-lost-after-pdu-length-mismatch \
       malformed-response:stream-lost-after-pdu-length-mismatch hang:capacity
+    # Every finding replays alone, every time (issue #26), the one saved as a refusal of a
+    # frame of the wrong length included (replay understands the target as the run did).
+    for folder in "$work"/pymodbus/*/; do
+      [ -f "$folder/finding.json" ] || continue
+      out=$(timeout -k 5 60 "$mbstorm" replay "$folder" --target "127.0.0.1:$port" --runs 2 2>&1)
+      if [ $? -eq 1 ] && grep -q "2 of 2 run(s) reproduced" <<<"$out"; then
+        echo "ok   replay reproduces $(basename "$folder") 2 of 2"
+      else
+        echo "FAIL replay of $(basename "$folder")"; sed 's/^/  /' <<<"$out" | tail -5; fail=1
+      fi
+    done
   else echo "FAIL pymodbus server did not start"; fail=1; fi
   stop_server
 else
