@@ -12,7 +12,16 @@ if [ ! -d "$scratch/.git" ] && [ ! -f "$scratch/.git" ]; then
 fi
 git -C "$scratch" checkout --detach -q "$(git -C "$repo" rev-parse HEAD)" || exit 2
 cd "$scratch"
+# The tests find the Modbus documents in ../shared beside the source tree.
+[ -e "$scratch/../shared" ] || [ ! -d "$repo/../shared" ] || ln -s "$repo/../shared" "$scratch/../shared"
 cmake --preset release >/dev/null || exit 2
+cmake --build --preset release -j "$(nproc)" >/tmp/mutation-build.log 2>&1 || { echo "the tree does not build"; exit 2; }
+# Every suite passes unmutated, or a failure would prove nothing.
+suites=$(python3 -c 'import sys
+for l in open(sys.argv[1]):
+    if l.strip() and not l.startswith("#"): print(l.split(" | ", 3)[3].strip())' "$repo/tests/mutation/mutations.txt" | paste -sd'|')
+ctest --preset release -R "$suites" -j 4 >/tmp/mutation-test.log 2>&1 ||
+  { echo "the suites fail unmutated: see /tmp/mutation-test.log"; exit 2; }
 survived=0 caught=0
 while IFS= read -r line; do
   case "$line" in ''|'#'*) continue ;; esac
