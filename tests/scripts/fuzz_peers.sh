@@ -15,6 +15,8 @@ libmodbus_server="$bin_dir/tests/libmodbus_test_server"
 seconds=15
 
 source "$scripts/lib/peer.bash"
+# bounded SECONDS COMMAND...: COMMAND, killed if it outlives SECONDS.
+bounded() { timeout -k 5 "$@"; }
 work=$(mktemp -d)
 trap 'stop_server; rm -rf "$work"' EXIT
 
@@ -72,7 +74,7 @@ if [ -f "$pymodbus_server" ] && /usr/bin/python3 -c 'import pymodbus.server' 2>/
     # frame of the wrong length included (replay understands the target as the run did).
     for folder in "$work"/pymodbus/*/; do
       [ -f "$folder/finding.json" ] || continue
-      out=$(timeout -k 5 60 "$mbstorm" replay "$folder" --target "127.0.0.1:$port" --runs 2 2>&1)
+      out=$(bounded 60 "$mbstorm" replay "$folder" --target "127.0.0.1:$port" --runs 2 2>&1)
       if [ $? -eq 1 ] && grep -q "2 of 2 run(s) reproduced" <<<"$out"; then
         echo "ok   replay reproduces $(basename "$folder") 2 of 2"
       else
