@@ -64,6 +64,9 @@ int run_replay(const ReplayOptions& o) {
     netfuzz::ExecOptions ex;
     ex.timeout_ms = o.timeout_ns ? static_cast<int>(o.timeout_ns / 1'000'000) : f.timeout_ms;
     ex.state = f.state;
+    // Patient with a frame in pieces: the target acts on each before the next goes out, so a
+    // finding about how it reassembles frames reproduces on a loaded host too.
+    ex.piece_settle_ms = 20;
     // Idle sentinels, as in the run: a crash replays as a crash under a supervisor too.
     netfuzz::DeathWatch watch(target, 3, ex.timeout_ms, &f.profile);
     const bool can_watch = target.max_links() > 1;
@@ -105,6 +108,7 @@ int run_replay(const ReplayOptions& o) {
                              : std::string());
         if (same)
             fmt::print("  expected: {}\n  seen:     {}\n", e.verdict.expected, e.verdict.seen);
+
         // Only another run needs the target back.
         if (e.target_down && i + 1 < std::max(1u, o.runs))
             netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);

@@ -425,7 +425,11 @@ Verdict Campaign::understood(Verdict v) const {
 }
 
 Execution Campaign::run_alone(const Case& c) {
-    Execution ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    // Confirmation and minimisation give the target a moment to act on each piece of a frame
+    // (replay gives it more): a reproducer must not depend on how fast the target reacted.
+    ExecOptions patient = exec_;
+    patient.piece_settle_ms = 5;
+    Execution ex = execute_case(c, *options_.connector, result_.profile, patient);
     ex.verdict = understood(std::move(ex.verdict));
     return ex;
 }

@@ -28,9 +28,10 @@ constexpr std::uint8_t kFreshConn = 255;
 // take well under a millisecond; a loaded machine stays far below this).
 constexpr std::int64_t kStallMs = 250;
 
-constexpr std::array<std::string_view, 10> kTraceNames = {
-    "connect",     "connect-failed", "send",    "recv",  "shutdown-write",
-    "peer-closed", "reset",          "timeout", "flood", "fresh-probe"};
+constexpr std::array<std::string_view, 11> kTraceNames = {
+    "connect", "connect-failed", "send",  "recv",        "shutdown-write", "peer-closed",
+    "reset",   "timeout",        "flood", "fresh-probe", "left-unread"};
+static_assert(kTraceNames.size() == static_cast<std::size_t>(TraceKind::LeftUnread) + 1);
 
 struct Pending {
     std::size_t offset = 0, size = 0;  // in Conn::sent
@@ -49,6 +50,9 @@ struct Conn {
     bool opened = false, closed = false, reset = false, shut = false, desync = false;
     bool shut_after_frames = false;  // half-closed with every frame sent complete
     bool framing_lost = false;
+    // The target closed it as soon as it read a piece of a frame, before the rest was due:
+    // the size of that piece (0: it did not).
+    std::size_t closed_on_piece = 0;
     std::vector<std::uint8_t> sent, received;
     std::size_t parsed = 0, rparsed = 0;
     std::vector<Pending> pending;
@@ -108,6 +112,10 @@ class CaseRunner {
     bool answered(const Conn& c) const;
     void flood(std::uint16_t count);
     void side_probe();
+    // Before a gap: waits (boundedly) until the target's program has read what was sent on
+    // the connection, so that the bytes after the gap reach it as a read of their own.
+    void await_read_by_target(std::uint8_t index);
+    bool wait_for_target_read(std::uint8_t index);  // false: not read, or not knowable
     // What judge() gathers across the connections: the worst verdict so far, and whom a
     // whole-server fault is blamed on.
     struct Judgement {
@@ -125,6 +133,7 @@ class CaseRunner {
     void judge(const Case& c);
     void judge_framing(std::size_t i, const Conn& cn, Judgement& j) const;
     void judge_unmatched(const Conn& cn, Judgement& j) const;
+    void judge_closed_on_piece(const Case& c, std::size_t i, const Conn& cn, Judgement& j) const;
     void judge_requests(const Case& c, std::size_t i, const Conn& cn, Judgement& j) const;
     void judge_silence(const Case& c, std::size_t i, const Conn& cn, std::size_t k,
                        const RequestInfo& info, const RequestInfo* before, bool before_exception,
@@ -499,6 +508,21 @@ void CaseRunner::judge_framing(std::size_t i, const Conn& cn, Judgement& j) cons
                        "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
 }
 
+// TCP is a stream: a frame may reach a server in any number of reads. One that closes on the
+// first piece, before the rest could come, breaks every client whose frame the network splits.
+void CaseRunner::judge_closed_on_piece(const Case& c, std::size_t i, const Conn& cn,
+                                       Judgement& j) const {
+    if (!cn.closed_on_piece) return;
+    j.consider(
+        Verdict{Oracle::UnexpectedClose, kClosesOnPartialFrameRule, c.function,
+                fmt::format("connection {} {} as soon as the target read {} ({} byte(s) "
+                            "of a frame), before the rest was sent",
+                            i, cn.reset ? "reset" : "closed",
+                            hex(codec::Bytes(cn.sent).subspan(cn.parsed), 16), cn.closed_on_piece),
+                "the rest awaited, the whole frame answered", cn.reset ? "reset" : "FIN"});
+    j.need_fresh_probe = true;
+}
+
 void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
     // An answer nobody asked for, on a connection that carried a request of the wrong
     // length, is the target framing that request by its function code.
@@ -742,6 +766,7 @@ void CaseRunner::judge(const Case& c) {
         if (cn.closed || cn.shut || cn.desync) j.need_fresh_probe = true;
         judge_framing(i, cn, j);
         judge_unmatched(cn, j);
+        judge_closed_on_piece(c, i, cn, j);
         judge_requests(c, i, cn, j);
     }
     j.consider(Shadow::check(j.shadow, options_.state));
@@ -777,9 +802,52 @@ void CaseRunner::side_probe() {
     side_probes_.push_back(SideProbe{r, ms, std::move(during)});
 }
 
+// A piece the target's program leaves unread this long is left to join the next one: a
+// server may wait for a whole header before it reads (and the campaign must go on).
+constexpr std::int64_t kPieceReadWaitMs = 200;
+
+void CaseRunner::await_read_by_target(std::uint8_t index) {
+    if (index >= conns_.size()) return;
+    Conn& c = conns_[index];
+    if (!c.link || c.closed || c.sent.empty()) return;
+    const bool read = wait_for_target_read(index);
+    // Reading is not yet acting: a patient run gives the target a moment to act on the piece
+    // (a close that comes after the next piece went out is not told apart from a close on
+    // the whole).
+    if (read && !c.closed && options_.piece_settle_ms > 0)
+        pump(net::now_ns() + options_.piece_settle_ms * net::kNsPerMs, [&] { return c.closed; });
+    if (c.closed && !c.shut && !c.desync && c.sent.size() > c.parsed)
+        c.closed_on_piece = c.sent.size() - c.parsed;
+}
+
+bool CaseRunner::wait_for_target_read(std::uint8_t index) {
+    Conn& c = conns_[index];
+    const std::int64_t deadline = net::now_ns() + kPieceReadWaitMs * net::kNsPerMs;
+    int pause_us = 10;
+    for (;;) {
+        const std::int64_t unread = c.link->unread_by_target();
+        if (unread == 0) return true;
+        if (unread < 0) return false;  // not knowable (another host): the gap alone
+        if (net::now_ns() >= deadline) {
+            event(index, TraceKind::LeftUnread, {},
+                  fmt::format("the target left {} byte(s) unread for {} ms: the next piece "
+                              "may join them",
+                              unread, kPieceReadWaitMs));
+            return false;
+        }
+        // A target reads within microseconds when it is running: check again soon, less
+        // often the longer it takes.
+        ::usleep(static_cast<useconds_t>(pause_us));
+        pause_us = std::min(pause_us * 2, 1000);
+        read_conn(index);
+        if (c.closed) return true;
+    }
+}
+
 Execution CaseRunner::run(const Case& c) {
     conns_.resize(std::max<std::size_t>(c.connections(), 1));
     for (const Step& s : c.steps) {
+        if (s.delay_us && s.op == Op::Send) await_read_by_target(s.conn);
         if (s.delay_us >= 2000) {
             const std::int64_t until = net::now_ns() + s.delay_us * 1000ll;
             pump(until, [] { return false; });

@@ -26,6 +26,7 @@ enum class TraceKind : std::uint8_t {
     Timeout,
     Flood,
     FreshProbe,
+    LeftUnread,  // a piece the target had not read when the next one was due
 };
 std::string_view trace_kind_name(TraceKind k) noexcept;
 bool trace_kind_from_name(std::string_view name, TraceKind& out) noexcept;
@@ -46,6 +47,10 @@ struct ExecOptions {
     // Armed sentinels (netfuzz/death_watch.hpp): the target's process died during the case
     // when they all drop, even if a supervisor had it back before the fresh probe. Null: none.
     DeathWatch* watch = nullptr;
+    // After the target has read a piece of a frame, how long it gets to act on it before the
+    // next piece goes out (replay is patient so that a finding reproduces on a loaded host;
+    // the campaign is fast).
+    int piece_settle_ms = 0;
 };
 
 struct Execution {

@@ -69,8 +69,8 @@ bool any_oracle(const std::string& stem) {
 // A frame in pieces acted on before it was whole (kAnswersPartialFrameRule): a stray answer,
 // a close or silence on the split request.
 bool partial_frame_family(const std::string& rule) {
-    return rule == kAnswersPartialFrameRule || rule == "close-with-request-pending/partial-frame" ||
-           rule == "no-answer/partial-frame";
+    return rule == kAnswersPartialFrameRule || rule == kClosesOnPartialFrameRule ||
+           rule == "close-with-request-pending/partial-frame" || rule == "no-answer/partial-frame";
 }
 }  // namespace
 

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 
+#include "net/peer_queue.hpp"
 #include "netfuzz/executor.hpp"
 
 namespace mbstorm::netfuzz {
@@ -29,6 +30,10 @@ ssize_t TcpLink::recv(std::uint8_t* data, std::size_t size) noexcept {
 
 void TcpLink::shutdown_write() noexcept {
     ::shutdown(fd_.get(), SHUT_WR);
+}
+
+std::int64_t TcpLink::unread_by_target() const noexcept {
+    return net::bytes_unread_by_peer(fd_.get());
 }
 
 std::unique_ptr<Link> TcpConnector::open(int timeout_ms, int& error) {

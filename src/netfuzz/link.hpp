@@ -26,6 +26,10 @@ class Link {
     // Non-blocking. Bytes read; 0: the peer closed; -EAGAIN: nothing yet; other -errno: broken.
     virtual ssize_t recv(std::uint8_t* data, std::size_t size) noexcept = 0;
     virtual void shutdown_write() noexcept = 0;
+    // Bytes sent that the target's program has not read yet, or -1 when that cannot be known
+    // (a target on another host, a serial line). A piece of a frame is delivered as a read of
+    // its own only once this is 0.
+    virtual std::int64_t unread_by_target() const noexcept { return -1; }
 };
 
 // Opens links to the target; how (TCP / TLS / serial) is chosen once by the CLI.
@@ -53,6 +57,7 @@ class TcpLink final : public Link {
     ssize_t send(const std::uint8_t* data, std::size_t size) noexcept override;
     ssize_t recv(std::uint8_t* data, std::size_t size) noexcept override;
     void shutdown_write() noexcept override;
+    std::int64_t unread_by_target() const noexcept override;
 
   private:
     net::UniqueFd fd_;

@@ -133,6 +133,8 @@ inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mis
 // shows, it is the target's reassembly: one root cause (finding.cpp keys the family as one).
 inline constexpr const char* kAnswersPartialFrameRule = "answers-partial-frame";
 inline constexpr const char* kPartialFrameFamily = "mishandles-partial-frame";
+// The same family when the target closed the connection as soon as it read the first piece.
+inline constexpr const char* kClosesOnPartialFrameRule = "closes-on-partial-frame";
 // A server that closes the connection on a request it cannot use (whatever its function code):
 // one policy of its framing.
 inline constexpr const char* kClosesOnInvalidRequestRule =

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "net/clock.hpp"
+#include "net/peer_queue.hpp"
 #include "netfuzz/executor.hpp"
 
 namespace mbstorm::netfuzz {
@@ -193,6 +194,11 @@ ssize_t TlsLink::recv(std::uint8_t* data, std::size_t size) noexcept {
         return static_cast<ssize_t>(n);
     }
     return ended_ ? end_code_ : -EAGAIN;
+}
+
+std::int64_t TlsLink::unread_by_target() const noexcept {
+    const std::int64_t unread = net::bytes_unread_by_peer(fd_.get());
+    return unread < 0 ? -1 : unread + static_cast<std::int64_t>(out_.size() - out_pos_);
 }
 
 void TlsLink::shutdown_write() noexcept {

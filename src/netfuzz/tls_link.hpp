@@ -63,6 +63,8 @@ class TlsLink final : public Link {
     ssize_t recv(std::uint8_t* data, std::size_t size) noexcept override;
     // close_notify, then the TCP half-close.
     void shutdown_write() noexcept override;
+    // Ciphertext not yet taken by the socket counts as unread too.
+    std::int64_t unread_by_target() const noexcept override;
 
     // Bytes written to the socket as they are, between the session's records (a case that
     // puts plaintext into an established session). Blocks up to `timeout_ms` for the socket.

@@ -7,6 +7,7 @@
 #include "net/buf_ring.hpp"
 #include "net/clock.hpp"
 #include "net/features.hpp"
+#include "net/peer_queue.hpp"
 #include "net/ring.hpp"
 #include "net/socket.hpp"
 #include "net/user_data.hpp"
@@ -101,6 +102,38 @@ TEST(Socket, Ipv6Loopback) {
     ep.set_port(local_port(l.get()));
     UniqueFd c(connect_blocking(ep));
     EXPECT_TRUE(c.valid());
+}
+
+// What the fuzzer waits on before the second piece of a split frame: the bytes the target's
+// program has not read yet, read from the kernel's socket diagnostics, for IPv4 and IPv6.
+TEST(PeerQueue, CountsTheBytesThePeersProgramHasNotRead) {
+    for (const char* where : {"127.0.0.1:0", "[::1]:0"}) {
+        Endpoint ep;
+        ASSERT_TRUE(parse_endpoint(where, ep));
+        UniqueFd l(listen_socket(ep));
+        if (!l.valid()) continue;  // no IPv6 loopback here
+        ep.set_port(local_port(l.get()));
+        UniqueFd c(connect_blocking(ep));
+        ASSERT_TRUE(c.valid());
+        UniqueFd a(::accept(l.get(), nullptr, nullptr));
+        ASSERT_TRUE(a.valid());
+        EXPECT_EQ(bytes_unread_by_peer(c.get()), 0) << where;
+        ASSERT_EQ(::send(c.get(), "hello", 5, 0), 5);
+        EXPECT_EQ(bytes_unread_by_peer(c.get()), 5) << where;
+        char buf[8];
+        ASSERT_EQ(::recv(a.get(), buf, 3, 0), 3);
+        EXPECT_EQ(bytes_unread_by_peer(c.get()), 2) << where;
+        ASSERT_EQ(::recv(a.get(), buf, sizeof buf, 0), 2);
+        EXPECT_EQ(bytes_unread_by_peer(c.get()), 0) << where;
+        // Our side of the same connection: the counts go the other way.
+        EXPECT_EQ(bytes_unread_by_peer(a.get()), 0) << where;
+    }
+}
+
+TEST(PeerQueue, UnknownWithoutAConnectedPeer) {
+    UniqueFd s(::socket(AF_INET, SOCK_STREAM, 0));
+    EXPECT_EQ(bytes_unread_by_peer(s.get()), -1);
+    EXPECT_EQ(bytes_unread_by_peer(-1), -1);
 }
 
 TEST(Socket, NofileLimitReportsWhenItCannotRaise) {

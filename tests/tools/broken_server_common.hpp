@@ -52,6 +52,11 @@ struct Faults {
     // Post-processes every normal reply ADU (e.g. to corrupt the transaction id).
     void (*on_reply)(const std::uint8_t* request, std::vector<std::uint8_t>& reply) = nullptr;
     bool drop_partial_header = false;  // framing bug: a header split across reads is lost
+    // Framing bug: a read that leaves less than a header is taken for a bad frame, and the
+    // connection closed (as pymodbus 3.0 does).
+    bool close_on_partial_header = false;
+    // A slow or busy target: bytes wait this long in its socket before it reads them.
+    int read_delay_ms = 0;
     bool answer_any_protocol = false;  // answers frames with protocol id != 0
 };
 
@@ -134,6 +139,7 @@ inline int serve(int listen_fd, const Faults& f) {
         for (const Client& c : clients)
             fds.push_back(pollfd{c.fd, static_cast<short>(c.stopped ? 0 : POLLIN), 0});
         if (::poll(fds.data(), fds.size(), 1000) < 0 && errno != EINTR) return 1;
+        if (f.read_delay_ms) ::usleep(static_cast<useconds_t>(f.read_delay_ms) * 1000);
         if (fds[0].revents & POLLIN) {
             for (;;) {
                 const int fd = ::accept4(listen_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
@@ -157,6 +163,7 @@ inline int serve(int listen_fd, const Faults& f) {
                     if (f.drop_partial_header && !c.in.empty() && c.in.size() < 7) c.in.clear();
                     c.in.insert(c.in.end(), buf, buf + n);
                     open = consume(c, f, model);
+                    if (f.close_on_partial_header && !c.in.empty() && c.in.size() < 7) open = false;
                 }
             }
             if (open)
