@@ -63,6 +63,14 @@ const char* direction_name(Direction d) {
     return d == Direction::Request ? "request" : "response";
 }
 
+// The options with only direction `d` allowed.
+DecodeOptions one_way(const DecodeOptions& o, Direction d) {
+    DecodeOptions only = o;
+    only.request = d == Direction::Request;
+    only.response = !only.request;
+    return only;
+}
+
 // When a PDU decodes in neither direction, the one it most likely was: an exception bit or a
 // read byte count that matches the length says response.
 Direction likely_direction(codec::Bytes pdu, const DecodeOptions& o) {
@@ -101,6 +109,32 @@ std::string describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std:
     return err;
 }
 
+// True when a PDU the bytes end inside has nothing wrong with it so far: it decodes, or fails
+// only for running short.
+bool sound_so_far(codec::Bytes pdu, Direction d) {
+    if (d == Direction::Request) {
+        codec::Request request;
+        const auto status = codec::decode_request(pdu, request);
+        return status.ok() || status.error == codec::CodecError::Truncated;
+    }
+    codec::Response response;
+    const auto error = codec::decode_response(pdu, response);
+    return error == codec::CodecError::Ok || error == codec::CodecError::Truncated;
+}
+
+// A PDU the bytes end inside: a table for each allowed direction in which it is sound so far
+// (a cut PDU decodes in none, so describe_framed alone would show only the likelier one).
+void describe_cut_pdu(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
+                      const std::vector<FieldRow>& head, const std::vector<FieldRow>& tail,
+                      std::vector<Decoded>& out) {
+    const std::size_t before = out.size();
+    for (Direction d : directions(o)) {
+        if (pdu.empty() || !sound_so_far(pdu, d)) continue;
+        describe_framed(pdu, one_way(o, d), what, head, tail, out);
+    }
+    if (out.size() == before) describe_framed(pdu, o, what, head, tail, out);
+}
+
 // The MBAP header's rows, read from an ADU's first 7 bytes.
 std::vector<FieldRow> mbap_rows(codec::Bytes adu) {
     const std::uint16_t protocol_id = codec::load_be16(adu.data() + 2);
@@ -134,7 +168,7 @@ std::string describe_cut_adu(codec::Bytes rest, int index, const DecodeOptions& 
     std::string why = fmt::format("the length field says {} bytes follow it, {} do",
                                   codec::load_be16(rest.data() + 4), rest.size() - 6);
     head[2].meaning += "  <-- BAD: " + why;
-    describe_framed(rest.subspan(codec::limits::kMbapHeader), o, what, head, {}, out);
+    describe_cut_pdu(rest.subspan(codec::limits::kMbapHeader), o, what, head, {}, out);
     return why;
 }
 
@@ -181,13 +215,16 @@ Reading decode_tcp(codec::Bytes bytes, const DecodeOptions& o) {
                                     : fmt::format("{} left over after {} complete frame{} ({}): {}",
                                                   byte_count(rest.size()), index,
                                                   index == 1 ? "" : "s", hex_preview(rest), cut));
-        // A sound MBAP header whose bytes run short is one fault in a fitting frame, a better
-        // guess than a PDU that fails; bytes after whole frames are more doubtful.
+        // A sound MBAP header whose bytes run short, or bytes left over after sound frames, is
+        // one fault in a fitting frame: a better guess than a PDU that fails.
         const bool header_fits =
             bytes.size() >= 7 && codec::load_be16(bytes.data() + 2) == 0 &&
             codec::load_be16(bytes.data() + 4) >= 2 &&
             codec::load_be16(bytes.data() + 4) <= codec::limits::kMaxMbapLength;
-        reading.doubt = index > 0 ? 3 : header_fits ? 1 : kNoFit;
+        if (index == 0)
+            reading.doubt = header_fits ? 1 : kNoFit;
+        else
+            reading.doubt = reading.doubt == 0 ? 1 : 3;
     }
     return reading;
 }
@@ -200,19 +237,6 @@ std::size_t rtu_frame_size(codec::Bytes bytes, Direction d, bool& exact) {
                                                             : codec::rtu_response_length(bytes);
     exact = length.status == codec::RtuLength::Status::Known;
     return exact || length.status == codec::RtuLength::Status::NeedMore ? length.size : 0;
-}
-
-// True when a PDU the bytes end inside has nothing wrong with it so far: it decodes, or fails
-// only for running short.
-bool sound_so_far(codec::Bytes pdu, Direction d) {
-    if (d == Direction::Request) {
-        codec::Request request;
-        const auto status = codec::decode_request(pdu, request);
-        return status.ok() || status.error == codec::CodecError::Truncated;
-    }
-    codec::Response response;
-    const auto error = codec::decode_response(pdu, response);
-    return error == codec::CodecError::Ok || error == codec::CodecError::Truncated;
 }
 
 // The bytes read as an RTU frame they end inside: the address and function fit and the
@@ -242,10 +266,7 @@ Reading decode_rtu_cut(codec::Bytes bytes, const DecodeOptions& o) {
         std::vector<FieldRow> tail{
             {"CRC", codec::format_hex(crc),
              fmt::format("<-- BAD: {} of its 2 bytes there: {}", crc.size(), why)}};
-        DecodeOptions one_way = o;
-        one_way.request = d == Direction::Request;
-        one_way.response = !one_way.request;
-        describe_framed(pdu, one_way,
+        describe_framed(pdu, one_way(o, d),
                         fmt::format("Modbus RTU frame ({}, cut short)", byte_count(bytes.size())),
                         head, tail, reading.decoded);
         if (reading.fault.empty()) reading.fault = "truncated: " + why;

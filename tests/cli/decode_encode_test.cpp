@@ -94,6 +94,19 @@ TEST(DecodeCommand, BytesLeftOverAfterATcpFrameAreShown) {
                 HasSubstr("truncated Modbus TCP frame: 1 byte left over after 1 complete frame "
                           "(FF): 1 byte: an MBAP header needs 7"));
     EXPECT_THAT(r.output, Not(HasSubstr("1 bytes")));
+    // Unnamed, sound frames with bytes after them are still TCP, not a bare PDU of function 0x00.
+    auto guessed = run_mbstorm("decode 00 01 00 00 00 06 01 03 00 00 00 0A FF");
+    EXPECT_EQ(guessed.exit_code, 1) << guessed.output;
+    EXPECT_THAT(guessed.output,
+                HasSubstr("read as Modbus TCP: truncated Modbus TCP frame: 1 byte"));
+    // A second ADU cut short is shown as far as it goes, read as the request it can still be.
+    auto second =
+        run_mbstorm("decode --tcp 00 01 00 00 00 06 01 03 00 00 00 0A 00 02 00 00 00 06 01 03 00");
+    EXPECT_EQ(second.exit_code, 1) << second.output;
+    EXPECT_THAT(second.output, HasSubstr("Modbus TCP ADU #2 (9 bytes, cut short) request:"));
+    EXPECT_THAT(second.output, HasSubstr("the length field says 6 bytes follow it, 3 do"));
+    EXPECT_THAT(second.output, HasSubstr("9 bytes left over after 1 complete frame (00 02 00 00 "
+                                         "00 06 01 03 00)"));
 }
 
 TEST(DecodeCommand, TruncatedRtuRequestIsShownCutShortNotAsAnotherFunction) {
