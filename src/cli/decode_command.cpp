@@ -39,10 +39,18 @@ struct Reading {
     std::string framing;  // "Modbus RTU", for the fault line
     std::vector<Decoded> decoded;
     std::string fault;  // empty: nothing wrong
-    int doubt = 0;      // 0 clean, 1 one fault in a fitting frame, 2 bad bare PDU, 3+ misfit
+    int doubt = 0;      // 0 clean frame, 1 one fault in a fitting frame or a clean bare PDU,
+                        // 2 bad bare PDU, 3+ misfit
 };
 
 constexpr int kNoFit = 4;
+
+// The bytes in hex, the first 16 of them when there are more (a stderr line stays short).
+std::string hex_preview(codec::Bytes bytes) {
+    constexpr std::size_t kShown = 16;
+    if (bytes.size() <= kShown) return codec::format_hex(bytes);
+    return codec::format_hex(bytes.first(kShown)) + " ...";
+}
 
 // Tries the directions the user allows; a frame may fit both (FC05/06 echo their request).
 std::vector<Direction> directions(const DecodeOptions& o) {
@@ -53,6 +61,14 @@ std::vector<Direction> directions(const DecodeOptions& o) {
 
 const char* direction_name(Direction d) {
     return d == Direction::Request ? "request" : "response";
+}
+
+// The options with only direction `d` allowed.
+DecodeOptions one_way(const DecodeOptions& o, Direction d) {
+    DecodeOptions only = o;
+    only.request = d == Direction::Request;
+    only.response = !only.request;
+    return only;
 }
 
 // When a PDU decodes in neither direction, the one it most likely was: an exception bit or a
@@ -93,6 +109,69 @@ std::string describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std:
     return err;
 }
 
+// True when a PDU the bytes end inside has nothing wrong with it so far: it decodes, or fails
+// only for running short.
+bool sound_so_far(codec::Bytes pdu, Direction d) {
+    if (d == Direction::Request) {
+        codec::Request request;
+        const auto status = codec::decode_request(pdu, request);
+        return status.ok() || status.error == codec::CodecError::Truncated;
+    }
+    codec::Response response;
+    const auto error = codec::decode_response(pdu, response);
+    return error == codec::CodecError::Ok || error == codec::CodecError::Truncated;
+}
+
+// A PDU the bytes end inside: a table for each allowed direction in which it is sound so far
+// (a cut PDU decodes in none, so describe_framed alone would show only the likelier one).
+void describe_cut_pdu(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
+                      const std::vector<FieldRow>& head, const std::vector<FieldRow>& tail,
+                      std::vector<Decoded>& out) {
+    const std::size_t before = out.size();
+    for (Direction d : directions(o)) {
+        if (pdu.empty() || !sound_so_far(pdu, d)) continue;
+        describe_framed(pdu, one_way(o, d), what, head, tail, out);
+    }
+    if (out.size() == before) describe_framed(pdu, o, what, head, tail, out);
+}
+
+// The MBAP header's rows, read from an ADU's first 7 bytes.
+std::vector<FieldRow> mbap_rows(codec::Bytes adu) {
+    const std::uint16_t protocol_id = codec::load_be16(adu.data() + 2);
+    return {
+        {"Transaction identifier", codec::format_hex(adu.subspan(0, 2)),
+         std::to_string(codec::load_be16(adu.data()))},
+        {"Protocol identifier", codec::format_hex(adu.subspan(2, 2)),
+         protocol_id == 0 ? "0 (Modbus)"
+                          : fmt::format("{} (not Modbus: a server discards it)", protocol_id)},
+        {"Length", codec::format_hex(adu.subspan(4, 2)),
+         fmt::format("{} (unit id + PDU)", codec::load_be16(adu.data() + 4))},
+        {"Unit identifier", codec::format_hex(adu.subspan(6, 1)), std::to_string(adu[6])},
+    };
+}
+
+// The bytes after the last whole ADU (all of them when there is none): an ADU the bytes end
+// inside. Shown as far as it goes, header fields and PDU, with the length field marked; fewer
+// bytes than a header are one marked row. Returns what is wrong, as one phrase.
+std::string describe_cut_adu(codec::Bytes rest, int index, const DecodeOptions& o,
+                             std::vector<Decoded>& out) {
+    const std::string what =
+        fmt::format("Modbus TCP ADU{} ({}, cut short)", index > 1 ? fmt::format(" #{}", index) : "",
+                    byte_count(rest.size()));
+    if (rest.size() < codec::limits::kMbapHeader) {
+        std::string why = fmt::format("{}: an MBAP header needs {}", byte_count(rest.size()),
+                                      codec::limits::kMbapHeader);
+        out.push_back({what, {{"(part of a header)", codec::format_hex(rest), "<-- BAD: " + why}}});
+        return why;
+    }
+    std::vector<FieldRow> head = mbap_rows(rest);
+    std::string why = fmt::format("the length field says {} bytes follow it, {} do",
+                                  codec::load_be16(rest.data() + 4), rest.size() - 6);
+    head[2].meaning += "  <-- BAD: " + why;
+    describe_cut_pdu(rest.subspan(codec::limits::kMbapHeader), o, what, head, {}, out);
+    return why;
+}
+
 Reading decode_tcp(codec::Bytes bytes, const DecodeOptions& o) {
     Reading reading{"Modbus TCP", {}, {}, 0};
     if (bytes.size() >= 4) {
@@ -118,50 +197,89 @@ Reading decode_tcp(codec::Bytes bytes, const DecodeOptions& o) {
             return reading;
         }
         ++index;
-        const auto& h = frame.header;
-        std::vector<FieldRow> head{
-            {"Transaction identifier", codec::format_hex(frame.adu.subspan(0, 2)),
-             std::to_string(h.transaction_id)},
-            {"Protocol identifier", codec::format_hex(frame.adu.subspan(2, 2)),
-             h.protocol_id == 0
-                 ? "0 (Modbus)"
-                 : fmt::format("{} (not Modbus: a server discards it)", h.protocol_id)},
-            {"Length", codec::format_hex(frame.adu.subspan(4, 2)),
-             fmt::format("{} (unit id + PDU)", h.length)},
-            {"Unit identifier", codec::format_hex(frame.adu.subspan(6, 1)),
-             std::to_string(h.unit_id)},
-        };
         std::string what = fmt::format(
             "Modbus TCP ADU{} ({} bytes)",
             index > 1 || splitter.pending() ? fmt::format(" #{}", index) : "", frame.adu.size());
-        std::string fault = describe_framed(frame.pdu, o, what, head, {}, reading.decoded);
+        std::string fault =
+            describe_framed(frame.pdu, o, what, mbap_rows(frame.adu), {}, reading.decoded);
         if (!fault.empty() && reading.fault.empty()) {
             reading.fault = index > 1 ? fmt::format("ADU #{}: {}", index, fault) : fault;
             reading.doubt = 1;
         }
     }
     if (index == 0 || splitter.buffered() != 0) {
-        std::string left = index == 0 && bytes.size() >= 6
-                               ? fmt::format("the length field says {} bytes follow it, {} do",
-                                             codec::load_be16(bytes.data() + 4), bytes.size() - 6)
-                               : fmt::format("{} bytes left over after {} complete frame(s)",
-                                             splitter.buffered(), index);
-        reading.fault = "truncated Modbus TCP frame: " + left;
-        // A sound MBAP header whose bytes run short is a better guess than a PDU that fails.
+        const codec::Bytes rest = index == 0 ? bytes : bytes.last(splitter.buffered());
+        const std::string cut = describe_cut_adu(rest, index + 1, o, reading.decoded);
+        reading.fault = "truncated Modbus TCP frame: " +
+                        (index == 0 ? cut
+                                    : fmt::format("{} left over after {} complete frame{} ({}): {}",
+                                                  byte_count(rest.size()), index,
+                                                  index == 1 ? "" : "s", hex_preview(rest), cut));
+        // A sound MBAP header whose bytes run short, or bytes left over after sound frames, is
+        // one fault in a fitting frame: a better guess than a PDU that fails.
         const bool header_fits =
             bytes.size() >= 7 && codec::load_be16(bytes.data() + 2) == 0 &&
             codec::load_be16(bytes.data() + 4) >= 2 &&
             codec::load_be16(bytes.data() + 4) <= codec::limits::kMaxMbapLength;
-        reading.doubt = index > 0 ? 3 : header_fits ? 2 : kNoFit;
+        if (index == 0)
+            reading.doubt = header_fits ? 1 : kNoFit;
+        else
+            reading.doubt = reading.doubt == 0 ? 1 : 3;
     }
     return reading;
 }
 
-Reading decode_rtu(codec::Bytes bytes, const DecodeOptions& o) {
+// The whole-frame size the codec's RTU length rule gives a frame starting with `bytes`, read
+// in direction `d`; `exact` false when it is a lower bound (a byte count not yet there).
+// 0 when the rule cannot tell (a function it has no rule for).
+std::size_t rtu_frame_size(codec::Bytes bytes, Direction d, bool& exact) {
+    const codec::RtuLength length = d == Direction::Request ? codec::rtu_request_length(bytes)
+                                                            : codec::rtu_response_length(bytes);
+    exact = length.status == codec::RtuLength::Status::Known;
+    return exact || length.status == codec::RtuLength::Status::NeedMore ? length.size : 0;
+}
+
+// The bytes read as an RTU frame they end inside: the address and function fit and the
+// function's length rule wants more bytes than there are. One table per direction that wants
+// more, the PDU as far as it goes, the missing CRC marked. doubt kNoFit when none does.
+Reading decode_rtu_cut(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading reading{"Modbus RTU", {}, {}, kNoFit};
+    constexpr std::size_t kCrcSize = 2;
+    if (bytes.size() < 2) return reading;  // no function code: no length rule to ask
+    for (Direction d : directions(o)) {
+        bool exact = false;
+        const std::size_t needed = rtu_frame_size(bytes, d, exact);
+        if (needed <= bytes.size()) continue;
+        // With only a lower bound the CRC's place is unknown: every byte there is PDU.
+        const std::size_t pdu_end =
+            exact ? std::min(bytes.size(), needed - kCrcSize) : bytes.size();
+        const codec::Bytes pdu = bytes.subspan(1, pdu_end - 1);
+        // A direction in which the bytes there are already wrong (a read response's byte count
+        // of 0) is no likelier than any other misfit.
+        if (!sound_so_far(pdu, d)) continue;
+        const codec::Bytes crc = bytes.subspan(pdu_end);
+        const std::string why = fmt::format("{}: a {} {} needs {}{}", byte_count(bytes.size()),
+                                            codec::function_label(bytes[1]), direction_name(d),
+                                            exact ? "" : "at least ", needed);
+        std::vector<FieldRow> head{{"Slave address", codec::format_hex(bytes.first(1)),
+                                    bytes[0] == 0 ? "0 (broadcast)" : std::to_string(bytes[0])}};
+        std::vector<FieldRow> tail{
+            {"CRC", codec::format_hex(crc),
+             fmt::format("<-- BAD: {} of its 2 bytes there: {}", crc.size(), why)}};
+        describe_framed(pdu, one_way(o, d),
+                        fmt::format("Modbus RTU frame ({}, cut short)", byte_count(bytes.size())),
+                        head, tail, reading.decoded);
+        if (reading.fault.empty()) reading.fault = "truncated: " + why;
+        reading.doubt = 1;
+    }
+    return reading;
+}
+
+Reading decode_whole_rtu(codec::Bytes bytes, const DecodeOptions& o) {
     Reading reading{"Modbus RTU", {}, {}, 0};
     if (bytes.size() < 4) {
-        reading.fault = fmt::format("RTU frame too short: {} bytes (address, function, CRC need 4)",
-                                    bytes.size());
+        reading.fault = fmt::format("RTU frame too short: {} (address, function, CRC need 4)",
+                                    byte_count(bytes.size()));
         reading.doubt = kNoFit;
         return reading;
     }
@@ -192,6 +310,14 @@ Reading decode_rtu(codec::Bytes bytes, const DecodeOptions& o) {
     return reading;
 }
 
+// An RTU frame read whole (its last two bytes the CRC) or as cut short, whichever is less in
+// doubt; a tie goes to the whole frame, whose CRC could be checked.
+Reading decode_rtu(codec::Bytes bytes, const DecodeOptions& o) {
+    Reading cut = decode_rtu_cut(bytes, o);
+    Reading whole = decode_whole_rtu(bytes, o);
+    return cut.doubt < whole.doubt ? cut : whole;
+}
+
 Reading decode_bare_pdu(codec::Bytes bytes, const DecodeOptions& o) {
     Reading reading{"a bare PDU", {}, {}, 0};
     if (bytes.empty()) {
@@ -199,9 +325,12 @@ Reading decode_bare_pdu(codec::Bytes bytes, const DecodeOptions& o) {
         reading.doubt = kNoFit;
         return reading;
     }
-    reading.fault = describe_framed(bytes, o, fmt::format("Modbus PDU ({} bytes)", bytes.size()),
-                                    {}, {}, reading.decoded);
-    reading.doubt = reading.fault.empty() ? 0 : 2;
+    reading.fault =
+        describe_framed(bytes, o, fmt::format("Modbus PDU ({})", byte_count(bytes.size())), {}, {},
+                        reading.decoded);
+    // Nothing confirms a bare PDU (no address, CRC or length field): a framed reading with one
+    // fault, such as an RTU frame cut short, is as likely (the tie goes to the framing).
+    reading.doubt = reading.fault.empty() ? 1 : 2;
     return reading;
 }
 
@@ -294,6 +423,9 @@ int run_decode(const DecodeOptions& o) {
                 reading = decode_guessing(bytes, o);
         }
     }
+    // Bytes that fit no framing are one line, whatever a misfit reading managed to show; a
+    // framing the user named is shown as far as it goes.
+    if (framing == Framing::Auto && reading.doubt >= kNoFit) reading.decoded.clear();
     for (std::size_t i = 0; i < reading.decoded.size(); ++i) {
         fmt::print("{}{}:\n{}", i ? "\n" : "", reading.decoded[i].title,
                    render_rows(reading.decoded[i].rows));

@@ -66,8 +66,7 @@ class RowWriter {
         }
     }
     void rest(const std::string& name) {
-        if (pos_ < pdu_.size())
-            field(name, pdu_.size() - pos_, fmt::format("{} bytes", pdu_.size() - pos_));
+        if (pos_ < pdu_.size()) field(name, pdu_.size() - pos_, byte_count(pdu_.size() - pos_));
     }
     std::size_t pos() const { return pos_; }
 
@@ -390,8 +389,8 @@ std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
             break;
         case CodecError::Truncated: {
             std::size_t need = needed_size(pdu, dir);
-            why = need ? fmt::format("{} bytes: {} needs {}", pdu.size(), fc_text, need)
-                       : fmt::format("{} bytes: fewer than {} needs", pdu.size(), fc_text);
+            why = need ? fmt::format("{}: {} needs {}", byte_count(pdu.size()), fc_text, need)
+                       : fmt::format("{}: fewer than {} needs", byte_count(pdu.size()), fc_text);
             rows.push_back({"(end of bytes)", "", "<-- BAD: " + why});
             return "truncated: " + why;
         }
@@ -534,6 +533,10 @@ std::string request_fault(Bytes pdu) {
     w.field("Function code", 1, codec::function_label(raw.function));
     describe_request_fields(raw, w);
     return pdu_fault(pdu, Direction::Request, status.error, rows, 0);
+}
+
+std::string byte_count(std::size_t n) {
+    return fmt::format("{} byte{}", n, n == 1 ? "" : "s");
 }
 
 std::string render_rows(const std::vector<FieldRow>& rows) {

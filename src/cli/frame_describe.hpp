@@ -25,6 +25,9 @@ bool describe_pdu(codec::Bytes pdu, Direction dir, std::vector<FieldRow>& rows, 
 // range ("quantity 200: valid 1..125 for 0x03 read_holding_registers"); "" when it is valid.
 std::string request_fault(codec::Bytes pdu);
 
+// "1 byte", "2 bytes".
+std::string byte_count(std::size_t n);
+
 // Renders rows as an aligned three-column table.
 std::string render_rows(const std::vector<FieldRow>& rows);
 

@@ -44,8 +44,8 @@ struct RunOptions {
     std::string function = std::string(codec::function_name(kDefaultFunction));
     std::string address = "0";
     std::string addr_mode = "sequential";
-    std::string model = "closed";
-    std::string arrival = "even";
+    std::string model;    // "": not given (open loop when --rate is)
+    std::string arrival;  // "": not given (even)
     int value = 0;
     int count = 0;
     std::uint64_t duration_ns = 10'000'000'000ULL;
@@ -74,6 +74,33 @@ std::string distributed_options(const RunOptions& o, ScenarioRunRequest& request
     if (auto e = parse_start_at(o.start_at, std::chrono::system_clock::now(), at); !e.empty())
         return e;
     request.start_at = at;
+    return {};
+}
+
+// --model, --rate and --arrival into the plan's model (load::settle_load_model's rule, as a
+// scenario file's keys); "" or the contradiction, naming both flags.
+std::string settle_model(RunOptions& o) {
+    load::LoadModelAsked asked;
+    if (!o.model.empty())
+        asked.model = o.model == "open" ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
+    asked.rate = o.plan.rate;
+    asked.arrival_given = !o.arrival.empty();
+    switch (load::settle_load_model(asked, o.plan.model)) {
+        case load::LoadModelConflict::None:
+            return {};
+        case load::LoadModelConflict::RateInClosedLoop:
+            return fmt::format(
+                "--model closed and --rate {:g} contradict each other: a rate paces an open "
+                "loop; drop --rate, or use --model open",
+                o.plan.rate);
+        case load::LoadModelConflict::OpenLoopWithoutRate:
+            return "--model open needs --rate (transactions per second, e.g. --rate 50000)";
+        case load::LoadModelConflict::ArrivalInClosedLoop:
+            return fmt::format(
+                "--arrival {} {}: arrivals are spaced only in an open loop; add --rate N or "
+                "drop --arrival",
+                o.arrival, o.model.empty() ? "needs --rate" : "contradicts --model closed");
+    }
     return {};
 }
 
@@ -109,10 +136,7 @@ std::string build_plan(RunOptions& o) {
     if (op.quantity == 0) op.quantity = codec::quantity_range(op.function).max == 1 ? 1 : 10;
     p.operations.assign(1, op);
 
-    p.model =
-        o.model == "open" || p.rate > 0 ? load::LoadModel::OpenLoop : load::LoadModel::ClosedLoop;
-    if (p.model == load::LoadModel::OpenLoop && p.rate <= 0)
-        return "--model open needs --rate (transactions per second, e.g. --rate 50000)";
+    if (auto error = settle_model(o); !error.empty()) return error;
     p.arrival = o.arrival == "poisson" ? load::Arrival::Poisson : load::Arrival::Even;
     p.duration = std::chrono::nanoseconds(o.duration_ns);
     p.warmup = std::chrono::nanoseconds(o.warmup_ns);

@@ -149,9 +149,14 @@ std::vector<TypedValue> values_from_registers(std::span<const std::uint16_t> reg
             case ValueType::I32:
                 v.number = codec::i32_from_registers(regs.subspan(i).first<2>(), order);
                 break;
-            case ValueType::F32:
-                v.number = codec::f32_from_registers(regs.subspan(i).first<2>(), order);
+            case ValueType::F32: {
+                // The shortest text that round-trips the float itself (0.1, not the widened
+                // 0.10000000149011612); the JSON number is that text read back as a double.
+                const float f = codec::f32_from_registers(regs.subspan(i).first<2>(), order);
+                v.text = fmt::format("{}", f);
+                v.number = std::strtod(v.text.c_str(), nullptr);
                 break;
+            }
             case ValueType::U64: {
                 auto n = codec::u64_from_registers(regs.subspan(i).first<4>(), order);
                 v.number = static_cast<double>(n);

@@ -120,6 +120,17 @@ std::uint32_t effective_threads(const Plan& plan) noexcept {
     return std::max(1U, std::min(threads, peak_connections(plan)));
 }
 
+LoadModelConflict settle_load_model(const LoadModelAsked& asked, LoadModel& model) {
+    const bool paced = asked.rate > 0 || asked.stage_rate;
+    model = asked.model.value_or(paced ? LoadModel::OpenLoop : LoadModel::ClosedLoop);
+    if (model == LoadModel::ClosedLoop && asked.rate > 0)
+        return LoadModelConflict::RateInClosedLoop;
+    if (model == LoadModel::OpenLoop && !paced) return LoadModelConflict::OpenLoopWithoutRate;
+    if (model == LoadModel::ClosedLoop && asked.arrival_given)
+        return LoadModelConflict::ArrivalInClosedLoop;
+    return LoadModelConflict::None;
+}
+
 std::vector<std::string> validate_plan(const Plan& plan) {
     std::vector<std::string> errors;
     auto fail = [&](std::string what) { errors.push_back(std::move(what)); };

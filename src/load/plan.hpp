@@ -136,6 +136,28 @@ inline constexpr std::uint32_t kMaxThreads = 1024;
 inline constexpr double kMaxRate = 1e9;
 inline constexpr double kMaxZipfExponent = 10.0;
 
+// What a run's settings say about the load model, before the model is settled: the model
+// named (if any), the rate, whether a stage sets a rate, whether an arrival pattern was named.
+struct LoadModelAsked {
+    std::optional<LoadModel> model;
+    double rate = 0;
+    bool stage_rate = false;
+    bool arrival_given = false;
+};
+
+// The contradictions among those settings; flags and scenario keys each word them in their
+// own spelling, from this one rule.
+enum class LoadModelConflict : std::uint8_t {
+    None,
+    RateInClosedLoop,     // a rate with the closed loop named: the rate would be ignored
+    OpenLoopWithoutRate,  // the open loop named, no rate to pace it
+    ArrivalInClosedLoop,  // an arrival pattern with no open loop to space arrivals in
+};
+
+// The model the settings mean: open loop when named or when a rate is set anywhere, else
+// closed loop. Returns the first contradiction among them (`model` is set regardless).
+LoadModelConflict settle_load_model(const LoadModelAsked& asked, LoadModel& model);
+
 // Every problem with a plan, each naming the field and the valid range ("connections: 0 is
 // out of range (valid 1..100000)"). Empty when the plan is usable.
 std::vector<std::string> validate_plan(const Plan& plan);

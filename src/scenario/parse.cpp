@@ -98,7 +98,8 @@ namespace {
 // The top-level keys whose meaning depends on others: kept to be checked together, and to
 // point errors at.
 struct TopLevelNodes {
-    NodeSlot target, slave, duration, stages, ops, thresholds, model, rate, transactions, backoff;
+    NodeSlot target, slave, duration, stages, ops, thresholds, model, rate, arrival, transactions,
+        backoff;
     bool depth = false;  // given in the file
 };
 
@@ -160,11 +161,12 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
             } else if (key == "rate") {
                 k.rate = v;
                 p.rate = r.number(v, "rate (transactions/s)", 0, load::kMaxRate);
-            } else if (key == "arrival")
+            } else if (key == "arrival") {
+                k.arrival = v;
                 p.arrival = r.choice(v, "arrival", {"even", "poisson"}) == "poisson"
                                 ? load::Arrival::Poisson
                                 : load::Arrival::Even;
-            else if (key == "duration") {
+            } else if (key == "duration") {
                 k.duration = v;
                 p.duration = r.duration(v, "duration", 0s, kMaxRunTime);
             } else if (key == "transactions") {
@@ -327,18 +329,26 @@ void settle_model(const YamlReader& r, const TopLevelNodes& k, Scenario& s) {
                    "or no model key)");
         }
     }
-    p.model = s.model.value_or(p.rate > 0 || stage_rate ? load::LoadModel::OpenLoop
-                                                        : load::LoadModel::ClosedLoop);
-    if (p.model == load::LoadModel::OpenLoop && p.rate <= 0 && !stage_rate) {
-        r.fail(k.rate ? k.rate : k.model,
-               fmt::format("rate: an open-loop run needs a rate > 0 (valid > 0..{:g} "
-                           "transactions/s)",
-                           load::kMaxRate));
-    }
-    if (k.rate && p.model == load::LoadModel::ClosedLoop && p.rate > 0) {
-        r.fail(k.rate,
-               "rate: not used in a closed-loop run (model: closed); remove it or "
-               "use model: open");
+    const load::LoadModelAsked asked{s.model, p.rate, stage_rate, bool(k.arrival)};
+    switch (load::settle_load_model(asked, p.model)) {
+        case load::LoadModelConflict::None:
+            break;
+        case load::LoadModelConflict::RateInClosedLoop:
+            r.fail(k.rate,
+                   "rate: not used in a closed-loop run (model: closed); remove it or "
+                   "use model: open");
+            break;
+        case load::LoadModelConflict::OpenLoopWithoutRate:
+            r.fail(k.rate ? k.rate : k.model,
+                   fmt::format("rate: an open-loop run needs a rate > 0 (valid > 0..{:g} "
+                               "transactions/s)",
+                               load::kMaxRate));
+            break;
+        case load::LoadModelConflict::ArrivalInClosedLoop:
+            r.fail(k.arrival,
+                   "arrival: only used in an open-loop run, which a rate sets (model: closed or "
+                   "no rate); remove it or set rate");
+            break;
     }
 }
 

@@ -7,6 +7,7 @@
 
 using mbstorm::test::run_mbstorm;
 using testing::HasSubstr;
+using testing::Not;
 
 TEST(DecodeCommand, RtuRequestShowsFieldsAndCorrectCrc) {
     auto r = run_mbstorm("decode 01 03 00 00 00 0A C5 CD");
@@ -62,18 +63,69 @@ TEST(DecodeCommand, AsciiWrongLrcNamesTheExpectedOne) {
     EXPECT_THAT(r.output, HasSubstr("LRC wrong: expected FB, the frame carries FC"));
 }
 
-TEST(DecodeCommand, TruncatedTcpFrameIsNamedRatherThanABadPdu) {
-    // Used to be read as a bare PDU with function code 0x00.
+TEST(DecodeCommand, TruncatedTcpFrameIsShownWithTheLengthMarked) {
+    // Used to be read as a bare PDU with function code 0x00, then as one line and exit 2.
     auto r = run_mbstorm("decode 00 01 00 00 00 06 01 03 00 00");
-    EXPECT_EQ(r.exit_code, 2) << r.output;
-    EXPECT_THAT(r.output, HasSubstr("truncated Modbus TCP frame: the length field says 6 bytes "
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Modbus TCP ADU (10 bytes, cut short) request:"));
+    EXPECT_THAT(r.output, HasSubstr("Transaction identifier"));
+    EXPECT_THAT(r.output, HasSubstr("6 (unit id + PDU)  <-- BAD: the length field says 6 bytes "
                                     "follow it, 4 do"));
+    EXPECT_THAT(r.output, HasSubstr("Starting address"));
+    EXPECT_THAT(r.output, HasSubstr("3 bytes: 0x03 read_holding_registers needs 5"));
+    EXPECT_THAT(r.output, HasSubstr("mbstorm decode: read as Modbus TCP: truncated Modbus TCP "
+                                    "frame: the length field says 6 bytes follow it, 4 do"));
 }
 
 TEST(DecodeCommand, TcpLengthThatDisagreesIsNamed) {
     auto r = run_mbstorm("decode --tcp 00 01 00 00 00 09 01 03 00 00 00 0A");
-    EXPECT_EQ(r.exit_code, 2) << r.output;
-    EXPECT_THAT(r.output, HasSubstr("the length field says 9 bytes follow it, 6 do"));
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Quantity of registers"));
+    EXPECT_THAT(r.output, HasSubstr("9 (unit id + PDU)  <-- BAD: the length field says 9 bytes "
+                                    "follow it, 6 do"));
+}
+
+TEST(DecodeCommand, BytesLeftOverAfterATcpFrameAreShown) {
+    auto r = run_mbstorm("decode --tcp 00 01 00 00 00 06 01 03 00 00 00 0A FF");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Modbus TCP ADU #2 (1 byte, cut short):"));
+    EXPECT_THAT(r.output, HasSubstr("FF     <-- BAD: 1 byte: an MBAP header needs 7"));
+    EXPECT_THAT(r.output,
+                HasSubstr("truncated Modbus TCP frame: 1 byte left over after 1 complete frame "
+                          "(FF): 1 byte: an MBAP header needs 7"));
+    EXPECT_THAT(r.output, Not(HasSubstr("1 bytes")));
+    // Unnamed, sound frames with bytes after them are still TCP, not a bare PDU of function 0x00.
+    auto guessed = run_mbstorm("decode 00 01 00 00 00 06 01 03 00 00 00 0A FF");
+    EXPECT_EQ(guessed.exit_code, 1) << guessed.output;
+    EXPECT_THAT(guessed.output,
+                HasSubstr("read as Modbus TCP: truncated Modbus TCP frame: 1 byte"));
+    // A second ADU cut short is shown as far as it goes, read as the request it can still be.
+    auto second =
+        run_mbstorm("decode --tcp 00 01 00 00 00 06 01 03 00 00 00 0A 00 02 00 00 00 06 01 03 00");
+    EXPECT_EQ(second.exit_code, 1) << second.output;
+    EXPECT_THAT(second.output, HasSubstr("Modbus TCP ADU #2 (9 bytes, cut short) request:"));
+    EXPECT_THAT(second.output, HasSubstr("the length field says 6 bytes follow it, 3 do"));
+    EXPECT_THAT(second.output, HasSubstr("9 bytes left over after 1 complete frame (00 02 00 00 "
+                                         "00 06 01 03 00)"));
+}
+
+TEST(DecodeCommand, TruncatedRtuRequestIsShownCutShortNotAsAnotherFunction) {
+    // As a bare PDU these bytes are a valid 0x11 response; as RTU, the read request of the
+    // specification's example with its last three bytes missing.
+    auto r = run_mbstorm("decode 11 03 00 6B 00");
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("Modbus RTU frame (5 bytes, cut short) request:"));
+    EXPECT_THAT(r.output, HasSubstr("Slave address"));
+    EXPECT_THAT(r.output, HasSubstr("Starting address"));
+    EXPECT_THAT(r.output, HasSubstr("<-- BAD: 0 of its 2 bytes there: 5 bytes: a 0x03 "
+                                    "read_holding_registers request needs 8"));
+    EXPECT_THAT(r.output, HasSubstr("mbstorm decode: read as Modbus RTU: truncated: 5 bytes: a "
+                                    "0x03 read_holding_registers request needs 8"));
+    EXPECT_THAT(r.output, Not(HasSubstr("0x11")));
+    // Told it is RTU, a frame of three bytes is shown as far as it goes too.
+    auto cut = run_mbstorm("decode --rtu --request 01 03 00");
+    EXPECT_EQ(cut.exit_code, 1) << cut.output;
+    EXPECT_THAT(cut.output, HasSubstr("3 bytes: a 0x03 read_holding_registers request needs 8"));
 }
 
 TEST(DecodeCommand, HexWithoutSpacesAndTcpDetected) {
@@ -117,7 +169,7 @@ TEST(DecodeCommand, PipelinedTcpFramesAreAllShown) {
 
 TEST(DecodeCommand, BadInputIsOneLineAndExitTwo) {
     for (const char* args :
-         {"decode ZZ", "decode 0", "decode --tcp 00 01 00 00 00 00 01", "decode --rtu 01 03 00"}) {
+         {"decode ZZ", "decode 0", "decode --tcp 00 01 00 00 00 00 01", "decode --rtu 01"}) {
         auto r = run_mbstorm(args);
         EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
         EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n"

@@ -73,6 +73,16 @@ TEST_F(ReadWrite, WrittenValuesReadBackInEveryTypeAndOrder) {
     EXPECT_EQ(io("read --addr 30003 -q 2").output, "[2]: 7\n[3]: 8\n");
 }
 
+TEST_F(ReadWrite, Float32ReadsBackAsTheShortestTextOfTheFloat) {
+    // 0.1f is 0.100000001490116...: shown as the float it is, not widened to a double first.
+    ASSERT_EQ(io("write --addr 40 --type f32 0.1 23.7").exit_code, 0);
+    EXPECT_EQ(io("read --addr 40 -q 2 --type f32").output, "[40]: 0.1\n[42]: 23.7\n");
+    auto j = io("read --addr 40 -q 2 --type f32 --json");
+    EXPECT_EQ(j.exit_code, 0) << j.output;
+    EXPECT_THAT(j.output, HasSubstr("\"values\":[{\"address\":40,\"value\":0.1},"
+                                    "{\"address\":42,\"value\":23.7}]"));
+}
+
 TEST_F(ReadWrite, SingleValuesUseTheSingleWriteFunctionsUnlessTold) {
     auto one = io("write --addr 5 42");
     EXPECT_THAT(one.output, HasSubstr("0x06 write_single_register"));

@@ -66,6 +66,10 @@ const BadCase kCases[] = {
     {"rate in closed loop", "model: closed\nrate: 100\n" OPS, "rate: not used in a closed-loop run",
      2, 7},
     {"open loop without rate", "model: open\n" OPS, "an open-loop run needs a rate > 0", 1, 8},
+    {"arrival in closed loop", "arrival: poisson\n" OPS, "arrival: only used in an open-loop run",
+     1, 10},
+    {"arrival with model closed", "model: closed\narrival: even\n" OPS,
+     "arrival: only used in an open-loop run", 2, 10},
     // --- target and slave
     {"target empty port", "target: '127.0.0.1:'\n" OPS, "port 502 if omitted", 1, 9},
     {"target port range", "target: 127.0.0.1:70000\n" OPS, "the port must be 1..65535", 1, 9},
