@@ -41,6 +41,7 @@ struct Reading {
     std::string fault;  // empty: nothing wrong
     int doubt = 0;      // 0 clean frame, 1 one fault in a fitting frame or a clean bare PDU,
                         // 2 bad bare PDU, 3+ misfit
+    std::string also;   // another reading as likely, for the user to choose
 };
 
 constexpr int kNoFit = 4;
@@ -173,7 +174,7 @@ std::string describe_cut_adu(codec::Bytes rest, int index, const DecodeOptions& 
 }
 
 Reading decode_tcp(codec::Bytes bytes, const DecodeOptions& o) {
-    Reading reading{"Modbus TCP", {}, {}, 0};
+    Reading reading{"Modbus TCP", {}, {}, 0, {}};
     if (bytes.size() >= 4) {
         std::uint16_t protocol_id = codec::load_be16(bytes.data() + 2);
         if (protocol_id != 0) {
@@ -243,7 +244,7 @@ std::size_t rtu_frame_size(codec::Bytes bytes, Direction d, bool& exact) {
 // function's length rule wants more bytes than there are. One table per direction that wants
 // more, the PDU as far as it goes, the missing CRC marked. doubt kNoFit when none does.
 Reading decode_rtu_cut(codec::Bytes bytes, const DecodeOptions& o) {
-    Reading reading{"Modbus RTU", {}, {}, kNoFit};
+    Reading reading{"Modbus RTU", {}, {}, kNoFit, {}};
     constexpr std::size_t kCrcSize = 2;
     if (bytes.size() < 2) return reading;  // no function code: no length rule to ask
     for (Direction d : directions(o)) {
@@ -276,7 +277,7 @@ Reading decode_rtu_cut(codec::Bytes bytes, const DecodeOptions& o) {
 }
 
 Reading decode_whole_rtu(codec::Bytes bytes, const DecodeOptions& o) {
-    Reading reading{"Modbus RTU", {}, {}, 0};
+    Reading reading{"Modbus RTU", {}, {}, 0, {}};
     if (bytes.size() < 4) {
         reading.fault = fmt::format("RTU frame too short: {} (address, function, CRC need 4)",
                                     byte_count(bytes.size()));
@@ -319,7 +320,7 @@ Reading decode_rtu(codec::Bytes bytes, const DecodeOptions& o) {
 }
 
 Reading decode_bare_pdu(codec::Bytes bytes, const DecodeOptions& o) {
-    Reading reading{"a bare PDU", {}, {}, 0};
+    Reading reading{"a bare PDU", {}, {}, 0, {}};
     if (bytes.empty()) {
         reading.fault = "no bytes to decode";
         reading.doubt = kNoFit;
@@ -335,7 +336,7 @@ Reading decode_bare_pdu(codec::Bytes bytes, const DecodeOptions& o) {
 }
 
 Reading decode_ascii(std::string text, const DecodeOptions& o) {
-    Reading reading{"Modbus ASCII", {}, {}, 0};
+    Reading reading{"Modbus ASCII", {}, {}, 0, {}};
     // Shells eat the CR LF; accept a frame without it.
     if (text.size() < 2 || text.substr(text.size() - 2) != "\r\n") text += "\r\n";
     std::array<std::uint8_t, codec::limits::kMaxAsciiAdu> buf{};
@@ -375,14 +376,18 @@ Reading decode_ascii(std::string text, const DecodeOptions& o) {
 }
 
 // Reads the bytes every way they could be framed and keeps the most plausible reading; on a
-// tie, TCP before RTU before a bare PDU.
+// tie, TCP before RTU before a bare PDU, and a sound bare PDU passed over is named.
 Reading decode_guessing(codec::Bytes bytes, const DecodeOptions& o) {
     Reading best = decode_tcp(bytes, o);
-    for (auto* decode : {&decode_rtu, &decode_bare_pdu}) {
-        if (best.doubt == 0) break;
-        Reading next = (*decode)(bytes, o);
-        if (next.doubt < best.doubt) best = std::move(next);
-    }
+    if (best.doubt == 0) return best;
+    Reading rtu = decode_rtu(bytes, o);
+    if (rtu.doubt < best.doubt) best = std::move(rtu);
+    if (best.doubt == 0) return best;
+    Reading bare = decode_bare_pdu(bytes, o);
+    if (bare.doubt < best.doubt) return bare;
+    if (bare.fault.empty() && !bare.decoded.empty())
+        best.also = fmt::format("the same bytes are also a sound {}: --pdu shows it",
+                                bare.decoded.front().title);
     return best;
 }
 
@@ -438,6 +443,7 @@ int run_decode(const DecodeOptions& o) {
     }
     fmt::print(stderr, "mbstorm decode: {}{}: {}\n", framing == Framing::Auto ? "read as " : "",
                reading.framing, reading.fault);
+    if (!reading.also.empty()) fmt::print(stderr, "mbstorm decode: {}\n", reading.also);
     return kExitFailed;
 }
 
