@@ -55,6 +55,9 @@ struct FuzzOptions {
     bool no_model = false;
     std::uint32_t max_connections = 4096;
     TransportOptions transport;
+    std::string target_cmd;
+    bool coverage = false;
+    std::uint64_t coverage_map_size = 65536;
 };
 
 // "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
@@ -100,6 +103,30 @@ bool write_output(const std::string& path, const std::string& text) {
     if (report::write_text_file(path, text, error)) return true;
     fmt::print(stderr, "mbstorm fuzz: {}\n", error);
     return false;
+}
+
+// --target-cmd and --coverage: mbstorm starts (and restarts) the target, handing it the map.
+bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c, std::string& error) {
+    if (!o.target_cmd.empty() && !o.restart_cmd.empty()) {
+        error = "--target-cmd starts and restarts the target: --restart-cmd is not needed";
+        return false;
+    }
+    if (o.coverage && o.target_cmd.empty()) {
+        error = "--coverage needs --target-cmd (mbstorm hands the target its coverage map)";
+        return false;
+    }
+    if (o.coverage && c.connector->framing() != codec::Framing::Mbap) {
+        error = "--coverage fuzzes Modbus TCP (MBAP) targets for now";
+        return false;
+    }
+    if (o.target_cmd.empty()) return true;
+    c.restart_cmd = o.target_cmd;
+    c.start_target = true;
+    if (!o.coverage) return true;
+    c.coverage = std::make_shared<netfuzz::CoverageMap>();
+    if (!c.coverage->create(o.coverage_map_size, error)) return false;
+    c.coverage->export_environment();
+    return true;
 }
 
 int run_fuzz(const FuzzOptions& o) {
@@ -153,6 +180,7 @@ int run_fuzz(const FuzzOptions& o) {
     c.minimize = !o.no_minimize;
     c.restart_cmd = o.restart_cmd;
     c.restart_wait_ms = static_cast<int>(o.restart_wait_ns / 1'000'000);
+    if (!set_up_target_command(o, c, error)) return usage_error("fuzz", error);
     c.out_dir = o.out_dir;
     c.stop = &g_stop;
     std::signal(SIGINT, on_fuzz_stop_signal);
@@ -237,6 +265,18 @@ void add_fuzz_command(CLI::App& app, Action& action) {
         ->capture_default_str();
     cmd->add_option("--restart-cmd", o->restart_cmd,
                     "shell command that restarts the target after a crash");
+    cmd->add_option("--target-cmd", o->target_cmd,
+                    "shell command that runs the target in the foreground: mbstorm starts it, "
+                    "restarts it after a crash and stops it at the end");
+    cmd->add_flag("--coverage", o->coverage,
+                  "grey-box: read the edge coverage of a target built for it (AFL++'s "
+                  "compilers, or clang -fsanitize-coverage=trace-pc-guard,trace-cmp with "
+                  "share/mbstorm/coverage/mbstorm_coverage.c) and fuzz from what reaches new "
+                  "edges; needs --target-cmd");
+    cmd->add_option("--coverage-map-size", o->coverage_map_size,
+                    "coverage map bytes, a power of two (passed on as AFL_MAP_SIZE)")
+        ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 24))
+        ->capture_default_str();
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");

@@ -300,6 +300,8 @@ class Campaign {
     // isolate()'s first run, again after a restart if the target was found down; false when
     // it stays down.
     bool first_isolated_run(const Case& c, Execution& ex);
+    void take_coverage(const Case& c);
+    bool start_target();
     std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
                                                 const std::string& key);
     Outcome record_plain(const Case& plain, Execution whole);
@@ -637,9 +639,29 @@ bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
     return !whole_server_hang(ex.verdict) || settle(cause);
 }
 
+// Grey-box: what the case reached. New edges (or hit counts in a new bucket) put it in the
+// corpus; the constants the target compared its input against go to the generator.
+void Campaign::take_coverage(const Case& c) {
+    const CoverageSample s = options_.coverage->collect();
+    if (s.new_bits) {
+        gen_->add_to_corpus(c, s.comparisons);
+        result_.corpus_size = gen_->corpus_size();
+    }
+    if (s.new_edges) {
+        result_.coverage_edges = options_.coverage->edges_seen();
+        result_.edges_over_time.emplace_back(elapsed(), result_.coverage_edges);
+    }
+    if (!s.compared_words.empty() || !s.compared_bytes.empty()) {
+        gen_->add_compared(s.compared_words, s.compared_bytes);
+        result_.compared_constants += s.compared_words.size() + s.compared_bytes.size();
+    }
+}
+
 bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
     ++result_.isolated_runs;
+    if (options_.coverage) options_.coverage->clear();
     ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    if (options_.coverage && !ex.down_before) take_coverage(c);
     if (!ex.down_before) return true;
     // Down before this case began: whatever did it is not this case.
     ++result_.deaths;
@@ -1251,6 +1273,7 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
         }
         ++r.fresh;
         ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+        if (options_.coverage) c.pipelinable = false;  // the map is read per case
         (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
     }
     return r;
@@ -1439,8 +1462,9 @@ bool Campaign::run_round(Round& r, std::vector<Case>& requeue,
         if (isolate(r.alone[i]) == Outcome::Lost) lost = true;
     }
     result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
-    // RTU/ASCII: every case runs alone, so the ones the deadline left unrun were not cases.
-    const bool all_alone = result_.profile.framing != codec::Framing::Mbap;
+    // RTU/ASCII and grey-box: every case runs alone, so the ones the deadline left unrun were
+    // not cases.
+    const bool all_alone = result_.profile.framing != codec::Framing::Mbap || options_.coverage;
     result_.cases += all_alone ? std::min(r.fresh, ran_alone) : r.fresh;
     if (all_alone)
         for (std::size_t i = ran_alone; i < r.alone.size(); ++i)
@@ -1466,6 +1490,25 @@ void Campaign::finish() {
     }
     result_.seconds = elapsed();
     progress(true);
+    if (options_.start_target) restart_.stop();
+}
+
+// --target-cmd: the target is ours to start (and, at the end, to stop).
+bool Campaign::start_target() {
+    TargetProfile any;
+    any.unit = options_.unit;
+    any.framing = options_.connector->framing();
+    any.probe_pdu = canonical_request(
+        *codec::function_info(codec::to_byte(codec::FunctionCode::ReadHoldingRegisters)));
+    restart_.own_process_group();
+    if (wait_for_target_with(restart_, *options_.connector, any, options_.restart_cmd,
+                             options_.restart_wait_ms, options_.timeout_ms, deadline_))
+        return true;
+    restart_.stop();
+    result_.error =
+        fmt::format("--target-cmd did not bring up a target that answers at {} within {} ms",
+                    options_.connector->describe(), options_.restart_wait_ms);
+    return false;
 }
 
 // The stages in order: discover, first looks, learn the device, then rounds of generated
@@ -1476,10 +1519,12 @@ CampaignResult Campaign::run() {
     last_progress_ = start_;
     if (options_.max_seconds > 0)
         deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
+    if (options_.start_target && !start_target()) return result_;
     if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
                          result_.error))
         return result_;
     result_.started = true;
+    result_.coverage = options_.coverage != nullptr;
     exec_.timeout_ms = options_.timeout_ms;
     exec_.state = options_.state;
     start_generator();

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "net/socket.hpp"
+#include "netfuzz/coverage_map.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/finding.hpp"
 #include "netfuzz/link.hpp"
@@ -48,7 +49,14 @@ struct CampaignOptions {
     std::uint32_t max_connections = 4096;  // capacity oracle cap (0: no capacity check)
     bool minimize = true;
     unsigned minimize_budget = 40;
-    std::string restart_cmd;      // run (sh -c) when the target is down
+    std::string restart_cmd;  // run (sh -c) when the target is down
+    // --target-cmd: restart_cmd is also run first, before discovery, and the target it runs
+    // is stopped (its process group) when the campaign ends.
+    bool start_target = false;
+    // Grey-box (--coverage): the map the target writes its edges to. Every case then runs
+    // alone (the map is cleared before it and read after), and cases that reach new edges
+    // join a corpus the generator mutates. Null: black-box.
+    std::shared_ptr<CoverageMap> coverage;
     int restart_wait_ms = 15000;  // how long to wait for it to come back
     std::string out_dir;          // "" : findings are not saved
     double progress_interval_s = 1.0;
@@ -95,6 +103,13 @@ struct CampaignResult {
     double batch_seconds = 0, isolated_seconds = 0;  // where the time went
     std::string stop_reason;
     std::array<std::uint64_t, static_cast<std::size_t>(MutationClass::Count)> cases_by_class{};
+    // Grey-box runs: edges hit so far, over time (seconds, edges; a point whenever they grow),
+    // the corpus, and how many constants the target's comparisons gave.
+    bool coverage = false;
+    std::uint32_t coverage_edges = 0;
+    std::vector<std::pair<double, std::uint32_t>> edges_over_time;
+    std::size_t corpus_size = 0;
+    std::size_t compared_constants = 0;
 };
 
 using ProgressFn = std::function<void(const Progress&)>;

@@ -43,7 +43,8 @@ constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::C
     "no-silence",
     "noise",
     "in-map",
-    "map-edge"};
+    "map-edge",
+    "coverage-mutation"};
 
 }  // namespace
 

@@ -49,6 +49,10 @@ enum class MutationClass : std::uint8_t {
     // that the code behind each address check runs.
     InMap,    // a request inside the map, valid but for at most one field
     MapEdge,  // each edge of each valid range: first, last, one before, one past
+    // Coverage-guided (fuzz --coverage, netfuzz/coverage_map.hpp): a case that reached new
+    // edges of the target, its frames' fields mutated (set to constants the target compared
+    // them against, bit flips, arithmetic, splices).
+    CoverageMutation,
     Count
 };
 

@@ -363,6 +363,10 @@ void Generator::next(Case& out) {
             naive(out);
             return;
         }
+        if (!solved_.empty() || (!coverage_corpus_.empty() && rng_.chance(2))) {
+            corpus_mutation(out);  // as the target ran it: not relocated or reframed
+            return;
+        }
         const std::uint32_t roll = rng_.below(1000);
         // With a model, a share of the cases is aimed inside the device's map (most of them
         // on a target that pauses after exceptions, so that its run is not spent waiting).

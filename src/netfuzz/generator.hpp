@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "netfuzz/case.hpp"
+#include "netfuzz/coverage_map.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/oracle.hpp"
 #include "netfuzz/rng.hpp"
@@ -63,6 +64,18 @@ class Generator {
     // A class that crashed or hung the target is drawn 16 times less often from now on.
     void deprioritise(std::uint8_t function, MutationClass cls);
 
+    // Coverage-guided runs (generator_coverage.cpp): a case that reached new edges joins the
+    // corpus, whose entries then make half the cases; constants the target compared its input
+    // against become field values.
+    // Its failed comparisons give the next cases: an operand found in one of its frames
+    // replaced by the other (input-to-state, as AFL++'s cmplog), alone and together with the
+    // comparison made next (a compiler may test `a == X && b == Y` as one branch).
+    void add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons = {});
+    void add_compared(const std::vector<std::uint16_t>& words,
+                      const std::vector<std::uint8_t>& bytes);
+    std::size_t corpus_size() const noexcept { return coverage_corpus_.size(); }
+    const std::vector<Case>& corpus() const noexcept { return coverage_corpus_; }
+
     // The structured request PDUs (limits of every function code), for tests.
     const std::vector<std::vector<std::uint8_t>>& seeds() const noexcept { return seeds_; }
 
@@ -79,6 +92,10 @@ class Generator {
     void read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t base, std::uint16_t qty,
                    bool coils);
     void burst_split(Case& out);
+    void corpus_mutation(Case& out);
+    void mutate_frame(std::vector<std::uint8_t>& f);
+    std::uint16_t compared_word();
+    void solve_comparisons(const Case& c, const std::vector<Comparison>& comparisons);
     // Model-aimed cases (generator_map.cpp).
     bool has_model() const noexcept { return options_.model && !options_.model->empty(); }
     void in_map(Case& out);
@@ -117,6 +134,10 @@ class Generator {
         bool second_range;  // FC17: the write range at the edge
     };
     std::vector<Edge> edges_;  // map-edge requests, walked in turn
+    std::vector<Case> coverage_corpus_;
+    std::vector<Case> solved_;  // input-to-state cases, run before any other
+    std::vector<std::uint16_t> compared_words_;
+    std::vector<std::uint8_t> compared_bytes_;
     std::size_t edge_cursor_ = 0;
     std::array<std::uint32_t, 256 * static_cast<std::size_t>(MutationClass::Count) / 32 + 1>
         deprioritised_{};

@@ -94,7 +94,9 @@ std::string culprit_text(MutationClass cls, const RequestInfo* rq) {
     if (cls == MutationClass::Split || cls == MutationClass::BurstSplit ||
         cls == MutationClass::PartialHold || cls == MutationClass::Drip)
         return "partial-frame";
-    if (is_transport_class(cls) || !rq || rq->pdu.empty()) return std::string(class_name(cls));
+    // A frame that is not Modbus (protocol id not 0) meets no function's handler.
+    if (is_transport_class(cls) || cls == MutationClass::ProtocolId || !rq || rq->pdu.empty())
+        return std::string(class_name(cls));
     if (request_kind(*rq) == "unknown-fc") return "unknown-fc";
     // The function code alone: one handler, whether this request was valid or not.
     return fmt::format("fc{:02X}", rq->pdu[0]);

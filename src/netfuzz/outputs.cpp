@@ -21,6 +21,21 @@ std::string_view sarif_level(Oracle o) {
 
 }  // namespace
 
+namespace {
+
+// Grey-box runs: edges over time, the corpus; null for black-box ones.
+json coverage_json(const CampaignResult& r) {
+    if (!r.coverage) return nullptr;
+    json over_time = json::array();
+    for (const auto& [seconds, edges] : r.edges_over_time) over_time.push_back({seconds, edges});
+    return {{"edges", r.coverage_edges},
+            {"corpus", r.corpus_size},
+            {"compared_constants", r.compared_constants},
+            {"edges_over_time", over_time}};
+}
+
+}  // namespace
+
 std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
     json findings = json::array();
     for (const Finding& f : r.findings) {
@@ -84,6 +99,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"learn_requests", r.learn_requests},
         {"death_watch", r.death_watch},
         {"rationed", r.rationed},
+        {"coverage", coverage_json(r)},
         {"findings", findings}};
     return j.dump(2) + "\n";
 }
@@ -181,6 +197,11 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     s += fmt::format(
         "  time: {:.1f} s pipelined, {:.1f} s isolated (transport, stateful, suspects)\n",
         r.batch_seconds, r.isolated_seconds);
+    if (r.coverage)
+        s += fmt::format(
+            "  coverage: {} edges; corpus {} case(s); {} constant(s) from the target's "
+            "comparisons\n",
+            r.coverage_edges, r.corpus_size, r.compared_constants);
     s += fmt::format(
         "  target deaths: {} ({} restarts, {} not repeatable alone); repeats of known root "
         "causes: {}; cases skipped as known crash/hang: {}; unconfirmed suspects: {}\n",

@@ -1,7 +1,10 @@
 #include "netfuzz/restart_command.hpp"
 
+#include <signal.h>
 #include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -31,6 +34,7 @@ void reap_left_running() {
 
 bool RestartCommand::start(const std::string& command, std::string& error) {
     reap_left_running();
+    if (own_group_) return start_owned(command, error);
     const char* argv[] = {"sh", "-c", command.c_str(), nullptr};
     const int rc =
         ::posix_spawn(&pid_, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ);
@@ -38,6 +42,27 @@ bool RestartCommand::start(const std::string& command, std::string& error) {
         pid_ = -1;
         error = std::string("cannot run --restart-cmd: ") + std::strerror(rc);
         return false;
+    }
+    return true;
+}
+
+// The target of --target-cmd: a process group of its own (stop() ends all of it), killed
+// with mbstorm however mbstorm ends, its stdout on mbstorm's stderr (stdout may carry a
+// report).
+bool RestartCommand::start_owned(const std::string& command, std::string& error) {
+    const pid_t parent = ::getpid();
+    pid_ = ::fork();
+    if (pid_ < 0) {
+        error = std::string("cannot run --target-cmd: ") + std::strerror(errno);
+        return false;
+    }
+    if (pid_ == 0) {
+        ::setpgid(0, 0);
+        ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (::getppid() != parent) ::_exit(127);  // mbstorm is gone already
+        ::dup2(2, 1);
+        ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
     }
     return true;
 }
@@ -50,6 +75,19 @@ bool RestartCommand::returned() {
         return true;
     }
     return false;
+}
+
+void RestartCommand::stop() {
+    if (pid_ < 0 || returned()) return;
+    const pid_t target = own_group_ ? -pid_ : pid_;
+    ::kill(target, SIGTERM);
+    for (int i = 0; i < 100 && !returned(); ++i) ::usleep(10000);
+    if (pid_ >= 0) {
+        ::kill(target, SIGKILL);
+        ::waitpid(pid_, nullptr, 0);
+        pid_ = -1;
+    }
+    if (own_group_) ::kill(target, SIGKILL);  // what sh started and left behind
 }
 
 RestartCommand::~RestartCommand() {

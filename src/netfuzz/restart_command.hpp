@@ -11,6 +11,12 @@ namespace mbstorm::netfuzz {
 
 class RestartCommand {
   public:
+    // Commands started from now on get a process group of their own, which stop() ends (the
+    // target of --target-cmd, the fuzzer's to stop; a --restart-cmd stays in the user's).
+    void own_process_group() noexcept { own_group_ = true; }
+    // Ends a command still running and everything it started in its process group: SIGTERM,
+    // then SIGKILL after a second.
+    void stop();
     // Starts the command; false with `error` when it cannot be started at all.
     bool start(const std::string& command, std::string& error);
     // True once the command has returned (it is reaped then).
@@ -22,7 +28,9 @@ class RestartCommand {
     ~RestartCommand();
 
   private:
+    bool start_owned(const std::string& command, std::string& error);
     pid_t pid_ = -1;
+    bool own_group_ = false;
 };
 
 }  // namespace mbstorm::netfuzz

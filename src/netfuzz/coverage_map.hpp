@@ -1,0 +1,75 @@
+// The coverage map of a grey-box run (mbstorm fuzz --coverage): a System V shared-memory
+// segment the target writes its edge hit counts to, AFL's convention (its id in __AFL_SHM_ID,
+// its size in AFL_MAP_SIZE), so targets built with AFL++'s compilers or with clang and
+// mbstorm's runtime (coverage/mbstorm_coverage.c) both work. Past the map, mbstorm's runtime
+// logs the operands of the comparisons the target made.
+//
+// Per case: clear() before it, collect() after it. Hit counts are bucketed as AFL does (1, 2,
+// 3, 4-7, 8-15, 16-31, 32-127, 128+); a case is new when it sets a bucket bit no case set
+// before.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mbstorm::netfuzz {
+
+struct Comparison {
+    std::uint8_t size = 0;  // operand bytes: 1, 2, 4 or 8
+    std::uint64_t a = 0, b = 0;
+};
+
+struct CoverageSample {
+    bool new_bits = false;        // a bucket bit no case set before
+    std::uint32_t new_edges = 0;  // edges never hit before
+    std::uint32_t edges = 0;      // edges this case hit
+    // Constants the target compared its input against (mbstorm's runtime only), deduplicated.
+    std::vector<std::uint16_t> compared_words;
+    std::vector<std::uint8_t> compared_bytes;
+    // The comparisons this case made that failed, in the order it made them: where a request
+    // carries one operand, the other put there passes the comparison.
+    std::vector<Comparison> comparisons;
+};
+
+class CoverageMap {
+  public:
+    CoverageMap() = default;
+    CoverageMap(const CoverageMap&) = delete;
+    CoverageMap& operator=(const CoverageMap&) = delete;
+    ~CoverageMap();
+
+    // Creates and attaches the segment (`map_size` a power of two, 64 B .. 16 MiB). It is
+    // marked for removal at once (Linux lets the target attach it still), so no segment
+    // outlives mbstorm however it ends. False with `error` set.
+    bool create(std::size_t map_size, std::string& error);
+    // Puts __AFL_SHM_ID and AFL_MAP_SIZE in this process's environment, for the target command.
+    void export_environment() const;
+
+    void clear() noexcept;
+    CoverageSample collect();
+
+    std::uint32_t edges_seen() const noexcept { return edges_seen_; }
+    std::size_t map_size() const noexcept { return map_size_; }
+    int id() const noexcept { return id_; }
+    // The map as the target left it (tests).
+    const std::uint8_t* map() const noexcept { return map_; }
+
+  private:
+    int id_ = -1;
+    std::uint8_t* map_ = nullptr;
+    std::size_t map_size_ = 0;
+    std::vector<std::uint8_t> virgin_;  // bucket bits no case has set yet (AFL's virgin map)
+    std::uint32_t edges_seen_ = 0;
+    std::vector<std::uint8_t> words_known_;  // a bit per 16-bit word already reported
+};
+
+// AFL's bucket of a hit count, as one bit (0 for no hit).
+std::uint8_t hit_bucket(std::uint8_t hits) noexcept;
+
+// The size of the comparison log mbstorm's runtime keeps past the map.
+std::size_t comparison_log_size() noexcept;
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,173 @@
+// Coverage-guided cases (mbstorm fuzz --coverage): mutations of the cases that reached new
+// edges of the target. Fields take the constants the target was seen comparing its input
+// against, so a check like `address == 0x1234 && value == 0xBEEF` is passed one field at a
+// time: the first comparison passed is a new edge, that case joins the corpus, and its
+// mutations try the second constant.
+#include <algorithm>
+
+#include "codec/limits.hpp"
+#include "codec/mbap.hpp"
+#include "netfuzz/generator.hpp"
+
+namespace mbstorm::netfuzz {
+namespace {
+
+namespace lim = codec::limits;
+
+// The most recent entries are mutated more often: they are the frontier.
+constexpr std::uint32_t kFrontier = 16;
+constexpr std::size_t kMaxCompared = 4096;
+
+}  // namespace
+
+void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons) {
+    Case entry = c;
+    entry.number = 0;
+    entry.cls = MutationClass::CoverageMutation;
+    coverage_corpus_.push_back(entry);
+    solve_comparisons(entry, comparisons);
+}
+
+namespace {
+
+// Puts the other operand of `cmp` where the case's frames carry one of them (big-endian, in
+// a PDU); false when neither is there.
+bool apply(Case& c, const Comparison& cmp) {
+    const std::size_t n = cmp.size == 1 ? 1 : 2;
+    if (n == 2 && (cmp.a > 0xFFFF || cmp.b > 0xFFFF)) return false;
+    for (Step& s : c.steps) {
+        std::vector<std::uint8_t>& f = s.bytes;
+        if (s.op != Op::Send || f.size() <= lim::kMbapHeader) continue;
+        for (std::size_t at = lim::kMbapHeader; at + n <= f.size(); ++at) {
+            const std::uint64_t here = n == 1 ? f[at] : codec::load_be16(f.data() + at);
+            const std::uint64_t to = here == cmp.a ? cmp.b : here == cmp.b ? cmp.a : here;
+            if (to == here) continue;
+            if (n == 1)
+                f[at] = static_cast<std::uint8_t>(to);
+            else
+                codec::store_be16(f.data() + at, static_cast<std::uint16_t>(to));
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace
+
+// A case per failed comparison whose operand the frames carry, and per run of up to three
+// comparisons in a row (`a == X && b == Y && c == Z` may be one branch): at most kMaxSolved
+// per corpus entry.
+void Generator::solve_comparisons(const Case& c, const std::vector<Comparison>& comparisons) {
+    constexpr std::size_t kMaxSolved = 96, kMaxRun = 3;
+    std::size_t made = 0;
+    for (std::size_t k = 0; k < comparisons.size() && made < kMaxSolved; ++k) {
+        Case run = c;
+        for (std::size_t i = k; i < std::min(comparisons.size(), k + kMaxRun); ++i) {
+            if (!apply(run, comparisons[i])) break;
+            solved_.push_back(run);
+            ++made;
+        }
+    }
+    for (Case& s : solved_)
+        for (const Step& st : s.steps)
+            if (st.op == Op::Send && st.bytes.size() > lim::kMbapHeader) {
+                s.function = st.bytes[lim::kMbapHeader];
+                break;
+            }
+}
+
+void Generator::add_compared(const std::vector<std::uint16_t>& words,
+                             const std::vector<std::uint8_t>& bytes) {
+    for (std::uint16_t w : words)
+        if (compared_words_.size() < kMaxCompared) compared_words_.push_back(w);
+    for (std::uint8_t b : bytes)
+        if (compared_bytes_.size() < 256) compared_bytes_.push_back(b);
+}
+
+std::uint16_t Generator::compared_word() {
+    if (!compared_words_.empty() && !rng_.chance(4))
+        return compared_words_[rng_.below(static_cast<std::uint32_t>(compared_words_.size()))];
+    return word();
+}
+
+void Generator::corpus_mutation(Case& out) {
+    if (!solved_.empty()) {
+        out = std::move(solved_.back());
+        solved_.pop_back();
+        return;
+    }
+    const auto n = static_cast<std::uint32_t>(coverage_corpus_.size());
+    const std::uint32_t pick =
+        rng_.chance(2) && n > kFrontier ? n - 1 - rng_.below(kFrontier) : rng_.below(n);
+    out = coverage_corpus_[pick];
+    out.cls = MutationClass::CoverageMutation;
+    out.pipelinable = false;
+    // One frame of the case (a sequence keeps its other steps as they were).
+    std::vector<std::size_t> frames;
+    for (std::size_t i = 0; i < out.steps.size(); ++i)
+        if (out.steps[i].op == Op::Send && out.steps[i].bytes.size() > lim::kMbapHeader)
+            frames.push_back(i);
+    if (frames.empty()) return;
+    std::vector<std::uint8_t>& f =
+        out.steps[frames[rng_.below(static_cast<std::uint32_t>(frames.size()))]].bytes;
+    for (std::uint32_t i = 0, stack = 1 + rng_.below(4); i < stack; ++i) mutate_frame(f);
+    // The header follows the PDU (lying lengths are the mbap-length class's).
+    codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(f.size() - 6));
+    out.function = f[lim::kMbapHeader];
+}
+
+// One mutation of the PDU of MBAP frame `f` (its function code included).
+void Generator::mutate_frame(std::vector<std::uint8_t>& f) {
+    const auto pdu_size = static_cast<std::uint32_t>(f.size() - lim::kMbapHeader);
+    const auto at = [&](std::uint32_t room) {
+        return lim::kMbapHeader + rng_.below(pdu_size > room ? pdu_size - room : 1);
+    };
+    switch (rng_.below(8)) {
+        case 0:
+        case 1:
+        case 2:  // a 16-bit field set to a compared constant (or a dictionary word)
+            if (pdu_size >= 3) codec::store_be16(f.data() + 1 + at(2), compared_word());
+            break;
+        case 3: {  // a byte set to a compared constant
+            const std::uint8_t b = compared_bytes_.empty()
+                                       ? rng_.byte()
+                                       : compared_bytes_[rng_.below(
+                                             static_cast<std::uint32_t>(compared_bytes_.size()))];
+            f[at(0)] = b;
+            break;
+        }
+        case 4:  // a bit flip
+            f[at(0)] ^= static_cast<std::uint8_t>(1u << rng_.below(8));
+            break;
+        case 5: {  // a 16-bit field a little more or less
+            if (pdu_size < 3) break;
+            const std::size_t i = 1 + at(2);
+            const int delta = static_cast<int>(rng_.below(35)) - 17;
+            codec::store_be16(f.data() + i,
+                              static_cast<std::uint16_t>(codec::load_be16(f.data() + i) + delta));
+            break;
+        }
+        case 6: {  // the tail of another entry's first frame
+            const Case& other =
+                coverage_corpus_[rng_.below(static_cast<std::uint32_t>(coverage_corpus_.size()))];
+            for (const Step& s : other.steps) {
+                if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader) continue;
+                const std::size_t cut = at(0) + 1;
+                const std::size_t from =
+                    lim::kMbapHeader +
+                    rng_.below(static_cast<std::uint32_t>(s.bytes.size() - lim::kMbapHeader));
+                f.resize(cut);
+                f.insert(f.end(), s.bytes.begin() + static_cast<std::ptrdiff_t>(from),
+                         s.bytes.end());
+                break;
+            }
+            break;
+        }
+        case 7:  // a random byte
+            f[at(0)] = rng_.byte();
+            break;
+    }
+    if (f.size() > lim::kMbapHeader + lim::kMaxPdu) f.resize(lim::kMbapHeader + lim::kMaxPdu);
+}
+
+}  // namespace mbstorm::netfuzz

@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# mbstorm fuzz --coverage (issue #27), as a user who can rebuild their server runs it: a small
+# C device (tests/tools/coverage_device.c) built with clang -fsanitize-coverage=
+# trace-pc-guard,trace-cmp and mbstorm's runtime (coverage/mbstorm_coverage.c), started by
+# mbstorm (--target-cmd). Its two planted crashes each need two fields equal to constants at
+# once (1 in 2^32 for a guess): coverage mode must find both, with edges that only grow, and
+# each reproducer must crash the device again when replayed alone; the black-box mode, the same
+# device built without coverage, the same seed and time, finds neither.
+#   bash fuzz_coverage.sh <mbstorm-binary> <scripts-dir>
+set -u
+mbstorm=$1
+scripts=${2:-$(cd "$(dirname "$0")" && pwd)}
+root=$(cd "$scripts/../.." && pwd)
+source "$scripts/lib/peer.bash"
+work=$(mktemp -d)
+trap 'stop_server; rm -rf "$work"' EXIT
+seconds=20
+
+# bounded SECONDS COMMAND...: COMMAND, killed if it outlives SECONDS.
+bounded() { timeout -k 5 "$@"; }
+
+fail=0
+device="$root/tests/tools/coverage_device.c"
+runtime="$root/coverage/mbstorm_coverage.c"
+clang -O1 -g -fsanitize-coverage=trace-pc-guard,trace-cmp -c "$device" -o "$work/device.o" &&
+  clang -O1 -c "$runtime" -o "$work/runtime.o" &&
+  clang "$work/device.o" "$work/runtime.o" -o "$work/device-coverage" &&
+  clang -O1 -g "$device" -o "$work/device-plain" ||
+  { echo "FAIL: the device does not build with clang and the coverage runtime"; exit 1; }
+
+# A port for the device: mbstorm starts it there (and again after each crash).
+free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
+
+# fuzz_device NAME BINARY [FLAGS...]: fuzzes BINARY started by mbstorm; $work/NAME.json.
+fuzz_device() {
+  local name=$1 binary=$2; shift 2
+  local p; p=$(free_port)
+  bounded $((seconds + 40)) "$mbstorm" fuzz --target "127.0.0.1:$p" --target-cmd "exec $binary --port $p" \
+    --seconds "$seconds" --seed 1 -q --no-model --max-connections 0 --out "$work/$name" --json "$work/$name.json" "$@" \
+    >"$work/$name.log" 2>&1
+  local rc=$?
+  if [ "$rc" -ne 0 ] && [ "$rc" -ne 1 ]; then
+    echo "FAIL $name: exit $rc"; sed 's/^/  /' "$work/$name.log" | tail -20; fail=1
+  fi
+}
+
+fuzz_device coverage "$work/device-coverage" --coverage
+fuzz_device blackbox "$work/device-plain"
+/usr/bin/python3 - "$work/coverage.json" "$work/blackbox.json" <<'PY' || fail=1
+import json, sys
+planted = {"crash:target-down/fc06", "crash:target-down/fc16"}
+cov, bb = (json.load(open(p)) for p in sys.argv[1:3])
+found = {f["root_cause"] for f in cov["findings"]}
+over_time = [e for _, e in cov["coverage"]["edges_over_time"]]
+checks = [
+    (planted == found, f"coverage mode finds both planted crashes, nothing else (found {sorted(found)})"),
+    (cov["coverage"]["edges"] > 20 and cov["coverage"]["corpus"] > 5,
+     f"edges {cov['coverage']['edges']}, corpus {cov['coverage']['corpus']}"),
+    (over_time == sorted(over_time) and len(over_time) > 1, "edges only grow over time"),
+    (cov["coverage"]["compared_constants"] > 0, "constants read from the device's comparisons"),
+    (not planted & {f["root_cause"] for f in bb["findings"]},
+     f"the black-box mode finds neither in the same time ({bb['cases']} cases)"),
+    (bb["coverage"] is None, "a black-box run reports no coverage"),
+]
+for ok, what in checks:
+    print(("ok   " if ok else "FAIL ") + what)
+sys.exit(0 if all(ok for ok, _ in checks) else 1)
+PY
+
+# Each crash replays alone against the device built with coverage, run on its own (no map
+# handed to it: the runtime counts into a private one).
+for folder in "$work"/coverage/*crash*/; do
+  [ -f "$folder/finding.json" ] || continue
+  if ! start_server "$work/replay.out" "$work/device-coverage" --port 0; then
+    echo "FAIL: the device did not start for replay"; fail=1; break
+  fi
+  out=$(bounded 30 "$mbstorm" replay "$folder" --target "127.0.0.1:$port" --runs 1 2>&1)
+  if [ $? -eq 1 ] && grep -q "1 of 1 run(s) reproduced" <<<"$out"; then
+    echo "ok   replay reproduces $(basename "$folder")"
+  else
+    echo "FAIL replay of $(basename "$folder")"; sed 's/^/  /' <<<"$out"; fail=1
+  fi
+  stop_server
+done
+exit $fail
