@@ -85,8 +85,9 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
         }
     }
     // All but naive, those that speak the other transport (the campaign runs them itself),
-    // the four of RTU/ASCII framing (generator_framing.cpp) and the two aimed at a device
-    // model (none given here: GeneratorAimed below).
+    // the four of RTU/ASCII framing (generator_framing.cpp), the two aimed at a device
+    // model (none given here: GeneratorAimed below) and the coverage corpus's (no corpus
+    // without --coverage: CoverageCorpus in coverage_map_test.cpp).
     std::size_t generated = 0;
     for (std::size_t i = 0; i < static_cast<std::size_t>(MutationClass::Count); ++i) {
         const auto k = static_cast<MutationClass>(i);
@@ -98,8 +99,10 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
         }
         const bool model_only = k == MutationClass::InMap || k == MutationClass::MapEdge;
         EXPECT_TRUE(!model_only || classes.count(k) == 0) << class_name(k);
+        const bool corpus_only = k == MutationClass::CoverageMutation;
+        EXPECT_TRUE(!corpus_only || classes.count(k) == 0) << class_name(k);
         generated += k != MutationClass::NaiveRandom && !is_cross_transport(k) && !framing_only &&
-                     !model_only;
+                     !model_only && !corpus_only;
     }
     EXPECT_EQ(classes.size(), generated);
 }

@@ -67,6 +67,25 @@ for ok, what in checks:
 sys.exit(0 if all(ok for ok, _ in checks) else 1)
 PY
 
+# The target mbstorm started is stopped at the end of the run, and dies with mbstorm when
+# mbstorm is killed outright.
+left=$(pgrep -f "$work/device-" || true)
+[ -z "$left" ] && echo "ok   the targets were stopped at the end of each run" ||
+  { echo "FAIL target processes left running: $left"; fail=1; }
+p=$(free_port)
+"$mbstorm" fuzz --target "127.0.0.1:$p" --target-cmd "exec $work/device-plain --port $p" \
+  --seconds 30 -q --max-connections 0 --out "$work/killed" >/dev/null 2>&1 &
+fuzzer=$!
+for _ in $(seq 50); do pgrep -f "$work/device-plain" >/dev/null && break; sleep 0.1; done
+sleep 0.5
+kill -9 "$fuzzer"; wait "$fuzzer" 2>/dev/null
+for _ in $(seq 20); do pgrep -f "$work/device-plain" >/dev/null || break; sleep 0.1; done
+if pgrep -f "$work/device-plain" >/dev/null; then
+  echo "FAIL the target outlived a killed mbstorm"; pkill -f "$work/device-plain"; fail=1
+else
+  echo "ok   the target died with a killed mbstorm"
+fi
+
 # Each crash replays alone against the device built with coverage, run on its own (no map
 # handed to it: the runtime counts into a private one).
 for folder in "$work"/coverage/*crash*/; do

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `cmake --install <build> --prefix X` puts a working mbstorm in X/bin, its documentation in
 # X/share/doc/mbstorm, its man pages in X/share/man/man1, its bash completion in
-# X/share/bash-completion/completions and its example scenarios in X/share/mbstorm/scenarios.
+# X/share/bash-completion/completions, its example scenarios in X/share/mbstorm/scenarios and
+# the coverage runtime in X/share/mbstorm/coverage.
 set -euo pipefail
 build=$(cd "$(dirname "$1")" && pwd)
 work=$(mktemp -d)
@@ -16,7 +17,7 @@ version=${version_text%%$'\n'*}
 [[ "$version" == "mbstorm "[0-9]* ]] || { echo "FAIL installed mbstorm --version printed '$version'" >&2; exit 1; }
 run_help=$("$work/prefix/bin/mbstorm" run --help)
 grep -q -- '--target' <<<"$run_help" || { echo "FAIL installed mbstorm run --help" >&2; exit 1; }
-for f in doc/mbstorm/README.md doc/mbstorm/copyright doc/mbstorm/docs/json-schema.md mbstorm/scenarios/ci-gate.yaml man/man1/mbstorm.1.gz man/man1/mbstorm-run.1.gz \
+for f in doc/mbstorm/README.md doc/mbstorm/copyright doc/mbstorm/docs/json-schema.md mbstorm/scenarios/ci-gate.yaml man/man1/mbstorm.1.gz man/man1/mbstorm-run.1.gz mbstorm/coverage/mbstorm_coverage.c \
   bash-completion/completions/mbstorm; do
   [ -f "$work/prefix/share/$f" ] || { echo "FAIL share/$f not installed" >&2; exit 1; }
 done

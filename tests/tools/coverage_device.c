@@ -38,7 +38,9 @@ struct client {
     size_t size;
 };
 
-static uint16_t be16(const uint8_t* p) { return (uint16_t)(p[0] << 8 | p[1]); }
+static uint16_t be16(const uint8_t* p) {
+    return (uint16_t)(p[0] << 8 | p[1]);
+}
 static void put16(uint8_t* p, uint16_t v) {
     p[0] = (uint8_t)(v >> 8);
     p[1] = (uint8_t)v;

@@ -1,0 +1,159 @@
+// The coverage map as a target sees it: a System V segment attached by its id (as AFL++'s
+// runtime and coverage/mbstorm_coverage.c do), hit counts in AFL's buckets, and the
+// comparison log past the map.
+#include <gtest/gtest.h>
+#include <sys/shm.h>
+
+#include <algorithm>
+#include <cstring>
+
+#include "netfuzz/coverage_map.hpp"
+#include "netfuzz/generator.hpp"
+
+using namespace mbstorm::netfuzz;
+
+namespace {
+
+// The target's side: the segment attached again by id, as the runtime does.
+struct TargetSide {
+    std::uint8_t* map = nullptr;
+    explicit TargetSide(const CoverageMap& m) {
+        void* at = ::shmat(m.id(), nullptr, 0);
+        if (at != reinterpret_cast<void*>(-1)) map = static_cast<std::uint8_t*>(at);
+    }
+    ~TargetSide() {
+        if (map) ::shmdt(map);
+    }
+};
+
+// The runtime's comparison log entry and header (coverage/mbstorm_coverage.c).
+struct Entry {
+    std::uint32_t size, reserved;
+    std::uint64_t a, b;
+};
+constexpr std::size_t kEntriesAt = 8 + 4096 / 8;
+
+void log_comparison(std::uint8_t* log, std::uint32_t size, std::uint64_t a, std::uint64_t b) {
+    std::uint32_t magic = 0x504D434DU, count = 0;
+    std::memcpy(&count, log + 4, 4);
+    const Entry e{size, 0, a, b};
+    std::memcpy(log + kEntriesAt + count * sizeof(Entry), &e, sizeof e);
+    ++count;
+    std::memcpy(log, &magic, 4);
+    std::memcpy(log + 4, &count, 4);
+}
+
+std::uint16_t codec_load(const std::vector<std::uint8_t>& f, std::size_t at) {
+    return static_cast<std::uint16_t>(f[at] << 8 | f[at + 1]);
+}
+
+}  // namespace
+
+TEST(CoverageMap, HitCountsGoInAflsBuckets) {
+    EXPECT_EQ(hit_bucket(0), 0);
+    EXPECT_EQ(hit_bucket(1), 1);
+    EXPECT_EQ(hit_bucket(2), 2);
+    EXPECT_EQ(hit_bucket(3), 4);
+    EXPECT_EQ(hit_bucket(4), 8);
+    EXPECT_EQ(hit_bucket(7), 8);
+    EXPECT_EQ(hit_bucket(8), 16);
+    EXPECT_EQ(hit_bucket(16), 32);
+    EXPECT_EQ(hit_bucket(32), 64);
+    EXPECT_EQ(hit_bucket(127), 64);
+    EXPECT_EQ(hit_bucket(128), 128);
+    EXPECT_EQ(hit_bucket(255), 128);
+}
+
+TEST(CoverageMap, ACaseIsNewWhenItSetsABucketBitNoneSetBefore) {
+    CoverageMap m;
+    std::string error;
+    ASSERT_TRUE(m.create(1 << 16, error)) << error;
+    TargetSide t(m);
+    ASSERT_NE(t.map, nullptr);
+    t.map[10] = 1;
+    t.map[65535] = 1;
+    CoverageSample s = m.collect();
+    EXPECT_TRUE(s.new_bits);
+    EXPECT_EQ(s.new_edges, 2u);
+    EXPECT_EQ(s.edges, 2u);
+    // The same again: nothing new.
+    m.clear();
+    EXPECT_EQ(t.map[10], 0);
+    t.map[10] = 1;
+    s = m.collect();
+    EXPECT_FALSE(s.new_bits);
+    // The same edge hit 5 times: a new bucket, not a new edge.
+    m.clear();
+    t.map[10] = 5;
+    s = m.collect();
+    EXPECT_TRUE(s.new_bits);
+    EXPECT_EQ(s.new_edges, 0u);
+    EXPECT_EQ(m.edges_seen(), 2u);
+}
+
+TEST(CoverageMap, ComparisonsPastTheMapAreReadInOrder) {
+    CoverageMap m;
+    std::string error;
+    ASSERT_TRUE(m.create(1 << 12, error)) << error;
+    TargetSide t(m);
+    ASSERT_NE(t.map, nullptr);
+    std::uint8_t* log = t.map + m.map_size();
+    log_comparison(log, 0x84, 0x0123, 7);     // a constant 0x0123 against the input's 7
+    log_comparison(log, 0x82, 0x4D42, 0x10);  // then 0x4D42 against 0x10
+    log_comparison(log, 1, 0x16, 0x03);       // a byte comparison
+    log_comparison(log, 4, 0x12345678, 9);    // 32 bits: two registers
+    const CoverageSample s = m.collect();
+    ASSERT_EQ(s.comparisons.size(), 4u);
+    EXPECT_EQ(s.comparisons[0].a, 0x0123u);
+    EXPECT_EQ(s.comparisons[1].a, 0x4D42u);
+    EXPECT_EQ(s.comparisons[2].size, 1);
+    const auto has = [&](std::uint16_t w) {
+        return std::find(s.compared_words.begin(), s.compared_words.end(), w) !=
+               s.compared_words.end();
+    };
+    EXPECT_TRUE(has(0x0123));
+    EXPECT_TRUE(has(0x4D42));
+    EXPECT_TRUE(has(0x1234));
+    EXPECT_TRUE(has(0x5678));
+    EXPECT_NE(std::find(s.compared_bytes.begin(), s.compared_bytes.end(), 0x16),
+              s.compared_bytes.end());
+    // clear() empties the log for the next case; constants are reported once per run.
+    m.clear();
+    log_comparison(log, 0x82, 0x4D42, 0x11);
+    const CoverageSample again = m.collect();
+    EXPECT_EQ(again.comparisons.size(), 1u);
+    EXPECT_TRUE(again.compared_words.empty());
+}
+
+TEST(CoverageMap, RefusesASizeThatIsNotAPowerOfTwo) {
+    CoverageMap m;
+    std::string error;
+    EXPECT_FALSE(m.create(1000, error));
+    EXPECT_NE(error.find("power of two"), std::string::npos) << error;
+}
+
+// Input-to-state: a corpus entry's failed comparisons turn into the cases that pass them, one
+// comparison alone and runs of comparisons made in a row (a compiler may test two fields as
+// one branch, so neither alone reaches anything new).
+TEST(CoverageCorpus, FailedComparisonsBecomeCasesThatPassThem) {
+    GeneratorOptions o;
+    Generator g(o);
+    // Write single register 0x0010 := 0x0007 (any request will do).
+    const std::vector<std::uint8_t> pdu = {0x06, 0x00, 0x10, 0x00, 0x07};
+    Case entry;
+    entry.steps.push_back(Step{Op::Send, 0, 0, 0, frame_pdu(pdu, 1, 1)});
+    g.add_to_corpus(entry, {Comparison{4, 0x0123, 0x0010}, Comparison{2, 0x4D42, 0x0007}});
+    bool address_alone = false, both = false;
+    for (int i = 0; i < 3; ++i) {
+        Case c;
+        g.next(c);
+        EXPECT_EQ(c.cls, MutationClass::CoverageMutation);
+        ASSERT_EQ(c.steps.size(), 1u);
+        const auto& f = c.steps[0].bytes;
+        const std::uint16_t address = codec_load(f, 8), value = codec_load(f, 10);
+        address_alone = address_alone || (address == 0x0123 && value == 0x0007);
+        both = both || (address == 0x0123 && value == 0x4D42);
+    }
+    EXPECT_TRUE(address_alone);
+    EXPECT_TRUE(both);
+}
