@@ -8,11 +8,18 @@
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "netfuzz/generator.hpp"
+#include "netfuzz/minimize.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
 
 namespace lim = codec::limits;
+
+// One whole MBAP frame, its length field saying so: what coverage mutations change.
+bool one_frame(const Step& s) {
+    return s.op == Op::Send && s.bytes.size() > lim::kMbapHeader &&
+           codec::load_be16(s.bytes.data() + 4) + 6u == s.bytes.size();
+}
 
 // The most recent entries are mutated more often: they are the frontier.
 constexpr std::uint32_t kFrontier = 16;
@@ -21,7 +28,9 @@ constexpr std::size_t kMaxCompared = 4096;
 }  // namespace
 
 void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons) {
-    Case entry = c;
+    // A frame per send, so that a mutation or a solved comparison stays inside one frame and
+    // its MBAP length can follow it.
+    Case entry = split_frames(c);
     entry.number = 0;
     entry.cls = MutationClass::CoverageMutation;
     coverage_corpus_.push_back(entry);
@@ -37,7 +46,7 @@ bool apply(Case& c, const Comparison& cmp) {
     if (n == 2 && (cmp.a > 0xFFFF || cmp.b > 0xFFFF)) return false;
     for (Step& s : c.steps) {
         std::vector<std::uint8_t>& f = s.bytes;
-        if (s.op != Op::Send || f.size() <= lim::kMbapHeader) continue;
+        if (!one_frame(s)) continue;
         for (std::size_t at = lim::kMbapHeader; at + n <= f.size(); ++at) {
             const std::uint64_t here = n == 1 ? f[at] : codec::load_be16(f.data() + at);
             const std::uint64_t to = here == cmp.a ? cmp.b : here == cmp.b ? cmp.a : here;
@@ -105,8 +114,7 @@ void Generator::corpus_mutation(Case& out) {
     // One frame of the case (a sequence keeps its other steps as they were).
     std::vector<std::size_t> frames;
     for (std::size_t i = 0; i < out.steps.size(); ++i)
-        if (out.steps[i].op == Op::Send && out.steps[i].bytes.size() > lim::kMbapHeader)
-            frames.push_back(i);
+        if (one_frame(out.steps[i])) frames.push_back(i);
     if (frames.empty()) return;
     std::vector<std::uint8_t>& f =
         out.steps[frames[rng_.below(static_cast<std::uint32_t>(frames.size()))]].bytes;
