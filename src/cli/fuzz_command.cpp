@@ -58,6 +58,7 @@ struct FuzzOptions {
     std::string target_cmd;
     bool coverage = false;
     std::uint64_t coverage_map_size = 65536;
+    std::string corpus_dir;
 };
 
 // "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
@@ -119,6 +120,11 @@ bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c, st
         error = "--coverage fuzzes Modbus TCP (MBAP) targets for now";
         return false;
     }
+    if (!o.corpus_dir.empty() && !o.coverage) {
+        error = "--corpus keeps a coverage corpus: it needs --coverage";
+        return false;
+    }
+    c.corpus_dir = o.corpus_dir;
     if (o.target_cmd.empty()) return true;
     c.restart_cmd = o.target_cmd;
     c.start_target = true;
@@ -277,6 +283,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "coverage map bytes, a power of two (passed on as AFL_MAP_SIZE)")
         ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 24))
         ->capture_default_str();
+    cmd->add_option("--corpus", o->corpus_dir,
+                    "coverage mode: save the corpus in this folder, one file per case; the "
+                    "cases already there run first (resume)");
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");

@@ -27,6 +27,7 @@
 #include "netfuzz/ask.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
+#include "netfuzz/corpus.hpp"
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
@@ -49,6 +50,14 @@ using Pdu = std::vector<std::uint8_t>;
 
 // How much longer than --restart-wait a --restart-cmd that has not returned may take.
 constexpr std::int64_t kRestartCommandGraceNs = 60 * net::kNsPerSec;
+
+// A case's steps as one text, to tell corpus entries apart.
+std::string steps_text(const Case& c) {
+    std::string t;
+    for (const Step& s : c.steps)
+        t += fmt::format("{}/{}/{}/{};", op_name(s.op), s.conn, s.delay_us, to_hex(s.bytes));
+    return t;
+}
 
 // How big a reproducer is: its steps first, then its bytes.
 std::pair<std::size_t, std::size_t> size_of(const Case& c) {
@@ -301,6 +310,11 @@ class Campaign {
     // it stays down.
     bool first_isolated_run(const Case& c, Execution& ex);
     void take_coverage(const Case& c);
+    void save_to_corpus(const Case& entry);
+    bool resume_corpus();
+    std::set<std::string> resumed_;  // resumed corpus entries not yet joined again
+    std::size_t next_corpus_file_ = 0;
+    bool corpus_write_failed_ = false;
     bool start_target();
     std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
                                                 const std::string& key);
@@ -646,6 +660,7 @@ void Campaign::take_coverage(const Case& c) {
     if (s.new_bits) {
         gen_->add_to_corpus(c, s.comparisons);
         result_.corpus_size = gen_->corpus_size();
+        save_to_corpus(gen_->corpus().back());
     }
     if (s.new_edges) {
         result_.coverage_edges = options_.coverage->edges_seen();
@@ -661,7 +676,9 @@ bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
     ++result_.isolated_runs;
     if (options_.coverage) options_.coverage->clear();
     ex = execute_case(c, *options_.connector, result_.profile, exec_);
-    if (options_.coverage && !ex.down_before) take_coverage(c);
+    // A case that took the target down is a finding, not a corpus entry (resumed, it would
+    // crash the target again first thing).
+    if (options_.coverage && !ex.down_before && !ex.target_down) take_coverage(c);
     if (!ex.down_before) return true;
     // Down before this case began: whatever did it is not this case.
     ++result_.deaths;
@@ -1457,8 +1474,14 @@ bool Campaign::run_round(Round& r, std::vector<Case>& requeue,
         requeue.push_back(r.piped[ci]);
     }
     std::size_t ran_alone = 0;
+    // Grey-box runs every case alone: one answer timeout left is enough to start one (a
+    // suspect asks can_afford() again before it is re-run).
+    const auto room_for_one = [&] {
+        return options_.coverage ? remaining_ns() > options_.timeout_ms * net::kNsPerMs
+                                 : can_afford(1);
+    };
     for (std::size_t i = 0; !lost && i < r.alone.size(); ++i, ++ran_alone) {
-        if (enough_findings() || !can_afford(1)) break;
+        if (enough_findings() || !room_for_one()) break;
         if (isolate(r.alone[i]) == Outcome::Lost) lost = true;
     }
     result_.isolated_seconds += static_cast<double>(net::now_ns() - t1) / 1e9;
@@ -1491,6 +1514,30 @@ void Campaign::finish() {
     result_.seconds = elapsed();
     progress(true);
     if (options_.start_target) restart_.stop();
+}
+
+// --corpus DIR: a new entry is written as it joins (an entry resumed from DIR is there
+// already); a write that fails ends the saving, with a note, not the run.
+void Campaign::save_to_corpus(const Case& entry) {
+    if (options_.corpus_dir.empty() || corpus_write_failed_) return;
+    if (resumed_.erase(steps_text(entry))) return;
+    std::string error;
+    if (!save_corpus_entry(options_.corpus_dir, next_corpus_file_++, entry, error)) {
+        corpus_write_failed_ = true;
+        result_.corpus_error = error;
+    }
+}
+
+// --corpus DIR with entries from an earlier run: they run first.
+bool Campaign::resume_corpus() {
+    if (!options_.coverage || options_.corpus_dir.empty()) return true;
+    std::vector<Case> saved;
+    if (!load_corpus(options_.corpus_dir, saved, result_.error)) return false;
+    next_corpus_file_ = saved.size();
+    for (const Case& c : saved) resumed_.insert(steps_text(split_frames(c)));
+    result_.resumed = saved.size();
+    gen_->resume(std::move(saved));
+    return true;
 }
 
 // --target-cmd: the target is ours to start (and, at the end, to stop).
@@ -1528,6 +1575,11 @@ CampaignResult Campaign::run() {
     exec_.timeout_ms = options_.timeout_ms;
     exec_.state = options_.state;
     start_generator();
+    if (!resume_corpus()) {
+        result_.started = false;
+        restart_.stop();
+        return result_;
+    }
     make_batch_runner();
     arm_watch();
     std::uint64_t generated = 0;

@@ -57,6 +57,9 @@ struct CampaignOptions {
     // alone (the map is cleared before it and read after), and cases that reach new edges
     // join a corpus the generator mutates. Null: black-box.
     std::shared_ptr<CoverageMap> coverage;
+    // Grey-box: where the corpus is saved, one file per entry (netfuzz/corpus.hpp); the
+    // entries already there are run first. "": not saved.
+    std::string corpus_dir;
     int restart_wait_ms = 15000;  // how long to wait for it to come back
     std::string out_dir;          // "" : findings are not saved
     double progress_interval_s = 1.0;
@@ -109,6 +112,8 @@ struct CampaignResult {
     std::uint32_t coverage_edges = 0;
     std::vector<std::pair<double, std::uint32_t>> edges_over_time;
     std::size_t corpus_size = 0;
+    std::size_t resumed = 0;   // corpus entries loaded from --corpus and run first
+    std::string corpus_error;  // why --corpus stopped being written ("": it was not)
     std::size_t compared_constants = 0;
 };
 

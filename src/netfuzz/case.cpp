@@ -87,6 +87,32 @@ bool is_transport_class(MutationClass c) noexcept {
     }
 }
 
+std::string_view op_name(Op op) noexcept {
+    switch (op) {
+        case Op::Send:
+            return "send";
+        case Op::ShutdownWrite:
+            return "shutdown-write";
+        case Op::Await:
+            return "await";
+        case Op::Flood:
+            return "flood";
+        case Op::SideProbe:
+            return "side-probe";
+    }
+    return "send";
+}
+
+bool op_from_name(std::string_view s, Op& out) noexcept {
+    for (Op op : {Op::Send, Op::ShutdownWrite, Op::Await, Op::Flood, Op::SideProbe}) {
+        if (op_name(op) == s) {
+            out = op;
+            return true;
+        }
+    }
+    return false;
+}
+
 std::uint8_t Case::connections() const noexcept {
     std::uint8_t n = 0;
     for (const Step& s : steps)

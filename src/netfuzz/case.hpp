@@ -74,6 +74,10 @@ enum class Op : std::uint8_t {
                     // are: a slow answer means the case stalls other clients too
 };
 
+// A step's operation as finding and corpus files name it ("send", "shutdown-write", ...).
+std::string_view op_name(Op op) noexcept;
+bool op_from_name(std::string_view name, Op& out) noexcept;
+
 struct Step {
     Op op = Op::Send;
     std::uint8_t conn = 0;

@@ -16,32 +16,6 @@ using nlohmann::json;
 // (one step per frame: up to 64 connections x 48 cases, coalesced cases holding up to 17).
 constexpr std::size_t kMaxLoadedSteps = 64 * 48 * 17;
 
-std::string_view op_name(Op op) {
-    switch (op) {
-        case Op::Send:
-            return "send";
-        case Op::ShutdownWrite:
-            return "shutdown-write";
-        case Op::Await:
-            return "await";
-        case Op::Flood:
-            return "flood";
-        case Op::SideProbe:
-            return "side-probe";
-    }
-    return "send";
-}
-
-bool op_from_name(const std::string& s, Op& out) {
-    for (Op op : {Op::Send, Op::ShutdownWrite, Op::Await, Op::Flood, Op::SideProbe}) {
-        if (op_name(op) == s) {
-            out = op;
-            return true;
-        }
-    }
-    return false;
-}
-
 std::string bytes_list(const std::array<bool, 256>& flags) {
     std::string s;
     for (unsigned i = 0; i < 256; ++i)

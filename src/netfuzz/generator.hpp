@@ -74,6 +74,11 @@ class Generator {
     void add_compared(const std::vector<std::uint16_t>& words,
                       const std::vector<std::uint8_t>& bytes);
     std::size_t corpus_size() const noexcept { return coverage_corpus_.size(); }
+    // Saved entries of an earlier run: run before anything else, they join the corpus again
+    // as they reach what they reached then.
+    void resume(std::vector<Case> entries) {
+        for (auto it = entries.rbegin(); it != entries.rend(); ++it) solved_.push_back(*it);
+    }
     const std::vector<Case>& corpus() const noexcept { return coverage_corpus_; }
 
     // The structured request PDUs (limits of every function code), for tests.

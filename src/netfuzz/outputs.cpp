@@ -31,6 +31,8 @@ json coverage_json(const CampaignResult& r) {
     return {{"edges", r.coverage_edges},
             {"corpus", r.corpus_size},
             {"compared_constants", r.compared_constants},
+            {"resumed", r.resumed},
+            {"corpus_error", r.corpus_error},
             {"edges_over_time", over_time}};
 }
 
@@ -202,6 +204,9 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
             "  coverage: {} edges; corpus {} case(s); {} constant(s) from the target's "
             "comparisons\n",
             r.coverage_edges, r.corpus_size, r.compared_constants);
+    if (r.resumed) s += fmt::format("  corpus resumed: {} saved entries run first\n", r.resumed);
+    if (!r.corpus_error.empty())
+        s += fmt::format("  WARNING: the corpus is no longer saved: {}\n", r.corpus_error);
     s += fmt::format(
         "  target deaths: {} ({} restarts, {} not repeatable alone); repeats of known root "
         "causes: {}; cases skipped as known crash/hang: {}; unconfirmed suspects: {}\n",

@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 
+#include "netfuzz/corpus.hpp"
 #include "netfuzz/coverage_map.hpp"
 #include "netfuzz/generator.hpp"
 
@@ -156,4 +159,46 @@ TEST(CoverageCorpus, FailedComparisonsBecomeCasesThatPassThem) {
     }
     EXPECT_TRUE(address_alone);
     EXPECT_TRUE(both);
+}
+
+// --corpus: entries written and read back as they were; a file that is not an entry (a number
+// out of its field's range, bad hex) is an error naming it, not a shorter corpus.
+TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
+    const std::string dir =
+        (std::filesystem::temp_directory_path() / ("mbstorm-corpus-" + std::to_string(::getpid())))
+            .string();
+    std::filesystem::remove_all(dir);
+    Case c;
+    c.cls = MutationClass::CoverageMutation;
+    c.function = 6;
+    c.steps.push_back(Step{Op::Send, 1, 250, 0, frame_pdu({0x06, 0x00, 0x10, 0x00, 0x07}, 9, 1)});
+    c.steps.push_back(Step{Op::ShutdownWrite, 1, 0, 0, {}});
+    std::string error;
+    ASSERT_TRUE(save_corpus_entry(dir, 0, c, error)) << error;
+    ASSERT_TRUE(save_corpus_entry(dir, 1, c, error)) << error;
+    std::vector<Case> back;
+    ASSERT_TRUE(load_corpus(dir, back, error)) << error;
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_EQ(back[1].cls, c.cls);
+    EXPECT_EQ(back[1].function, 6);
+    ASSERT_EQ(back[1].steps.size(), 2u);
+    EXPECT_EQ(back[1].steps[0].bytes, c.steps[0].bytes);
+    EXPECT_EQ(back[1].steps[0].conn, 1);
+    EXPECT_EQ(back[1].steps[0].delay_us, 250u);
+    EXPECT_EQ(back[1].steps[1].op, Op::ShutdownWrite);
+    for (const char* bad :
+         {R"({"class": "coverage-mutation", "steps": [{"op": "send", "conn": 300, "hex": "00"}]})",
+          R"({"class": "coverage-mutation", "steps": [{"op": "send", "conn": -1, "hex": "00"}]})",
+          R"({"class": "coverage-mutation", "steps": [{"op": "send", "hex": "0G"}]})",
+          R"({"class": "no-such-class", "steps": [{"op": "send", "hex": "00"}]})", "[1, 2"}) {
+        std::ofstream(dir + "/000002.json") << bad;
+        back.clear();
+        error.clear();
+        EXPECT_FALSE(load_corpus(dir, back, error)) << bad;
+        EXPECT_NE(error.find("000002.json"), std::string::npos) << error;
+    }
+    std::filesystem::remove_all(dir);
+    back.clear();
+    EXPECT_TRUE(load_corpus(dir, back, error));  // no folder yet: an empty corpus
+    EXPECT_TRUE(back.empty());
 }

@@ -68,6 +68,23 @@ for ok, what in checks:
 sys.exit(0 if all(ok for ok, _ in checks) else 1)
 PY
 
+# --corpus: the corpus saved one file per entry, and a later run resumes from it (the saved
+# entries run first, so it is where the first run ended within its first second).
+seconds=4 fuzz_device saved "$work/device-coverage" --coverage --corpus "$work/corpus"
+saved=$(find "$work/corpus" -name '*.json' | wc -l)
+seconds=3 fuzz_device resumed "$work/device-coverage" --coverage --corpus "$work/corpus"
+/usr/bin/python3 - "$work/saved.json" "$work/resumed.json" "$saved" <<'PY' || fail=1
+import json, sys
+first, again = (json.load(open(p))["coverage"] for p in sys.argv[1:3])
+saved = int(sys.argv[3])
+at_one_second = max([e for t, e in again["edges_over_time"] if t < 1.0] or [0])
+ok = saved == first["corpus"] and again["resumed"] == saved and at_one_second >= first["edges"] - 2
+print(("ok   " if ok else "FAIL ") + f"--corpus: {saved} entries saved of {first['corpus']}, "
+      f"{again['resumed']} resumed, {at_one_second} edges within 1 s of the resumed run "
+      f"(the first ended at {first['edges']})")
+sys.exit(0 if ok else 1)
+PY
+
 # Built with AFL++'s compiler instead, unchanged: its runtime writes the same map. (It logs no
 # comparisons for mbstorm, so the planted crashes stay out of reach: only the map is checked.)
 if AFL_QUIET=1 afl-clang-fast -O1 -g "$device" -o "$work/device-afl" >"$work/afl.log" 2>&1; then
