@@ -663,6 +663,7 @@ void Campaign::take_coverage(const Case& c) {
         save_to_corpus(gen_->corpus().back());
     }
     if (s.new_edges) {
+        result_.edges_by_function[c.function] += s.new_edges;
         result_.coverage_edges = options_.coverage->edges_seen();
         result_.edges_over_time.emplace_back(elapsed(), result_.coverage_edges);
     }

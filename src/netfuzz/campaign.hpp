@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -112,7 +113,9 @@ struct CampaignResult {
     std::uint32_t coverage_edges = 0;
     std::vector<std::pair<double, std::uint32_t>> edges_over_time;
     std::size_t corpus_size = 0;
-    std::size_t resumed = 0;   // corpus entries loaded from --corpus and run first
+    std::size_t resumed = 0;  // corpus entries loaded from --corpus and run first
+    // New edges by the function code of the case that first reached them.
+    std::map<std::uint8_t, std::uint32_t> edges_by_function;
     std::string corpus_error;  // why --corpus stopped being written ("": it was not)
     std::size_t compared_constants = 0;
 };

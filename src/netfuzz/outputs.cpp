@@ -28,10 +28,14 @@ json coverage_json(const CampaignResult& r) {
     if (!r.coverage) return nullptr;
     json over_time = json::array();
     for (const auto& [seconds, edges] : r.edges_over_time) over_time.push_back({seconds, edges});
+    json by_function = json::object();
+    for (const auto& [fc, edges] : r.edges_by_function)
+        by_function[fmt::format("0x{:02X}", fc)] = edges;
     return {{"edges", r.coverage_edges},
             {"corpus", r.corpus_size},
             {"compared_constants", r.compared_constants},
             {"resumed", r.resumed},
+            {"edges_by_function", by_function},
             {"corpus_error", r.corpus_error},
             {"edges_over_time", over_time}};
 }
@@ -204,6 +208,12 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
             "  coverage: {} edges; corpus {} case(s); {} constant(s) from the target's "
             "comparisons\n",
             r.coverage_edges, r.corpus_size, r.compared_constants);
+    if (!r.edges_by_function.empty()) {
+        std::string by;
+        for (const auto& [fc, edges] : r.edges_by_function)
+            by += fmt::format("{}0x{:02X} {}", by.empty() ? "" : ", ", fc, edges);
+        s += fmt::format("  new edges by the function code that reached them first: {}\n", by);
+    }
     if (r.resumed) s += fmt::format("  corpus resumed: {} saved entries run first\n", r.resumed);
     if (!r.corpus_error.empty())
         s += fmt::format("  WARNING: the corpus is no longer saved: {}\n", r.corpus_error);

@@ -59,6 +59,9 @@ checks = [
      f"edges {cov['coverage']['edges']}, corpus {cov['coverage']['corpus']}"),
     (over_time == sorted(over_time) and len(over_time) > 1, "edges only grow over time"),
     (cov["coverage"]["compared_constants"] > 0, "constants read from the device's comparisons"),
+    (sum(cov["coverage"]["edges_by_function"].values()) == cov["coverage"]["edges"]
+     and {"0x03", "0x06", "0x10", "0x16"} <= set(cov["coverage"]["edges_by_function"]),
+     f"new edges by function code: {cov['coverage']['edges_by_function']}"),
     (not planted & {f["root_cause"] for f in bb["findings"]},
      f"the black-box mode finds neither in the same time ({bb['cases']} cases)"),
     (bb["coverage"] is None, "a black-box run reports no coverage"),
