@@ -1,5 +1,7 @@
 #include "netfuzz/finding.hpp"
 
+#include "netfuzz/case_json.hpp"
+
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -99,17 +101,6 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         error = fmt::format("cannot create {}: {}", dir, ec.message());
         return false;
     }
-    auto steps_of = [](const Case& c) {
-        json steps = json::array();
-        for (const Step& s : c.steps) {
-            steps.push_back({{"op", op_name(s.op)},
-                             {"conn", s.conn},
-                             {"delay_us", s.delay_us},
-                             {"count", s.count},
-                             {"hex", to_hex(s.bytes)}});
-        }
-        return steps;
-    };
     json trace = json::array();
     for (const TraceEvent& e : f.trace) {
         json ev = {{"t_us", e.t_us}, {"conn", e.conn}, {"event", trace_kind_name(e.kind)}};
@@ -146,8 +137,8 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
           {"probe", to_hex(f.profile.probe_pdu)},
           {"unsupported", bytes_list(f.profile.unsupported)},
           {"extended", bytes_list(f.profile.extended)}}},
-        {"case", {{"steps", steps_of(f.fuzz_case)}}},
-        {"original_case", {{"steps", steps_of(f.original_case)}}},
+        {"case", {{"steps", steps_to_json(f.fuzz_case)}}},
+        {"original_case", {{"steps", steps_to_json(f.original_case)}}},
         {"trace", trace},
     };
     // The framing the case's bytes are in (MBAP when absent): replay needs the same.
@@ -196,33 +187,37 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         const json j = json::parse(in);
         out = Finding{};
         out.folder = path;
-        out.id = j.value("id", 0u);
+        out.id = static_cast<std::size_t>(whole_number(j, "id", 0, 0, 1'000'000'000));
         if (!oracle_from_name(j.at("oracle").get<std::string>(), out.verdict.oracle))
             throw std::runtime_error("unknown oracle");
         out.verdict.rule = j.value("rule", "");
         out.verdict.summary = j.value("summary", "");
         out.verdict.expected = j.value("expected", "");
         out.verdict.seen = j.value("seen", "");
-        out.verdict.culprit_fc = j.at("function").is_number() ? j.at("function").get<int>() : -1;
+        out.verdict.culprit_fc = j.at("function").is_null()
+                                     ? -1
+                                     : static_cast<int>(whole_number(j, "function", -1, -1, 255));
         if (out.verdict.culprit_fc >= 0)
             out.fuzz_case.function = static_cast<std::uint8_t>(out.verdict.culprit_fc);
         if (!class_from_name(j.at("class").get<std::string>(), out.fuzz_case.cls))
             throw std::runtime_error("unknown class");
         out.target = j.value("target", "");
-        out.seed = j.value("seed", std::uint64_t{0});
-        out.timeout_ms = j.value("timeout_ms", 1000);
+        out.seed = j.contains("seed") && j.at("seed").is_number_unsigned()
+                       ? j.at("seed").get<std::uint64_t>()
+                       : static_cast<std::uint64_t>(whole_number(j, "seed", 0, 0, INT64_MAX));
+        out.timeout_ms = static_cast<int>(whole_number(j, "timeout_ms", 1000, 1, 3'600'000));
         if (j.contains("state_range") && j["state_range"].is_array() &&
             j["state_range"].size() == 2) {
-            const auto base = j["state_range"][0].get<std::uint32_t>();
-            const auto span = j["state_range"][1].get<std::uint32_t>();
-            if (base <= 0xFFFF && span >= 1 && span <= 0x10000)
-                out.state = StateRange{static_cast<std::uint16_t>(base), span};
+            const auto base = whole_number(j["state_range"][0], "state_range", 0, 0xFFFF);
+            const auto span = whole_number(j["state_range"][1], "state_range", 1, 0x10000);
+            out.state =
+                StateRange{static_cast<std::uint16_t>(base), static_cast<std::uint32_t>(span)};
         }
         out.minimized = j.value("minimized", false);
         out.confirmed = j.value("confirmed", true);
         out.note = j.value("note", "");
         const json& p = j.at("profile");
-        out.profile.unit = p.at("unit").get<std::uint8_t>();
+        out.profile.unit = static_cast<std::uint8_t>(whole_number(p.at("unit"), "unit", 0, 255));
         if (!from_hex(p.at("probe").get<std::string>(), out.profile.probe_pdu) ||
             out.profile.probe_pdu.empty())
             throw std::runtime_error("bad probe");
@@ -239,30 +234,21 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         out.profile.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
         if (p.contains("unmapped") && p["unmapped"].is_object())
             for (const auto& [table, addrs] : p["unmapped"].items()) {
-                const unsigned long t = std::stoul(table);
-                if (t < out.profile.unmapped.size())
-                    out.profile.unmapped[t] = addrs.get<std::vector<std::uint16_t>>();
+                const std::size_t t = table.size() == 1 && table[0] >= '0' && table[0] <= '3'
+                                          ? static_cast<std::size_t>(table[0] - '0')
+                                          : out.profile.unmapped.size();
+                if (t == out.profile.unmapped.size() || !addrs.is_array())
+                    throw std::runtime_error("bad 'unmapped'");
+                for (const json& a : addrs)
+                    out.profile.unmapped[t].push_back(
+                        static_cast<std::uint16_t>(whole_number(a, "unmapped", 0, 0xFFFF)));
             }
-        out.hits = j.value("hits", std::uint64_t{1});
-        auto load_steps = [](const json& steps, Case& c) {
-            for (const json& s : steps) {
-                Step st;
-                if (!op_from_name(s.at("op").get<std::string>(), st.op))
-                    throw std::runtime_error("unknown step op");
-                st.conn = s.value("conn", std::uint8_t{0});
-                st.delay_us = s.value("delay_us", 0u);
-                st.count = s.value("count", std::uint16_t{0});
-                if (!from_hex(s.value("hex", ""), st.bytes)) throw std::runtime_error("bad hex");
-                c.steps.push_back(std::move(st));
-                if (c.steps.size() > kMaxLoadedSteps || c.connections() > 8)
-                    throw std::runtime_error("case too large");
-            }
-        };
-        load_steps(j.at("case").at("steps"), out.fuzz_case);
+        out.hits = static_cast<std::uint64_t>(whole_number(j, "hits", 1, 0, INT64_MAX));
+        steps_from_json(j.at("case").at("steps"), out.fuzz_case, kMaxLoadedSteps);
         out.original_case.cls = out.fuzz_case.cls;
         out.original_case.function = out.fuzz_case.function;
         if (j.contains("original_case"))
-            load_steps(j.at("original_case").at("steps"), out.original_case);
+            steps_from_json(j.at("original_case").at("steps"), out.original_case, kMaxLoadedSteps);
     } catch (const std::exception& e) {
         error = fmt::format("{}: not a finding: {}", file, e.what());
         return false;

@@ -1,0 +1,66 @@
+// finding.json as replay reads it back: every number must fit its field or the file is
+// refused with the field named. A float or an out-of-range value converted into a narrower
+// field would be undefined behaviour (UBSan: float-cast-overflow).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "netfuzz/finding.hpp"
+
+using namespace mbstorm::netfuzz;
+
+namespace {
+
+std::string seed_finding() {
+    return std::string(MBSTORM_SOURCE_DIR) + "/fuzz/corpus/saved_finding/split-close.json";
+}
+
+}  // namespace
+
+TEST(SavedFinding, EveryNumberMustFitItsField) {
+    std::ifstream in(seed_finding());
+    ASSERT_TRUE(in) << seed_finding();
+    const nlohmann::json good = nlohmann::json::parse(in);
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("mbstorm-finding-" + std::to_string(::getpid()) + ".json"))
+                                 .string();
+    auto load = [&](const nlohmann::json& j, std::string& error) {
+        std::ofstream(path) << j.dump();
+        Finding f;
+        error.clear();
+        return load_finding(path, f, error);
+    };
+    std::string error;
+    ASSERT_TRUE(load(good, error)) << error;
+    // A finding whose fault has no function code is saved with -1: that loads.
+    nlohmann::json no_function = good;
+    no_function["function"] = -1;
+    EXPECT_TRUE(load(no_function, error)) << error;
+    struct Bad {
+        nlohmann::json::json_pointer where;
+        nlohmann::json value;
+        const char* field;
+    };
+    const Bad bad[] = {
+        {nlohmann::json::json_pointer("/timeout_ms"), 1e300, "timeout_ms"},
+        {nlohmann::json::json_pointer("/timeout_ms"), -5, "timeout_ms"},
+        {nlohmann::json::json_pointer("/function"), 300, "function"},
+        {nlohmann::json::json_pointer("/profile/unit"), 256, "unit"},
+        {nlohmann::json::json_pointer("/profile/unit"), 1.5, "unit"},
+        {nlohmann::json::json_pointer("/state_range/1"), 0x20000, "state_range"},
+        {nlohmann::json::json_pointer("/case/steps/0/conn"), 1e12, "conn"},
+        {nlohmann::json::json_pointer("/case/steps/0/delay_us"), -1, "delay_us"},
+        {nlohmann::json::json_pointer("/hits"), "many", "hits"},
+        {nlohmann::json::json_pointer("/profile/unmapped/0/0"), 70000, "unmapped"},
+    };
+    for (const Bad& b : bad) {
+        nlohmann::json j = good;
+        j[b.where] = b.value;
+        EXPECT_FALSE(load(j, error)) << b.where.to_string();
+        EXPECT_NE(error.find(b.field), std::string::npos) << b.where.to_string() << ": " << error;
+    }
+    std::filesystem::remove(path);
+}
