@@ -61,9 +61,13 @@ TEST(SplitDelivery, EachPieceIsAReadOfItsOwnOnASlowServer) {
     ASSERT_TRUE(s.start());
     for (int run = 0; run < 5; ++run) {
         const Execution ex = s.run(3, 50);
+        // The close comes once the server has acted on the piece: before the rest went out
+        // (closes-on-partial-frame) or, on a loaded machine, just after it
+        // (close-with-request-pending/partial-frame). One root cause either way; without the
+        // wait the pieces meet in one read and there is no finding at all.
         EXPECT_EQ(ex.verdict.oracle, Oracle::UnexpectedClose) << ex.verdict.summary;
-        EXPECT_EQ(ex.verdict.rule, kClosesOnPartialFrameRule) << ex.verdict.summary;
-        EXPECT_EQ(root_cause_key(ex.verdict), std::string("stream:") + kPartialFrameFamily);
+        EXPECT_EQ(root_cause_key(ex.verdict), std::string("stream:") + kPartialFrameFamily)
+            << ex.verdict.summary;
     }
 }
 
