@@ -114,7 +114,9 @@ int run_replay(const ReplayOptions& o) {
             netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms);
     }
     fmt::print("{} of {} run(s) reproduced the finding ({})\n", reproduced, std::max(1u, o.runs),
-               o.original ? "original case" : "minimised case");
+               o.original    ? "the case as first found"
+               : f.minimized ? "the minimised case"
+                             : "the case as found: it was not minimised");
     return reproduced ? kExitFailed : kExitOk;
 }
 

@@ -74,6 +74,12 @@ Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit,
 // A finding that rests on a line's timing counts only if this many re-runs alone repeat it.
 constexpr unsigned kTimingConfirmations = 2;
 
+// A finding about what a read shows after a write: whether it shows again depends on what the
+// registers held before the case ran.
+bool reads_back_state(const Verdict& v) {
+    return v.oracle == Oracle::SpecDeviation && v.rule.rfind("read-after-write", 0) == 0;
+}
+
 // Each crash root cause may cost at most this many target restarts (finding it, confirming
 // it, minimising it).
 constexpr unsigned kMaxRestartsPerCause = 3;
@@ -334,6 +340,10 @@ class Campaign {
     bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
     void repair_fields(Finding& f);
+    bool replays_alone(Finding& f);
+    bool replays_once_more(const Finding& f);
+    void check_random_drops();
+    Finding capacity_finding(const CapacityResult& cr) const;
     bool move_into_map(Step& s, int fc) const;
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
@@ -417,6 +427,10 @@ class Campaign {
     enum class LengthMismatchClose { NotAsked, RefusesTheFrame, LosesTheStream };
     LengthMismatchClose length_mismatch_close_ = LengthMismatchClose::NotAsked;
     mutable std::uint64_t length_mismatch_seen_ = 0;
+    // A silence or close that did not happen again when its case was replayed: the target
+    // was asked once whether it drops requests at random (check_random_drops).
+    bool random_drops_asked_ = false;
+    bool random_drops_known_ = false;
     Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
     std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
@@ -874,6 +888,9 @@ void Campaign::record(const Case& c, Execution ex) {
     if (options_.minimize && depends_on_line_timing(c.cls)) {
         // Confirmed, but each try would again be at the scheduler's mercy.
         f.minimize_note = "not minimised: its verdict rests on a silence's length";
+    } else if (options_.minimize && c.cls == MutationClass::Repeated) {
+        // Fewer repeats only make the drop less likely to show.
+        f.minimize_note = "not minimised: each repeat is a chance for the drop to show";
     } else if (options_.minimize) {
         Execution last;
         bool lost = false, cut = false, restart_budget = false;
@@ -887,6 +904,13 @@ void Campaign::record(const Case& c, Execution ex) {
             if (crash && restarts_by_cause_[key] + 1 >= kMaxRestartsPerCause) {
                 restart_budget = true;
                 return false;
+            }
+            // A read-back's verdict depends on what the registers held before: the candidate
+            // runs once to leave its own state and is judged on its second run, as a replay
+            // after it would be. A step that sets the state up is then kept.
+            if (reads_back_state(first)) {
+                ++result_.isolated_runs;
+                (void)run_alone(candidate);
             }
             ++result_.isolated_runs;
             Execution e = run_alone(candidate);
@@ -924,6 +948,7 @@ void Campaign::record(const Case& c, Execution ex) {
         }
     }
     repair_fields(f);
+    if (!replays_alone(f)) return;
     // The identity is what the minimised reproducer violates: it may turn out to be a root
     // cause already known under another guise (a codec detail that fell away).
     if (Finding* existing = known(f.verdict)) {
@@ -988,6 +1013,70 @@ void Campaign::repair_fields(Finding& f) {
     f.verdict = std::move(e.verdict);
     f.trace = std::move(e.trace);
     f.minimized = true;
+}
+
+// Issue #26: a finding is saved only once the very case saved for it, run alone on fresh
+// connections, shows the same fault again (what `replay` checks). A crash has killed the
+// target twice by then; anything else has been seen once alone, maybe before minimisation or
+// field repair changed the case, and a target that misbehaves at random shows nothing twice.
+bool Campaign::replays_alone(Finding& f) {
+    if (f.oracle() == Oracle::Crash || !f.confirmed) return true;
+    const bool silence = f.oracle() == Oracle::Hang || f.oracle() == Oracle::UnexpectedClose;
+    const bool at_random = rule_stem(f.verdict.rule) == kRandomDropRule ||
+                           rule_stem(f.verdict.rule) == kRandomCloseRule;
+    // Asked before the first silence is saved: a target that drops requests at random would
+    // pass one replay at its drop rate, so its silences must then repeat more often before
+    // each is a defect of its own.
+    if (silence && !at_random && !random_drops_asked_) check_random_drops();
+    if (!up_) return false;
+    const unsigned runs = random_drops_known_ && silence && !at_random ? 4 : 1;
+    for (unsigned run = 0; run < runs; ++run) {
+        if (!can_afford(1)) {
+            // Seen alone once: kept, but not called confirmed.
+            f.confirmed = false;
+            f.note += fmt::format("{}not confirmed: --seconds ran out before it was replayed "
+                                  "alone once more",
+                                  f.note.empty() ? "" : "; ");
+            return true;
+        }
+        if (replays_once_more(f)) continue;
+        ++result_.unconfirmed;
+        return false;
+    }
+    return true;
+}
+
+bool Campaign::replays_once_more(const Finding& f) {
+    ++result_.isolated_runs;
+    const Execution e = run_alone(f.fuzz_case);
+    const bool same = same_fault(e.verdict, f.verdict);
+    return bring_back(e, same ? root_cause_key(f.verdict) : "") && same;
+}
+
+// A silence (or close) that did not come again when its case was replayed alone: is the
+// request to blame, or does the target drop requests whatever they are? Its probe request,
+// answered at discovery, is sent 32 times on one connection, each answer awaited. A silence
+// there is one defect, found once, however many other requests it has swallowed.
+void Campaign::check_random_drops() {
+    constexpr std::uint16_t kRepeats = 32;
+    random_drops_asked_ = true;
+    if (result_.profile.probe_pdu.empty() || !can_afford(2)) return;
+    Case c;
+    c.cls = MutationClass::Repeated;
+    c.function = result_.profile.probe_pdu[0];
+    for (std::uint16_t i = 0; i < kRepeats; ++i) {
+        c.steps.push_back(Step{Op::Send, 0, 0, 0, probe_frame(result_.profile, 0x5200 + i)});
+        c.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+    }
+    ++result_.isolated_runs;
+    Execution ex = run_alone(c);
+    const std::string stem = rule_stem(ex.verdict.rule);
+    if (stem != kRandomDropRule && stem != kRandomCloseRule) {
+        bring_back(ex, "");
+        return;
+    }
+    random_drops_known_ = true;
+    if (!known(ex.verdict)) record(c, std::move(ex));
 }
 
 void Campaign::keep(Finding f) {
@@ -1060,42 +1149,43 @@ void Campaign::check_capacity_once() {
         check_capacity(*options_.connector, result_.profile, options_.max_connections,
                        options_.timeout_ms, deadline_, watch_.get());
     result_.capacity_held = cr.held;
-    if (cr.verdict && !known(cr.verdict)) {
-        Finding f;
-        f.found_after_s = elapsed();
-        f.verdict = cr.verdict;
-        f.fuzz_case.cls = MutationClass::Flood;
-        f.fuzz_case.steps.push_back(
-            Step{Op::Flood,
-                 0,
-                 0,
-                 static_cast<std::uint16_t>(std::min<std::uint32_t>(
-                     std::max(cr.opened, cr.held + cr.refused + 64), 0xFFFF)),
-                 {}});
-        f.original_case = f.fuzz_case;
-        f.original_steps = 1;
-        f.variants["capacity check"] = 1;
-        const std::uint16_t flood = f.fuzz_case.steps.front().count;
-        f.note = cr.target_down && cr.opened > cr.held
-                     ? fmt::format(
-                           "found by the connection-capacity check: the target died with {} "
-                           "connections open (all {} held before were answered); the "
-                           "reproducer opens {} connections at once, probes each and holds "
-                           "them until answered",
-                           cr.opened, cr.held, flood)
-                     : fmt::format(
-                           "found by the connection-capacity check (held {} connections, {} "
-                           "refused); the reproducer opens {} connections at once, probes each "
-                           "and holds them until answered",
-                           cr.held, cr.refused, flood);
-        keep(std::move(f));
-    }
     if (cr.target_down) {
         ++result_.deaths;
+        if (cr.verdict && !known(cr.verdict)) keep(capacity_finding(cr));
         recover(cr.verdict ? root_cause_key(cr.verdict) : "");
-    } else if (watch_) {
-        watch_->arm();  // a target at its limit may have closed some of them
+        return;
     }
+    if (watch_) watch_->arm();  // a target at its limit may have closed some of them
+    if (!cr.verdict) return;
+    // Connections left unserved: the target's own limit, or requests it drops whatever they
+    // are? Asked first, and the finding kept only once its flood, replayed, shows it again.
+    if (!random_drops_asked_) check_random_drops();
+    if (random_drops_known_ || !up_) return;
+    Finding f = capacity_finding(cr);
+    if (!known(f.verdict) && replays_alone(f)) keep(std::move(f));
+}
+
+// The capacity check's finding: its numbers are the check's at the step that failed, and its
+// reproducer opens as many connections at once as were open then.
+Finding Campaign::capacity_finding(const CapacityResult& cr) const {
+    Finding f;
+    f.found_after_s = elapsed();
+    f.verdict = cr.verdict;
+    const std::uint32_t open = cr.opened ? cr.opened : cr.held + cr.refused + 64;
+    const auto flood = static_cast<std::uint16_t>(std::min<std::uint32_t>(open, 0xFFFF));
+    f.fuzz_case.cls = MutationClass::Flood;
+    f.fuzz_case.steps.push_back(Step{Op::Flood, 0, 0, flood, {}});
+    f.original_case = f.fuzz_case;
+    f.original_steps = 1;
+    f.variants["capacity check"] = 1;
+    f.note = fmt::format(
+        "found by the connection-capacity check: {} connections open at once were all "
+        "answered; with {} open ({} of them refused or closed by the target, as it may) {}; "
+        "the reproducer opens {} connections at once, probes each and holds them until "
+        "answered",
+        cr.held, cr.opened, cr.refused,
+        cr.target_down ? "the target died" : "it left some unserved", flood);
+    return f;
 }
 
 void Campaign::progress(bool force) {

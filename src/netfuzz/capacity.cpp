@@ -152,7 +152,7 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
         if (silent > 0) {
             out.verdict = Verdict{
                 Oracle::Hang,
-                "capacity/accepted-connections-unserved",
+                kCapacityUnservedRule,
                 -1,
                 fmt::format("with {} connections open, {} newly accepted connection(s) got no "
                             "answer within {} ms",

@@ -44,7 +44,8 @@ constexpr std::array<std::string_view, static_cast<std::size_t>(MutationClass::C
     "noise",
     "in-map",
     "map-edge",
-    "coverage-mutation"};
+    "coverage-mutation",
+    "repeated-request"};
 
 }  // namespace
 

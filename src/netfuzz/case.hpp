@@ -53,6 +53,10 @@ enum class MutationClass : std::uint8_t {
     // edges of the target, its frames' fields mutated (set to constants the target compared
     // them against, bit flips, arithmetic, splices).
     CoverageMutation,
+    // Asked by the campaign of a target whose silences do not repeat: one valid request sent
+    // again and again, each answer awaited. A target that leaves some unanswered drops
+    // requests at random (one defect, however many requests it has dropped).
+    Repeated,
     Count
 };
 

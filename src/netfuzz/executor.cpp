@@ -143,6 +143,7 @@ class CaseRunner {
                                                             const RequestInfo* before,
                                                             bool before_exception) const;
     void judge_side_probes(Judgement& j) const;
+    void judge_flood(Judgement& j) const;
     void judge_target(const Case& c, Judgement& j);
     std::int64_t stall_threshold_ms() const {
         return std::min<std::int64_t>(kStallMs, options_.timeout_ms);
@@ -162,6 +163,9 @@ class CaseRunner {
     Execution out_;
     bool any_connect_ = false;
     bool flooded_ = false;
+    // Of the flood's connections: how many were open at once, and how many of those neither
+    // answered nor closed in time (accepted, then left unserved).
+    std::size_t flood_opened_ = 0, flood_silent_ = 0;
     std::vector<SideProbe> side_probes_;
     std::uint16_t view_tid_ = 1;  // RTU/ASCII: transaction ids of the MBAP views
 };
@@ -476,15 +480,32 @@ void CaseRunner::flood(std::uint16_t count) {
         (void)link->send(f.data(), f.size());
         links.push_back(std::move(link));
     }
-    // All of them held until each is answered (or a timeout): a server that fails at N
-    // connections must have N at once.
+    // All of them held until each is answered or closed (or a timeout): a server that fails
+    // at N connections must have N at once. As long as the capacity check waits (capacity.cpp):
+    // slow is not unserved.
     std::vector<pollfd> waiting;
     for (const auto& link : links) waiting.push_back(pollfd{link->poll_fd(), POLLIN, 0});
-    const std::int64_t until = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
+    const std::int64_t until =
+        net::now_ns() +
+        (3 * options_.timeout_ms + 2 * static_cast<std::int64_t>(links.size())) * net::kNsPerMs;
     while (!waiting.empty() && net::now_ns() < until) {
         if (::poll(waiting.data(), waiting.size(), 20) <= 0) continue;
         std::erase_if(waiting, [](const pollfd& p) { return p.revents != 0; });
     }
+    flood_opened_ = std::max(flood_opened_, links.size());
+    flood_silent_ += waiting.size();
+}
+
+// Connections accepted and then left unserved: what the capacity check calls a hang, so that
+// its finding replays as itself.
+void CaseRunner::judge_flood(Judgement& j) const {
+    if (flood_silent_ == 0) return;
+    j.consider(Verdict{
+        Oracle::Hang, kCapacityUnservedRule, -1,
+        fmt::format("with {} connections opened at once, {} accepted connection(s) got no answer",
+                    flood_opened_, flood_silent_),
+        "every accepted connection is served (or refused, or closed, at a limit)",
+        fmt::format("{} of {} silent", flood_silent_, flood_opened_)});
 }
 
 void CaseRunner::judge_framing(std::size_t i, const Conn& cn, Judgement& j) const {
@@ -590,6 +611,9 @@ std::pair<std::string, const RequestInfo*> CaseRunner::silence_rule(const Case& 
     const bool exception_drop =
         before && before_exception && profile_.drops_after_exception && (!closed || cn.shut);
     if (exception_drop) return {"drops-requests-after-exception", before};
+    // The same valid request, answered before: nothing in it is to blame.
+    if (c.cls == MutationClass::Repeated)
+        return {closed ? kRandomCloseRule : kRandomDropRule, nullptr};
     if (cn.shut) return {"drops-answers-on-half-close", blamed};
     if (before && pdu_length_mismatch(*before)) return {kStreamLostRule, before};
     if (!pd.probe && closed && pdu_length_mismatch(info)) return {kStreamLostRule, blamed};
@@ -742,6 +766,9 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
             r = probe_target(target_, profile_, options_.timeout_ms);
             event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
         }
+        // A case asking whether the target drops requests at random: its probe's silence
+        // is one more such drop, not a whole-server hang.
+        if (c.cls == MutationClass::Repeated && r == ProbeResult::NoAnswer) r = ProbeResult::Ok;
         if (r != ProbeResult::Ok) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
             j.candidate = fresh_probe_verdict(r);
@@ -771,6 +798,7 @@ void CaseRunner::judge(const Case& c) {
     }
     j.consider(Shadow::check(j.shadow, options_.state));
     judge_side_probes(j);
+    judge_flood(j);
     judge_target(c, j);
     Verdict& v = j.candidate;
     if (v)

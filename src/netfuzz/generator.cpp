@@ -736,7 +736,20 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
             put16(w, base);
             put16(w, qty);
             w.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) put16(w, word());
+            // First the complement of what it will write, so that its read part shows whether
+            // the write came first however often the case runs (a rerun would otherwise find
+            // the values already there).
+            std::vector<std::uint8_t> pre{kWriteMultipleRegisters};
+            put16(pre, base);
+            put16(pre, qty);
+            pre.push_back(static_cast<std::uint8_t>(2 * qty));
+            for (int i = 0; i < qty; ++i) {
+                const std::uint16_t v = word();
+                put16(w, v);
+                put16(pre, static_cast<std::uint16_t>(~v));
+            }
+            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+            out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
             break;
         }
         case kMaskWriteRegister: {  // after a plain write, so the old value is known

@@ -128,6 +128,12 @@ bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexc
 // close, silence, an answer with a transaction id nobody sent), it is that one root cause.
 bool pdu_length_mismatch(const RequestInfo& info) noexcept;
 inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mismatch";
+// The same valid request sent again and again (MutationClass::Repeated) went unanswered, or
+// the connection closed under it, once: the target drops requests at random.
+// The capacity check, or a flood, found connections accepted and then left unanswered.
+inline constexpr const char* kCapacityUnservedRule = "capacity/accepted-connections-unserved";
+inline constexpr const char* kRandomDropRule = "drops-requests-at-random";
+inline constexpr const char* kRandomCloseRule = "closes-at-random";
 // A frame delivered in pieces that the target acted on before it was whole: an answer to a
 // started frame alone, or a close or silence with the split request unanswered. However it
 // shows, it is the target's reassembly: one root cause (finding.cpp keys the family as one).

@@ -99,7 +99,10 @@ TEST(Generator, EveryClassAppearsAndWritesStayOutOfTheStatefulRange) {
         }
         const bool model_only = k == MutationClass::InMap || k == MutationClass::MapEdge;
         EXPECT_TRUE(!model_only || classes.count(k) == 0) << class_name(k);
-        const bool corpus_only = k == MutationClass::CoverageMutation;
+        // Corpus mutations, and the campaign's question to a target whose silences do not
+        // repeat (campaign.cpp: check_random_drops).
+        const bool corpus_only =
+            k == MutationClass::CoverageMutation || k == MutationClass::Repeated;
         EXPECT_TRUE(!corpus_only || classes.count(k) == 0) << class_name(k);
         generated += k != MutationClass::NaiveRandom && !is_cross_transport(k) && !framing_only &&
                      !model_only && !corpus_only;

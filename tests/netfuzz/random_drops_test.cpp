@@ -1,0 +1,52 @@
+// A target that leaves requests unanswered at random (`mbstorm serve --no-answer-rate`): one
+// finding, drops-requests-at-random, that replays; not one hang per request it happened to
+// drop, each saved as confirmed and replaying 0 of 5 (issue #26 item 5, #29 item 6).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "fuzz_test_support.hpp"
+
+namespace {
+
+using mbstorm::test::run_mbstorm;
+
+std::string start_dropping_slave(std::unique_ptr<mbstorm::test::Target>& server) {
+    server = std::make_unique<mbstorm::test::Target>(
+        std::vector<std::string>{MBSTORM_BINARY, "serve", "--listen", "127.0.0.1:0",
+                                 "--no-answer-rate", "0.3", "--seed", "5", "--duration", "120s"});
+    const std::string line = server->wait_for_line("listening on ");
+    const auto at = line.find("listening on ");
+    if (at == std::string::npos) return {};
+    const auto rest = line.substr(at + 13);
+    return rest.substr(0, rest.find(' '));
+}
+
+TEST(RandomDrops, ATargetThatDropsRequestsAtRandomIsOneFindingThatReplays) {
+    std::unique_ptr<mbstorm::test::Target> server;
+    const std::string target = start_dropping_slave(server);
+    ASSERT_FALSE(target.empty());
+    const std::string dir = mbstorm::test::temp_dir("random-drops");
+    const auto run =
+        run_mbstorm("fuzz --target " + target + " --seconds 15 --timeout 200ms --seed 1 -q --out " +
+                    dir + "/findings --json " + dir + "/s.json");
+    ASSERT_EQ(run.exit_code, 1) << run.output;
+    std::ifstream in(dir + "/s.json");
+    const auto s = nlohmann::json::parse(in);
+    ASSERT_EQ(s.at("findings").size(), 1u) << run.output;
+    const auto& f = s.at("findings").at(0);
+    EXPECT_EQ(f.at("root_cause"), "hang:drops-requests-at-random") << run.output;
+    EXPECT_TRUE(f.at("confirmed").get<bool>());
+    const auto replay = run_mbstorm("replay " + f.at("folder").get<std::string>() + " --target " +
+                                    target + " --runs 3");
+    EXPECT_EQ(replay.exit_code, 1) << replay.output;
+    EXPECT_NE(replay.output.find("3 of 3 run(s) reproduced the finding (the case as found: it "
+                                 "was not minimised)"),
+              std::string::npos)
+        << replay.output;
+}
+
+}  // namespace
