@@ -44,7 +44,7 @@ struct FuzzOptions {
     std::string out_dir = "mbstorm-findings";
     std::string restart_cmd;
     std::uint64_t restart_wait_ns = 15'000'000'000;
-    std::string json, junit, sarif;
+    std::string json, junit, sarif, html;
     bool no_minimize = false;
     bool naive = false;
     bool quiet = false;
@@ -161,13 +161,15 @@ int run_fuzz(const FuzzOptions& o) {
     // A summary that cannot be written must not cost a whole campaign first.
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
                                      {"--junit", o.junit},
-                                     {"--sarif", o.sarif}}) {
+                                     {"--sarif", o.sarif},
+                                     {"--html", o.html}}) {
         if (!path.empty() && path != "-" && !report::check_writable(path, error))
             return usage_error("fuzz", fmt::format("cannot write {} {}", flag, error));
     }
-    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
+    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-");
     if (on_stdout > 1)
-        return usage_error("fuzz", "only one of --json, --junit and --sarif can be '-' (stdout)");
+        return usage_error("fuzz",
+                           "only one of --json, --junit, --sarif and --html can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
     fmt::print(stderr,
                "mbstorm fuzz: WARNING: writes will be sent to {} (function codes {} and malformed "
@@ -224,6 +226,7 @@ int run_fuzz(const FuzzOptions& o) {
     if (!o.json.empty()) ok &= write_output(o.json, netfuzz::format_fuzz_json(r, info));
     if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
     if (!o.sarif.empty()) ok &= write_output(o.sarif, netfuzz::format_fuzz_sarif(r, info));
+    if (!o.html.empty()) ok &= write_output(o.html, netfuzz::format_fuzz_html(r, info));
     if (!ok) return kExitUsage;
     if (const int sig = g_stop_signal.load(); sig != 0) {
         fmt::print(stderr, "mbstorm fuzz: interrupted by {}: exit code {}\n", signal_name(sig),
@@ -291,6 +294,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
     cmd->add_option("--junit", o->junit, "write JUnit XML to this file ('-': stdout)");
     cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file ('-': stdout)");
+    cmd->add_option("--html", o->html,
+                    "write a self-contained HTML report to this file ('-': stdout): the run, "
+                    "the device model, the findings and, with --coverage, edges over time");
     cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
     cmd->add_flag("--naive", o->naive,
                   "baseline: random PDU bytes instead of the structure-aware generator");

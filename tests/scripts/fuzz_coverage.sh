@@ -6,7 +6,8 @@
 # once (1 in 2^32 for a guess): coverage mode must find both, with edges that only grow, and
 # each reproducer must crash the device again when replayed alone; the black-box mode, the same
 # device built without coverage, the same seed and time, finds neither. Built with AFL++'s
-# afl-clang-fast the device works unchanged.
+# afl-clang-fast the device works unchanged. --html writes the run as a page (the edges chart
+# and the findings).
 #   bash fuzz_coverage.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -45,8 +46,8 @@ fuzz_device() {
   fi
 }
 
-fuzz_device coverage "$work/device-coverage" --coverage
-fuzz_device blackbox "$work/device-plain"
+fuzz_device coverage "$work/device-coverage" --coverage --html "$work/coverage.html"
+fuzz_device blackbox "$work/device-plain" --html "$work/blackbox.html"
 /usr/bin/python3 - "$work/coverage.json" "$work/blackbox.json" <<'PY' || fail=1
 import json, sys
 planted = {"crash:target-down/fc06", "crash:target-down/fc16"}
@@ -70,6 +71,19 @@ for ok, what in checks:
     print(("ok   " if ok else "FAIL ") + what)
 sys.exit(0 if all(ok for ok, _ in checks) else 1)
 PY
+
+# --html: one page with the run, the findings (both planted crashes, with their folders) and,
+# in coverage mode only, the edges chart and the edges by function code.
+html_fail=0
+html_has() { grep -q -- "$2" "$1" || { echo "FAIL $(basename "$1") lacks '$2'"; html_fail=1; }; }
+for part in '<svg' 'Edges reached over time' '<polyline' 'crash:target-down/fc06' \
+  'crash:target-down/fc16' '001-crash-target-down-fc' '0x10 write_multiple_registers' \
+  'time limit reached' 'cases/s'; do
+  html_has "$work/coverage.html" "$part"
+done
+html_has "$work/blackbox.html" 'No findings'
+if grep -q '<svg' "$work/blackbox.html"; then echo "FAIL the black-box page has a chart"; html_fail=1; fi
+[ "$html_fail" -eq 0 ] && echo "ok   --html: the chart, the edges by function code and the findings" || fail=1
 
 # --corpus: the corpus saved one file per entry, and a later run resumes from it (the saved
 # entries run first, so it is where the first run ended within its first second).
