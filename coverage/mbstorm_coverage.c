@@ -1,9 +1,11 @@
 /* mbstorm's coverage runtime: build it into a Modbus server to fuzz it with `mbstorm fuzz
  * --coverage`. It needs plain clang, nothing else:
  *
- *   clang -g -fsanitize-coverage=trace-pc-guard,trace-cmp -c server.c
+ *   clang -g -fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table -c server.c
  *   clang -c /usr/share/mbstorm/coverage/mbstorm_coverage.c      (no coverage flags here)
  *   clang server.o mbstorm_coverage.o -o server
+ *
+ * (pc-table is optional: only `mbstorm fuzz --coverage-report` needs it.)
  *
  * mbstorm starts the server (--target-cmd) with the id of a System V shared-memory segment in
  * __AFL_SHM_ID and its map size in AFL_MAP_SIZE, as AFL++ does, so a server built with AFL++'s
@@ -14,11 +16,24 @@
  * (1, 2, 4 and 8 bytes, and switch cases), once per comparison site per case: mbstorm turns
  * the constants a server compares its input against into values and addresses to try.
  *
+ * With pc-table, each module's table of (PC, flags) pairs, one per guard in the guards' order,
+ * tells which guard is a function's entry: the runtime lists those functions, as offsets in
+ * their module (what addr2line takes) with their guard, in the file named by
+ * MBSTORM_COVERAGE_PCS (mbstorm sets it for --coverage-report), appending
+ *   module /path/of/the/module
+ *   0x<offset> <guard>        one line per function
+ * for each module (a restarted server appends the same lines again). mbstorm then names the
+ * functions whose entry guard no case hit.
+ *
  * Without __AFL_SHM_ID (the server run on its own) the counts go to a private map. */
+#define _GNU_SOURCE /* dl_iterate_phdr */
+#include <link.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/shm.h>
+#include <unistd.h>
 
 /* The layout past the map; mbstorm reads it (src/netfuzz/coverage_map.hpp). */
 #define MBSTORM_CMP_MAGIC 0x504D434DU /* "MCMP" */
@@ -43,6 +58,9 @@ static uint8_t* map = private_map;
 static uint32_t map_size = sizeof private_map;
 static struct mbstorm_cmp_log* cmp_log;
 static uint32_t next_guard = 1;
+/* The guards numbered last: clang calls __sanitizer_cov_pcs_init for the same module next. */
+static const uint32_t* last_guards;
+static const uint32_t* last_guards_end;
 
 static void attach(void) {
     static int attached;
@@ -63,6 +81,8 @@ static void attach(void) {
 /* Numbers the module's edges 1..n (0 stays unused, as in AFL: an empty byte means no hit). */
 void __sanitizer_cov_trace_pc_guard_init(uint32_t* start, uint32_t* stop) {
     attach();
+    last_guards = start;
+    last_guards_end = stop;
     if (start == stop || *start) return;
     for (uint32_t* g = start; g < stop; ++g) {
         *g = next_guard % map_size;
@@ -108,3 +128,49 @@ void __sanitizer_cov_trace_switch(uint64_t value, uint64_t* cases) {
 }
 
 /* The division and GEP hooks trace-cmp does not enable are not needed. */
+
+struct module_search {
+    uintptr_t pc;
+    uintptr_t base;  /* what the module's addresses are relative to */
+    char path[4096]; /* "" until found */
+};
+
+static int find_module(struct dl_phdr_info* info, size_t size, void* data) {
+    (void)size;
+    struct module_search* m = data;
+    for (int i = 0; i < info->dlpi_phnum; ++i) {
+        const ElfW(Phdr)* ph = &info->dlpi_phdr[i];
+        const uintptr_t start = info->dlpi_addr + ph->p_vaddr;
+        if (ph->p_type != PT_LOAD || m->pc < start || m->pc >= start + ph->p_memsz) continue;
+        m->base = info->dlpi_addr;
+        if (info->dlpi_name && info->dlpi_name[0]) {
+            snprintf(m->path, sizeof m->path, "%s", info->dlpi_name);
+        } else { /* the executable itself: its name is not in the list */
+            const ssize_t n = readlink("/proc/self/exe", m->path, sizeof m->path - 1);
+            m->path[n > 0 ? n : 0] = 0;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+/* -fsanitize-coverage=pc-table: (PC, flags) pairs, flags bit 1 for a function's entry block.
+ * Runs once per module at start-up, never in the hit path. */
+void __sanitizer_cov_pcs_init(const uintptr_t* begin, const uintptr_t* end) {
+    const char* path = getenv("MBSTORM_COVERAGE_PCS");
+    if (!path || begin == end || !last_guards) return;
+    const size_t count = (size_t)(end - begin) / 2;
+    /* Not the guards numbered last (built without trace-pc-guard): no guard to name. */
+    if (count != (size_t)(last_guards_end - last_guards)) return;
+    struct module_search m = {.pc = begin[0]};
+    dl_iterate_phdr(find_module, &m);
+    if (!m.path[0]) return;
+    FILE* out = fopen(path, "a");
+    if (!out) return;
+    fprintf(out, "module %s\n", m.path);
+    for (size_t i = 0; i < count; ++i)
+        if (begin[2 * i + 1] & 1)
+            fprintf(out, "0x%llx %u\n", (unsigned long long)(begin[2 * i] - m.base),
+                    (unsigned)last_guards[i]);
+    fclose(out);
+}

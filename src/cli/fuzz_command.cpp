@@ -15,6 +15,7 @@
 #include "cli/transport_options.hpp"
 #include "codec/function_code.hpp"
 #include "netfuzz/campaign.hpp"
+#include "netfuzz/coverage_report.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/dictionary.hpp"
 #include "netfuzz/outputs.hpp"
@@ -44,7 +45,7 @@ struct FuzzOptions {
     std::string out_dir = "mbstorm-findings";
     std::string restart_cmd;
     std::uint64_t restart_wait_ns = 15'000'000'000;
-    std::string json, junit, sarif;
+    std::string json, junit, sarif, html;
     bool no_minimize = false;
     bool naive = false;
     bool quiet = false;
@@ -59,6 +60,7 @@ struct FuzzOptions {
     bool coverage = false;
     std::uint64_t coverage_map_size = 65536;
     std::string corpus_dir;
+    std::string coverage_report;
 };
 
 // "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
@@ -106,8 +108,24 @@ bool write_output(const std::string& path, const std::string& text) {
     return false;
 }
 
-// --target-cmd and --coverage: mbstorm starts (and restarts) the target, handing it the map.
-bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c, std::string& error) {
+// --coverage-report: the functions the target listed whose entry no case reached.
+bool write_coverage_report(const std::string& path, const netfuzz::FunctionListFile& functions,
+                           const netfuzz::CoverageMap& map) {
+    std::string list, report, error;
+    if (!functions.read(list, error) || !netfuzz::coverage_report(list, map, report, error)) {
+        fmt::print(stderr, "mbstorm fuzz: --coverage-report: {}\n", error);
+        return false;
+    }
+    fmt::print(stderr, "mbstorm fuzz: --coverage-report {}: {}", path == "-" ? "(stdout)" : path,
+               report.substr(0, report.find('\n') + 1));
+    return write_output(path, report);
+}
+
+// --target-cmd and --coverage: mbstorm starts (and restarts) the target, handing it the map
+// and, for --coverage-report, the file it lists its functions in (`functions`).
+bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c,
+                           std::unique_ptr<netfuzz::FunctionListFile>& functions,
+                           std::string& error) {
     if (!o.target_cmd.empty() && !o.restart_cmd.empty()) {
         error = "--target-cmd starts and restarts the target: --restart-cmd is not needed";
         return false;
@@ -124,6 +142,10 @@ bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c, st
         error = "--corpus keeps a coverage corpus: it needs --coverage";
         return false;
     }
+    if (!o.coverage_report.empty() && !o.coverage) {
+        error = "--coverage-report lists the functions no case reached: it needs --coverage";
+        return false;
+    }
     c.corpus_dir = o.corpus_dir;
     if (o.target_cmd.empty()) return true;
     c.restart_cmd = o.target_cmd;
@@ -132,6 +154,10 @@ bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c, st
     c.coverage = std::make_shared<netfuzz::CoverageMap>();
     if (!c.coverage->create(o.coverage_map_size, error)) return false;
     c.coverage->export_environment();
+    if (o.coverage_report.empty()) return true;
+    functions = std::make_unique<netfuzz::FunctionListFile>();
+    if (!functions->create(error)) return false;
+    functions->export_environment();
     return true;
 }
 
@@ -161,13 +187,18 @@ int run_fuzz(const FuzzOptions& o) {
     // A summary that cannot be written must not cost a whole campaign first.
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
                                      {"--junit", o.junit},
-                                     {"--sarif", o.sarif}}) {
+                                     {"--sarif", o.sarif},
+                                     {"--html", o.html},
+                                     {"--coverage-report", o.coverage_report}}) {
         if (!path.empty() && path != "-" && !report::check_writable(path, error))
             return usage_error("fuzz", fmt::format("cannot write {} {}", flag, error));
     }
-    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-");
+    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-") +
+                          (o.coverage_report == "-");
     if (on_stdout > 1)
-        return usage_error("fuzz", "only one of --json, --junit and --sarif can be '-' (stdout)");
+        return usage_error("fuzz",
+                           "only one of --json, --junit, --sarif, --html and --coverage-report "
+                           "can be '-' (stdout)");
     // The first line, always: this is not a read-only tool.
     fmt::print(stderr,
                "mbstorm fuzz: WARNING: writes will be sent to {} (function codes {} and malformed "
@@ -186,7 +217,8 @@ int run_fuzz(const FuzzOptions& o) {
     c.minimize = !o.no_minimize;
     c.restart_cmd = o.restart_cmd;
     c.restart_wait_ms = static_cast<int>(o.restart_wait_ns / 1'000'000);
-    if (!set_up_target_command(o, c, error)) return usage_error("fuzz", error);
+    std::unique_ptr<netfuzz::FunctionListFile> functions;
+    if (!set_up_target_command(o, c, functions, error)) return usage_error("fuzz", error);
     c.out_dir = o.out_dir;
     c.stop = &g_stop;
     std::signal(SIGINT, on_fuzz_stop_signal);
@@ -224,6 +256,8 @@ int run_fuzz(const FuzzOptions& o) {
     if (!o.json.empty()) ok &= write_output(o.json, netfuzz::format_fuzz_json(r, info));
     if (!o.junit.empty()) ok &= write_output(o.junit, netfuzz::format_fuzz_junit(r, info));
     if (!o.sarif.empty()) ok &= write_output(o.sarif, netfuzz::format_fuzz_sarif(r, info));
+    if (!o.html.empty()) ok &= write_output(o.html, netfuzz::format_fuzz_html(r, info));
+    if (functions) ok &= write_coverage_report(o.coverage_report, *functions, *c.coverage);
     if (!ok) return kExitUsage;
     if (const int sig = g_stop_signal.load(); sig != 0) {
         fmt::print(stderr, "mbstorm fuzz: interrupted by {}: exit code {}\n", signal_name(sig),
@@ -283,6 +317,10 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "coverage map bytes, a power of two (passed on as AFL_MAP_SIZE)")
         ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 24))
         ->capture_default_str();
+    cmd->add_option("--coverage-report", o->coverage_report,
+                    "coverage mode: write the target's functions no case reached to this file "
+                    "('-': stdout), by file and line (a target built with pc-table too: "
+                    "-fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table)");
     cmd->add_option("--corpus", o->corpus_dir,
                     "coverage mode: save the corpus in this folder, one file per case; the "
                     "cases already there run first (resume)");
@@ -291,6 +329,9 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
     cmd->add_option("--junit", o->junit, "write JUnit XML to this file ('-': stdout)");
     cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file ('-': stdout)");
+    cmd->add_option("--html", o->html,
+                    "write a self-contained HTML report to this file ('-': stdout): the run, "
+                    "the device model, the findings and, with --coverage, edges over time");
     cmd->add_flag("--no-minimize", o->no_minimize, "do not shrink findings by delta debugging");
     cmd->add_flag("--naive", o->naive,
                   "baseline: random PDU bytes instead of the structure-aware generator");

@@ -76,6 +76,7 @@ bool CoverageMap::create(std::size_t map_size, std::string& error) {
     map_ = static_cast<std::uint8_t*>(at);
     map_size_ = map_size;
     virgin_.assign(map_size, 0xFF);
+    reached_.assign(map_size, false);
     words_known_.assign(65536 / 8 + 256 / 8, 0);
     clear();
     return true;
@@ -88,6 +89,14 @@ void CoverageMap::export_environment() const {
 
 void CoverageMap::clear() noexcept {
     if (!map_) return;
+    // Most of the map is zero: look at eight bytes at a time.
+    for (std::size_t i = 0; i < map_size_; i += 8) {
+        std::uint64_t word;
+        std::memcpy(&word, map_ + i, 8);
+        if (!word) continue;
+        for (std::size_t k = i; k < i + 8; ++k)
+            if (map_[k]) reached_[k] = true;
+    }
     std::memset(map_, 0, map_size_);
     auto* log = reinterpret_cast<CmpLog*>(map_ + map_size_);
     log->count = 0;
@@ -128,6 +137,10 @@ void harvest(const CmpEntry& e, std::uint8_t* known_words, std::uint8_t* known_b
 }
 
 }  // namespace
+
+bool CoverageMap::reached(std::size_t index) const noexcept {
+    return index < map_size_ && (reached_[index] || map_[index] != 0);
+}
 
 CoverageSample CoverageMap::collect() {
     CoverageSample s;

@@ -6,7 +6,8 @@
 //
 // Per case: clear() before it, collect() after it. Hit counts are bucketed as AFL does (1, 2,
 // 3, 4-7, 8-15, 16-31, 32-127, 128+); a case is new when it sets a bucket bit no case set
-// before.
+// before. Apart from that, clear() keeps which edges were ever hit, by anything the target did
+// (its start-up, discovery, confirmation runs too), for --coverage-report.
 #pragma once
 
 #include <cstddef>
@@ -48,8 +49,11 @@ class CoverageMap {
     // Puts __AFL_SHM_ID and AFL_MAP_SIZE in this process's environment, for the target command.
     void export_environment() const;
 
+    // Remembers the edges hit since the last clear (reached()), then zeroes the map.
     void clear() noexcept;
     CoverageSample collect();
+    // Whether the map cell `index` (an edge's guard) was ever hit during the run.
+    bool reached(std::size_t index) const noexcept;
 
     std::uint32_t edges_seen() const noexcept { return edges_seen_; }
     std::size_t map_size() const noexcept { return map_size_; }
@@ -62,6 +66,7 @@ class CoverageMap {
     std::uint8_t* map_ = nullptr;
     std::size_t map_size_ = 0;
     std::vector<std::uint8_t> virgin_;  // bucket bits no case has set yet (AFL's virgin map)
+    std::vector<bool> reached_;         // cells hit before the last clear()
     std::uint32_t edges_seen_ = 0;
     std::vector<std::uint8_t> words_known_;  // a bit per 16-bit word already reported
 };

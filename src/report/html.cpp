@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "report/explain.hpp"
+#include "report/html_page.hpp"
 #include "report/units.hpp"
 #include "report/xml_escape.hpp"
 
@@ -18,73 +19,10 @@ namespace {
 using stats::Histogram;
 using stats::OutcomeCounters;
 
-constexpr std::array<const char*, 8> kPalette = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
-                                                 "#9467bd", "#8c564b", "#e377c2", "#17becf"};
 constexpr const char* kOverallColor = "#222222";
 
 std::string escape(std::string_view text) {
     return xml_escape(text);
-}
-
-// ---------------------------------------------------------------- charts (inline SVG)
-
-struct Series {
-    std::string name;
-    std::string color;
-    std::vector<std::pair<double, double>> points;  // data coordinates
-    double width = 1.8;
-};
-struct Tick {
-    double at;
-    std::string label;
-};
-struct Chart {
-    std::string title;
-    std::string x_label;
-    std::string y_label;
-    double x_min = 0, x_max = 1, y_min = 0, y_max = 1;
-    std::vector<Tick> x_ticks, y_ticks;
-    std::vector<Series> series;
-    std::vector<Tick> markers;  // vertical lines (stage boundaries)
-};
-
-constexpr double kWidth = 900, kHeight = 360;
-constexpr double kLeft = 78, kRight = 40, kTop = 34, kBottom = 52;
-
-// A "nice" step (1, 2, 2.5, 5 x 10^n) giving about `target` intervals up to max.
-double nice_step(double max, int target) {
-    if (!(max > 0.0)) return 1.0;
-    const double raw = max / target;
-    const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
-    for (double m : {1.0, 2.0, 2.5, 5.0, 10.0}) {
-        if (m * magnitude >= raw) return m * magnitude;
-    }
-    return 10.0 * magnitude;
-}
-
-std::string trim_number(double v) {
-    std::string s = fmt::format("{:.3f}", v);
-    while (!s.empty() && s.back() == '0') s.pop_back();
-    if (!s.empty() && s.back() == '.') s.pop_back();
-    return s;
-}
-
-// Time axis 0..end: nice ticks up to the run's end, which is where the axis ends (a 3 s run
-// is not drawn to 4 s).
-double time_ticks(double end, std::vector<Tick>& ticks) {
-    const double step = nice_step(end, 5);
-    for (double v = 0.0; v <= end + step * 1e-6; v += step) ticks.push_back({v, trim_number(v)});
-    return end;
-}
-
-// Linear 0..max axis with nice ticks; returns the rounded-up max.
-double linear_ticks(double max, std::vector<Tick>& ticks, const std::string& suffix = "") {
-    const double step = nice_step(max, 5);
-    const double top = std::max(step, std::ceil(max / step - 1e-9) * step);
-    for (double v = 0.0; v <= top + step * 1e-6; v += step) {
-        ticks.push_back({v, trim_number(v) + suffix});
-    }
-    return top;
 }
 
 struct LatencyUnit {
@@ -95,83 +33,6 @@ LatencyUnit latency_unit(double max_ns) {
     if (max_ns < 1e6) return {1e3, "µs"};
     if (max_ns < 1e9) return {1e6, "ms"};
     return {1e9, "s"};
-}
-
-std::string render_chart(const Chart& c) {
-    const double plot_w = kWidth - kLeft - kRight;
-    const double plot_h = kHeight - kTop - kBottom;
-    const double x_span = c.x_max > c.x_min ? c.x_max - c.x_min : 1.0;
-    const double y_span = c.y_max > c.y_min ? c.y_max - c.y_min : 1.0;
-    auto px = [&](double x) { return kLeft + (x - c.x_min) / x_span * plot_w; };
-    auto py = [&](double y) { return kTop + plot_h - (y - c.y_min) / y_span * plot_h; };
-
-    std::string s = fmt::format(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 {} {}\" width=\"{}\" "
-        "height=\"{}\" role=\"img\" aria-label=\"{}\">\n",
-        kWidth, kHeight, kWidth, kHeight, escape(c.title));
-    s += fmt::format("<rect x=\"0\" y=\"0\" width=\"{}\" height=\"{}\" fill=\"#ffffff\"/>\n",
-                     kWidth, kHeight);
-    s += fmt::format("<text x=\"{}\" y=\"20\" class=\"title\">{}</text>\n", kLeft, escape(c.title));
-
-    s += "<g class=\"grid\">\n";
-    for (const auto& t : c.y_ticks) {
-        const double y = py(t.at);
-        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", kLeft,
-                         y, kLeft + plot_w, y);
-        s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"ylab\">{}</text>\n", kLeft - 6,
-                         y + 4, escape(t.label));
-    }
-    for (const auto& t : c.x_ticks) {
-        const double x = px(t.at);
-        s += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\"/>\n", x,
-                         kTop, x, kTop + plot_h);
-        s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"xlab\">{}</text>\n", x,
-                         kTop + plot_h + 16, escape(t.label));
-    }
-    s += "</g>\n";
-    s += fmt::format(
-        "<rect x=\"{}\" y=\"{}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" "
-        "stroke=\"#888888\"/>\n",
-        kLeft, kTop, plot_w, plot_h);
-
-    for (const auto& m : c.markers) {
-        const double x = px(m.at);
-        s += fmt::format(
-            "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" class=\"marker\"/>\n", x,
-            kTop, x, kTop + plot_h);
-        s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"mlab\">{}</text>\n", x + 3,
-                         kTop + 12, escape(m.label));
-    }
-
-    for (const auto& series : c.series) {
-        if (series.points.empty()) continue;
-        std::string pts;
-        for (const auto& [x, y] : series.points) {
-            pts += fmt::format("{:.1f},{:.1f} ", px(std::clamp(x, c.x_min, c.x_max)),
-                               py(std::clamp(y, c.y_min, c.y_max)));
-        }
-        if (!pts.empty()) pts.pop_back();
-        s += fmt::format(
-            "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" "
-            "stroke-linejoin=\"round\" points=\"{}\"><title>{}</title></polyline>\n",
-            series.color, series.width, pts, escape(series.name));
-    }
-
-    s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"axis\">{}</text>\n",
-                     kLeft + plot_w / 2, kHeight - 10, escape(c.x_label));
-    s += fmt::format(
-        "<text x=\"16\" y=\"{:.1f}\" class=\"axis\" transform=\"rotate(-90 16 "
-        "{:.1f})\">{}</text>\n",
-        kTop + plot_h / 2, kTop + plot_h / 2, escape(c.y_label));
-    s += "</svg>\n";
-
-    s += "<div class=\"legend\">";
-    for (const auto& series : c.series) {
-        s += fmt::format("<span><i style=\"background:{}\"></i>{}</span>", series.color,
-                         escape(series.name));
-    }
-    s += "</div>\n";
-    return s;
 }
 
 // 0%, 90%, 99%, 99.9%, ... for x = log10(1/(1-p)) = 0, 1, 2, 3, ...
@@ -320,21 +181,10 @@ std::string latency_over_time_chart(const stats::RunResult& r) {
 
 // ---------------------------------------------------------------- tables
 
-void row(std::string& out, const std::vector<std::string>& cells, bool header = false) {
-    out += "<tr>";
-    bool first = true;
-    for (const auto& cell : cells) {
-        const char* tag = header ? "th" : "td";
-        out += fmt::format("<{}{}>{}</{}>", tag, first ? " class=\"l\"" : "", cell, tag);
-        first = false;
-    }
-    out += "</tr>\n";
-}
-
 std::string run_table(const stats::RunResult& r) {
     const auto& m = r.metadata;
     std::string t = "<table class=\"kv\">\n";
-    auto kv = [&](const char* k, const std::string& v) { row(t, {k, escape(v)}); };
+    auto kv = [&](const char* k, const std::string& v) { table_row(t, {k, escape(v)}); };
     kv("Target", m.target);
     kv("Load model", load_model_text(r));
     kv("Threads / connections / depth",
@@ -353,7 +203,7 @@ std::string run_table(const stats::RunResult& r) {
 std::string summary_table(const stats::RunResult& r) {
     const auto& c = r.counters;
     std::string t = "<table class=\"kv\">\n";
-    auto kv = [&](const char* k, const std::string& v) { row(t, {k, escape(v)}); };
+    auto kv = [&](const char* k, const std::string& v) { table_row(t, {k, escape(v)}); };
     kv("Throughput", format_rate(r.throughput()) + " transactions/s");
     kv("Transactions", fmt::format("{} completed, {} sent", format_count(c.completed()),
                                    format_count(c.transactions_sent)));
@@ -369,7 +219,7 @@ std::string summary_table(const stats::RunResult& r) {
                    r.connections.failed, r.connections.reconnects, r.connections.closed_by_peer));
     for (const auto& line : schedule_lines(r)) kv("Schedule", line);
     for (const auto& s : r.shortfalls) {
-        row(t, {"Plan", "<span class=\"bad\">NOT carried out</span>: " + escape(s.text)});
+        table_row(t, {"Plan", "<span class=\"bad\">NOT carried out</span>: " + escape(s.text)});
     }
     for (const auto& hint : hint_lines(r)) kv("Hint", hint);
     t += "</table>\n";
@@ -389,7 +239,7 @@ void latency_row(std::string& t, const std::string& name, const Histogram& h,
                        p(99.9), p(99.99), p(99.999), h.empty() ? "-" : format_latency(h.max()),
                        h.empty() ? "-" : format_latency(h.mean())})
         cells.push_back(cell);
-    row(t, cells);
+    table_row(t, cells);
 }
 
 void latency_header(std::string& t, const char* first, bool with_target = false) {
@@ -398,7 +248,7 @@ void latency_header(std::string& t, const char* first, bool with_target = false)
     for (const char* cell :
          {"count", "tx/s", "p50", "p75", "p90", "p99", "p99.9", "p99.99", "p99.999", "max", "mean"})
         cells.emplace_back(cell);
-    row(t, cells, true);
+    table_row(t, cells, true);
 }
 
 std::string latency_table(const stats::RunResult& r) {
@@ -468,9 +318,10 @@ std::string stages_table(const stats::RunResult& r) {
 
 std::string thresholds_table(const stats::RunResult& r) {
     std::string t = "<table>\n";
-    row(t, {"threshold", "observed", "result"}, true);
+    table_row(t, {"threshold", "observed", "result"}, true);
     for (const auto& th : r.thresholds) {
-        row(t, {escape(th.expression),
+        table_row(
+            t, {escape(th.expression),
                 escape(th.observed_text.empty() ? trim_number(th.observed) : th.observed_text),
                 th.passed ? "<span class=\"ok\">PASS</span>" : "<span class=\"bad\">FAIL</span>"});
     }
@@ -478,48 +329,12 @@ std::string thresholds_table(const stats::RunResult& r) {
     return t;
 }
 
-constexpr const char* kStyle = R"css(
-body { font-family: system-ui, -apple-system, "Segoe UI", Roboto, "Helvetica Neue", Arial, sans-serif;
-       color: #1d1d1f; background: #f6f7f9; margin: 0; line-height: 1.45; }
-main { max-width: 940px; margin: 0 auto; padding: 24px 20px 60px; }
-h1 { font-size: 1.6em; margin: 0 0 4px; }
-h2 { font-size: 1.15em; margin: 32px 0 10px; border-bottom: 1px solid #d9dce1; padding-bottom: 4px; }
-.sub { color: #5a6270; margin: 0 0 16px; }
-section.card { background: #fff; border: 1px solid #e1e4e8; border-radius: 6px; padding: 12px 16px; }
-table { border-collapse: collapse; width: 100%; font-size: 0.86em; background: #fff;
-        font-variant-numeric: tabular-nums; }
-th, td { padding: 5px 6px; border-bottom: 1px solid #eceef1; text-align: right; white-space: nowrap; }
-th { background: #f0f2f5; font-weight: 600; }
-.l { text-align: left; }
-td.sub { padding-left: 24px; }
-.scroll { overflow-x: auto; }
-table.kv td.l { width: 32%; color: #5a6270; }
-table.kv td { text-align: left; white-space: normal; }
-.ok { color: #1a7f37; font-weight: 600; }
-.bad { color: #cf222e; font-weight: 600; }
-svg { display: block; margin-top: 14px; max-width: 100%; height: auto; background: #fff; border: 1px solid #e1e4e8;
-      border-radius: 6px; font-family: inherit; }
-svg .title { font-size: 14px; font-weight: 600; fill: #1d1d1f; }
-svg .grid line { stroke: #e6e8eb; stroke-width: 1; }
-svg .ylab { font-size: 11px; fill: #5a6270; text-anchor: end; }
-svg .xlab { font-size: 11px; fill: #5a6270; text-anchor: middle; }
-svg .axis { font-size: 12px; fill: #3c4350; text-anchor: middle; }
-svg .marker { stroke: #8250df; stroke-width: 1.2; stroke-dasharray: 5 4; }
-svg .mlab { font-size: 11px; fill: #8250df; }
-.legend { margin: 6px 0 18px; font-size: 0.88em; color: #3c4350; }
-.legend span { margin-right: 16px; white-space: nowrap; }
-.legend i { display: inline-block; width: 14px; height: 3px; margin-right: 6px; vertical-align: middle; }
-)css";
-
 }  // namespace
 
 std::string format_html(const stats::RunResult& r) {
     const auto& m = r.metadata;
     std::string out;
-    out += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
-    out += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-    out += fmt::format("<title>mbstorm report — {}</title>\n", escape(m.target));
-    out += fmt::format("<style>{}</style>\n</head>\n<body>\n<main>\n", kStyle);
+    out += page_start("mbstorm report — " + m.target);
     out +=
         fmt::format("<h1>mbstorm load report</h1>\n<p class=\"sub\">{} · {} · {}</p>\n",
                     escape(m.target), escape(m.tool_version.empty() ? "mbstorm" : m.tool_version),
@@ -543,7 +358,7 @@ std::string format_html(const stats::RunResult& r) {
     }
     if (!r.stages.empty()) out += "<h2>Stages</h2>\n" + stages_table(r);
     out += "<h2>Errors</h2>\n" + errors_table(r);
-    out += "</main>\n</body>\n</html>\n";
+    out += page_end();
     return out;
 }
 

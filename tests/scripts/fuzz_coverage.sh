@@ -6,7 +6,9 @@
 # once (1 in 2^32 for a guess): coverage mode must find both, with edges that only grow, and
 # each reproducer must crash the device again when replayed alone; the black-box mode, the same
 # device built without coverage, the same seed and time, finds neither. Built with AFL++'s
-# afl-clang-fast the device works unchanged.
+# afl-clang-fast the device works unchanged. --html writes the run as a page (the edges chart
+# and the findings); built with pc-table too, --coverage-report names the device's maintenance
+# routine (a signal handler) as never reached, and not its request handler.
 #   bash fuzz_coverage.sh <mbstorm-binary> <scripts-dir>
 set -u
 mbstorm=$1
@@ -23,9 +25,11 @@ bounded() { timeout -k 5 "$@"; }
 fail=0
 device="$root/tests/tools/coverage_device.c"
 runtime="$root/coverage/mbstorm_coverage.c"
-clang -O1 -g -fsanitize-coverage=trace-pc-guard,trace-cmp -c "$device" -o "$work/device.o" &&
+clang -O1 -g -fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table -c "$device" -o "$work/device.o" &&
   clang -O1 -c "$runtime" -o "$work/runtime.o" &&
   clang "$work/device.o" "$work/runtime.o" -o "$work/device-coverage" &&
+  clang -O1 -g -fsanitize-coverage=trace-pc-guard,trace-cmp -c "$device" -o "$work/device-nopc.o" &&
+  clang "$work/device-nopc.o" "$work/runtime.o" -o "$work/device-nopc" &&
   clang -O1 -g "$device" -o "$work/device-plain" ||
   { echo "FAIL: the device does not build with clang and the coverage runtime"; exit 1; }
 
@@ -45,8 +49,9 @@ fuzz_device() {
   fi
 }
 
-fuzz_device coverage "$work/device-coverage" --coverage
-fuzz_device blackbox "$work/device-plain"
+fuzz_device coverage "$work/device-coverage" --coverage --html "$work/coverage.html" \
+  --coverage-report "$work/unreached.txt"
+fuzz_device blackbox "$work/device-plain" --html "$work/blackbox.html"
 /usr/bin/python3 - "$work/coverage.json" "$work/blackbox.json" <<'PY' || fail=1
 import json, sys
 planted = {"crash:target-down/fc06", "crash:target-down/fc16"}
@@ -70,6 +75,51 @@ for ok, what in checks:
     print(("ok   " if ok else "FAIL ") + what)
 sys.exit(0 if all(ok for ok, _ in checks) else 1)
 PY
+
+# --html: one page with the run, the findings (both planted crashes, with their folders) and,
+# in coverage mode only, the edges chart and the edges by function code.
+html_fail=0
+html_has() { grep -q -- "$2" "$1" || { echo "FAIL $(basename "$1") lacks '$2'"; html_fail=1; }; }
+for part in '<svg' 'Edges reached over time' '<polyline' 'crash:target-down/fc06' \
+  'crash:target-down/fc16' '001-crash-target-down-fc' '0x10 write_multiple_registers' \
+  'time limit reached' 'cases/s'; do
+  html_has "$work/coverage.html" "$part"
+done
+html_has "$work/blackbox.html" 'No findings'
+if grep -q '<svg' "$work/blackbox.html"; then echo "FAIL the black-box page has a chart"; html_fail=1; fi
+[ "$html_fail" -eq 0 ] && echo "ok   --html: the chart, the edges by function code and the findings" || fail=1
+
+# --coverage-report: the maintenance routine only a signal runs is listed, with its file and
+# line; the request handler every case runs and main are not.
+report="$work/unreached.txt"
+if [ -f "$report" ] &&
+  grep -qE '^[0-9]+ of [0-9]+ functions reached; never reached: [0-9]+$' <(head -1 "$report") &&
+  grep -qE '^clear_registers +.*coverage_device\.c:[0-9]+$' "$report" &&
+  ! grep -qE '^(answer|main) ' "$report"; then
+  echo "ok   --coverage-report: $(head -1 "$report"), clear_registers among them, answer not"
+else
+  echo "FAIL --coverage-report:"; sed 's/^/  /' "$report" 2>/dev/null | head -20; fail=1
+fi
+# A target built without pc-table lists no functions: said so, no file, exit 2 (a report that
+# could not be written); and the report is refused without --coverage.
+p=$(free_port)
+bounded 40 "$mbstorm" fuzz --target "127.0.0.1:$p" --target-cmd "exec $work/device-nopc --port $p" \
+  --coverage --seconds 2 -q --no-model --max-connections 0 --out "$work/nopc" \
+  --coverage-report "$work/nopc.txt" >"$work/nopc.log" 2>&1
+rc=$?
+if [ "$rc" -eq 2 ] && grep -q 'the target was built without pc-table' "$work/nopc.log" &&
+  [ ! -e "$work/nopc.txt" ]; then
+  echo "ok   a target without pc-table: named, no report, exit 2"
+else
+  echo "FAIL without pc-table: exit $rc"; sed 's/^/  /' "$work/nopc.log" | tail -5; fail=1
+fi
+"$mbstorm" fuzz --target 127.0.0.1:1 --seconds 1 --coverage-report "$work/x.txt" >"$work/refused.log" 2>&1
+rc=$?
+if [ "$rc" -eq 2 ] && grep -q -- '--coverage-report .*needs --coverage' "$work/refused.log"; then
+  echo "ok   --coverage-report without --coverage: refused, exit 2"
+else
+  echo "FAIL --coverage-report without --coverage: exit $rc"; sed 's/^/  /' "$work/refused.log"; fail=1
+fi
 
 # --corpus: the corpus saved one file per entry, and a later run resumes from it (the saved
 # entries run first, so it is where the first run ended within its first second).
