@@ -1034,9 +1034,10 @@ bool Campaign::replays_alone(Finding& f) {
         if (!can_afford(1)) {
             // Seen alone once: kept, but not called confirmed.
             f.confirmed = false;
-            f.note += fmt::format("{}not confirmed: --seconds ran out before it was replayed "
-                                  "alone once more",
-                                  f.note.empty() ? "" : "; ");
+            f.note += fmt::format(
+                "{}not confirmed: --seconds ran out before it was replayed "
+                "alone once more",
+                f.note.empty() ? "" : "; ");
             return true;
         }
         if (replays_once_more(f)) continue;
