@@ -13,6 +13,7 @@
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/executor.hpp"
 #include "netfuzz/finding.hpp"
+#include "netfuzz/state_marker.hpp"
 
 namespace mbstorm::cli {
 namespace {
@@ -69,7 +70,11 @@ int run_replay(const ReplayOptions& o) {
     ex.piece_settle_ms = 20;
     // Idle sentinels, as in the run: a crash replays as a crash under a supervisor too.
     netfuzz::DeathWatch watch(target, 3, ex.timeout_ms, &f.profile);
-    const bool can_watch = target.max_links() > 1;
+    // A target that serves one connection at a time cannot hold sentinels: the run watched a
+    // marker register instead, and so does replay.
+    const bool can_watch = target.max_links() > 1 && !f.profile.one_connection;
+    netfuzz::StateMarker marker(target, f.profile, ex.timeout_ms);
+    const bool use_marker = !can_watch && f.profile.marker_address >= 0;
     unsigned reproduced = 0;
     const netfuzz::Case& replayed = o.original ? f.original_case : f.fuzz_case;
     if (replayed.steps.empty()) {
@@ -83,6 +88,11 @@ int run_replay(const ReplayOptions& o) {
             watch.arm();
         }
         ex.watch = watch.armed() ? &watch : nullptr;
+        if (use_marker && !marker.armed()) {
+            netfuzz::wait_for_target(target, f.profile, "", 2000, ex.timeout_ms);
+            marker.arm_at(static_cast<std::uint16_t>(f.profile.marker_address));
+        }
+        ex.marker = marker.armed() ? &marker : nullptr;
         netfuzz::Execution e = netfuzz::execute_case(replayed, target, f.profile, ex);
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.

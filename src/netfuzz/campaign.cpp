@@ -35,6 +35,7 @@
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
+#include "netfuzz/state_marker.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -357,6 +358,10 @@ class Campaign {
     void use_probe_inside_the_map();
     // Opens the sentinels, if the target serves a fresh connection while they are open.
     void arm_watch();
+    bool needs_concurrent_connections(const Case& c) const;
+    void arm_marker();
+    bool marker_says_restart(const std::vector<Case>& cases);
+    void rearm_watches();
     // Runs cases alone before the generator's, counted as first looks; true when the target
     // was lost.
     bool look_first(std::vector<Case> cases, std::uint64_t& generated);
@@ -410,6 +415,7 @@ class Campaign {
     std::unique_ptr<Generator> gen_;
     std::unique_ptr<BatchRunner> batch_;
     std::unique_ptr<DeathWatch> watch_;
+    std::unique_ptr<StateMarker> marker_;  // where there are no sentinels
     RestartCommand restart_;
     ExecOptions exec_;
     std::int64_t last_progress_ = 0;
@@ -604,7 +610,7 @@ void Campaign::set_drops_after_exception() {
 // still reached early and progress is reported).
 void Campaign::make_batch_runner() {
     const bool pauses = result_.profile.drops_after_exception;
-    lanes_ = pauses ? 1u : std::max(1u, options_.lanes);
+    lanes_ = pauses || result_.profile.one_connection ? 1u : std::max(1u, options_.lanes);
     lane_depth_ = pauses ? std::min(16u, std::max(1u, options_.lane_depth))
                          : std::max(1u, options_.lane_depth);
     batch_ =
@@ -637,8 +643,14 @@ bool Campaign::recover(const std::string& cause) {
     ++result_.restarts;
     if (!cause.empty()) ++restarts_by_cause_[cause];
     up_ = true;
-    if (watch_) watch_->arm();
+    rearm_watches();
     return true;
+}
+
+// A restarted (or merely settled) target holds none of the sentinels and its initial state.
+void Campaign::rearm_watches() {
+    if (watch_ && !watch_->armed()) watch_->arm();
+    if (marker_ && !marker_->armed()) marker_->rearm();
 }
 
 bool Campaign::settle(const std::string& cause) {
@@ -650,7 +662,7 @@ bool Campaign::settle(const std::string& cause) {
     if (wait_for_target_with(none, *options_.connector, result_.profile, "",
                              options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
         up_ = true;
-        if (watch_ && !watch_->armed()) watch_->arm();
+        rearm_watches();
         return true;
     }
     if (remaining_ns() <= 0) return false;
@@ -1267,16 +1279,71 @@ void Campaign::use_probe_inside_the_map() {
 void Campaign::arm_watch() {
     // A serial line has one link; a target that serves one connection at a time would be
     // blocked by an idle one.
-    if (!options_.death_watch || options_.connector->max_links() <= 1) return;
+    if (options_.connector->max_links() <= 1) return;
     watch_ =
         std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms, &result_.profile);
-    if (!watch_->arm() || probe_target(*options_.connector, result_.profile, options_.timeout_ms) !=
-                              ProbeResult::Ok) {
-        watch_.reset();
+    if (watch_->arm() && probe_target(*options_.connector, result_.profile, options_.timeout_ms) ==
+                             ProbeResult::Ok) {
+        if (!options_.death_watch) {
+            watch_.reset();
+            return;
+        }
+        result_.death_watch = true;
+        exec_.watch = watch_.get();
         return;
     }
-    result_.death_watch = true;
-    exec_.watch = watch_.get();
+    watch_.reset();
+    // Unanswered beside idle connections, answered without them: one connection at a time.
+    if (probe_target(*options_.connector, result_.profile, options_.timeout_ms) != ProbeResult::Ok)
+        return;
+    result_.profile.one_connection = true;
+    make_batch_runner();
+}
+
+// Cases that need two connections at once (a second connection, a flood, a concurrent probe)
+// show a target that serves one at a time only that: the capacity check reports it once.
+bool Campaign::needs_concurrent_connections(const Case& c) const {
+    if (!result_.profile.one_connection) return false;
+    if (c.connections() > 1) return true;
+    return std::any_of(c.steps.begin(), c.steps.end(),
+                       [](const Step& s) { return s.op == Op::Flood || s.op == Op::SideProbe; });
+}
+
+// No sentinels (a target that serves one connection at a time, a serial line): a register of
+// the learned map keeps a value mbstorm wrote; back at its initial value, the process
+// restarted.
+void Campaign::arm_marker() {
+    if (watch_ || !options_.death_watch || result_.model.empty()) return;
+    marker_ =
+        std::make_unique<StateMarker>(*options_.connector, result_.profile, options_.timeout_ms);
+    if (!marker_->arm(result_.model)) {
+        marker_.reset();
+        return;
+    }
+    exec_.marker = marker_.get();
+    result_.profile.marker_address = marker_->address();
+    result_.death_marker = marker_->address();
+    result_.death_marker_initial = marker_->initial();
+    result_.death_marker_value = marker_->value();
+}
+
+// After a pipelined batch broke: the marker back at its initial value, when no case of the
+// batch may have written it.
+bool Campaign::marker_says_restart(const std::vector<Case>& cases) {
+    if (!marker_ || !marker_->armed()) return false;
+    for (const Case& c : cases) {
+        bool wrote = false;
+        for_each_request(c, result_.profile, [&](const RequestInfo& info) {
+            wrote = may_write_register(info.pdu, marker_->address());
+            return !wrote;
+        });
+        if (wrote) {
+            marker_->rearm();
+            return false;
+        }
+    }
+    std::uint16_t seen = 0;
+    return marker_->read(seen) == StateMarker::Reading::Reset;
 }
 
 bool Campaign::rationed(const Case& c) {
@@ -1307,6 +1374,10 @@ bool Campaign::rationed(const Case& c) {
 bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {
     for (Case& c : cases) {
         if (out_of_budget() || !can_afford(1)) break;
+        if (needs_concurrent_connections(c)) {
+            ++result_.not_sent_one_connection;
+            continue;
+        }
         c.number = ++generated;
         ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
         ++result_.cases;
@@ -1335,6 +1406,7 @@ void Campaign::start_generator() {
 
 bool Campaign::learn_then_look(std::uint64_t& generated) {
     know_the_device();
+    arm_marker();
     // A known map: stateful cases write inside it, and every read-back in a case run alone
     // is checked (nothing else writes while it runs), unless the user chose the range.
     if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
@@ -1378,6 +1450,10 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
         }
         if (rationed(c)) {
             ++result_.rationed;
+            continue;
+        }
+        if (needs_concurrent_connections(c)) {
+            ++result_.not_sent_one_connection;
             continue;
         }
         ++r.fresh;
@@ -1452,7 +1528,8 @@ Campaign::AfterBatch Campaign::target_after_batch(const BatchResult& br,
     AfterBatch after;
     const bool broke = br.connect_failed || br.lane_lost;
     // The sentinels see a death a supervisor hides from the probe below.
-    const bool watched_death = watch_ && watch_->died(broke ? 200 : 0);
+    const bool watched_death =
+        (watch_ && watch_->died(broke ? 200 : 0)) || (broke && marker_says_restart(piped));
     if (!broke && !watched_death) return after;
     batch_->close_all();
     const ProbeResult pr =
@@ -1544,6 +1621,8 @@ bool Campaign::run_round(Round& r, std::vector<Case>& requeue,
                          std::set<std::uint64_t>& requeued_once) {
     const std::int64_t t0 = net::now_ns();
     const BatchResult br = batch_->run(r.piped);
+    // Its lane would keep every other connection (isolated runs, probes) waiting.
+    if (result_.profile.one_connection) batch_->close_all();
     const std::int64_t t1 = net::now_ns();
     account_batch(br, t1 - t0, r.piped.size());
     const std::vector<std::size_t> suspects = triage(br, r.piped);

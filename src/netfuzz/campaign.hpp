@@ -83,8 +83,15 @@ struct CampaignResult {
     DeviceModel model;  // what was known of the device's map (learned or given)
     double learn_seconds = 0;
     std::uint64_t learn_requests = 0;
-    bool death_watch = false;    // sentinels were held (the target serves them concurrently)
+    bool death_watch = false;  // sentinels were held (the target serves them concurrently)
+    // Without sentinels: the holding register a marker was written to (state_marker.hpp), and
+    // the values it held and was given. -1: none.
+    std::int32_t death_marker = -1;
+    std::uint16_t death_marker_initial = 0, death_marker_value = 0;
     std::uint64_t rationed = 0;  // cases not sent: owed an exception that costs a pause
+    // Cases not sent because they need two connections at once and the target serves one at a
+    // time (profile.one_connection).
+    std::uint64_t not_sent_one_connection = 0;
     std::vector<Finding> findings;
     std::uint64_t cases = 0;
     std::uint64_t batched_cases = 0, isolated_runs = 0;

@@ -17,6 +17,7 @@
 #include "net/clock.hpp"
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/death_watch.hpp"
+#include "netfuzz/state_marker.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -145,6 +146,8 @@ class CaseRunner {
     void judge_side_probes(Judgement& j) const;
     void judge_flood(Judgement& j) const;
     void judge_target(const Case& c, Judgement& j);
+    // The marker register back at its initial value: the process restarted.
+    bool marker_reset(const Judgement& j, std::uint16_t& seen);
     std::int64_t stall_threshold_ms() const {
         return std::min<std::int64_t>(kStallMs, options_.timeout_ms);
     }
@@ -739,6 +742,22 @@ void CaseRunner::judge_side_probes(Judgement& j) const {
     }
 }
 
+bool CaseRunner::marker_reset(const Judgement& j, std::uint16_t& seen) {
+    StateMarker* m = options_.marker;
+    if (options_.watch || !m || !m->armed()) return false;
+    for (const auto& conn : j.infos)
+        for (const RequestInfo& info : conn)
+            if (may_write_register(info.pdu, m->address())) {
+                m->rearm();  // this case may have written it: nothing to be told from it
+                return false;
+            }
+    const StateMarker::Reading reading = m->read(seen);
+    event(kFreshConn, TraceKind::FreshProbe, {},
+          reading == StateMarker::Reading::Reset ? "marker register lost its value"
+                                                 : "marker register kept");
+    return reading == StateMarker::Reading::Reset;
+}
+
 // Whether the target is still there (the fresh probe, then the sentinels): a death or a
 // whole-server hang outranks whatever the case's own connections showed.
 void CaseRunner::judge_target(const Case& c, Judgement& j) {
@@ -747,6 +766,10 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
     // time the probe is answered they have arrived.
     ProbeResult r = ProbeResult::Ok;
     if (j.need_fresh_probe) {
+        // A target that serves one connection at a time gets to the probe only once the
+        // case's own are gone.
+        if (profile_.one_connection)
+            for (Conn& cn : conns_) cn.link.reset();
         r = probe_target(target_, profile_, options_.timeout_ms);
         event(kFreshConn, TraceKind::FreshProbe, {}, std::string(probe_result_name(r)));
     }
@@ -773,6 +796,15 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
             j.candidate = fresh_probe_verdict(r);
         }
+    }
+    std::uint16_t seen = 0;
+    if (j.need_fresh_probe && !out_.target_down && r == ProbeResult::Ok && marker_reset(j, seen)) {
+        out_.target_down = true;
+        j.candidate = fresh_probe_verdict(ProbeResult::Closed);
+        j.candidate.summary = fmt::format(
+            "the target's process restarted: holding register {} held {:04X}, not the {:04X} "
+            "mbstorm had written there",
+            options_.marker->address(), seen, options_.marker->value());
     }
     if (out_.target_down || (j.need_fresh_probe && r != ProbeResult::Ok)) {
         // The request a whole-server fault is blamed on: the first one owed an answer that

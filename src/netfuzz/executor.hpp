@@ -40,6 +40,7 @@ struct TraceEvent {
 };
 
 class DeathWatch;
+class StateMarker;
 
 struct ExecOptions {
     int timeout_ms = 1000;  // answer timeout (hang oracle)
@@ -47,6 +48,9 @@ struct ExecOptions {
     // Armed sentinels (netfuzz/death_watch.hpp): the target's process died during the case
     // when they all drop, even if a supervisor had it back before the fresh probe. Null: none.
     DeathWatch* watch = nullptr;
+    // Where there are no sentinels: a marker register (netfuzz/state_marker.hpp) found back at
+    // its initial value after a case that broke a connection is a restart. Null: none.
+    StateMarker* marker = nullptr;
     // After the target has read a piece of a frame, how long it gets to act on it before the
     // next piece goes out (replay is patient so that a finding reproduces on a loaded host;
     // the campaign is fast).

@@ -146,6 +146,8 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         if (!f.profile.unmapped[t].empty())
             j["profile"]["unmapped"][std::to_string(t)] = f.profile.unmapped[t];
     if (f.profile.refuses_length_mismatch) j["profile"]["refuses_length_mismatch"] = true;
+    if (f.profile.one_connection) j["profile"]["one_connection"] = true;
+    if (f.profile.marker_address >= 0) j["profile"]["marker_address"] = f.profile.marker_address;
     if (f.profile.framing != codec::Framing::Mbap) {
         j["profile"]["framing"] = codec::framing_name(f.profile.framing);
         j["profile"]["serial_line"] = f.profile.serial_line;
@@ -232,6 +234,9 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
             throw std::runtime_error("unknown framing");
         out.profile.serial_line = p.value("serial_line", false);
         out.profile.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
+        out.profile.one_connection = p.value("one_connection", false);
+        out.profile.marker_address =
+            static_cast<std::int32_t>(whole_number(p, "marker_address", -1, 0, 0xFFFF));
         if (p.contains("unmapped") && p["unmapped"].is_object())
             for (const auto& [table, addrs] : p["unmapped"].items()) {
                 const std::size_t t = table.size() == 1 && table[0] >= '0' && table[0] <= '3'

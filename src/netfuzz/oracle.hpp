@@ -72,6 +72,13 @@ struct TargetProfile {
     // close is then close-with-request-pending/invalid-request, not a lost stream: see
     // understood_by, used by the campaign and by replay alike.
     bool refuses_length_mismatch = false;
+    // It serves one connection at a time (the next waits in the listen backlog): cases that
+    // need two at once are not sent, pipelined batches use one lane, and a case's connections
+    // are closed before a fresh probe (which would otherwise wait behind them).
+    bool one_connection = false;
+    // The holding register whose value tells a restart where there are no sentinels
+    // (state_marker.hpp), so that replay watches the same way. -1: none.
+    std::int32_t marker_address = -1;
 };
 
 // Addresses (holding registers and coils) that only stateful cases write; every other write

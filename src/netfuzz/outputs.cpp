@@ -104,6 +104,12 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"learn_seconds", r.learn_seconds},
         {"learn_requests", r.learn_requests},
         {"death_watch", r.death_watch},
+        {"one_connection_at_a_time", r.profile.one_connection},
+        {"not_sent_one_connection", r.not_sent_one_connection},
+        {"death_marker", r.death_marker >= 0 ? nlohmann::json{{"address", r.death_marker},
+                                                              {"initial", r.death_marker_initial},
+                                                              {"value", r.death_marker_value}}
+                                             : nlohmann::json()},
         {"rationed", r.rationed},
         {"coverage", coverage_json(r)},
         {"findings", findings}};
@@ -230,11 +236,23 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
             model.insert(at, "  ");
         s += model;
     }
-    s += fmt::format("  deaths seen by idle sentinel connections: {}\n",
-                     r.death_watch
-                         ? "yes (a crash is a crash even when a supervisor restarts the target)"
-                         : "no (the target does not serve an idle connection beside another, or "
-                           "a serial line)");
+    if (r.death_marker >= 0)
+        s += fmt::format(
+            "  deaths seen by a marker register: holding {} was given {:04X} (it held {:04X}); "
+            "lost after a case that did not write it, the process restarted\n",
+            r.death_marker, r.death_marker_value, r.death_marker_initial);
+    else
+        s += fmt::format("  deaths seen by idle sentinel connections: {}\n",
+                         r.death_watch ? "yes (a crash is a crash even when a supervisor "
+                                         "restarts the target)"
+                                       : "no (the target does not serve an idle connection "
+                                         "beside another, or a serial line; and no register of "
+                                         "a learned map keeps what is written)");
+    if (r.profile.one_connection)
+        s += fmt::format(
+            "  the target serves one connection at a time: {} case(s) needing two at once were "
+            "not sent\n",
+            r.not_sent_one_connection);
     if (r.rationed)
         s += fmt::format(
             "  {} case(s) owed an exception the target pauses after were not sent (1 in 8 "

@@ -3,7 +3,7 @@
 // except where a planted fault hook says otherwise. Each broken_server_*.cpp plants one fault.
 //
 // Usage: broken_server_X [--port P] [--respawn] [--restart-delay-ms N] [--pid-file F]
-//                        [--exit-after-s N]
+//                        [--exit-after-s N] [--one-connection]
 // Prints "PORT <n>" once listening. With --respawn a supervisor restarts the server after it
 // dies (as systemd or a PLC watchdog would), on the same port, after the restart delay.
 // --pid-file appends the process id to F, so a test that starts servers in the background
@@ -58,6 +58,9 @@ struct Faults {
     // A slow or busy target: bytes wait this long in its socket before it reads them.
     int read_delay_ms = 0;
     bool answer_any_protocol = false;  // answers frames with protocol id != 0
+    // Serves one connection at a time (--one-connection), as many small devices and
+    // libmodbus's simplest server loop do: the next waits in the listen backlog.
+    bool one_connection = false;
 };
 
 inline void handle_default(const std::uint8_t* adu, std::size_t size,
@@ -135,7 +138,8 @@ inline int serve(int listen_fd, const Faults& f) {
     std::vector<pollfd> fds;
     std::uint8_t buf[8192];
     for (;;) {
-        fds.assign(1, pollfd{listen_fd, POLLIN, 0});
+        const bool full = f.one_connection && !clients.empty();
+        fds.assign(1, pollfd{listen_fd, static_cast<short>(full ? 0 : POLLIN), 0});
         for (const Client& c : clients)
             fds.push_back(pollfd{c.fd, static_cast<short>(c.stopped ? 0 : POLLIN), 0});
         if (::poll(fds.data(), fds.size(), 1000) < 0 && errno != EINTR) return 1;
@@ -147,6 +151,7 @@ inline int serve(int listen_fd, const Faults& f) {
                 int one = 1;
                 ::setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
                 clients.push_back(Client{fd, {}, false});
+                if (f.one_connection) break;
             }
         }
         std::vector<Client> keep;
@@ -208,7 +213,8 @@ inline void forward_stop(int) {
 using ServeFn = int (*)(int listen_fd, const Faults& f);
 
 // `serve_fn`: a server with its own loop (the multi-fault server) instead of serve().
-inline int main_with(int argc, char** argv, const Faults& f, ServeFn serve_fn = serve) {
+inline int main_with(int argc, char** argv, const Faults& planted, ServeFn serve_fn = serve) {
+    Faults f = planted;
     int port = 0, restart_delay_ms = 300, exit_after_s = 0;
     bool respawn = false;
     const char* pid_file = nullptr;
@@ -224,6 +230,8 @@ inline int main_with(int argc, char** argv, const Faults& f, ServeFn serve_fn = 
             pid_file = argv[++i];
         else if (a == "--exit-after-s" && i + 1 < argc)
             exit_after_s = std::atoi(argv[++i]);
+        else if (a == "--one-connection")
+            f.one_connection = true;
     }
     if (pid_file) {
         FILE* out = std::fopen(pid_file, "a");
