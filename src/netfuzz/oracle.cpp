@@ -558,9 +558,10 @@ Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& write
             const bool before = w.acked != 0 && w.acked <= e.sent_ns;
             const bool overlaps = w.sent < e.answered_ns && !before;
             if (overlaps) ambiguous = true;
-            // The later of two: acknowledged later, or in the same reply sent later.
+            // The later of two: acknowledged later, or in the same reply sent later, or sent in
+            // the same send and later in the stream (the events are in stream order).
             const bool later = latest && (w.acked > latest->acked ||
-                                          (w.acked == latest->acked && w.sent > latest->sent));
+                                          (w.acked == latest->acked && w.sent >= latest->sent));
             if (before && (!latest || (latest->self != &rq && later))) {
                 latest = &w;
                 latest_index = a - w.address;

@@ -248,6 +248,28 @@ TEST(ShadowMaskWrite, AWrongMaskWriteResultIsAMismatchNamedAfterTheMaskWrite) {
     }
 }
 
+// Two writes of one register in the same send, acknowledged in the same reply: the second
+// one's value stands (a burst-split case once read back the second and was called a mismatch
+// against the first).
+TEST(ShadowMaskWrite, OfTwoWritesInOneSendTheLaterInTheStreamStands) {
+    TargetProfile p;
+    std::vector<std::vector<std::uint8_t>> frames = {
+        frame_pdu({0x06, 0x03, 0xE8, 0xA5, 0xA4}, 1, 1),
+        frame_pdu({0x06, 0x03, 0xE8, 0xFF, 0xFF}, 2, 1),
+        frame_pdu({0x03, 0x03, 0xE8, 0x00, 0x01}, 3, 1)};
+    RequestInfo first, second, read;
+    describe_request(frames[0], p, first);
+    describe_request(frames[1], p, second);
+    describe_request(frames[2], p, read);
+    const std::vector<std::uint8_t> ack1 = {0x06, 0x03, 0xE8, 0xA5, 0xA4};
+    const std::vector<std::uint8_t> ack2 = {0x06, 0x03, 0xE8, 0xFF, 0xFF};
+    const std::vector<std::uint8_t> got = {0x03, 0x02, 0xFF, 0xFF};
+    std::vector<Shadow::Event> events = {
+        {&first, 10, 20, ack1, 0}, {&second, 10, 20, ack2, 0}, {&read, 30, 40, got, 0}};
+    const Verdict v = Shadow::check(events, StateRange{0, 0x10000});
+    EXPECT_FALSE(v) << v.summary;
+}
+
 TEST(ShadowMaskWrite, AValueOnlyAnotherConnectionReadsWrongIsItsOwnFault) {
     TargetProfile p;
     std::vector<std::vector<std::uint8_t>> frames = {
