@@ -14,20 +14,10 @@ namespace {
 
 using mbstorm::test::run_mbstorm;
 
-std::string start_dropping_slave(std::unique_ptr<mbstorm::test::Target>& server) {
-    server = std::make_unique<mbstorm::test::Target>(
-        std::vector<std::string>{MBSTORM_BINARY, "serve", "--listen", "127.0.0.1:0",
-                                 "--no-answer-rate", "0.3", "--seed", "5", "--duration", "120s"});
-    const std::string line = server->wait_for_line("listening on ");
-    const auto at = line.find("listening on ");
-    if (at == std::string::npos) return {};
-    const auto rest = line.substr(at + 13);
-    return rest.substr(0, rest.find(' '));
-}
-
 TEST(RandomDrops, ATargetThatDropsRequestsAtRandomIsOneFindingThatReplays) {
     std::unique_ptr<mbstorm::test::Target> server;
-    const std::string target = start_dropping_slave(server);
+    const std::string target =
+        mbstorm::test::start_reference_slave(server, {"--no-answer-rate", "0.3", "--seed", "5"});
     ASSERT_FALSE(target.empty());
     const std::string dir = mbstorm::test::temp_dir("random-drops");
     const auto run =
