@@ -1,4 +1,5 @@
 #include "load/engine.hpp"
+#include "load/foreign_protocol.hpp"
 #include "load/serial_load.hpp"
 
 #include <fmt/format.h>
@@ -120,6 +121,10 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         result.pending_at_end += w->pending_at_end;
         result.late_responses += w->late_responses;
         result.framing_errors += w->framing_errors;
+        result.unframed_bytes += w->unframed_bytes;
+        if (result.unframed_sample.empty())
+            result.unframed_sample.assign(w->unframed_sample.begin(),
+                                          w->unframed_sample.begin() + w->unframed_sample_size);
         result.crc_errors += w->crc_errors;
         result.bad_protocol_frames += w->bad_protocol_frames;
     }
@@ -632,6 +637,19 @@ void describe_run(const Plan& plan, const EngineOptions& options, const StageSch
     }
 }
 
+// Answers that could not be framed as Modbus/TCP: what they were, so that a target speaking
+// another protocol is not a mystery of 100 % framing errors and "received 0 B".
+void note_foreign_protocol(LoadResult& result) {
+    if (result.framing_errors == 0 || result.unframed_bytes == 0) return;
+    result.warnings.push_back(fmt::format(
+        "{} connection{} received {} that could not be read as Modbus/TCP (framing_error; not "
+        "counted as received): the target looks like {}",
+        result.framing_errors, result.framing_errors == 1 ? "" : "s",
+        result.unframed_bytes == 1 ? std::string("1 byte")
+                                   : fmt::format("{} bytes", result.unframed_bytes),
+        describe_foreign_bytes(result.unframed_sample)));
+}
+
 // What a serial run adds to the metadata: the line is the target, one request at a time.
 void describe_serial_run(const Plan& plan, const StageSchedule& schedule, const SerialRunner& line,
                          LoadResult& result) {
@@ -782,6 +800,7 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
                                               fmt::join(setup.verdict.write_operations, ", ")));
     }
+    note_foreign_protocol(result);
     return result;
 }
 

@@ -85,6 +85,10 @@ struct LoadResult {
     std::uint64_t late_responses = 0;  // answers that arrived after their transaction timed out
     std::uint64_t crc_errors = 0;      // RTU over TCP: answers whose CRC failed (connection reset)
     std::uint64_t framing_errors = 0;  // unrecoverable MBAP framing (connection was reset)
+    // What those connections received that could not be framed: bytes, and the first bytes of
+    // the first such receive (what the target speaks instead; see foreign_protocol.hpp).
+    std::uint64_t unframed_bytes = 0;
+    std::vector<std::uint8_t> unframed_sample;
     std::uint64_t bad_protocol_frames = 0;  // frames with protocol id != 0 (discarded)
     // The target went away during the run (no connection open for a while after one was) and
     // had not come back when it ended; each outage is also a note in run.metadata.notes.

@@ -565,6 +565,14 @@ void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
     }
 }
 
+void Worker::note_unframed(codec::Bytes input) noexcept {
+    unframed_bytes += input.size();
+    if (unframed_sample_size != 0) return;
+    unframed_sample_size =
+        static_cast<std::uint8_t>(std::min(input.size(), unframed_sample.size()));
+    std::copy_n(input.begin(), unframed_sample_size, unframed_sample.begin());
+}
+
 void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept {
     Connection& c = connections_[index];
     const net::UserData ud = net::decode_user_data(cqe.user_data);
@@ -629,6 +637,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
             // The stream cannot be resynchronised: count it and start a fresh connection. The
             // transactions it carried end as framing errors, not as a peer's close.
             ++framing_errors;
+            note_unframed(input);
             close_connection(index, now, stats::Outcome::FramingError);
             return;
         }

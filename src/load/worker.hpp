@@ -1,6 +1,7 @@
 // One engine thread: its ring, buffer ring, connections, generator, pacer and results.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -70,6 +71,11 @@ class Worker {
     std::uint64_t pending_at_end = 0;
     std::uint64_t late_responses = 0;
     std::uint64_t framing_errors = 0;
+    // Bytes of the receives whose stream could not be framed (what `received` leaves out), and
+    // the first such receive's first bytes: they say what the target speaks instead.
+    std::uint64_t unframed_bytes = 0;
+    std::array<std::uint8_t, 16> unframed_sample{};
+    std::uint8_t unframed_sample_size = 0;
     std::uint64_t crc_errors = 0;  // RTU over TCP: answers with a bad CRC (connection reset)
     std::uint64_t bad_protocol_frames = 0;
     std::uint64_t skipped_requests = 0;  // see stats::PipeliningSigns
@@ -102,6 +108,7 @@ class Worker {
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
     void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    void note_unframed(codec::Bytes input) noexcept;
     // An answer's frame: matched to its transaction, checked and recorded. on_answer is the
     // body, inlined into on_recv's frame loop (as a call, its prologue and epilogue were about
     // 18 instructions per answer); on_frame is the same for the other files (rtu_io.cpp).

@@ -1044,6 +1044,12 @@ bool Campaign::replays_alone(Finding& f) {
     const unsigned runs = random_drops_known_ && silence && !at_random ? 4 : 1;
     for (unsigned run = 0; run < runs; ++run) {
         if (!can_afford(1)) {
+            // A silence from a target known to drop requests at random is most likely one
+            // more drop: not kept unconfirmed.
+            if (runs > 1) {
+                ++result_.suspects_left;
+                return false;
+            }
             // Seen alone once: kept, but not called confirmed.
             f.confirmed = false;
             f.note += fmt::format(
