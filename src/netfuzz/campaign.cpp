@@ -1288,8 +1288,14 @@ void Campaign::arm_watch() {
     if (options_.connector->max_links() <= 1) return;
     watch_ =
         std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms, &result_.profile);
-    if (watch_->arm() && probe_target(*options_.connector, result_.profile, options_.timeout_ms) ==
-                             ProbeResult::Ok) {
+    const auto answered = [&] {
+        return probe_target(*options_.connector, result_.profile, options_.timeout_ms) ==
+               ProbeResult::Ok;
+    };
+    // Twice: a target that drops a request now and then must neither lose its sentinels nor be
+    // taken for one that serves one connection at a time over one unanswered probe.
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        if (!watch_->arm() || !answered()) continue;
         if (!options_.death_watch) {
             watch_.reset();
             return;
@@ -1300,8 +1306,7 @@ void Campaign::arm_watch() {
     }
     watch_.reset();
     // Unanswered beside idle connections, answered without them: one connection at a time.
-    if (probe_target(*options_.connector, result_.profile, options_.timeout_ms) != ProbeResult::Ok)
-        return;
+    if (!answered() || !answered()) return;
     result_.profile.one_connection = true;
     make_batch_runner();
 }
