@@ -72,6 +72,36 @@ std::string name_of(const ShardRun& s) {
     return fmt::format("{} (run {})", s.json_path, s.summary.metadata.run_id);
 }
 
+// Runs of one distributed test run at the same time; merged when they did not, the duration
+// spans them all and the throughput divides by time some of them were not running. Empty
+// when some instant had every run going and no stretch had none.
+std::string overlap_warning(const std::vector<ShardRun>& shards) {
+    struct Span {
+        double start, end;
+    };
+    std::vector<Span> spans;
+    for (const auto& s : shards)
+        spans.push_back({s.measure_start_epoch_s,
+                         s.measure_start_epoch_s +
+                             static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9});
+    std::sort(spans.begin(), spans.end(), [](Span a, Span b) { return a.start < b.start; });
+    double latest_start = spans.front().start, earliest_end = spans.front().end, idle = 0;
+    double covered_to = spans.front().end, last_end = spans.front().end;
+    for (const Span& sp : spans) {
+        latest_start = std::max(latest_start, sp.start);
+        earliest_end = std::min(earliest_end, sp.end);
+        idle += std::max(0.0, sp.start - covered_to);
+        covered_to = std::max(covered_to, sp.end);
+        last_end = std::max(last_end, sp.end);
+    }
+    if (latest_start < earliest_end && idle < 1e-3) return {};
+    return fmt::format(
+        "the runs did not all run at the same time: {:.1f} s from the first start to the last "
+        "end, {:.1f} s with every run going, {:.1f} s with none; the duration and throughput "
+        "count that whole span (start the runs of one test together: run --start-at)",
+        last_end - spans.front().start, std::max(0.0, earliest_end - latest_start), idle);
+}
+
 struct MergedInterval {
     stats::Histogram latency;
     std::uint64_t transactions = 0, errors = 0;
@@ -520,6 +550,7 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         if (back.start_offset_ns < m.measured_duration_ns)
             back.duration_ns = m.measured_duration_ns - back.start_offset_ns;
     }
+    if (std::string w = overlap_warning(shards); !w.empty()) r.warnings.push_back(std::move(w));
     m.notes.push_back(fmt::format(
         "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
         "timeline on wall-clock time from {}",

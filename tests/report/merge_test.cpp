@@ -315,6 +315,26 @@ TEST(Merge, StageTagsRoundTrip) {
     EXPECT_EQ(stage_of_hlog_tag(""), 0u);
 }
 
+// Two 2 s runs one after the other (issue #29: merged into "duration 4.0 s" and half the
+// throughput, silently).
+TEST(Merge, WarnsWhenTheRunsDidNotRunAtTheSameTime) {
+    std::mt19937_64 rng(11);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> v;
+    v.push_back(make_shard("first", 1000.0, 2, rng, all, all_read));
+    v.push_back(make_shard("second", 1002.5, 2, rng, all, all_read));
+    const MergeOutcome apart = merge_shards(v);
+    ASSERT_TRUE(apart.ok) << apart.error;
+    ASSERT_EQ(apart.warnings.size(), 1u);
+    EXPECT_EQ(apart.warnings[0],
+              "the runs did not all run at the same time: 4.5 s from the first start to the last "
+              "end, 0.0 s with every run going, 0.5 s with none; the duration and throughput "
+              "count that whole span (start the runs of one test together: run --start-at)");
+    // Started together: nothing to say.
+    v[1] = make_shard("second", 1000.0, 2, rng, all, all_read);
+    EXPECT_TRUE(merge_shards(v).warnings.empty());
+}
+
 TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {
     std::mt19937_64 rng(10);
     stats::Histogram all, all_read;
