@@ -643,11 +643,14 @@ bool Campaign::recover(const std::string& cause) {
     ++result_.restarts;
     if (!cause.empty()) ++restarts_by_cause_[cause];
     up_ = true;
-    rearm_watches();
+    // A restarted target holds none of the sentinels (those still open went to the dead
+    // process) and its initial state.
+    if (watch_) watch_->arm();
+    if (marker_) marker_->rearm();
     return true;
 }
 
-// A restarted (or merely settled) target holds none of the sentinels and its initial state.
+// A settled target may have closed sentinels or lost the marker while it hung.
 void Campaign::rearm_watches() {
     if (watch_ && !watch_->armed()) watch_->arm();
     if (marker_ && !marker_->armed()) marker_->rearm();
