@@ -792,6 +792,9 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
         // A case asking whether the target drops requests at random: its probe's silence
         // is one more such drop, not a whole-server hang.
         if (c.cls == MutationClass::Repeated && r == ProbeResult::NoAnswer) r = ProbeResult::Ok;
+        // Likewise after a flood that left accepted connections unserved: the probe is one
+        // more connection past the target's limit (it may not have seen the flood's close yet).
+        if (flood_silent_ > 0 && r == ProbeResult::NoAnswer) r = ProbeResult::Ok;
         if (r != ProbeResult::Ok) {
             out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
             j.candidate = fresh_probe_verdict(r);
