@@ -341,6 +341,7 @@ class Campaign {
     bool reproduces_every_time(const Case& c, const std::string& key);
     void record(const Case& c, Execution ex);
     void repair_fields(Finding& f);
+    void merge_stub_answer(Finding& f);
     bool replays_alone(Finding& f);
     bool replays_once_more(const Finding& f);
     void check_random_drops();
@@ -963,6 +964,7 @@ void Campaign::record(const Case& c, Execution ex) {
         }
     }
     repair_fields(f);
+    merge_stub_answer(f);
     if (!replays_alone(f)) return;
     // The identity is what the minimised reproducer violates: it may turn out to be a root
     // cause already known under another guise (a codec detail that fell away).
@@ -975,33 +977,17 @@ void Campaign::record(const Case& c, Execution ex) {
     keep(std::move(f));
 }
 
-// Field-level minimisation (field_repair.hpp): "02 where 03 is owed" from a request also
-// outside the map may be a target that never makes the 03 check; with the address inside
-// the map it shows which. Whatever deviation the repaired request still draws is the finding.
 // One request frame (any framing) with its addresses moved into the map; false when the
 // step is not one such frame of function `fc`, or nothing moved.
 bool Campaign::move_into_map(Step& s, int fc) const {
     const codec::Framing framing = result_.profile.framing;
-    if (s.op != Op::Send) return false;
-    std::vector<std::uint8_t> mbap;
-    if (framing == codec::Framing::Mbap) {
-        if (s.bytes.size() <= lim::kMbapHeader ||
-            codec::announced_adu_size(s.bytes.data()) != s.bytes.size())
-            return false;
-        mbap = s.bytes;
-    } else {
-        WireFrame wf;
-        if (cut_frame(s.bytes, framing, true, 0, wf) != WireCut::Frame ||
-            wf.size != s.bytes.size() || !wf.discard.empty())
-            return false;
-        mbap = std::move(wf.mbap);
-    }
-    if (mbap.size() <= lim::kMbapHeader || mbap[lim::kMbapHeader] != fc) return false;
+    std::optional<std::vector<std::uint8_t>> mbap = step_request(s, fc, framing);
+    if (!mbap) return false;
     const auto pdu =
-        with_addresses_in_map(codec::Bytes(mbap).subspan(lim::kMbapHeader), result_.model);
+        with_addresses_in_map(codec::Bytes(*mbap).subspan(lim::kMbapHeader), result_.model);
     if (!pdu) return false;
-    std::copy(pdu->begin(), pdu->end(), mbap.begin() + lim::kMbapHeader);
-    s.bytes = framing == codec::Framing::Mbap ? std::move(mbap) : reframe(mbap, framing);
+    std::copy(pdu->begin(), pdu->end(), mbap->begin() + lim::kMbapHeader);
+    set_step_request(s, *mbap, framing);
     return true;
 }
 
@@ -1025,6 +1011,43 @@ void Campaign::repair_fields(Finding& f) {
         fmt::format("{}field-level: with its address inside the map, {} became {}",
                     f.minimize_note.empty() ? "" : "; ", f.verdict.rule, e.verdict.rule);
     f.fuzz_case = std::move(repaired);
+    f.verdict = std::move(e.verdict);
+    f.trace = std::move(e.trace);
+    f.minimized = true;
+}
+
+// An invalid request answered normally, where a valid request of the same function code in
+// its place gets the very same bytes back and that answer is itself wrong: the handler never
+// reads the request (pymodbus 3.0's FC 14 stub answers everything with an empty record list).
+// One fix removes both, so it is one finding: the valid request's.
+void Campaign::merge_stub_answer(Finding& f) {
+    if (f.verdict.oracle != Oracle::SpecDeviation || f.verdict.culprit_fc < 0 ||
+        f.verdict.rule.rfind(kInvalidAnsweredNormallyRule, 0) != 0 || !can_afford(1))
+        return;
+    const auto fc = static_cast<std::uint8_t>(f.verdict.culprit_fc);
+    const auto valid = valid_request_in_map(fc, result_.model);
+    const codec::Framing framing = result_.profile.framing;
+    Case plain = f.fuzz_case;
+    std::vector<Step*> sends;
+    for (Step& s : plain.steps)
+        if (s.op == Op::Send) sends.push_back(&s);
+    const auto mbap = sends.size() == 1 ? step_request(*sends[0], fc, framing) : std::nullopt;
+    if (!valid || !mbap) return;
+    set_step_request(
+        *sends[0], mbap_view((*mbap)[lim::kMbapHeader - 1], *valid, codec::load_be16(mbap->data())),
+        framing);
+    ++result_.isolated_runs;
+    Execution e = run_alone(plain);
+    if ((e.down_before || e.target_down) && !recover("")) return;
+    const bool wrong =
+        e.verdict.oracle == Oracle::SpecDeviation || e.verdict.oracle == Oracle::MalformedResponse;
+    const std::vector<std::uint8_t> answer = answered_bytes(f.trace);
+    if (!wrong || answer.empty() || answered_bytes(e.trace) != answer) return;
+    f.minimize_note += fmt::format(
+        "{}field-level: a valid request got the same answer, so the handler does not read the "
+        "request; {} became {}",
+        f.minimize_note.empty() ? "" : "; ", f.verdict.rule, e.verdict.rule);
+    f.fuzz_case = std::move(plain);
     f.verdict = std::move(e.verdict);
     f.trace = std::move(e.trace);
     f.minimized = true;

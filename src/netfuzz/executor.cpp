@@ -24,7 +24,6 @@ namespace mbstorm::netfuzz {
 namespace {
 
 namespace lim = codec::limits;
-constexpr std::uint8_t kFreshConn = 255;
 // A concurrent connection answered later than this was stalled by the case (loopback answers
 // take well under a millisecond; a loaded machine stays far below this).
 constexpr std::int64_t kStallMs = 250;

@@ -31,9 +31,12 @@ enum class TraceKind : std::uint8_t {
 std::string_view trace_kind_name(TraceKind k) noexcept;
 bool trace_kind_from_name(std::string_view name, TraceKind& out) noexcept;
 
+// The connection number trace events of the fresh liveness probe carry.
+inline constexpr std::uint8_t kFreshConn = 255;
+
 struct TraceEvent {
     std::int64_t t_us = 0;  // since the case started
-    std::uint8_t conn = 0;  // 255: the fresh liveness-probe connection
+    std::uint8_t conn = 0;  // kFreshConn: the fresh liveness-probe connection
     TraceKind kind = TraceKind::Send;
     std::vector<std::uint8_t> bytes;
     std::string note;

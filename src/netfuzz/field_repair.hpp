@@ -10,7 +10,10 @@
 #include <vector>
 
 #include "codec/bytes.hpp"
+#include "codec/framing.hpp"
+#include "netfuzz/case.hpp"
 #include "netfuzz/device_model.hpp"
+#include "netfuzz/executor.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -20,5 +23,21 @@ namespace mbstorm::netfuzz {
 // knows no range of that table, or every address is in the map already.
 std::optional<std::vector<std::uint8_t>> with_addresses_in_map(codec::Bytes pdu,
                                                                const DeviceModel& model);
+
+// A request of function `fc` the codec owes no exception and whose every address lies in one
+// range of the model's map (the model's first range when it knows the table); nothing when
+// no such request can be made (an unknown code, a table the model holds nothing of).
+std::optional<std::vector<std::uint8_t>> valid_request_in_map(std::uint8_t fc,
+                                                              const DeviceModel& model);
+
+// The one request frame a send step holds (any framing), as its MBAP view; nothing when the
+// step is not exactly one whole frame of function `fc` that a reader would take.
+std::optional<std::vector<std::uint8_t>> step_request(const Step& s, int fc,
+                                                      codec::Framing framing);
+// The step's frame replaced with `mbap` in the step's framing.
+void set_step_request(Step& s, const std::vector<std::uint8_t>& mbap, codec::Framing framing);
+
+// Every byte the target sent on the case's own connections (not the fresh probe's), in order.
+std::vector<std::uint8_t> answered_bytes(const std::vector<TraceEvent>& trace);
 
 }  // namespace mbstorm::netfuzz

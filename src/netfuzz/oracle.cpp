@@ -350,7 +350,7 @@ Verdict judge_normal_answer(const Answer& a) {
                     // 0F's quantity showed as two findings, one per field).
                     a.unknown_sub_function
                         ? std::string(kSubFunctionNot01Rule)
-                        : fmt::format("invalid-request-answered-normally(owes-{:02X})/fc{:02X}",
+                        : fmt::format("{}(owes-{:02X})/fc{:02X}", kInvalidAnsweredNormallyRule,
                                       static_cast<std::uint8_t>(a.owed), a.fc),
                     rq,
                     fmt::format("{}: invalid request answered normally ({} owed: {})",

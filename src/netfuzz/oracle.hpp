@@ -153,6 +153,9 @@ inline constexpr const char* kClosesOnPartialFrameRule = "closes-on-partial-fram
 inline constexpr const char* kClosesOnInvalidRequestRule =
     "close-with-request-pending/invalid-request";
 
+// A request the codec owes an exception answered normally ("...(owes-03)/fc0F").
+inline constexpr const char* kInvalidAnsweredNormallyRule = "invalid-request-answered-normally";
+
 // A verdict as what is known of the target explains it (TargetProfile::refuses_length_mismatch).
 Verdict understood_by(const TargetProfile& profile, Verdict v);
 

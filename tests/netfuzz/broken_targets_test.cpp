@@ -120,6 +120,23 @@ TEST(RefusingTarget, ClosingOnARequestOfTheWrongLengthIsNotALostStream) {
     EXPECT_EQ(refusals, 1) << fuzzed.run.output;
 }
 
+// A handler that never reads its request (FC 14 answers everything with the same empty record
+// list, as pymodbus 3.0's stub does): invalid requests answered normally (two checks it skips,
+// 02 and 03 owed) and the valid request's undecodable answer are one defect, so one finding,
+// the valid request's (field-level: a valid request in its place got the very same bytes).
+TEST(StubTarget, AHandlerThatDoesNotReadItsRequestIsOneFinding) {
+    const FuzzedServer fuzzed("broken_server_stub", "--cases 20000 -q");
+    ASSERT_FALSE(fuzzed.target.empty()) << "broken_server_stub did not start";
+    ASSERT_EQ(fuzzed.run.exit_code, 1) << fuzzed.run.output;
+    ASSERT_FALSE(fuzzed.summary.is_discarded()) << fuzzed.run.output;
+    std::vector<std::string> file_record;
+    for (const auto& f : fuzzed.summary.at("findings"))
+        if (f.at("function").is_number() && f.at("function").get<int>() == 0x14)
+            file_record.push_back(f.at("root_cause").get<std::string>());
+    ASSERT_EQ(file_record.size(), 1u) << fuzzed.run.output;
+    EXPECT_EQ(file_record[0].rfind("malformed-response:", 0), 0u) << fuzzed.run.output;
+}
+
 // A target that answers 06 (busy) to most requests: the summary says most cases were wasted
 // (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings". 1000
 // cases (2 s) give about 1,900 pipelined answers, three quarters of them busy.

@@ -14,6 +14,7 @@
 #include "netfuzz/executor.hpp"
 #include "netfuzz/field_repair.hpp"
 #include "netfuzz/generator.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace {
 
@@ -318,6 +319,48 @@ TEST(FieldRepair, MovesEveryAddressOutsideTheMapToItsTableAndNothingElse) {
     EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x08, 0x00, 0x00}, model));
     EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x04, 0x20, 0x00, 0, 1}, model));
     EXPECT_FALSE(with_addresses_in_map(std::vector<std::uint8_t>{0x05, 0x20}, model));
+}
+
+// The valid request a stub's answer is compared with: valid for the codec, inside one range
+// of the map for codes with a table, any valid one for codes without.
+TEST(FieldRepair, AValidRequestInTheMapOfEachCode) {
+    DeviceModel model;
+    model.table(Table::Coils).ranges = ranges({{200, 263}});
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1039}, {1060, 1099}});
+    for (const std::uint8_t fc : {0x01, 0x03, 0x05, 0x06, 0x0F, 0x10, 0x16, 0x17, 0x14, 0x08}) {
+        const auto pdu = valid_request_in_map(fc, model);
+        ASSERT_TRUE(pdu) << int(fc);
+        mbstorm::codec::Request q;
+        ASSERT_TRUE(mbstorm::codec::decode_request(*pdu, q).ok()) << int(fc);
+        const auto table = mbstorm::codec::function_table(fc);
+        if (!table) continue;
+        const AddressRange* r = model.table(*table).range_of(q.address);
+        ASSERT_NE(r, nullptr) << int(fc);
+        EXPECT_LE(q.address + std::max<int>(q.quantity, 1) - 1, r->last) << int(fc);
+    }
+    // No range of the table known: no request of it is inside the map.
+    EXPECT_FALSE(valid_request_in_map(0x04, model));
+    EXPECT_FALSE(valid_request_in_map(0x99, model));
+}
+
+// A step's one request read as MBAP and written back in the step's framing (RTU: the CRC
+// made again); a step of two frames, or of another code, is not one request.
+TEST(FieldRepair, AStepsRequestIsReadAndWrittenInItsFraming) {
+    using mbstorm::codec::Framing;
+    const std::vector<std::uint8_t> mbap = {0x12, 0x34, 0, 0, 0, 6, 0x11, 0x03, 0, 0x6B, 0, 3};
+    Step rtu{Op::Send, 0, 0, 0, reframe(mbap, Framing::Rtu)};
+    const auto read = step_request(rtu, 0x03, Framing::Rtu);
+    ASSERT_TRUE(read);
+    EXPECT_TRUE(std::equal(read->begin() + 6, read->end(), mbap.begin() + 6));
+    EXPECT_FALSE(step_request(rtu, 0x04, Framing::Rtu));
+    std::vector<std::uint8_t> changed = *read;
+    changed.back() = 4;
+    set_step_request(rtu, changed, Framing::Rtu);
+    EXPECT_EQ(rtu.bytes, reframe(changed, Framing::Rtu));
+    Step two{Op::Send, 0, 0, 0, mbap};
+    two.bytes.insert(two.bytes.end(), mbap.begin(), mbap.end());
+    EXPECT_FALSE(step_request(two, 0x03, Framing::Mbap));
+    EXPECT_TRUE(step_request(Step{Op::Send, 0, 0, 0, mbap}, 0x03, Framing::Mbap));
 }
 
 }  // namespace
