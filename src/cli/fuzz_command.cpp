@@ -3,10 +3,13 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <string>
+#include <thread>
 #include <utility>
 
 #include "cli/commands.hpp"
@@ -14,6 +17,7 @@
 #include "cli/fuzz_target.hpp"
 #include "cli/transport_options.hpp"
 #include "codec/function_code.hpp"
+#include "netfuzz/baseline.hpp"
 #include "netfuzz/campaign.hpp"
 #include "netfuzz/coverage_report.hpp"
 #include "netfuzz/device_model.hpp"
@@ -43,6 +47,8 @@ struct FuzzOptions {
     unsigned lanes = 4;
     unsigned isolated_per_mille = 10;
     std::string out_dir = "mbstorm-findings";
+    std::string baseline;                  // --baseline: an earlier run's --json or --sarif file
+    std::uint64_t wait_for_target_ns = 0;  // --wait-for-target: retry the first connect
     std::string restart_cmd;
     std::uint64_t restart_wait_ns = 15'000'000'000;
     std::string json, junit, sarif, html;
@@ -161,6 +167,24 @@ bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c,
     return true;
 }
 
+// --wait-for-target: a target started just before mbstorm (a CI service, a container) may not
+// accept connections yet. Retries the connect every 100 ms; false when the time ran out.
+bool wait_for_target(netfuzz::Connector& target, std::uint64_t wait_ns, int& error) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::nanoseconds(wait_ns);
+    fmt::print(stderr, "mbstorm fuzz: waiting up to {:.1f} s for {} to accept a connection\n",
+               static_cast<double>(wait_ns) / 1e9, target.describe());
+    for (;;) {
+        if (target.open(1000, error)) return true;
+        if (g_stop.load() || std::chrono::steady_clock::now() >= until) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+}
+
+// Findings whose root cause --baseline lists are known: reported, not failing the run.
+int fuzz_exit_code(const netfuzz::CampaignResult& r) {
+    return r.new_findings() == 0 && !r.target_lost ? kExitOk : kExitFailed;
+}
+
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
@@ -184,6 +208,9 @@ int run_fuzz(const FuzzOptions& o) {
         c.dict_tokens = std::move(d.tokens);
     }
     c.max_connections = o.max_connections;
+    netfuzz::Baseline baseline;
+    if (!o.baseline.empty() && !netfuzz::load_baseline(o.baseline, baseline, error))
+        return usage_error("fuzz", error);
     // A summary that cannot be written must not cost a whole campaign first.
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
                                      {"--junit", o.junit},
@@ -224,6 +251,15 @@ int run_fuzz(const FuzzOptions& o) {
     std::signal(SIGINT, on_fuzz_stop_signal);
     std::signal(SIGTERM, on_fuzz_stop_signal);
 
+    if (int err = 0;
+        o.wait_for_target_ns && !wait_for_target(*c.connector, o.wait_for_target_ns, err)) {
+        fmt::print(stderr,
+                   "mbstorm fuzz: {} did not accept a connection within {:.1f} s "
+                   "(--wait-for-target): {}\n",
+                   c.target_text, static_cast<double>(o.wait_for_target_ns) / 1e9,
+                   err ? std::strerror(err) : "stopped");
+        return kExitUsage;
+    }
     const bool quiet = o.quiet;
     auto progress = [quiet](const netfuzz::Progress& p) {
         if (quiet) return;
@@ -248,6 +284,7 @@ int run_fuzz(const FuzzOptions& o) {
                    connector_failure(*c.connector));
         return kExitUsage;
     }
+    if (!o.baseline.empty()) netfuzz::apply_baseline(baseline, r);
     const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};
     // The summary is the result: stdout, unless a report file takes stdout.
     fmt::print(on_stdout ? stderr : stdout, "{}", netfuzz::format_fuzz_summary(r, info));
@@ -264,7 +301,7 @@ int run_fuzz(const FuzzOptions& o) {
                    exit_code_for_signal(sig));
         return exit_code_for_signal(sig);
     }
-    return r.findings.empty() && !r.target_lost ? kExitOk : kExitFailed;
+    return fuzz_exit_code(r);
 }
 
 }  // namespace
@@ -326,6 +363,13 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "cases already there run first (resume)");
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
+    cmd->add_option("--baseline", o->baseline,
+                    "an earlier run's --json or --sarif file: findings with a root cause it "
+                    "lists are reported as known and do not fail the run (exit 0 when nothing "
+                    "is new)");
+    add_duration_option(cmd, "--wait-for-target", o->wait_for_target_ns,
+                        "retry the first connect for up to this long (a target started just "
+                        "before mbstorm, e.g. a CI service)");
     cmd->add_option("--json", o->json, "write a JSON summary to this file ('-': stdout)");
     cmd->add_option("--junit", o->junit, "write JUnit XML to this file ('-': stdout)");
     cmd->add_option("--sarif", o->sarif, "write SARIF 2.1.0 to this file ('-': stdout)");

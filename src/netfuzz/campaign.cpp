@@ -29,6 +29,7 @@
 #include "netfuzz/capacity.hpp"
 #include "netfuzz/corpus.hpp"
 #include "netfuzz/cross_transport.hpp"
+#include "netfuzz/culprit.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/field_repair.hpp"
@@ -181,82 +182,6 @@ std::string variant_of(const Verdict& v, const Case& c) {
     s += class_name(c.cls);
     if (v.culprit_unit >= 0) s += fmt::format(" unit {}", v.culprit_unit);
     return s;
-}
-
-// The culprit part of a rule that names one ("no-answer/fc07-valid" -> "fc07-valid").
-std::string culprit_of(const std::string& rule) {
-    const auto slash = rule.find('/');
-    return slash == std::string::npos ? std::string() : rule.substr(slash + 1);
-}
-
-// The frames a case sends on its first connection, put back together: for a transport case
-// (split, drip, ...) the requests it delivers in the end. False when the bytes are not a clean
-// run of complete frames or the case uses other steps.
-bool reassemble(const Case& c, Case& plain, codec::Framing framing) {
-    std::vector<std::uint8_t> bytes;
-    for (const Step& s : c.steps) {
-        if (s.op == Op::Send && s.conn == 0)
-            bytes.insert(bytes.end(), s.bytes.begin(), s.bytes.end());
-        else if (s.op != Op::SideProbe && (s.op != Op::Await || s.conn != 0))
-            return false;
-    }
-    std::size_t off = 0;
-    const auto views = request_views(bytes, framing, off);
-    if (off != bytes.size() || views.empty() || views[0].size() <= lim::kMbapHeader) return false;
-    plain = Case{};
-    plain.cls = views.size() > 1 ? MutationClass::Coalesced : MutationClass::ValidLimits;
-    plain.function = views[0][lim::kMbapHeader];
-    plain.number = c.number;
-    plain.pipelinable = true;
-    plain.steps.push_back(Step{Op::Send, 0, 0, 0, std::move(bytes)});
-    return true;
-}
-
-// Calls `visit` with each whole frame the case sends, described, until it returns false.
-template <class Visit>
-void for_each_request(const Case& c, const TargetProfile& profile, Visit&& visit) {
-    for (const Step& s : c.steps) {
-        if (s.op != Op::Send) continue;
-        std::size_t consumed = 0;
-        for (const Pdu& view : request_views(s.bytes, profile.framing, consumed)) {
-            RequestInfo info;
-            describe_request(view, profile, info);
-            if (!visit(info)) return;
-        }
-    }
-}
-
-// What a case's culprits would be, each with whether its request is valid: "fc10/valid",
-// "fc10/invalid". A crash on a handler's invalid requests says nothing of its valid ones (and
-// the other way round), so only requests of the same kind are skipped once it is known.
-std::vector<std::string> signatures(const Case& c, const TargetProfile& profile) {
-    std::vector<std::string> out;
-    if (is_transport_class(c.cls)) out.push_back(culprit_text(c.cls, nullptr));
-    Case plain;
-    const Case& framed =
-        is_transport_class(c.cls) && reassemble(c, plain, profile.framing) ? plain : c;
-    if (&framed == &c && is_transport_class(c.cls)) return out;
-    for_each_request(framed, profile, [&](const RequestInfo& info) {
-        std::string s = culprit_text(framed.cls, &info);
-        if (s.rfind("fc", 0) == 0) s += fmt::format("/{}", request_kind(info));
-        out.push_back(std::move(s));
-        return true;
-    });
-    if (out.empty()) out.push_back(culprit_text(c.cls, nullptr));
-    return out;
-}
-
-// Whether any frame the case delivers has a PDU of the wrong length for its function code.
-bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
-    Case plain;
-    const Case& framed =
-        is_transport_class(c.cls) && reassemble(c, plain, profile.framing) ? plain : c;
-    bool found = false;
-    for_each_request(framed, profile, [&](const RequestInfo& info) {
-        found = pdu_length_mismatch(info);
-        return !found;
-    });
-    return found;
 }
 
 bool whole_server_hang(const Verdict& v) {
@@ -1960,6 +1885,12 @@ bool wait_for_target(Connector& target, const TargetProfile& profile,
     RestartCommand command;
     return wait_for_target_with(command, target, profile, restart_cmd, wait_ms, timeout_ms,
                                 deadline_ns);
+}
+
+std::size_t CampaignResult::new_findings() const noexcept {
+    std::size_t n = 0;
+    for (const Finding& f : findings) n += f.baseline != BaselineState::Known;
+    return n;
 }
 
 CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on_progress,

@@ -93,6 +93,11 @@ struct CampaignResult {
     // time (profile.one_connection).
     std::uint64_t not_sent_one_connection = 0;
     std::vector<Finding> findings;
+    // --baseline: its file, and its root causes no finding of this run had.
+    std::string baseline_file;
+    std::vector<std::string> baseline_absent;
+    // Findings that fail the run: all of them, or those --baseline did not know.
+    std::size_t new_findings() const noexcept;
     std::uint64_t cases = 0;
     std::uint64_t batched_cases = 0, isolated_runs = 0;
     std::uint64_t duplicates = 0;     // cases that showed an already known root cause (hits)

@@ -23,6 +23,9 @@ std::string rule_stem(const std::string& rule);
 // The same fault: the same oracle and rule stem (what minimisation and replay ask for).
 bool same_fault(const Verdict& a, const Verdict& b);
 
+// Whether --baseline knew a finding's root cause (None: no baseline given).
+enum class BaselineState : std::uint8_t { None, New, Known };
+
 struct Finding {
     std::size_t id = 0;
     Verdict verdict;
@@ -51,6 +54,7 @@ struct Finding {
     // Where its run checked reads after writes: replay checks the same range.
     StateRange state;
     std::string folder;  // where it was saved ("" if not saved)
+    BaselineState baseline = BaselineState::None;
 
     Oracle oracle() const noexcept { return verdict.oracle; }
     // Root-cause key: "crash:target-down/fc0F-invalid".

@@ -40,6 +40,18 @@ json coverage_json(const CampaignResult& r) {
             {"edges_over_time", over_time}};
 }
 
+json baseline_name(BaselineState b) {
+    switch (b) {
+        case BaselineState::None:
+            return nullptr;
+        case BaselineState::New:
+            return "new";
+        case BaselineState::Known:
+            return "known";
+    }
+    return nullptr;
+}
+
 }  // namespace
 
 std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
@@ -63,6 +75,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
                             {"found_after_s", f.found_after_s},
                             {"minimized", f.minimized},
                             {"confirmed", f.confirmed},
+                            {"baseline", baseline_name(f.baseline)},
                             {"note", f.note}});
     }
     json classes = json::object();
@@ -112,6 +125,11 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
                                              : nlohmann::json()},
         {"rationed", r.rationed},
         {"coverage", coverage_json(r)},
+        {"baseline", r.baseline_file.empty() ? json(nullptr)
+                                             : json{{"file", r.baseline_file},
+                                                    {"new", r.new_findings()},
+                                                    {"known", r.findings.size() - r.new_findings()},
+                                                    {"absent", r.baseline_absent}}},
         {"findings", findings}};
     return j.dump(2) + "\n";
 }
@@ -122,7 +140,8 @@ std::string format_fuzz_junit(const CampaignResult& r, const RunInfo& info) {
     for (std::size_t i = 0; i < r.cases_by_class.size(); ++i)
         if (r.cases_by_class[i]) by_class[std::string(class_name(static_cast<MutationClass>(i)))];
     for (const Finding& f : r.findings)
-        by_class[std::string(class_name(f.fuzz_case.cls))].push_back(&f);
+        if (f.baseline != BaselineState::Known)
+            by_class[std::string(class_name(f.fuzz_case.cls))].push_back(&f);
     std::size_t failures = 0;
     for (auto& [k, v] : by_class) failures += v.empty() ? 0 : 1;
     std::string x = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
@@ -179,10 +198,14 @@ std::string format_fuzz_sarif(const CampaignResult& r, const RunInfo& info) {
               {"class", class_name(f.fuzz_case.cls)},
               {"hits", f.hits},
               {"confirmed", f.confirmed}}}};
+        if (f.baseline != BaselineState::None)
+            result["baselineState"] = f.baseline == BaselineState::Known ? "unchanged" : "new";
         if (!f.folder.empty())
+            // GitHub code scanning shows a result only with a region (startLine at least).
             result["locations"] =
                 json::array({{{"physicalLocation",
-                               {{"artifactLocation", {{"uri", f.folder + "/finding.json"}}}}}}});
+                               {{"artifactLocation", {{"uri", f.folder + "/finding.json"}}},
+                                {"region", {{"startLine", 1}}}}}}});
         results.push_back(std::move(result));
     }
     const json j = {
@@ -275,6 +298,12 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
             "minimised\n",
             r.suspects_left, r.findings_not_minimized);
     s += fmt::format("  stopped: {}\n", r.stop_reason);
+    if (!r.baseline_file.empty())
+        s += fmt::format(
+            "  baseline {}: {} new, {} known (not failing the run), {} of it not seen "
+            "this run\n",
+            r.baseline_file, r.new_findings(), r.findings.size() - r.new_findings(),
+            r.baseline_absent.size());
     if (r.findings.empty()) {
         s += "  no findings\n";
         return s;
@@ -286,8 +315,10 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
                      [](const Finding* a, const Finding* b) { return a->oracle() < b->oracle(); });
     s += fmt::format("  {} root cause(s):\n", r.findings.size());
     for (const Finding* f : ranked) {
-        s += fmt::format("  #{} {:<18} {}\n      rule {}; {} hit(s)", f->id,
-                         oracle_name(f->oracle()), f->verdict.summary, f->verdict.rule, f->hits);
+        s += fmt::format("  #{} {:<18} {}{}\n      rule {}; {} hit(s)", f->id,
+                         oracle_name(f->oracle()), f->verdict.summary,
+                         f->baseline == BaselineState::Known ? " (known: in the baseline)" : "",
+                         f->verdict.rule, f->hits);
         std::string variants;
         std::size_t shown = 0;
         for (const auto& [v, n] : f->variants) {

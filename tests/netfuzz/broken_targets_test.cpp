@@ -137,6 +137,60 @@ TEST(StubTarget, AHandlerThatDoesNotReadItsRequestIsOneFinding) {
     EXPECT_EQ(file_record[0].rfind("malformed-response:", 0), 0u) << fuzzed.run.output;
 }
 
+// --baseline: an earlier run's findings are known. A run that finds only those exits 0 and
+// says they are known (console, JSON, SARIF baselineState); one whose finding the baseline
+// does not list fails as before. Its --sarif file is a baseline too; a file that is neither is
+// a usage error before anything is sent.
+TEST(Baseline, KnownFindingsDoNotFailTheRunNewOnesDo) {
+    const FuzzedServer first("broken_server_exception", "--cases 20000 -q");
+    ASSERT_FALSE(first.target.empty());
+    ASSERT_EQ(first.run.exit_code, 1) << first.run.output;
+    ASSERT_FALSE(first.summary.at("findings").empty());
+    const std::string dir = mbstorm::test::temp_dir("baseline");
+    const std::string known = dir + "/known.json", other = dir + "/other.json";
+    std::ofstream(known) << first.summary.dump();
+    nlohmann::json changed = first.summary;
+    for (auto& f : changed.at("findings")) f["root_cause"] = "crash:target-down/fc42";
+    std::ofstream(other) << changed.dump();
+
+    const FuzzedServer again("broken_server_exception",
+                             "--cases 20000 --baseline " + known + " --sarif " + dir + "/s.json");
+    EXPECT_EQ(again.run.exit_code, 0) << again.run.output;
+    EXPECT_NE(again.run.output.find("(known: in the baseline)"), std::string::npos);
+    EXPECT_EQ(again.summary.at("baseline").at("new").get<int>(), 0) << again.summary.dump(2);
+    for (const auto& f : again.summary.at("findings"))
+        EXPECT_EQ(f.at("baseline").get<std::string>(), "known");
+    std::ifstream sarif_in(dir + "/s.json");
+    const auto sarif = nlohmann::json::parse(sarif_in, nullptr, false);
+    ASSERT_FALSE(sarif.is_discarded());
+    for (const auto& res : sarif.at("runs").at(0).at("results")) {
+        EXPECT_EQ(res.at("baselineState").get<std::string>(), "unchanged");
+        // What GitHub code scanning needs to show a result: a file and a line.
+        const auto& where = res.at("locations").at(0).at("physicalLocation");
+        EXPECT_FALSE(where.at("artifactLocation").at("uri").get<std::string>().empty());
+        EXPECT_EQ(where.at("region").at("startLine").get<int>(), 1);
+    }
+
+    const FuzzedServer by_sarif("broken_server_exception",
+                                "--cases 20000 -q --baseline " + dir + "/s.json");
+    EXPECT_EQ(by_sarif.run.exit_code, 0) << by_sarif.run.output;
+
+    const FuzzedServer unknown("broken_server_exception", "--cases 20000 -q --baseline " + other);
+    EXPECT_EQ(unknown.run.exit_code, 1) << unknown.run.output;
+    EXPECT_GT(unknown.summary.at("baseline").at("new").get<int>(), 0);
+    EXPECT_EQ(unknown.summary.at("baseline").at("absent"),
+              nlohmann::json::array({"crash:target-down/fc42"}));
+
+    std::ofstream(dir + "/bad.json") << "{\"findings\": [{\"root_cause\": 7}]}";
+    const auto bad =
+        run_mbstorm("fuzz --target 127.0.0.1:1 --cases 10 --baseline " + dir + "/bad.json");
+    EXPECT_EQ(bad.exit_code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("bad.json: a root cause is not a non-empty string"),
+              std::string::npos)
+        << bad.output;
+    std::filesystem::remove_all(dir);
+}
+
 // A target that answers 06 (busy) to most requests: the summary says most cases were wasted
 // (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings". 1000
 // cases (2 s) give about 1,900 pipelined answers, three quarters of them busy.
