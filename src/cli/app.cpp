@@ -24,7 +24,10 @@ const CLI::App* find_subcommand(const CLI::App& app, std::string_view name) {
 // The one of `names` that `typed` is a near miss of, or "". Options compare without their
 // dashes: "--conections" is one edit from "--connections" in a word of ten letters, not twelve.
 std::string near_miss(std::string_view typed, const std::vector<std::string>& names) {
-    auto bare = [](std::string_view name) { return name.substr(name.find_first_not_of('-')); };
+    auto bare = [](std::string_view name) {
+        const std::size_t letters = name.find_first_not_of('-');
+        return letters == std::string_view::npos ? std::string_view() : name.substr(letters);
+    };
     std::vector<std::string_view> bare_names;
     for (const std::string& name : names) bare_names.push_back(bare(name));
     const std::string_view closest = util::closest_name(bare(typed), bare_names);

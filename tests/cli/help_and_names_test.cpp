@@ -58,6 +58,8 @@ TEST(CliNames, UnknownOptionFarFromAnyPointsToTheHelp) {
     const auto r = run_mbstorm("run -x 4");
     EXPECT_EQ(r.exit_code, kExitUsage);
     EXPECT_EQ(r.output, "mbstorm run: unknown option -x (see mbstorm run --help)\n");
+    EXPECT_EQ(run_mbstorm("run ---").output,
+              "mbstorm run: unknown option --- (see mbstorm run --help)\n");
     EXPECT_THAT(run_mbstorm("decode --frobnicate 01").output,
                 HasSubstr("mbstorm decode: unknown option --frobnicate (see mbstorm decode "
                           "--help)"));
