@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "cli/commands.hpp"
@@ -50,6 +51,21 @@ std::vector<std::string> visible_option_names(const CLI::App& command) {
     return names;
 }
 
+// The same permission under two names, as it allows different things: writes (run, write) or
+// any traffic at all (fuzz, replay) to a target outside loopback. Each is the other's near miss.
+constexpr std::pair<std::string_view, std::string_view> kCounterparts[] = {
+    {"--allow-writes", "--allow-remote"},
+    {"--allow-remote", "--allow-writes"},
+};
+
+// The near miss of the unknown option `name` among `command`'s options, or "".
+std::string option_near_miss(const CLI::App& command, const std::string& name) {
+    for (const auto& [typed, counterpart] : kCounterparts)
+        if (name == typed && command.get_option_no_throw(std::string(counterpart)) != nullptr)
+            return std::string(counterpart);
+    return near_miss(name, visible_option_names(command));
+}
+
 // The option that `word` names ("--depth", "--depth=4", "-c", "-c4"), or "" when `word` is a
 // value (a plain word, a negative number, "-").
 std::string option_name_in(std::string_view word) {
@@ -68,7 +84,7 @@ std::string unknown_option(const CLI::App& command, const std::vector<std::strin
         if (word == "--") break;  // what follows is values only
         const std::string name = option_name_in(word);
         if (name.empty() || command.get_option_no_throw(name) != nullptr) continue;
-        const std::string hint = near_miss(name, visible_option_names(command));
+        const std::string hint = option_near_miss(command, name);
         return hint.empty() ? fmt::format("unknown option {} (see mbstorm {} --help)", name,
                                           command.get_name())
                             : fmt::format("unknown option {}; did you mean {}?", name, hint);
