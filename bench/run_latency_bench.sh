@@ -67,7 +67,7 @@ run_client() {
   local p=$1; shift
   rm -f "$tmp/run.json"
   timeout $(( ${secs%.*} + 60 )) taskset -c 1 "$mbstorm" run --target "127.0.0.1:$p" --threads 1 \
-    -c "$conns" --fc 3 --count 10 -d "${secs}s" --warmup "$warmup" -q --json "$tmp/run.json" "$@" \
+    -c "$conns" --fc 3 --quantity 10 -d "${secs}s" --warmup "$warmup" -q --json "$tmp/run.json" "$@" \
     >/dev/null 2>&1
   [ -s "$tmp/run.json" ] || return 0
   /usr/bin/python3 - "$tmp/run.json" <<'EOF'

@@ -64,9 +64,9 @@ PY
 
 echo "load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 serve
-measure "plain TCP 16x16" -c 16 --depth 16 --fc 3 --count 10
+measure "plain TCP 16x16" -c 16 --depth 16 --fc 3 --quantity 10
 serve "${server_tls[@]}"
-measure "TLS 16x16" "${client_tls[@]}" -c 16 --depth 16 --fc 3 --count 10
+measure "TLS 16x16" "${client_tls[@]}" -c 16 --depth 16 --fc 3 --quantity 10
 serve "${server_tls[@]}" --drop-rate 0.5
 measure "TLS handshakes, full" "${client_tls[@]}" -c 200 --depth 1 --connect-rate 100000
 measure "TLS handshakes, --tls-resume" "${client_tls[@]}" -c 200 --depth 1 \

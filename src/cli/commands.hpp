@@ -46,5 +46,7 @@ void add_write_command(CLI::App& app, Action& action);
 void add_merge_command(CLI::App& app, Action& action);
 // Walks `app` when run: add it after every other subcommand.
 void add_completion_command(CLI::App& app, Action& action);
+// Every subcommand above, in the order --help lists them: the whole command line.
+void add_all_commands(CLI::App& app, Action& action);
 
 }  // namespace mbstorm::cli

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/deprecated_option.hpp"
 #include "cli/frame_describe.hpp"
 #include "codec/address.hpp"
 #include "codec/ascii.hpp"
@@ -24,7 +25,7 @@ struct EncodeOptions {
     std::string function;   // number or name
     std::string reference;  // e.g. 40001: sets function table and address
     std::string address = "0";
-    int count = 1;
+    int quantity = 1;
     int value = 0;
     std::vector<int> values;
     int and_mask = 0xFFFF, or_mask = 0;
@@ -81,7 +82,7 @@ std::string file_fault(std::uint8_t fc, int file, int record, std::size_t length
     // FC14: each sub-response takes 2 bytes + 2 per register within the response's byte count.
     const std::size_t max_read = (codec::limits::kMaxFileResponseBytes - 2) / 2;
     if (reads && (length < 1 || length > max_read))
-        return fmt::format("--count {} (record length): valid 1..{} for {}", length, max_read,
+        return fmt::format("--quantity {} (record length): valid 1..{} for {}", length, max_read,
                            codec::function_label(fc));
     if (file < codec::limits::kMinFileNumber)
         return fmt::format("--file {}: valid 1..65535 for {}", file, codec::function_label(fc));
@@ -144,7 +145,7 @@ std::string option_fault(const EncodeOptions& o, std::uint8_t fc) {
     const std::size_t file_length =
         codec::request_is(fc, codec::RequestShape::FileRecords) && codec::is_write_function(fc)
             ? o.values.size()
-            : static_cast<std::size_t>(o.count);
+            : static_cast<std::size_t>(o.quantity);
     if (auto fault = file_fault(fc, o.file, o.record, file_length); !fault.empty()) return fault;
     if (codec::request_is(fc, codec::RequestShape::SingleCoil) && o.value != 0 && o.value != 1 &&
         o.value != codec::limits::kCoilOn)
@@ -161,7 +162,7 @@ std::string build_request(const EncodeOptions& o, std::uint8_t fc, std::uint16_t
     r = codec::Request{};
     r.function = fc;
     r.address = address;
-    r.quantity = static_cast<std::uint16_t>(o.count);
+    r.quantity = static_cast<std::uint16_t>(o.quantity);
     r.value = static_cast<std::uint16_t>(o.value);
     r.and_mask = static_cast<std::uint16_t>(o.and_mask);
     r.or_mask = static_cast<std::uint16_t>(o.or_mask);
@@ -201,7 +202,7 @@ std::string build_request(const EncodeOptions& o, std::uint8_t fc, std::uint16_t
         case FC::ReadFileRecord:
         case FC::WriteFileRecord: {
             bool write = fc == codec::to_byte(FC::WriteFileRecord);
-            std::uint16_t length = static_cast<std::uint16_t>(write ? o.values.size() : o.count);
+            std::uint16_t length = static_cast<std::uint16_t>(write ? o.values.size() : o.quantity);
             payload[n++] = codec::limits::kFileReferenceType;
             codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(o.file));
             codec::store_be16(payload.data() + n + 2, static_cast<std::uint16_t>(o.record));
@@ -292,8 +293,11 @@ void add_encode_command(CLI::App& app, Action& action) {
                     "reference number (40001 = holding register 0); picks the read function");
     cmd->add_option("--addr,-a", o->address,
                     "starting address: " + std::string(codec::kAddressRuleHelp));
-    cmd->add_option("--count,-n", o->count, "quantity (bits or registers)")
+    cmd->add_option("--quantity", o->quantity, "registers or bits (FC14: the record length)")
         ->check(CLI::Range(0, 65535));
+    for (const char* old_name : {"--count", "-n"})
+        add_deprecated_option(cmd, old_name, "--quantity", o->quantity)
+            ->check(CLI::Range(0, 65535));
     cmd->add_option("--value", o->value, "value for FC05 (0/1) and FC06")
         ->check(CLI::Range(0, 65535));
     cmd->add_option("--values", o->values, "values for FC0F/10/15/17 and FC08 data")

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "cli/commands.hpp"
+#include "cli/deprecated_option.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/fuzz_target.hpp"
 #include "cli/transport_options.hpp"
@@ -195,7 +196,7 @@ int run_fuzz(const FuzzOptions& o) {
     if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);
     c.state_given = o.state_given;
     if (!o.map.empty() + !o.model.empty() + o.no_model > 1)
-        return usage_error("fuzz", "--map, --model and --no-model exclude each other");
+        return usage_error("fuzz", "--map, --device-model and --no-model exclude each other");
     if (!o.map.empty() && !netfuzz::parse_map(o.map, c.model, error))
         return usage_error("fuzz", error);
     if (!o.model.empty() && !netfuzz::load_model(o.model, c.model, error))
@@ -315,7 +316,7 @@ void add_fuzz_command(CLI::App& app, Action& action) {
         "server to fuzz: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if omitted (802 "
         "with --transport tls; required but with --serial; loopback unless --allow-remote)");
     cmd->add_flag("--allow-remote", o->allow_remote, "allow a target outside 127.0.0.0/8 and ::1");
-    cmd->add_option("--unit", o->unit, "unit id the target answers")
+    cmd->add_option("--unit,-u", o->unit, "unit id the target answers")
         ->check(CLI::Range(0, 255))
         ->capture_default_str();
     cmd->add_option("--seed", o->seed,
@@ -331,7 +332,7 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                      0);
     add_duration_option(cmd, "--timeout", o->timeout_ns,
                         "answer timeout: longer is a hang (default 1s)");
-    cmd->add_option("--connections", o->lanes, "pipelined connections for well-framed cases")
+    cmd->add_option("--connections,-c", o->lanes, "pipelined connections for well-framed cases")
         ->check(CLI::Range(1u, 64u))
         ->capture_default_str();
     cmd->add_option("--transport-share", o->isolated_per_mille,
@@ -390,9 +391,11 @@ void add_fuzz_command(CLI::App& app, Action& action) {
                     "the device's register map, if you have it: TABLE=FIRST-LAST,... with TABLE "
                     "coils, discrete, input or holding (e.g. holding=1000-1099,coils=200-263); "
                     "default: learned by asking before fuzzing");
-    cmd->add_option("--model", o->model,
+    cmd->add_option("--device-model", o->model,
                     "a device model saved by an earlier run (its --out folder's model.json) "
                     "instead of learning it again");
+    // --model is run's closed or open loop.
+    add_deprecated_option(cmd, "--model", "--device-model", o->model);
     cmd->add_flag("--no-model", o->no_model,
                   "do not learn the device's map: cases are not aimed inside it");
     cmd->add_option("--max-connections", o->max_connections,

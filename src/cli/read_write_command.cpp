@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/deprecated_option.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/frame_describe.hpp"
 #include "cli/modbus_client.hpp"
@@ -58,8 +59,8 @@ struct IoOptions {
     std::string order = "ABCD";
     int quantity = 1;  // read: values of --type
     std::vector<std::string> values;
-    std::string function;  // write: force 05/06/0F/10
-    std::uint64_t count = 1;
+    std::string function;            // write: force 05/06/0F/10
+    std::uint64_t transactions = 1;  // 0: until interrupted
     std::uint64_t interval_ns = 1'000'000'000ULL;
     std::uint64_t timeout_ns = 1'000'000'000ULL;
     bool json = false;
@@ -216,7 +217,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         j["function"] = codec::function_label(p.request.function);
         j["table"] = std::string(codec::table_name(p.table));
         j["address"] = p.address;
-        if (o.count != 1) j["poll"] = poll;
+        if (o.transactions != 1) j["poll"] = poll;
     }
     auto emit_json = [&] { fmt::print("{}\n", j.dump()); };
     if (!error.empty()) {
@@ -285,7 +286,7 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         }
         emit_json();
     } else {
-        if (o.count != 1 && poll > 1) fmt::print("\n");
+        if (o.transactions != 1 && poll > 1) fmt::print("\n");
         for (const auto& v : values) fmt::print("[{}]: {}\n", v.address, v.text);
     }
     std::fflush(stdout);
@@ -312,7 +313,7 @@ int run_serial_io(const IoOptions& o, IoPlan& p,
     int exit_code = kExitOk;
     const auto interval = std::chrono::nanoseconds(o.interval_ns);
     auto next = std::chrono::steady_clock::now();
-    for (std::uint64_t poll = 1; o.count == 0 || poll <= o.count; ++poll) {
+    for (std::uint64_t poll = 1; o.transactions == 0 || poll <= o.transactions; ++poll) {
         codec::Response rsp;
         codec::Bytes answer;
         std::int64_t sent_ns = 0;
@@ -347,7 +348,7 @@ int run_serial_io(const IoOptions& o, IoPlan& p,
         }
         if (report(o, p, poll, why, rsp) != kExitOk) exit_code = kExitFailed;
         if (outcome == load::SerialOutcome::IoError) break;
-        if (o.count != 0 && poll == o.count) break;
+        if (o.transactions != 0 && poll == o.transactions) break;
         next += interval;
         std::this_thread::sleep_until(next);
     }
@@ -391,13 +392,13 @@ int run_io(const IoOptions& o) {
     int exit_code = kExitOk;
     const auto interval = std::chrono::nanoseconds(o.interval_ns);
     auto next = std::chrono::steady_clock::now();
-    for (std::uint64_t poll = 1; o.count == 0 || poll <= o.count; ++poll) {
+    for (std::uint64_t poll = 1; o.transactions == 0 || poll <= o.transactions; ++poll) {
         codec::Response rsp;
         std::string why = client.transact(static_cast<std::uint8_t>(o.unit),
                                           codec::Bytes(pdu.data(), enc.size), timeout_ms, rsp);
         if (report(o, p, poll, why, rsp) != kExitOk) exit_code = kExitFailed;
         if (why == "the target closed the connection") break;
-        if (o.count != 0 && poll == o.count) break;
+        if (o.transactions != 0 && poll == o.transactions) break;
         next += interval;
         std::this_thread::sleep_until(next);
     }
@@ -407,9 +408,12 @@ int run_io(const IoOptions& o) {
 void add_common_options(CLI::App* cmd, IoOptions& o) {
     cmd->add_option("--target", o.target,
                     "HOST[:PORT] of the device (port 502 by default); not with --serial");
-    cmd->add_option("--unit,-u", o.unit, "unit id (default 1)")->check(CLI::Range(0, 255));
+    // mbpoll's -a is the unit (slave address): say so where its users look.
+    cmd->add_option("--unit,-u", o.unit, "unit id (default 1); mbpoll's -a")
+        ->check(CLI::Range(0, 255));
     cmd->add_option("--addr,-a", o.address,
-                    "first address: " + std::string(codec::kAddressRuleHelp));
+                    "first address (mbpoll users: -a here is the address, the unit is -u): " +
+                        std::string(codec::kAddressRuleHelp));
     cmd->add_option("--table", o.table,
                     "coils, discrete_inputs, input_registers or holding_registers (default: the "
                     "reference number's table, else holding_registers)");
@@ -418,7 +422,9 @@ void add_common_options(CLI::App* cmd, IoOptions& o) {
                         " (default u16; bits on coils and discrete inputs)");
     cmd->add_option("--order", o.order,
                     "word/byte order of multi-register values: ABCD (default), CDAB, BADC, DCBA");
-    cmd->add_option("--count,-n", o.count, "how many times (default 1; 0: until interrupted)");
+    cmd->add_option("-n,--transactions", o.transactions,
+                    "how many transactions (default 1; 0: until interrupted)");
+    add_deprecated_option(cmd, "--count", "--transactions", o.transactions);
     add_duration_option(cmd, "--interval", o.interval_ns,
                         "time between the starts of two transactions (default 1s)");
     add_duration_option(cmd, "--timeout", o.timeout_ns, "connect and answer timeout (default 1s)");
@@ -433,9 +439,11 @@ void add_read_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "read", "Read one range of a device once or every --interval, as typed values");
     add_common_options(cmd, *o);
-    cmd->add_option("--quantity,-q", o->quantity,
+    cmd->add_option("--quantity", o->quantity,
                     "how many values of --type (string: characters; default 1)")
         ->check(CLI::Range(1, 65535));
+    // -q is --quiet in run and fuzz.
+    add_deprecated_option(cmd, "-q", "--quantity", o->quantity)->check(CLI::Range(1, 65535));
     cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });
 }
 
@@ -447,7 +455,7 @@ void add_write_command(CLI::App& app, Action& action) {
     add_common_options(cmd, *o);
     cmd->add_option("values", o->values, "values to write, as --type says")->required();
     cmd->add_option(
-        "--fc", o->function,
+        "--fc,-f", o->function,
         fmt::format("force the function: {} for coils, {} for holding registers "
                     "(default: single for one value, multiple otherwise); {}",
                     write_choices(codec::Table::Coils),

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/deprecated_option.hpp"
 #include "cli/distributed_options.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/run_output.hpp"
@@ -47,7 +48,7 @@ struct RunOptions {
     std::string model;    // "": not given (open loop when --rate is)
     std::string arrival;  // "": not given (even)
     int value = 0;
-    int count = 0;
+    int quantity = 0;  // 0: not given (10, or 1 for the single-item functions)
     std::uint64_t duration_ns = 10'000'000'000ULL;
     std::uint64_t warmup_ns = 0, timeout_ns = 1'000'000'000ULL,
                   connect_timeout_ns = 3'000'000'000ULL;
@@ -131,8 +132,8 @@ std::string build_plan(RunOptions& o) {
     op.values.value = static_cast<std::uint16_t>(o.value);
     op.name = std::string(codec::function_name(op.function));
     if (op.name.empty()) op.name = fmt::format("fc{:02x}", op.function);
-    // No --count: 10 for reads, 1 where the function has a fixed quantity of one.
-    op.quantity = o.count;
+    // No --quantity: 10 for reads, 1 where the function has a fixed quantity of one.
+    op.quantity = o.quantity;
     if (op.quantity == 0) op.quantity = codec::quantity_range(op.function).max == 1 ? 1 : 10;
     p.operations.assign(1, op);
 
@@ -200,8 +201,8 @@ int run_load_test(RunOptions& o) {
 // Flags given next to a scenario FILE override its values; the single-operation flags have no
 // meaning there (the file lists the operations).
 int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
-    for (const char* flag : {"--fc", "--addr", "--count", "--unit", "--addr-mode", "--zipf",
-                             "--value", "--model", "--arrival"}) {
+    for (const char* flag : {"--fc", "--addr", "--quantity", "--count", "--unit", "--addr-mode",
+                             "--zipf", "--value", "--model", "--arrival"}) {
         if (cmd.count(flag) != 0)
             return usage_error(
                 "run",
@@ -290,14 +291,16 @@ void add_run_command(CLI::App& app, Action& action) {
                       "transaction's intended send time (coordinated-omission corrected)");
     cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
-    cmd->add_option("--fc", o->function,
+    cmd->add_option("--fc,-f", o->function,
                     "function code (default " + codec::function_label(kDefaultFunction) +
                         "): " + std::string(codec::kFunctionCodeForms));
-    cmd->add_option("--addr", o->address, std::string(codec::kAddressRuleHelp));
-    cmd->add_option("--count", o->count,
-                    "quantity per request (default 10; 1 for " + single_item_functions() + ")")
+    cmd->add_option("--addr,-a", o->address, std::string(codec::kAddressRuleHelp));
+    cmd->add_option(
+           "--quantity", o->quantity,
+           "registers or bits per request (default 10; 1 for " + single_item_functions() + ")")
         ->check(CLI::Range(1, 2000));
-    cmd->add_option("--unit", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
+    add_deprecated_option(cmd, "--count", "--quantity", o->quantity)->check(CLI::Range(1, 2000));
+    cmd->add_option("--unit,-u", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
     cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
     add_number_option(cmd, "--zipf", p.operations[0].zipf_exponent, 0.0, load::kMaxZipfExponent,

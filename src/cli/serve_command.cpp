@@ -7,6 +7,7 @@
 #include <string>
 
 #include "cli/commands.hpp"
+#include "cli/deprecated_option.hpp"
 #include "cli/duration_option.hpp"
 #include "cli/metrics_endpoint.hpp"
 #include "cli/transport_options.hpp"
@@ -164,7 +165,8 @@ void add_serve_command(CLI::App& app, Action& action) {
                     "port 502 if omitted (802 with --transport tls)")
         ->capture_default_str();
     add_transport_options(cmd, o->transport, TransportSide::Server);
-    cmd->add_option("--threads,-t", o->config.threads,
+    add_deprecated_option(cmd, "-t", "--threads", o->config.threads);
+    cmd->add_option("--threads", o->config.threads,
                     "worker threads, each with its own ring (0: one per core)")
         ->check(CLI::Range(0u, 1024u));
     cmd->add_option("--device", o->device_file,

@@ -39,7 +39,7 @@ struct CampaignOptions {
     bool naive = false;        // baseline random-frame generator
     StateRange state;          // where stateful cases write and read back (--state-range)
     bool state_given = false;  // --state-range was given: kept even when a model is known
-    // The device's map given by the user (--map, --model); empty: learned before fuzzing
+    // The device's map given by the user (--map, --device-model); empty: learned before fuzzing
     // (but with `naive`), within a tenth of --seconds and at most 20 s.
     DeviceModel model;
     bool learn_model = true;

@@ -255,13 +255,13 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
 bool load_model(const std::string& path, DeviceModel& out, std::string& error) {
     std::ifstream in(path);
     if (!in) {
-        error = fmt::format("--model {}: cannot read it", path);
+        error = fmt::format("--device-model {}: cannot read it", path);
         return false;
     }
     std::stringstream text;
     text << in.rdbuf();
     if (!model_from_json(text.str(), out, error)) {
-        error = fmt::format("--model {}: {}", path, error);
+        error = fmt::format("--device-model {}: {}", path, error);
         return false;
     }
     out.source = path;

@@ -1,9 +1,9 @@
 // What the fuzzer knows of the device's data model: which addresses of each of the four tables
 // answer, how many items one read may take, whether writes stick, which unit ids answer and
 // what an exception costs. Learned before fuzzing (learn_device_model), given by hand (--map)
-// or read back from an earlier run's model.json (--model), so that most cases land inside the
-// map and the code behind each address check runs: real devices have small, sparse maps that
-// do not start at 0, and a request outside them only ever meets exception 02.
+// or read back from an earlier run's model.json (--device-model), so that most cases land inside
+// the map and the code behind each address check runs: real devices have small, sparse maps that do
+// not start at 0, and a request outside them only ever meets exception 02.
 #pragma once
 
 #include <array>

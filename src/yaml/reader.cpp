@@ -10,6 +10,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "util/closest_name.hpp"
+
 namespace mbstorm::yaml {
 
 void Reader::fail(const YAML::Mark& mark, const std::string& message) const {
@@ -36,8 +38,13 @@ void Reader::each_key(const YAML::Node& map, std::string_view what,
         if (!kv.first.IsScalar()) fail(kv.first, fmt::format("{}: keys must be plain words", what));
         const std::string key = kv.first.Scalar();
         if (std::find(known.begin(), known.end(), key) == known.end()) {
-            fail(kv.first, fmt::format("unknown key '{}' in {} (valid keys: {})", key, what,
-                                       fmt::join(known, ", ")));
+            // A typo gets its one fix; anything else the whole list to choose from.
+            const std::string_view closest = util::closest_name(key, known);
+            fail(kv.first, closest.empty()
+                               ? fmt::format("unknown key '{}' in {} (valid keys: {})", key, what,
+                                             fmt::join(known, ", "))
+                               : fmt::format("unknown key '{}' in {}; did you mean '{}'?", key,
+                                             what, closest));
         }
         if (!seen.insert(key).second) {
             fail(kv.first, fmt::format("duplicate key '{}' in {}", key, what));

@@ -188,11 +188,11 @@ TEST(DecodeCommand, NonModbusProtocolIdIsShownAndFlagged) {
 }
 
 TEST(EncodeCommand, BuildsFramesInEveryFraming) {
-    EXPECT_EQ(run_mbstorm("encode --fc 3 --addr 0 --count 10 --rtu").output,
+    EXPECT_EQ(run_mbstorm("encode --fc 3 --addr 0 --quantity 10 --rtu").output,
               "01 03 00 00 00 0A C5 CD\n");
-    EXPECT_EQ(run_mbstorm("encode --fc read_holding_registers --count 10 --tid 1").output,
+    EXPECT_EQ(run_mbstorm("encode --fc read_holding_registers --quantity 10 --tid 1").output,
               "00 01 00 00 00 06 01 03 00 00 00 0A\n");
-    EXPECT_EQ(run_mbstorm("encode --fc 3 --count 1 --ascii").output, ":010300000001FB\n");
+    EXPECT_EQ(run_mbstorm("encode --fc 3 --quantity 1 --ascii").output, ":010300000001FB\n");
     // Reference 40100 is holding register 99 (0x63).
     EXPECT_EQ(run_mbstorm("encode --ref 40100 --pdu").output, "03 00 63 00 01\n");
 }
@@ -205,7 +205,7 @@ TEST(EncodeCommand, WriteMultipleRegistersAndCoils) {
 }
 
 TEST(EncodeCommand, OutOfSpecFieldsAreRejected) {
-    auto r = run_mbstorm("encode --fc 3 --count 126");
+    auto r = run_mbstorm("encode --fc 3 --quantity 126");
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_THAT(r.output, HasSubstr("quantity"));
     EXPECT_EQ(run_mbstorm("encode --fc nonsense").exit_code, 2);
@@ -214,26 +214,27 @@ TEST(EncodeCommand, OutOfSpecFieldsAreRejected) {
 // Every refusal names the field, the value and the valid range, in one line.
 TEST(EncodeCommand, RefusalsNameFieldValueAndRange) {
     const std::pair<const char*, const char*> cases[] = {
-        {"encode --fc 3 -n 200", "quantity 200: valid 1..125 for 0x03 read_holding_registers"},
+        {"encode --fc 3 --quantity 200",
+         "quantity 200: valid 1..125 for 0x03 read_holding_registers"},
         {"encode --fc 99",
          "function code 99 (0x63): not a public Modbus function; valid: 0x01 0x02 0x03 0x04 "
          "0x05 0x06 0x07 0x08 0x0B"},
         {"encode --fc nonsense", "function 'nonsense' is not a function code; write a name"},
-        {"encode --fc 1 -n 0", "quantity 0: valid 1..2000 for 0x01 read_coils"},
-        {"encode --fc 3 --addr 0xFFFF -n 2", "address 65535 + quantity 2 runs past 65535"},
+        {"encode --fc 1 --quantity 0", "quantity 0: valid 1..2000 for 0x01 read_coils"},
+        {"encode --fc 3 --addr 0xFFFF --quantity 2", "address 65535 + quantity 2 runs past 65535"},
         {"encode --fc 16 --addr 0", "--values holds 0 value(s): valid 1..123 for 0x10"},
         {"encode --fc 5 --value 7", "--value 7 for 0x05 write_single_coil: valid 0 (OFF) or 1"},
         {"encode --fc 8 --sub 19", "sub-function 0x0013: valid 0x0000..0x0004"},
-        {"encode --fc 0x17 -n 126 --values 1", "quantity 126: valid 1..125 for 0x17"},
-        {"encode --fc 20 --count 200",
-         "--count 200 (record length): valid 1..121 for 0x14 read_file_record"},
+        {"encode --fc 0x17 --quantity 126 --values 1", "quantity 126: valid 1..125 for 0x17"},
+        {"encode --fc 20 --quantity 200",
+         "--quantity 200 (record length): valid 1..121 for 0x14 read_file_record"},
         {"encode --fc 21 --values 1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,"
          "25,26,27,28,29,30,31,32,33,34,35,36,37,38,39,40,41,42,43,44,45,46,47,48,49,50,51,52,53,"
          "54,55,56,57,58,59,60,61,62,63,64,65,66,67,68,69,70,71,72,73,74,75,76,77,78,79,80,81,82,"
          "83,84,85,86,87,88,89,90,91,92,93,94,95,96,97,98,99,100,101,102,103,104,105,106,107,108,"
          "109,110,111,112,113,114,115,116,117,118,119,120,121,122,123",
          "--values holds 123 value(s): valid 1..122 for 0x15 write_file_record"},
-        {"encode --fc 20 --record 9999 --count 2", "--record 9999 + record length 2 runs past"},
+        {"encode --fc 20 --record 9999 --quantity 2", "--record 9999 + record length 2 runs past"},
     };
     for (const auto& [args, message] : cases) {
         auto r = run_mbstorm(args);

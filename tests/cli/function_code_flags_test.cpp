@@ -48,7 +48,7 @@ TEST(FunctionCodeFlags, EncodeAndWriteAcceptTheSameForms) {
     EXPECT_EQ(run_mbstorm("encode --fc 0x10 --addr 0 --values 7 --pdu").output,
               run_mbstorm("encode --fc 16 --addr 0 --values 7 --pdu").output);
     // 010 is decimal ten, not octal eight.
-    EXPECT_EQ(run_mbstorm("encode --fc 010 --addr 0 --count 1 --pdu").exit_code, 2);
+    EXPECT_EQ(run_mbstorm("encode --fc 010 --addr 0 --quantity 1 --pdu").exit_code, 2);
 }
 
 TEST(FunctionCodeFlags, DecodeShowsTheFunctionCodeInHexWithItsName) {

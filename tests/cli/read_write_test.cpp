@@ -53,31 +53,32 @@ TEST_F(ReadWrite, WrittenValuesReadBackInEveryTypeAndOrder) {
     ASSERT_EQ(w.exit_code, 0) << w.output;
     EXPECT_THAT(w.output, HasSubstr("wrote 4 register(s) at address 100 of unit 1 (0x10 "
                                     "write_multiple_registers)"));
-    auto f = io("read --addr 40101 -q 2 --type f32 --order CDAB");
+    auto f = io("read --addr 40101 --quantity 2 --type f32 --order CDAB");
     EXPECT_EQ(f.exit_code, 0) << f.output;
     EXPECT_EQ(f.output, "[100]: 3.5\n[102]: -1.25\n");
     // 3.5f is 0x40600000: low word first.
-    EXPECT_EQ(io("read --addr 100 -q 2").output, "[100]: 0\n[101]: 16480\n");
+    EXPECT_EQ(io("read --addr 100 --quantity 2").output, "[100]: 0\n[101]: 16480\n");
 
     ASSERT_EQ(io("write --addr 0x10 --type i32 -- -2").exit_code, 0);
     EXPECT_EQ(io("read --addr 16 --type i32").output, "[16]: -2\n");
-    EXPECT_EQ(io("read --addr 16 --type i16 -q 2").output, "[16]: -1\n[17]: -2\n");
+    EXPECT_EQ(io("read --addr 16 --type i16 --quantity 2").output, "[16]: -1\n[17]: -2\n");
     ASSERT_EQ(io("write --addr 20 --type f64 --order DCBA 0.1").exit_code, 0);
     EXPECT_EQ(io("read --addr 20 --type f64 --order DCBA").output, "[20]: 0.1\n");
     ASSERT_EQ(io("write --addr 30 --type string pump-7").exit_code, 0);
-    EXPECT_EQ(io("read --addr 30 --type string -q 6").output, "[30]: pump-7\n");
+    EXPECT_EQ(io("read --addr 30 --type string --quantity 6").output, "[30]: pump-7\n");
     EXPECT_EQ(io("read --addr 30 --type bits").output, "[30]: 0111000001110101\n");
 
     ASSERT_EQ(io("write --addr 00003 1 0 1").exit_code, 0);  // coil references
-    EXPECT_EQ(io("read --table coils --addr 2 -q 4").output, "[2]: 1\n[3]: 0\n[4]: 1\n[5]: 0\n");
-    EXPECT_EQ(io("read --addr 30003 -q 2").output, "[2]: 7\n[3]: 8\n");
+    EXPECT_EQ(io("read --table coils --addr 2 --quantity 4").output,
+              "[2]: 1\n[3]: 0\n[4]: 1\n[5]: 0\n");
+    EXPECT_EQ(io("read --addr 30003 --quantity 2").output, "[2]: 7\n[3]: 8\n");
 }
 
 TEST_F(ReadWrite, Float32ReadsBackAsTheShortestTextOfTheFloat) {
     // 0.1f is 0.100000001490116...: shown as the float it is, not widened to a double first.
     ASSERT_EQ(io("write --addr 40 --type f32 0.1 23.7").exit_code, 0);
-    EXPECT_EQ(io("read --addr 40 -q 2 --type f32").output, "[40]: 0.1\n[42]: 23.7\n");
-    auto j = io("read --addr 40 -q 2 --type f32 --json");
+    EXPECT_EQ(io("read --addr 40 --quantity 2 --type f32").output, "[40]: 0.1\n[42]: 23.7\n");
+    auto j = io("read --addr 40 --quantity 2 --type f32 --json");
     EXPECT_EQ(j.exit_code, 0) << j.output;
     EXPECT_THAT(j.output, HasSubstr("\"values\":[{\"address\":40,\"value\":0.1},"
                                     "{\"address\":42,\"value\":23.7}]"));
@@ -106,7 +107,7 @@ TEST_F(ReadWrite, ExceptionIsNamedAndExitsNonZero) {
 
 TEST_F(ReadWrite, JsonAndRepeatedPolls) {
     ASSERT_EQ(io("write --addr 7 --type u32 70000").exit_code, 0);
-    auto r = io("read --addr 7 --type u32 --json --count 3 --interval 10ms");
+    auto r = io("read --addr 7 --type u32 --json -n 3 --interval 10ms");
     EXPECT_EQ(r.exit_code, 0) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 3) << r.output;
     EXPECT_THAT(r.output, HasSubstr("\"poll\":3"));
@@ -115,11 +116,26 @@ TEST_F(ReadWrite, JsonAndRepeatedPolls) {
     EXPECT_THAT(r.output, HasSubstr("\"function\":\"0x03 read_holding_registers\""));
 }
 
+// -q (now --quiet elsewhere) and --count (now -n/--transactions) keep their old meaning here.
+TEST_F(ReadWrite, OldSpellingsOfQuantityAndCountStillWorkWithAWarning) {
+    ASSERT_EQ(io("write --addr 50 1 2 3").exit_code, 0);
+    auto r = io("read --addr 50 -q 3 --count 2 --interval 10ms");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(r.output, HasSubstr("mbstorm read: -q is deprecated, use --quantity\n"));
+    EXPECT_THAT(r.output, HasSubstr("mbstorm read: --count is deprecated, use --transactions\n"));
+    EXPECT_THAT(r.output, HasSubstr("[50]: 1\n[51]: 2\n[52]: 3\n"));
+    std::size_t polls = 0;
+    for (auto at = r.output.find("[52]"); at != std::string::npos;
+         at = r.output.find("[52]", at + 1))
+        ++polls;
+    EXPECT_EQ(polls, 2u) << r.output;
+}
+
 TEST_F(ReadWrite, RefusalsNameTheFieldAndRange) {
     auto ro = io("write --addr 30001 5");
     EXPECT_EQ(ro.exit_code, 2) << ro.output;
     EXPECT_THAT(ro.output, HasSubstr("input_registers are read-only"));
-    auto big = io("read --addr 0 -q 126");
+    auto big = io("read --addr 0 --quantity 126");
     EXPECT_EQ(big.exit_code, 2) << big.output;
     EXPECT_THAT(big.output,
                 HasSubstr("quantity 126: valid 1..125 for 0x03 read_holding_registers"));

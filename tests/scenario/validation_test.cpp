@@ -26,7 +26,7 @@ const BadCase kCases[] = {
     {"empty", "", "the scenario is empty", 0, 0},
     {"not a mapping", "- 1\n- 2\n", "must be a mapping of keys", 1, 1},
     {"unknown top key", "conections: 4\n" OPS,
-     "unknown key 'conections' in the scenario (valid keys:", 1, 1},
+     "unknown key 'conections' in the scenario; did you mean 'connections'?", 1, 1},
     {"duplicate key", "depth: 2\ndepth: 3\n" OPS, "duplicate key 'depth'", 2, 1},
     {"binary out of range", "depth: 0b1000000000000001\n" OPS,
      "depth: 0b1000000000000001 is out of range (valid 1..32768)", 1, 8},

@@ -25,7 +25,7 @@ fail=0
 sample() { awk -v key="$2" 'index($0, key " ") == 1 { print $2 }' "$1"; }
 printf 'tls_roles:\n  Operator: "1-255"\n  Viewer: [1, 2, 3, 4]\n' >"$work/device.yaml"
 if start_mbstorm_serve "$work/serve.out" "$mbstorm" "${tls[@]}" --tls-cert "$work/server.pem" \
-     --tls-key "$work/server.key" -t 1 -d 60 --device "$work/device.yaml" \
+     --tls-key "$work/server.key" --threads 1 -d 60 --device "$work/device.yaml" \
      --metrics-listen 127.0.0.1:0; then
   if grep -q "listening on 127.0.0.1:$port (tls, " "$work/serve.out"; then
     echo "ok   serve's listening line names the transport"

@@ -30,10 +30,10 @@ expect() {
 }
 
 expect "f32 CDAB written" 0 "wrote 4 register(s)" write --addr 40011 --type f32 --order CDAB 3.5 -1.25
-expect "f32 CDAB read back" 0 $'[10]: 3.5\n[12]: -1.25' read --addr 40011 -q 2 --type f32 --order CDAB
+expect "f32 CDAB read back" 0 $'[10]: 3.5\n[12]: -1.25' read --addr 40011 --quantity 2 --type f32 --order CDAB
 expect "string written" 0 "wrote 4 register(s)" write --addr 20 --type string pymodbus
-expect "string read back" 0 "[20]: pymodbus" read --addr 20 --type string -q 8
+expect "string read back" 0 "[20]: pymodbus" read --addr 20 --type string --quantity 8
 expect "coils round trip" 0 "wrote 3 bit(s)" write --addr 00006 1 1 0
-expect "coils read back" 0 $'[5]: 1\n[6]: 1\n[7]: 0' read --addr 00006 -q 3
+expect "coils read back" 0 $'[5]: 1\n[6]: 1\n[7]: 0' read --addr 00006 --quantity 3
 expect "exception named" 1 "ILLEGAL DATA ADDRESS" read --addr 0x1000
 exit $fail

@@ -48,7 +48,7 @@ if command -v tshark >/dev/null; then
   grep -q "Capturing on" "$work/tshark.log" && capturing=1
 fi
 timeout 60 "$mbstorm" run --transport rtu-over-tcp --target "127.0.0.1:$port" -c 2 -d 0 \
-  --transactions 300 --fc read_holding_registers --addr 0-99 --count 5 -q \
+  --transactions 300 --fc read_holding_registers --addr 0-99 --quantity 5 -q \
   --json "$work/run.json" >"$work/run.out" 2>&1
 ok=$(/usr/bin/python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); o=d["outcomes"]; print(o["ok"], sum(v for k,v in o.items() if k!="ok"))' "$work/run.json" 2>/dev/null)
 [ "$ok" = "300 0" ] && echo "ok   mbstorm run rtu-over-tcp -> pymodbus: 300 answered, 0 errors" \

@@ -22,10 +22,10 @@ for framing in rtu ascii; do
   server_pid=$!
   for _ in $(seq 100); do grep -q READY "$work/peer.out" && break; sleep 0.1; done
   line=(--serial "$work/line_b" --framing "$framing" --parity none)
-  out=$(timeout -k 5 20 "$mbstorm" read "${line[@]}" --addr 1 -q 3 2>&1)
+  out=$(timeout -k 5 20 "$mbstorm" read "${line[@]}" --addr 1 --quantity 3 2>&1)
   if [[ "$out" == $'[1]: 1001\n[2]: 1002\n[3]: 1003' ]]; then echo "ok   $framing: read pymodbus's registers"
   else echo "FAIL $framing: read"; sed 's/^/  /' <<<"$out"; fail=1; fi
-  out=$(timeout -k 5 60 "$mbstorm" run "${line[@]}" --fc 3 --addr 0 --count 5 --transactions 100 \
+  out=$(timeout -k 5 60 "$mbstorm" run "${line[@]}" --fc 3 --addr 0 --quantity 5 --transactions 100 \
     -d 0 --timeout 1s 2>&1)
   if grep -q "Throughput.*(100 transactions" <<<"$out" && grep -q "Errors      0 of 100" <<<"$out"; then
     echo "ok   $framing: run --serial, 100 transactions answered"

@@ -20,7 +20,7 @@ for framing in rtu ascii; do
     --baud 115200 --only-unit 1 ||
     { echo "FAIL: serve --serial did not start"; cat "$work/serve.out.err"; exit 1; }
   timeout -k 5 60 "$mbstorm" run --serial "$work/line_b" --framing "$framing" --baud 115200 \
-    --fc 3 --addr 0 --count 10 --transactions 200 -d 0 --json "$work/$framing.json" \
+    --fc 3 --addr 0 --quantity 10 --transactions 200 -d 0 --json "$work/$framing.json" \
     >"$work/run.out" 2>&1
   code=$?
   timeout -k 5 60 "$mbstorm" run --serial "$work/line_b" --framing "$framing" --baud 115200 \

@@ -12,7 +12,7 @@ source "$scripts/lib/tls_certs.bash"
 tls_prologue
 trap 'exec 3>&- 2>/dev/null; stop_server; rm -rf "$work"' EXIT  # and the stalled client's socket
 start_mbstorm_serve "$work/serve.out" "$mbstorm" "${tls[@]}" --tls-cert "$work/server.pem" \
-  --tls-key "$work/server.key" --frame-timeout 500ms -t 1 -d 30 ||
+  --tls-key "$work/server.key" --frame-timeout 500ms --threads 1 -d 30 ||
   { echo "FAIL: serve did not start"; cat "$work/serve.out"*; exit 1; }
 fail=0
 

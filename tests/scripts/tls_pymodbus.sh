@@ -36,7 +36,7 @@ print(r["totals"]["transactions"], r["totals"]["errors"], c["tls_handshakes"], c
 
 # 1. pymodbus client -> mbstorm serve.
 "$mbstorm" serve "${tls[@]}" --tls-cert "$work/server.pem" --tls-key "$work/server.key" \
-  --tls-role Operator=1-6,15,16 --tls-role Viewer=1-4 --listen 127.0.0.1:0 -t 1 -d 60 \
+  --tls-role Operator=1-6,15,16 --tls-role Viewer=1-4 --listen 127.0.0.1:0 --threads 1 -d 60 \
   >"$work/serve.out" 2>&1 &
 server_pid=$!
 if wait_for 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve.out"; then
@@ -58,10 +58,10 @@ client=("${tls[@]}" --tls-cert "$work/operator.pem" --tls-key "$work/operator.ke
 expect "write to pymodbus" 0 "wrote 2 register(s)" write "${client[@]}" \
   --target "127.0.0.1:$port" --addr 40021 1234 5678
 expect "read back from pymodbus" 0 $'[20]: 1234\n[21]: 5678' read "${client[@]}" \
-  --target "127.0.0.1:$port" --addr 40021 -q 2
+  --target "127.0.0.1:$port" --addr 40021 --quantity 2
 for resume in "" --tls-resume; do
   out=$(timeout -k 5 60 "$mbstorm" run --target "127.0.0.1:$port" "${client[@]}" $resume \
-        -c 4 --depth 1 -d 1s --warmup 0 --fc 3 --addr 0 --count 10 --json "$work/run.json" 2>&1)
+        -c 4 --depth 1 -d 1s --warmup 0 --fc 3 --addr 0 --quantity 10 --json "$work/run.json" 2>&1)
   rc=$?
   read -r completed errors handshakes resumed < <(json_counts "$work/run.json")
   if [ "$rc" = 0 ] && [ "${completed:-0}" -gt 0 ] && [ "${errors:-1}" = 0 ] &&
@@ -88,7 +88,7 @@ stop_server
 # 4. --tls-resume against mbstorm serve, which drops a share of its connections: the
 # reconnections resume their sessions (TLS 1.3 tickets), and without the flag none does.
 "$mbstorm" serve "${tls[@]}" --tls-cert "$work/server.pem" --tls-key "$work/server.key" \
-  --listen 127.0.0.1:0 -t 1 -d 60 --drop-rate 0.02 --seed 7 >"$work/serve2.out" 2>&1 &
+  --listen 127.0.0.1:0 --threads 1 -d 60 --drop-rate 0.02 --seed 7 >"$work/serve2.out" 2>&1 &
 server_pid=$!
 if wait_for 's/.*listening on 127\.0\.0\.1:\([0-9]*\).*/\1/p' "$work/serve2.out"; then
   for resume in --tls-resume ""; do

@@ -51,6 +51,11 @@ TEST(YamlReader, UnknownKeyNamesTheValidKeysAndThePosition) {
     EXPECT_EQ(e.column, 1);
 }
 
+TEST(YamlReader, UnknownKeyNearAValidOneSuggestsItInsteadOfTheList) {
+    const TestError e = each_key_error("a: 1\nbb: 2\n");
+    EXPECT_STREQ(e.what(), "doc.yaml:2:1: unknown key 'bb' in thing; did you mean 'b'?");
+}
+
 TEST(YamlReader, DuplicateKeyIsRejected) {
     const TestError e = each_key_error("a: 1\nb: 2\na: 3\n");
     EXPECT_STREQ(e.what(), "doc.yaml:3:1: duplicate key 'a' in thing");

@@ -1,0 +1,85 @@
+// Help that teaches: no subcommand prints the usage, a misspelt subcommand or option names the
+// one meant, and every parse error names its subcommand.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "../support/run_mbstorm.hpp"
+
+using mbstorm::test::run_mbstorm;
+using testing::HasSubstr;
+using testing::Not;
+using testing::StartsWith;
+
+namespace {
+
+constexpr int kExitUsage = 2;
+
+TEST(CliHelp, NoArgumentsPrintsTheUsageAndEverySubcommand) {
+    const auto r = run_mbstorm("");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    EXPECT_THAT(r.output, HasSubstr("Usage:"));
+    EXPECT_THAT(r.output, HasSubstr("Subcommands:"));
+    for (const char* sub :
+         {"run", "serve", "decode", "encode", "fuzz", "replay", "read", "write", "merge"})
+        EXPECT_THAT(r.output, HasSubstr(std::string("\n  ") + sub + " ")) << sub;
+    EXPECT_THAT(r.output, HasSubstr("mbstorm SUBCOMMAND --help"));
+}
+
+TEST(CliNames, MisspeltSubcommandSuggestsTheNearestOne) {
+    const auto r = run_mbstorm("rnu");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    EXPECT_EQ(r.output, "mbstorm: unknown subcommand 'rnu'; did you mean 'run'?\n");
+    EXPECT_THAT(run_mbstorm("fuz --target 127.0.0.1").output, HasSubstr("did you mean 'fuzz'?"));
+}
+
+TEST(CliNames, UnknownSubcommandFarFromAnyListsThemAll) {
+    const auto r = run_mbstorm("xyzzy");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    EXPECT_THAT(r.output,
+                HasSubstr("mbstorm: unknown subcommand 'xyzzy'; the subcommands are "
+                          "run, serve, decode, encode, fuzz, replay, read, write, merge"));
+}
+
+TEST(CliNames, MisspeltOptionSuggestsTheOptionOfThatSubcommand) {
+    const auto r = run_mbstorm("run --conections 4");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    // Not taken for the scenario file's path any more ("file: File does not exist: 4").
+    EXPECT_EQ(r.output, "mbstorm run: unknown option --conections; did you mean --connections?\n");
+    EXPECT_THAT(run_mbstorm("fuzz --target 127.0.0.1 --max-conections 3").output,
+                HasSubstr("mbstorm fuzz: unknown option --max-conections; did you mean "
+                          "--max-connections?"));
+    EXPECT_THAT(run_mbstorm("serve --theads=2").output,
+                HasSubstr("mbstorm serve: unknown option --theads; did you mean --threads?"));
+}
+
+TEST(CliNames, UnknownOptionFarFromAnyPointsToTheHelp) {
+    const auto r = run_mbstorm("run -x 4");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    EXPECT_EQ(r.output, "mbstorm run: unknown option -x (see mbstorm run --help)\n");
+    EXPECT_EQ(run_mbstorm("run ---").output,
+              "mbstorm run: unknown option --- (see mbstorm run --help)\n");
+    EXPECT_THAT(run_mbstorm("decode --frobnicate 01").output,
+                HasSubstr("mbstorm decode: unknown option --frobnicate (see mbstorm decode "
+                          "--help)"));
+}
+
+TEST(CliNames, ValuesAndKnownSpellingsAreNotTakenForOptions) {
+    // --name=value, a negative number and what follows "--" are values, not unknown options.
+    const auto r = run_mbstorm("run --seed=5 --connections=3 --print-scenario");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_THAT(run_mbstorm("encode --fc 6 --addr 0 --value -1").output,
+                HasSubstr("mbstorm encode: --value: Value -1 not in range"));
+    EXPECT_THAT(run_mbstorm("decode --pdu -- -z").output, Not(HasSubstr("unknown option")));
+}
+
+TEST(CliHelp, ParseErrorsNameTheSubcommand) {
+    const auto r = run_mbstorm("run --connections 0");
+    EXPECT_EQ(r.exit_code, kExitUsage);
+    EXPECT_THAT(r.output, StartsWith("mbstorm run: --connections: Value 0 not in range"));
+    EXPECT_THAT(run_mbstorm("read --unit").output, StartsWith("mbstorm read: "));
+    EXPECT_THAT(run_mbstorm("completion zsh").output, StartsWith("mbstorm completion: "));
+}
+
+}  // namespace
