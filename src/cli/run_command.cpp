@@ -58,6 +58,8 @@ struct RunOptions {
     std::string scenario_file;  // `mbstorm run FILE`: see run_scenario.cpp
     bool print_scenario = false;
     std::string junit;
+    std::vector<std::string> thresholds;  // --threshold EXPR (repeatable)
+    bool fail_on_plan_shortfall = false;
     std::string shard;     // --shard I/N (else the environment)
     std::string start_at;  // --start-at TIME
     TransportOptions transport;
@@ -151,9 +153,12 @@ std::string build_plan(RunOptions& o) {
 int run_load_test(RunOptions& o) {
     if (o.plan.operations.empty()) o.plan.operations.push_back({});
     if (auto err = build_plan(o); !err.empty()) return usage_error("run", err);
-    if (o.print_scenario) return print_flag_scenario(o.plan, o.target);
-    if (!o.junit.empty())
-        return usage_error("run", "--junit needs a scenario FILE (thresholds are set there)");
+    if (o.print_scenario) return print_flag_scenario(o.plan, o.target, o.thresholds);
+    if (!o.junit.empty() && o.thresholds.empty() && !o.fail_on_plan_shortfall)
+        return usage_error("run",
+                           "--junit writes thresholds as test cases: give --threshold EXPR "
+                           "(e.g. 'p99 < 5ms'; repeatable), --fail-on-plan-shortfall or a "
+                           "scenario FILE");
     auto& plan = o.plan;
     if (o.transport.kind() == TransportKind::Serial) {
         if (!o.target.empty())
@@ -179,6 +184,7 @@ int run_load_test(RunOptions& o) {
     s.plan.tls_resume = o.transport.tls_resume;
     s.name.clear();
     s.slave_threads = o.slave_threads;
+    if (auto e = add_threshold_flags(o.thresholds, s); !e.empty()) return usage_error("run", e);
     fmt::print(
         stderr, "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
         !plan.serial.device.empty()
@@ -192,6 +198,8 @@ int run_load_test(RunOptions& o) {
         plan.duration.count() ? fmt::format("for {:.3g}s", plan.duration.count() / 1e9)
                               : fmt::format("for {} transactions", plan.transactions));
     ScenarioRunRequest request;
+    request.fail_on_plan_shortfall = o.fail_on_plan_shortfall;
+    request.junit = o.junit;
     request.quiet = o.quiet;
     request.outputs = o.outputs;
     if (auto e = distributed_options(o, request); !e.empty()) return usage_error("run", e);
@@ -226,6 +234,8 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     r.file = o.scenario_file;
     r.print = o.print_scenario;
     r.junit = o.junit;
+    r.thresholds = o.thresholds;
+    r.fail_on_plan_shortfall = o.fail_on_plan_shortfall;
     r.quiet = o.quiet;
     r.outputs = o.outputs;
     if (auto e = distributed_options(o, r); !e.empty()) return usage_error("run", e);
@@ -336,7 +346,15 @@ void add_run_command(CLI::App& app, Action& action) {
         ->check(CLI::ExistingFile);
     cmd->add_flag("--print-scenario", o->print_scenario,
                   "print the fully resolved scenario (defaults included) as YAML and exit");
-    cmd->add_option("--junit", o->junit, "write the scenario's thresholds as JUnit XML test cases");
+    cmd->add_option("--junit", o->junit, "write the thresholds as JUnit XML test cases");
+    cmd->add_option("--threshold", o->thresholds,
+                    "pass/fail check, as in a scenario's thresholds (e.g. 'p99 < 5ms', "
+                    "'error_rate < 0.1%', 'throughput > 50000/s'); repeatable; a breach exits 1")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    cmd->add_flag("--fail-on-plan-shortfall", o->fail_on_plan_shortfall,
+                  "exit 1 when the plan was not carried out (connections not opened, the rate "
+                  "not reached, the run cut short), thresholds or not");
     cmd->callback([o, cmd, &action] {
         action = [o, cmd] {
             OutputFiles outputs = o->outputs;

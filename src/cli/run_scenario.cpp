@@ -99,10 +99,41 @@ void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::
 
 }  // namespace
 
-int print_flag_scenario(const load::Plan& plan, const std::string& target) {
-    fmt::print("{}", scenario::format_scenario(scenario::scenario_from_plan(plan, target)));
+std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
+    for (const std::string& text : texts) {
+        scenario::ThresholdSpec spec;
+        std::string error;
+        if (!scenario::parse_threshold(text, spec, error))
+            return fmt::format("--threshold '{}': {}", text, error);
+        s.thresholds.push_back(std::move(spec));
+    }
+    return {};
+}
+
+int print_flag_scenario(const load::Plan& plan, const std::string& target,
+                        const std::vector<std::string>& thresholds) {
+    scenario::Scenario s = scenario::scenario_from_plan(plan, target);
+    if (auto e = add_threshold_flags(thresholds, s); !e.empty()) return usage_error("run", e);
+    fmt::print("{}", scenario::format_scenario(s));
     return kExitOk;
 }
+
+namespace {
+
+// --fail-on-plan-shortfall: the plan carried out is one more check, failed when a part of it
+// (connections, rate, duration) was not (its text says what was missing).
+void judge_plan_carried_out(stats::RunResult& run) {
+    stats::ThresholdResult t;
+    t.expression = "plan carried out (--fail-on-plan-shortfall)";
+    t.passed = run.shortfalls.empty();
+    t.observed = t.passed ? 1.0 : 0.0;
+    for (const stats::PlanShortfall& s : run.shortfalls)
+        t.observed_text += (t.observed_text.empty() ? "" : "; ") + s.text;
+    if (t.passed) t.observed_text = "yes";
+    run.thresholds.push_back(std::move(t));
+}
+
+}  // namespace
 
 int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
     // A report that cannot be written must not cost a whole run first.
@@ -171,6 +202,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     hooks.shard = shard;
     hooks.start_at = request.start_at;
     load::LoadResult result = scenario::run_scenario(s, hooks);
+    if (request.fail_on_plan_shortfall) judge_plan_carried_out(result.run);
     result.run.metadata.test_id = request.outputs.test_id;
     result.run.metadata.run_id = run_id;
     if (const auto late = result.run.metadata.late_by_ns; late != 0)
@@ -221,7 +253,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
 
     OutputFiles files = request.outputs;
     files.junit = request.junit;
-    files.junit_suite = s.name;
+    files.junit_suite = s.name.empty() ? std::string("run") : s.name;
     int code = report_run(result, files);
     if (stream_failed && code == kExitOk) code = kExitUsage;
     if (code == kExitOk && !result.run.thresholds_passed()) {
@@ -263,6 +295,8 @@ int run_scenario_file(const ScenarioRunRequest& request) {
         for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
         return kExitUsage;
     }
+    if (auto e = add_threshold_flags(request.thresholds, s); !e.empty())
+        return usage_error("run", e);
     if (request.print) {
         fmt::print("{}", scenario::format_scenario(s));
         return kExitOk;

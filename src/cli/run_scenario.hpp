@@ -4,6 +4,7 @@
 #include <chrono>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "cli/run_output.hpp"
 #include "load/plan.hpp"
@@ -22,8 +23,14 @@ struct ScenarioRunRequest {
     std::optional<std::chrono::system_clock::time_point> start_at;  // --start-at
     std::shared_ptr<net::TlsContext> tls;                           // --transport tls
     bool tls_resume = false;
-    load::Plan::Serial serial;  // --serial: the line replaces the scenario's target
+    load::Plan::Serial serial;            // --serial: the line replaces the scenario's target
+    std::vector<std::string> thresholds;  // --threshold EXPR, added to the scenario's
+    bool fail_on_plan_shortfall = false;  // a part of the plan not carried out fails the run
 };
+
+// --threshold expressions added to the scenario's thresholds (the whole run's); "" or the
+// first expression that does not parse, with the forms accepted.
+std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s);
 
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.
 int run_scenario_file(const ScenarioRunRequest& request);
@@ -33,6 +40,7 @@ int run_scenario_file(const ScenarioRunRequest& request);
 int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request);
 
 // --print-scenario for a flag-only run: the plan the flags describe, as a scenario file.
-int print_flag_scenario(const load::Plan& plan, const std::string& target);
+int print_flag_scenario(const load::Plan& plan, const std::string& target,
+                        const std::vector<std::string>& thresholds);
 
 }  // namespace mbstorm::cli
