@@ -57,7 +57,8 @@ struct IoOptions {
     std::string table;
     std::string type;
     std::string order = "ABCD";
-    int quantity = 1;  // read: values of --type
+    int quantity = 1;             // read: values of --type
+    bool quantity_given = false;  // --quantity on the command line (a range gives it too)
     std::vector<std::string> values;
     std::string function;            // write: force 05/06/0F/10
     std::uint64_t transactions = 1;  // 0: until interrupted
@@ -80,6 +81,7 @@ struct IoPlan {
     std::vector<std::uint8_t> payload;     // write data the request points at
     std::vector<std::uint16_t> registers;  // write: the registers (or bits) written
     std::uint16_t items = 0;               // registers or bits read or written
+    std::uint32_t range_items = 0;         // read --addr FIRST-LAST: registers or bits in it
 };
 
 bool table_from_text(const std::string& text, codec::Table& out) {
@@ -115,10 +117,16 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     codec::AddressRange range;
     if (auto error = codec::parse_address_range(o.address, p.table, range); !error.empty())
         return "--addr " + error;
-    if (range.is_range)
-        return fmt::format("--addr '{}' is a range: give the first address and --quantity",
-                           o.address);
     p.address = range.first;
+    p.range_items = range.is_range ? range.last - range.first + 1 : 0;
+    if (range.is_range && o.write)
+        return fmt::format(
+            "--addr '{}' is a range: give the first address (the values say how "
+            "many are written)",
+            o.address);
+    if (range.is_range && o.quantity_given)
+        return fmt::format("--addr '{}' is a range: it says how many to read, without --quantity",
+                           o.address);
 
     const bool bit_table = codec::is_bit_table(p.table);
     if (!o.type.empty() && !value_type_from_name(o.type, p.type))
@@ -141,6 +149,17 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
             : p.type == ValueType::String
                 ? (static_cast<std::size_t>(o.quantity) + 1) / 2
                 : static_cast<std::size_t>(o.quantity) * registers_per_value(p.type);
+        // A range is the registers (or bits) read: whole values of --type only.
+        if (p.range_items != 0) {
+            const std::size_t per =
+                bit_table || p.type == ValueType::String ? 1 : registers_per_value(p.type);
+            if (p.range_items % per != 0)
+                return fmt::format(
+                    "--addr '{}' holds {} registers, not a whole number of {} "
+                    "values ({} registers each)",
+                    o.address, p.range_items, o.type, per);
+            items = p.range_items;
+        }
         if (items > 0xFFFF) items = 0xFFFF;
         r.quantity = static_cast<std::uint16_t>(items);
         p.items = r.quantity;
@@ -439,12 +458,17 @@ void add_read_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand(
         "read", "Read one range of a device once or every --interval, as typed values");
     add_common_options(cmd, *o);
-    cmd->add_option("--quantity", o->quantity,
-                    "how many values of --type (string: characters; default 1)")
+    cmd->add_option(
+           "--quantity", o->quantity,
+           "how many values of --type (string: characters; default 1, or as many as a range "
+           "--addr FIRST-LAST holds)")
         ->check(CLI::Range(1, 65535));
     // -q is --quiet in run and fuzz.
     add_deprecated_option(cmd, "-q", "--quantity", o->quantity)->check(CLI::Range(1, 65535));
-    cmd->callback([o, &action] { action = [o] { return run_io(*o); }; });
+    cmd->callback([o, cmd, &action] {
+        o->quantity_given = cmd->count("--quantity") + cmd->count("-q") != 0;
+        action = [o] { return run_io(*o); };
+    });
 }
 
 void add_write_command(CLI::App& app, Action& action) {

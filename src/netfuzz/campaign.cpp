@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -1737,6 +1738,32 @@ CampaignResult Campaign::run() {
     return result_;
 }
 
+// Why discovery found no request to probe with: silence, or answers it cannot use (a device
+// answering everything with 04 does answer: say what it said).
+std::string no_usable_answer(std::uint8_t unit, const std::vector<Pdu>& probes,
+                             const std::vector<Pdu>& answers) {
+    std::string said;
+    bool any = false;
+    for (std::size_t i = 0; i < probes.size(); ++i) {
+        const Pdu& a = answers[i];
+        any = any || !a.empty();
+        std::string what =
+            a.empty() ? std::string("no answer")
+            : a.size() == 2 && a[0] == (probes[i][0] | codec::kExceptionBit)
+                ? fmt::format("exception {:02X} ({})", a[1],
+                              codec::exception_name(static_cast<codec::ExceptionCode>(a[1])))
+                : fmt::format("{} ({})",
+                              a.size() == 1 ? "1 byte" : fmt::format("{} bytes", a.size()),
+                              hex(a, 8));
+        said += fmt::format("{}0x{:02X}: {}", said.empty() ? "" : ", ", probes[i][0], what);
+    }
+    if (!any) return fmt::format("the target does not answer unit {} ({})", unit, said);
+    return fmt::format(
+        "the target answers unit {} but no read with a normal response or exception 02, so "
+        "there is nothing to probe it with ({})",
+        unit, said);
+}
+
 }  // namespace
 
 bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
@@ -1759,7 +1786,11 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
     bool connected = false;
     auto answers = ask_pipelined(target, frames, timeout_ms, connected);
     if (!connected) {
-        error = "cannot connect to the target";
+        // Once more, for the reason (refused, unreachable, timed out): the user has to act on it.
+        int why = 0;
+        error = target.open(timeout_ms, why) ? std::string("cannot connect to the target")
+                                             : fmt::format("cannot connect to the target: {}",
+                                                           why ? std::strerror(why) : "timed out");
         return false;
     }
     for (std::size_t i = 0; i < probes.size(); ++i) {
@@ -1775,9 +1806,7 @@ bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, Targe
             answers[i][1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress))
             profile.probe_pdu = probes[i];
     if (profile.probe_pdu.empty()) {
-        error = fmt::format(
-            "the target does not answer unit {} (tried 0x03, 0x04, 0x01, 0x02, 0x11 and 0x08)",
-            unit);
+        error = no_usable_answer(unit, probes, answers);
         return false;
     }
     // Does it drop what is pipelined behind a request it answers with an exception? Then

@@ -2,6 +2,7 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <ctime>
 
@@ -27,12 +28,13 @@ int run_until_signal(Server& server, const RunOptions& options) {
     const double interval = options.stats_interval_s > 0 ? options.stats_interval_s : 1.0;
     std::int64_t next = start + static_cast<std::int64_t>(interval * 1e9);
     ServerStats before = server.stats();
+    // -d 300ms ends at 300 ms, not at the next whole-second statistics line.
+    const std::int64_t end =
+        options.max_seconds > 0 ? start + static_cast<std::int64_t>(options.max_seconds * 1e9) : 0;
     for (;;) {
         std::int64_t now = net::now_ns();
-        if (options.max_seconds > 0 &&
-            now - start >= static_cast<std::int64_t>(options.max_seconds * 1e9))
-            break;
-        std::int64_t wait = next - now;
+        if (end != 0 && now >= end) break;
+        std::int64_t wait = (end != 0 ? std::min(next, end) : next) - now;
         if (wait < 0) wait = 0;
         timespec ts{static_cast<time_t>(wait / net::kNsPerSec),
                     static_cast<long>(wait % net::kNsPerSec)};

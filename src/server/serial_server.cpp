@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <thread>
 #include <utility>
 
@@ -191,11 +192,14 @@ int run_serial_until_signal(SerialServer& server, bool print_stats, double max_s
     sigaddset(&set, SIGTERM);
     const std::int64_t start = net::now_ns();
     std::int64_t next = start + net::kNsPerSec;
+    const std::int64_t end = max_seconds > 0 ? start + static_cast<std::int64_t>(max_seconds * 1e9)
+                                             : std::numeric_limits<std::int64_t>::max();
     while (!finished) {
         std::int64_t now = net::now_ns();
-        if (max_seconds > 0 && now - start >= static_cast<std::int64_t>(max_seconds * 1e9)) break;
-        // Short waits: a server that failed on its own ends the run too.
-        const std::int64_t wait = std::min<std::int64_t>(next > now ? next - now : 0, kStopCheckNs);
+        if (now >= end) break;
+        // Short waits: a server that failed on its own ends the run too (and -d 300ms ends at
+        // 300 ms, not at the next statistics line).
+        const std::int64_t wait = std::min({next > now ? next - now : 0, kStopCheckNs, end - now});
         timespec ts{static_cast<time_t>(wait / net::kNsPerSec),
                     static_cast<long>(wait % net::kNsPerSec)};
         const int sig = sigtimedwait(&set, nullptr, &ts);

@@ -41,6 +41,18 @@ TEST(Durations, ServeStopsByItselfAndPrintsItsSummary) {
     EXPECT_THAT(r.output, HasSubstr("summary:")) << r.output;
 }
 
+// -d 300ms is 300 ms of serving, not the next whole second (the loop waited for its
+// once-a-second statistics line before looking at the deadline: it printed "summary: 1.0s").
+TEST(Durations, ServeEndsAtItsDurationNotAtTheNextSecond) {
+    auto r = run_mbstorm("serve --listen 127.0.0.1:0 --threads 1 -d 300ms", 60);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const auto at = r.output.find("summary: ");
+    ASSERT_NE(at, std::string::npos) << r.output;
+    const double seconds = std::stod(r.output.substr(at + 9));
+    EXPECT_GE(seconds, 0.3) << r.output;
+    EXPECT_LT(seconds, 1.0) << r.output;
+}
+
 TEST(Durations, BadDurationsNameTheForms) {
     for (const char* args :
          {"run -d nan", "run -d 1m30", "fuzz --target 127.0.0.1:1 --seconds nan",

@@ -131,6 +131,25 @@ TEST_F(ReadWrite, OldSpellingsOfQuantityAndCountStillWorkWithAWarning) {
     EXPECT_EQ(polls, 2u) << r.output;
 }
 
+// --addr FIRST-LAST, as --help says: the range is what is read (reference numbers too);
+// with --quantity besides, or a range not whole values of --type, it is refused.
+TEST_F(ReadWrite, AnAddressRangeSaysHowManyToRead) {
+    auto w = io("write --addr 40011 1 2 3 4");
+    ASSERT_EQ(w.exit_code, 0) << w.output;
+    auto r = io("read --addr 40011-40014");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_EQ(r.output, "[10]: 1\n[11]: 2\n[12]: 3\n[13]: 4\n");
+    auto u32 = io("read --addr 10-13 --type u32");
+    EXPECT_EQ(u32.exit_code, 0) << u32.output;
+    EXPECT_EQ(u32.output, "[10]: 65538\n[12]: 196612\n");
+    auto both = io("read --addr 40011-40014 --quantity 2");
+    EXPECT_EQ(both.exit_code, 2) << both.output;
+    EXPECT_THAT(both.output, HasSubstr("it says how many to read, without --quantity"));
+    auto odd = io("read --addr 10-12 --type u32");
+    EXPECT_EQ(odd.exit_code, 2) << odd.output;
+    EXPECT_THAT(odd.output, HasSubstr("holds 3 registers, not a whole number of u32 values"));
+}
+
 TEST_F(ReadWrite, RefusalsNameTheFieldAndRange) {
     auto ro = io("write --addr 30001 5");
     EXPECT_EQ(ro.exit_code, 2) << ro.output;

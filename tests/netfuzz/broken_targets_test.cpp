@@ -191,6 +191,26 @@ TEST(Baseline, KnownFindingsDoNotFailTheRunNewOnesDo) {
     std::filesystem::remove_all(dir);
 }
 
+// A target the fuzzer cannot start on says why: a device answering every request with 04
+// answers, so the message shows what it answered to each probe; a refused connect names the
+// reason.
+TEST(UnusableTarget, TheErrorSaysWhatTheTargetAnsweredOrWhyItCouldNotConnect) {
+    const FuzzedServer failing("broken_server_failing", "--cases 100 -q");
+    ASSERT_FALSE(failing.target.empty());
+    EXPECT_EQ(failing.run.exit_code, 2) << failing.run.output;
+    EXPECT_NE(failing.run.output.find("answers unit 1 but no read with a normal response"),
+              std::string::npos)
+        << failing.run.output;
+    EXPECT_NE(failing.run.output.find("0x03: exception 04 (SERVER DEVICE FAILURE)"),
+              std::string::npos)
+        << failing.run.output;
+    const auto refused = run_mbstorm("fuzz --target 127.0.0.1:1 --cases 10 -q");
+    EXPECT_EQ(refused.exit_code, 2) << refused.output;
+    EXPECT_NE(refused.output.find("cannot connect to the target: Connection refused"),
+              std::string::npos)
+        << refused.output;
+}
+
 // A target that answers 06 (busy) to most requests: the summary says most cases were wasted
 // (the JSON counts them) and the fuzzer slowed down, instead of a bare "no findings". 1000
 // cases (2 s) give about 1,900 pipelined answers, three quarters of them busy.
