@@ -8,11 +8,43 @@
 #include <memory>
 #include <thread>
 
+#include "codec/function_code.hpp"
 #include "scenario/expect.hpp"
 #include "server/server.hpp"
 #include "slave/device_yaml.hpp"
 
 namespace mbstorm::scenario {
+
+namespace {
+
+std::string_view address_mode_text(load::AddressMode m) {
+    switch (m) {
+        case load::AddressMode::Sequential:
+            return "in turn";
+        case load::AddressMode::Uniform:
+            return "at random";
+        case load::AddressMode::Zipf:
+            return "zipf";
+    }
+    return "";
+}
+
+// What was asked of the target, for the report's header: the function, where, how much, which
+// unit ("request: 0x03 read_holding_registers, addresses 0-99 in turn, quantity 10, unit 1").
+std::string describe_request(const load::Operation& op) {
+    const bool range = op.last_address && *op.last_address != op.first_address;
+    const std::string where =
+        range ? fmt::format("addresses {}-{} {}", op.first_address, *op.last_address,
+                            address_mode_text(op.address_mode))
+              : fmt::format("address {}", op.first_address);
+    const std::string label = codec::function_label(op.function);
+    const bool named = !op.name.empty() && label.find(op.name) == std::string::npos;
+    return fmt::format("request{}: {}, {}, quantity {}, unit {}",
+                       named ? " '" + op.name + "'" : std::string(), label, where, op.quantity,
+                       op.unit_id);
+}
+
+}  // namespace
 
 load::Plan engine_plan(const Scenario& s) {
     load::Plan plan = s.plan;
@@ -113,9 +145,14 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     eo.start_at = hooks.start_at;
     out = load::run_load(plan, eo);
 
+    for (const load::Operation& op : plan.operations)
+        out.run.metadata.notes.push_back(describe_request(op));
     if (embedded) {
-        out.run.metadata.notes.push_back(
-            fmt::format("target: embedded reference slave on {}", embedded->endpoint()));
+        out.run.metadata.notes.push_back(fmt::format(
+            "target: embedded reference slave on {} ({} thread{}): it shares this machine's {} "
+            "cores with the load, so the numbers measure both (--target for a device's own)",
+            embedded->endpoint(), embedded->threads(), embedded->threads() == 1 ? "" : "s",
+            std::max(1u, std::thread::hardware_concurrency())));
         embedded->stop();
     } else if (s.slave_given) {
         out.run.metadata.notes.push_back("slave: settings not used (a target was given)");
