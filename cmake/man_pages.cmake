@@ -29,8 +29,29 @@ if(NOT subcommands)
   message(FATAL_ERROR "no subcommands in `${MBSTORM} --help`:\n${help}")
 endif()
 
+# The "Heading:" blocks a subcommand's --help ends with (Examples, Exit status, Files) as man
+# sections of their own, lines kept as written (help2man would run them together).
+function(footer_sections help out_var)
+  set(sections "")
+  foreach(heading Examples "Exit status" Files)
+    if(help MATCHES "\n${heading}:\n(([^\n]+\n)+)")
+      string(TOUPPER "${heading}" upper)
+      string(REPLACE "\\" "\\e" block "${CMAKE_MATCH_1}")
+      string(REGEX REPLACE "(^|\n)  " "\\1" block "${block}")
+      string(REGEX REPLACE "(^|\n)([.'])" "\\1\\\\&\\2" block "${block}")
+      string(APPEND sections "[${upper}]\n.nf\n${block}.fi\n")
+    endif()
+  endforeach()
+  set(${out_var} "${sections}" PARENT_SCOPE)
+endfunction()
+
 function(write_page command name summary see_also_text)
-  file(WRITE "${OUT_DIR}/wrappers/${name}.h2m" "[SEE ALSO]\n${see_also_text}")
+  set(footer "")
+  if(name MATCHES "^mbstorm-(.+)$")
+    execute_process(COMMAND "${MBSTORM}" ${CMAKE_MATCH_1} --help OUTPUT_VARIABLE sub_help)
+    footer_sections("${sub_help}" footer)
+  endif()
+  file(WRITE "${OUT_DIR}/wrappers/${name}.h2m" "${footer}[SEE ALSO]\n${see_also_text}")
   execute_process(
     COMMAND "${HELP2MAN}" --no-info --no-discard-stderr "--version-string=${VERSION}"
             "--name=${summary}" "--include=${OUT_DIR}/wrappers/${name}.h2m"
@@ -48,7 +69,10 @@ write_page("${MBSTORM}" mbstorm "Modbus TCP load tester, reference slave and fuz
 foreach(name IN LISTS subcommands)
   # help2man names a page after the program it runs: a wrapper called mbstorm-<name>.
   set(wrapper "${OUT_DIR}/wrappers/mbstorm-${name}")
-  file(WRITE "${wrapper}" "#!/bin/sh\nexec '${MBSTORM}' ${name} \"$@\"\n")
+  # The footer's blocks go in as sections of their own (footer_sections): help2man sees the
+  # help without them.
+  file(WRITE "${wrapper}"
+       "#!/bin/sh\n'${MBSTORM}' ${name} \"$@\" | sed '/^Examples:$/,$d'\n")
   file(CHMOD "${wrapper}" PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE)
   write_page("${wrapper}" "mbstorm-${name}" "${summary_${name}}" ".BR mbstorm (1)\n")
 endforeach()

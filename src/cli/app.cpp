@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "cli/commands.hpp"
+#include "cli/help_footers.hpp"
+#include "cli/packaged_files.hpp"
 #include "cli/version.hpp"
 #include "util/closest_name.hpp"
 
@@ -140,6 +142,7 @@ void add_all_commands(CLI::App& app, Action& action) {
     add_write_command(app, action);
     add_merge_command(app, action);
     add_completion_command(app, action);
+    add_help_footers(app, packaged_dir("scenarios"));
 }
 
 int run_cli(int argc, char** argv) {

@@ -106,7 +106,7 @@ void add_merge_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<MergeOptions>();
     auto* cmd = app.add_subcommand(
         "merge",
-        "combine the runs of one test (each run's --json and --hlog files) into one report, "
+        "Combine the runs of one test (each run's --json and --hlog files) into one report, "
         "as if one machine had run the whole plan; thresholds judged on the merged result");
     cmd->add_option("files", o->files,
                     "every run's JSON summary (run --json) and interval log (run --hlog)")

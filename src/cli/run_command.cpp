@@ -10,6 +10,7 @@
 #include "cli/deprecated_option.hpp"
 #include "cli/distributed_options.hpp"
 #include "cli/duration_option.hpp"
+#include "cli/packaged_files.hpp"
 #include "cli/run_output.hpp"
 #include "cli/run_scenario.hpp"
 #include "cli/transport_options.hpp"
@@ -342,8 +343,21 @@ void add_run_command(CLI::App& app, Action& action) {
                     "(2026-11-24T14:00:00Z, or with an offset) or seconds since the epoch; a "
                     "late start begins at once and reports by how much");
     cmd->add_option("file", o->scenario_file,
-                    "scenario file (YAML, see scenarios/README.md); flags override its values")
-        ->check(CLI::ExistingFile);
+                    "scenario file (YAML, see scenarios/README.md), or the name of a packaged "
+                    "one (quickstart, ci-gate, soak, ...); flags override its values")
+        ->transform(CLI::Validator(
+            [](std::string& arg) {
+                const std::string found = find_scenario(arg);
+                if (found.empty())
+                    return fmt::format("no scenario file '{}'{}", arg,
+                                       packaged_dir("scenarios").empty()
+                                           ? std::string()
+                                           : " (nor a packaged scenario of that name: " +
+                                                 packaged_dir("scenarios") + ")");
+                arg = found;
+                return std::string();
+            },
+            "FILE|NAME"));
     cmd->add_flag("--print-scenario", o->print_scenario,
                   "print the fully resolved scenario (defaults included) as YAML and exit");
     cmd->add_option("--junit", o->junit, "write the thresholds as JUnit XML test cases");

@@ -3,6 +3,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <string>
 
 #include "../support/run_mbstorm.hpp"
@@ -72,6 +74,36 @@ TEST(CliNames, ValuesAndKnownSpellingsAreNotTakenForOptions) {
     EXPECT_THAT(run_mbstorm("encode --fc 6 --addr 0 --value -1").output,
                 HasSubstr("mbstorm encode: --value: Value -1 not in range"));
     EXPECT_THAT(run_mbstorm("decode --pdu -- -z").output, Not(HasSubstr("unknown option")));
+}
+
+// Every subcommand's --help ends with examples that start with its own name and the exit
+// codes it uses (the man pages take both as sections: script.man_pages).
+TEST(CliHelp, EverySubcommandHasExamplesAndExitStatus) {
+    const auto all = run_mbstorm("--help");
+    const auto list = all.output.substr(all.output.find("Subcommands:"));
+    std::istringstream lines(list);
+    std::string line;
+    int checked = 0;
+    while (std::getline(lines, line)) {
+        if (line.rfind("  ", 0) != 0 || line.size() < 3 || line[2] == ' ') continue;
+        const std::string sub = line.substr(2, line.find(' ', 2) - 2);
+        const auto help = run_mbstorm(sub + " --help");
+        EXPECT_THAT(help.output, HasSubstr("\nExamples:\n  mbstorm " + sub)) << sub;
+        EXPECT_THAT(help.output, HasSubstr("\nExit status:\n  0  ")) << sub;
+        ++checked;
+    }
+    EXPECT_GE(checked, 9) << all.output;
+}
+
+// A packaged scenario runs by its name; a name that is neither a file nor packaged says where
+// the packaged ones are.
+TEST(CliHelp, APackagedScenarioRunsByName) {
+    const auto ok = run_mbstorm("run quickstart --print-scenario");
+    EXPECT_EQ(ok.exit_code, 0) << ok.output;
+    EXPECT_THAT(ok.output, HasSubstr("scenarios/quickstart.yaml"));
+    const auto none = run_mbstorm("run no-such-scenario -q");
+    EXPECT_EQ(none.exit_code, 2) << none.output;
+    EXPECT_THAT(none.output, HasSubstr("no scenario file 'no-such-scenario' (nor a packaged "));
 }
 
 TEST(CliHelp, ParseErrorsNameTheSubcommand) {

@@ -21,4 +21,10 @@ for f in doc/mbstorm/README.md doc/mbstorm/copyright doc/mbstorm/docs/json-schem
   bash-completion/completions/mbstorm; do
   [ -f "$work/prefix/share/$f" ] || { echo "FAIL share/$f not installed" >&2; exit 1; }
 done
-echo "ok   installed: $version, its docs and scenarios"
+# The installed binary names its own scenarios and finds one by name (not the checkout's).
+grep -q -- "$work/prefix/share/mbstorm/scenarios" <<<"$run_help" ||
+  { echo "FAIL installed mbstorm run --help does not name $work/prefix/share/mbstorm/scenarios" >&2; exit 1; }
+by_name=$(cd "$work" && "$work/prefix/bin/mbstorm" run ci-gate --print-scenario)
+grep -q -- "from $work/prefix/share/mbstorm/scenarios/ci-gate.yaml" <<<"$by_name" ||
+  { echo "FAIL installed mbstorm run ci-gate did not find the installed scenario: $(head -1 <<<"$by_name")" >&2; exit 1; }
+echo "ok   installed: $version, its docs and scenarios (run NAME finds them)"

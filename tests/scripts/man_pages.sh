@@ -39,6 +39,11 @@ for sub in "${subcommands[@]}"; do
   grep -q "^       mbstorm-$sub - " "$work/page" || fail "mbstorm-$sub(1) has no NAME line"
   grep -q "^       mbstorm $sub " "$work/page" || fail "mbstorm-$sub(1) has no synopsis 'mbstorm $sub ...'"
   grep -q "mbstorm(1)" "$work/page" || fail "mbstorm-$sub(1) does not point to mbstorm(1)"
+  # The footer's Examples and Exit status are sections of their own, one line per example.
+  grep -q "^EXAMPLES" "$work/page" || fail "mbstorm-$sub(1) has no EXAMPLES section"
+  grep -q "^EXIT STATUS" "$work/page" || fail "mbstorm-$sub(1) has no EXIT STATUS section"
+  grep -qE "^       mbstorm $sub( |$)" <(sed -n '/^EXAMPLES/,/^[A-Z]/p' "$work/page") ||
+    fail "mbstorm-$sub(1)'s EXAMPLES do not start a line with 'mbstorm $sub'"
   "$mbstorm" "$sub" --help | options_in >"$work/options"
   [ -s "$work/options" ] || fail "no options found in mbstorm $sub --help"
   while read -r option; do
