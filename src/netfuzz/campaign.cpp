@@ -614,7 +614,7 @@ bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
 void Campaign::take_coverage(const Case& c) {
     const CoverageSample s = options_.coverage->collect();
     if (s.new_bits) {
-        gen_->add_to_corpus(c, s.comparisons);
+        gen_->add_to_corpus(c, s.comparisons, s.rarest_edge);
         result_.corpus_size = gen_->corpus_size();
         save_to_corpus(gen_->corpus().back());
     }
@@ -1369,6 +1369,7 @@ void Campaign::start_generator() {
     go.intercharacter_us =
         static_cast<std::uint32_t>(options_.connector->intercharacter_timeout_ns() / 1000);
     gen_ = std::make_unique<Generator>(go);
+    if (options_.coverage) gen_->favour_rare_edges(options_.coverage.get());
 }
 
 bool Campaign::learn_then_look(std::uint64_t& generated) {

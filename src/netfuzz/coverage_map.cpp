@@ -77,6 +77,7 @@ bool CoverageMap::create(std::size_t map_size, std::string& error) {
     map_size_ = map_size;
     virgin_.assign(map_size, 0xFF);
     reached_.assign(map_size, false);
+    cases_hitting_.assign(map_size, 0);
     words_known_.assign(65536 / 8 + 256 / 8, 0);
     clear();
     return true;
@@ -154,6 +155,9 @@ CoverageSample CoverageMap::collect() {
             const std::uint8_t b = hit_bucket(map_[k]);
             if (!b) continue;
             ++s.edges;
+            const std::uint32_t hits = ++cases_hitting_[k];
+            if (s.edges == 1 || hits < cases_hitting_[s.rarest_edge])
+                s.rarest_edge = static_cast<std::uint32_t>(k);
             if (!(virgin_[k] & b)) continue;
             s.new_bits = true;
             if (virgin_[k] == 0xFF) {

@@ -27,6 +27,9 @@ struct CoverageSample {
     bool new_bits = false;        // a bucket bit no case set before
     std::uint32_t new_edges = 0;  // edges never hit before
     std::uint32_t edges = 0;      // edges this case hit
+    // Of the edges this case hit, the one the fewest cases of the run have hit (counting this
+    // one): a corpus entry's claim to more runs (Generator favours entries of rare edges).
+    std::uint32_t rarest_edge = 0;
     // Constants the target compared its input against (mbstorm's runtime only), deduplicated.
     std::vector<std::uint16_t> compared_words;
     std::vector<std::uint8_t> compared_bytes;
@@ -54,6 +57,10 @@ class CoverageMap {
     CoverageSample collect();
     // Whether the map cell `index` (an edge's guard) was ever hit during the run.
     bool reached(std::size_t index) const noexcept;
+    // How many collected cases hit the map cell `index`.
+    std::uint32_t cases_hitting(std::size_t index) const noexcept {
+        return index < cases_hitting_.size() ? cases_hitting_[index] : 0;
+    }
 
     std::uint32_t edges_seen() const noexcept { return edges_seen_; }
     std::size_t map_size() const noexcept { return map_size_; }
@@ -67,6 +74,7 @@ class CoverageMap {
     std::size_t map_size_ = 0;
     std::vector<std::uint8_t> virgin_;  // bucket bits no case has set yet (AFL's virgin map)
     std::vector<bool> reached_;         // cells hit before the last clear()
+    std::vector<std::uint32_t> cases_hitting_;  // per cell: collected cases that hit it
     std::uint32_t edges_seen_ = 0;
     std::vector<std::uint8_t> words_known_;  // a bit per 16-bit word already reported
 };

@@ -70,7 +70,15 @@ class Generator {
     // Its failed comparisons give the next cases: an operand found in one of its frames
     // replaced by the other (input-to-state, as AFL++'s cmplog), alone and together with the
     // comparison made next (a compiler may test `a == X && b == Y` as one branch).
-    void add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons = {});
+    // `rarest_edge`: the map cell of the rarest edge the case hit (CoverageSample).
+    void add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons = {},
+                       std::uint32_t rarest_edge = 0);
+    // Half the corpus picks go to the entry whose rarest edge the fewest cases have hit so
+    // far (counted by `map`), as FairFuzz does: what reaches a rare branch is mutated until
+    // the branch is no longer rare. Without a map, the newest entries are favoured.
+    void favour_rare_edges(const CoverageMap* map) noexcept { edge_counts_ = map; }
+    // The corpus entry the next coverage mutation starts from.
+    std::size_t pick_corpus_entry();
     void add_compared(const std::vector<std::uint16_t>& words,
                       const std::vector<std::uint8_t>& bytes);
     std::size_t corpus_size() const noexcept { return coverage_corpus_.size(); }
@@ -140,6 +148,8 @@ class Generator {
     };
     std::vector<Edge> edges_;  // map-edge requests, walked in turn
     std::vector<Case> coverage_corpus_;
+    std::vector<std::uint32_t> corpus_rare_edge_;  // per entry: its rarest edge when it joined
+    const CoverageMap* edge_counts_ = nullptr;
     std::vector<Case> solved_;  // input-to-state cases, run before any other
     std::vector<std::uint16_t> compared_words_;
     std::vector<std::uint8_t> compared_bytes_;

@@ -27,13 +27,15 @@ constexpr std::size_t kMaxCompared = 4096;
 
 }  // namespace
 
-void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons) {
+void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons,
+                              std::uint32_t rarest_edge) {
     // A frame per send, so that a mutation or a solved comparison stays inside one frame and
     // its MBAP length can follow it.
     Case entry = split_frames(c);
     entry.number = 0;
     entry.cls = MutationClass::CoverageMutation;
     coverage_corpus_.push_back(entry);
+    corpus_rare_edge_.push_back(rarest_edge);
     solve_comparisons(entry, comparisons);
 }
 
@@ -99,16 +101,26 @@ std::uint16_t Generator::compared_word() {
     return word();
 }
 
+std::size_t Generator::pick_corpus_entry() {
+    const auto n = static_cast<std::uint32_t>(coverage_corpus_.size());
+    if (!rng_.chance(2)) return rng_.below(n);
+    if (!edge_counts_) return n > kFrontier ? n - 1 - rng_.below(kFrontier) : rng_.below(n);
+    // The entry of the rarest edge; of equally rare ones, the newest.
+    std::size_t best = n - 1;
+    for (std::size_t i = n; i-- > 0;)
+        if (edge_counts_->cases_hitting(corpus_rare_edge_[i]) <
+            edge_counts_->cases_hitting(corpus_rare_edge_[best]))
+            best = i;
+    return best;
+}
+
 void Generator::corpus_mutation(Case& out) {
     if (!solved_.empty()) {
         out = std::move(solved_.back());
         solved_.pop_back();
         return;
     }
-    const auto n = static_cast<std::uint32_t>(coverage_corpus_.size());
-    const std::uint32_t pick =
-        rng_.chance(2) && n > kFrontier ? n - 1 - rng_.below(kFrontier) : rng_.below(n);
-    out = coverage_corpus_[pick];
+    out = coverage_corpus_[pick_corpus_entry()];
     out.cls = MutationClass::CoverageMutation;
     out.pipelinable = false;
     // One frame of the case (a sequence keeps its other steps as they were).

@@ -202,3 +202,53 @@ TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
     EXPECT_TRUE(load_corpus(dir, back, error));  // no folder yet: an empty corpus
     EXPECT_TRUE(back.empty());
 }
+
+// Each case's rarest edge: of the cells it hit, the one the fewest collected cases hit.
+TEST(CoverageMap, ACaseNamesTheRarestEdgeItHit) {
+    CoverageMap m;
+    std::string error;
+    ASSERT_TRUE(m.create(65536, error)) << error;
+    TargetSide target(m);
+    ASSERT_NE(target.map, nullptr);
+    for (int i = 0; i < 5; ++i) {  // five cases through cell 100 only
+        m.clear();
+        target.map[100] = 1;
+        EXPECT_EQ(m.collect().rarest_edge, 100u);
+    }
+    m.clear();
+    target.map[100] = 3;
+    target.map[7000] = 1;  // a case that also reaches cell 7000, hit by nobody before
+    const CoverageSample s = m.collect();
+    EXPECT_EQ(s.rarest_edge, 7000u);
+    EXPECT_EQ(m.cases_hitting(100), 6u);
+    EXPECT_EQ(m.cases_hitting(7000), 1u);
+}
+
+// Corpus entries of rare edges get more runs (FairFuzz's rule): of two entries, the one whose
+// edge one case reached is picked about three times in four (half the picks go to the
+// rarest, half are uniform), the one whose edge fifty cases reached about once in four.
+TEST(CoverageCorpus, EntriesOfRareEdgesAreMutatedMoreOften) {
+    CoverageMap m;
+    std::string error;
+    ASSERT_TRUE(m.create(65536, error)) << error;
+    TargetSide target(m);
+    ASSERT_NE(target.map, nullptr);
+    auto run_case = [&](std::size_t cell) {
+        m.clear();
+        target.map[cell] = 1;
+        return m.collect();
+    };
+    GeneratorOptions o;
+    o.seed = 3;
+    Generator g(o);
+    g.favour_rare_edges(&m);
+    Case entry;
+    entry.steps.push_back(Step{Op::Send, 0, 0, 0, frame_pdu({0x03, 0x00, 0x00, 0x00, 0x01}, 1, 1)});
+    g.add_to_corpus(entry, {}, run_case(10).rarest_edge);  // common: hit 50 times below
+    g.add_to_corpus(entry, {}, run_case(20).rarest_edge);  // rare: hit once
+    for (int i = 0; i < 49; ++i) run_case(10);
+    int rare = 0;
+    for (int i = 0; i < 1000; ++i) rare += g.pick_corpus_entry() == 1;
+    EXPECT_GT(rare, 650) << "the rare edge's entry was picked " << rare << " times in 1000";
+    EXPECT_LT(rare, 850);
+}
