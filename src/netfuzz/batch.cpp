@@ -11,6 +11,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/rules.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -305,7 +306,8 @@ void BatchRunner::conclude(Lane& l, Round& round) {
             round.judged[f.case_index] = true;
             result.verdicts.emplace_back(
                 f.case_index,
-                Verdict{Oracle::Hang, "no-answer/" + culprit_text(cases[f.case_index].cls, &f.info),
+                Verdict{Oracle::Hang,
+                        unanswered_rule(false, culprit_text(cases[f.case_index].cls, &f.info)),
                         f.info.pdu.empty() ? -1 : f.info.pdu[0],
                         fmt::format("no answer to request {} (later requests were answered)",
                                     hex(f.info.pdu, 16)),

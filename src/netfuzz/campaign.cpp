@@ -37,6 +37,7 @@
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/state_marker.hpp"
 #include "netfuzz/wire.hpp"
 
@@ -80,7 +81,7 @@ constexpr unsigned kTimingConfirmations = 2;
 // A finding about what a read shows after a write: whether it shows again depends on what the
 // registers held before the case ran.
 bool reads_back_state(const Verdict& v) {
-    return v.oracle == Oracle::SpecDeviation && v.rule.rfind("read-after-write", 0) == 0;
+    return v.oracle == Oracle::SpecDeviation && v.rule.rfind(kReadAfterWriteMismatchRule, 0) == 0;
 }
 
 // Each crash root cause may cost at most this many target restarts (finding it, confirming
@@ -186,7 +187,7 @@ std::string variant_of(const Verdict& v, const Case& c) {
 }
 
 bool whole_server_hang(const Verdict& v) {
-    return v.oracle == Oracle::Hang && v.rule.rfind("whole-server-hang", 0) == 0;
+    return v.oracle == Oracle::Hang && v.rule.rfind(kWholeServerHangRule, 0) == 0;
 }
 
 class Campaign {
@@ -508,7 +509,7 @@ void Campaign::learn_costly(const Finding& f) {
     const Oracle o = f.oracle();
     if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
     const std::string culprit = culprit_of(f.verdict.rule);
-    if (!culprit.empty() && culprit != "capacity") {
+    if (!culprit.empty() && culprit != kCapacityCulprit) {
         learn_costly_signatures(culprit, f.fuzz_case);
         if (f.original_case.steps.size()) learn_costly_signatures(culprit, f.original_case);
     }
@@ -517,12 +518,12 @@ void Campaign::learn_costly(const Finding& f) {
         gen_->deprioritise(f.fuzz_case.function, f.fuzz_case.cls);
     // A server that stalls every client while a frame is unfinished stalls them whatever the
     // frame: each case delivering one in pieces costs a timeout to show it again.
-    if (f.verdict.rule == "stalls-other-connections(partial-frame)")
+    if (f.verdict.rule == stalls_other_connections_rule(kPartialFrameCulprit))
         for (unsigned fc = 0; fc < 256; ++fc)
             for (const MutationClass cls : {MutationClass::Split, MutationClass::BurstSplit,
                                             MutationClass::PartialHold, MutationClass::Drip})
                 gen_->deprioritise(static_cast<std::uint8_t>(fc), cls);
-    if (f.verdict.rule == "drops-requests-after-exception") set_drops_after_exception();
+    if (f.verdict.rule == kDropsRequestsAfterExceptionRule) set_drops_after_exception();
 }
 
 void Campaign::set_drops_after_exception() {
@@ -921,8 +922,10 @@ bool Campaign::move_into_map(Step& s, int fc) const {
 // outside the map may be a target that never makes the 03 check; with the address inside
 // the map it shows which. Whatever deviation the repaired request still draws is the finding.
 void Campaign::repair_fields(Finding& f) {
+    const std::string address_refused_where_other_owed = exception_where_owed_prefix(
+        static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress));
     if (f.verdict.oracle != Oracle::SpecDeviation ||
-        f.verdict.rule.rfind("exception-02-where-", 0) != 0 || result_.model.empty() ||
+        f.verdict.rule.rfind(address_refused_where_other_owed, 0) != 0 || result_.model.empty() ||
         !can_afford(1))
         return;
     Case repaired = f.fuzz_case;
@@ -1083,7 +1086,7 @@ void Campaign::record_lost_batch(const std::vector<Case>& batch) {
     Verdict v = fresh_probe_verdict(
         probe_target(*options_.connector, result_.profile, options_.timeout_ms));
     if (!v) v = fresh_probe_verdict(ProbeResult::ConnectFailed);
-    v.rule += "/pipelined-batch";
+    v.rule = rule_with_culprit(v.rule, kPipelinedBatchCulprit);
     Case all;
     all.cls = MutationClass::Coalesced;
     all.pipelinable = true;
@@ -1442,13 +1445,9 @@ std::vector<std::string> Campaign::lane_break_keys(const LaneBreak& b) const {
     if (b.closed && b.unanswered_invalid)  // the executor's order (executor.cpp)
         keys.push_back(fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule));
     if (b.has_previous && b.previous_exception)
-        keys.push_back(close +
-                       (b.closed ? "closes-after-exception" : "drops-requests-after-exception"));
-    if (b.has_previous)
-        keys.push_back(close + (b.closed ? "closes-after/" : "drops-requests-after/") +
-                       b.previous_culprit);
-    keys.push_back(close + (b.closed ? "close-with-request-pending/" : "no-answer/") +
-                   b.unanswered_culprit);
+        keys.push_back(close + after_exception_rule(b.closed));
+    if (b.has_previous) keys.push_back(close + after_request_rule(b.closed, b.previous_culprit));
+    keys.push_back(close + unanswered_rule(b.closed, b.unanswered_culprit));
     return keys;
 }
 

@@ -14,6 +14,7 @@
 #include "net/clock.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/executor.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -136,7 +137,7 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
             out.target_down = true;
             out.verdict = Verdict{
                 Oracle::Crash,
-                "target-down/capacity",
+                target_down_rule(kCapacityCulprit),
                 -1,
                 fmt::format("the target's process died with {} connections opened (every idle "
                             "connection it held was closed at once)",
@@ -174,7 +175,7 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
                 conns[oldest].state == ConnState::Waiting && !out_of_time()) {
                 out.verdict = Verdict{
                     Oracle::Hang,
-                    "capacity/existing-connections-unserved",
+                    kCapacityExistingUnservedRule,
                     -1,
                     fmt::format("with {} connections open, the oldest one stopped answering",
                                 conns.size()),
@@ -192,7 +193,7 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
         out.target_down = true;
         if (!out.verdict)
             out.verdict = Verdict{Oracle::Crash,
-                                  "target-down/capacity",
+                                  target_down_rule(kCapacityCulprit),
                                   -1,
                                   fmt::format("target stopped accepting connections after "
                                               "holding {} connections",

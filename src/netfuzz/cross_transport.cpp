@@ -13,6 +13,7 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "net/tls_hello.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/tls_link.hpp"
 
 namespace mbstorm::netfuzz {
@@ -199,7 +200,7 @@ Verdict CrossRunner::answered_verdict(MutationClass cls) const {
             // discards, whatever else it misreads.
             if (cls == MutationClass::TlsToPlain)
                 return Verdict{Oracle::SpecDeviation,
-                               "answers-nonzero-protocol-id",
+                               kAnswersNonzeroProtocolIdRule,
                                -1,
                                "the plain Modbus/TCP port answered the bytes of a TLS "
                                "ClientHello as a Modbus request (their protocol id is not 0)",
@@ -209,7 +210,7 @@ Verdict CrossRunner::answered_verdict(MutationClass cls) const {
             const bool in_session = cls == MutationClass::PlaintextInSession;
             return Verdict{
                 Oracle::SpecDeviation,
-                in_session ? "tls-session-answers-plaintext" : "tls-port-answers-plaintext",
+                in_session ? kTlsSessionAnswersPlaintextRule : kTlsPortAnswersPlaintextRule,
                 fc,
                 in_session ? "plain Modbus/TCP written between the records of a TLS session was "
                              "answered: the session does not protect the requests"
@@ -236,9 +237,9 @@ void CrossRunner::judge(const Case& c) {
         // To a plain Modbus/TCP server, TLS bytes are a frame that never finishes: a stall
         // they cause is the one a started frame causes.
         const std::string_view held =
-            c.cls == MutationClass::TlsToPlain ? "partial-frame" : class_name(c.cls);
+            c.cls == MutationClass::TlsToPlain ? kPartialFrameCulprit : class_name(c.cls);
         consider(Verdict{
-            Oracle::Hang, fmt::format("stalls-other-connections({})", held), -1,
+            Oracle::Hang, stalls_other_connections_rule(held), -1,
             fmt::format(
                 "a concurrent connection {} ({} ms) while another held {}",
                 p.result == ProbeResult::Ok ? std::string("was answered late")
@@ -259,7 +260,7 @@ void CrossRunner::judge(const Case& c) {
     if (r != ProbeResult::Ok) {
         out_.target_down = r == ProbeResult::ConnectFailed || r == ProbeResult::Closed;
         Verdict v = fresh_probe_verdict(r);
-        v.rule += "/" + std::string(class_name(c.cls));
+        v.rule = rule_with_culprit(v.rule, class_name(c.cls));
         consider(std::move(v));
     }
     if (candidate) candidate.summary += fmt::format(" [{}]", class_name(c.cls));

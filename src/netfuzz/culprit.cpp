@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "codec/limits.hpp"
+#include "netfuzz/rules.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -34,7 +35,8 @@ bool reassemble(const Case& c, Case& plain, codec::Framing framing) {
 }
 
 std::string signature_of(std::string culprit, const RequestInfo& info) {
-    if (culprit.rfind("fc", 0) == 0) culprit += fmt::format("/{}", request_kind(info));
+    if (culprit.rfind(kFunctionCulpritPrefix, 0) == 0)
+        culprit += fmt::format("/{}", request_kind(info));
     return culprit;
 }
 

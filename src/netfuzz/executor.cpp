@@ -17,6 +17,7 @@
 #include "net/clock.hpp"
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/death_watch.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/state_marker.hpp"
 #include "netfuzz/wire.hpp"
 
@@ -154,7 +155,7 @@ class CaseRunner {
     struct SideProbe {
         ProbeResult result;
         std::int64_t ms;
-        std::string during;  // "partial-frame", "exception" or "request"
+        std::string during;  // kPartialFrameCulprit, kExceptionHeld or kRequestHeld
     };
 
     Connector& target_;
@@ -518,7 +519,7 @@ void CaseRunner::judge_framing(std::size_t i, const Conn& cn, Judgement& j) cons
     if (framed()) {
         j.consider(Verdict{
             Oracle::MalformedResponse,
-            cn.bad_response_check ? "response-check-failed" : "response-framing", -1,
+            cn.bad_response_check ? kResponseCheckFailedRule : kResponseFramingRule, -1,
             fmt::format(
                 "response framing lost on connection {}: {}", i,
                 cn.bad_response_check
@@ -528,7 +529,7 @@ void CaseRunner::judge_framing(std::size_t i, const Conn& cn, Judgement& j) cons
             hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
         return;
     }
-    j.consider(Verdict{Oracle::MalformedResponse, "response-framing", -1,
+    j.consider(Verdict{Oracle::MalformedResponse, kResponseFramingRule, -1,
                        fmt::format("response framing lost on connection {}: MBAP length {}", i,
                                    codec::read_mbap_header(cn.received.data() + cn.rparsed).length),
                        "MBAP length 2..254", hex(codec::Bytes(cn.received).subspan(cn.rparsed))});
@@ -589,7 +590,7 @@ void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
         j.consider(Verdict{Oracle::MalformedResponse,
                            length_mismatch_sent || tid == started_tid ? kStreamLostRule
                            : partial_only                             ? kAnswersPartialFrameRule
-                                                                      : "unmatched-transaction-id",
+                                                                      : kUnmatchedTransactionIdRule,
                            fc,
                            fmt::format("response with transaction id {:04X} matches no request",
                                        codec::load_be16(received_frames_of.data() + off)),
@@ -615,11 +616,11 @@ std::pair<std::string, const RequestInfo*> CaseRunner::silence_rule(const Case& 
     if (answered_after(cn.pending, k)) before = nullptr;
     const bool exception_drop =
         before && before_exception && profile_.drops_after_exception && (!closed || cn.shut);
-    if (exception_drop) return {"drops-requests-after-exception", before};
+    if (exception_drop) return {kDropsRequestsAfterExceptionRule, before};
     // The same valid request, answered before: nothing in it is to blame.
     if (c.cls == MutationClass::Repeated)
         return {closed ? kRandomCloseRule : kRandomDropRule, nullptr};
-    if (cn.shut) return {"drops-answers-on-half-close", blamed};
+    if (cn.shut) return {kDropsAnswersOnHalfCloseRule, blamed};
     if (before && pdu_length_mismatch(*before)) return {kStreamLostRule, before};
     if (!pd.probe && closed && pdu_length_mismatch(info)) return {kStreamLostRule, blamed};
     // Closing on a request it cannot use is one policy of the server's framing, whatever the
@@ -628,15 +629,10 @@ std::pair<std::string, const RequestInfo*> CaseRunner::silence_rule(const Case& 
     // findings for one defect, until this came first).
     if (closed && !pd.probe && request_kind(info) != "valid")
         return {kClosesOnInvalidRequestRule, blamed};
-    if (before && before_exception)
-        return {closed ? "closes-after-exception" : "drops-requests-after-exception", before};
+    if (before && before_exception) return {after_exception_rule(closed), before};
     if (!pd.probe || !before)
-        return {fmt::format("{}/{}", closed ? "close-with-request-pending" : "no-answer",
-                            culprit_text(c.cls, pd.probe ? nullptr : &info)),
-                blamed};
-    return {fmt::format("{}/{}", closed ? "closes-after" : "drops-requests-after",
-                        culprit_text(c.cls, before)),
-            blamed};
+        return {unanswered_rule(closed, culprit_text(c.cls, pd.probe ? nullptr : &info)), blamed};
+    return {after_request_rule(closed, culprit_text(c.cls, before)), blamed};
 }
 
 void CaseRunner::judge_silence(const Case& c, std::size_t i, const Conn& cn, std::size_t k,
@@ -653,7 +649,7 @@ void CaseRunner::judge_silence(const Case& c, std::size_t i, const Conn& cn, std
     const int fc = blamed && !blamed->pdu.empty() ? blamed->pdu[0] : -1;
     // A drop behind an exception is the same fault whether or not our half-close then
     // (rightly) closed the connection.
-    const bool exception_drop = rule == "drops-requests-after-exception" && cn.shut;
+    const bool exception_drop = rule == kDropsRequestsAfterExceptionRule && cn.shut;
     if (cn.closed && !exception_drop) {
         j.consider(Verdict{
             Oracle::UnexpectedClose, std::move(rule), fc,
@@ -728,19 +724,19 @@ void CaseRunner::judge_side_probes(Judgement& j) const {
     for (const SideProbe& sp : side_probes_) {
         const bool stalled = sp.result != ProbeResult::Ok || sp.ms >= stall_threshold_ms();
         if (!stalled || sp.result == ProbeResult::ConnectFailed) continue;
-        j.consider(
-            Verdict{Oracle::Hang, fmt::format("stalls-other-connections({})", sp.during), j.last_fc,
-                    fmt::format("a concurrent connection {} ({} ms) while another held {}",
-                                sp.result == ProbeResult::Ok
-                                    ? std::string("was answered late")
-                                    : fmt::format("got {}", probe_result_name(sp.result)),
-                                sp.ms,
-                                sp.during == "partial-frame" ? "a started frame"
-                                : sp.during == "exception" ? "a request answered with an exception"
-                                                           : "a request"),
-                    fmt::format("an answer within {} ms, whatever other connections do",
-                                stall_threshold_ms()),
-                    fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
+        j.consider(Verdict{
+            Oracle::Hang, stalls_other_connections_rule(sp.during), j.last_fc,
+            fmt::format("a concurrent connection {} ({} ms) while another held {}",
+                        sp.result == ProbeResult::Ok
+                            ? std::string("was answered late")
+                            : fmt::format("got {}", probe_result_name(sp.result)),
+                        sp.ms,
+                        sp.during == kPartialFrameCulprit ? "a started frame"
+                        : sp.during == kExceptionHeld     ? "a request answered with an exception"
+                                                          : "a request"),
+            fmt::format("an answer within {} ms, whatever other connections do",
+                        stall_threshold_ms()),
+            fmt::format("{} after {} ms", probe_result_name(sp.result), sp.ms)});
     }
 }
 
@@ -815,7 +811,7 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
         // The request a whole-server fault is blamed on: the first one owed an answer that
         // got none, else the last one sent.
         const RequestInfo* at = j.first_unanswered ? j.first_unanswered : j.last_sent;
-        j.candidate.rule += "/" + culprit_text(c.cls, at);
+        j.candidate.rule = rule_with_culprit(j.candidate.rule, culprit_text(c.cls, at));
         j.candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
     }
 }
@@ -850,15 +846,15 @@ void CaseRunner::judge(const Case& c) {
 void CaseRunner::side_probe() {
     const std::int64_t t0 = net::now_ns();
     // What the case's connections are in the middle of, for the rule.
-    std::string during = "request";
+    std::string during = kRequestHeld;
     for (const Conn& cn : conns_) {
         if (!cn.opened || cn.closed) continue;
-        if (!cn.desync && cn.sent.size() > cn.parsed) during = "partial-frame";
+        if (!cn.desync && cn.sent.size() > cn.parsed) during = kPartialFrameCulprit;
         for (const Pending& pd : cn.pending)
             if (pd.answered_ns && pd.rsp_size > lim::kMbapHeader &&
                 (received_frames(cn)[pd.rsp_offset + lim::kMbapHeader] & codec::kExceptionBit) &&
-                during != "partial-frame")
-                during = "exception";
+                during != kPartialFrameCulprit)
+                during = kExceptionHeld;
     }
     const ProbeResult r = probe_target(target_, profile_, options_.timeout_ms);
     const std::int64_t ms = (net::now_ns() - t0) / net::kNsPerMs;
@@ -1028,7 +1024,7 @@ Verdict fresh_probe_verdict(ProbeResult r) {
         case ProbeResult::ConnectFailed:
         case ProbeResult::Closed:
             return Verdict{Oracle::Crash,
-                           "target-down",
+                           kTargetDownRule,
                            -1,
                            r == ProbeResult::Closed ? "target closes every new connection"
                                                     : "target stopped accepting connections",
@@ -1041,7 +1037,7 @@ Verdict fresh_probe_verdict(ProbeResult r) {
     // The server as a whole no longer answers (not just one connection).
     return Verdict{
         Oracle::Hang,
-        "whole-server-hang",
+        kWholeServerHangRule,
         -1,
         fmt::format("whole server hangs: a fresh connection's probe got {}", probe_result_name(r)),
         "an answer on a fresh connection",

@@ -1,6 +1,7 @@
 #include "netfuzz/finding.hpp"
 
 #include "netfuzz/case_json.hpp"
+#include "netfuzz/rules.hpp"
 
 #include <fmt/format.h>
 
@@ -46,7 +47,8 @@ bool any_oracle(const std::string& stem) {
 // a close or silence on the split request.
 bool partial_frame_family(const std::string& rule) {
     return rule == kAnswersPartialFrameRule || rule == kClosesOnPartialFrameRule ||
-           rule == "close-with-request-pending/partial-frame" || rule == "no-answer/partial-frame";
+           rule == unanswered_rule(true, kPartialFrameCulprit) ||
+           rule == unanswered_rule(false, kPartialFrameCulprit);
 }
 }  // namespace
 

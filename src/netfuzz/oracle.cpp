@@ -9,6 +9,7 @@
 #include "codec/function_code.hpp"
 #include "codec/rtu.hpp"
 #include "codec/values.hpp"
+#include "netfuzz/rules.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -84,7 +85,7 @@ std::string hex(codec::Bytes bytes, std::size_t max) {
 }
 
 std::string_view request_kind(const RequestInfo& info) noexcept {
-    if (info.status.error == codec::CodecError::UnsupportedFunction) return "unknown-fc";
+    if (info.status.error == codec::CodecError::UnsupportedFunction) return kUnknownFunctionCulprit;
     return info.status.ok() ? "valid" : "invalid";
 }
 
@@ -93,13 +94,13 @@ std::string culprit_text(MutationClass cls, const RequestInfo* rq) {
     // reassembly of a started frame.
     if (cls == MutationClass::Split || cls == MutationClass::BurstSplit ||
         cls == MutationClass::PartialHold || cls == MutationClass::Drip)
-        return "partial-frame";
+        return kPartialFrameCulprit;
     // A frame that is not Modbus (protocol id not 0) meets no function's handler.
     if (is_transport_class(cls) || cls == MutationClass::ProtocolId || !rq || rq->pdu.empty())
         return std::string(class_name(cls));
-    if (request_kind(*rq) == "unknown-fc") return "unknown-fc";
+    if (request_kind(*rq) == kUnknownFunctionCulprit) return kUnknownFunctionCulprit;
     // The function code alone: one handler, whether this request was valid or not.
-    return fmt::format("fc{:02X}", rq->pdu[0]);
+    return function_culprit(rq->pdu[0]);
 }
 
 bool pdu_length_mismatch(const RequestInfo& info) noexcept {
@@ -157,8 +158,6 @@ void describe_request(codec::Bytes adu, const TargetProfile& profile, RequestInf
     }
 }
 
-constexpr const char* kSubFunctionNot01Rule = "unknown-sub-function-not-refused-with-01";
-
 // A normal answer to a read covering an address the device refused alone (profile.unmapped).
 Verdict check_unmapped(const RequestInfo& rq, const TargetProfile& profile) {
     const codec::Request& q = rq.request;
@@ -170,15 +169,13 @@ Verdict check_unmapped(const RequestInfo& rq, const TargetProfile& profile) {
     const auto& unmapped = profile.unmapped[static_cast<std::size_t>(*table)];
     for (const std::uint16_t a : unmapped) {
         if (a < q.address || std::uint32_t{a} >= std::uint32_t{q.address} + q.quantity) continue;
-        return make(
-            Oracle::SpecDeviation,
-            fmt::format("unmapped-address-answered-normally({})", codec::table_name(*table)), rq,
-            fmt::format("{}: a read over address {} answered normally, where a read of "
-                        "that address alone gets exception 02",
-                        codec::function_label(q.function), a),
-            "exception 02 (ILLEGAL DATA ADDRESS): the range holds an address the device "
-            "does not have",
-            "a normal response");
+        return make(Oracle::SpecDeviation, unmapped_address_rule(codec::table_name(*table)), rq,
+                    fmt::format("{}: a read over address {} answered normally, where a read of "
+                                "that address alone gets exception 02",
+                                codec::function_label(q.function), a),
+                    "exception 02 (ILLEGAL DATA ADDRESS): the range holds an address the device "
+                    "does not have",
+                    "a normal response");
     }
     return {};
 }
@@ -221,28 +218,28 @@ struct Answer {
 Verdict judge_header(const Answer& a) {
     const RequestInfo& rq = a.rq;
     if (rq.expect == Expect::MustBeSilent && !rq.discard.empty()) {
-        return make(Oracle::SpecDeviation, fmt::format("answers-{}", rq.discard), rq,
+        return make(Oracle::SpecDeviation, answers_discarded_rule(rq.discard), rq,
                     fmt::format("answered a frame it must discard ({})", rq.discard),
                     "no answer: the frame is discarded", a.seen);
     }
     if (rq.expect == Expect::MustBeSilent) {
-        return make(Oracle::SpecDeviation, "answers-nonzero-protocol-id", rq,
+        return make(Oracle::SpecDeviation, kAnswersNonzeroProtocolIdRule, rq,
                     fmt::format("answered a frame with protocol id {:04X}", rq.header.protocol_id),
                     "no answer: frames with protocol id != 0 are discarded", a.seen);
     }
     if (a.header.protocol_id != 0) {
-        return make(Oracle::MalformedResponse, "response-protocol-id", rq,
+        return make(Oracle::MalformedResponse, kResponseProtocolIdRule, rq,
                     fmt::format("response carries protocol id {:04X}", a.header.protocol_id),
                     "protocol id 0000", a.seen);
     }
     if (a.header.unit_id != rq.header.unit_id) {
-        return make(Oracle::MalformedResponse, "response-unit-id", rq,
+        return make(Oracle::MalformedResponse, kResponseUnitIdRule, rq,
                     fmt::format("response unit id {} for a request to unit {}", a.header.unit_id,
                                 rq.header.unit_id),
                     fmt::format("unit id {}", rq.header.unit_id), a.seen);
     }
     if (a.pdu.empty() || (a.pdu[0] & 0x7F) != (a.fc & 0x7F)) {
-        return make(Oracle::MalformedResponse, "response-function", rq,
+        return make(Oracle::MalformedResponse, kResponseFunctionRule, rq,
                     fmt::format("response function 0x{:02X} for request {}",
                                 a.pdu.empty() ? 0 : a.pdu[0], codec::function_label(a.fc)),
                     fmt::format("function 0x{:02X} or 0x{:02X}", a.fc & 0x7F,
@@ -275,7 +272,7 @@ bool exception_allowed(const Answer& a, std::uint8_t code) {
 
 Verdict judge_exception(const Answer& a) {
     if (a.pdu.size() != 2) {
-        return make(Oracle::MalformedResponse, "exception-response-length", a.rq,
+        return make(Oracle::MalformedResponse, kExceptionResponseLengthRule, a.rq,
                     fmt::format("exception response of {} bytes (MBAP length {})", a.pdu.size(),
                                 a.header.length),
                     "the function with its exception bit and one exception code byte", a.seen);
@@ -289,9 +286,8 @@ Verdict judge_exception(const Answer& a) {
         // reason that owes the same exception. An unknown sub-function is one missing
         // check however it is answered (see kSubFunctionNot01Rule).
         a.unknown_sub_function ? std::string(kSubFunctionNot01Rule)
-        : none_owed            ? fmt::format("exception-{:02X}-to-valid-request", code)
-                               : fmt::format("exception-{:02X}-where-{:02X}-owed", code,
-                                             static_cast<std::uint8_t>(a.owed)),
+        : none_owed            ? exception_to_valid_request_rule(code)
+                               : exception_where_owed_rule(code, static_cast<std::uint8_t>(a.owed)),
         a.rq,
         fmt::format("{}: {} where {} is owed", codec::function_label(a.fc), exception_text(code),
                     none_owed ? std::string("a normal response")
@@ -305,21 +301,21 @@ std::string_view echo_fault(codec::ResponseShape shape, const codec::Response& r
     using codec::ResponseShape;
     switch (shape) {
         case ResponseShape::EchoValue:
-            return r.address != q.address || r.value != q.value ? "echo-differs" : "";
+            return r.address != q.address || r.value != q.value ? kEchoDiffersRule : "";
         case ResponseShape::EchoQuantity:
-            return r.address != q.address || r.quantity != q.quantity ? "echo-differs" : "";
+            return r.address != q.address || r.quantity != q.quantity ? kEchoDiffersRule : "";
         case ResponseShape::EchoMask:
             return r.address != q.address || r.and_mask != q.and_mask || r.or_mask != q.or_mask
-                       ? "echo-differs"
+                       ? kEchoDiffersRule
                        : "";
         case ResponseShape::EchoSubFunction:
-            if (r.sub_function != q.sub_function) return "sub-function-not-echoed";
+            if (r.sub_function != q.sub_function) return kSubFunctionNotEchoedRule;
             if (q.sub_function == 0x0000 &&
                 !std::equal(r.payload.begin(), r.payload.end(), q.payload.begin(), q.payload.end()))
-                return "query-data-not-echoed";
+                return kQueryDataNotEchoedRule;
             return "";
         case ResponseShape::MeiObjects:
-            return r.mei_type != q.mei_type ? "mei-type-not-echoed" : "";
+            return r.mei_type != q.mei_type ? kMeiTypeNotEchoedRule : "";
         case ResponseShape::Bits:
         case ResponseShape::Registers:
         case ResponseShape::ExceptionStatus:
@@ -334,9 +330,9 @@ std::string_view echo_fault(codec::ResponseShape shape, const codec::Response& r
 }
 
 std::string_view echo_fault_text(std::string_view rule) {
-    if (rule == "sub-function-not-echoed") return "sub-function not echoed";
-    if (rule == "query-data-not-echoed") return "return-query-data did not echo the data";
-    if (rule == "mei-type-not-echoed") return "MEI type not echoed";
+    if (rule == kSubFunctionNotEchoedRule) return "sub-function not echoed";
+    if (rule == kQueryDataNotEchoedRule) return "return-query-data did not echo the data";
+    if (rule == kMeiTypeNotEchoedRule) return "MEI type not echoed";
     return "echo differs from the request";
 }
 
@@ -350,8 +346,7 @@ Verdict judge_normal_answer(const Answer& a) {
                     // 0F's quantity showed as two findings, one per field).
                     a.unknown_sub_function
                         ? std::string(kSubFunctionNot01Rule)
-                        : fmt::format("{}(owes-{:02X})/fc{:02X}", kInvalidAnsweredNormallyRule,
-                                      static_cast<std::uint8_t>(a.owed), a.fc),
+                        : invalid_answered_normally_rule(static_cast<std::uint8_t>(a.owed), a.fc),
                     rq,
                     fmt::format("{}: invalid request answered normally ({} owed: {})",
                                 codec::function_label(a.fc),
@@ -362,8 +357,8 @@ Verdict judge_normal_answer(const Answer& a) {
     if (a.profile.extended[a.fc]) return {};
     codec::Response r;
     if (const auto err = codec::decode_response(a.pdu, r); err != codec::CodecError::Ok) {
-        return make(Oracle::MalformedResponse,
-                    fmt::format("undecodable-response({})", codec::error_name(err)), rq,
+        return make(Oracle::MalformedResponse, undecodable_response_rule(codec::error_name(err)),
+                    rq,
                     fmt::format("{}: response does not decode: {}", codec::function_label(a.fc),
                                 codec::error_description(err)),
                     a.expected_text, a.seen);
@@ -376,8 +371,8 @@ Verdict judge_normal_answer(const Answer& a) {
     if (Verdict v = check_unmapped(rq, a.profile)) return v;
     const int want = codec::expected_read_byte_count(rq.request);
     if (want >= 0 && static_cast<int>(r.payload.size()) != want)
-        return mismatch("read-data-size", fmt::format("{} data bytes for a request that needs {}",
-                                                      r.payload.size(), want));
+        return mismatch(kReadDataSizeRule, fmt::format("{} data bytes for a request that needs {}",
+                                                       r.payload.size(), want));
     const codec::FunctionInfo* info = codec::function_info(a.fc);
     if (!info) return {};
     const std::string_view fault = echo_fault(info->response, r, rq.request);
@@ -580,18 +575,17 @@ Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& write
         }
         if (got == want) continue;
         const std::uint8_t writer = latest->self->request.function;
-        return make(Oracle::SpecDeviation,
-                    fmt::format("read-after-write-mismatch{}({})/fc{:02X}",
-                                other_connection ? "-other-connection" : "",
-                                coils ? "coils" : "holding-registers", writer),
-                    *latest->self,
-                    fmt::format("read-after-write mismatch{}: {} {:04X} wrote {:04X}, read "
-                                "back {:04X}",
-                                other_connection ? " on another connection" : "",
-                                coils ? "coil" : "holding register", a, want, got),
-                    fmt::format("{:04X} (written by {}, acknowledged)", want,
-                                codec::function_label(writer)),
-                    fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
+        return make(
+            Oracle::SpecDeviation,
+            read_after_write_rule(other_connection, coils ? "coils" : "holding-registers", writer),
+            *latest->self,
+            fmt::format("read-after-write mismatch{}: {} {:04X} wrote {:04X}, read "
+                        "back {:04X}",
+                        other_connection ? " on another connection" : "",
+                        coils ? "coil" : "holding register", a, want, got),
+            fmt::format("{:04X} (written by {}, acknowledged)", want,
+                        codec::function_label(writer)),
+            fmt::format("{:04X} in {}", got, hex(e.response_pdu)));
     }
     return {};
 }

@@ -14,6 +14,7 @@
 #include "codec/mbap.hpp"
 #include "codec/pdu.hpp"
 #include "netfuzz/case.hpp"
+#include "netfuzz/rules.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -132,29 +133,9 @@ bool owes_exception(const RequestInfo& info, const TargetProfile& profile) noexc
 // function code implies (or whose function code gives no length at all). A server that frames
 // by the MBAP length answers it and goes on; one that frames by the function code takes bytes
 // of the next frame or waits for bytes that never come. Whatever the stream then shows (a
-// close, silence, an answer with a transaction id nobody sent), it is that one root cause.
+// close, silence, an answer with a transaction id nobody sent), it is that one root cause
+// (kStreamLostRule: rule texts are named in netfuzz/rules.hpp).
 bool pdu_length_mismatch(const RequestInfo& info) noexcept;
-inline constexpr const char* kStreamLostRule = "stream-lost-after-pdu-length-mismatch";
-// The same valid request sent again and again (MutationClass::Repeated) went unanswered, or
-// the connection closed under it, once: the target drops requests at random.
-// The capacity check, or a flood, found connections accepted and then left unanswered.
-inline constexpr const char* kCapacityUnservedRule = "capacity/accepted-connections-unserved";
-inline constexpr const char* kRandomDropRule = "drops-requests-at-random";
-inline constexpr const char* kRandomCloseRule = "closes-at-random";
-// A frame delivered in pieces that the target acted on before it was whole: an answer to a
-// started frame alone, or a close or silence with the split request unanswered. However it
-// shows, it is the target's reassembly: one root cause (finding.cpp keys the family as one).
-inline constexpr const char* kAnswersPartialFrameRule = "answers-partial-frame";
-inline constexpr const char* kPartialFrameFamily = "mishandles-partial-frame";
-// The same family when the target closed the connection as soon as it read the first piece.
-inline constexpr const char* kClosesOnPartialFrameRule = "closes-on-partial-frame";
-// A server that closes the connection on a request it cannot use (whatever its function code):
-// one policy of its framing.
-inline constexpr const char* kClosesOnInvalidRequestRule =
-    "close-with-request-pending/invalid-request";
-
-// A request the codec owes an exception answered normally ("...(owes-03)/fc0F").
-inline constexpr const char* kInvalidAnsweredNormallyRule = "invalid-request-answered-normally";
 
 // A verdict as what is known of the target explains it (TargetProfile::refuses_length_mismatch).
 Verdict understood_by(const TargetProfile& profile, Verdict v);

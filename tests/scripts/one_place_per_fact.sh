@@ -3,6 +3,9 @@
 # function code or frames/cuts MBAP by hand beyond the budgets in one_place_allow.txt (each
 # with its reason). First proves the check can fail: a planted `case 0x17:` and a planted
 # `6u + h.length` must both be reported.
+# Likewise the fuzzer's root-cause rule texts live in src/netfuzz/rules.hpp (issue #26): no
+# other .cpp under src/netfuzz spells one of its hyphenated constants as a literal (a planted
+# one must be reported first).
 set -euo pipefail
 scripts=$(cd "$2" && pwd)
 root=$(cd "$scripts/../.." && pwd)
@@ -26,3 +29,37 @@ if grep -q "owner.cpp\|justified.cpp" "$work/self.log"; then
 fi
 
 /usr/bin/python3 "$scripts/lib/one_place.py" "$root"
+
+# Prints each `"text"` literal in src/netfuzz/*.cpp (rules.cpp aside, where the parameterised
+# rules are put together) that equals a hyphenated rule constant of rules.hpp; fails if any.
+# Single words ("capacity", "fc") are left out: they are too common to tell apart.
+rule_literals() {
+  local dir=$1/src/netfuzz texts found=0 text
+  # Constants may be wrapped onto the next line by clang-format: join the lines first.
+  texts=$(tr '\n' ' ' <"$dir/rules.hpp" |
+    grep -oE 'constexpr const char\* k[A-Za-z0-9]+ = +"[^"]*-[^"]*"' | sed 's/.*= *"\(.*\)"/\1/')
+  if [ "$(printf '%s\n' "$texts" | grep -c .)" -lt 20 ] || ! grep -qx 'target-down' <<<"$texts"; then
+    echo "FAIL could not read the rule constants of $dir/rules.hpp" >&2
+    return 1
+  fi
+  while IFS= read -r text; do
+    if grep -nF "\"$text\"" --include='*.cpp' --exclude='rules.cpp' -r "$dir"; then found=1; fi
+  done <<<"$texts"
+  return $found
+}
+
+mkdir -p "$work/src/netfuzz"
+cp "$root/src/netfuzz/rules.hpp" "$work/src/netfuzz/"
+printf 'const char* r() { return "drops-requests-after-exception"; }\n' >"$work/src/netfuzz/planted.cpp"
+printf 'const char* r() { return "target-down"; }  // the one place\n' >"$work/src/netfuzz/rules.cpp"
+if rule_literals "$work" >"$work/rules.log" 2>&1; then
+  echo "FAIL the rule check passed a planted literal:" >&2; cat "$work/rules.log" >&2; exit 1
+fi
+if ! grep -q 'planted.cpp:1:' "$work/rules.log" || grep -q 'rules.cpp' "$work/rules.log"; then
+  echo "FAIL the rule check did not report just the planted literal:" >&2; cat "$work/rules.log" >&2; exit 1
+fi
+if ! rule_literals "$root" >"$work/rules.log" 2>&1; then
+  echo "FAIL rule texts spelled outside src/netfuzz/rules.hpp (name the constant instead):" >&2
+  cat "$work/rules.log" >&2
+  exit 1
+fi
