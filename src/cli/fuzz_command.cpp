@@ -186,6 +186,48 @@ int fuzz_exit_code(const netfuzz::CampaignResult& r) {
     return r.new_findings() == 0 && !r.target_lost ? kExitOk : kExitFailed;
 }
 
+// What the user hands the campaign besides flags: the state range, a device map or model,
+// a dictionary. False with `error` naming the bad one.
+bool read_fuzz_inputs(const FuzzOptions& o, netfuzz::CampaignOptions& c, std::string& error) {
+    if (!parse_state_range(o.state_range, c.state, error)) return false;
+    c.state_given = o.state_given;
+    if (!o.map.empty() + !o.model.empty() + o.no_model > 1) {
+        error = "--map, --device-model and --no-model exclude each other";
+        return false;
+    }
+    if (!o.map.empty() && !netfuzz::parse_map(o.map, c.model, error)) return false;
+    if (!o.model.empty() && !netfuzz::load_model(o.model, c.model, error)) return false;
+    c.learn_model = !o.no_model;
+    if (!o.dict.empty()) {
+        netfuzz::Dictionary d;
+        if (!netfuzz::load_dictionary(o.dict, d, error)) return false;
+        c.dict_words = std::move(d.words);
+        c.dict_tokens = std::move(d.tokens);
+    }
+    c.max_connections = o.max_connections;
+    return true;
+}
+
+// Report paths are checked before the run: a summary that cannot be written must not cost a
+// whole campaign first. "" or the problem.
+std::string check_fuzz_outputs(const FuzzOptions& o) {
+    std::string error;
+    for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
+                                     {"--junit", o.junit},
+                                     {"--sarif", o.sarif},
+                                     {"--html", o.html},
+                                     {"--coverage-report", o.coverage_report}}) {
+        if (!path.empty() && path != "-" && !report::check_writable(path, error))
+            return fmt::format("cannot write {} {}", flag, error);
+    }
+    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-") +
+                          (o.coverage_report == "-");
+    if (on_stdout > 1)
+        return "only one of --json, --junit, --sarif, --html and --coverage-report can be '-' "
+               "(stdout)";
+    return {};
+}
+
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
     std::string error;
@@ -193,40 +235,13 @@ int run_fuzz(const FuzzOptions& o) {
     if (!c.connector) return usage_error("fuzz", error);
     if (o.duration_ns == 0 && o.cases == 0)
         return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
-    if (!parse_state_range(o.state_range, c.state, error)) return usage_error("fuzz", error);
-    c.state_given = o.state_given;
-    if (!o.map.empty() + !o.model.empty() + o.no_model > 1)
-        return usage_error("fuzz", "--map, --device-model and --no-model exclude each other");
-    if (!o.map.empty() && !netfuzz::parse_map(o.map, c.model, error))
-        return usage_error("fuzz", error);
-    if (!o.model.empty() && !netfuzz::load_model(o.model, c.model, error))
-        return usage_error("fuzz", error);
-    c.learn_model = !o.no_model;
-    if (!o.dict.empty()) {
-        netfuzz::Dictionary d;
-        if (!netfuzz::load_dictionary(o.dict, d, error)) return usage_error("fuzz", error);
-        c.dict_words = std::move(d.words);
-        c.dict_tokens = std::move(d.tokens);
-    }
-    c.max_connections = o.max_connections;
+    if (!read_fuzz_inputs(o, c, error)) return usage_error("fuzz", error);
     netfuzz::Baseline baseline;
     if (!o.baseline.empty() && !netfuzz::load_baseline(o.baseline, baseline, error))
         return usage_error("fuzz", error);
-    // A summary that cannot be written must not cost a whole campaign first.
-    for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
-                                     {"--junit", o.junit},
-                                     {"--sarif", o.sarif},
-                                     {"--html", o.html},
-                                     {"--coverage-report", o.coverage_report}}) {
-        if (!path.empty() && path != "-" && !report::check_writable(path, error))
-            return usage_error("fuzz", fmt::format("cannot write {} {}", flag, error));
-    }
-    const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-") +
-                          (o.coverage_report == "-");
-    if (on_stdout > 1)
-        return usage_error("fuzz",
-                           "only one of --json, --junit, --sarif, --html and --coverage-report "
-                           "can be '-' (stdout)");
+    if (std::string e = check_fuzz_outputs(o); !e.empty()) return usage_error("fuzz", e);
+    const bool on_stdout = o.json == "-" || o.junit == "-" || o.sarif == "-" || o.html == "-" ||
+                           o.coverage_report == "-";
     // The first line, always: this is not a read-only tool.
     fmt::print(stderr,
                "mbstorm fuzz: WARNING: writes will be sent to {} (function codes {} and malformed "
@@ -307,6 +322,29 @@ int run_fuzz(const FuzzOptions& o) {
 
 }  // namespace
 
+// Grey-box: the target started by mbstorm and the coverage map handed to it.
+void add_coverage_options(CLI::App* cmd, FuzzOptions& o) {
+    cmd->add_option("--target-cmd", o.target_cmd,
+                    "shell command that runs the target in the foreground: mbstorm starts it, "
+                    "restarts it after a crash and stops it at the end");
+    cmd->add_flag("--coverage", o.coverage,
+                  "grey-box: read the edge coverage of a target built for it (AFL++'s "
+                  "compilers, or clang -fsanitize-coverage=trace-pc-guard,trace-cmp with "
+                  "share/mbstorm/coverage/mbstorm_coverage.c) and fuzz from what reaches new "
+                  "edges; needs --target-cmd");
+    cmd->add_option("--coverage-map-size", o.coverage_map_size,
+                    "coverage map bytes, a power of two (passed on as AFL_MAP_SIZE)")
+        ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 24))
+        ->capture_default_str();
+    cmd->add_option("--coverage-report", o.coverage_report,
+                    "coverage mode: write the target's functions no case reached to this file "
+                    "('-': stdout), by file and line (a target built with pc-table too: "
+                    "-fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table)");
+    cmd->add_option("--corpus", o.corpus_dir,
+                    "coverage mode: save the corpus in this folder, one file per case; the "
+                    "cases already there run first (resume)");
+}
+
 void add_fuzz_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<FuzzOptions>();
     auto* cmd = app.add_subcommand(
@@ -343,25 +381,7 @@ void add_fuzz_command(CLI::App& app, Action& action) {
         ->capture_default_str();
     cmd->add_option("--restart-cmd", o->restart_cmd,
                     "shell command that restarts the target after a crash");
-    cmd->add_option("--target-cmd", o->target_cmd,
-                    "shell command that runs the target in the foreground: mbstorm starts it, "
-                    "restarts it after a crash and stops it at the end");
-    cmd->add_flag("--coverage", o->coverage,
-                  "grey-box: read the edge coverage of a target built for it (AFL++'s "
-                  "compilers, or clang -fsanitize-coverage=trace-pc-guard,trace-cmp with "
-                  "share/mbstorm/coverage/mbstorm_coverage.c) and fuzz from what reaches new "
-                  "edges; needs --target-cmd");
-    cmd->add_option("--coverage-map-size", o->coverage_map_size,
-                    "coverage map bytes, a power of two (passed on as AFL_MAP_SIZE)")
-        ->check(CLI::Range(std::uint64_t{64}, std::uint64_t{1} << 24))
-        ->capture_default_str();
-    cmd->add_option("--coverage-report", o->coverage_report,
-                    "coverage mode: write the target's functions no case reached to this file "
-                    "('-': stdout), by file and line (a target built with pc-table too: "
-                    "-fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table)");
-    cmd->add_option("--corpus", o->corpus_dir,
-                    "coverage mode: save the corpus in this folder, one file per case; the "
-                    "cases already there run first (resume)");
+    add_coverage_options(cmd, *o);
     add_duration_option(cmd, "--restart-wait", o->restart_wait_ns,
                         "how long to wait for a crashed target to return (default 15s)");
     cmd->add_option("--baseline", o->baseline,

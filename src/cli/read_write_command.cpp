@@ -100,7 +100,34 @@ bool table_from_text(const std::string& text, codec::Table& out) {
     return false;
 }
 
-std::string build_request(const IoOptions& o, IoPlan& p) {
+// A read: the items --quantity values of --type take, or those of a range --addr.
+std::string read_request(const IoOptions& o, IoPlan& p, bool bit_table) {
+    auto& r = p.request;
+    r.function = codec::function_for(p.table, codec::RequestShape::AddressQuantity);
+    std::size_t items = bit_table ? static_cast<std::size_t>(o.quantity)
+                        : p.type == ValueType::String
+                            ? (static_cast<std::size_t>(o.quantity) + 1) / 2
+                            : static_cast<std::size_t>(o.quantity) * registers_per_value(p.type);
+    // A range is the registers (or bits) read: whole values of --type only.
+    if (p.range_items != 0) {
+        const std::size_t per =
+            bit_table || p.type == ValueType::String ? 1 : registers_per_value(p.type);
+        if (p.range_items % per != 0)
+            return fmt::format(
+                "--addr '{}' holds {} registers, not a whole number of {} "
+                "values ({} registers each)",
+                o.address, p.range_items, o.type, per);
+        items = p.range_items;
+    }
+    if (items > 0xFFFF) items = 0xFFFF;
+    r.quantity = static_cast<std::uint16_t>(items);
+    p.items = r.quantity;
+    return {};
+}
+
+// The table (--table, or the reference number's, or holding registers) and the address, or
+// the range to read.
+std::string resolve_address(const IoOptions& o, IoPlan& p) {
     // The table: --table, or the reference number's, or holding registers.
     std::optional<codec::Table> table;
     if (!o.table.empty()) {
@@ -127,6 +154,11 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     if (range.is_range && o.quantity_given)
         return fmt::format("--addr '{}' is a range: it says how many to read, without --quantity",
                            o.address);
+    return {};
+}
+
+std::string build_request(const IoOptions& o, IoPlan& p) {
+    if (std::string e = resolve_address(o, p); !e.empty()) return e;
 
     const bool bit_table = codec::is_bit_table(p.table);
     if (!o.type.empty() && !value_type_from_name(o.type, p.type))
@@ -142,29 +174,7 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
 
     auto& r = p.request;
     r.address = p.address;
-    if (!o.write) {
-        r.function = codec::function_for(p.table, codec::RequestShape::AddressQuantity);
-        std::size_t items =
-            bit_table ? static_cast<std::size_t>(o.quantity)
-            : p.type == ValueType::String
-                ? (static_cast<std::size_t>(o.quantity) + 1) / 2
-                : static_cast<std::size_t>(o.quantity) * registers_per_value(p.type);
-        // A range is the registers (or bits) read: whole values of --type only.
-        if (p.range_items != 0) {
-            const std::size_t per =
-                bit_table || p.type == ValueType::String ? 1 : registers_per_value(p.type);
-            if (p.range_items % per != 0)
-                return fmt::format(
-                    "--addr '{}' holds {} registers, not a whole number of {} "
-                    "values ({} registers each)",
-                    o.address, p.range_items, o.type, per);
-            items = p.range_items;
-        }
-        if (items > 0xFFFF) items = 0xFFFF;
-        r.quantity = static_cast<std::uint16_t>(items);
-        p.items = r.quantity;
-        return {};
-    }
+    if (!o.write) return read_request(o, p, bit_table);
 
     if (p.table == codec::Table::InputRegisters || p.table == codec::Table::DiscreteInputs)
         return fmt::format("{} are read-only: {}", codec::table_name(p.table),

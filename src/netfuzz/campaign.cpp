@@ -239,7 +239,16 @@ class Campaign {
     // Skips from now on the requests of `c` whose culprit is `culprit`, by signature.
     void learn_costly_signatures(const std::string& culprit, const Case& c);
     // Runs one case alone and records what it shows.
-    Outcome isolate(Case c);
+    // What an isolated run showed: its outcome and, when it fired, the root cause.
+    struct Isolated {
+        Outcome outcome = Outcome::Clean;
+        Oracle oracle = Oracle::None;
+        std::string key;
+        bool operator==(Outcome o) const noexcept { return outcome == o; }
+    };
+    // `batch_died`: the case comes from a batch that killed the target (it has killed it once).
+    Isolated isolate(Case c, bool batch_died = false);
+    Outcome isolate_case(Case c, bool batch_died, Isolated& shown);
     // isolate()'s first run, again after a restart if the target was found down; false when
     // it stays down.
     bool first_isolated_run(const Case& c, Execution& ex);
@@ -253,7 +262,8 @@ class Campaign {
     std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
                                                 const std::string& key);
     Outcome record_plain(const Case& plain, Execution whole);
-    std::optional<Outcome> confirm_death(const Case& c, Execution& ex, const std::string& key);
+    std::optional<Outcome> confirm_death(const Case& c, Execution& ex, const std::string& key,
+                                         bool batch_died);
     // The target is down (or was found down): restart it. `cause` (a root-cause key, or "")
     // is charged with the restart.
     bool recover(const std::string& cause);
@@ -365,13 +375,10 @@ class Campaign {
     // was asked once whether it drops requests at random (check_random_drops).
     bool random_drops_asked_ = false;
     bool random_drops_known_ = false;
-    Oracle last_oracle_ = Oracle::None;  // of the last isolated run that fired
-    std::string last_key_;               // and its root cause
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
     std::uint64_t rationed_seen_ = 0, rationed_units_seen_ = 0;
     // The case being isolated comes from a pipelined batch that killed the target.
-    bool batch_died_ = false;
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
 
@@ -714,7 +721,7 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
 // A death is a crash only if the case, replayed alone, kills the target again. Nothing when
 // confirmed (`ex` the confirming run) and to be recorded.
 std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Execution& ex,
-                                                         const std::string& key) {
+                                                         const std::string& key, bool batch_died) {
     ++result_.deaths;
     if (!recover(key)) {
         Finding f = found(c, std::move(ex));
@@ -726,7 +733,7 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
         return Outcome::Lost;
     }
     // A case from a batch that died killed the target twice already: the batch and now.
-    if (batch_died_) return std::nullopt;
+    if (batch_died) return std::nullopt;
     if (!can_afford(1)) {
         ++result_.suspects_left;
         return Outcome::Clean;
@@ -753,7 +760,13 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
     return std::nullopt;
 }
 
-Campaign::Outcome Campaign::isolate(Case c) {
+Campaign::Isolated Campaign::isolate(Case c, bool batch_died) {
+    Isolated shown;
+    shown.outcome = isolate_case(std::move(c), batch_died, shown);
+    return shown;
+}
+
+Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& shown) {
     if (would_retrigger(c)) {
         ++result_.skipped_known;
         return Outcome::Skipped;
@@ -766,9 +779,9 @@ Campaign::Outcome Campaign::isolate(Case c) {
         if (!up_) return Outcome::Lost;
         ex.verdict = understood(std::move(ex.verdict));
     }
-    last_oracle_ = ex.verdict.oracle;
-    last_key_ = root_cause_key(ex.verdict);
-    const std::string key = last_key_;
+    shown.oracle = ex.verdict.oracle;
+    shown.key = root_cause_key(ex.verdict);
+    const std::string key = shown.key;
     if (Finding* f = known(ex.verdict)) {
         hit(*f, ex.verdict, c);
         if (!bring_back(ex, key)) return Outcome::Lost;
@@ -784,7 +797,7 @@ Campaign::Outcome Campaign::isolate(Case c) {
     if (!ex.target_down && depends_on_line_timing(c.cls) && !reproduces_every_time(c, key))
         return up_ ? Outcome::Clean : Outcome::Lost;
     if (ex.target_down)
-        if (const auto done = confirm_death(c, ex, key)) return *done;
+        if (const auto done = confirm_death(c, ex, key, batch_died)) return *done;
     record(c, std::move(ex));
     return up_ ? Outcome::Fired : Outcome::Lost;
 }
@@ -1556,15 +1569,13 @@ bool Campaign::find_batch_culprit(const BatchResult& br, const std::vector<std::
             found = true;
             continue;
         }
-        batch_died_ = after.died;
-        const Outcome out = isolate(piped[ci]);
-        batch_died_ = false;
-        if (out == Outcome::Lost) return true;
+        const Isolated shown = isolate(piped[ci], after.died);
+        if (shown == Outcome::Lost) return true;
         // A crash or hang explains the batch; anything else keeps looking.
-        found = out == Outcome::Fired &&
-                (last_oracle_ == Oracle::Crash || last_oracle_ == Oracle::Hang);
+        found = shown == Outcome::Fired &&
+                (shown.oracle == Oracle::Crash || shown.oracle == Oracle::Hang);
         // The batch's death (or the hang it had to be restarted from) was this one's doing.
-        if (found && (after.died || after.settled_by_restart)) ++restarts_by_cause_[last_key_];
+        if (found && (after.died || after.settled_by_restart)) ++restarts_by_cause_[shown.key];
     }
     return false;
 }
@@ -1577,7 +1588,7 @@ bool Campaign::isolate_suspects(const std::vector<std::size_t>& suspects,
             result_.suspects_left += suspects.size() - k;
             break;
         }
-        const Outcome out = isolate(piped[suspects[k]]);
+        const Outcome out = isolate(piped[suspects[k]]).outcome;
         if (out == Outcome::Lost) return true;
         if (out == Outcome::Clean) ++result_.unconfirmed;
     }

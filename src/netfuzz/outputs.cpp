@@ -222,6 +222,43 @@ std::string format_fuzz_sarif(const CampaignResult& r, const RunInfo& info) {
     return j.dump(2) + "\n";
 }
 
+namespace {
+
+// The root causes, worst first (crash, hang, close, malformed response, spec deviation), each
+// with its rule, hits, variants, notes and folder.
+std::string format_root_causes(const CampaignResult& r) {
+    std::string s;
+    std::vector<const Finding*> ranked;
+    for (const Finding& f : r.findings) ranked.push_back(&f);
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [](const Finding* a, const Finding* b) { return a->oracle() < b->oracle(); });
+    s += fmt::format("  {} root cause(s):\n", r.findings.size());
+    for (const Finding* f : ranked) {
+        s += fmt::format("  #{} {:<18} {}{}\n      rule {}; {} hit(s)", f->id,
+                         oracle_name(f->oracle()), f->verdict.summary,
+                         f->baseline == BaselineState::Known ? " (known: in the baseline)" : "",
+                         f->verdict.rule, f->hits);
+        std::string variants;
+        std::size_t shown = 0;
+        for (const auto& [v, n] : f->variants) {
+            if (shown++ == 6) {
+                variants += fmt::format(", ... {} more", f->variants.size() - 6);
+                break;
+            }
+            variants += fmt::format("{}{} x{}", variants.empty() ? "" : ", ", v, n);
+        }
+        if (!variants.empty()) s += " in " + variants;
+        s += "\n      ";
+        if (!f->note.empty()) s += "note: " + f->note + "\n      ";
+        if (!f->minimize_note.empty()) s += f->minimize_note + "\n      ";
+        s += f->folder.empty() ? std::string("(not saved)") : f->folder;
+        s += "\n";
+    }
+    return s;
+}
+
+}  // namespace
+
 std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     std::string s = fmt::format("\nmbstorm fuzz summary: target {}, seed {}, {} generator\n",
                                 info.target, info.seed, info.naive ? "naive" : "structured");
@@ -308,34 +345,7 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
         s += "  no findings\n";
         return s;
     }
-    // Root causes, worst first: crash, hang, close, malformed response, spec deviation.
-    std::vector<const Finding*> ranked;
-    for (const Finding& f : r.findings) ranked.push_back(&f);
-    std::stable_sort(ranked.begin(), ranked.end(),
-                     [](const Finding* a, const Finding* b) { return a->oracle() < b->oracle(); });
-    s += fmt::format("  {} root cause(s):\n", r.findings.size());
-    for (const Finding* f : ranked) {
-        s += fmt::format("  #{} {:<18} {}{}\n      rule {}; {} hit(s)", f->id,
-                         oracle_name(f->oracle()), f->verdict.summary,
-                         f->baseline == BaselineState::Known ? " (known: in the baseline)" : "",
-                         f->verdict.rule, f->hits);
-        std::string variants;
-        std::size_t shown = 0;
-        for (const auto& [v, n] : f->variants) {
-            if (shown++ == 6) {
-                variants += fmt::format(", ... {} more", f->variants.size() - 6);
-                break;
-            }
-            variants += fmt::format("{}{} x{}", variants.empty() ? "" : ", ", v, n);
-        }
-        if (!variants.empty()) s += " in " + variants;
-        s += "\n      ";
-        if (!f->note.empty()) s += "note: " + f->note + "\n      ";
-        if (!f->minimize_note.empty()) s += f->minimize_note + "\n      ";
-        s += f->folder.empty() ? std::string("(not saved)") : f->folder;
-        s += "\n";
-    }
-    return s;
+    return s + format_root_causes(r);
 }
 
 }  // namespace mbstorm::netfuzz
