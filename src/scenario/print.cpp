@@ -30,18 +30,6 @@ const char* value_mode_name(load::ValueMode m) {
     return "constant";
 }
 
-const char* address_mode_name(load::AddressMode m) {
-    switch (m) {
-        case load::AddressMode::Sequential:
-            return "sequential";
-        case load::AddressMode::Uniform:
-            return "uniform";
-        case load::AddressMode::Zipf:
-            return "zipf";
-    }
-    return "sequential";
-}
-
 void emit_operation(YAML::Emitter& out, const load::Operation& op, const Expectation& e,
                     const std::vector<ThresholdSpec>& thresholds) {
     out << YAML::BeginMap;
@@ -106,6 +94,18 @@ void emit_operation(YAML::Emitter& out, const load::Operation& op, const Expecta
 }
 
 }  // namespace
+
+const char* address_mode_name(load::AddressMode m) {
+    switch (m) {
+        case load::AddressMode::Sequential:
+            return "sequential";
+        case load::AddressMode::Uniform:
+            return "uniform";
+        case load::AddressMode::Zipf:
+            return "zipf";
+    }
+    return "sequential";
+}
 
 std::string format_scenario(const Scenario& s) {
     const load::Plan& p = s.plan;

@@ -10,4 +10,7 @@ namespace mbstorm::scenario {
 
 std::string format_scenario(const Scenario& scenario);
 
+// How a scenario names an address mode (its `distribution`: sequential, uniform, zipf).
+const char* address_mode_name(load::AddressMode m);
+
 }  // namespace mbstorm::scenario

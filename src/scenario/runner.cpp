@@ -10,6 +10,7 @@
 
 #include "codec/function_code.hpp"
 #include "scenario/expect.hpp"
+#include "scenario/print.hpp"
 #include "server/server.hpp"
 #include "slave/device_yaml.hpp"
 
@@ -17,25 +18,13 @@ namespace mbstorm::scenario {
 
 namespace {
 
-std::string_view address_mode_text(load::AddressMode m) {
-    switch (m) {
-        case load::AddressMode::Sequential:
-            return "in turn";
-        case load::AddressMode::Uniform:
-            return "at random";
-        case load::AddressMode::Zipf:
-            return "zipf";
-    }
-    return "";
-}
-
 // What was asked of the target, for the report's header: the function, where, how much, which
-// unit ("request: 0x03 read_holding_registers, addresses 0-99 in turn, quantity 10, unit 1").
+// unit ("request: 0x03 read_holding_registers, addresses 0-99 sequential, quantity 10, unit 1").
 std::string describe_request(const load::Operation& op) {
     const bool range = op.last_address && *op.last_address != op.first_address;
     const std::string where =
         range ? fmt::format("addresses {}-{} {}", op.first_address, *op.last_address,
-                            address_mode_text(op.address_mode))
+                            address_mode_name(op.address_mode))
               : fmt::format("address {}", op.first_address);
     const std::string label = codec::function_label(op.function);
     const bool named = !op.name.empty() && label.find(op.name) == std::string::npos;
