@@ -27,10 +27,13 @@ bool from_summary(const json& j, Baseline& out, std::string& error) {
         error = out.file + ": \"findings\" is not a list";
         return false;
     }
-    for (const json& f : j["findings"])
-        if (!f.is_object() || !f.contains("root_cause") || !take_key(f["root_cause"], out, error))
-            return error.empty() ? (error = out.file + ": a finding has no \"root_cause\"", false)
-                                 : false;
+    for (const json& f : j["findings"]) {
+        if (!f.is_object() || !f.contains("root_cause")) {
+            error = out.file + ": a finding has no \"root_cause\"";
+            return false;
+        }
+        if (!take_key(f["root_cause"], out, error)) return false;
+    }
     return true;
 }
 
