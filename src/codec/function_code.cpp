@@ -172,6 +172,35 @@ AddressFields address_fields(RequestShape shape) noexcept {
     return {};
 }
 
+RequestFields request_fields(std::uint8_t fc) noexcept {
+    const FunctionInfo* f = find(fc);
+    if (f == nullptr) return {};
+    switch (f->request) {
+        case RequestShape::AddressQuantity:
+            return {3, 0, 0, 0, 0, f->quantity, {}, false};
+        case RequestShape::MultipleCoils:
+            return {3, 3, 5, 6, 0, f->quantity, f->quantity, true};
+        case RequestShape::MultipleRegisters:
+            return {3, 3, 5, 6, 0, f->quantity, f->quantity, false};
+        case RequestShape::ReadWriteRegisters:
+            return {3, 7, 9, 10, 0, f->quantity, {1, limits::kMaxRwWriteRegisters}, false};
+        case RequestShape::SingleCoil: {
+            RequestFields value_only;
+            value_only.coil_value = 3;
+            return value_only;
+        }
+        case RequestShape::FunctionOnly:
+        case RequestShape::SingleRegister:
+        case RequestShape::SubFunction:
+        case RequestShape::FileRecords:
+        case RequestShape::MaskWrite:
+        case RequestShape::FifoPointer:
+        case RequestShape::MeiTransport:
+            return {};
+    }
+    return {};
+}
+
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept {
     const FunctionInfo* f = find(fc);
     return f != nullptr && f->request == shape;

@@ -119,6 +119,21 @@ struct AddressFields {
 };
 AddressFields address_fields(RequestShape shape) noexcept;
 
+// Where a request of function `fc` carries the fields a server checks besides its addresses:
+// PDU offsets of the quantity (FC 17: the read count), of the count its byte count follows
+// (FC 0F, 10: the quantity itself; FC 17: the write count), of the byte count, of the first
+// data byte and of FC 05's value (0000 or FF00 only); 0 for none. With the range each count
+// must lie in, and how many data bytes `n` items take.
+struct RequestFields {
+    std::size_t quantity = 0, written = 0, byte_count = 0, data = 0, coil_value = 0;
+    limits::QuantityRange quantity_range, written_range;
+    bool packed_bits = false;  // data is packed coils, else 2 bytes per register
+    std::size_t data_bytes(std::uint16_t n) const noexcept {
+        return packed_bits ? (std::size_t{n} + 7u) / 8u : 2u * std::size_t{n};
+    }
+};
+RequestFields request_fields(std::uint8_t fc) noexcept;
+
 // True when `fc` is public and its request (response) has `shape`.
 bool request_is(std::uint8_t fc, RequestShape shape) noexcept;
 bool response_is(std::uint8_t fc, ResponseShape shape) noexcept;

@@ -1,6 +1,7 @@
 #include "netfuzz/campaign.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -244,6 +245,7 @@ class Campaign {
         Outcome outcome = Outcome::Clean;
         Oracle oracle = Oracle::None;
         std::string key;
+        bool confirmed_death = false;  // a new crash, confirmed by confirm_death
         bool operator==(Outcome o) const noexcept { return outcome == o; }
     };
     // `batch_died`: the case comes from a batch that killed the target (it has killed it once).
@@ -276,8 +278,25 @@ class Campaign {
     // A finding as first seen: the case and what it did.
     Finding found(const Case& c, Execution ex) const;
     bool reproduces_every_time(const Case& c, const std::string& key);
+    // A finding's candidate reproducers, run alone as minimisation and field repair try them.
+    struct Retrial {
+        Retrial(Verdict v, std::string k, bool same, std::string charged)
+            : first(std::move(v)), key(std::move(k)), same_key(same), charge(std::move(charged)) {}
+        Verdict first;
+        std::string key;     // its root cause
+        bool same_key;       // the very root cause, not merely the same fault
+        std::string charge;  // the key its restarts are charged to: the finding's first guise
+        Execution last;      // the last candidate that showed it
+        bool lost = false, cut = false, restart_budget = false;
+    };
+    // Whether `candidate`, run alone, shows the fault again (then kept in r.last).
+    bool shows_again(const Case& candidate, Retrial& r);
     void record(const Case& c, Execution ex);
+    void minimise(Finding& f);
     void repair_fields(Finding& f);
+    // Each wrong field of the culprit request made right in turn, kept right while the same
+    // root cause shows; the fields left wrong are the finding's.
+    void narrow_wrong_fields(Finding& f, const std::string& charge);
     void merge_stub_answer(Finding& f);
     bool replays_alone(Finding& f);
     bool replays_once_more(const Finding& f);
@@ -732,8 +751,12 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
         keep(std::move(f));
         return Outcome::Lost;
     }
-    // A case from a batch that died killed the target twice already: the batch and now.
-    if (batch_died) return std::nullopt;
+    // A case from a batch that died killed the target twice already: the batch and now. The
+    // batch's restart is charged now, before minimisation spends what is left of the budget.
+    if (batch_died) {
+        ++restarts_by_cause_[key];
+        return std::nullopt;
+    }
     if (!can_afford(1)) {
         ++result_.suspects_left;
         return Outcome::Clean;
@@ -798,6 +821,7 @@ Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& show
         return up_ ? Outcome::Clean : Outcome::Lost;
     if (ex.target_down)
         if (const auto done = confirm_death(c, ex, key, batch_died)) return *done;
+    shown.confirmed_death = ex.target_down;
     record(c, std::move(ex));
     return up_ ? Outcome::Fired : Outcome::Lost;
 }
@@ -832,79 +856,89 @@ bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
     return true;
 }
 
+bool Campaign::shows_again(const Case& candidate, Retrial& r) {
+    if (r.lost) return false;
+    if (!can_afford(1)) {
+        r.cut = true;
+        return false;
+    }
+    // One restart is kept for a batch this crash may still kill (known_crash_of).
+    if (r.first.oracle == Oracle::Crash &&
+        restarts_by_cause_[r.charge] + 1 >= kMaxRestartsPerCause) {
+        r.restart_budget = true;
+        return false;
+    }
+    // A read-back's verdict depends on what the registers held before: the candidate runs
+    // once to leave its own state and is judged on its second run, as a replay after it would
+    // be. A step that sets the state up is then kept.
+    if (reads_back_state(r.first)) {
+        ++result_.isolated_runs;
+        (void)run_alone(candidate);
+    }
+    ++result_.isolated_runs;
+    Execution e = run_alone(candidate);
+    // The same fault, not merely the same oracle: else it drifted to another bug (the detail
+    // naming the request may change as the case shrinks: see same_fault). Field repair asks
+    // for the very root cause.
+    const bool same = r.same_key ? e.verdict && root_cause_key(e.verdict) == r.key
+                                 : same_fault(r.first, e.verdict);
+    if (e.down_before || e.target_down) {
+        ++result_.deaths;
+        if (!recover(same && e.target_down ? r.charge : "")) r.lost = true;
+    } else if (whole_server_hang(e.verdict) && !settle(same ? r.charge : "")) {
+        r.lost = true;
+    }
+    if (!same) return false;
+    r.last = std::move(e);
+    return true;
+}
+
+// Delta debugging over the case's frames and steps, then each PDU's tail (minimize.hpp).
+void Campaign::minimise(Finding& f) {
+    const Case& c = f.original_case;
+    if (depends_on_line_timing(c.cls)) {
+        // Confirmed, but each try would again be at the scheduler's mercy.
+        f.minimize_note = "not minimised: its verdict rests on a silence's length";
+        return;
+    }
+    if (c.cls == MutationClass::Repeated) {
+        // Fewer repeats only make the drop less likely to show.
+        f.minimize_note = "not minimised: each repeat is a chance for the drop to show";
+        return;
+    }
+    Retrial r{f.verdict, f.key(), false, f.key()};
+    auto reproduces = [&](const Case& candidate) { return shows_again(candidate, r); };
+    // Crashes and hangs cost a restart or a timeout per try: a smaller budget, whole frames
+    // only.
+    const bool costly = f.oracle() == Oracle::Crash || f.oracle() == Oracle::Hang;
+    Case small = minimize_case(
+        c, reproduces,
+        costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget, !costly,
+        result_.profile.framing);
+    if (size_of(small) < size_of(c) && r.last.verdict) {
+        f.fuzz_case = std::move(small);
+        f.verdict = r.last.verdict;
+        f.trace = std::move(r.last.trace);
+        f.minimized = true;
+    }
+    if (r.cut) {
+        f.minimize_note = "minimisation cut short by --seconds";
+        ++result_.findings_not_minimized;
+    } else if (r.restart_budget) {
+        f.minimize_note = fmt::format("minimisation stopped: a crash may cost at most {} restarts",
+                                      kMaxRestartsPerCause);
+    }
+}
+
 void Campaign::record(const Case& c, Execution ex) {
     const std::string key = root_cause_key(ex.verdict);
-    const Verdict first = ex.verdict;
-    const Oracle oracle = ex.verdict.oracle;
-    const bool crash = oracle == Oracle::Crash;
-    const bool costly = crash || oracle == Oracle::Hang;
     Finding f = found(c, std::move(ex));  // seen now, not when minimising it ends
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
-    if (options_.minimize && depends_on_line_timing(c.cls)) {
-        // Confirmed, but each try would again be at the scheduler's mercy.
-        f.minimize_note = "not minimised: its verdict rests on a silence's length";
-    } else if (options_.minimize && c.cls == MutationClass::Repeated) {
-        // Fewer repeats only make the drop less likely to show.
-        f.minimize_note = "not minimised: each repeat is a chance for the drop to show";
-    } else if (options_.minimize) {
-        Execution last;
-        bool lost = false, cut = false, restart_budget = false;
-        auto reproduces = [&](const Case& candidate) {
-            if (lost) return false;
-            if (!can_afford(1)) {
-                cut = true;
-                return false;
-            }
-            // One restart is kept for a batch this crash may still kill (known_crash_of).
-            if (crash && restarts_by_cause_[key] + 1 >= kMaxRestartsPerCause) {
-                restart_budget = true;
-                return false;
-            }
-            // A read-back's verdict depends on what the registers held before: the candidate
-            // runs once to leave its own state and is judged on its second run, as a replay
-            // after it would be. A step that sets the state up is then kept.
-            if (reads_back_state(first)) {
-                ++result_.isolated_runs;
-                (void)run_alone(candidate);
-            }
-            ++result_.isolated_runs;
-            Execution e = run_alone(candidate);
-            // The same fault, not merely the same oracle: else it drifted to another bug.
-            // (the detail naming the request may change as the case shrinks: see same_fault)
-            const bool same = same_fault(first, e.verdict);
-            if (e.down_before || e.target_down) {
-                ++result_.deaths;
-                if (!recover(same && e.target_down ? key : "")) lost = true;
-            } else if (whole_server_hang(e.verdict) && !settle(same ? key : "")) {
-                lost = true;
-            }
-            if (!same) return false;
-            last = std::move(e);
-            return true;
-        };
-        // Crashes and hangs cost a restart or a timeout per try: a smaller budget, whole
-        // frames only.
-        Case small = minimize_case(
-            c, reproduces,
-            costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget, !costly,
-            result_.profile.framing);
-        if (size_of(small) < size_of(c) && last.verdict) {
-            f.fuzz_case = std::move(small);
-            f.verdict = last.verdict;
-            f.trace = std::move(last.trace);
-            f.minimized = true;
-        }
-        if (cut) {
-            f.minimize_note = "minimisation cut short by --seconds";
-            ++result_.findings_not_minimized;
-        } else if (restart_budget) {
-            f.minimize_note = fmt::format(
-                "minimisation stopped: a crash may cost at most {} restarts", kMaxRestartsPerCause);
-        }
-    }
+    if (options_.minimize) minimise(f);
     repair_fields(f);
     merge_stub_answer(f);
+    if (options_.minimize) narrow_wrong_fields(f, key);
     if (!replays_alone(f)) return;
     // The identity is what the minimised reproducer violates: it may turn out to be a root
     // cause already known under another guise (a codec detail that fell away).
@@ -923,8 +957,14 @@ bool Campaign::move_into_map(Step& s, int fc) const {
     const codec::Framing framing = result_.profile.framing;
     std::optional<std::vector<std::uint8_t>> mbap = step_request(s, fc, framing);
     if (!mbap) return false;
-    const auto pdu =
-        with_addresses_in_map(codec::Bytes(*mbap).subspan(lim::kMbapHeader), result_.model);
+    // Each range made to fit the map with its count (a start inside the table whose count
+    // runs past the range's end is outside the map too).
+    std::optional<std::vector<std::uint8_t>> pdu;
+    for (const RequestField range : {RequestField::Address, RequestField::WriteAddress}) {
+        const codec::Bytes now =
+            pdu ? codec::Bytes(*pdu) : codec::Bytes(*mbap).subspan(lim::kMbapHeader);
+        if (auto moved = with_field_repaired(now, range, result_.model)) pdu = std::move(moved);
+    }
     if (!pdu) return false;
     std::copy(pdu->begin(), pdu->end(), mbap->begin() + lim::kMbapHeader);
     set_step_request(s, *mbap, framing);
@@ -956,6 +996,58 @@ void Campaign::repair_fields(Finding& f) {
     f.verdict = std::move(e.verdict);
     f.trace = std::move(e.trace);
     f.minimized = true;
+}
+
+// The one send step holding a whole request frame of function `fc`; nothing when there is no
+// such step or more than one.
+std::optional<std::size_t> only_request_step(const Case& c, int fc, codec::Framing framing) {
+    std::optional<std::size_t> at;
+    for (std::size_t i = 0; i < c.steps.size(); ++i) {
+        if (!step_request(c.steps[i], fc, framing)) continue;
+        if (at) return std::nullopt;
+        at = i;
+    }
+    return at;
+}
+
+void Campaign::narrow_wrong_fields(Finding& f, const std::string& charge) {
+    const codec::Framing framing = result_.profile.framing;
+    const auto at = only_request_step(f.fuzz_case, f.verdict.culprit_fc, framing);
+    if (!at) return;
+    auto pdu_of = [&](const Case& c) {
+        const auto mbap = step_request(c.steps[*at], f.verdict.culprit_fc, framing);
+        return std::vector<std::uint8_t>(mbap->begin() + lim::kMbapHeader, mbap->end());
+    };
+    const std::vector<RequestField> wrong = wrong_fields(pdu_of(f.fuzz_case), result_.model);
+    Retrial r{f.verdict, f.key(), true, charge};
+    std::vector<std::string> made_right;
+    for (const RequestField field : wrong) {
+        const auto repaired = with_field_repaired(pdu_of(f.fuzz_case), field, result_.model);
+        if (!repaired) continue;
+        Case candidate = f.fuzz_case;
+        auto mbap = *step_request(candidate.steps[*at], f.verdict.culprit_fc, framing);
+        mbap.resize(lim::kMbapHeader);
+        mbap.insert(mbap.end(), repaired->begin(), repaired->end());
+        codec::store_be16(mbap.data() + 4, static_cast<std::uint16_t>(repaired->size() + 1));
+        set_step_request(candidate.steps[*at], mbap, framing);
+        if (!shows_again(candidate, r)) {
+            if (r.lost || r.cut || r.restart_budget) break;
+            continue;
+        }
+        f.fuzz_case = std::move(candidate);
+        f.verdict = r.last.verdict;
+        f.trace = std::move(r.last.trace);
+        f.minimized = true;
+        made_right.emplace_back(field_name(field));
+    }
+    for (const RequestField field : wrong_fields(pdu_of(f.fuzz_case), result_.model))
+        f.wrong_fields.emplace_back(field_name(field));
+    if (wrong.empty()) return;
+    f.minimize_note += fmt::format(
+        "{}field-level: wrong {}{}{}", f.minimize_note.empty() ? "" : "; ",
+        f.wrong_fields.empty() ? "none" : fmt::format("{}", fmt::join(f.wrong_fields, ", ")),
+        made_right.empty() ? "" : fmt::format(" ({} made right)", fmt::join(made_right, ", ")),
+        r.lost || r.cut || r.restart_budget ? ", not narrowed further" : "");
 }
 
 // An invalid request answered normally, where a valid request of the same function code in
@@ -1575,7 +1667,10 @@ bool Campaign::find_batch_culprit(const BatchResult& br, const std::vector<std::
         found = shown == Outcome::Fired &&
                 (shown.oracle == Oracle::Crash || shown.oracle == Oracle::Hang);
         // The batch's death (or the hang it had to be restarted from) was this one's doing.
-        if (found && (after.died || after.settled_by_restart)) ++restarts_by_cause_[shown.key];
+        // (A confirmed crash's batch death is charged by confirm_death already.)
+        const bool charged = shown.oracle == Oracle::Crash && shown.confirmed_death;
+        if (found && !charged && (after.died || after.settled_by_restart))
+            ++restarts_by_cause_[shown.key];
     }
     return false;
 }

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "codec/bytes.hpp"
@@ -23,6 +24,33 @@ namespace mbstorm::netfuzz {
 // knows no range of that table, or every address is in the map already.
 std::optional<std::vector<std::uint8_t>> with_addresses_in_map(codec::Bytes pdu,
                                                                const DeviceModel& model);
+
+// A field of a request that a server checks before it acts on it: the counts, the byte count
+// and the data it announces, a single coil's value (exception 03 in v1.1b3's flow), then the
+// address ranges (02). FC 17 has two of each count and range: read, then write.
+enum class RequestField : std::uint8_t {
+    Quantity,
+    WriteQuantity,
+    ByteCount,
+    DataLength,
+    Value,
+    Address,
+    WriteAddress,
+};
+// As finding.json and the summary name it: "byte-count", "write-address", ...
+std::string_view field_name(RequestField field) noexcept;
+
+// The fields of request PDU `pdu` that are wrong, in the order above: a count outside its
+// function's limits, a byte count that disagrees with its count, data that disagrees with the
+// byte count, FC 05's value, and (when the model knows the table) a range outside the map.
+// A range is judged with its count when the count is valid, else as one item.
+std::vector<RequestField> wrong_fields(codec::Bytes pdu, const DeviceModel& model);
+
+// `pdu` with `field` made right and nothing else changed (the data is cut or padded with zero
+// bytes to its byte count; a count is made to agree with the byte count where that is valid,
+// else 1); nothing when that field is right already or cannot be made right.
+std::optional<std::vector<std::uint8_t>> with_field_repaired(codec::Bytes pdu, RequestField field,
+                                                             const DeviceModel& model);
 
 // A request of function `fc` the codec owes no exception and whose every address lies in one
 // range of the model's map (the model's first range when it knows the table); nothing when

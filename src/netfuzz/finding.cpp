@@ -129,6 +129,7 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"found_after_s", f.found_after_s},
         {"minimized", f.minimized},
         {"minimize_note", f.minimize_note},
+        {"wrong_fields", f.wrong_fields},
         {"confirmed", f.confirmed},
         {"note", f.note},
         {"original_steps", f.original_steps},
@@ -218,6 +219,7 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
                 StateRange{static_cast<std::uint16_t>(base), static_cast<std::uint32_t>(span)};
         }
         out.minimized = j.value("minimized", false);
+        out.wrong_fields = j.value("wrong_fields", std::vector<std::string>{});
         out.confirmed = j.value("confirmed", true);
         out.note = j.value("note", "");
         const json& p = j.at("profile");

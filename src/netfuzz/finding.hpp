@@ -48,8 +48,11 @@ struct Finding {
     std::uint64_t hits = 1;
     std::map<std::string, std::uint64_t> variants;
     std::string minimize_note;  // why it was not (fully) minimised, if it was not
-    unsigned restarts = 0;      // target restarts this root cause cost (finding, confirming,
-                                // minimising it)
+    // The fields of the culprit request still wrong in the reproducer once field repair made
+    // the others right ("byte-count", "address": field_repair.hpp); empty when none or unknown.
+    std::vector<std::string> wrong_fields;
+    unsigned restarts = 0;  // target restarts this root cause cost (finding, confirming,
+                            // minimising it)
     int timeout_ms = 1000;
     // Where its run checked reads after writes: replay checks the same range.
     StateRange state;

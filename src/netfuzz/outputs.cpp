@@ -66,6 +66,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
                             {"hits", f.hits},
                             {"variants", f.variants},
                             {"minimize_note", f.minimize_note},
+                            {"wrong_fields", f.wrong_fields},
                             {"restarts", f.restarts},
                             {"summary", f.verdict.summary},
                             {"expected", f.verdict.expected},

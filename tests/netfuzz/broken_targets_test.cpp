@@ -137,6 +137,29 @@ TEST(StubTarget, AHandlerThatDoesNotReadItsRequestIsOneFinding) {
     EXPECT_EQ(file_record[0].rfind("malformed-response:", 0), 0u) << fuzzed.run.output;
 }
 
+// Field-level minimisation (issue #26 item 4): FC 10 never reads its byte count. The cases
+// that show it carry other wrong fields too (a byte count and data that disagree with each
+// other and with the quantity, a range past the end of the table, where the 02 it draws is the
+// same skipped check). One finding, its reproducer wrong in one field only, replaying alone.
+TEST(ByteCountTarget, AFindingNamesTheOneWrongFieldItNeeds) {
+    const FuzzedServer fuzzed("broken_server_bytecount", "--cases 20000 -q");
+    ASSERT_FALSE(fuzzed.target.empty()) << "broken_server_bytecount did not start";
+    ASSERT_EQ(fuzzed.run.exit_code, 1) << fuzzed.run.output;
+    ASSERT_FALSE(fuzzed.summary.is_discarded()) << fuzzed.run.output;
+    const auto& findings = fuzzed.summary.at("findings");
+    ASSERT_EQ(findings.size(), 1u) << fuzzed.run.output;
+    const auto& f = findings[0];
+    EXPECT_EQ(f.at("root_cause"), "spec-deviation:invalid-request-answered-normally(owes-03)/fc10")
+        << fuzzed.run.output;
+    const std::vector<std::string> wrong = f.at("wrong_fields");
+    ASSERT_EQ(wrong.size(), 1u) << f.dump(2);
+    EXPECT_TRUE(wrong[0] == "byte-count" || wrong[0] == "data-length") << f.dump(2);
+    const std::string folder = f.at("folder");
+    const auto replay =
+        run_mbstorm("replay " + folder + " --target " + fuzzed.target + " --runs 2");
+    EXPECT_NE(replay.output.find("2 of 2 run(s) reproduced"), std::string::npos) << replay.output;
+}
+
 // --baseline: an earlier run's findings are known. A run that finds only those exits 0 and
 // says they are known (console, JSON, SARIF baselineState); one whose finding the baseline
 // does not list fails as before. Its --sarif file is a baseline too; a file that is neither is

@@ -363,4 +363,72 @@ TEST(FieldRepair, AStepsRequestIsReadAndWrittenInItsFraming) {
     EXPECT_TRUE(step_request(Step{Op::Send, 0, 0, 0, mbap}, 0x03, Framing::Mbap));
 }
 
+std::vector<std::string> names(const std::vector<RequestField>& fields) {
+    std::vector<std::string> out;
+    for (const RequestField f : fields) out.emplace_back(field_name(f));
+    return out;
+}
+using Names = std::vector<std::string>;
+
+// Field-level minimisation's facts (issue #26 item 4): which fields of a request are wrong, in
+// the order a server checks them, and each made right alone.
+TEST(FieldRepair, NamesEachWrongFieldInCheckOrder) {
+    DeviceModel model;
+    model.table(Table::Coils).ranges = ranges({{200, 263}});
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1039}, {1060, 1099}});
+    // FC 0F at 0x2000, quantity 0x4001 (over 1968), byte count 2, one data byte: every field.
+    const std::vector<std::uint8_t> coils = {0x0F, 0x20, 0x00, 0x40, 0x01, 0x02, 0xAA};
+    EXPECT_EQ(names(wrong_fields(coils, model)),
+              (Names{"quantity", "byte-count", "data-length", "address"}));
+    // A valid FC 10 inside the map: nothing; its byte count one too large: only that.
+    const std::vector<std::uint8_t> regs = {0x10, 0x03, 0xE8, 0, 2, 4, 0, 1, 0, 2};
+    EXPECT_TRUE(wrong_fields(regs, model).empty());
+    std::vector<std::uint8_t> long_count = regs;
+    long_count[5] = 5;
+    EXPECT_EQ(names(wrong_fields(long_count, model)), (Names{"byte-count", "data-length"}));
+    // FC 17: the write range runs past the first block's end (1039) while the read range fits.
+    const std::vector<std::uint8_t> rw = {0x17, 0x03, 0xE8, 0, 1, 0x04, 0x0F, 0, 2, 4, 0, 1, 0, 2};
+    EXPECT_EQ(names(wrong_fields(rw, model)), (Names{"write-address"}));
+    // FC 05's value, and an address the model does not know the table of (no judgement).
+    EXPECT_EQ(names(wrong_fields(std::vector<std::uint8_t>{0x05, 0, 0xC8, 0x12, 0x34}, model)),
+              (Names{"value"}));
+    EXPECT_EQ(names(wrong_fields(std::vector<std::uint8_t>{0x04, 0x20, 0, 0, 0}, model)),
+              (Names{"quantity"}));
+    EXPECT_TRUE(wrong_fields(std::vector<std::uint8_t>{0x99, 1, 2}, model).empty());
+}
+
+TEST(FieldRepair, MakesOneFieldRightAndLeavesTheRest) {
+    DeviceModel model;
+    model.table(Table::Coils).ranges = ranges({{200, 263}});
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1003}, {1060, 1099}});
+    const std::vector<std::uint8_t> coils = {0x0F, 0x20, 0x00, 0x40, 0x01, 0x02, 0xAA};
+    // The quantity takes what the byte count announces (2 bytes: 16 coils).
+    EXPECT_EQ(*with_field_repaired(coils, RequestField::Quantity, model),
+              (std::vector<std::uint8_t>{0x0F, 0x20, 0x00, 0x00, 0x10, 0x02, 0xAA}));
+    // The data is padded to the byte count.
+    EXPECT_EQ(*with_field_repaired(coils, RequestField::DataLength, model),
+              (std::vector<std::uint8_t>{0x0F, 0x20, 0x00, 0x40, 0x01, 0x02, 0xAA, 0x00}));
+    // The address moves to the first coil of the map.
+    EXPECT_EQ(*with_field_repaired(coils, RequestField::Address, model),
+              (std::vector<std::uint8_t>{0x0F, 0x00, 0xC8, 0x40, 0x01, 0x02, 0xAA}));
+    // A byte count made right takes its data along when the data agreed with it.
+    const std::vector<std::uint8_t> regs = {0x10, 0x04, 0x24, 0, 1, 4, 0, 1, 0, 2};
+    EXPECT_EQ(*with_field_repaired(regs, RequestField::ByteCount, model),
+              (std::vector<std::uint8_t>{0x10, 0x04, 0x24, 0, 1, 2, 0, 1}));
+    EXPECT_TRUE(
+        wrong_fields(*with_field_repaired(regs, RequestField::ByteCount, model), model).empty());
+    // Five registers do not fit the four-register block at 1000: the block at 1060 holds them.
+    const std::vector<std::uint8_t> five = {0x03, 0x20, 0x00, 0, 5};
+    EXPECT_EQ(mbstorm::codec::load_be16(
+                  with_field_repaired(five, RequestField::Address, model)->data() + 1),
+              1060);
+    EXPECT_EQ(*with_field_repaired(std::vector<std::uint8_t>{0x05, 0, 0xC8, 0x12, 0x34},
+                                   RequestField::Value, model),
+              (std::vector<std::uint8_t>{0x05, 0, 0xC8, 0xFF, 0x00}));
+    // A field that is right already, or that cannot be made right: nothing.
+    EXPECT_FALSE(with_field_repaired(regs, RequestField::Address, model));
+    EXPECT_FALSE(with_field_repaired(std::vector<std::uint8_t>{0x02, 0x20, 0, 0, 1},
+                                     RequestField::Address, model));
+}
+
 }  // namespace
