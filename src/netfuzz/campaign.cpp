@@ -39,6 +39,7 @@
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/restart_command.hpp"
 #include "netfuzz/rules.hpp"
+#include "netfuzz/shrink.hpp"
 #include "netfuzz/state_marker.hpp"
 #include "netfuzz/wire.hpp"
 
@@ -62,13 +63,6 @@ std::string steps_text(const Case& c) {
     for (const Step& s : c.steps)
         t += fmt::format("{}/{}/{}/{};", op_name(s.op), s.conn, s.delay_us, to_hex(s.bytes));
     return t;
-}
-
-// How big a reproducer is: its steps first, then its bytes.
-std::pair<std::size_t, std::size_t> size_of(const Case& c) {
-    std::size_t bytes = 0;
-    for (const Step& s : c.steps) bytes += s.bytes.size();
-    return {c.steps.size(), bytes};
 }
 
 Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit,
@@ -191,7 +185,7 @@ bool whole_server_hang(const Verdict& v) {
     return v.oracle == Oracle::Hang && v.rule.rfind(kWholeServerHangRule, 0) == 0;
 }
 
-class Campaign {
+class Campaign : private Rerun {
   public:
     Campaign(const CampaignOptions& o, const ProgressFn& p, const FindingFn& f)
         : options_(o), on_progress_(p), on_finding_(f) {}
@@ -278,31 +272,16 @@ class Campaign {
     // A finding as first seen: the case and what it did.
     Finding found(const Case& c, Execution ex) const;
     bool reproduces_every_time(const Case& c, const std::string& key);
-    // A finding's candidate reproducers, run alone as minimisation and field repair try them.
-    struct Retrial {
-        Retrial(Verdict v, std::string k, bool same, std::string charged)
-            : first(std::move(v)), key(std::move(k)), same_key(same), charge(std::move(charged)) {}
-        Verdict first;
-        std::string key;     // its root cause
-        bool same_key;       // the very root cause, not merely the same fault
-        std::string charge;  // the key its restarts are charged to: the finding's first guise
-        Execution last;      // the last candidate that showed it
-        bool lost = false, cut = false, restart_budget = false;
-    };
-    // Whether `candidate`, run alone, shows the fault again (then kept in r.last).
-    bool shows_again(const Case& candidate, Retrial& r);
+    // Rerun, for the minimise stage (shrink.hpp): candidates run alone within the time and
+    // the crash's restart budget.
+    bool shows_again(const Case& candidate, Retrial& r) override;
+    std::optional<Execution> run_once(const Case& c) override;
+    ShrinkContext shrink_context() const;
     void record(const Case& c, Execution ex);
-    void minimise(Finding& f);
-    void repair_fields(Finding& f);
-    // Each wrong field of the culprit request made right in turn, kept right while the same
-    // root cause shows; the fields left wrong are the finding's.
-    void narrow_wrong_fields(Finding& f, const std::string& charge);
-    void merge_stub_answer(Finding& f);
     bool replays_alone(Finding& f);
     bool replays_once_more(const Finding& f);
     void check_random_drops();
     Finding capacity_finding(const CapacityResult& cr) const;
-    bool move_into_map(Step& s, int fc) const;
     void record_lost_batch(const std::vector<Case>& batch);
     void keep(Finding f);
     void check_capacity_once();
@@ -893,41 +872,17 @@ bool Campaign::shows_again(const Case& candidate, Retrial& r) {
     return true;
 }
 
-// Delta debugging over the case's frames and steps, then each PDU's tail (minimize.hpp).
-void Campaign::minimise(Finding& f) {
-    const Case& c = f.original_case;
-    if (depends_on_line_timing(c.cls)) {
-        // Confirmed, but each try would again be at the scheduler's mercy.
-        f.minimize_note = "not minimised: its verdict rests on a silence's length";
-        return;
-    }
-    if (c.cls == MutationClass::Repeated) {
-        // Fewer repeats only make the drop less likely to show.
-        f.minimize_note = "not minimised: each repeat is a chance for the drop to show";
-        return;
-    }
-    Retrial r{f.verdict, f.key(), false, f.key()};
-    auto reproduces = [&](const Case& candidate) { return shows_again(candidate, r); };
-    // Crashes and hangs cost a restart or a timeout per try: a smaller budget, whole frames
-    // only.
-    const bool costly = f.oracle() == Oracle::Crash || f.oracle() == Oracle::Hang;
-    Case small = minimize_case(
-        c, reproduces,
-        costly ? std::min(8u, options_.minimize_budget / 3) : options_.minimize_budget, !costly,
-        result_.profile.framing);
-    if (size_of(small) < size_of(c) && r.last.verdict) {
-        f.fuzz_case = std::move(small);
-        f.verdict = r.last.verdict;
-        f.trace = std::move(r.last.trace);
-        f.minimized = true;
-    }
-    if (r.cut) {
-        f.minimize_note = "minimisation cut short by --seconds";
-        ++result_.findings_not_minimized;
-    } else if (r.restart_budget) {
-        f.minimize_note = fmt::format("minimisation stopped: a crash may cost at most {} restarts",
-                                      kMaxRestartsPerCause);
-    }
+std::optional<Execution> Campaign::run_once(const Case& c) {
+    if (!can_afford(1)) return std::nullopt;
+    ++result_.isolated_runs;
+    Execution e = run_alone(c);
+    if ((e.down_before || e.target_down) && !recover("")) return std::nullopt;
+    return e;
+}
+
+ShrinkContext Campaign::shrink_context() const {
+    return ShrinkContext{result_.model, result_.profile.framing, options_.minimize_budget,
+                         kMaxRestartsPerCause};
 }
 
 void Campaign::record(const Case& c, Execution ex) {
@@ -935,10 +890,11 @@ void Campaign::record(const Case& c, Execution ex) {
     Finding f = found(c, std::move(ex));  // seen now, not when minimising it ends
     // Known from now on (its culprit), so that nothing else pays for it while it is minimised.
     learn_costly(f);
-    if (options_.minimize) minimise(f);
-    repair_fields(f);
-    merge_stub_answer(f);
-    if (options_.minimize) narrow_wrong_fields(f, key);
+    const ShrinkContext ctx = shrink_context();
+    if (options_.minimize && !minimise_finding(f, *this, ctx)) ++result_.findings_not_minimized;
+    move_ranges_into_map(f, *this, ctx);
+    merge_stub_answer(f, *this, ctx);
+    if (options_.minimize) narrow_wrong_fields(f, *this, ctx, key);
     if (!replays_alone(f)) return;
     // The identity is what the minimised reproducer violates: it may turn out to be a root
     // cause already known under another guise (a codec detail that fell away).
@@ -949,142 +905,6 @@ void Campaign::record(const Case& c, Execution ex) {
     }
     by_key_[key] = result_.findings.size();  // the unminimised guise leads here too
     keep(std::move(f));
-}
-
-// One request frame (any framing) with its addresses moved into the map; false when the
-// step is not one such frame of function `fc`, or nothing moved.
-bool Campaign::move_into_map(Step& s, int fc) const {
-    const codec::Framing framing = result_.profile.framing;
-    std::optional<std::vector<std::uint8_t>> mbap = step_request(s, fc, framing);
-    if (!mbap) return false;
-    // Each range made to fit the map with its count (a start inside the table whose count
-    // runs past the range's end is outside the map too).
-    std::optional<std::vector<std::uint8_t>> pdu;
-    for (const RequestField range : {RequestField::Address, RequestField::WriteAddress}) {
-        const codec::Bytes now =
-            pdu ? codec::Bytes(*pdu) : codec::Bytes(*mbap).subspan(lim::kMbapHeader);
-        if (auto moved = with_field_repaired(now, range, result_.model)) pdu = std::move(moved);
-    }
-    if (!pdu) return false;
-    std::copy(pdu->begin(), pdu->end(), mbap->begin() + lim::kMbapHeader);
-    set_step_request(s, *mbap, framing);
-    return true;
-}
-
-// Field-level minimisation (field_repair.hpp): "02 where 03 is owed" from a request also
-// outside the map may be a target that never makes the 03 check; with the address inside
-// the map it shows which. Whatever deviation the repaired request still draws is the finding.
-void Campaign::repair_fields(Finding& f) {
-    const std::string address_refused_where_other_owed = exception_where_owed_prefix(
-        static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress));
-    if (f.verdict.oracle != Oracle::SpecDeviation ||
-        f.verdict.rule.rfind(address_refused_where_other_owed, 0) != 0 || result_.model.empty() ||
-        !can_afford(1))
-        return;
-    Case repaired = f.fuzz_case;
-    bool changed = false;
-    for (Step& s : repaired.steps) changed = move_into_map(s, f.verdict.culprit_fc) || changed;
-    if (!changed) return;
-    ++result_.isolated_runs;
-    Execution e = run_alone(repaired);
-    if ((e.down_before || e.target_down) && !recover("")) return;
-    if (e.verdict.oracle != Oracle::SpecDeviation) return;
-    f.minimize_note +=
-        fmt::format("{}field-level: with its address inside the map, {} became {}",
-                    f.minimize_note.empty() ? "" : "; ", f.verdict.rule, e.verdict.rule);
-    f.fuzz_case = std::move(repaired);
-    f.verdict = std::move(e.verdict);
-    f.trace = std::move(e.trace);
-    f.minimized = true;
-}
-
-// The one send step holding a whole request frame of function `fc`; nothing when there is no
-// such step or more than one.
-std::optional<std::size_t> only_request_step(const Case& c, int fc, codec::Framing framing) {
-    std::optional<std::size_t> at;
-    for (std::size_t i = 0; i < c.steps.size(); ++i) {
-        if (!step_request(c.steps[i], fc, framing)) continue;
-        if (at) return std::nullopt;
-        at = i;
-    }
-    return at;
-}
-
-void Campaign::narrow_wrong_fields(Finding& f, const std::string& charge) {
-    const codec::Framing framing = result_.profile.framing;
-    const auto at = only_request_step(f.fuzz_case, f.verdict.culprit_fc, framing);
-    if (!at) return;
-    auto pdu_of = [&](const Case& c) {
-        const auto mbap = step_request(c.steps[*at], f.verdict.culprit_fc, framing);
-        return std::vector<std::uint8_t>(mbap->begin() + lim::kMbapHeader, mbap->end());
-    };
-    const std::vector<RequestField> wrong = wrong_fields(pdu_of(f.fuzz_case), result_.model);
-    Retrial r{f.verdict, f.key(), true, charge};
-    std::vector<std::string> made_right;
-    for (const RequestField field : wrong) {
-        const auto repaired = with_field_repaired(pdu_of(f.fuzz_case), field, result_.model);
-        if (!repaired) continue;
-        Case candidate = f.fuzz_case;
-        auto mbap = *step_request(candidate.steps[*at], f.verdict.culprit_fc, framing);
-        mbap.resize(lim::kMbapHeader);
-        mbap.insert(mbap.end(), repaired->begin(), repaired->end());
-        codec::store_be16(mbap.data() + 4, static_cast<std::uint16_t>(repaired->size() + 1));
-        set_step_request(candidate.steps[*at], mbap, framing);
-        if (!shows_again(candidate, r)) {
-            if (r.lost || r.cut || r.restart_budget) break;
-            continue;
-        }
-        f.fuzz_case = std::move(candidate);
-        f.verdict = r.last.verdict;
-        f.trace = std::move(r.last.trace);
-        f.minimized = true;
-        made_right.emplace_back(field_name(field));
-    }
-    for (const RequestField field : wrong_fields(pdu_of(f.fuzz_case), result_.model))
-        f.wrong_fields.emplace_back(field_name(field));
-    if (wrong.empty()) return;
-    f.minimize_note += fmt::format(
-        "{}field-level: wrong {}{}{}", f.minimize_note.empty() ? "" : "; ",
-        f.wrong_fields.empty() ? "none" : fmt::format("{}", fmt::join(f.wrong_fields, ", ")),
-        made_right.empty() ? "" : fmt::format(" ({} made right)", fmt::join(made_right, ", ")),
-        r.lost || r.cut || r.restart_budget ? ", not narrowed further" : "");
-}
-
-// An invalid request answered normally, where a valid request of the same function code in
-// its place gets the very same bytes back and that answer is itself wrong: the handler never
-// reads the request (pymodbus 3.0's FC 14 stub answers everything with an empty record list).
-// One fix removes both, so it is one finding: the valid request's.
-void Campaign::merge_stub_answer(Finding& f) {
-    if (f.verdict.oracle != Oracle::SpecDeviation || f.verdict.culprit_fc < 0 ||
-        f.verdict.rule.rfind(kInvalidAnsweredNormallyRule, 0) != 0 || !can_afford(1))
-        return;
-    const auto fc = static_cast<std::uint8_t>(f.verdict.culprit_fc);
-    const auto valid = valid_request_in_map(fc, result_.model);
-    const codec::Framing framing = result_.profile.framing;
-    Case plain = f.fuzz_case;
-    std::vector<Step*> sends;
-    for (Step& s : plain.steps)
-        if (s.op == Op::Send) sends.push_back(&s);
-    const auto mbap = sends.size() == 1 ? step_request(*sends[0], fc, framing) : std::nullopt;
-    if (!valid || !mbap) return;
-    set_step_request(
-        *sends[0], mbap_view((*mbap)[lim::kMbapHeader - 1], *valid, codec::load_be16(mbap->data())),
-        framing);
-    ++result_.isolated_runs;
-    Execution e = run_alone(plain);
-    if ((e.down_before || e.target_down) && !recover("")) return;
-    const bool wrong =
-        e.verdict.oracle == Oracle::SpecDeviation || e.verdict.oracle == Oracle::MalformedResponse;
-    const std::vector<std::uint8_t> answer = answered_bytes(f.trace);
-    if (!wrong || answer.empty() || answered_bytes(e.trace) != answer) return;
-    f.minimize_note += fmt::format(
-        "{}field-level: a valid request got the same answer, so the handler does not read the "
-        "request; {} became {}",
-        f.minimize_note.empty() ? "" : "; ", f.verdict.rule, e.verdict.rule);
-    f.fuzz_case = std::move(plain);
-    f.verdict = std::move(e.verdict);
-    f.trace = std::move(e.trace);
-    f.minimized = true;
 }
 
 // Issue #26: a finding is saved only once the very case saved for it, run alone on fresh
