@@ -301,7 +301,8 @@ class Campaign : private Rerun {
     // Runs cases alone before the generator's, counted as first looks; true when the target
     // was lost.
     bool look_first(std::vector<Case> cases, std::uint64_t& generated);
-    // Whether a case is owed an exception the target pauses after (rationed: 1 in 8 sent).
+    // Whether a case is owed an exception the target pauses after and is not sent: each kind
+    // once, then 1 in 32, within a quarter of the run (kPauseShare).
     bool rationed(const Case& c);
 
     // The stages of run().
@@ -376,6 +377,9 @@ class Campaign : private Rerun {
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
     std::uint64_t rationed_seen_ = 0, rationed_units_seen_ = 0;
+    // Cases sent although they cost the target's pause: each kind once, the rest rationed.
+    std::set<std::string> paused_kinds_;
+    std::uint64_t pause_spent_ms_ = 0;  // the pauses they cost, as the model measured them
     // The case being isolated comes from a pipelined batch that killed the target.
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
@@ -1241,6 +1245,21 @@ bool Campaign::marker_says_restart(const std::vector<Case>& cases) {
     return marker_->read(seen) == StateMarker::Reading::Reset;
 }
 
+// A target that pauses after exceptions spends at most this share of the run in those pauses;
+// a request owed such an exception whose kind was sent already goes out one time in this many.
+constexpr double kPauseShare = 0.25;
+constexpr std::uint64_t kRationedShare = 32;
+
+// What a request owed an exception is, for rationing: its function, why the codec refuses it,
+// and which fields are wrong (its address outside the map is a kind of its own).
+std::string pausing_kind(const RequestInfo& info, const DeviceModel& m) {
+    std::string kind = fmt::format("{:02x}/{}", info.pdu.empty() ? 0 : info.pdu[0],
+                                   codec::error_name(info.status.error));
+    for (const RequestField f : wrong_fields(info.pdu, m))
+        kind += fmt::format("/{}", field_name(f));
+    return kind;
+}
+
 bool Campaign::rationed(const Case& c) {
     const DeviceModel& m = result_.model;
     // A unit id the device was seen not to answer costs a timeout on a pipelined lane.
@@ -1254,16 +1273,29 @@ bool Campaign::rationed(const Case& c) {
         if (silent && ++rationed_units_seen_ % 16 != 0) return true;
     }
     if (!m.pauses_after_exceptions()) return false;
-    bool pauses = false;
+    unsigned pause_ms = 0;
+    std::string kind;
     for_each_request(c, result_.profile, [&](const RequestInfo& info) {
         const std::uint8_t fc = info.pdu.empty() ? 0 : info.pdu[0];
         std::size_t code = static_cast<std::size_t>(info.status.exception);
         if (result_.profile.unsupported[fc]) code = 1;
-        pauses = owes_exception(info, result_.profile) && code < m.exception_pause_ms.size() &&
-                 m.exception_pause_ms[code] > 0;
-        return !pauses;
+        if (!owes_exception(info, result_.profile) || code >= m.exception_pause_ms.size() ||
+            m.exception_pause_ms[code] == 0)
+            return true;
+        pause_ms = m.exception_pause_ms[code];
+        kind = pausing_kind(info, m);
+        return false;
     });
-    return pauses && ++rationed_seen_ % 8 != 0;
+    if (pause_ms == 0) return false;
+    // A kind of request not sent yet goes out while the pauses stay within their share of the
+    // run; the rest, one in kRationedShare, and only within that share too.
+    const double share = kPauseShare * elapsed() * 1000.0;
+    const bool affordable = static_cast<double>(pause_spent_ms_) <= share;
+    const bool novel = !paused_kinds_.count(kind);
+    if (!affordable || (!novel && ++rationed_seen_ % kRationedShare != 0)) return true;
+    paused_kinds_.insert(kind);
+    pause_spent_ms_ += pause_ms;
+    return false;
 }
 
 bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {

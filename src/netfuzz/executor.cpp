@@ -587,10 +587,17 @@ void CaseRunner::judge_unmatched(const Conn& cn, Judgement& j) const {
                     fc = rfc;
         }
         const int tid = codec::load_be16(received_frames_of.data() + off);
+        // The transaction id of a request still unanswered, sent whole only after this answer
+        // came (a frame dripped a byte at a time): a started frame answered, the same guise.
+        bool answered_before_whole = false;
+        for (const Pending& pd : cn.pending)
+            answered_before_whole =
+                answered_before_whole || (!pd.probe && !pd.answered_ns && pd.tid == tid);
         j.consider(Verdict{Oracle::MalformedResponse,
-                           length_mismatch_sent || tid == started_tid ? kStreamLostRule
-                           : partial_only                             ? kAnswersPartialFrameRule
-                                                                      : kUnmatchedTransactionIdRule,
+                           length_mismatch_sent || tid == started_tid || answered_before_whole
+                               ? kStreamLostRule
+                           : partial_only ? kAnswersPartialFrameRule
+                                          : kUnmatchedTransactionIdRule,
                            fc,
                            fmt::format("response with transaction id {:04X} matches no request",
                                        codec::load_be16(received_frames_of.data() + off)),

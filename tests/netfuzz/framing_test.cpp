@@ -11,6 +11,8 @@
 
 #include <atomic>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <set>
 #include <thread>
 #include <vector>
@@ -23,6 +25,7 @@
 #include "netfuzz/finding.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/link.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/serial_link.hpp"
 #include "netfuzz/wire.hpp"
 
@@ -179,11 +182,12 @@ TEST(GeneratorFraming, SerialLinesGetSilenceAndNoiseMutationsOnOneLink) {
     }
 }
 
-// A slave for RTU over TCP in a thread: answers every frame with exception 01 (illegal
-// function), and a frame with a bad CRC too unless it `discards` those as it should.
-class RtuSlave {
+// A slave in a thread on a loopback port: `consume` takes each connection's bytes received so
+// far, drops what it has acted on and sends its answers.
+class ThreadSlave {
   public:
-    explicit RtuSlave(bool discards_bad_crc) : discards_(discards_bad_crc) {
+    using Consume = std::function<void(int fd, Bytes& buffer)>;
+    explicit ThreadSlave(Consume consume) : consume_(std::move(consume)) {
         fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
         sockaddr_in a{};
         a.sin_family = AF_INET;
@@ -195,7 +199,7 @@ class RtuSlave {
         port_ = ntohs(a.sin_port);
         thread_ = std::thread([this] { serve(); });
     }
-    ~RtuSlave() {
+    ~ThreadSlave() {
         stop_ = true;
         thread_.join();
         ::close(fd_);
@@ -227,27 +231,37 @@ class RtuSlave {
                     break;
                 }
                 bufs[i].insert(bufs[i].end(), b, b + n);
-                WireFrame w;
-                while (cut_frame(bufs[i], codec::Framing::Rtu, true, 0, w) == WireCut::Frame) {
-                    const Bytes frame(bufs[i].begin(),
-                                      bufs[i].begin() + static_cast<std::ptrdiff_t>(w.size));
-                    bufs[i].erase(bufs[i].begin(),
-                                  bufs[i].begin() + static_cast<std::ptrdiff_t>(w.size));
-                    if (!w.discard.empty() && discards_) continue;
-                    const Bytes answer =
-                        frame_pdu({static_cast<std::uint8_t>(frame[1] | 0x80), 0x01}, 0, frame[0],
-                                  codec::Framing::Rtu);
-                    (void)!::send(conns[i], answer.data(), answer.size(), MSG_NOSIGNAL);
-                }
+                consume_(conns[i], bufs[i]);
             }
         }
         for (int c : conns) ::close(c);
     }
-    bool discards_;
+    Consume consume_;
     int fd_ = -1;
     int port_ = 0;
     std::atomic<bool> stop_{false};
     std::thread thread_;
+};
+
+void send_bytes(int fd, const Bytes& b) {
+    (void)!::send(fd, b.data(), b.size(), MSG_NOSIGNAL);
+}
+
+// A slave for RTU over TCP: answers every frame with exception 01 (illegal function), and a
+// frame with a bad CRC too unless it `discards` those as it should.
+class RtuSlave : public ThreadSlave {
+  public:
+    explicit RtuSlave(bool discards_bad_crc)
+        : ThreadSlave([discards_bad_crc](int fd, Bytes& buf) {
+              WireFrame w;
+              while (cut_frame(buf, codec::Framing::Rtu, true, 0, w) == WireCut::Frame) {
+                  const Bytes frame(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(w.size));
+                  buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(w.size));
+                  if (!w.discard.empty() && discards_bad_crc) continue;
+                  send_bytes(fd, frame_pdu({static_cast<std::uint8_t>(frame[1] | 0x80), 0x01}, 0,
+                                           frame[0], codec::Framing::Rtu));
+              }
+          }) {}
 };
 
 Execution run_bad_crc_case(RtuSlave& slave) {
@@ -265,6 +279,43 @@ Execution run_bad_crc_case(RtuSlave& slave) {
     ExecOptions o;
     o.timeout_ms = 400;
     return execute_case(c, connector, profile, o);
+}
+
+// A target that frames FC 08 by its function code and answers it (exception 01) as soon as
+// it has read the header and the function code, before the rest of the frame came (libmodbus
+// 3.1.6 answers a dripped FC 08 so): the answer carries the request's own transaction id, and
+// its request is whole only after it. That is the stream-lost root cause, not an answer with a
+// transaction id nobody sent.
+TEST(ExecutorFraming, AnAnswerBeforeItsDrippedRequestWasWholeIsTheStreamLost) {
+    auto early = std::make_shared<std::set<int>>();
+    ThreadSlave slave([early](int fd, Bytes& buf) {
+        while (buf.size() >= codec::limits::kMbapHeader + 1) {
+            if (buf[7] == 0x08 && early->insert(fd).second)
+                send_bytes(fd, {buf[0], buf[1], 0, 0, 0, 3, buf[6], 0x88, 0x01});
+            const std::size_t whole = codec::announced_adu_size(buf.data());
+            if (buf.size() < whole) return;
+            if (buf[7] == 0x03)
+                send_bytes(fd, {buf[0], buf[1], 0, 0, 0, 7, buf[6], 0x03, 4, 0, 0, 0, 0});
+            early->erase(fd);
+            buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(whole));
+        }
+    });
+    net::Endpoint e;
+    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    TcpConnector connector(e);
+    TargetProfile profile;
+    profile.probe_pdu = kRead;
+    Case c;
+    c.cls = MutationClass::Drip;
+    c.function = 0x08;
+    const Bytes f = frame_pdu({0x08, 0x00, 0x11, 0x00, 0x00}, 0x816D, 1);
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, Bytes(f.begin(), f.begin() + 8)});
+    c.steps.push_back(Step{Op::Send, 0, 50'000, 0, Bytes(f.begin() + 8, f.end())});
+    ExecOptions o;
+    o.timeout_ms = 300;
+    const Execution ex = execute_case(c, connector, profile, o);
+    EXPECT_EQ(root_cause_key(ex.verdict), std::string("stream:") + kStreamLostRule)
+        << ex.verdict.summary;
 }
 
 TEST(ExecutorFraming, SlaveThatDiscardsABadCrcAndAnswersTheNextFrameIsClean) {
