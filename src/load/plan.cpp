@@ -131,6 +131,32 @@ LoadModelConflict settle_load_model(const LoadModelAsked& asked, LoadModel& mode
     return LoadModelConflict::None;
 }
 
+namespace {
+
+// Each stage of a staged run: its duration and the targets it ramps to.
+void check_stages(const Plan& plan, std::vector<std::string>& errors) {
+    auto fail = [&](std::string what) { errors.push_back(std::move(what)); };
+    for (std::size_t i = 0; i < plan.stages.size(); ++i) {
+        const Stage& s = plan.stages[i];
+        if (s.duration <= Duration::zero()) {
+            fail(fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
+                             seconds_text(s.duration)));
+        }
+        if (s.target_rate && plan.model != LoadModel::OpenLoop) {
+            fail(fmt::format("stages[{}]: a target rate needs an open-loop run", i));
+        } else if (s.target_rate && !(*s.target_rate >= 0 && *s.target_rate <= kMaxRate)) {
+            fail(fmt::format("stages[{}]: target rate {} is out of range (valid 0..{:g})", i,
+                             *s.target_rate, kMaxRate));
+        }
+        if (s.target_connections && *s.target_connections > kMaxConnections) {
+            fail(fmt::format("stages[{}]: target connections {} is out of range (valid 0..{})", i,
+                             *s.target_connections, kMaxConnections));
+        }
+    }
+}
+
+}  // namespace
+
 std::vector<std::string> validate_plan(const Plan& plan) {
     std::vector<std::string> errors;
     auto fail = [&](std::string what) { errors.push_back(std::move(what)); };
@@ -215,23 +241,7 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     if (!plan.stages.empty() && plan.transactions != 0) {
         fail("transactions: not supported with stages (stages end by time)");
     }
-    for (std::size_t i = 0; i < plan.stages.size(); ++i) {
-        const Stage& s = plan.stages[i];
-        if (s.duration <= Duration::zero()) {
-            fail(fmt::format("stages[{}]: duration {} is out of range (valid > 0s)", i,
-                             seconds_text(s.duration)));
-        }
-        if (s.target_rate && plan.model != LoadModel::OpenLoop) {
-            fail(fmt::format("stages[{}]: a target rate needs an open-loop run", i));
-        } else if (s.target_rate && !(*s.target_rate >= 0 && *s.target_rate <= kMaxRate)) {
-            fail(fmt::format("stages[{}]: target rate {} is out of range (valid 0..{:g})", i,
-                             *s.target_rate, kMaxRate));
-        }
-        if (s.target_connections && *s.target_connections > kMaxConnections) {
-            fail(fmt::format("stages[{}]: target connections {} is out of range (valid 0..{})", i,
-                             *s.target_connections, kMaxConnections));
-        }
-    }
+    check_stages(plan, errors);
     return errors;
 }
 

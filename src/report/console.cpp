@@ -109,6 +109,25 @@ std::size_t label_width(const stats::RunResult& r) {
     return width + 1;
 }
 
+// TLS handshakes and who carried the records, when the run used TLS.
+void append_tls_lines(std::string& out, const stats::ConnectionStats& cs, double seconds) {
+    if (cs.tls_handshakes == 0) return;
+    out += fmt::format(
+        "TLS         {} handshakes ({:.0f}/s), {} resumed, {} failed, latency mean {:.3f} ms, "
+        "max {:.3f} ms\n",
+        format_count(cs.tls_handshakes),
+        static_cast<double>(cs.tls_handshakes) / (seconds > 0 ? seconds : 1.0),
+        format_count(cs.tls_resumed), format_count(cs.tls_handshake_failures),
+        static_cast<double>(cs.tls_handshake_ns_total) / static_cast<double>(cs.tls_handshakes) /
+            1e6,
+        static_cast<double>(cs.tls_handshake_ns_max) / 1e6);
+    out += fmt::format(
+        "            records by kernel TLS on {} connections ({} ended by a non-data "
+        "record), by userspace OpenSSL on {}\n",
+        format_count(cs.tls_offloaded), format_count(cs.tls_offload_errors),
+        format_count(cs.tls_handshakes - cs.tls_offloaded));
+}
+
 }  // namespace
 
 std::string format_console_report(const stats::RunResult& r) {
@@ -139,23 +158,7 @@ std::string format_console_report(const stats::RunResult& r) {
                        format_count(r.connections.opened), format_count(r.connections.failed),
                        format_count(r.connections.reconnects),
                        format_count(r.connections.closed_by_peer));
-    if (r.connections.tls_handshakes != 0) {
-        const auto& cs = r.connections;
-        out += fmt::format(
-            "TLS         {} handshakes ({:.0f}/s), {} resumed, {} failed, latency mean {:.3f} ms, "
-            "max {:.3f} ms\n",
-            format_count(cs.tls_handshakes),
-            static_cast<double>(cs.tls_handshakes) / (seconds > 0 ? seconds : 1.0),
-            format_count(cs.tls_resumed), format_count(cs.tls_handshake_failures),
-            static_cast<double>(cs.tls_handshake_ns_total) /
-                static_cast<double>(cs.tls_handshakes) / 1e6,
-            static_cast<double>(cs.tls_handshake_ns_max) / 1e6);
-        out += fmt::format(
-            "            records by kernel TLS on {} connections ({} ended by a non-data "
-            "record), by userspace OpenSSL on {}\n",
-            format_count(cs.tls_offloaded), format_count(cs.tls_offload_errors),
-            format_count(cs.tls_handshakes - cs.tls_offloaded));
-    }
+    append_tls_lines(out, r.connections, seconds);
     for (const auto& line : schedule_lines(r)) out += fmt::format("Schedule    {}\n", line);
     if (!r.shortfalls.empty()) {
         out += "Plan        NOT carried out:\n";
