@@ -304,6 +304,10 @@ namespace {
 
 // Asks the target many requests, pipelined in chunks; requests an exception made the target
 // drop are asked again, behind it.
+std::uint8_t exception_of(const Pdu& a) {
+    return a.size() == 2 && (a[0] & codec::kExceptionBit) ? a[1] : 0;
+}
+
 class Asker {
   public:
     Asker(Connector& target, const TargetProfile& profile, const LearnOptions& o,
@@ -313,7 +317,19 @@ class Asker {
     bool out_of_time() const { return deadline_ && net::now_ns() >= deadline_; }
     std::vector<Pdu> ask(const std::vector<Pdu>& pdus, std::uint8_t unit);
     std::vector<Pdu> ask(const std::vector<Pdu>& pdus) { return ask(pdus, profile_.unit); }
-    Pdu ask_one(const Pdu& pdu) { return ask(std::vector<Pdu>{pdu}).front(); }
+    // One pass: every request asked once (pipelined where the framing allows).
+    std::vector<Pdu> ask_once(const std::vector<Pdu>& pdus, std::uint8_t unit);
+    bool killed_stream(const Pdu& pdu) const;
+    // One request; a silence is asked again (twice at most) once the target has answered a
+    // request with an exception (it refuses what it does not hold, so a silence is a drop) or
+    // answered a silence when asked again: a boundary or a hole learned from a drop is wrong.
+    Pdu ask_one(const Pdu& pdu) {
+        Pdu answer = ask(std::vector<Pdu>{pdu}).front();
+        for (int again = 0;
+             again < 2 && answer.empty() && (refuses_ || drops_seen_) && !out_of_time(); ++again)
+            answer = ask(std::vector<Pdu>{pdu}).front();
+        return answer;
+    }
     // Round trip of one request on a fresh connection, in ms (the answer in `answer`).
     double timed(const Pdu& pdu, Pdu& answer);
     const TargetProfile& profile() const { return profile_; }
@@ -323,6 +339,8 @@ class Asker {
     bool came_back();
     static constexpr unsigned kMaxLearnDeaths = 8;
     unsigned deaths_ = 0;
+    bool refuses_ = false;     // some request was answered with an exception
+    bool drops_seen_ = false;  // a silence was answered when asked again
     Connector& target_;
     const TargetProfile& profile_;
     const LearnOptions& options_;
@@ -330,7 +348,44 @@ class Asker {
     LearnStats& stats_;
 };
 
+// A device behind a lossy link or a busy gateway drops requests now and then: the silences are
+// asked again (kMaxAskAgain rounds at most; a round that gets no answer ends it, unless an
+// earlier silence was answered when asked again) before one is taken for an address outside
+// the map (else the map is learned full of holes). Not when most requests went unanswered:
+// that target is silent on purpose (to what is not in its map, or to a unit it is not), and
+// asking again costs a timeout for nothing. Requests that killed the stream are not asked
+// again.
+constexpr int kMaxAskAgain = 8;
+
 std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
+    std::vector<Pdu> answers = ask_once(pdus, unit);
+    for (int round = 0; round < kMaxAskAgain && !out_of_time(); ++round) {
+        std::vector<std::size_t> silent;
+        for (std::size_t i = 0; i < pdus.size(); ++i)
+            if (answers[i].empty() && !killed_stream(pdus[i])) silent.push_back(i);
+        if (silent.empty() || silent.size() * 2 > pdus.size()) break;
+        std::vector<Pdu> again;
+        for (const std::size_t i : silent) again.push_back(pdus[i]);
+        std::vector<Pdu> got = ask_once(again, unit);
+        bool progress = false;
+        for (std::size_t k = 0; k < silent.size(); ++k) {
+            if (got[k].empty()) continue;
+            answers[silent[k]] = std::move(got[k]);
+            progress = drops_seen_ = true;
+        }
+        // Silent on purpose after all; unless silences were drops before (a round may lose
+        // the last few again).
+        if (!progress && !drops_seen_) break;
+    }
+    return answers;
+}
+
+bool Asker::killed_stream(const Pdu& pdu) const {
+    return std::find(stats_.stream_killers.begin(), stats_.stream_killers.end(), pdu) !=
+           stats_.stream_killers.end();
+}
+
+std::vector<Pdu> Asker::ask_once(const std::vector<Pdu>& pdus, std::uint8_t unit) {
     std::vector<Pdu> answers(pdus.size());
     const std::size_t chunk = profile_.framing == codec::Framing::Mbap ? 256 : 1;
     std::size_t next = 0;
@@ -367,13 +422,18 @@ std::vector<Pdu> Asker::ask(const std::vector<Pdu>& pdus, std::uint8_t unit) {
                 break;
             }
         }
-        // One request alone and no answer, not even on the probe after it: it killed the stream.
+        // One request alone and no answer, not even on the probe after it (asked twice: a
+        // target that drops requests may drop a probe): it killed the stream.
         if (n == 1 && got[0].empty() &&
+            probe_target(target_, profile_, options_.timeout_ms) != ProbeResult::Ok &&
             probe_target(target_, profile_, options_.timeout_ms) != ProbeResult::Ok) {
             stats_.stream_killers.push_back(pdus[next]);
             if (!came_back()) break;
         }
-        for (std::size_t i = 0; i < settled; ++i) answers[next + i] = std::move(got[i]);
+        for (std::size_t i = 0; i < settled; ++i) {
+            refuses_ = refuses_ || exception_of(got[i]) != 0;
+            answers[next + i] = std::move(got[i]);
+        }
         next += settled;
     }
     return answers;
@@ -390,16 +450,12 @@ bool Asker::came_back() {
 
 double Asker::timed(const Pdu& pdu, Pdu& answer) {
     const std::int64_t t0 = net::now_ns();
-    answer = ask_one(pdu);
+    answer = ask(std::vector<Pdu>{pdu}).front();  // once: a retry's timeouts are no pause
     return static_cast<double>(net::now_ns() - t0) / 1e6;
 }
 
 bool normal_answer(const Pdu& a, std::uint8_t fc) {
     return !a.empty() && a[0] == fc;
-}
-
-std::uint8_t exception_of(const Pdu& a) {
-    return a.size() == 2 && (a[0] & codec::kExceptionBit) ? a[1] : 0;
 }
 
 // Addresses a sweep asks first: the user's, then where vendors start their maps.
@@ -518,8 +574,29 @@ void learn_units(Connector& target, const TargetProfile& p, int timeout_ms, Devi
         frames.push_back(frame_pdu(p.probe_pdu, static_cast<std::uint16_t>(u),
                                    static_cast<std::uint8_t>(u), p.framing));
     bool connected = false;
-    const std::vector<Pdu> got = ask_pipelined(target, frames, timeout_ms, connected);
+    std::vector<Pdu> got = ask_pipelined(target, frames, timeout_ms, connected);
     st.requests += frames.size();
+    // A target that answers most units and not a few may have dropped those (a lossy link):
+    // they are asked again while each round gets answers.
+    for (int round = 0; round < kMaxAskAgain; ++round) {
+        std::vector<unsigned> silent;
+        for (unsigned u = 0; u < 256; ++u)
+            if (got[u].empty()) silent.push_back(u);
+        if (silent.empty() || silent.size() * 2 > 256) break;
+        std::vector<Pdu> again;
+        for (const unsigned u : silent)  // each with its place as its transaction id (ask.hpp)
+            again.push_back(frame_pdu(p.probe_pdu, static_cast<std::uint16_t>(again.size()),
+                                      static_cast<std::uint8_t>(u), p.framing));
+        const std::vector<Pdu> more = ask_pipelined(target, again, timeout_ms, connected);
+        st.requests += again.size();
+        bool progress = false;
+        for (std::size_t k = 0; k < silent.size(); ++k) {
+            if (more[k].empty()) continue;
+            got[silent[k]] = more[k];
+            progress = true;
+        }
+        if (!progress) break;
+    }
     for (unsigned u = 0; u < 256; ++u)
         if (!got[u].empty()) m.units.push_back(static_cast<std::uint8_t>(u));
 }

@@ -316,8 +316,8 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
             r.not_sent_one_connection);
     if (r.rationed)
         s += fmt::format(
-            "  {} case(s) owed an exception the target pauses after were not sent (1 in 8 "
-            "is)\n",
+            "  {} case(s) owed an exception the target pauses after were not sent (each kind "
+            "once, then 1 in 32, the pauses within a quarter of the run)\n",
             r.rationed);
     if (r.profile.drops_after_exception)
         s += "  the target drops requests pipelined behind an exception: those were sent one "
