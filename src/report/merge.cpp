@@ -6,10 +6,12 @@
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "report/units.hpp"
 
@@ -17,6 +19,33 @@ namespace mbstorm::report {
 namespace {
 
 using nlohmann::json;
+
+// A count, an id or a time in ns as a shard wrote it: a whole number that fits `T`. Anything
+// else (a fraction, a sign, 3e26) refuses the file with what was wrong, rather than being
+// converted out of range (undefined behaviour; found by fuzz_merge_json).
+template <class T>
+T whole(const json& v) {
+    if (v.is_number_unsigned()) {
+        const auto u = v.get<std::uint64_t>();
+        if (u <= static_cast<std::uint64_t>(std::numeric_limits<T>::max()))
+            return static_cast<T>(u);
+    } else if (v.is_number_integer()) {
+        const auto i = v.get<std::int64_t>();
+        if (std::numeric_limits<T>::is_signed &&
+            i >= static_cast<std::int64_t>(std::numeric_limits<T>::min()) &&
+            i <= static_cast<std::int64_t>(std::numeric_limits<T>::max()))
+            return static_cast<T>(i);
+    }
+    throw std::runtime_error(fmt::format("{} is not a whole number from {} to {}", v.dump(),
+                                         +std::numeric_limits<T>::min(),
+                                         +std::numeric_limits<T>::max()));
+}
+
+// The count `name` of `j`, 0 when it is absent.
+std::uint64_t whole_or(const json& j, const char* name) {
+    const auto it = j.find(name);
+    return it == j.end() ? 0 : whole<std::uint64_t>(*it);
+}
 
 std::uint64_t ns_from_s(double s) {
     return s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(s * 1e9));
@@ -26,22 +55,22 @@ void read_counters(const json& outcomes, const json& exceptions, const json& tot
                    stats::OutcomeCounters& c) {
     for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
         const std::string name(stats::outcome_name(static_cast<stats::Outcome>(i)));
-        c.outcomes[i] = outcomes.value(name, std::uint64_t{0});
+        c.outcomes[i] = whole_or(outcomes, name.c_str());
     }
     for (const auto& [key, count] : exceptions.items()) {
         const unsigned long code = std::stoul(key, nullptr, 16);
-        if (code < c.exceptions.size()) c.exceptions[code] = count.get<std::uint64_t>();
+        if (code < c.exceptions.size()) c.exceptions[code] = whole<std::uint64_t>(count);
     }
-    c.transactions_sent = totals.value("transactions_sent", std::uint64_t{0});
-    c.bytes_sent = totals.value("bytes_sent", std::uint64_t{0});
-    c.bytes_received = totals.value("bytes_received", std::uint64_t{0});
+    c.transactions_sent = whole_or(totals, "transactions_sent");
+    c.bytes_sent = whole_or(totals, "bytes_sent");
+    c.bytes_received = whole_or(totals, "bytes_received");
 }
 
 void read_lag(const json& j, stats::LagCounts& lag) {
-    lag.late_sends = j.value("late_sends", std::uint64_t{0});
-    lag.max_lag_ns = j.value("max_lag_ns", std::uint64_t{0});
-    lag.total_lag_ns = static_cast<std::uint64_t>(j.value("mean_lag_ns", 0.0) *
-                                                  static_cast<double>(lag.late_sends));
+    lag.late_sends = whole_or(j, "late_sends");
+    lag.max_lag_ns = whole_or(j, "max_lag_ns");
+    lag.total_lag_ns =
+        ns_from_s(j.value("mean_lag_ns", 0.0) * static_cast<double>(lag.late_sends) / 1e9);
 }
 
 // The run id of the log's first line; empty when it has none.
@@ -127,24 +156,24 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         auto& m = out.summary.metadata;
         m.test_id = t.at("id").get<std::string>();
         m.run_id = t.at("run_id").get<std::string>();
-        m.merged_runs = t.at("merged_runs").get<std::uint32_t>();
+        m.merged_runs = whole<std::uint32_t>(t.at("merged_runs"));
         if (m.merged_runs != 0)
             throw std::runtime_error(fmt::format(
                 "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
         out.measure_start_epoch_s = t.at("measure_start_epoch_s").get<double>();
-        out.shard_index = t.contains("shard_index") ? t.at("shard_index").get<int>() : -1;
-        out.shard_count = t.contains("shard_count") ? t.at("shard_count").get<int>() : 0;
+        out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
+        out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
         const json& h = t.at("histogram");
-        out.lowest_discernible_ns = h.at("lowest_discernible_ns").get<std::uint64_t>();
-        out.highest_trackable_ns = h.at("highest_trackable_ns").get<std::uint64_t>();
-        out.significant_digits = h.at("significant_digits").get<int>();
+        out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
+        out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
+        out.significant_digits = whole<int>(h.at("significant_digits"));
 
         const json& r = doc.at("run");
         m.tool_version = doc.value("tool", "mbstorm");
         m.target = r.at("target").get<std::string>();
-        m.threads = r.at("threads").get<std::uint32_t>();
-        m.connections = r.at("connections").get<std::uint32_t>();
-        m.depth = r.at("depth").get<std::uint32_t>();
+        m.threads = whole<std::uint32_t>(r.at("threads"));
+        m.connections = whole<std::uint32_t>(r.at("connections"));
+        m.depth = whole<std::uint32_t>(r.at("depth"));
         m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
                                                              : stats::LoadModel::Closed;
         m.rate_per_second = r.at("rate_per_second").get<double>();
@@ -157,28 +186,28 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"),
                       out.summary.counters);
         const json& lat = doc.at("latency");
-        out.latency_count = lat.at("count").get<std::uint64_t>();
-        out.min_ns = lat.at("min_ns").get<std::uint64_t>();
-        out.max_ns = lat.at("max_ns").get<std::uint64_t>();
+        out.latency_count = whole<std::uint64_t>(lat.at("count"));
+        out.min_ns = whole<std::uint64_t>(lat.at("min_ns"));
+        out.max_ns = whole<std::uint64_t>(lat.at("max_ns"));
         for (const json& op : doc.at("operations")) {
             stats::OperationResult o;
             o.name = op.at("name").get<std::string>();
-            o.function_code = op.at("function_code").get<std::uint8_t>();
+            o.function_code = whole<std::uint8_t>(op.at("function_code"));
             read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
-            out.op_min_ns.push_back(op.at("latency").at("min_ns").get<std::uint64_t>());
-            out.op_max_ns.push_back(op.at("latency").at("max_ns").get<std::uint64_t>());
+            out.op_min_ns.push_back(whole<std::uint64_t>(op.at("latency").at("min_ns")));
+            out.op_max_ns.push_back(whole<std::uint64_t>(op.at("latency").at("max_ns")));
             out.summary.operations.push_back(std::move(o));
         }
         const json& tl = doc.at("timeline");
         out.summary.timeline_interval_ns = ns_from_s(tl.at("interval_s").get<double>());
         for (const json& iv : tl.at("intervals")) {
             stats::IntervalSummary s;
-            s.index = iv.at("index").get<std::uint64_t>();
+            s.index = whole<std::uint64_t>(iv.at("index"));
             s.start_offset_ns = ns_from_s(iv.at("start_offset_s").get<double>());
-            s.transactions = iv.at("transactions").get<std::uint64_t>();
-            s.errors = iv.at("errors").get<std::uint64_t>();
+            s.transactions = whole<std::uint64_t>(iv.at("transactions"));
+            s.errors = whole<std::uint64_t>(iv.at("errors"));
             s.target_rate = iv.at("target_rate_per_s").get<double>();
-            s.open_connections = iv.at("open_connections").get<std::uint32_t>();
+            s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
             out.summary.timeline.push_back(s);
         }
         const json& lag = doc.at("schedule_lag");
@@ -186,19 +215,19 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         read_lag(lag.at("target"), out.summary.schedule_lag.target);
         const json& c = doc.at("connections");
         auto& cs = out.summary.connections;
-        cs.opened = c.at("opened").get<std::uint64_t>();
-        cs.failed = c.at("failed").get<std::uint64_t>();
-        cs.reconnects = c.at("reconnects").get<std::uint64_t>();
-        cs.closed_by_peer = c.at("closed_by_peer").get<std::uint64_t>();
-        cs.peak_open = c.at("peak_open").get<std::uint64_t>();
+        cs.opened = whole<std::uint64_t>(c.at("opened"));
+        cs.failed = whole<std::uint64_t>(c.at("failed"));
+        cs.reconnects = whole<std::uint64_t>(c.at("reconnects"));
+        cs.closed_by_peer = whole<std::uint64_t>(c.at("closed_by_peer"));
+        cs.peak_open = whole<std::uint64_t>(c.at("peak_open"));
         // TLS counters (written by every run; absent from reports older than them: 0).
-        cs.tls_handshakes = c.value("tls_handshakes", std::uint64_t{0});
-        cs.tls_resumed = c.value("tls_resumed", std::uint64_t{0});
-        cs.tls_handshake_ns_total = c.value("tls_handshake_ns_total", std::uint64_t{0});
-        cs.tls_handshake_ns_max = c.value("tls_handshake_ns_max", std::uint64_t{0});
-        cs.tls_handshake_failures = c.value("tls_handshake_failures", std::uint64_t{0});
-        cs.tls_offloaded = c.value("tls_offloaded", std::uint64_t{0});
-        cs.tls_offload_errors = c.value("tls_offload_errors", std::uint64_t{0});
+        cs.tls_handshakes = whole_or(c, "tls_handshakes");
+        cs.tls_resumed = whole_or(c, "tls_resumed");
+        cs.tls_handshake_ns_total = whole_or(c, "tls_handshake_ns_total");
+        cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
+        cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
+        cs.tls_offloaded = whole_or(c, "tls_offloaded");
+        cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
         for (const json& s : doc.at("plan_shortfalls")) {
             stats::PlanShortfall p;
             p.what = s.at("what").get<std::string>();
@@ -208,24 +237,24 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
             out.summary.shortfalls.push_back(std::move(p));
         }
         out.summary.pipelining.skipped_requests =
-            doc.at("pipelining").at("skipped_requests").get<std::uint64_t>();
+            whole<std::uint64_t>(doc.at("pipelining").at("skipped_requests"));
         for (const json& th : doc.at("thresholds")) {
             std::string e = th.at("expression").get<std::string>();
             if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
         }
         for (const json& st : doc.at("stages")) {
             stats::StageResult stage;
-            stage.index = st.at("index").get<std::uint32_t>();
+            stage.index = whole<std::uint32_t>(st.at("index"));
             stage.name = st.at("name").get<std::string>();
             stage.start_offset_ns = ns_from_s(st.at("start_offset_s").get<double>());
             stage.end_offset_ns = ns_from_s(st.at("end_offset_s").get<double>());
             stage.rate_from = st.at("target_rate_from_per_s").get<double>();
             stage.rate_to = st.at("target_rate_to_per_s").get<double>();
-            stage.connections_from = st.at("target_connections_from").get<std::uint32_t>();
-            stage.connections_to = st.at("target_connections_to").get<std::uint32_t>();
+            stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
+            stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
             read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
-            out.stage_min_ns.push_back(st.at("latency").at("min_ns").get<std::uint64_t>());
-            out.stage_max_ns.push_back(st.at("latency").at("max_ns").get<std::uint64_t>());
+            out.stage_min_ns.push_back(whole<std::uint64_t>(st.at("latency").at("min_ns")));
+            out.stage_max_ns.push_back(whole<std::uint64_t>(st.at("latency").at("max_ns")));
             out.summary.stages.push_back(std::move(stage));
         }
     } catch (const std::exception& e) {

@@ -1,8 +1,13 @@
 #include "report/merge.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 
 namespace mbstorm::report {
@@ -349,4 +354,32 @@ TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {
 }
 
 }  // namespace
+// A shard's counts and times are whole numbers that fit their fields: anything else refuses the
+// file, saying what was wrong. fuzz_merge_json found an outcome count of 3.3e26 converted to a
+// 64-bit count (undefined behaviour, UBSan) after 8 minutes.
+TEST(Merge, RefusesACountThatIsNotAWholeNumberThatFits) {
+    std::ifstream in(std::string(MBSTORM_SOURCE_DIR) + "/fuzz/corpus/merge_json/1.json");
+    const nlohmann::json real = nlohmann::json::parse(in);
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("merge-count-" + std::to_string(::getpid()) + ".json"))
+                                 .string();
+    auto read_with = [&](const nlohmann::json& count, std::string& error) {
+        nlohmann::json doc = real;
+        doc["operations"][0]["outcomes"]["exception"] = count;
+        std::ofstream(path) << doc.dump();
+        ShardRun run;
+        const bool ok = read_shard_summary(path, run, error);
+        std::remove(path.c_str());
+        return ok;
+    };
+    std::string error;
+    EXPECT_TRUE(read_with(7, error)) << error;
+    for (const nlohmann::json& bad :
+         {nlohmann::json(3.3e26), nlohmann::json(-1), nlohmann::json(1.5)}) {
+        error.clear();
+        EXPECT_FALSE(read_with(bad, error)) << bad.dump();
+        EXPECT_NE(error.find("is not a whole number"), std::string::npos) << error;
+    }
+}
+
 }  // namespace mbstorm::report
