@@ -21,27 +21,13 @@ void put16(Pdu& p, std::uint32_t v) {
     p.push_back(static_cast<std::uint8_t>(v));
 }
 
-// The most items one request of this shape may carry (v1.1b3).
-std::uint32_t item_limit(RequestShape shape, bool bits) {
-    switch (shape) {
-        case RequestShape::AddressQuantity:
-            return bits ? lim::kMaxReadBits : lim::kMaxReadRegisters;
-        case RequestShape::MultipleCoils:
-            return lim::kMaxWriteCoils;
-        case RequestShape::MultipleRegisters:
-            return lim::kMaxWriteRegisters;
-        case RequestShape::ReadWriteRegisters:
-            return lim::kMaxRwWriteRegisters;
-        case RequestShape::FunctionOnly:
-        case RequestShape::SingleCoil:
-        case RequestShape::SingleRegister:
-        case RequestShape::SubFunction:
-        case RequestShape::FileRecords:
-        case RequestShape::MaskWrite:
-        case RequestShape::FifoPointer:
-        case RequestShape::MeiTransport:
-            return 1;
-    }
+// The most items one request of function `fc` may carry (v1.1b3, from the codec's table): the
+// count its byte count follows (FC 0F, 10, FC 17's write part), else its quantity (01-04),
+// else one item (05, 06, 16, 18).
+std::uint32_t item_limit(std::uint8_t fc) {
+    const codec::RequestFields rf = codec::request_fields(fc);
+    if (rf.written) return rf.written_range.max;
+    if (rf.quantity) return rf.quantity_range.max;
     return 1;
 }
 
@@ -108,10 +94,6 @@ bool addressed(std::uint8_t fc) {
     return info && info->table && codec::address_fields(info->request).any();
 }
 
-bool bit_table(codec::Table t) {
-    return t == codec::Table::Coils || t == codec::Table::DiscreteInputs;
-}
-
 // A write of many items whose quantity says one more or one fewer item (a byte more or fewer
 // for coils: 8 items) than its byte count and data carry, the range still inside the block: a
 // handler that checks the address, then trusts the byte count, runs past its buffer.
@@ -164,7 +146,7 @@ void Generator::in_map(Case& out) {
     const codec::FunctionInfo* info = codec::function_info(fc);
     const TableModel& tm = options_.model->table(*info->table);
     const AddressRange& r = tm.ranges[rng_.below(static_cast<std::uint32_t>(tm.ranges.size()))];
-    const std::uint32_t spec_limit = item_limit(info->request, bit_table(*info->table));
+    const std::uint32_t spec_limit = item_limit(fc);
     const std::uint32_t limit = std::min(spec_limit, r.size());
     // Mostly few items: a small quantity is where off-by-ones live, and it fits anywhere.
     const std::uint32_t q =
@@ -225,7 +207,7 @@ void Generator::build_edges() {
         const std::uint8_t fc = codec::to_byte(info.code);
         if (!addressed(fc) || options_.unsupported[fc]) continue;
         const TableModel& tm = options_.model->table(*info.table);
-        const std::uint32_t limit = item_limit(info.request, bit_table(*info.table));
+        const std::uint32_t limit = item_limit(fc);
         const bool ranged = limit > 1;
         for (std::size_t k = 0; k < tm.ranges.size(); ++k) {
             const AddressRange& r = tm.ranges[k];
