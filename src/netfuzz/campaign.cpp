@@ -27,16 +27,20 @@
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/ask.hpp"
+#include "netfuzz/attribute.hpp"
 #include "netfuzz/batch.hpp"
 #include "netfuzz/capacity.hpp"
+#include "netfuzz/confirm.hpp"
 #include "netfuzz/corpus.hpp"
 #include "netfuzz/cross_transport.hpp"
 #include "netfuzz/culprit.hpp"
 #include "netfuzz/death_watch.hpp"
 #include "netfuzz/device_model.hpp"
+#include "netfuzz/discovery.hpp"
 #include "netfuzz/field_repair.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
+#include "netfuzz/rationing.hpp"
 #include "netfuzz/restart_command.hpp"
 #include "netfuzz/rules.hpp"
 #include "netfuzz/shrink.hpp"
@@ -44,18 +48,10 @@
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
-// Defined below; the campaign keeps one RestartCommand for the whole run.
-bool wait_for_target_with(RestartCommand& command, Connector& target, const TargetProfile& profile,
-                          const std::string& restart_cmd, int wait_ms, int timeout_ms,
-                          std::int64_t deadline_ns);
-
 namespace {
 
 namespace lim = codec::limits;
 using Pdu = std::vector<std::uint8_t>;
-
-// How much longer than --restart-wait a --restart-cmd that has not returned may take.
-constexpr std::int64_t kRestartCommandGraceNs = 60 * net::kNsPerSec;
 
 // A case's steps as one text, to tell corpus entries apart.
 std::string steps_text(const Case& c) {
@@ -70,9 +66,6 @@ Pdu frame_of(const Pdu& pdu, std::uint16_t tid, std::uint8_t unit,
     return frame_pdu(pdu, tid, unit, framing);
 }
 
-// A finding that rests on a line's timing counts only if this many re-runs alone repeat it.
-constexpr unsigned kTimingConfirmations = 2;
-
 // A finding about what a read shows after a write: whether it shows again depends on what the
 // registers held before the case ran.
 bool reads_back_state(const Verdict& v) {
@@ -84,54 +77,6 @@ bool reads_back_state(const Verdict& v) {
 constexpr unsigned kMaxRestartsPerCause = 3;
 
 // A rule as a folder name part: "target-down/fc0F-invalid" -> "target-down-fc0F-invalid".
-// A valid request of every public function code (discovery asks each once): made from each
-// function's request shape in the codec's table, writes aimed just below the state range.
-Pdu canonical_request(const codec::FunctionInfo& info) {
-    using codec::RequestShape;
-    const std::uint8_t fc = codec::to_byte(info.code);
-    switch (info.request) {
-        case RequestShape::FunctionOnly:
-            return {fc};
-        case RequestShape::AddressQuantity:
-            return {fc, 0, 0, 0, 1};
-        case RequestShape::SingleCoil:
-            return {fc, 0x5F, 0xFF, 0xFF, 0x00};
-        case RequestShape::SingleRegister:
-            return {fc, 0x5F, 0xFF, 0, 0};
-        case RequestShape::SubFunction:
-            return {fc, 0, 0, 0x12, 0x34};  // return query data
-        case RequestShape::MultipleCoils:
-            return {fc, 0x5F, 0xFF, 0, 1, 1, 0};
-        case RequestShape::MultipleRegisters:
-            return {fc, 0x5F, 0xFF, 0, 1, 2, 0, 0};
-        case RequestShape::FileRecords:
-            // One sub-request of record 0 in file 1: a read, or a write of one register.
-            if (info.writes) return {fc, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0};
-            return {fc, 7, 6, 0, 1, 0, 0, 0, 1};
-        case RequestShape::MaskWrite:
-            return {fc, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0};
-        case RequestShape::ReadWriteRegisters:
-            return {fc, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0};
-        case RequestShape::FifoPointer:
-            return {fc, 0x5F, 0xFF};
-        case RequestShape::MeiTransport: {
-            const std::uint8_t basic = 0x01;  // read device id code 01: the basic objects
-            return {fc, codec::kMeiReadDeviceId, basic, 0x00};
-        }
-    }
-    return {fc};
-}
-
-const std::vector<Pdu>& canonical_requests() {
-    static const std::vector<Pdu> canonical = [] {
-        std::vector<Pdu> out;
-        for (const codec::FunctionInfo& info : codec::public_functions())
-            out.push_back(canonical_request(info));
-        return out;
-    }();
-    return canonical;
-}
-
 // What discovery already hinted at, looked at before anything else so that a slow target
 // cannot hide it behind its pauses: each valid request the target was silent to (alone, on a
 // fresh connection, where the oracle can tell a function that is never answered), and the probe
@@ -185,7 +130,7 @@ bool whole_server_hang(const Verdict& v) {
     return v.oracle == Oracle::Hang && v.rule.rfind(kWholeServerHangRule, 0) == 0;
 }
 
-class Campaign : private Rerun {
+class Campaign : private Rerun, private Replayer {
   public:
     Campaign(const CampaignOptions& o, const ProgressFn& p, const FindingFn& f)
         : options_(o), on_progress_(p), on_finding_(f) {}
@@ -210,7 +155,7 @@ class Campaign : private Rerun {
     }
     // Whether `runs` isolated runs still fit before the deadline (each may wait a timeout for
     // the answer and another for the fresh probe).
-    bool can_afford(unsigned runs) const {
+    bool can_afford(unsigned runs) const override {
         if (stopped()) return false;
         const std::int64_t per_run =
             2 * std::int64_t{options_.timeout_ms} * net::kNsPerMs + 200 * net::kNsPerMs;
@@ -226,13 +171,10 @@ class Campaign : private Rerun {
     // close on that frame by itself, before anything follows it?
     void ask_how_length_mismatch_closes(const Case& c);
     void hit(Finding& f, const Verdict& v, const Case& c);
-    bool would_retrigger(const Case& c) const;
     void learn_costly(const Finding& f);
     // Whether a request of `c` belongs to a handler with a known crash: then it is a hit of
     // that crash (charged its restart) and the handler is skipped from now on.
     bool known_crash_of(const Case& c);
-    // Skips from now on the requests of `c` whose culprit is `culprit`, by signature.
-    void learn_costly_signatures(const std::string& culprit, const Case& c);
     // Runs one case alone and records what it shows.
     // What an isolated run showed: its outcome and, when it fired, the root cause.
     struct Isolated {
@@ -268,10 +210,13 @@ class Campaign : private Rerun {
     // A hang that outlasts --restart-wait is restarted like a crash, charged to `cause`.
     bool settle(const std::string& cause = "");
     // After a run that crashed the target or hung it as a whole: either of the above.
-    bool bring_back(const Execution& ex, const std::string& cause);
+    bool bring_back(const Execution& ex, const std::string& cause) override;
+    // Replayer, for the confirm stage (confirm.hpp): a run alone, counted.
+    Execution replay_alone(const Case& c) override;
     // A finding as first seen: the case and what it did.
     Finding found(const Case& c, Execution ex) const;
-    bool reproduces_every_time(const Case& c, const std::string& key);
+    // The confirm stage's answer as the campaign counts it: true when the finding stands.
+    bool confirmed(Confirmation c);
     // Rerun, for the minimise stage (shrink.hpp): candidates run alone within the time and
     // the crash's restart budget.
     bool shows_again(const Case& candidate, Retrial& r) override;
@@ -279,7 +224,6 @@ class Campaign : private Rerun {
     ShrinkContext shrink_context() const;
     void record(const Case& c, Execution ex);
     bool replays_alone(Finding& f);
-    bool replays_once_more(const Finding& f);
     void check_random_drops();
     Finding capacity_finding(const CapacityResult& cr) const;
     void record_lost_batch(const std::vector<Case>& batch);
@@ -301,9 +245,6 @@ class Campaign : private Rerun {
     // Runs cases alone before the generator's, counted as first looks; true when the target
     // was lost.
     bool look_first(std::vector<Case> cases, std::uint64_t& generated);
-    // Whether a case is owed an exception the target pauses after and is not sent: each kind
-    // once, then 1 in 32, within a quarter of the run (kPauseShare).
-    bool rationed(const Case& c);
 
     // The stages of run().
     struct Round {
@@ -326,14 +267,9 @@ class Campaign : private Rerun {
     // Runs a round; false when the campaign ends (target lost, findings enough, line done).
     bool run_round(Round& r, std::vector<Case>& requeue, std::set<std::uint64_t>& requeued_once);
     void account_batch(const BatchResult& br, std::int64_t ns, std::size_t cases);
-    // Root-cause keys a broken lane may be a known guise of, likeliest first.
-    std::vector<std::string> lane_break_keys(const LaneBreak& b) const;
     // Known verdicts and lane breaks counted as hits; the rest: suspects to isolate.
     std::vector<std::size_t> triage(const BatchResult& br, const std::vector<Case>& piped);
     AfterBatch target_after_batch(const BatchResult& br, const std::vector<Case>& piped);
-    std::vector<std::size_t> batch_culprit_candidates(const BatchResult& br,
-                                                      const std::vector<std::size_t>& suspects,
-                                                      std::size_t cases) const;
     // Each true when the target was lost.
     bool find_batch_culprit(const BatchResult& br, const std::vector<std::size_t>& suspects,
                             const std::vector<Case>& piped, const AfterBatch& after,
@@ -347,7 +283,7 @@ class Campaign : private Rerun {
     CampaignResult result_;
     std::int64_t start_ = 0, deadline_ = 0;
     std::map<std::string, std::size_t> by_key_;  // root cause -> index in result_.findings
-    std::set<std::string> costly_culprits_;      // culprits of known crashes and hangs
+    CostlyCases costly_{result_.profile};        // not sent: they would show what is known
     std::map<std::string, unsigned> restarts_by_cause_;
     std::unique_ptr<Generator> gen_;
     std::unique_ptr<BatchRunner> batch_;
@@ -360,26 +296,16 @@ class Campaign : private Rerun {
     bool up_ = true;
     bool capacity_checked_ = false;
     bool settle_restarted_ = false;  // the last settle() ended in a restart
-    // A request of the wrong length is known to break the connection (the stream is lost, or
-    // the target closes on such a frame): more of them only show it again.
-    bool length_mismatch_known_ = false;
     // How the target closes after a request of the wrong length, once asked: a close says the
     // stream was lost only if the target waited for bytes the frame did not have. One that
     // closes on the frame alone refuses the request, as it may any request it cannot use
     // (pymodbus 3.0 does both): one root cause, close-with-request-pending/invalid-request.
-    enum class LengthMismatchClose { NotAsked, RefusesTheFrame, LosesTheStream };
     LengthMismatchClose length_mismatch_close_ = LengthMismatchClose::NotAsked;
-    mutable std::uint64_t length_mismatch_seen_ = 0;
-    // A silence or close that did not happen again when its case was replayed: the target
-    // was asked once whether it drops requests at random (check_random_drops).
-    bool random_drops_asked_ = false;
-    bool random_drops_known_ = false;
+    // Whether the target drops requests at random, once asked (check_random_drops).
+    ReplayCheck replay_check_;
     unsigned lane_depth_ = 48;
     unsigned lanes_ = 4;
-    std::uint64_t rationed_seen_ = 0, rationed_units_seen_ = 0;
-    // Cases sent although they cost the target's pause: each kind once, the rest rationed.
-    std::set<std::string> paused_kinds_;
-    std::uint64_t pause_spent_ms_ = 0;  // the pauses they cost, as the model measured them
+    Rationing rationing_;  // cases not sent: they cost more than they can show
     // The case being isolated comes from a pipelined batch that killed the target.
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
 };
@@ -452,7 +378,10 @@ void Campaign::ask_how_length_mismatch_closes(const Case& c) {
     const bool refused = closed_us >= 0 && (second_send_us < 0 || closed_us < second_send_us);
     length_mismatch_close_ =
         refused ? LengthMismatchClose::RefusesTheFrame : LengthMismatchClose::LosesTheStream;
-    if (refused) length_mismatch_known_ = result_.profile.refuses_length_mismatch = true;
+    if (refused) {
+        result_.profile.refuses_length_mismatch = true;
+        costly_.length_mismatch_loses_the_stream();
+    }
     bring_back(ex, "");
 }
 
@@ -463,29 +392,8 @@ void Campaign::hit(Finding& f, const Verdict& v, const Case& c) {
     // Another request that does it: skipped from now on as well.
     if (v.oracle == Oracle::Crash || v.oracle == Oracle::Hang) {
         const std::string culprit = culprit_of(v.rule);
-        if (!culprit.empty() && culprit != "capacity") learn_costly_signatures(culprit, c);
+        if (!culprit.empty() && culprit != kCapacityCulprit) costly_.learn(culprit, c);
     }
-}
-
-bool Campaign::would_retrigger(const Case& c) const {
-    // Once the target is known to lose the stream on a request of the wrong length, each such
-    // request costs a broken connection (and the target's pause) to show it again: only one in
-    // 16 is still sent, for what else it may hit in the handler.
-    if (length_mismatch_known_ && carries_length_mismatch(c, result_.profile))
-        return ++length_mismatch_seen_ % 16 != 0;
-    if (costly_culprits_.empty()) return false;
-    // A stateful case is about its write: its read-backs (FC 03, 01, FC 17 over the window)
-    // are valid requests that would otherwise be skipped once any crash on them is known.
-    const bool stateful =
-        c.cls == MutationClass::StatefulSame || c.cls == MutationClass::StatefulCross;
-    const std::string about = fmt::format("fc{:02X}/", c.function);
-    for (const std::string& k : signatures(c, result_.profile)) {
-        if (stateful && k.rfind(about, 0) != 0) continue;
-        if (costly_culprits_.count(k)) return true;
-        // A culprit known without a signature (a transport class, a request not framed).
-        if (costly_culprits_.count(k.substr(0, k.find('/')))) return true;
-    }
-    return false;
 }
 
 bool Campaign::known_crash_of(const Case& c) {
@@ -497,30 +405,20 @@ bool Campaign::known_crash_of(const Case& c) {
         hit(f, f.verdict, c);
         ++restarts_by_cause_[it->first];
         // Crashed by another kind of request too: every request of that handler is skipped.
-        costly_culprits_.insert(culprit);
+        costly_.learn_handler(culprit);
         return true;
     }
     return false;
 }
 
-void Campaign::learn_costly_signatures(const std::string& culprit, const Case& c) {
-    bool any = false;
-    for (const std::string& k : signatures(c, result_.profile))
-        if (k.rfind(culprit + "/", 0) == 0) {
-            costly_culprits_.insert(k);
-            any = true;
-        }
-    if (!any) costly_culprits_.insert(culprit);
-}
-
 void Campaign::learn_costly(const Finding& f) {
-    if (rule_stem(f.verdict.rule) == kStreamLostRule) length_mismatch_known_ = true;
+    if (rule_stem(f.verdict.rule) == kStreamLostRule) costly_.length_mismatch_loses_the_stream();
     const Oracle o = f.oracle();
     if (o != Oracle::Crash && o != Oracle::Hang && o != Oracle::UnexpectedClose) return;
     const std::string culprit = culprit_of(f.verdict.rule);
     if (!culprit.empty() && culprit != kCapacityCulprit) {
-        learn_costly_signatures(culprit, f.fuzz_case);
-        if (f.original_case.steps.size()) learn_costly_signatures(culprit, f.original_case);
+        costly_.learn(culprit, f.fuzz_case);
+        if (f.original_case.steps.size()) costly_.learn(culprit, f.original_case);
     }
     // Hangs without a culprit (stalls of other connections) are charged to their class.
     if (culprit.empty() && o == Oracle::Hang)
@@ -773,7 +671,7 @@ Campaign::Isolated Campaign::isolate(Case c, bool batch_died) {
 }
 
 Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& shown) {
-    if (would_retrigger(c)) {
+    if (costly_.would_retrigger(c)) {
         ++result_.skipped_known;
         return Outcome::Skipped;
     }
@@ -800,7 +698,8 @@ Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& show
         if (const auto done = judge_transport_case(c, ex, plain, key)) return *done;
     }
     if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
-    if (!ex.target_down && depends_on_line_timing(c.cls) && !reproduces_every_time(c, key))
+    if (!ex.target_down && depends_on_line_timing(c.cls) &&
+        !confirmed(shows_every_time(c, key, *this)))
         return up_ ? Outcome::Clean : Outcome::Lost;
     if (ex.target_down)
         if (const auto done = confirm_death(c, ex, key, batch_died)) return *done;
@@ -821,22 +720,26 @@ Finding Campaign::found(const Case& c, Execution ex) const {
     return f;
 }
 
-bool Campaign::reproduces_every_time(const Case& c, const std::string& key) {
-    for (unsigned run = 0; run < kTimingConfirmations; ++run) {
-        if (!can_afford(1)) {
-            ++result_.suspects_left;
-            return false;
-        }
-        ++result_.isolated_runs;
-        const Execution again = run_alone(c);
-        const bool same = again.verdict && root_cause_key(again.verdict) == key;
-        if (!bring_back(again, same ? key : "")) return false;
-        if (!same) {
+Execution Campaign::replay_alone(const Case& c) {
+    ++result_.isolated_runs;
+    return run_alone(c);
+}
+
+bool Campaign::confirmed(Confirmation c) {
+    switch (c) {
+        case Confirmation::Confirmed:
+        case Confirmation::KeptUnconfirmed:
+            return true;
+        case Confirmation::NotShown:
             ++result_.unconfirmed;
             return false;
-        }
+        case Confirmation::CutShort:
+            ++result_.suspects_left;
+            return false;
+        case Confirmation::TargetLost:
+            return false;
     }
-    return true;
+    return false;
 }
 
 bool Campaign::shows_again(const Case& candidate, Retrial& r) {
@@ -911,70 +814,20 @@ void Campaign::record(const Case& c, Execution ex) {
     keep(std::move(f));
 }
 
-// Issue #26: a finding is saved only once the very case saved for it, run alone on fresh
-// connections, shows the same fault again (what `replay` checks). A crash has killed the
-// target twice by then; anything else has been seen once alone, maybe before minimisation or
-// field repair changed the case, and a target that misbehaves at random shows nothing twice.
 bool Campaign::replays_alone(Finding& f) {
-    if (f.oracle() == Oracle::Crash || !f.confirmed) return true;
-    const bool silence = f.oracle() == Oracle::Hang || f.oracle() == Oracle::UnexpectedClose;
-    const bool at_random = rule_stem(f.verdict.rule) == kRandomDropRule ||
-                           rule_stem(f.verdict.rule) == kRandomCloseRule;
-    // Asked before the first silence is saved: a target that drops requests at random would
-    // pass one replay at its drop rate, so its silences must then repeat more often before
-    // each is a defect of its own.
-    if (silence && !at_random && !random_drops_asked_) check_random_drops();
+    if (replay_check_.asks_random_drops_first(f)) check_random_drops();
     if (!up_) return false;
-    const unsigned runs = random_drops_known_ && silence && !at_random ? 4 : 1;
-    for (unsigned run = 0; run < runs; ++run) {
-        if (!can_afford(1)) {
-            // A silence from a target known to drop requests at random is most likely one
-            // more drop: not kept unconfirmed.
-            if (runs > 1) {
-                ++result_.suspects_left;
-                return false;
-            }
-            // Seen alone once: kept, but not called confirmed.
-            f.confirmed = false;
-            f.note += fmt::format(
-                "{}not confirmed: --seconds ran out before it was replayed "
-                "alone once more",
-                f.note.empty() ? "" : "; ");
-            return true;
-        }
-        if (replays_once_more(f)) continue;
-        ++result_.unconfirmed;
-        return false;
-    }
-    return true;
+    return confirmed(replay_check_.replays_alone(f, *this));
 }
 
-bool Campaign::replays_once_more(const Finding& f) {
-    ++result_.isolated_runs;
-    const Execution e = run_alone(f.fuzz_case);
-    const bool same = same_fault(e.verdict, f.verdict);
-    return bring_back(e, same ? root_cause_key(f.verdict) : "") && same;
-}
-
-// A silence (or close) that did not come again when its case was replayed alone: is the
-// request to blame, or does the target drop requests whatever they are? Its probe request,
-// answered at discovery, is sent 32 times on one connection, each answer awaited. A silence
-// there is one defect, found once, however many other requests it has swallowed.
+// A silence (or close) to confirm: is the request to blame, or does the target drop requests
+// whatever they are? Its finding, if so, is recorded (and so confirmed) like any other.
 void Campaign::check_random_drops() {
-    constexpr std::uint16_t kRepeats = 32;
-    random_drops_asked_ = true;
+    replay_check_.random_drops_answered(false);
     if (result_.profile.probe_pdu.empty() || !can_afford(2)) return;
-    Case c;
-    c.cls = MutationClass::Repeated;
-    c.function = result_.profile.probe_pdu[0];
-    for (std::uint16_t i = 0; i < kRepeats; ++i) {
-        c.steps.push_back(Step{Op::Send, 0, 0, 0, probe_frame(result_.profile, 0x5200 + i)});
-        c.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
-    }
-    ++result_.isolated_runs;
-    Execution ex = run_alone(c);
-    const std::string stem = rule_stem(ex.verdict.rule);
-    if (stem != kRandomDropRule && stem != kRandomCloseRule) {
+    const Case c = random_drops_case(result_.profile);
+    Execution ex = replay_alone(c);
+    if (!drops_at_random(ex.verdict)) {
         bring_back(ex, "");
         return;
     }
@@ -983,7 +836,7 @@ void Campaign::check_random_drops() {
     // unanswered without dropping anything at random.
     const Verdict asked = ex.verdict;
     if (!known(asked)) record(c, std::move(ex));
-    random_drops_known_ = known(asked) != nullptr;
+    replay_check_.random_drops_answered(known(asked) != nullptr);
 }
 
 void Campaign::keep(Finding f) {
@@ -1066,8 +919,8 @@ void Campaign::check_capacity_once() {
     if (!cr.verdict) return;
     // Connections left unserved: the target's own limit, or requests it drops whatever they
     // are? Asked first, and the finding kept only once its flood, replayed, shows it again.
-    if (!random_drops_asked_) check_random_drops();
-    if (random_drops_known_ || !up_) return;
+    if (!replay_check_.random_drops_asked()) check_random_drops();
+    if (replay_check_.random_drops_known() || !up_) return;
     Finding f = capacity_finding(cr);
     if (!known(f.verdict) && replays_alone(f)) keep(std::move(f));
 }
@@ -1245,59 +1098,6 @@ bool Campaign::marker_says_restart(const std::vector<Case>& cases) {
     return marker_->read(seen) == StateMarker::Reading::Reset;
 }
 
-// A target that pauses after exceptions spends at most this share of the run in those pauses;
-// a request owed such an exception whose kind was sent already goes out one time in this many.
-constexpr double kPauseShare = 0.25;
-constexpr std::uint64_t kRationedShare = 32;
-
-// What a request owed an exception is, for rationing: its function, why the codec refuses it,
-// and which fields are wrong (its address outside the map is a kind of its own).
-std::string pausing_kind(const RequestInfo& info, const DeviceModel& m) {
-    std::string kind = fmt::format("{:02x}/{}", info.pdu.empty() ? 0 : info.pdu[0],
-                                   codec::error_name(info.status.error));
-    for (const RequestField f : wrong_fields(info.pdu, m))
-        kind += fmt::format("/{}", field_name(f));
-    return kind;
-}
-
-bool Campaign::rationed(const Case& c) {
-    const DeviceModel& m = result_.model;
-    // A unit id the device was seen not to answer costs a timeout on a pipelined lane.
-    if (!m.units.empty() && m.units.size() < 256) {
-        bool silent = false;
-        for_each_request(c, result_.profile, [&](const RequestInfo& info) {
-            silent =
-                std::find(m.units.begin(), m.units.end(), info.header.unit_id) == m.units.end();
-            return !silent;
-        });
-        if (silent && ++rationed_units_seen_ % 16 != 0) return true;
-    }
-    if (!m.pauses_after_exceptions()) return false;
-    unsigned pause_ms = 0;
-    std::string kind;
-    for_each_request(c, result_.profile, [&](const RequestInfo& info) {
-        const std::uint8_t fc = info.pdu.empty() ? 0 : info.pdu[0];
-        std::size_t code = static_cast<std::size_t>(info.status.exception);
-        if (result_.profile.unsupported[fc]) code = 1;
-        if (!owes_exception(info, result_.profile) || code >= m.exception_pause_ms.size() ||
-            m.exception_pause_ms[code] == 0)
-            return true;
-        pause_ms = m.exception_pause_ms[code];
-        kind = pausing_kind(info, m);
-        return false;
-    });
-    if (pause_ms == 0) return false;
-    // A kind of request not sent yet goes out while the pauses stay within their share of the
-    // run; the rest, one in kRationedShare, and only within that share too.
-    const double share = kPauseShare * elapsed() * 1000.0;
-    const bool affordable = static_cast<double>(pause_spent_ms_) <= share;
-    const bool novel = !paused_kinds_.count(kind);
-    if (!affordable || (!novel && ++rationed_seen_ % kRationedShare != 0)) return true;
-    paused_kinds_.insert(kind);
-    pause_spent_ms_ += pause_ms;
-    return false;
-}
-
 bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {
     for (Case& c : cases) {
         if (out_of_budget() || !can_afford(1)) break;
@@ -1360,7 +1160,7 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
     Round r;
     for (Case& c : requeue) {
         // Queued before a crash or hang became known: it may carry that culprit.
-        if (would_retrigger(c)) {
+        if (costly_.would_retrigger(c)) {
             ++result_.skipped_known;
             continue;
         }
@@ -1372,11 +1172,11 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
         Case c;
         gen_->next(c);
         c.number = ++generated;
-        if (would_retrigger(c)) {
+        if (costly_.would_retrigger(c)) {
             ++result_.skipped_known;
             continue;
         }
-        if (rationed(c)) {
+        if (rationing_.holds_back(c, result_.profile, result_.model, elapsed())) {
             ++result_.rationed;
             continue;
         }
@@ -1392,46 +1192,20 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
     return r;
 }
 
-std::vector<std::string> Campaign::lane_break_keys(const LaneBreak& b) const {
-    std::vector<std::string> keys;
-    const std::string close = b.closed ? "unexpected-close:" : "hang:";
-    if (b.length_mismatch)
-        keys.push_back(length_mismatch_close_ == LengthMismatchClose::RefusesTheFrame && b.closed
-                           ? fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule)
-                           : fmt::format("stream:{}", kStreamLostRule));
-    if (b.closed && b.unanswered_invalid)  // the executor's order (executor.cpp)
-        keys.push_back(fmt::format("unexpected-close:{}", kClosesOnInvalidRequestRule));
-    if (b.has_previous && b.previous_exception)
-        keys.push_back(close + after_exception_rule(b.closed));
-    if (b.has_previous) keys.push_back(close + after_request_rule(b.closed, b.previous_culprit));
-    keys.push_back(close + unanswered_rule(b.closed, b.unanswered_culprit));
-    return keys;
-}
-
 std::vector<std::size_t> Campaign::triage(const BatchResult& br, const std::vector<Case>& piped) {
-    std::vector<std::size_t> suspects = br.suspects;
-    for (const auto& [ci, v] : br.verdicts) {
-        if (Finding* f = known(v))
-            hit(*f, v, piped[ci]);
-        else
-            suspects.push_back(ci);
-    }
-    // A broken lane whose break matches a known root cause needs no re-run.
-    for (const LaneBreak& b : br.breaks) {
-        for (const std::string& k : lane_break_keys(b)) {
-            const auto it = by_key_.find(k);
-            if (it == by_key_.end()) continue;
-            Finding& f = result_.findings[it->second];
-            const std::size_t ci = b.has_previous ? b.previous_case : b.unanswered_case;
-            if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
-            std::erase(suspects, b.previous_case);
-            std::erase(suspects, b.unanswered_case);
-            break;
-        }
-    }
-    std::sort(suspects.begin(), suspects.end());
-    suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-    return suspects;
+    const auto known_verdict = [&](const Verdict& v, std::size_t ci) {
+        Finding* f = known(v);
+        if (f) hit(*f, v, piped[ci]);
+        return f != nullptr;
+    };
+    const auto known_key = [&](const std::string& key, std::size_t ci) {
+        const auto it = by_key_.find(key);
+        if (it == by_key_.end()) return false;
+        Finding& f = result_.findings[it->second];
+        if (ci < piped.size()) hit(f, f.verdict, piped[ci]);
+        return true;
+    };
+    return netfuzz::triage(br, length_mismatch_close_, known_verdict, known_key);
 }
 
 void Campaign::account_batch(const BatchResult& br, std::int64_t ns, std::size_t cases) {
@@ -1473,29 +1247,6 @@ Campaign::AfterBatch Campaign::target_after_batch(const BatchResult& br,
         after.settled_by_restart = settle_restarted_;
     }
     return after;
-}
-
-// The target died or hung as a whole: the culprit may be any unanswered frame (a server may
-// not even have answered what came before it). Look at them one by one, lane by lane in turn
-// from where each broke, until a crash or hang shows up; the rest go into `later`.
-std::vector<std::size_t> Campaign::batch_culprit_candidates(
-    const BatchResult& br, const std::vector<std::size_t>& suspects, std::size_t cases) const {
-    std::vector<std::size_t> candidates;
-    std::vector<bool> seen(cases, false);
-    for (std::size_t pos = 0;; ++pos) {
-        bool any = false;
-        for (const LaneBreak& b : br.breaks) {
-            if (pos >= b.unanswered.size()) continue;
-            any = true;
-            const std::size_t ci = b.unanswered[pos];
-            if (!seen[ci]) candidates.push_back(ci);
-            seen[ci] = true;
-        }
-        if (!any) break;
-    }
-    for (std::size_t ci : suspects)
-        if (!seen[ci]) candidates.push_back(ci);
-    return candidates;
 }
 
 bool Campaign::find_batch_culprit(const BatchResult& br, const std::vector<std::size_t>& suspects,
@@ -1696,183 +1447,7 @@ CampaignResult Campaign::run() {
     return result_;
 }
 
-// Why discovery found no request to probe with: silence, or answers it cannot use (a device
-// answering everything with 04 does answer: say what it said).
-std::string no_usable_answer(std::uint8_t unit, const std::vector<Pdu>& probes,
-                             const std::vector<Pdu>& answers) {
-    std::string said;
-    bool any = false;
-    for (std::size_t i = 0; i < probes.size(); ++i) {
-        const Pdu& a = answers[i];
-        any = any || !a.empty();
-        std::string what =
-            a.empty() ? std::string("no answer")
-            : a.size() == 2 && a[0] == (probes[i][0] | codec::kExceptionBit)
-                ? fmt::format("exception {:02X} ({})", a[1],
-                              codec::exception_name(static_cast<codec::ExceptionCode>(a[1])))
-                : fmt::format("{} ({})",
-                              a.size() == 1 ? "1 byte" : fmt::format("{} bytes", a.size()),
-                              hex(a, 8));
-        said += fmt::format("{}0x{:02X}: {}", said.empty() ? "" : ", ", probes[i][0], what);
-    }
-    if (!any) return fmt::format("the target does not answer unit {} ({})", unit, said);
-    return fmt::format(
-        "the target answers unit {} but no read with a normal response or exception 02, so "
-        "there is nothing to probe it with ({})",
-        unit, said);
-}
-
 }  // namespace
-
-bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
-                     std::string& error) {
-    profile = TargetProfile{};
-    profile.unit = unit;
-    profile.framing = target.framing();
-    profile.serial_line = target.serial_line();
-    const bool framed = profile.framing != codec::Framing::Mbap;
-    // Probe candidates, most common first.
-    using codec::FunctionCode;
-    std::vector<Pdu> probes;
-    for (FunctionCode fc : {FunctionCode::ReadHoldingRegisters, FunctionCode::ReadInputRegisters,
-                            FunctionCode::ReadCoils, FunctionCode::ReadDiscreteInputs,
-                            FunctionCode::ReportServerId, FunctionCode::Diagnostics})
-        probes.push_back(canonical_request(*codec::function_info(codec::to_byte(fc))));
-    std::vector<Pdu> frames;
-    for (std::size_t i = 0; i < probes.size(); ++i)
-        frames.push_back(frame_of(probes[i], static_cast<std::uint16_t>(i), unit, profile.framing));
-    bool connected = false;
-    auto answers = ask_pipelined(target, frames, timeout_ms, connected);
-    if (!connected) {
-        // Once more, for the reason (refused, unreachable, timed out): the user has to act on it.
-        int why = 0;
-        error = target.open(timeout_ms, why) ? std::string("cannot connect to the target")
-                                             : fmt::format("cannot connect to the target: {}",
-                                                           why ? std::strerror(why) : "timed out");
-        return false;
-    }
-    for (std::size_t i = 0; i < probes.size(); ++i) {
-        if (!answers[i].empty() && answers[i][0] == probes[i][0]) {
-            profile.probe_pdu = probes[i];
-            break;
-        }
-    }
-    // A device whose map does not start at 0 answers every probe above with an exception:
-    // 02 (its address check) will do until the model gives a read inside the map.
-    for (std::size_t i = 0; i < probes.size() && profile.probe_pdu.empty(); ++i)
-        if (answers[i].size() == 2 && answers[i][0] == (probes[i][0] | codec::kExceptionBit) &&
-            answers[i][1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress))
-            profile.probe_pdu = probes[i];
-    if (profile.probe_pdu.empty()) {
-        error = no_usable_answer(unit, probes, answers);
-        return false;
-    }
-    // Does it drop what is pipelined behind a request it answers with an exception? Then
-    // everything below goes one request at a time.
-    // (RTU and ASCII send one request at a time: nothing is pipelined to be dropped.)
-    if (!framed) {
-        answers = ask_pipelined(
-            target, {frame_of(Pdu{0x41}, 0, unit), frame_of(profile.probe_pdu, 1, unit)},
-            timeout_ms, connected);
-        profile.drops_after_exception =
-            answers[0].size() == 2 && (answers[0][0] & 0x80) && answers[1].empty();
-    }
-    std::vector<Pdu> pdus = canonical_requests();
-    if (framed) {
-        // One request at a time: every undefined code asked in turn would cost a timeout each
-        // where the target stays silent to them, so they are assumed unsupported.
-        pdus.push_back(profile.probe_pdu);
-        frames.clear();
-        for (std::size_t i = 0; i < pdus.size(); ++i)
-            frames.push_back(frame_of(pdus[i], 0, unit, profile.framing));
-        answers = ask_pipelined(target, frames, timeout_ms, connected);
-    } else if (!profile.drops_after_exception) {
-        for (unsigned fc = 0; fc < 256; ++fc)
-            if (!codec::is_supported_function(static_cast<std::uint8_t>(fc)))
-                pdus.push_back(Pdu{static_cast<std::uint8_t>(fc)});
-        pdus.push_back(profile.probe_pdu);
-        frames.clear();
-        for (std::size_t i = 0; i < pdus.size(); ++i)
-            frames.push_back(frame_of(pdus[i], static_cast<std::uint16_t>(i), unit));
-        answers = ask_pipelined(target, frames, timeout_ms, connected);
-    } else {
-        // Undefined codes are assumed unsupported (no vendor extensions learned): asking each
-        // would cost the target's pause after every exception.
-        pdus.push_back(profile.probe_pdu);
-        answers.assign(pdus.size(), {});
-        for (std::size_t i = 0; i + 1 < pdus.size(); ++i)
-            answers[i] =
-                ask_pipelined(target, {frame_of(pdus[i], 0, unit)}, timeout_ms, connected).front();
-    }
-    // Silence counts only where the stream went on (the probe behind them was answered).
-    const bool stream_went_on = profile.drops_after_exception || !answers.back().empty();
-    for (std::size_t i = 0; i + 1 < pdus.size(); ++i) {
-        const Pdu& a = answers[i];
-        if (a.empty()) {
-            if (stream_went_on && codec::is_supported_function(pdus[i][0]))
-                profile.silent[pdus[i][0]] = true;
-            continue;
-        }
-        const std::uint8_t fc = pdus[i][0];
-        if (a.size() == 2 && a[0] == (fc | codec::kExceptionBit) &&
-            a[1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalFunction))
-            profile.unsupported[fc] = true;
-        if (!codec::is_supported_function(fc) && a[0] == fc) profile.extended[fc] = true;
-    }
-    return true;
-}
-
-bool wait_for_target_with(RestartCommand& command, Connector& target, const TargetProfile& profile,
-                          const std::string& restart_cmd, int wait_ms, int timeout_ms,
-                          std::int64_t deadline_ns) {
-    const std::int64_t wait_ns = std::int64_t{wait_ms} * net::kNsPerMs;
-    std::int64_t deadline = net::now_ns() + wait_ns;
-    bool command_running = false, was_running = false;
-    if (!restart_cmd.empty()) {
-        // One copy at a time: a command still running (a slow restart, or the target itself
-        // run in the foreground) is waited for, not started again.
-        command_running = was_running = command.running();
-        if (!command_running) {
-            std::string error;
-            command_running = command.start(restart_cmd, error);
-            if (!command_running) fmt::print(stderr, "mbstorm fuzz: {}\n", error);
-        }
-        // The wait counts from when the command returns (a `systemctl restart` may take its
-        // time); one that does not return (the target in the foreground) gets a minute more.
-        if (command_running) deadline += kRestartCommandGraceNs;
-    }
-    // A command still running from an earlier restart is the target in the foreground: if it
-    // returns now, the target it ran is the one that died (sentinels see a death before the
-    // process has quite ended), and it is started again, once.
-    bool foreground = was_running;
-    int backoff_ms = 20;
-    for (;;) {
-        if (command_running && command.returned()) {
-            command_running = false;
-            deadline = net::now_ns() + wait_ns;
-            std::string error;
-            if (foreground && command.start(restart_cmd, error)) {
-                command_running = true;
-                deadline += kRestartCommandGraceNs;
-            }
-            foreground = false;
-        }
-        if (probe_target(target, profile, std::min(timeout_ms, 1000)) == ProbeResult::Ok)
-            return true;
-        const std::int64_t now = net::now_ns();
-        if (now >= deadline || (deadline_ns && now >= deadline_ns)) return false;
-        std::this_thread::sleep_for(std::chrono::milliseconds(backoff_ms));
-        backoff_ms = std::min(backoff_ms * 3 / 2, 1000);
-    }
-}
-
-bool wait_for_target(Connector& target, const TargetProfile& profile,
-                     const std::string& restart_cmd, int wait_ms, int timeout_ms,
-                     std::int64_t deadline_ns) {
-    RestartCommand command;
-    return wait_for_target_with(command, target, profile, restart_cmd, wait_ms, timeout_ms,
-                                deadline_ns);
-}
 
 std::size_t CampaignResult::new_findings() const noexcept {
     std::size_t n = 0;

@@ -18,6 +18,7 @@
 #include "net/socket.hpp"
 #include "netfuzz/coverage_map.hpp"
 #include "netfuzz/device_model.hpp"
+#include "netfuzz/discovery.hpp"
 #include "netfuzz/finding.hpp"
 #include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
@@ -137,18 +138,5 @@ using FindingFn = std::function<void(const Finding&)>;
 
 CampaignResult run_campaign(const CampaignOptions& options, const ProgressFn& on_progress = {},
                             const FindingFn& on_finding = {});
-
-// Learns the probe request, the function codes the target does not support and its vendor
-// extensions. False with `error` when the target does not answer at all.
-bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
-                     std::string& error);
-
-// Waits (connects retried with backoff) until the target answers the probe, starting
-// `restart_cmd` first when given. False when it does not come back within `wait_ms` of the
-// command returning (or, for a command that keeps running, of its start plus a minute), or by
-// `deadline_ns` (0: none).
-bool wait_for_target(Connector& target, const TargetProfile& profile,
-                     const std::string& restart_cmd, int wait_ms, int timeout_ms,
-                     std::int64_t deadline_ns = 0);
 
 }  // namespace mbstorm::netfuzz

@@ -90,6 +90,28 @@ std::size_t probe_all(std::vector<Held>& conns, std::size_t from, const TargetPr
     }
 }
 
+// A lossy target drops a probe now and then as it drops any request, so the connections left
+// silent are asked again: a connection the target does not serve stays silent however often it
+// is asked. At most this many rounds, ended early by two in a row that answer none.
+constexpr unsigned kMaxAskAgain = 4;
+
+// Asks the connections of `conns[from..]` still waiting for an answer again; the number left
+// silent.
+std::size_t ask_silent_again(std::vector<Held>& conns, std::size_t from,
+                             const TargetProfile& profile, std::size_t silent, int timeout_ms,
+                             std::int64_t deadline_ns) {
+    unsigned fruitless = 0;
+    for (unsigned round = 0; silent > 0 && round < kMaxAskAgain && fruitless < 2; ++round) {
+        for (std::size_t i = from; i < conns.size(); ++i)
+            if (conns[i].state == ConnState::Waiting) conns[i].state = ConnState::Connected;
+        const std::size_t still = probe_all(conns, from, profile, timeout_ms, deadline_ns);
+        fruitless = still < silent ? 0 : fruitless + 1;
+        silent = still;
+        if (deadline_ns && net::now_ns() >= deadline_ns) break;
+    }
+    return silent;
+}
+
 }  // namespace
 
 std::uint32_t connection_budget() {
@@ -131,7 +153,9 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
         // A slow target gets three timeouts, and 2 ms more per new connection, to answer a
         // whole step: slow is not unserved.
         const int wait_ms = 3 * timeout_ms + 2 * static_cast<int>(conns.size() - from);
-        const std::size_t silent = probe_all(conns, from, profile, wait_ms, deadline_ns);
+        const std::size_t silent = ask_silent_again(
+            conns, from, profile, probe_all(conns, from, profile, wait_ms, deadline_ns), timeout_ms,
+            deadline_ns);
         out.opened = static_cast<std::uint32_t>(conns.size());
         if (watch && watch->died(50)) {
             out.target_down = true;
@@ -171,8 +195,12 @@ CapacityResult check_capacity(Connector& target, const TargetProfile& profile,
             }
         if (oldest < conns.size()) {
             conns[oldest].state = ConnState::Connected;  // sends the probe again
-            if (probe_all(conns, oldest, profile, timeout_ms, deadline_ns) > 0 &&
-                conns[oldest].state == ConnState::Waiting && !out_of_time()) {
+            const std::size_t silent_from_oldest =
+                probe_all(conns, oldest, profile, timeout_ms, deadline_ns);
+            if (conns[oldest].state == ConnState::Waiting)
+                ask_silent_again(conns, oldest, profile, silent_from_oldest, timeout_ms,
+                                 deadline_ns);
+            if (conns[oldest].state == ConnState::Waiting && !out_of_time()) {
                 out.verdict = Verdict{
                     Oracle::Hang,
                     kCapacityExistingUnservedRule,

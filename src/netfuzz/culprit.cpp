@@ -71,4 +71,34 @@ bool carries_length_mismatch(const Case& c, const TargetProfile& profile) {
     return found;
 }
 
+// How often a request of the wrong length is still sent once the target is known to lose the
+// stream on one (for what else it may hit in the handler).
+constexpr std::uint64_t kLengthMismatchShare = 16;
+
+bool CostlyCases::would_retrigger(const Case& c) {
+    if (length_mismatch_known_ && carries_length_mismatch(c, profile_))
+        return ++length_mismatch_seen_ % kLengthMismatchShare != 0;
+    if (culprits_.empty()) return false;
+    // A stateful case is about its write: its read-backs (FC 03, 01, FC 17 over the window)
+    // are valid requests that would otherwise be skipped once any crash on them is known.
+    const bool stateful =
+        c.cls == MutationClass::StatefulSame || c.cls == MutationClass::StatefulCross;
+    const std::string about = fmt::format("fc{:02X}/", c.function);
+    for (const std::string& k : signatures(c, profile_)) {
+        if (stateful && k.rfind(about, 0) != 0) continue;
+        if (culprits_.count(k) || culprits_.count(k.substr(0, k.find('/')))) return true;
+    }
+    return false;
+}
+
+void CostlyCases::learn(const std::string& culprit, const Case& c) {
+    bool any = false;
+    for (const std::string& k : signatures(c, profile_))
+        if (k.rfind(culprit + "/", 0) == 0) {
+            culprits_.insert(k);
+            any = true;
+        }
+    if (!any) culprits_.insert(culprit);
+}
+
 }  // namespace mbstorm::netfuzz

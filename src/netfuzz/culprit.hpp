@@ -4,6 +4,8 @@
 // cause when a batch dies).
 #pragma once
 
+#include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -49,5 +51,26 @@ std::vector<std::string> signatures(const Case& c, const TargetProfile& profile)
 
 // Whether any frame the case delivers has a PDU of the wrong length for its function code.
 bool carries_length_mismatch(const Case& c, const TargetProfile& profile);
+
+// The cases not worth sending again: those that carry a culprit of a known crash or hang
+// (each would cost a restart or a timeout to show what is known), and, once the target is known
+// to lose the stream on a request of the wrong length, all but one in 16 of those.
+class CostlyCases {
+  public:
+    explicit CostlyCases(const TargetProfile& profile) : profile_(profile) {}
+    bool would_retrigger(const Case& c);
+    // The requests of `c` whose culprit is `culprit`, by signature (the culprit alone when it
+    // has none: a transport class, a request not framed).
+    void learn(const std::string& culprit, const Case& c);
+    // Every request of a handler (crashed by more than one kind of request).
+    void learn_handler(const std::string& culprit) { culprits_.insert(culprit); }
+    void length_mismatch_loses_the_stream() noexcept { length_mismatch_known_ = true; }
+
+  private:
+    const TargetProfile& profile_;
+    std::set<std::string> culprits_;  // signatures and culprits of known crashes and hangs
+    bool length_mismatch_known_ = false;
+    std::uint64_t length_mismatch_seen_ = 0;
+};
 
 }  // namespace mbstorm::netfuzz

@@ -53,4 +53,41 @@ TEST(Culprit, EachFrameIsNamedByItsHandlerAndWhetherItIsValid) {
     EXPECT_EQ(culprit_of("answers-nonzero-protocol-id"), "");
 }
 
+// Once FC 0F's invalid requests are known to crash the target, cases carrying one are not sent
+// again; its valid requests, and a stateful case's read-backs, still are. Crashed by more than
+// one kind of request, the whole handler is skipped.
+TEST(CostlyCases, ACaseCarryingAKnownCrashIsNotSentAgain) {
+    TargetProfile profile;
+    CostlyCases costly(profile);
+    const Case invalid = one_frame(MutationClass::InvalidValues,
+                                   {0, 1, 0, 0, 0, 6, 1, 0x0F, 0x00, 0x10, 0x00, 0x00});
+    const Case valid = one_frame(MutationClass::ValidLimits,
+                                 {0, 1, 0, 0, 0, 8, 1, 0x0F, 0x00, 0x10, 0x00, 0x01, 0x01, 0x01});
+    EXPECT_FALSE(costly.would_retrigger(invalid));
+    costly.learn("fc0F", invalid);
+    EXPECT_TRUE(costly.would_retrigger(invalid));
+    EXPECT_FALSE(costly.would_retrigger(valid));
+    // A stateful case about another write, reading back over FC 0F's handler: still sent.
+    Case stateful = valid;
+    stateful.cls = MutationClass::StatefulSame;
+    stateful.function = 0x05;
+    stateful.steps.insert(stateful.steps.begin(), invalid.steps.front());
+    EXPECT_FALSE(costly.would_retrigger(stateful));
+    costly.learn_handler("fc0F");
+    EXPECT_TRUE(costly.would_retrigger(valid));
+}
+
+TEST(CostlyCases, OnceTheStreamIsLostOnAWrongLengthOnlyOneSuchRequestInSixteenGoes) {
+    TargetProfile profile;
+    CostlyCases costly(profile);
+    // FC 06 with a PDU one byte short.
+    const Case short_write =
+        one_frame(MutationClass::Truncated, {0, 1, 0, 0, 0, 5, 1, 0x06, 0x00, 0x10, 0x00});
+    EXPECT_FALSE(costly.would_retrigger(short_write));
+    costly.length_mismatch_loses_the_stream();
+    unsigned sent = 0;
+    for (int i = 0; i < 64; ++i) sent += !costly.would_retrigger(short_write);
+    EXPECT_EQ(sent, 4u);
+}
+
 }  // namespace

@@ -28,10 +28,13 @@
 #include "netfuzz/rules.hpp"
 #include "netfuzz/serial_link.hpp"
 #include "netfuzz/wire.hpp"
+#include "thread_slave.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
 
+using mbstorm::test::send_bytes;
+using mbstorm::test::ThreadSlave;
 using Bytes = std::vector<std::uint8_t>;
 const Bytes kRead = {0x03, 0x00, 0x10, 0x00, 0x02};
 
@@ -180,71 +183,6 @@ TEST(GeneratorFraming, SerialLinesGetSilenceAndNoiseMutationsOnOneLink) {
             }
         }
     }
-}
-
-// A slave in a thread on a loopback port: `consume` takes each connection's bytes received so
-// far, drops what it has acted on and sends its answers.
-class ThreadSlave {
-  public:
-    using Consume = std::function<void(int fd, Bytes& buffer)>;
-    explicit ThreadSlave(Consume consume) : consume_(std::move(consume)) {
-        fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-        sockaddr_in a{};
-        a.sin_family = AF_INET;
-        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-        ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
-        ::listen(fd_, 16);
-        socklen_t len = sizeof a;
-        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-        port_ = ntohs(a.sin_port);
-        thread_ = std::thread([this] { serve(); });
-    }
-    ~ThreadSlave() {
-        stop_ = true;
-        thread_.join();
-        ::close(fd_);
-    }
-    std::string endpoint() const { return "127.0.0.1:" + std::to_string(port_); }
-
-  private:
-    void serve() {
-        std::vector<int> conns;
-        std::vector<Bytes> bufs;
-        for (int rounds = 0; !stop_ && rounds < 20000; ++rounds) {
-            std::vector<pollfd> ps{{fd_, POLLIN, 0}};
-            for (int c : conns) ps.push_back({c, POLLIN, 0});
-            if (::poll(ps.data(), ps.size(), 20) <= 0) continue;
-            // Only the connections polled above (a new one joins the next round).
-            const std::size_t polled = conns.size();
-            if (ps[0].revents & POLLIN) {
-                conns.push_back(::accept(fd_, nullptr, nullptr));
-                bufs.emplace_back();
-            }
-            for (std::size_t i = 0; i < polled; ++i) {
-                if (!(ps[i + 1].revents & (POLLIN | POLLHUP))) continue;
-                std::uint8_t b[512];
-                const ssize_t n = ::recv(conns[i], b, sizeof b, 0);
-                if (n <= 0) {
-                    ::close(conns[i]);
-                    conns.erase(conns.begin() + static_cast<std::ptrdiff_t>(i));
-                    bufs.erase(bufs.begin() + static_cast<std::ptrdiff_t>(i));
-                    break;
-                }
-                bufs[i].insert(bufs[i].end(), b, b + n);
-                consume_(conns[i], bufs[i]);
-            }
-        }
-        for (int c : conns) ::close(c);
-    }
-    Consume consume_;
-    int fd_ = -1;
-    int port_ = 0;
-    std::atomic<bool> stop_{false};
-    std::thread thread_;
-};
-
-void send_bytes(int fd, const Bytes& b) {
-    (void)!::send(fd, b.data(), b.size(), MSG_NOSIGNAL);
 }
 
 // A slave for RTU over TCP: answers every frame with exception 01 (illegal function), and a
