@@ -2,6 +2,7 @@
 // asked. Two commands rather than one `poll`: a write changes a device, and its name on the
 // command line says so (and it alone takes --allow-writes).
 #include <fmt/format.h>
+#include <time.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -66,6 +67,10 @@ struct IoOptions {
     std::uint64_t timeout_ns = 1'000'000'000ULL;
     bool json = false;
     bool allow_writes = false;
+    // read: each value also (text: only) as its registers in hex, as they came
+    bool hex = false;
+    bool one_based = false;   // read: [1] is address 0, as mbpoll shows it
+    bool timestamps = false;  // each transaction's time, UTC (JSON: "time")
     TransportOptions transport;
 };
 
@@ -163,6 +168,9 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
     const bool bit_table = codec::is_bit_table(p.table);
     if (!o.type.empty() && !value_type_from_name(o.type, p.type))
         return fmt::format("--type '{}': valid {}", o.type, kValueTypeNames);
+    if (bit_table && o.hex)
+        return fmt::format("--hex shows registers in hex; {} hold single bits",
+                           codec::table_name(p.table));
     if (bit_table) {
         if (!o.type.empty() && p.type != ValueType::Bits)
             return fmt::format("--type {}: {} hold single bits; use --type bits (the default)",
@@ -225,15 +233,77 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
             r.quantity = p.items;
             break;
         }
-        default:  // MultipleRegisters: function_for above picks only these four shapes
+        case codec::RequestShape::MultipleRegisters:
             for (std::uint16_t w : p.registers) {
                 p.payload.push_back(static_cast<std::uint8_t>(w >> 8));
                 p.payload.push_back(static_cast<std::uint8_t>(w & 0xFF));
             }
             r.quantity = p.items;
             break;
+        case codec::RequestShape::FunctionOnly:
+        case codec::RequestShape::AddressQuantity:
+        case codec::RequestShape::SubFunction:
+        case codec::RequestShape::FileRecords:
+        case codec::RequestShape::MaskWrite:
+        case codec::RequestShape::ReadWriteRegisters:
+        case codec::RequestShape::FifoPointer:
+        case codec::RequestShape::MeiTransport:
+            // function_for and --fc above pick only the four shapes of plain writes.
+            return fmt::format("{} does not write values as given here",
+                               codec::function_label(r.function));
     }
     return {};
+}
+
+// Now, UTC, to the millisecond: "2026-11-28T10:15:02.317Z".
+std::string utc_now() {
+    const auto now = std::chrono::system_clock::now();
+    const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+    const auto ms =
+        std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() %
+        1000;
+    std::tm utc{};
+    ::gmtime_r(&seconds, &utc);
+    return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z", utc.tm_year + 1900,
+                       utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, ms);
+}
+
+// The registers of value `v` (read from `first`), in hex as they came: "0x4060" or
+// "0x40600000".
+std::string hex_of(const TypedValue& v, const std::vector<std::uint16_t>& regs, std::uint16_t first,
+                   std::size_t per_value) {
+    std::string out = "0x";
+    const std::size_t from = static_cast<std::uint16_t>(v.address - first);
+    for (std::size_t i = from; i < regs.size() && i < from + per_value; ++i)
+        out += fmt::format("{:04X}", regs[i]);
+    return out;
+}
+
+// A read's values: one line each ("[100]: 3.5"), or one JSON object each.
+void print_values(const IoOptions& o, const IoPlan& p, const std::vector<TypedValue>& values,
+                  const std::vector<std::uint16_t>& regs, nlohmann::json* json) {
+    // A string is one value over every register read.
+    const std::size_t per_value =
+        p.type == ValueType::String ? regs.size() : registers_per_value(p.type);
+    for (const auto& v : values) {
+        const std::string hex = o.hex ? hex_of(v, regs, p.address, per_value) : "";
+        const unsigned label = v.address + (o.one_based ? 1u : 0u);
+        if (!json) {
+            fmt::print("[{}]: {}{}\n", label, v.text, o.hex ? " " + hex : "");
+            continue;
+        }
+        nlohmann::json item{{"address", v.address}};
+        if (o.one_based) item["reference"] = label;
+        const bool floating = p.type == ValueType::F32 || p.type == ValueType::F64;
+        if (!v.is_number)
+            item["value"] = v.text;
+        else if (floating)
+            item["value"] = v.number;
+        else
+            item["value"] = nlohmann::json::parse(v.text);  // integers exactly, not via double
+        if (o.hex) item["hex"] = hex;
+        json->push_back(item);
+    }
 }
 
 // One transaction's outcome, printed as text or one JSON line.
@@ -247,6 +317,10 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         j["table"] = std::string(codec::table_name(p.table));
         j["address"] = p.address;
         if (o.transactions != 1) j["poll"] = poll;
+        if (o.timestamps) j["time"] = utc_now();
+    } else if (o.timestamps) {
+        if (poll > 1) fmt::print("\n");
+        fmt::print("-- {} poll {}\n", utc_now(), poll);
     }
     auto emit_json = [&] { fmt::print("{}\n", j.dump()); };
     if (!error.empty()) {
@@ -301,22 +375,11 @@ int report(const IoOptions& o, const IoPlan& p, std::uint64_t poll, const std::s
         j["type"] = std::string(value_type_name(p.type));
         j["order"] = std::string(codec::word_order_name(p.order));
         j["registers"] = regs;
-        auto& out = j["values"] = nlohmann::json::array();
-        for (const auto& v : values) {
-            nlohmann::json item{{"address", v.address}};
-            const bool floating = p.type == ValueType::F32 || p.type == ValueType::F64;
-            if (!v.is_number)
-                item["value"] = v.text;
-            else if (floating)
-                item["value"] = v.number;
-            else
-                item["value"] = nlohmann::json::parse(v.text);  // integers exactly, not via double
-            out.push_back(item);
-        }
+        print_values(o, p, values, regs, &(j["values"] = nlohmann::json::array()));
         emit_json();
     } else {
-        if (o.transactions != 1 && poll > 1) fmt::print("\n");
-        for (const auto& v : values) fmt::print("[{}]: {}\n", v.address, v.text);
+        if (o.transactions != 1 && poll > 1 && !o.timestamps) fmt::print("\n");
+        print_values(o, p, values, regs, nullptr);
     }
     std::fflush(stdout);
     return kExitOk;
@@ -458,6 +521,9 @@ void add_common_options(CLI::App* cmd, IoOptions& o) {
                         "time between the starts of two transactions (default 1s)");
     add_duration_option(cmd, "--timeout", o.timeout_ns, "connect and answer timeout (default 1s)");
     cmd->add_flag("--json", o.json, "one JSON object per transaction on stdout");
+    cmd->add_flag("--timestamps", o.timestamps,
+                  "start each transaction's output with its time, UTC to the millisecond "
+                  "(JSON: \"time\")");
     add_transport_options(cmd, o.transport, TransportSide::Client);
 }
 
@@ -475,6 +541,12 @@ void add_read_command(CLI::App& app, Action& action) {
         ->check(CLI::Range(1, 65535));
     // -q is --quiet in run and fuzz.
     add_deprecated_option(cmd, "-q", "--quantity", o->quantity)->check(CLI::Range(1, 65535));
+    cmd->add_flag("--hex", o->hex,
+                  "also show each value's registers in hex, as they came (\"[100]: 3.5 "
+                  "0x40600000\"; JSON: \"hex\")");
+    cmd->add_flag("--one-based", o->one_based,
+                  "number the values from 1 as mbpoll does: [1] is address 0, register 40001 "
+                  "(JSON: \"reference\" beside \"address\")");
     cmd->callback([o, cmd, &action] {
         o->quantity_given = cmd->count("--quantity") + cmd->count("-q") != 0;
         action = [o] { return run_io(*o); };

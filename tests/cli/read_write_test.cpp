@@ -116,6 +116,30 @@ TEST_F(ReadWrite, JsonAndRepeatedPolls) {
     EXPECT_THAT(r.output, HasSubstr("\"function\":\"0x03 read_holding_registers\""));
 }
 
+// For mbpoll and modpoll users (issue #29): each value's registers in hex as they came, the
+// values numbered from 1 as mbpoll numbers them, and each poll's time.
+TEST_F(ReadWrite, HexOneBasedNumbersAndTimestamps) {
+    ASSERT_EQ(io("write --addr 100 --type f32 3.5").exit_code, 0);
+    EXPECT_EQ(io("read --addr 100 --type f32 --hex").output, "[100]: 3.5 0x40600000\n");
+    EXPECT_EQ(io("read --addr 40101 --quantity 2 --hex --one-based").output,
+              "[101]: 16480 0x4060\n[102]: 0 0x0000\n");
+    auto t = io("read --addr 100 -n 2 --interval 10ms --timestamps");
+    EXPECT_EQ(t.exit_code, 0) << t.output;
+    EXPECT_THAT(t.output, testing::MatchesRegex("-- 20[0-9][0-9]-[01][0-9]-[0-3][0-9]T[0-2][0-9]:"
+                                                "[0-5][0-9]:[0-6][0-9][.][0-9][0-9][0-9]Z poll 1\n"
+                                                "\\[100\\]: 16480\n\n"
+                                                "-- [-0-9T:.]+Z poll 2\n\\[100\\]: 16480\n"))
+        << t.output;
+    auto j = io("read --addr 100 --quantity 2 --json --hex --one-based --timestamps");
+    EXPECT_EQ(j.exit_code, 0) << j.output;
+    EXPECT_THAT(j.output, HasSubstr("\"values\":[{\"address\":100,\"hex\":\"0x4060\",\"reference\":"
+                                    "101,\"value\":16480},"));
+    EXPECT_THAT(j.output, testing::ContainsRegex("\"time\":\"20[0-9-]+T[0-9:.]+Z\""));
+    auto bits = io("read --table coils --addr 0 --hex");
+    EXPECT_EQ(bits.exit_code, 2) << bits.output;
+    EXPECT_THAT(bits.output, HasSubstr("--hex shows registers in hex; coils hold single bits"));
+}
+
 // -q (now --quiet elsewhere) and --count (now -n/--transactions) keep their old meaning here.
 TEST_F(ReadWrite, OldSpellingsOfQuantityAndCountStillWorkWithAWarning) {
     ASSERT_EQ(io("write --addr 50 1 2 3").exit_code, 0);

@@ -2,7 +2,7 @@
 # `cpack -G DEB` in the build folder makes mbstorm_<version>_<arch>.deb: the stripped binary as
 # the only program, its library dependencies from dpkg-shlibdeps, the scenarios under
 # /usr/share/mbstorm, the docs and a copyright file under /usr/share/doc/mbstorm, the man
-# pages and the bash completion; everything owned by root, nothing under /usr/local. The
+# pages and the bash and zsh completions; everything owned by root, nothing under /usr/local. The
 # package is built into a temporary folder and unpacked, not installed (scripts/deb-check.sh
 # installs it).
 set -euo pipefail
@@ -40,7 +40,7 @@ awk '($1 ~ /^d/ && $1 != "drwxr-xr-x") || ($1 ~ /^-/ && $1 != "-rw-r--r--" && $1
 dpkg-deb -x "$deb" "$work/root"
 for f in usr/share/doc/mbstorm/copyright usr/share/doc/mbstorm/README.md usr/share/doc/mbstorm/docs/json-schema.md \
   usr/share/mbstorm/scenarios/ci-gate.yaml usr/share/mbstorm/scenarios/devices/example-device.yaml \
-  usr/share/bash-completion/completions/mbstorm; do
+  usr/share/bash-completion/completions/mbstorm usr/share/zsh/vendor-completions/_mbstorm; do
   [ -f "$work/root/$f" ] || fail "/$f is not in the package"
 done
 for page in "$build"/man/man1/*.1.gz; do
