@@ -83,6 +83,7 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.operations.push_back(std::move(merged));
     }
     for (auto& w : workers) {
+        run.service_time.add(w->service_time);
         run.counters.add(w->stray);
         run.schedule_lag.engine.add(w->schedule_lag.engine);
         run.schedule_lag.target.add(w->schedule_lag.target);
@@ -410,6 +411,7 @@ void take_serial_results(SerialRunner& line, LoadResult& result) {
     stats::RunResult& run = result.run;
     run.operations = std::move(line.operations);
     for (const auto& op : run.operations) run.latency.add(op.latency);
+    run.service_time.add(line.service_time);
     run.counters = line.counters;
     run.schedule_lag.target = line.target_lag;
     run.connections.opened = 1;

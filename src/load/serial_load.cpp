@@ -153,6 +153,9 @@ void SerialRunner::run() noexcept {
             const bool timed =
                 so == SerialOutcome::Answered &&
                 (outcome == stats::Outcome::Ok || outcome == stats::Outcome::Exception);
+            if (timed && open_loop_)
+                service_time.record(
+                    static_cast<std::uint64_t>(std::max<std::int64_t>(done - sent_ns, 0)));
             record(info, outcome, static_cast<std::uint8_t>(rsp.exception), timed,
                    static_cast<std::uint64_t>(std::max<std::int64_t>(done - from, 0)),
                    pdu.size() + kUnitAndCheck, answer.size() + kUnitAndCheck, from);

@@ -48,6 +48,7 @@ class SerialRunner {
     // What was measured, read after run() returned.
     std::vector<stats::OperationResult> operations;
     stats::OutcomeCounters counters;
+    stats::Histogram service_time;           // open loop: answers timed from their actual send
     std::vector<stats::StageResult> stages;  // sized like the schedule's stages
     stats::LagCounts target_lag;             // open loop: sends the busy line delayed
     std::uint64_t bad_checks = 0;            // answers whose CRC/LRC failed

@@ -926,6 +926,8 @@ void Worker::record(const Transaction& t, stats::Outcome outcome, std::uint8_t e
     const std::int64_t from = open_loop_ ? t.intended_ns : t.sent_ns;
     const auto latency = static_cast<std::uint64_t>(std::max<std::int64_t>(now - from, 0));
     const bool answered = has_response(outcome);
+    if (answered && open_loop_)
+        service_time.record(static_cast<std::uint64_t>(std::max<std::int64_t>(now - t.sent_ns, 0)));
     auto count = [&](stats::OperationResult& into, bool with_latency) {
         if (outcome == stats::Outcome::Exception) {
             into.counters.record_exception(exception_code);

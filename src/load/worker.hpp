@@ -65,6 +65,7 @@ class Worker {
     // Results, valid after run() returned.
     std::vector<stats::OperationResult> operations;
     std::vector<stats::StageResult> stages;  // staged runs: by the stage a transaction was sent in
+    stats::Histogram service_time;           // open loop: answers timed from their actual send
     stats::OutcomeCounters stray;            // UnknownId / DuplicateId and their bytes
     stats::ScheduleLag schedule_lag;
     stats::ConnectionStats connection_stats;

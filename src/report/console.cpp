@@ -165,8 +165,17 @@ std::string format_console_report(const stats::RunResult& r) {
         for (const auto& s : r.shortfalls) out += fmt::format("  {}\n", s.text);
     }
 
-    out += fmt::format("\nLatency ({} samples)\n", format_count(r.latency.total_count()));
+    const bool open_loop = r.metadata.model == stats::LoadModel::Open;
+    out += fmt::format("\nLatency ({} samples{})\n", format_count(r.latency.total_count()),
+                       open_loop ? "; from each request's intended send, queueing included" : "");
     append_latency_table(out, r.latency);
+    if (open_loop && r.service_time.total_count() != 0) {
+        out += fmt::format(
+            "\nService time, uncorrected ({} samples; from each request's actual send: what the "
+            "target took, without the wait the schedule saw)\n",
+            format_count(r.service_time.total_count()));
+        append_latency_table(out, r.service_time);
+    }
 
     out += fmt::format("\nErrors      {} of {} ({:.3f}%)\n", format_count(c.errors()),
                        format_count(c.completed()), percent(c.errors(), c.completed()));

@@ -56,10 +56,13 @@ std::vector<std::string> schedule_lines(const stats::RunResult& r) {
     if (lag.target.late_sends != 0) {
         lines.push_back(fmt::format(
             "target not keeping up: {} late sends waited for answers (in-flight window full: {} "
-            "connection{} x depth {}), max lag {}, mean lag {}",
+            "connection{} x depth {}), max lag {}, mean lag {}; to reach the rate, widen the "
+            "window (--connections, --depth) if the target serves more at once, else lower "
+            "--rate to what it sustained ({} tx/s)",
             format_count(lag.target.late_sends), format_count(r.metadata.connections),
             r.metadata.connections == 1 ? "" : "s", r.metadata.depth,
-            format_latency(lag.target.max_lag_ns), format_latency(lag.target.mean_lag_ns())));
+            format_latency(lag.target.max_lag_ns), format_latency(lag.target.mean_lag_ns()),
+            format_rate(r.throughput())));
     }
     if (lag.engine.late_sends != 0) {
         lines.push_back(fmt::format(

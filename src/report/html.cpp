@@ -260,6 +260,10 @@ std::string latency_table(const stats::RunResult& r) {
         latency_row(t, format_operation(op.name, op.function_code), op.latency,
                     op.counters.completed(), seconds);
     }
+    // Open loop: the rows above count from the intended send; this one from the actual send.
+    if (r.metadata.model == stats::LoadModel::Open && r.service_time.total_count() != 0)
+        latency_row(t, "service time, uncorrected (all operations, from the actual send)",
+                    r.service_time, r.service_time.total_count(), seconds);
     t += "</table></div>\n";
     return t;
 }

@@ -200,6 +200,10 @@ std::string format_json(const stats::RunResult& r, int indent) {
         {"test", test},
         {"totals", totals_json(r.counters, m.measured_duration_ns)},
         {"latency", latency_json(r.latency)},
+        {"service_time",
+         r.metadata.model == stats::LoadModel::Open && r.service_time.total_count() != 0
+             ? latency_json(r.service_time)
+             : json(nullptr)},
         {"outcomes", outcomes_json(r.counters)},
         {"exceptions", exceptions_json(r.counters)},
         {"operations", operations},

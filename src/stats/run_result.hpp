@@ -159,7 +159,11 @@ struct ThresholdResult {
 
 struct RunResult {
     RunMetadata metadata;
-    Histogram latency;         // all operations
+    Histogram latency;  // all operations
+    // Open loop: the same answers timed from their actual send, not their intended one (wrk2's
+    // --u_latency): the target's service time, without the queueing the schedule saw. Empty
+    // in closed loop, where the two are one.
+    Histogram service_time;
     OutcomeCounters counters;  // all operations
     std::vector<OperationResult> operations;
     std::vector<IntervalSummary> timeline;  // from IntervalTimeline::summaries()

@@ -78,6 +78,14 @@ TEST(EngineHonestNumbers, ASaturatedTargetIsBlamedNotTheEngine) {
         r.run.shortfalls.front().text.find("of the 1,200 transactions the schedule asked for"),
         std::string::npos)
         << r.run.shortfalls.front().text;
+    // Every answer is timed twice: from its intended send (the queue behind the full window
+    // included) and from its actual send (the target's 20 ms, and the request queued behind
+    // it in the window of 2), as wrk2's corrected and uncorrected histograms.
+    EXPECT_EQ(r.run.service_time.total_count(), r.run.latency.total_count());
+    EXPECT_GE(r.run.service_time.value_at_percentile(50), 19'000'000u);
+    EXPECT_LE(r.run.service_time.value_at_percentile(99), 100'000'000u);
+    EXPECT_GT(r.run.latency.value_at_percentile(99),
+              5 * r.run.service_time.value_at_percentile(99));
 }
 
 // The engine itself stalls (a verifier that sleeps now and then, on the worker thread) while

@@ -200,6 +200,26 @@ TEST(ConsoleReport, LateSendsAreBlamedOnTheEngineOrTheTarget) {
     EXPECT_TRUE(contains(text, "Schedule    engine fell behind: 3 late sends (mbstorm's own CPU"))
         << text;
     EXPECT_TRUE(contains(text, "target not keeping up")) << text;
+    EXPECT_TRUE(contains(text, "else lower --rate to what it sustained")) << text;
+}
+
+// Open loop: the corrected latency (from the intended send) and, beside it, the uncorrected
+// service time (from the actual send), as wrk2's --u_latency shows; closed loop: one table.
+TEST(ConsoleReport, AnOpenLoopRunShowsTheServiceTimeBesideTheCorrectedLatency) {
+    auto result = testing::make_sample_result();
+    for (int i = 0; i < 1000; ++i) result.service_time.record(200'000);
+    std::string text = format_console_report(result);
+    EXPECT_TRUE(contains(text, "samples; from each request's intended send, queueing included)"))
+        << text;
+    const auto service = text.find(
+        "\nService time, uncorrected (1,000 samples; from each "
+        "request's actual send");
+    ASSERT_NE(service, std::string::npos) << text;
+    EXPECT_NE(text.find("200", service), std::string::npos) << text;
+    result.metadata.model = stats::LoadModel::Closed;
+    text = format_console_report(result);
+    EXPECT_FALSE(contains(text, "Service time")) << text;
+    EXPECT_FALSE(contains(text, "intended send")) << text;
 }
 
 // A ramp 500 -> 2,000/s used to be shown as "rate 2.00k/s", and stages had no target column.

@@ -57,6 +57,19 @@ TEST(Json, EveryDocumentedFieldIsPresent) {
     EXPECT_GT(checked, 50);
 }
 
+// Open loop: the uncorrected service time beside the corrected latency; closed loop: null.
+TEST(Json, AnOpenLoopRunCarriesItsServiceTime) {
+    auto r = testing::make_sample_result();
+    for (int i = 0; i < 1000; ++i) r.service_time.record(200'000);
+    json doc = json::parse(format_json(r));
+    ASSERT_TRUE(doc.at("service_time").is_object()) << doc.at("service_time");
+    EXPECT_EQ(doc.at("service_time").at("count"), 1000);
+    EXPECT_NE(doc.at("service_time").at("mean_ns"), doc.at("latency").at("mean_ns"));
+    r.metadata.model = stats::LoadModel::Closed;
+    doc = json::parse(format_json(r));
+    EXPECT_TRUE(doc.at("service_time").is_null());
+}
+
 TEST(Json, ValuesMatchTheRunResult) {
     const auto r = testing::make_sample_result();
     const json doc = json::parse(format_json(r));
