@@ -3,17 +3,29 @@
 #include <poll.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
-#include <sys/time.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <memory>
+#include <vector>
+
+#include "net/clock.hpp"
 
 namespace mbstorm::net {
 namespace {
 
 constexpr std::size_t kMaxRequestHead = 8192;
-constexpr int kIoTimeoutMs = 2000;  // a peer slower than this is dropped
+// A client has this long from its accept to send a whole request head, and as long again to
+// take the answer: a slow or dripping one is closed then, whatever it keeps sending.
+constexpr std::int64_t kExchangeDeadlineNs = 2 * kNsPerSec;
+// After a 431, what the client still sends is read and dropped this long (and at most this
+// much), so that closing does not reset the connection and throw the answer away with it.
+constexpr std::int64_t kDrainNs = 100 * kNsPerMs;
+constexpr std::size_t kMaxDrained = 16 * kMaxRequestHead;
+// Connections served at once; a new one past this closes the oldest (the nearest its deadline
+// anyway), so that a crowd of idle sockets cannot keep a scrape out.
+constexpr std::size_t kMaxClients = 64;
 
 const char* reason(int status) {
     switch (status) {
@@ -32,35 +44,131 @@ const char* reason(int status) {
     }
 }
 
-void set_io_timeouts(int fd) {
-    timeval tv{kIoTimeoutMs / 1000, (kIoTimeoutMs % 1000) * 1000};
-    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
-    ::setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+// One connection: its request head as it comes, then its answer as it goes out.
+struct Client {
+    enum class Phase { Reading, Writing, Draining };
+    UniqueFd fd;
+    Phase phase = Phase::Reading;
+    std::int64_t deadline_ns = 0;
+    std::string in;
+    std::string out;
+    std::size_t sent = 0;
+    bool drain_after = false;  // its head was not read whole (431)
+    std::size_t drained = 0;
+};
+
+// The answer to a whole request head.
+std::string reply_to(std::string_view head, const HttpServer::Handler& handler) {
+    std::string method, path;
+    HttpReply reply;
+    if (!parse_http_request_line(head, method, path)) {
+        reply = {400, "text/plain; charset=utf-8", "malformed request line\n"};
+    } else if (method != "GET" && method != "HEAD") {
+        reply = {405, "text/plain; charset=utf-8", "only GET and HEAD\n"};
+    } else {
+        try {
+            reply = handler(path);
+        } catch (const std::exception& e) {
+            reply = {500, "text/plain; charset=utf-8", std::string(e.what()) + "\n"};
+        }
+    }
+    return http_response(reply, method == "HEAD");
 }
 
-// After an answer to a request not read whole (431): no more to send, and what the client
-// still sends is read and dropped for a moment, so that closing does not reset the connection
-// and throw away the answer with it. Bounded in bytes and time: the server is one thread.
-void close_gracefully(int fd) {
-    ::shutdown(fd, SHUT_WR);
-    const timeval tv{0, 100'000};
-    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+void start_answer(Client& c, std::string response, bool drain_after) {
+    c.out = std::move(response);
+    c.sent = 0;
+    c.drain_after = drain_after;
+    c.phase = Client::Phase::Writing;
+    c.deadline_ns = now_ns() + kExchangeDeadlineNs;
+}
+
+// Reads what the client sent; false when it is to be closed.
+bool read_request(Client& c, const HttpServer::Handler& handler) {
+    char buffer[4096];
+    for (;;) {
+        const ssize_t n = ::recv(c.fd.get(), buffer, sizeof buffer, 0);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
+        if (n <= 0) return false;  // closed, or reset
+        c.in.append(buffer, static_cast<std::size_t>(n));
+        if (const std::size_t end = c.in.find("\r\n\r\n"); end != std::string::npos) {
+            start_answer(c, reply_to(std::string_view(c.in).substr(0, end + 4), handler), false);
+            return true;
+        }
+        if (c.in.size() > kMaxRequestHead) {
+            start_answer(
+                c, http_response({431, "text/plain; charset=utf-8", "request too large\n"}, false),
+                true);
+            return true;
+        }
+    }
+}
+
+// Sends what is left of the answer; false when the client is done with (or gone).
+bool write_answer(Client& c) {
+    while (c.sent < c.out.size()) {
+        const ssize_t n =
+            ::send(c.fd.get(), c.out.data() + c.sent, c.out.size() - c.sent, MSG_NOSIGNAL);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
+        if (n <= 0) return false;
+        c.sent += static_cast<std::size_t>(n);
+    }
+    if (!c.drain_after) return false;
+    ::shutdown(c.fd.get(), SHUT_WR);
+    c.phase = Client::Phase::Draining;
+    c.deadline_ns = now_ns() + kDrainNs;
+    return true;
+}
+
+// Reads and drops what a client sends after its 431; false once it is done.
+bool drain(Client& c) {
     char sink[4096];
-    for (std::size_t drained = 0; drained < 16 * kMaxRequestHead;) {
-        const ssize_t n = ::recv(fd, sink, sizeof sink, 0);
+    for (;;) {
+        const ssize_t n = ::recv(c.fd.get(), sink, sizeof sink, 0);
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return;
-        drained += static_cast<std::size_t>(n);
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
+        if (n <= 0) return false;
+        c.drained += static_cast<std::size_t>(n);
+        if (c.drained > kMaxDrained) return false;
     }
 }
 
-void send_all(int fd, std::string_view bytes) {
-    while (!bytes.empty()) {
-        const ssize_t n = ::send(fd, bytes.data(), bytes.size(), MSG_NOSIGNAL);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return;  // gone or too slow: nothing more to do for it
-        bytes.remove_prefix(static_cast<std::size_t>(n));
+// Acts on a client's poll events; false when it is to be closed.
+bool serve_client(Client& c, short revents, const HttpServer::Handler& handler) {
+    if (revents == 0) return true;
+    switch (c.phase) {
+        case Client::Phase::Reading:
+            return read_request(c, handler) &&
+                   (c.phase != Client::Phase::Writing || write_answer(c));
+        case Client::Phase::Writing:
+            return write_answer(c);
+        case Client::Phase::Draining:
+            return drain(c);
     }
+    return false;
+}
+
+void accept_clients(int listener, std::vector<Client>& clients) {
+    for (int i = 0; i < 16; ++i) {
+        UniqueFd fd(::accept4(listener, nullptr, nullptr, SOCK_CLOEXEC | SOCK_NONBLOCK));
+        if (!fd.valid()) return;  // none left, the peer gave up, or out of descriptors
+        if (clients.size() >= kMaxClients) clients.erase(clients.begin());
+        Client c;
+        c.fd = std::move(fd);
+        c.deadline_ns = now_ns() + kExchangeDeadlineNs;
+        clients.push_back(std::move(c));
+    }
+}
+
+// How long poll may wait: until the nearest deadline.
+int poll_timeout_ms(const std::vector<Client>& clients) {
+    if (clients.empty()) return -1;
+    std::int64_t nearest = clients.front().deadline_ns;
+    for (const Client& c : clients) nearest = std::min(nearest, c.deadline_ns);
+    const std::int64_t left = nearest - now_ns();
+    return left <= 0 ? 0 : static_cast<int>(left / kNsPerMs + 1);
 }
 
 }  // namespace
@@ -97,7 +205,7 @@ bool HttpServer::start(std::string_view listen, Handler handler, std::string& er
     ListenOptions options;
     options.backlog = 16;
     options.reuse_port = false;
-    options.nonblocking = false;
+    options.nonblocking = true;
     const int fd = listen_socket(endpoint, options);
     if (fd < 0) {
         error = std::strerror(-fd);
@@ -127,49 +235,32 @@ void HttpServer::stop() noexcept {
     wake_.reset();
 }
 
+// One thread, every client at once: poll over the listener, the stop eventfd and each client,
+// each with a deadline, so that no client (dripping, silent, never reading) holds up another
+// or stop(). Leaving closes every client.
 void HttpServer::serve() noexcept {
+    std::vector<Client> clients;
+    std::vector<pollfd> fds;
     for (;;) {
-        pollfd fds[2] = {{listener_.get(), POLLIN, 0}, {wake_.get(), POLLIN, 0}};
-        const int rc = ::poll(fds, 2, -1);
-        if (rc < 0 && errno == EINTR) continue;
-        if (rc < 0 || (fds[1].revents & POLLIN) != 0) return;
-        if ((fds[0].revents & POLLIN) == 0) continue;
-        UniqueFd client(::accept4(listener_.get(), nullptr, nullptr, SOCK_CLOEXEC));
-        if (!client.valid()) continue;  // e.g. the peer gave up already, or out of descriptors
-        answer(client.get());
+        fds.assign({{listener_.get(), POLLIN, 0}, {wake_.get(), POLLIN, 0}});
+        for (const Client& c : clients)
+            fds.push_back({c.fd.get(),
+                           static_cast<short>(c.phase == Client::Phase::Writing ? POLLOUT : POLLIN),
+                           0});
+        const int rc = ::poll(fds.data(), fds.size(), poll_timeout_ms(clients));
+        if (rc < 0 && errno != EINTR) return;
+        if (rc < 0) continue;
+        if ((fds[1].revents & POLLIN) != 0) return;
+        const std::size_t polled = clients.size();
+        std::vector<bool> keep(polled, true);
+        const std::int64_t now = now_ns();
+        for (std::size_t i = 0; i < polled; ++i)
+            keep[i] = serve_client(clients[i], fds[i + 2].revents, handler_) &&
+                      clients[i].deadline_ns > now;
+        for (std::size_t i = polled; i-- > 0;)
+            if (!keep[i]) clients.erase(clients.begin() + static_cast<std::ptrdiff_t>(i));
+        if ((fds[0].revents & POLLIN) != 0) accept_clients(listener_.get(), clients);
     }
-}
-
-void HttpServer::answer(int fd) noexcept {
-    set_io_timeouts(fd);
-    std::string head;
-    char buffer[2048];
-    while (head.find("\r\n\r\n") == std::string::npos) {
-        if (head.size() > kMaxRequestHead) {
-            send_all(fd, http_response({431, "text/plain; charset=utf-8", "request too large\n"},
-                                       false));
-            close_gracefully(fd);
-            return;
-        }
-        const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return;  // closed, or too slow
-        head.append(buffer, static_cast<std::size_t>(n));
-    }
-    std::string method, path;
-    HttpReply reply;
-    if (!parse_http_request_line(head, method, path)) {
-        reply = {400, "text/plain; charset=utf-8", "malformed request line\n"};
-    } else if (method != "GET" && method != "HEAD") {
-        reply = {405, "text/plain; charset=utf-8", "only GET and HEAD\n"};
-    } else {
-        try {
-            reply = handler_(path);
-        } catch (const std::exception& e) {
-            reply = {500, "text/plain; charset=utf-8", std::string(e.what()) + "\n"};
-        }
-    }
-    send_all(fd, http_response(reply, method == "HEAD"));
 }
 
 }  // namespace mbstorm::net

@@ -1,7 +1,10 @@
 // A tiny HTTP/1.1 server on its own thread, for `--metrics-listen`: it answers GET (and HEAD)
-// with what a handler returns for the path, one connection at a time, each closed after its
-// answer. Nothing here touches an engine's ring, so the hot path pays nothing for it. Bad
-// requests get 400, other methods 405, oversized or slow ones are cut off; none stops it.
+// with what a handler returns for the path, each connection closed after its answer. Nothing
+// here touches an engine's ring, so the hot path pays nothing for it. Every connection is
+// served at once (poll, no thread per client), each with a deadline for its whole request and
+// one for its answer, at most 64 at a time (a new one closes the oldest): a dripping, silent
+// or never-reading client holds up neither a scrape nor stop(). Bad requests get 400, other
+// methods 405, oversized heads 431.
 #pragma once
 
 #include <functional>
@@ -31,6 +34,8 @@ class HttpServer {
 
     // listen: HOST:PORT (port 0: any free port). False with `error` when it cannot listen.
     bool start(std::string_view listen, Handler handler, std::string& error);
+    // Closes every client connection and the listener; returns at once, whatever the clients
+    // are doing.
     void stop() noexcept;
     bool running() const noexcept { return thread_.joinable(); }
     // The address it listens on, e.g. "127.0.0.1:40123" or "[::1]:9100".
@@ -38,7 +43,6 @@ class HttpServer {
 
   private:
     void serve() noexcept;
-    void answer(int fd) noexcept;
 
     Handler handler_;
     UniqueFd listener_;

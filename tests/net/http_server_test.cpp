@@ -6,7 +6,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "net/http_server.hpp"
 #include "net/socket.hpp"
@@ -87,6 +90,82 @@ TEST_F(HttpServerTest, RefusesWhatIsNotAGetAndKeepsServing) {
         round_trip(server_.address(), "GET /metrics HTTP/1.1\r\n\r\n").rfind("HTTP/1.1 200 ", 0),
         0u);
     EXPECT_EQ(calls_.load(), 1);
+}
+
+UniqueFd connect_to(const std::string& address) {
+    Endpoint endpoint;
+    if (!parse_endpoint(address, endpoint)) return UniqueFd();
+    return UniqueFd(connect_blocking(endpoint));
+}
+
+// Whether the server has closed `fd` (an end of file within 5 s), sending nothing more.
+bool closed_by_server(int fd) {
+    timeval tv{5, 0};
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    char b = 0;
+    return ::recv(fd, &b, 1, 0) == 0;
+}
+
+// A client that sends one byte of a request head every 50 ms, for up to `bytes` bytes, until
+// the server closes it; `done` once it stopped for either reason, `closed` if the server did.
+struct Dripper {
+    explicit Dripper(const std::string& address, int bytes) : fd(connect_to(address)) {
+        thread = std::thread([this, bytes] {
+            for (int i = 0; i < bytes && !closed; ++i) {
+                const char b = "GET /metrics"[i % 12];
+                closed = ::send(fd.get(), &b, 1, MSG_NOSIGNAL) != 1;
+                char in = 0;
+                closed = closed || ::recv(fd.get(), &in, 1, MSG_DONTWAIT) == 0;
+                std::this_thread::sleep_for(std::chrono::milliseconds(50));
+            }
+            done = true;
+        });
+    }
+    ~Dripper() { thread.join(); }
+    UniqueFd fd;
+    std::atomic<bool> done{false}, closed{false};
+    std::thread thread;
+};
+
+// A client dripping its request head used to hold the one-at-a-time server for as long as it
+// kept dripping (each byte restarted a 2 s read timeout): a scrape waited behind it.
+TEST_F(HttpServerTest, ADrippingClientHoldsUpNeitherAScrapeNorItsOwnDeadline) {
+    Dripper drip(server_.address(), 200);  // 10 s of dripping
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const std::string reply = round_trip(server_.address(), "GET /metrics HTTP/1.1\r\n\r\n");
+    EXPECT_EQ(reply.rfind("HTTP/1.1 200 ", 0), 0u) << reply;
+    EXPECT_FALSE(drip.done) << "the scrape was answered while the dripper still dripped";
+    // Its whole request has a deadline: it is closed long before its 200 bytes are out.
+    while (!drip.done) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    EXPECT_TRUE(drip.closed);
+}
+
+// 100 sockets that never send a byte (more than the server serves at once): a scrape is still
+// answered; before, each silent socket cost it a 2 s timeout in turn.
+TEST_F(HttpServerTest, ACrowdOfSilentSocketsDoesNotKeepAScrapeOut) {
+    std::vector<UniqueFd> crowd;
+    for (int i = 0; i < 100; ++i) crowd.push_back(connect_to(server_.address()));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const std::string reply = round_trip(server_.address(), "GET /metrics HTTP/1.1\r\n\r\n");
+    EXPECT_EQ(reply.rfind("HTTP/1.1 200 ", 0), 0u) << reply;
+    // The oldest were closed to make room, the rest at their deadline.
+    EXPECT_TRUE(closed_by_server(crowd.front().get()));
+    EXPECT_TRUE(closed_by_server(crowd.back().get()));
+}
+
+// stop() joined a thread reading a dripping client: `serve -d 3s` lived as long as the client
+// dripped. Now it closes every client and returns at once.
+TEST(HttpServer, StopClosesEveryClientAndReturnsWhileTheyDrip) {
+    HttpServer server;
+    std::string error;
+    ASSERT_TRUE(server.start(
+        "127.0.0.1:0", [](std::string_view) { return HttpReply{}; }, error));
+    Dripper drip(server.address(), 200);
+    const UniqueFd silent = connect_to(server.address());
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    server.stop();
+    EXPECT_FALSE(drip.done) << "stop() waited for the dripping client";
+    EXPECT_TRUE(closed_by_server(silent.get()));
 }
 
 TEST(HttpServer, RefusesAnAddressInUseAndStopsPromptly) {

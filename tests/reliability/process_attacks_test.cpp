@@ -8,10 +8,13 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <thread>
 
 #include "../server/client_test_support.hpp"
 #include "child_process.hpp"
@@ -136,6 +139,33 @@ TEST(ProcessAttacks, SlowlorisCrowdIsClosedByTheFrameTimeoutWhileOthersAreServed
     serve.signal(SIGINT);
     EXPECT_EQ(serve.wait(), 0) << serve.output();
     EXPECT_THAT(serve.output(), HasSubstr("1000 closed for a slow frame"));
+}
+
+// A client dripping a request head into --metrics-listen, a byte every 100 ms for 20 s, used
+// to keep `serve -d 1s` alive until it left (the endpoint's one thread read it, and exit
+// joined that thread). The server now exits at its duration, the client still dripping.
+TEST(ProcessAttacks, ADrippingMetricsClientDoesNotKeepServeAlivePastItsDuration) {
+    ChildProcess serve({"serve", "--listen", "127.0.0.1:0", "--threads", "1", "-d", "1s",
+                        "--metrics-listen", "127.0.0.1:0"});
+    const std::string marker = "metrics on http://127.0.0.1:";
+    ASSERT_TRUE(serve.wait_for_output(marker)) << serve.output();
+    ASSERT_TRUE(serve.wait_for_output("/metrics\n")) << serve.output();
+    const auto at = serve.output().find(marker) + marker.size();
+    const int fd = connect_to(static_cast<std::uint16_t>(std::stoi(serve.output().substr(at))));
+    ASSERT_GE(fd, 0);
+    std::atomic<bool> dripped_all{false};
+    std::thread drip([&] {
+        for (int i = 0; i < 200; ++i) {
+            if (::send(fd, "G", 1, MSG_NOSIGNAL) != 1) return;
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+        dripped_all = true;
+    });
+    EXPECT_EQ(serve.wait(), 0) << serve.output();
+    EXPECT_FALSE(dripped_all) << "serve outlived its duration until the client left";
+    ::shutdown(fd, SHUT_RDWR);
+    drip.join();
+    ::close(fd);
 }
 
 TEST(ProcessAttacks, ServeStopsCleanlyOnSigtermAndSigint) {
