@@ -97,6 +97,8 @@ int run_serve(ServeOptions& o) {
                        "mbstorm serve: warning: the device file's tls_roles apply only with "
                        "--transport tls\n");
         units = std::make_unique<slave::UnitModels>(slave::build_units(*device));
+        // RTU over TCP: unit 0 is a broadcast, as on the serial line behind a gateway.
+        if (o.transport.kind() == TransportKind::RtuOverTcp) units->broadcast_unit_zero = true;
         c.units = units.get();
         c.simulated = device->simulated;
     }

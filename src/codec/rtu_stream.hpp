@@ -1,7 +1,10 @@
 // Cuts RTU frames (address, PDU, CRC-16) out of a byte stream with no other framing, as RTU
 // over TCP carries them: frame ends come from the codec's length inference (rtu.hpp), and
-// every frame's CRC is checked. A stream whose CRC fails cannot be resynchronised reliably
-// (any byte may start the next frame), so that is fatal, like a lost MBAP header.
+// every frame's CRC is checked. A frame whose CRC fails ends where its length rule says it
+// does, so a serial slave's manners can be kept (it drops the frame and listens on, as a slave
+// behind a gateway does): with `skip_bad_crc` such a frame is skipped and the next one read.
+// A frame with no length rule (an unknown function code) whose CRC fails leaves no boundary to
+// resynchronise on (any byte may start the next frame): that is fatal, like a lost MBAP header.
 #pragma once
 
 #include <array>
@@ -22,11 +25,13 @@ class RtuSplitter {
     enum class Status : std::uint8_t {
         Frame,     // `out` holds a complete frame with a valid CRC
         NeedMore,  // the fed bytes are used up
+        Skipped,   // skip_bad_crc: a frame of known length failed its CRC and was dropped
         Fatal,     // framing lost (see error(): BadCrc, FrameTooLong); reset() before reuse
     };
 
-    explicit RtuSplitter(Direction direction = Direction::Requests) noexcept
-        : direction_(direction) {}
+    explicit RtuSplitter(Direction direction = Direction::Requests,
+                         bool skip_bad_crc = false) noexcept
+        : direction_(direction), skip_bad_crc_(skip_bad_crc) {}
 
     void feed(Bytes chunk) noexcept { chunk_ = chunk; }
     // `out` is filled as a TCP frame would be (unit id = RTU address, transaction id 0), so
@@ -41,6 +46,7 @@ class RtuSplitter {
   private:
     Status emit(const std::uint8_t* adu, std::size_t size, TcpFrame& out) noexcept;
     Direction direction_;
+    bool skip_bad_crc_;
     Bytes chunk_;
     std::array<std::uint8_t, limits::kMaxRtuAdu> partial_{};
     std::size_t partial_size_ = 0;

@@ -23,6 +23,8 @@ codec::CodecError Worker::consume_rtu(Connection& c, const std::uint8_t* data, s
                 break;
             case codec::RtuSplitter::Status::NeedMore:
                 return codec::CodecError::Ok;
+            case codec::RtuSplitter::Status::Skipped:  // not asked for here: an answer with a
+                return codec::CodecError::BadCrc;      // bad CRC is an error of the target's
             case codec::RtuSplitter::Status::Fatal:
                 return c.rtu->error();
         }

@@ -1,6 +1,8 @@
 // RTU over TCP input: RTU frames (address, PDU, CRC) cut from the stream by the codec's length
 // inference, then served like MBAP frames (Worker::serve_frame writes the RTU answer). No
-// transaction ids: answers go out in request order, as they always do here.
+// transaction ids: answers go out in request order, as they always do here. A frame with a bad
+// CRC is dropped and the next one served, as a serial slave behind a gateway does, so the
+// gateway keeps its link; only a bad frame with no length rule to find its end closes it.
 #include "server/worker.hpp"
 
 namespace mbstorm::server {
@@ -17,9 +19,12 @@ void Worker::consume_rtu_input(std::uint32_t index, const std::uint8_t* data,
                 counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
                 note_partial_frame(c, index, completed);
                 return;
+            case codec::RtuSplitter::Status::Skipped:
+                counters_.add(ServerCounters::CrcErrors);
+                break;
             case codec::RtuSplitter::Status::Fatal:
-                // A bad CRC leaves no reliable frame boundary: the frames before it are
-                // answered and the connection closes after that.
+                // No length rule to resynchronise on: the frames before it are answered and
+                // the connection closes after that.
                 lose_framing(index, c.rtu->error() == codec::CodecError::BadCrc);
                 return;
             case codec::RtuSplitter::Status::Frame:

@@ -42,6 +42,13 @@ bool Server::start(std::string* error) {
         table_slots_ = fit_socket_tables(n);
     else if (config_.max_connections)
         fit_connection_limit_to_descriptors(n);
+    // RTU over TCP speaks for serial slaves: unit 0 is a broadcast there, carried out by every
+    // unit and answered by none (models given by a device file are set so by the caller).
+    if (config_.framing == codec::Framing::Rtu && !config_.units && !config_.model) {
+        owned_units_ = std::make_unique<slave::UnitModels>(slave::UnitModels::shared());
+        owned_units_->broadcast_unit_zero = true;
+        config_.units = owned_units_.get();
+    }
     if (config_.units) {
         model_ = &config_.units->model_at(0);
     } else if (config_.model) {

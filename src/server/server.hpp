@@ -54,6 +54,8 @@ class Server {
 
     ServerConfig config_;
     std::unique_ptr<slave::DataModel> owned_model_;
+    // RTU over TCP with no models given: one shared model whose unit 0 is a broadcast.
+    std::unique_ptr<slave::UnitModels> owned_units_;
     slave::DataModel* model_ = nullptr;
     std::vector<std::unique_ptr<Worker>> workers_;
     std::vector<std::thread> threads_;

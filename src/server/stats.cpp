@@ -122,8 +122,9 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
                "evicted, {} refused, {} accepts out of fds (EMFILE/ENFILE)\n"
                "  bytes: {} in, {} out\n"
                "  exceptions: {} ({})\n"
-               "  framing: {} discarded (protocol id != 0), {} closed for bad length, {} closed "
-               "for a bad CRC\n"
+               "  framing: {} discarded (protocol id != 0), {} closed for bad length, {} with a "
+               "bad "
+               "CRC (dropped)\n"
                "  emulation: {} busy (06), {} other-unit requests\n"
                "  faults: {} delayed, {} dropped connections, {} unanswered\n"
                "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",

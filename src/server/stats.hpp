@@ -19,7 +19,9 @@ struct ServerStats {
     std::uint64_t connections_total = 0;
     std::uint64_t discarded_frames = 0;    // protocol id != 0
     std::uint64_t bad_framing_closes = 0;  // MBAP length 0, 1 or > 254; RTU frame too long
-    std::uint64_t crc_errors = 0;          // RTU over TCP: closed after a frame with a bad CRC
+    // RTU over TCP: frames with a bad CRC, dropped (the link closed only for one with no
+    // length rule to find the next frame by)
+    std::uint64_t crc_errors = 0;
     std::uint64_t idle_closes = 0;
     std::uint64_t frame_timeouts = 0;  // closed: a started frame did not complete in time
     std::uint64_t evictions = 0;

@@ -339,7 +339,8 @@ void Worker::admit(int fd) noexcept {
         Connection& c = conns_[index];
         if (!use_buf_ring_ && !c.plain_buf) c.plain_buf.reset(new std::uint8_t[config_.buf_size]);
         if (config_.framing == codec::Framing::Rtu && !c.rtu)
-            c.rtu = std::make_unique<codec::RtuSplitter>();
+            c.rtu = std::make_unique<codec::RtuSplitter>(codec::RtuSplitter::Direction::Requests,
+                                                         /*skip_bad_crc=*/true);
     } catch (...) {
         counters_.add(ServerCounters::Refusals);
         close_socket(fd);

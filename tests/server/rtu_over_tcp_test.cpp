@@ -1,6 +1,7 @@
 // The reference slave speaking RTU over TCP (ServerConfig::framing = Rtu): RTU frames on the
-// stream, answers in order, exceptions as RTU frames, and a bad CRC closing the connection
-// after the frames before it are answered (counted as a CRC error).
+// stream, answers in order, exceptions as RTU frames; a frame with a bad CRC dropped and the
+// next one answered, as a serial slave behind a gateway does (counted as a CRC error), and a
+// write to unit 0 carried out and not answered (a broadcast).
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -77,29 +78,57 @@ TEST(RtuOverTcp, ExceptionsAreRtuFrames) {
     EXPECT_EQ(c.recv_n(5), with_crc({1, 0xC1, 1}));
 }
 
-TEST(RtuOverTcp, BadCrcClosesAfterAnsweringWhatCameBefore) {
+// A serial slave drops a frame whose CRC fails and listens on; the gateway keeps its TCP link.
+// The length rule of the frame's function code says where it ends. (Before, the connection
+// was closed, and a gateway's link with it.)
+TEST(RtuOverTcp, AFrameWithABadCrcIsDroppedAndTheNextOneAnswered) {
     auto srv = start_rtu();
-    Client bad(*srv);
-    Client good(*srv);
+    Client c(*srv);
     Frame stream = rtu_read_holding(1);
-    Frame broken = rtu_read_holding(1);
+    Frame broken = rtu_read_holding(4);
     broken.back() ^= 0xFF;
     stream.insert(stream.end(), broken.begin(), broken.end());
-    ASSERT_TRUE(bad.send_all(stream));
-    expect_read_answer(bad.recv_n(7), 1);
-    EXPECT_TRUE(bad.closed_by_peer());
+    const Frame after = rtu_read_holding(2);
+    stream.insert(stream.end(), after.begin(), after.end());
+    ASSERT_TRUE(c.send_all(stream));
+    expect_read_answer(c.recv_n(7), 1);
+    expect_read_answer(c.recv_n(9), 2);
     EXPECT_TRUE(test::eventually([&] { return srv->stats().crc_errors == 1; }));
-    EXPECT_EQ(srv->stats().bad_framing_closes, 0u);
-    // Other connections go on.
-    ASSERT_TRUE(good.send_all(rtu_read_holding(3)));
-    expect_read_answer(good.recv_n(11), 3);
+    EXPECT_EQ(srv->stats().transactions, 2u);
+    ASSERT_TRUE(c.send_all(rtu_read_holding(3)));
+    expect_read_answer(c.recv_n(11), 3);
+}
+
+// A frame of an unknown function code has no length rule: with its CRC wrong, nothing says
+// where the next frame starts, and the link is closed once no CRC ends the bytes within the
+// longest RTU frame.
+TEST(RtuOverTcp, ABadFrameWithNoLengthRuleClosesTheLink) {
+    auto srv = start_rtu();
+    Client c(*srv);
+    Frame garbage = {1, 0x41};
+    for (int i = 0; i < 300; ++i) garbage.push_back(static_cast<std::uint8_t>(i * 7 + 1));
+    ASSERT_TRUE(c.send_all(garbage));
+    EXPECT_TRUE(c.closed_by_peer());
+    EXPECT_TRUE(test::eventually([&] { return srv->stats().crc_errors == 1; }));
+}
+
+// Unit 0 on a serial line is a broadcast: every slave carries out the write, none answers.
+TEST(RtuOverTcp, AWriteToUnitZeroIsCarriedOutAndNotAnswered) {
+    auto srv = start_rtu();
+    Client c(*srv);
+    ASSERT_TRUE(c.send_all(with_crc({0, 6, 0, 5, 0x12, 0x34})));
+    ASSERT_TRUE(c.send_all(with_crc({1, 3, 0, 5, 0, 1})));
+    // The first bytes back are the read's: the write drew no echo.
+    EXPECT_EQ(c.recv_n(7), with_crc({1, 3, 2, 0x12, 0x34}));
+    EXPECT_TRUE(c.silent_for(100));
 }
 
 TEST(RtuOverTcp, MbapOnAnRtuPortIsNotAnswered) {
     auto srv = start_rtu();
     Client c(*srv);
-    // An MBAP read: to an RTU reader, address 0x00 with function 0x01 and a wrong CRC.
+    // An MBAP read: to an RTU reader, address 0x00 with function 0x01 and a wrong CRC
+    // (dropped), then the start of a frame of function 0x00 (no length rule: more awaited).
     ASSERT_TRUE(c.send_all(test::read_holding(1, 1, 0, 10)));
-    EXPECT_TRUE(c.closed_by_peer());
+    EXPECT_TRUE(c.silent_for(300));
     EXPECT_EQ(srv->stats().transactions, 0u);
 }
