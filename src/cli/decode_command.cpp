@@ -407,6 +407,13 @@ int run_decode(const DecodeOptions& o) {
     } else {
         std::array<std::uint8_t, 4096> buf{};
         auto parsed = codec::parse_hex(text, buf);
+        if (parsed.error == codec::CodecError::BufferTooSmall) {
+            fmt::print(stderr,
+                       "mbstorm decode: too many bytes: more than {} (the longest Modbus frame is "
+                       "{})\n",
+                       buf.size(), codec::limits::kMaxRtuAdu);
+            return kExitUsage;
+        }
         if (!parsed.ok()) {
             fmt::print(stderr, "mbstorm decode: bad hex at character {}: {}\n", parsed.position + 1,
                        parsed.error == codec::CodecError::OddHexLength ? "odd number of hex digits"

@@ -4,6 +4,8 @@
 
 #include <cstring>
 
+#include "load/preflight.hpp"
+#include "load/write_safety.hpp"
 #include "netfuzz/serial_link.hpp"
 #include "netfuzz/tls_link.hpp"
 
@@ -12,14 +14,8 @@ namespace mbstorm::cli {
 bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
                          std::string& error, std::uint16_t default_port) {
     if (!net::parse_endpoint(text, out, &error, default_port)) return false;
-    bool loopback = false;
-    if (out.family() == AF_INET) {
-        const auto* a = reinterpret_cast<const sockaddr_in*>(&out.addr);
-        loopback = (ntohl(a->sin_addr.s_addr) >> 24) == 127;
-    } else if (out.family() == AF_INET6) {
-        const auto* a = reinterpret_cast<const sockaddr_in6*>(&out.addr);
-        loopback = IN6_IS_ADDR_LOOPBACK(&a->sin6_addr);
-    }
+    // The rule run and write apply to writes: 127.0.0.0/8, ::1 and ::ffff:127.0.0.0/104.
+    const bool loopback = load::is_loopback_address(load::numeric_address(out));
     if (!loopback && !allow_remote) {
         error = "target " + out.to_string() +
                 " is not a loopback address; fuzzing writes to the device and may change its "

@@ -164,7 +164,8 @@ void add_serve_command(CLI::App& app, Action& action) {
     auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
     cmd->add_option("--listen,-l", o->config.listen,
                     "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
-                    "port 502 if omitted (802 with --transport tls)")
+                    "port 502 if omitted (802 with --transport tls); :PORT, 0.0.0.0 or [::] "
+                    "accept connections from every interface")
         ->capture_default_str();
     add_transport_options(cmd, o->transport, TransportSide::Server);
     add_deprecated_option(cmd, "-t", "--threads", o->config.threads);

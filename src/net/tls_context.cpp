@@ -48,10 +48,16 @@ std::string tls_certificate_role(X509* cert) {
     if (at < 0) return {};
     X509_EXTENSION* ext = X509_get_ext(cert, at);
     const ASN1_OCTET_STRING* der = X509_EXTENSION_get_data(ext);
-    const unsigned char* p = ASN1_STRING_get0_data(der);
+    const unsigned char* const start = ASN1_STRING_get0_data(der);
+    const unsigned char* p = start;
     ASN1_UTF8STRING* role = d2i_ASN1_UTF8STRING(nullptr, &p, ASN1_STRING_length(der));
     if (role == nullptr) {
         ERR_clear_error();
+        return {};
+    }
+    // The extension is the UTF8String and nothing else: bytes after it make it no role.
+    if (p != start + ASN1_STRING_length(der)) {
+        ASN1_UTF8STRING_free(role);
         return {};
     }
     std::string out(reinterpret_cast<const char*>(ASN1_STRING_get0_data(role)),

@@ -18,6 +18,17 @@ TEST(DecodeCommand, RtuRequestShowsFieldsAndCorrectCrc) {
     EXPECT_THAT(r.output, HasSubstr("correct"));
 }
 
+// 1 MB of hex used to be called "not a hex digit at character 8193" (issue #31).
+TEST(DecodeCommand, TooManyBytesIsSaidSo) {
+    std::string hex;
+    for (int i = 0; i < 5000; ++i) hex += "AB";
+    auto r = run_mbstorm("decode " + hex);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_THAT(r.output,
+                HasSubstr("too many bytes: more than 4096 (the longest Modbus frame is 256)"));
+    EXPECT_THAT(r.output, Not(HasSubstr("not a hex digit")));
+}
+
 TEST(DecodeCommand, RtuWrongCrcIsReported) {
     // Shown field by field, and the fault makes the exit code 1 (scripts can tell).
     auto r = run_mbstorm("decode --rtu 01 03 00 00 00 0A C5 CE");

@@ -26,6 +26,18 @@ TEST(TargetSyntax, RunDefaultsToPort502) {
     }
 }
 
+// fuzz (and replay, which resolves its target the same way) took only 127.0.0.0/8 and ::1 for
+// loopback, while run and write also take the IPv4-mapped ::ffff:127.x (issue #31): one rule.
+TEST(TargetSyntax, FuzzTakesLoopbackAsRunAndWriteDo) {
+    auto mapped =
+        run_mbstorm("fuzz -q --seconds 1 --timeout 200ms --target [::ffff:127.0.0.1]:1", 60);
+    EXPECT_THAT(mapped.output, Not(HasSubstr("not a loopback address"))) << mapped.output;
+    EXPECT_THAT(mapped.output, HasSubstr("cannot connect")) << mapped.output;
+    auto remote = run_mbstorm("fuzz -q --seconds 1 --target [::ffff:10.0.0.1]:1", 60);
+    EXPECT_EQ(remote.exit_code, 2) << remote.output;
+    EXPECT_THAT(remote.output, HasSubstr("is not a loopback address")) << remote.output;
+}
+
 TEST(TargetSyntax, ScenarioTargetTakesTheSameSyntax) {
     auto r = run_mbstorm(
         "run --print-scenario --target ::1 " MBSTORM_SOURCE_DIR "/scenarios/quickstart.yaml", 30);

@@ -1,7 +1,8 @@
 // What the TLS suites share: certificates made once per suite by openssl(1)
-// (tests/scripts/lib/tls_certs.bash: a CA, "server", the clients "operator", "viewer", "norole"
-// and "rogue" of another CA), contexts built from them, and an OpenSSL client and server in one
-// process with the ciphertext moved between them by hand (memory BIOs).
+// (tests/scripts/lib/tls_certs.bash: a CA, "server", the clients "operator", "viewer",
+// "norole", "trailing" (bytes after its role) and "rogue" of another CA), contexts built from
+// them, and an OpenSSL client and server in one process with the ciphertext moved between them
+// by hand (memory BIOs).
 #pragma once
 
 #include <gtest/gtest.h>

@@ -15,7 +15,9 @@ tls_prologue() {
 # Writes into DIR: ca.pem (the CA), server.pem/.key (127.0.0.1), operator.pem/.key and
 # viewer.pem/.key (clients whose Modbus/TCP Security role extension, OID
 # 1.3.6.1.4.1.50316.802.1, says Operator or Viewer), norole.pem/.key (a client of the same CA
-# without a role) and rogue.pem/.key (a client with a role, signed by another CA).
+# without a role), trailing.pem/.key (a client whose role extension holds the UTF8String
+# "Operator" and two bytes after it: not a role) and rogue.pem/.key (a client with a role,
+# signed by another CA).
 make_tls_certs() {
   local d=$1 name
   openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 2 \
@@ -38,10 +40,14 @@ extendedKeyUsage = clientAuth
 [norole]
 basicConstraints = CA:FALSE
 extendedKeyUsage = clientAuth
+[trailing]
+basicConstraints = CA:FALSE
+extendedKeyUsage = clientAuth
+1.3.6.1.4.1.50316.802.1 = DER:0C:08:4F:70:65:72:61:74:6F:72:FF:FF
 CNF
   # name section signing-CA
   for spec in "server server ca" "operator operator ca" "viewer viewer ca" \
-              "norole norole ca" "rogue operator rogue-ca"; do
+              "norole norole ca" "trailing trailing ca" "rogue operator rogue-ca"; do
     set -- $spec
     name=$1
     openssl req -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes \
