@@ -110,6 +110,10 @@ std::size_t TlsSession::pending_output() const noexcept {
     return ssl_ == nullptr ? 0 : BIO_ctrl_pending(out_);
 }
 
+bool TlsSession::partial_input() const noexcept {
+    return ssl_ != nullptr && (BIO_ctrl_pending(in_) > 0 || SSL_has_pending(ssl_) == 1);
+}
+
 std::size_t TlsSession::take_output(std::vector<std::uint8_t>& out) {
     const std::size_t pending = pending_output();
     if (pending == 0) return 0;

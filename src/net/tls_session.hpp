@@ -45,6 +45,8 @@ class TlsSession {
     // Ciphertext waiting to go to the peer, appended to `out` (keeps its capacity).
     std::size_t take_output(std::vector<std::uint8_t>& out);
     std::size_t pending_output() const noexcept;
+    // Ciphertext from the peer not yet made into plaintext: a record that has not all come.
+    bool partial_input() const noexcept;
     // Queues close_notify (take_output sends it).
     void close() noexcept;
 

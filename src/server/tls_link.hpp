@@ -50,6 +50,9 @@ struct TlsLink {
     // they leave the queue once all of cipher_out has been sent.
     std::size_t plain_carried = 0;
     const FunctionSet* allowed = nullptr;  // nullptr: every function
+    // Admitted one over the connection limit when every connection held had authenticated:
+    // the oldest idle one is evicted only once this handshake succeeds.
+    bool evict_when_established = false;
     // The kernel's TLS carries the records (ktls_offload.hpp): plaintext both ways from here
     // on, through the plain paths; the session stays for the role and is never used again.
     bool kernel = false;

@@ -146,13 +146,22 @@ void Worker::request_eviction() noexcept {
     [[maybe_unused]] auto n = ::write(mail_fd_, &one, sizeof one);
 }
 
+std::uint32_t Worker::eviction_victim() const noexcept {
+    // A TLS connection still in its handshake has not shown who it is: it goes before any
+    // authenticated session, oldest first.
+    if (handshaking_ > 0)
+        for (std::uint32_t i = lru_head_; i != kNoConn; i = conns_[i].lru_next)
+            if (conns_[i].tls && !conns_[i].tls->session.established()) return i;
+    return lru_head_;
+}
+
 void Worker::serve_evictions() noexcept {
     // Each request closes this worker's oldest idle connection, if it still has one (it may
     // have closed meanwhile: then the server is below the limit anyway).
     for (std::uint32_t n = evict_requests_.exchange(0, std::memory_order_relaxed); n > 0; --n) {
         if (lru_head_ == kNoConn) break;
         counters_.add(ServerCounters::Evictions);
-        close_connection(lru_head_);
+        close_connection(eviction_victim());
     }
 }
 
@@ -163,6 +172,11 @@ void Worker::publish_oldest_idle() noexcept {
 }
 
 bool Worker::evict_server_wide_oldest() noexcept {
+    if (handshaking_ > 0) {  // this worker's unauthenticated connections go first
+        counters_.add(ServerCounters::Evictions);
+        close_connection(eviction_victim());
+        return true;
+    }
     Worker* victim = nullptr;
     std::int64_t oldest = INT64_MAX;
     if (lru_head_ != kNoConn) {
@@ -180,7 +194,7 @@ bool Worker::evict_server_wide_oldest() noexcept {
     if (victim == nullptr) return false;
     if (victim == this) {
         counters_.add(ServerCounters::Evictions);
-        close_connection(lru_head_);
+        close_connection(eviction_victim());
     } else {
         // The new connection is admitted now; the server is one over its limit until the
         // other worker has closed its oldest (it counts the eviction).
@@ -315,13 +329,19 @@ void Worker::pause_accept() noexcept {
 
 void Worker::admit(int fd) noexcept {
     const std::uint32_t limit = config_.max_connections;
+    bool evict_when_established = false;
     if (limit != 0 && open_connections_.load(std::memory_order_relaxed) >= limit) {
-        const bool evicted = config_.full_policy == FullPolicy::EvictOldestIdle &&
+        const bool evict = config_.full_policy == FullPolicy::EvictOldestIdle;
+        // Every connection held has authenticated and the newcomer has not: it may not push
+        // one out before it has shown who it is (one over the limit until then; a socket that
+        // never does is closed by its frame timeout, or evicted by the next newcomer).
+        evict_when_established = evict && config_.tls && handshaking_ == 0;
+        const bool evicted = evict && !evict_when_established &&
                              (cross_evict_ ? evict_server_wide_oldest() : lru_head_ != kNoConn);
         if (evicted && !cross_evict_) {
             counters_.add(ServerCounters::Evictions);
-            close_connection(lru_head_);
-        } else if (!evicted) {
+            close_connection(eviction_victim());
+        } else if (!evicted && !evict_when_established) {
             counters_.add(ServerCounters::Refusals);
             close_socket(fd);
             return;
@@ -366,6 +386,7 @@ void Worker::admit(int fd) noexcept {
     if (config_.tls) {
         try {
             c.tls = std::make_unique<TlsLink>(config_.tls);
+            c.tls->evict_when_established = evict_when_established;
             if (ktls_) c.tls->session.track_for_offload();
         } catch (...) {
             c.tls.reset();
@@ -380,6 +401,13 @@ void Worker::admit(int fd) noexcept {
         }
     }
     c.last_active_ns = now_ ? now_ : net::now_ns();
+    if (c.tls) {
+        // The handshake is timed from the accept: a socket that never sends a byte holds a
+        // TLS slot as surely as one that stops half-way.
+        ++handshaking_;
+        start_frame_clock(c, index);
+        c.frame_started_ns = c.last_active_ns;
+    }
     lru_push_back(index);
     ++open_here_;
     open_connections_.fetch_add(1, std::memory_order_relaxed);
@@ -392,6 +420,7 @@ void Worker::close_connection(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     if (c.state != Connection::State::Open) return;
     c.state = Connection::State::Closing;
+    if (c.tls && !c.tls->session.established()) --handshaking_;
     lru_unlink(index);
     // shutdown() ends a pending recv/send at once; the ops still hold the socket, so the
     // descriptor can be closed now and the slot released when they have completed.

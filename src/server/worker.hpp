@@ -81,6 +81,11 @@ class Worker {
     void arm_stop() noexcept;
     void arm_mail() noexcept;
     void serve_evictions() noexcept;  // eviction requests from other workers
+    // The connection an eviction closes: the oldest still in its TLS handshake, else the
+    // least recently active.
+    std::uint32_t eviction_victim() const noexcept;
+    // A TLS connection admitted over the limit has authenticated: the oldest idle one goes.
+    void make_room_after_handshake(std::uint32_t index) noexcept;
     void publish_oldest_idle() noexcept;
     bool evict_server_wide_oldest() noexcept;  // false: nothing idle anywhere
     void arm_recv(std::uint32_t index) noexcept;
@@ -192,6 +197,7 @@ class Worker {
     std::uint32_t lru_head_ = kNoConn;
     std::uint32_t lru_tail_ = kNoConn;
     std::uint32_t open_here_ = 0;
+    std::uint32_t handshaking_ = 0;  // open TLS connections whose handshake is not done
     BlockPool pool_;
     std::vector<std::uint16_t> stash_next_;  // per buffer id
     std::vector<std::uint32_t> stash_size_;  // per buffer id

@@ -17,8 +17,8 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
         const net::TlsStatus hs = t.session.handshake();
         if (hs == net::TlsStatus::WantMore) {
             // A handshake that stalls holds a TLS session: --frame-timeout bounds it like a
-            // frame that stops half-way (counted as a slow frame).
-            if (c.frame_started_ns == 0) start_frame_clock(c, index);  // from its first bytes
+            // frame that stops half-way (counted as a slow frame), timed from the accept.
+            if (c.frame_started_ns == 0) start_frame_clock(c, index);
             if (t.session.pending_output() > 0) mark_dirty(c, index);  // our next flight
             return;
         }
@@ -27,9 +27,11 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
             return;
         }
         c.frame_started_ns = 0;  // the handshake is done; frames are timed from here on
+        --handshaking_;
         counters_.add(ServerCounters::TlsHandshakes);
         if (t.session.resumed()) counters_.add(ServerCounters::TlsResumed);
         t.allowed = config_.tls_roles.allowed_for(t.session.peer_role());
+        if (t.evict_when_established) make_room_after_handshake(index);
     }
     for (;;) {
         std::size_t n = 0;
@@ -50,6 +52,9 @@ void Worker::tls_input(std::uint32_t index, const std::uint8_t* data, std::size_
         }
         break;
     }
+    // A record that has not all come is a frame still arriving: --frame-timeout bounds it (every
+    // ciphertext byte of a dripped record would otherwise keep the connection alive).
+    if (c.frame_started_ns == 0 && t.session.partial_input()) start_frame_clock(c, index);
     if (t.session.pending_output() > 0) mark_dirty(c, index);  // tickets, key updates
     if (ktls_) tls_offload(index);
 }
@@ -78,6 +83,19 @@ void Worker::tls_offload(std::uint32_t index) noexcept {
     }
     t.kernel = true;
     counters_.add(ServerCounters::TlsOffloaded);
+}
+
+void Worker::make_room_after_handshake(std::uint32_t index) noexcept {
+    conns_[index].tls->evict_when_established = false;
+    if (open_connections_.load(std::memory_order_relaxed) <= config_.max_connections) return;
+    if (cross_evict_) {
+        evict_server_wide_oldest();
+        return;
+    }
+    const std::uint32_t victim = eviction_victim();
+    if (victim == kNoConn || victim == index) return;
+    counters_.add(ServerCounters::Evictions);
+    close_connection(victim);
 }
 
 void Worker::tls_refuse(std::uint32_t index) noexcept {
