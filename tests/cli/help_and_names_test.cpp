@@ -111,7 +111,7 @@ TEST(CliHelp, ParseErrorsNameTheSubcommand) {
     EXPECT_EQ(r.exit_code, kExitUsage);
     EXPECT_THAT(r.output, StartsWith("mbstorm run: --connections: Value 0 not in range"));
     EXPECT_THAT(run_mbstorm("read --unit").output, StartsWith("mbstorm read: "));
-    EXPECT_THAT(run_mbstorm("completion zsh").output, StartsWith("mbstorm completion: "));
+    EXPECT_THAT(run_mbstorm("completion fish").output, StartsWith("mbstorm completion: "));
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "../support/loopback_listener.hpp"
 #include "load/engine.hpp"
 #include "server/server.hpp"
 
@@ -185,15 +186,8 @@ TEST(EngineHonestNumbers, PerOperationTrafficIsCounted) {
 class OneAtATimeServer {
   public:
     OneAtATimeServer() {
-        fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-        sockaddr_in addr{};
-        addr.sin_family = AF_INET;
-        addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-        EXPECT_EQ(::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-        EXPECT_EQ(::listen(fd_, 4), 0);
-        socklen_t len = sizeof addr;
-        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-        port_ = ntohs(addr.sin_port);
+        fd_ = test::listen_on_loopback(4, port_);
+        EXPECT_GE(fd_, 0);
         thread_ = std::thread([this] { serve(); });
     }
     ~OneAtATimeServer() {

@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "../support/loopback_listener.hpp"
 #include "load/engine.hpp"
 #include "load/foreign_protocol.hpp"
 
@@ -48,15 +49,8 @@ TEST(ForeignProtocol, NamesWhatTheAnswersLookLike) {
 class HttpLikeServer {
   public:
     HttpLikeServer() {
-        listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-        sockaddr_in addr{};
-        addr.sin_family = AF_INET;
-        addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-        EXPECT_EQ(::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-        EXPECT_EQ(::listen(listen_fd_, 64), 0);
-        socklen_t len = sizeof addr;
-        ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-        port_ = ntohs(addr.sin_port);
+        listen_fd_ = test::listen_on_loopback(64, port_);
+        EXPECT_GE(listen_fd_, 0);
         thread_ = std::thread([this] { serve(); });
     }
     ~HttpLikeServer() {

@@ -15,6 +15,8 @@
 #include <thread>
 #include <vector>
 
+#include "../support/loopback_listener.hpp"
+
 namespace mbstorm::test {
 
 using SlaveBytes = std::vector<std::uint8_t>;
@@ -25,15 +27,7 @@ class ThreadSlave {
   public:
     using Consume = std::function<void(int fd, SlaveBytes& buffer)>;
     explicit ThreadSlave(Consume consume) : consume_(std::move(consume)) {
-        fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-        sockaddr_in a{};
-        a.sin_family = AF_INET;
-        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-        ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
-        ::listen(fd_, 1024);  // the capacity tests open hundreds at once
-        socklen_t len = sizeof a;
-        ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-        port_ = ntohs(a.sin_port);
+        fd_ = listen_on_loopback(1024, port_);  // the capacity tests open hundreds at once
         thread_ = std::thread([this] { serve(); });
     }
     ~ThreadSlave() {
@@ -75,7 +69,7 @@ class ThreadSlave {
     }
     Consume consume_;
     int fd_ = -1;
-    int port_ = 0;
+    std::uint16_t port_ = 0;
     std::atomic<bool> stop_{false};
     std::thread thread_;
 };
