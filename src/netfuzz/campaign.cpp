@@ -623,7 +623,8 @@ bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
 // corpus; the constants the target compared its input against go to the generator.
 void Campaign::take_coverage(const Case& c) {
     const CoverageSample s = options_.coverage->collect();
-    if (s.new_bits && gen_->add_to_corpus(c, s.comparisons, s.rarest_edge)) {
+    if (s.new_bits) {
+        gen_->add_to_corpus(c, s.comparisons, s.rarest_edge);
         result_.corpus_size = gen_->corpus_size();
         save_to_corpus(gen_->corpus().back());
     }

@@ -71,9 +71,7 @@ class Generator {
     // replaced by the other (input-to-state, as AFL++'s cmplog), alone and together with the
     // comparison made next (a compiler may test `a == X && b == Y` as one branch).
     // `rarest_edge`: the map cell of the rarest edge the case hit (CoverageSample).
-    // False, and nothing kept, for a case without a whole MBAP frame (a split, a drip, plain
-    // TLS bytes): no mutation could change it, so each pick of it would run it again as it was.
-    bool add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons = {},
+    void add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons = {},
                        std::uint32_t rarest_edge = 0);
     // Half the corpus picks go to the entry whose rarest edge the fewest cases have hit so
     // far (counted by `map`), as FairFuzz does: what reaches a rare branch is mutated until

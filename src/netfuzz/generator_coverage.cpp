@@ -27,18 +27,16 @@ constexpr std::size_t kMaxCompared = 4096;
 
 }  // namespace
 
-bool Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons,
+void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comparisons,
                               std::uint32_t rarest_edge) {
     // A frame per send, so that a mutation or a solved comparison stays inside one frame and
     // its MBAP length can follow it.
     Case entry = split_frames(c);
-    if (std::none_of(entry.steps.begin(), entry.steps.end(), one_frame)) return false;
     entry.number = 0;
     entry.cls = MutationClass::CoverageMutation;
     coverage_corpus_.push_back(entry);
     corpus_rare_edge_.push_back(rarest_edge);
     solve_comparisons(entry, comparisons);
-    return true;
 }
 
 namespace {
