@@ -539,9 +539,12 @@ bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
     ++result_.isolated_runs;
     if (options_.coverage) options_.coverage->clear();
     ex = execute_case(c, *options_.connector, result_.profile, exec_);
-    // A case that took the target down is a finding, not a corpus entry (resumed, it would
-    // crash the target again first thing).
-    if (options_.coverage && !ex.down_before && !ex.target_down) take_coverage(c);
+    // A case that took the target down or hung it is a finding, not a corpus entry: resumed or
+    // mutated, it would crash the target again, or wait out a timeout, first thing (AFL keeps
+    // its timeouts out of the queue too).
+    if (options_.coverage && !ex.down_before && !ex.target_down &&
+        ex.verdict.oracle != Oracle::Hang)
+        take_coverage(c);
     if (!ex.down_before) return true;
     // Down before this case began: whatever did it is not this case.
     ++result_.deaths;
@@ -979,6 +982,8 @@ void Campaign::know_the_device() {
                                     : kLearnBudgetS;
         lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
         lo.hints = options_.dict_words;
+        // A target learning crashed is started again by our command, if we have one.
+        if (!options_.restart_cmd.empty()) lo.restart = [this] { return recover(""); };
         // One request at a time on a serial line or RTU/ASCII: a coarser sweep.
         if (result_.profile.framing != codec::Framing::Mbap) lo.stride = 256;
         LearnStats st;
@@ -1118,6 +1123,9 @@ void Campaign::start_generator() {
     go.unit = options_.unit;
     go.naive = options_.naive;
     go.isolated_per_mille = options_.isolated_per_mille;
+    // Coverage mode runs every case alone: transport and stateful cases cost no more than the
+    // others there, so they get a tenth of the cases at least, as on a pausing target.
+    if (options_.coverage) go.isolated_per_mille = std::max(go.isolated_per_mille, 100u);
     go.state = exec_.state;
     go.unsupported = result_.profile.unsupported;
     go.dict_words = options_.dict_words;

@@ -441,6 +441,10 @@ std::vector<Pdu> Asker::ask_once(const std::vector<Pdu>& pdus, std::uint8_t unit
 
 bool Asker::came_back() {
     if (++deaths_ > kMaxLearnDeaths) return false;
+    // Whoever started the target starts it again: waiting for a supervisor would be in vain.
+    if (options_.restart)
+        return probe_target(target_, profile_, options_.timeout_ms) == ProbeResult::Ok ||
+               options_.restart();
     for (int wait_ms = 20; wait_ms < 2000 && !out_of_time(); wait_ms *= 2) {
         if (probe_target(target_, profile_, options_.timeout_ms) == ProbeResult::Ok) return true;
         ::usleep(static_cast<useconds_t>(wait_ms) * 1000);

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,10 @@ struct LearnOptions {
     std::int64_t budget_ns = 0;        // 0: no bound; else learning stops (partial) after this long
     std::uint32_t stride = 16;         // sweep step: ranges shorter than this may be missed
     std::vector<std::uint16_t> hints;  // addresses to try first (--dict words)
+    // Brings back a target that died while learning and did not come back at once: the
+    // campaign's --target-cmd or --restart-cmd (true: it is back). Empty: only a supervisor
+    // (systemd, a watchdog) brings it back, so learning waits a little for one.
+    std::function<bool()> restart;
 };
 
 struct LearnStats {

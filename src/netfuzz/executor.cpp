@@ -39,6 +39,10 @@ struct Pending {
     std::uint16_t tid = 0;
     Expect expect = Expect::Answer;
     bool probe = false;
+    // An in-stream probe sent only once the case's answers were awaited (a target that drops
+    // what follows an exception): its answer shows the stream alive, not that nothing sent
+    // before it was dropped.
+    bool awaited_probe = false;
     std::int64_t sent_ns = 0, answered_ns = 0;
     std::size_t rsp_offset = 0, rsp_size = 0;  // in Conn::received
     // RTU/ASCII: gave up waiting for its answer (a later frame may then be answered)
@@ -67,7 +71,7 @@ struct Conn {
 // Whether a request sent after the k-th on its connection was answered.
 bool answered_after(const std::vector<Pending>& pending, std::size_t k) {
     return std::any_of(pending.begin() + static_cast<std::ptrdiff_t>(k) + 1, pending.end(),
-                       [](const Pending& p) { return p.answered_ns != 0; });
+                       [](const Pending& p) { return p.answered_ns != 0 && !p.awaited_probe; });
 }
 
 // Runs one case alone on its own connections and judges it; `BatchRunner` (batch.cpp) runs many
@@ -111,6 +115,7 @@ class CaseRunner {
     template <typename Done>
     bool pump(std::int64_t deadline, Done done);
     bool answered(const Conn& c) const;
+    void await_answers_before_probes();
     void flood(std::uint16_t count);
     void side_probe();
     // Before a gap: waits (boundedly) until the target's program has read what was sent on
@@ -440,6 +445,19 @@ bool CaseRunner::answered(const Conn& c) const {
     for (const Pending& pd : c.pending)
         if (pd.expect == Expect::Answer && pd.answered_ns == 0 && !pd.expired) return false;
     return true;
+}
+
+// A target that drops what follows an exception (libmodbus's flush) would drop an in-stream
+// probe sent right behind the case, and each such case would cost a timeout: the case's own
+// answers are awaited first. Such a target flushes before it answers, so a probe sent once the
+// exception has arrived is read.
+void CaseRunner::await_answers_before_probes() {
+    if (!profile_.drops_after_exception) return;
+    pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs, [&] {
+        return std::all_of(conns_.begin(), conns_.end(), [&](const Conn& cn) {
+            return !cn.opened || !cn.link || cn.shut || cn.desync || answered(cn);
+        });
+    });
 }
 
 template <typename Done>
@@ -951,6 +969,7 @@ Execution CaseRunner::run(const Case& c) {
         }
         if (out_.down_before) return std::move(out_);
     }
+    await_answers_before_probes();
     // Close out each connection: an in-stream probe after intact streams (so that silence
     // to the case's frames is told apart from a stalled connection), a half-close after
     // desynchronised ones.
@@ -965,7 +984,10 @@ Execution CaseRunner::run(const Case& c) {
                 ++tid;
             const std::size_t before = cn.pending.size();
             send_bytes(static_cast<std::uint8_t>(i), probe_frame(profile_, tid));
-            if (cn.pending.size() > before) cn.pending.back().probe = true;
+            if (cn.pending.size() > before) {
+                cn.pending.back().probe = true;
+                cn.pending.back().awaited_probe = profile_.drops_after_exception;
+            }
         } else {
             if (!cn.shut) {
                 cn.link->shutdown_write();

@@ -14,7 +14,8 @@ namespace {
 using mbstorm::test::run_mbstorm;
 
 // Far more than the first bugs of multi_fault_server take (about a second, seed 1): a run that
-// ignored the limit would use all of it and find most of the eleven.
+// ignored the limit would use all of it and find most of the eleven bugs the black-box mode
+// reaches.
 constexpr int kSeconds = 60;
 
 TEST(MaxFindings, TheRunEndsAtTheNthFindingLongBeforeTheDeadline) {

@@ -1,6 +1,6 @@
 // A Modbus TCP server with many planted bugs at once, for the fuzzer's precision test: every
 // bug must be found, each exactly once. Single-threaded poll() loop over the reference handler
-// (slave/handler), except where a bug says otherwise. The planted bugs (11):
+// (slave/handler), except where a bug says otherwise. The planted bugs (12):
 //   1. crash: FC 0F with quantity 0 aborts the process
 //   2. crash: FC 16 with AND mask 0000 and OR mask FFFF aborts the process
 //   3. crash: FC 2B/0E read device id code 04 with an object id >= 80 aborts the process
@@ -14,6 +14,10 @@
 //  10. resource: only the first 100 concurrent connections are served; later ones are
 //      accepted and never answered
 //  11. half-close: requests that arrive together with the client's FIN are dropped unanswered
+//  12. crash: FC 06 writing 7E57 to register 0A0B aborts the process. One value at one address
+//      (1 in 2^32 for a guess, neither a boundary nor a map edge): the black-box mode does not
+//      find it; coverage mode reads both constants from the server's comparisons
+//      (tests/scripts/fuzz_coverage_multi_fault.sh)
 // Usage as broken_server_common.hpp (--port, --respawn, --pid-file, --exit-after-s).
 #include <fcntl.h>
 
@@ -70,6 +74,8 @@ broken::Action planted(const std::uint8_t* adu, std::size_t size, std::vector<st
     const std::uint8_t* p = adu + 7;
     const std::size_t n = size - 7;
     if (fc == 0x0F && n >= 5 && p[3] == 0 && p[4] == 0) std::abort();  // 1
+    if (fc == 0x06 && n == 5 && load_be16(p + 1) == 0x0A0B && load_be16(p + 3) == 0x7E57)
+        std::abort();  // 12
     if (fc == 0x16 && n >= 7 && load_be16(p + 3) == 0 && load_be16(p + 5) == 0xFFFF)
         std::abort();                                                                        // 2
     if (fc == 0x2B && n >= 4 && p[1] == 0x0E && p[2] == 0x04 && p[3] >= 0x80) std::abort();  // 3

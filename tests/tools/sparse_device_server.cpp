@@ -8,7 +8,7 @@
 //   coils 200-263, even addresses on; discrete inputs 500-531, all on.
 // Like libmodbus, after an exception 01 or 03 it sleeps 100 ms (the whole server) and discards
 // the connection's unread input. Protocol id != 0: dropped; MBAP length < 2 or > 254: closed.
-// The planted bugs (12):
+// The planted bugs (13):
 //   1. crash: FC 10 inside the map with byte count != 2 * quantity aborts (inside the map the
 //      byte count is trusted; outside it, it is checked and owed 03 as it should be)
 //   2. crash: FC 0F inside the coil map with byte count != ceil(quantity / 8) aborts
@@ -30,6 +30,10 @@
 //      byte (byte count quantity / 8 + 1)
 //  12. one request hangs: FC 10 writing exactly the first block (1000, 40 registers) is never
 //      answered (nor stored); the connection goes on
+//  13. crash: FC 01 reading 30 coils from 4D2A aborts (a test hook left in, outside the map).
+//      One address and one quantity (1 in 2^27 for a guess, neither a boundary nor a map edge):
+//      the black-box mode does not find it; coverage mode reads both constants from the
+//      device's comparisons (tests/scripts/fuzz_coverage_multi_fault.sh)
 // Usage as broken_server_common.hpp (--port, --respawn, --restart-delay-ms, --pid-file,
 // --exit-after-s).
 #include <array>
@@ -138,6 +142,7 @@ Pdu read_bits(const std::uint8_t* p, std::size_t n, const Device& d) {
     const std::uint8_t fc = p[0];
     if (n != 5) return exception(fc, 0x03);
     const int address = load_be16(p + 1), quantity = load_be16(p + 3);
+    if (fc == 0x01 && address == 0x4D2A && quantity == 30) std::abort();  // bug 13
     if (quantity < 1 || quantity > 2000) return exception(fc, 0x03);
     const std::span<const Block> table = fc == 0x01 ? kCoils : kDiscrete;
     if (!inside_one_block(table, address, quantity)) return exception(fc, 0x02);
