@@ -802,6 +802,7 @@ void Campaign::record(const Case& c, Execution ex) {
     if (options_.minimize && !minimise_finding(f, *this, ctx)) ++result_.findings_not_minimized;
     move_ranges_into_map(f, *this, ctx);
     merge_stub_answer(f, *this, ctx);
+    read_back_on_writers_connection(f, *this);
     if (options_.minimize) narrow_wrong_fields(f, *this, ctx, key);
     if (!replays_alone(f)) return;
     // The identity is what the minimised reproducer violates: it may turn out to be a root

@@ -61,6 +61,16 @@ std::string undecodable_response_rule(std::string_view codec_error) {
     return fmt::format("undecodable-response({})", codec_error);
 }
 
+std::string same_connection_rule(std::string_view rule) {
+    const std::string_view stem = kReadAfterWriteMismatchRule;
+    constexpr std::string_view kOther = "-other-connection";
+    if (rule.substr(0, stem.size()) != stem || rule.substr(stem.size(), kOther.size()) != kOther)
+        return {};
+    std::string out(stem);
+    out.append(rule.substr(stem.size() + kOther.size()));
+    return out;
+}
+
 std::string read_after_write_rule(bool other_connection, std::string_view table,
                                   std::uint8_t writer) {
     return fmt::format("{}{}({})/{}", kReadAfterWriteMismatchRule,

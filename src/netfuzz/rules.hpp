@@ -162,5 +162,8 @@ std::string undecodable_response_rule(std::string_view codec_error);
 // "read-after-write-mismatch-other-connection(coils)/fc0F": the writer's function ends it.
 std::string read_after_write_rule(bool other_connection, std::string_view table,
                                   std::uint8_t writer);
+// The same mismatch read back on the writer's own connection: "read-after-write-mismatch(coils)
+// /fc0F" for "read-after-write-mismatch-other-connection(coils)/fc0F"; "" for any other rule.
+std::string same_connection_rule(std::string_view rule);
 
 }  // namespace mbstorm::netfuzz

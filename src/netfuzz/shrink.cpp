@@ -160,6 +160,20 @@ void merge_stub_answer(Finding& f, Rerun& rerun, const ShrinkContext& ctx) {
     take(f, std::move(plain), std::move(*e));
 }
 
+void read_back_on_writers_connection(Finding& f, Rerun& rerun) {
+    const std::string same = same_connection_rule(f.verdict.rule);
+    if (f.verdict.oracle != Oracle::SpecDeviation || same.empty()) return;
+    Case one = f.fuzz_case;
+    for (Step& s : one.steps) s.conn = 0;
+    one.cls = MutationClass::StatefulSame;
+    if (!rerun.run_once(one)) return;  // leaves the registers as the judged run finds them
+    std::optional<Execution> e = rerun.run_once(one);
+    if (!e || e->verdict.rule != same) return;
+    add_note(f, fmt::format("the writer's own read-back shows it too: {} became {}", f.verdict.rule,
+                            same));
+    take(f, std::move(one), std::move(*e));
+}
+
 void narrow_wrong_fields(Finding& f, Rerun& rerun, const ShrinkContext& ctx,
                          const std::string& charge) {
     const int fc = f.verdict.culprit_fc;

@@ -62,6 +62,11 @@ void move_ranges_into_map(Finding& f, Rerun& rerun, const ShrinkContext& ctx);
 // An invalid request answered normally whose valid counterpart gets the very same, wrong,
 // answer: the valid request's finding.
 void merge_stub_answer(Finding& f, Rerun& rerun, const ShrinkContext& ctx);
+// A write whose value is stored wrong shows on every connection: a mismatch read on another
+// connection is that defect when the writer's own read-back shows it too (the case with every
+// step on one connection, run twice: the read-back depends on what the registers held). It is
+// the other connections' own (a per-connection cache) only when the writer reads it right.
+void read_back_on_writers_connection(Finding& f, Rerun& rerun);
 // Each wrong field of the culprit request made right in turn, kept right while the same root
 // cause shows (restarts charged to `charge`); sets f.wrong_fields.
 void narrow_wrong_fields(Finding& f, Rerun& rerun, const ShrinkContext& ctx,

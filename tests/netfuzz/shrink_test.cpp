@@ -9,6 +9,7 @@
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "codec/table.hpp"
+#include "netfuzz/rules.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace {
@@ -219,6 +220,68 @@ TEST(Shrink, DeltaDebuggingKeepsTheOneStepThatFires) {
     ScriptedTarget no_time(ignores_byte_count, 0);
     EXPECT_FALSE(minimise_finding(g, no_time, ShrinkContext{model}));
     EXPECT_EQ(g.minimize_note, "minimisation cut short by --seconds");
+}
+
+}  // namespace
+
+namespace {
+
+// A target whose read-backs go wrong on the writer's connection too (`stores_wrong`), or only on
+// the others' (a per-connection cache).
+class ReadBackTarget : public Rerun {
+  public:
+    explicit ReadBackTarget(bool stores_wrong) : stores_wrong_(stores_wrong) {}
+    bool shows_again(const Case&, Retrial&) override { return false; }
+    std::optional<Execution> run_once(const Case& c) override {
+        ++runs;
+        bool one_connection = true;
+        for (const Step& s : c.steps) one_connection = one_connection && s.conn == 0;
+        Execution e;
+        if (!one_connection || stores_wrong_)
+            e.verdict =
+                deviation(read_after_write_rule(!one_connection, "holding-registers", 0x16), 0x16);
+        return e;
+    }
+    unsigned runs = 0;
+
+  private:
+    bool stores_wrong_;
+};
+
+Case written_then_read_elsewhere() {
+    Case c;
+    c.cls = MutationClass::StatefulCross;
+    c.steps.push_back(send({0x16, 0x00, 0x10, 0xFF, 0x00, 0x00, 0xFF}));
+    c.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+    Step read = send({0x03, 0x00, 0x10, 0x00, 0x01}, 2);
+    read.conn = 1;
+    c.steps.push_back(read);
+    return c;
+}
+
+// pymodbus-like: FC 16 stores a wrong value, which every connection reads back: one defect,
+// named as the writer's own read-back shows it (not a second finding "on another connection").
+TEST(Shrink, AMismatchOnAnotherConnectionIsTheWritersOwnWhenItReadsItWrongToo) {
+    const Case c = written_then_read_elsewhere();
+    Finding f =
+        finding_of(c, deviation(read_after_write_rule(true, "holding-registers", 0x16), 0x16));
+    ReadBackTarget target(true);
+    read_back_on_writers_connection(f, target);
+    EXPECT_EQ(f.verdict.rule, read_after_write_rule(false, "holding-registers", 0x16));
+    for (const Step& s : f.fuzz_case.steps) EXPECT_EQ(s.conn, 0);
+    EXPECT_EQ(target.runs, 2u) << "run once to leave its state, judged on the second";
+}
+
+// A per-connection cache: the writer reads its own value right; the other connection's
+// mismatch is a defect of its own and stays so.
+TEST(Shrink, AMismatchOnlyOtherConnectionsSeeStaysTheirs) {
+    const Case c = written_then_read_elsewhere();
+    const Verdict cross = deviation(read_after_write_rule(true, "holding-registers", 0x16), 0x16);
+    Finding f = finding_of(c, cross);
+    ReadBackTarget target(false);
+    read_back_on_writers_connection(f, target);
+    EXPECT_EQ(f.verdict.rule, cross.rule);
+    EXPECT_EQ(f.fuzz_case.steps.back().conn, 1);
 }
 
 }  // namespace
