@@ -262,6 +262,8 @@ class Campaign : private Rerun, private Replayer {
     bool learn_then_look(std::uint64_t& generated);
     // Cases queued again first (unless a known crash or hang makes them pointless), then fresh.
     Round next_round(std::vector<Case>& requeue, std::uint64_t& generated);
+    // A case joins the round unless it needs connections the target does not allow.
+    void admit(Case c, Round& r);
     // Runs a round; false when the campaign ends (target lost, findings enough, line done).
     bool run_round(Round& r, std::vector<Case>& requeue, std::set<std::uint64_t>& requeued_once);
     void account_batch(const BatchResult& br, std::int64_t ns, std::size_t cases);
@@ -1175,6 +1177,15 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
     }
     requeue.clear();
     if (watch_) watch_->refresh();
+    // Kinds that waited for the pauses' share, now that it allows them.
+    for (Case& c : rationing_.release(elapsed())) {
+        --result_.rationed;
+        if (costly_.would_retrigger(c)) {
+            ++result_.skipped_known;
+            continue;
+        }
+        admit(std::move(c), r);
+    }
     for (std::size_t tries = 0; r.piped.size() + r.alone.size() < n && tries < 8 * n; ++tries) {
         Case c;
         gen_->next(c);
@@ -1187,16 +1198,20 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
             ++result_.rationed;
             continue;
         }
-        if (needs_concurrent_connections(c)) {
-            ++result_.not_sent_one_connection;
-            continue;
-        }
-        ++r.fresh;
-        ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
-        if (options_.coverage) c.pipelinable = false;  // the map is read per case
-        (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
+        admit(std::move(c), r);
     }
     return r;
+}
+
+void Campaign::admit(Case c, Round& r) {
+    if (needs_concurrent_connections(c)) {
+        ++result_.not_sent_one_connection;
+        return;
+    }
+    ++r.fresh;
+    ++result_.cases_by_class[static_cast<std::size_t>(c.cls)];
+    if (options_.coverage) c.pipelinable = false;  // the map is read per case
+    (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
 }
 
 std::vector<std::size_t> Campaign::triage(const BatchResult& br, const std::vector<Case>& piped) {
@@ -1346,6 +1361,7 @@ bool Campaign::run_round(Round& r, std::vector<Case>& requeue,
     if (all_alone)
         for (std::size_t i = ran_alone; i < r.alone.size(); ++i)
             --result_.cases_by_class[static_cast<std::size_t>(r.alone[i].cls)];
+    rationing_.round_took(static_cast<double>(net::now_ns() - t0) / 1e6);
     if (all_alone && ran_alone < r.alone.size() && !lost) return false;
     progress(false);
     return !lost && !enough_findings();

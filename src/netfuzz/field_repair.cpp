@@ -235,6 +235,27 @@ std::vector<RequestField> wrong_fields(codec::Bytes pdu, const DeviceModel& mode
     return out;
 }
 
+int wrong_count_side(codec::Bytes pdu, RequestField field, const DeviceModel& model) {
+    if (pdu.empty() || !codec::function_info(pdu[0]) || !is_wrong(pdu, field, model)) return 0;
+    const codec::RequestFields rf = codec::request_fields(pdu[0]);
+    const auto side = [](bool over) { return over ? 1 : -1; };
+    switch (field) {
+        case RequestField::Quantity:
+            return side(*word_at(pdu, rf.quantity) > rf.quantity_range.max);
+        case RequestField::WriteQuantity:
+            return side(*word_at(pdu, rf.written) > rf.written_range.max);
+        case RequestField::ByteCount:
+            return side(pdu[rf.byte_count] > rf.data_bytes(*word_at(pdu, rf.written)));
+        case RequestField::DataLength:
+            return side(pdu.size() - rf.data > pdu[rf.byte_count]);
+        case RequestField::Value:
+        case RequestField::Address:
+        case RequestField::WriteAddress:
+            return 0;
+    }
+    return 0;
+}
+
 std::optional<std::vector<std::uint8_t>> with_field_repaired(codec::Bytes pdu, RequestField field,
                                                              const DeviceModel& model) {
     if (pdu.empty() || !codec::function_info(pdu[0]) || !is_wrong(pdu, field, model))

@@ -46,6 +46,10 @@ std::string_view field_name(RequestField field) noexcept;
 // A range is judged with its count when the count is valid, else as one item.
 std::vector<RequestField> wrong_fields(codec::Bytes pdu, const DeviceModel& model);
 
+// Whether wrong count `field` (quantity, write quantity, byte count, data length) is too large
+// (1) or too small (-1): a device checks each bound apart. 0 for any other field, or a right one.
+int wrong_count_side(codec::Bytes pdu, RequestField field, const DeviceModel& model);
+
 // `pdu` with `field` made right and nothing else changed (the data is cut or padded with zero
 // bytes to its byte count; a count is made to agree with the byte count where that is valid,
 // else 1); nothing when that field is right already or cannot be made right.

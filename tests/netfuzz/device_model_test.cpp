@@ -397,6 +397,29 @@ TEST(FieldRepair, NamesEachWrongFieldInCheckOrder) {
     EXPECT_TRUE(wrong_fields(std::vector<std::uint8_t>{0x99, 1, 2}, model).empty());
 }
 
+TEST(FieldRepair, SaysWhichBoundAWrongCountBreaks) {
+    DeviceModel model;
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1099}});
+    // FC 10 at 1000: 2 registers, byte count 4, 4 data bytes; then each count off each way.
+    const std::vector<std::uint8_t> regs = {0x10, 0x03, 0xE8, 0, 2, 4, 0, 1, 0, 2};
+    EXPECT_EQ(wrong_count_side(regs, RequestField::ByteCount, model), 0);
+    std::vector<std::uint8_t> pdu = regs;
+    pdu[5] = 6;
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::ByteCount, model), 1);
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::DataLength, model), -1);
+    pdu[5] = 2;
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::ByteCount, model), -1);
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::DataLength, model), 1);
+    pdu = regs;
+    pdu[4] = 0;  // quantity 0
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::Quantity, model), -1);
+    pdu[3] = 0x40;  // quantity 0x4000
+    EXPECT_EQ(wrong_count_side(pdu, RequestField::Quantity, model), 1);
+    EXPECT_EQ(wrong_count_side(std::vector<std::uint8_t>{0x05, 0, 0, 0x12, 0x34},
+                               RequestField::Value, model),
+              0);
+}
+
 TEST(FieldRepair, MakesOneFieldRightAndLeavesTheRest) {
     DeviceModel model;
     model.table(Table::Coils).ranges = ranges({{200, 263}});
