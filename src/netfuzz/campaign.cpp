@@ -43,6 +43,7 @@
 #include "netfuzz/rules.hpp"
 #include "netfuzz/shrink.hpp"
 #include "netfuzz/state_marker.hpp"
+#include "netfuzz/target_care.hpp"
 #include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
@@ -124,10 +125,6 @@ std::string variant_of(const Verdict& v, const Case& c) {
     return s;
 }
 
-bool whole_server_hang(const Verdict& v) {
-    return v.oracle == Oracle::Hang && v.rule.rfind(kWholeServerHangRule, 0) == 0;
-}
-
 class Campaign : private Rerun, private Replayer {
   public:
     Campaign(const CampaignOptions& o, const ProgressFn& p, const FindingFn& f)
@@ -200,15 +197,10 @@ class Campaign : private Rerun, private Replayer {
     Outcome record_plain(const Case& plain, Execution whole);
     std::optional<Outcome> confirm_death(const Case& c, Execution& ex, const std::string& key,
                                          bool batch_died);
-    // The target is down (or was found down): restart it. `cause` (a root-cause key, or "")
-    // is charged with the restart.
-    bool recover(const std::string& cause);
-    // The target accepts but does not answer (a whole-server hang): wait for it to answer
-    // again before anything else is judged, restarting it if it never does.
-    // A hang that outlasts --restart-wait is restarted like a crash, charged to `cause`.
-    bool settle(const std::string& cause = "");
-    // After a run that crashed the target or hung it as a whole: either of the above.
-    bool bring_back(const Execution& ex, const std::string& cause) override;
+    // After a run that crashed the target or hung it as a whole (TargetCare::bring_back).
+    bool bring_back(const Execution& ex, const std::string& cause) override {
+        return care_.bring_back(ex, cause);
+    }
     // Replayer, for the confirm stage (confirm.hpp): a run alone, counted.
     Execution replay_alone(const Case& c) override;
     // A finding as first seen: the case and what it did.
@@ -234,12 +226,9 @@ class Campaign : private Rerun, private Replayer {
     void know_the_device();
     // Liveness probes read the first address of the map (an answer, not an exception).
     void use_probe_inside_the_map();
-    // Opens the sentinels, if the target serves a fresh connection while they are open.
+    // Opens the sentinels (TargetCare::arm_watch) and lets the cases use them.
     void arm_watch();
     bool needs_concurrent_connections(const Case& c) const;
-    void arm_marker();
-    bool marker_says_restart(const std::vector<Case>& cases);
-    void rearm_watches();
     // Runs cases alone before the generator's, counted as first looks; true when the target
     // was lost.
     bool look_first(std::vector<Case> cases, std::uint64_t& generated);
@@ -284,18 +273,13 @@ class Campaign : private Rerun, private Replayer {
     std::int64_t start_ = 0, deadline_ = 0;
     std::map<std::string, std::size_t> by_key_;  // root cause -> index in result_.findings
     CostlyCases costly_{result_.profile};        // not sent: they would show what is known
-    std::map<std::string, unsigned> restarts_by_cause_;
     std::unique_ptr<Generator> gen_;
     std::unique_ptr<BatchRunner> batch_;
-    std::unique_ptr<DeathWatch> watch_;
-    std::unique_ptr<StateMarker> marker_;  // where there are no sentinels
-    RestartCommand restart_;
+    TargetCare care_{options_, result_, [this] { progress(true); }};  // deaths, restarts
     ExecOptions exec_;
     std::int64_t last_progress_ = 0;
     std::uint64_t last_cases_ = 0;
-    bool up_ = true;
     bool capacity_checked_ = false;
-    bool settle_restarted_ = false;  // the last settle() ended in a restart
     // How the target closes after a request of the wrong length, once asked: a close says the
     // stream was lost only if the target waited for bytes the frame did not have. One that
     // closes on the frame alone refuses the request, as it may any request it cannot use
@@ -403,7 +387,7 @@ bool Campaign::known_crash_of(const Case& c) {
         if (it == by_key_.end()) continue;
         Finding& f = result_.findings[it->second];
         hit(f, f.verdict, c);
-        ++restarts_by_cause_[it->first];
+        care_.charge(it->first);
         // Crashed by another kind of request too: every request of that handler is skipped.
         costly_.learn_handler(culprit);
         return true;
@@ -453,70 +437,6 @@ void Campaign::make_batch_runner() {
                                       BatchOptions{lanes_, options_.timeout_ms, pauses, deadline_});
 }
 
-bool Campaign::recover(const std::string& cause) {
-    up_ = false;
-    progress(true);
-    std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (!wait_for_target_with(restart_, *options_.connector, result_.profile, options_.restart_cmd,
-                              options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
-        result_.target_lost = true;
-        // Name the command and the wait: the user has to fix one of them.
-        result_.stop_reason =
-            remaining_ns() <= 0
-                ? std::string("time limit reached while waiting for the target to come back")
-            : options_.restart_cmd.empty()
-                ? fmt::format(
-                      "the target did not come back within {} ms (--restart-wait; no "
-                      "--restart-cmd given)",
-                      options_.restart_wait_ms)
-                : fmt::format(
-                      "the target did not come back within {} ms (--restart-wait) after "
-                      "--restart-cmd '{}'",
-                      options_.restart_wait_ms, options_.restart_cmd);
-        return false;
-    }
-    ++result_.restarts;
-    if (!cause.empty()) ++restarts_by_cause_[cause];
-    up_ = true;
-    // A restarted target holds none of the sentinels (those still open went to the dead
-    // process) and its initial state.
-    if (watch_) watch_->arm();
-    if (marker_) marker_->rearm();
-    return true;
-}
-
-// A settled target may have closed sentinels or lost the marker while it hung.
-void Campaign::rearm_watches() {
-    if (watch_ && !watch_->armed()) watch_->arm();
-    if (marker_ && !marker_->armed()) marker_->rearm();
-}
-
-bool Campaign::settle(const std::string& cause) {
-    settle_restarted_ = false;
-    up_ = false;
-    progress(true);
-    RestartCommand none;
-    const std::int64_t wait_deadline = deadline_ ? deadline_ + 2 * net::kNsPerSec : 0;
-    if (wait_for_target_with(none, *options_.connector, result_.profile, "",
-                             options_.restart_wait_ms, options_.timeout_ms, wait_deadline)) {
-        up_ = true;
-        rearm_watches();
-        return true;
-    }
-    if (remaining_ns() <= 0) return false;
-    ++result_.deaths;
-    settle_restarted_ = true;
-    return recover(cause);
-}
-
-bool Campaign::bring_back(const Execution& ex, const std::string& cause) {
-    if (ex.target_down) {
-        ++result_.deaths;
-        return recover(cause);
-    }
-    return !whole_server_hang(ex.verdict) || settle(cause);
-}
-
 // Grey-box: what the case reached. New edges (or hit counts in a new bucket) put it in the
 // corpus; the constants the target compared its input against go to the generator.
 void Campaign::take_coverage(const Case& c) {
@@ -551,7 +471,7 @@ bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
     // Down before this case began: whatever did it is not this case.
     ++result_.deaths;
     ++result_.unattributed_deaths;
-    if (!recover("")) return false;
+    if (!care_.recover("")) return false;
     ex = execute_case(c, *options_.connector, result_.profile, exec_);
     if (!ex.down_before) return true;
     result_.target_lost = true;
@@ -575,7 +495,7 @@ std::optional<Campaign::Outcome> Campaign::judge_transport_case(Case& c, Executi
     if (whole.verdict.oracle == ex.verdict.oracle) return record_plain(plain, std::move(whole));
     if (whole.target_down) {
         ++result_.deaths;
-        if (!recover("")) return Outcome::Lost;
+        if (!care_.recover("")) return Outcome::Lost;
     }
     // The way the bytes arrived: confirm the transport case itself.
     if (!can_afford(1)) {
@@ -588,13 +508,13 @@ std::optional<Campaign::Outcome> Campaign::judge_transport_case(Case& c, Executi
         ++result_.unconfirmed;
         if (ex.target_down) {
             ++result_.deaths;
-            if (!recover("")) return Outcome::Lost;
+            if (!care_.recover("")) return Outcome::Lost;
         }
         return Outcome::Clean;
     }
     if (ex.target_down) {
         ++result_.deaths;
-        if (!recover(key)) return Outcome::Lost;
+        if (!care_.recover(key)) return Outcome::Lost;
         ex.target_down = false;  // confirmed
     }
     return std::nullopt;
@@ -611,14 +531,14 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
     }
     if (whole.target_down) {
         ++result_.deaths;
-        ++restarts_by_cause_[key];  // the transport case's death was this one's too
-        if (!recover(key)) return Outcome::Lost;
+        care_.charge(key);  // the transport case's death was this one's too
+        if (!care_.recover(key)) return Outcome::Lost;
         whole.target_down = false;  // confirmed: it killed the target twice
-    } else if (whole_server_hang(whole.verdict) && !settle(key)) {
+    } else if (whole_server_hang(whole.verdict) && !care_.settle(key)) {
         return Outcome::Lost;
     }
     record(plain, std::move(whole));
-    return up_ ? Outcome::Fired : Outcome::Lost;
+    return care_.up() ? Outcome::Fired : Outcome::Lost;
 }
 
 // A death is a crash only if the case, replayed alone, kills the target again. Nothing when
@@ -626,7 +546,7 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
 std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Execution& ex,
                                                          const std::string& key, bool batch_died) {
     ++result_.deaths;
-    if (!recover(key)) {
+    if (!care_.recover(key)) {
         Finding f = found(c, std::move(ex));
         f.confirmed = false;
         f.note =
@@ -638,7 +558,7 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
     // A case from a batch that died killed the target twice already: the batch and now. The
     // batch's restart is charged now, before minimisation spends what is left of the budget.
     if (batch_died) {
-        ++restarts_by_cause_[key];
+        care_.charge(key);
         return std::nullopt;
     }
     if (!can_afford(1)) {
@@ -652,12 +572,12 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
         ++result_.unattributed_deaths;
         if (again.target_down) {
             ++result_.deaths;
-            if (!recover("")) return Outcome::Lost;
+            if (!care_.recover("")) return Outcome::Lost;
         }
         return Outcome::Clean;
     }
     ++result_.deaths;
-    if (!recover(key)) {
+    if (!care_.recover(key)) {
         Finding f = found(c, std::move(again));
         f.note = "confirmed (killed the target twice); not minimised: it did not come back";
         keep(std::move(f));
@@ -683,7 +603,7 @@ Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& show
     if (!ex.verdict) return Outcome::Clean;
     if (is_stream_lost_close(ex.verdict)) {
         ask_how_length_mismatch_closes(c);
-        if (!up_) return Outcome::Lost;
+        if (!care_.up()) return Outcome::Lost;
         ex.verdict = understood(std::move(ex.verdict));
     }
     shown.oracle = ex.verdict.oracle;
@@ -700,15 +620,16 @@ Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& show
         is_transport_class(c.cls) && reassemble(c, plain, result_.profile.framing)) {
         if (const auto done = judge_transport_case(c, ex, plain, key)) return *done;
     }
-    if (whole_server_hang(ex.verdict) && !ex.target_down && !settle(key)) return Outcome::Lost;
+    if (whole_server_hang(ex.verdict) && !ex.target_down && !care_.settle(key))
+        return Outcome::Lost;
     if (!ex.target_down && depends_on_line_timing(c.cls) &&
         !confirmed(shows_every_time(c, key, *this)))
-        return up_ ? Outcome::Clean : Outcome::Lost;
+        return care_.up() ? Outcome::Clean : Outcome::Lost;
     if (ex.target_down)
         if (const auto done = confirm_death(c, ex, key, batch_died)) return *done;
     shown.confirmed_death = ex.target_down;
     record(c, std::move(ex));
-    return up_ ? Outcome::Fired : Outcome::Lost;
+    return care_.up() ? Outcome::Fired : Outcome::Lost;
 }
 
 Finding Campaign::found(const Case& c, Execution ex) const {
@@ -752,8 +673,7 @@ bool Campaign::shows_again(const Case& candidate, Retrial& r) {
         return false;
     }
     // One restart is kept for a batch this crash may still kill (known_crash_of).
-    if (r.first.oracle == Oracle::Crash &&
-        restarts_by_cause_[r.charge] + 1 >= kMaxRestartsPerCause) {
+    if (r.first.oracle == Oracle::Crash && care_.charged(r.charge) + 1 >= kMaxRestartsPerCause) {
         r.restart_budget = true;
         return false;
     }
@@ -773,8 +693,8 @@ bool Campaign::shows_again(const Case& candidate, Retrial& r) {
                                  : same_fault(r.first, e.verdict);
     if (e.down_before || e.target_down) {
         ++result_.deaths;
-        if (!recover(same && e.target_down ? r.charge : "")) r.lost = true;
-    } else if (whole_server_hang(e.verdict) && !settle(same ? r.charge : "")) {
+        if (!care_.recover(same && e.target_down ? r.charge : "")) r.lost = true;
+    } else if (whole_server_hang(e.verdict) && !care_.settle(same ? r.charge : "")) {
         r.lost = true;
     }
     if (!same) return false;
@@ -786,7 +706,7 @@ std::optional<Execution> Campaign::run_once(const Case& c) {
     if (!can_afford(1)) return std::nullopt;
     ++result_.isolated_runs;
     Execution e = run_alone(c);
-    if ((e.down_before || e.target_down) && !recover("")) return std::nullopt;
+    if ((e.down_before || e.target_down) && !care_.recover("")) return std::nullopt;
     return e;
 }
 
@@ -820,7 +740,7 @@ void Campaign::record(const Case& c, Execution ex) {
 
 bool Campaign::replays_alone(Finding& f) {
     if (replay_check_.asks_random_drops_first(f)) check_random_drops();
-    if (!up_) return false;
+    if (!care_.up()) return false;
     return confirmed(replay_check_.replays_alone(f, *this));
 }
 
@@ -911,20 +831,20 @@ void Campaign::check_capacity_once() {
     capacity_checked_ = true;
     const CapacityResult cr =
         check_capacity(*options_.connector, result_.profile, options_.max_connections,
-                       options_.timeout_ms, deadline_, watch_.get());
+                       options_.timeout_ms, deadline_, care_.watch());
     result_.capacity_held = cr.held;
     if (cr.target_down) {
         ++result_.deaths;
         if (cr.verdict && !known(cr.verdict)) keep(capacity_finding(cr));
-        recover(cr.verdict ? root_cause_key(cr.verdict) : "");
+        care_.recover(cr.verdict ? root_cause_key(cr.verdict) : "");
         return;
     }
-    if (watch_) watch_->arm();  // a target at its limit may have closed some of them
+    if (DeathWatch* w = care_.watch()) w->arm();  // a target at its limit may have closed some
     if (!cr.verdict) return;
     // Connections left unserved: the target's own limit, or requests it drops whatever they
     // are? Asked first, and the finding kept only once its flood, replayed, shows it again.
     if (!replay_check_.random_drops_asked()) check_random_drops();
-    if (replay_check_.random_drops_known() || !up_) return;
+    if (replay_check_.random_drops_known() || !care_.up()) return;
     Finding f = capacity_finding(cr);
     if (!known(f.verdict) && replays_alone(f)) keep(std::move(f));
 }
@@ -962,7 +882,7 @@ void Campaign::progress(bool force) {
     p.seconds = elapsed();
     p.cases_per_second = dt > 0 ? static_cast<double>(result_.cases - last_cases_) / dt : 0;
     p.findings = result_.findings.size();
-    p.target_up = up_;
+    p.target_up = care_.up();
     p.restarts = result_.restarts;
     last_progress_ = now;
     last_cases_ = result_.cases;
@@ -986,7 +906,7 @@ void Campaign::know_the_device() {
         lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
         lo.hints = options_.dict_words;
         // A target learning crashed is started again by our command, if we have one.
-        if (!options_.restart_cmd.empty()) lo.restart = [this] { return recover(""); };
+        if (!options_.restart_cmd.empty()) lo.restart = [this] { return care_.recover(""); };
         // One request at a time on a serial line or RTU/ASCII: a coarser sweep.
         if (result_.profile.framing != codec::Framing::Mbap) lo.stride = 256;
         LearnStats st;
@@ -1030,32 +950,9 @@ void Campaign::use_probe_inside_the_map() {
 }
 
 void Campaign::arm_watch() {
-    // A serial line has one link; a target that serves one connection at a time would be
-    // blocked by an idle one.
-    if (options_.connector->max_links() <= 1) return;
-    watch_ =
-        std::make_unique<DeathWatch>(*options_.connector, 3, options_.timeout_ms, &result_.profile);
-    const auto answered = [&] {
-        return probe_target(*options_.connector, result_.profile, options_.timeout_ms) ==
-               ProbeResult::Ok;
-    };
-    // Twice: a target that drops a request now and then must neither lose its sentinels nor be
-    // taken for one that serves one connection at a time over one unanswered probe.
-    for (int attempt = 0; attempt < 2; ++attempt) {
-        if (!watch_->arm() || !answered()) continue;
-        if (!options_.death_watch) {
-            watch_.reset();
-            return;
-        }
-        result_.death_watch = true;
-        exec_.watch = watch_.get();
-        return;
-    }
-    watch_.reset();
-    // Unanswered beside idle connections, answered without them: one connection at a time.
-    if (!answered() || !answered()) return;
-    result_.profile.one_connection = true;
-    make_batch_runner();
+    const TargetCare::Sentinels s = care_.arm_watch();
+    if (s == TargetCare::Sentinels::Armed) exec_.watch = care_.watch();
+    if (s == TargetCare::Sentinels::OneConnectionAtATime) make_batch_runner();
 }
 
 // Cases that need two connections at once (a second connection, a flood, a concurrent probe)
@@ -1065,43 +962,6 @@ bool Campaign::needs_concurrent_connections(const Case& c) const {
     if (c.connections() > 1) return true;
     return std::any_of(c.steps.begin(), c.steps.end(),
                        [](const Step& s) { return s.op == Op::Flood || s.op == Op::SideProbe; });
-}
-
-// No sentinels (a target that serves one connection at a time, a serial line): a register of
-// the learned map keeps a value mbstorm wrote; back at its initial value, the process
-// restarted.
-void Campaign::arm_marker() {
-    if (watch_ || !options_.death_watch || result_.model.empty()) return;
-    marker_ =
-        std::make_unique<StateMarker>(*options_.connector, result_.profile, options_.timeout_ms);
-    if (!marker_->arm(result_.model)) {
-        marker_.reset();
-        return;
-    }
-    exec_.marker = marker_.get();
-    result_.profile.marker_address = marker_->address();
-    result_.death_marker = marker_->address();
-    result_.death_marker_initial = marker_->initial();
-    result_.death_marker_value = marker_->value();
-}
-
-// After a pipelined batch broke: the marker back at its initial value, when no case of the
-// batch may have written it.
-bool Campaign::marker_says_restart(const std::vector<Case>& cases) {
-    if (!marker_ || !marker_->armed()) return false;
-    for (const Case& c : cases) {
-        bool wrote = false;
-        for_each_request(c, result_.profile, [&](const RequestInfo& info) {
-            wrote = may_write_register(info.pdu, marker_->address());
-            return !wrote;
-        });
-        if (wrote) {
-            marker_->rearm();
-            return false;
-        }
-    }
-    std::uint16_t seen = 0;
-    return marker_->read(seen) == StateMarker::Reading::Reset;
 }
 
 bool Campaign::look_first(std::vector<Case> cases, std::uint64_t& generated) {
@@ -1143,7 +1003,9 @@ void Campaign::start_generator() {
 
 bool Campaign::learn_then_look(std::uint64_t& generated) {
     know_the_device();
-    arm_marker();
+    // No sentinels (a target that serves one connection at a time, a serial line): a register
+    // of the learned map keeps a value mbstorm wrote; back at its initial value, it restarted.
+    if (care_.arm_marker(result_.model)) exec_.marker = care_.marker();
     // A known map: stateful cases write inside it, and every read-back in a case run alone
     // is checked (nothing else writes while it runs), unless the user chose the range.
     if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
@@ -1176,7 +1038,7 @@ Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& 
         (c.pipelinable ? r.piped : r.alone).push_back(std::move(c));
     }
     requeue.clear();
-    if (watch_) watch_->refresh();
+    if (DeathWatch* w = care_.watch()) w->refresh();
     // Kinds that waited for the pauses' share, now that it allows them.
     for (Case& c : rationing_.release(elapsed())) {
         --result_.rationed;
@@ -1249,7 +1111,7 @@ Campaign::AfterBatch Campaign::target_after_batch(const BatchResult& br,
     const bool broke = br.connect_failed || br.lane_lost;
     // The sentinels see a death a supervisor hides from the probe below.
     const bool watched_death =
-        (watch_ && watch_->died(broke ? 200 : 0)) || (broke && marker_says_restart(piped));
+        care_.watch_saw_death(broke ? 200 : 0) || (broke && care_.marker_says_restart(piped));
     if (!broke && !watched_death) return after;
     batch_->close_all();
     const ProbeResult pr =
@@ -1258,15 +1120,15 @@ Campaign::AfterBatch Campaign::target_after_batch(const BatchResult& br,
     if (pr == ProbeResult::ConnectFailed || pr == ProbeResult::Closed) {
         after.whole_target = after.died = true;
         ++result_.deaths;
-        if (!recover("")) {
+        if (!care_.recover("")) {
             // Nothing can be re-run: the batch is all there is to show for it.
             if (br.lane_lost) record_lost_batch(piped);
             after.lost = true;
         }
     } else if (pr != ProbeResult::Ok) {
         after.whole_target = true;
-        after.lost = !settle();  // hung and never back: the suspects cannot be judged
-        after.settled_by_restart = settle_restarted_;
+        after.lost = !care_.settle();  // hung and never back: the suspects cannot be judged
+        after.settled_by_restart = care_.settle_restarted();
     }
     return after;
 }
@@ -1294,8 +1156,7 @@ bool Campaign::find_batch_culprit(const BatchResult& br, const std::vector<std::
         // The batch's death (or the hang it had to be restarted from) was this one's doing.
         // (A confirmed crash's batch death is charged by confirm_death already.)
         const bool charged = shown.oracle == Oracle::Crash && shown.confirmed_death;
-        if (found && !charged && (after.died || after.settled_by_restart))
-            ++restarts_by_cause_[shown.key];
+        if (found && !charged && (after.died || after.settled_by_restart)) care_.charge(shown.key);
     }
     return false;
 }
@@ -1377,13 +1238,13 @@ void Campaign::finish() {
                                                                           : "time limit reached";
     }
     // Restarts per root cause, including those charged to a guise it had before minimising.
-    for (const auto& [key, n] : restarts_by_cause_) {
+    for (const auto& [key, n] : care_.charges()) {
         const auto it = by_key_.find(key);
         if (it != by_key_.end()) result_.findings[it->second].restarts += n;
     }
     result_.seconds = elapsed();
     progress(true);
-    if (options_.start_target) restart_.stop();
+    if (options_.start_target) care_.restart().stop();
 }
 
 // --corpus DIR: a new entry is written as it joins (an entry resumed from DIR is there
@@ -1417,11 +1278,11 @@ bool Campaign::start_target() {
     any.framing = options_.connector->framing();
     any.probe_pdu = canonical_request(
         *codec::function_info(codec::to_byte(codec::FunctionCode::ReadHoldingRegisters)));
-    restart_.own_process_group();
-    if (wait_for_target_with(restart_, *options_.connector, any, options_.restart_cmd,
+    care_.restart().own_process_group();
+    if (wait_for_target_with(care_.restart(), *options_.connector, any, options_.restart_cmd,
                              options_.restart_wait_ms, options_.timeout_ms, deadline_))
         return true;
-    restart_.stop();
+    care_.restart().stop();
     result_.error =
         fmt::format("--target-cmd did not bring up a target that answers at {} within {} ms",
                     options_.connector->describe(), options_.restart_wait_ms);
@@ -1436,6 +1297,7 @@ CampaignResult Campaign::run() {
     last_progress_ = start_;
     if (options_.max_seconds > 0)
         deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
+    care_.set_deadline(deadline_);
     if (options_.start_target && !start_target()) return result_;
     if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
                          result_.error))
@@ -1447,7 +1309,7 @@ CampaignResult Campaign::run() {
     start_generator();
     if (!resume_corpus()) {
         result_.started = false;
-        restart_.stop();
+        care_.restart().stop();
         return result_;
     }
     make_batch_runner();
