@@ -923,30 +923,17 @@ void Campaign::know_the_device() {
 }
 
 void Campaign::use_probe_inside_the_map() {
-    using codec::Table;
     // A learned range's neighbours were each refused alone: the oracle holds reads to that.
     if (result_.model.source == "learned" && !result_.model.partial)
         for (std::size_t t = 0; t < kTableCount; ++t) {
+            const std::vector<std::uint16_t> refused = refused_neighbours(result_.model.tables[t]);
             auto& out = result_.profile.unmapped[t];
-            const TableModel& tm = result_.model.tables[t];
-            for (const AddressRange& r : tm.ranges) {
-                if (r.first > 0 && !tm.contains(r.first - 1u)) out.push_back(r.first - 1);
-                if (r.last < 0xFFFF && !tm.contains(r.last + 1u)) out.push_back(r.last + 1);
-            }
+            out.insert(out.end(), refused.begin(), refused.end());
         }
-    for (const Table table :
-         {Table::HoldingRegisters, Table::InputRegisters, Table::Coils, Table::DiscreteInputs}) {
-        const std::uint8_t fc = codec::function_for(table, codec::RequestShape::AddressQuantity);
-        const TableModel& tm = result_.model.table(table);
-        if (tm.ranges.empty() || result_.profile.unsupported[fc]) continue;
-        const std::uint16_t at = tm.ranges.front().first;
-        const Pdu probe = {fc, static_cast<std::uint8_t>(at >> 8), static_cast<std::uint8_t>(at), 0,
-                           1};
-        if (probe == result_.profile.probe_pdu) return;
-        result_.profile.probe_pdu = probe;
-        make_batch_runner();  // it probes with the profile's request
-        return;
-    }
+    const auto probe = probe_in_map(result_.model, result_.profile.unsupported);
+    if (!probe || *probe == result_.profile.probe_pdu) return;
+    result_.profile.probe_pdu = *probe;
+    make_batch_runner();  // it probes with the profile's request
 }
 
 void Campaign::arm_watch() {

@@ -118,6 +118,30 @@ bool DeviceModel::pauses_after_exceptions() const noexcept {
     return exception_pause_ms[1] > 0 || exception_pause_ms[3] > 0 || exception_pause_ms[4] > 0;
 }
 
+std::vector<std::uint16_t> refused_neighbours(const TableModel& table) {
+    std::vector<std::uint16_t> out;
+    for (const AddressRange& r : table.ranges) {
+        if (r.first > 0 && !table.contains(r.first - 1u)) out.push_back(r.first - 1);
+        if (r.last < 0xFFFF && !table.contains(r.last + 1u)) out.push_back(r.last + 1);
+    }
+    return out;
+}
+
+std::optional<std::vector<std::uint8_t>> probe_in_map(const DeviceModel& model,
+                                                      const std::array<bool, 256>& unsupported) {
+    using codec::Table;
+    for (const Table table :
+         {Table::HoldingRegisters, Table::InputRegisters, Table::Coils, Table::DiscreteInputs}) {
+        const std::uint8_t fc = codec::function_for(table, codec::RequestShape::AddressQuantity);
+        const TableModel& tm = model.table(table);
+        if (tm.ranges.empty() || unsupported[fc]) continue;
+        const std::uint16_t at = tm.ranges.front().first;
+        return std::vector<std::uint8_t>{fc, static_cast<std::uint8_t>(at >> 8),
+                                         static_cast<std::uint8_t>(at), 0, 1};
+    }
+    return std::nullopt;
+}
+
 void normalise(std::vector<AddressRange>& ranges) {
     std::sort(ranges.begin(), ranges.end(),
               [](const AddressRange& a, const AddressRange& b) { return a.first < b.first; });

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,17 @@ struct DeviceModel {
     // True when any exception but 02 makes the target pause: cases owed one are rationed.
     bool pauses_after_exceptions() const noexcept;
 };
+
+// The addresses just outside each of a table's ranges (the one before its first, the one past
+// its last) that no other range holds: learning refused each of them alone, so a read of one
+// owes exception 02.
+std::vector<std::uint16_t> refused_neighbours(const TableModel& table);
+
+// A read of one item at the first address of the map, from the first table (holding
+// registers, input registers, coils, discrete inputs) the model knows and whose read the
+// target supports: a liveness probe the target answers normally. Nothing when there is none.
+std::optional<std::vector<std::uint8_t>> probe_in_map(const DeviceModel& model,
+                                                      const std::array<bool, 256>& unsupported);
 
 // Sorts and merges adjacent or overlapping ranges.
 void normalise(std::vector<AddressRange>& ranges);

@@ -397,6 +397,33 @@ TEST(FieldRepair, NamesEachWrongFieldInCheckOrder) {
     EXPECT_TRUE(wrong_fields(std::vector<std::uint8_t>{0x99, 1, 2}, model).empty());
 }
 
+TEST(DeviceModelMap, ANeighbourOfARangeIsRefusedUnlessAnotherRangeHoldsIt) {
+    TableModel t;
+    t.ranges = ranges({{1000, 1039}, {1060, 1099}});
+    EXPECT_EQ(refused_neighbours(t), (std::vector<std::uint16_t>{999, 1040, 1059, 1100}));
+    t.ranges = ranges({{0, 9}, {0xFFF0, 0xFFFF}});
+    EXPECT_EQ(refused_neighbours(t), (std::vector<std::uint16_t>{10, 0xFFEF}));
+    t.ranges = ranges({{5, 5}, {7, 7}});
+    EXPECT_EQ(refused_neighbours(t), (std::vector<std::uint16_t>{4, 6, 6, 8}));
+    // Ranges as a model file may give them, not merged: the address between is no neighbour.
+    t.ranges = {AddressRange{0, 9}, AddressRange{10, 19}};
+    EXPECT_EQ(refused_neighbours(t), (std::vector<std::uint16_t>{20}));
+}
+
+TEST(DeviceModelMap, TheLivenessProbeReadsTheFirstAddressOfTheFirstTableTheTargetServes) {
+    DeviceModel model;
+    std::array<bool, 256> unsupported{};
+    EXPECT_FALSE(probe_in_map(model, unsupported));
+    model.table(Table::Coils).ranges = ranges({{200, 263}});
+    EXPECT_EQ(*probe_in_map(model, unsupported), (std::vector<std::uint8_t>{0x01, 0, 0xC8, 0, 1}));
+    model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1099}});
+    model.table(Table::InputRegisters).ranges = ranges({{5, 9}});
+    EXPECT_EQ(*probe_in_map(model, unsupported),
+              (std::vector<std::uint8_t>{0x03, 0x03, 0xE8, 0, 1}));
+    unsupported[0x03] = true;
+    EXPECT_EQ(*probe_in_map(model, unsupported), (std::vector<std::uint8_t>{0x04, 0, 5, 0, 1}));
+}
+
 TEST(FieldRepair, SaysWhichBoundAWrongCountBreaks) {
     DeviceModel model;
     model.table(Table::HoldingRegisters).ranges = ranges({{1000, 1099}});
