@@ -29,13 +29,15 @@ while read -r kind name pkgs; do
 done <"$needs_file"
 mapfile -t packages < <(printf '%s\n' "${packages[@]}" | sort -u)
 
-# check_needs: every program on PATH, every module importable by /usr/bin/python3.
+# check_needs: every program on PATH, every module importable by /usr/bin/python3, every
+# library known to pkg-config.
 check_needs() {
   local missing=() kind name pkgs
   while read -r kind name pkgs; do
     case "$kind" in
       program) command -v "$name" >/dev/null || missing+=("program $name ($pkgs)") ;;
       module) /usr/bin/python3 -c "import $name" >/dev/null 2>&1 || missing+=("python module $name ($pkgs)") ;;
+      library) pkg-config --exists "$name" 2>/dev/null || missing+=("library $name ($pkgs)") ;;
     esac
   done <"$needs_file"
   if [ ${#missing[@]} -ne 0 ]; then
@@ -43,7 +45,7 @@ check_needs() {
     printf '  %s\n' "${missing[@]}" >&2
     return 1
   fi
-  echo "setup: every program and python module in scripts/$needs_file is present"
+  echo "setup: every program, python module and library in scripts/$needs_file is present"
 }
 
 if [ "${1:-}" = --check ]; then check_needs; exit; fi

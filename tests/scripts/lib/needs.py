@@ -41,7 +41,10 @@ def read_needs(root):
         if not words:
             continue
         kind, name = words[0], words[1]
-        (programs if kind == "program" else modules).add(name)
+        if kind == "program":
+            programs.add(name)
+        elif kind == "module":
+            modules.add(name)
     return programs, modules
 
 
