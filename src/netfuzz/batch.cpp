@@ -60,6 +60,21 @@ struct BatchRunner::Lane {
         }
         send_limit = out.size();
     }
+
+    // The first frame owed an answer that got none (frames.size() if there is none).
+    std::size_t first_unanswered() const {
+        for (std::size_t k = 0; k < frames.size(); ++k)
+            if (!frames[k].answered && frames[k].info.expect == Expect::Answer) return k;
+        return frames.size();
+    }
+
+    // The last answered request frame before `end` (frames.size() if there is none).
+    std::size_t last_answered_before(std::size_t end) const {
+        std::size_t found = frames.size();
+        for (std::size_t k = 0; k < end && k < frames.size(); ++k)
+            if (frames[k].answered && !frames[k].fence) found = k;
+        return found;
+    }
 };
 
 BatchRunner::BatchRunner(Connector& target, const TargetProfile& profile, BatchOptions options)
@@ -217,23 +232,13 @@ void BatchRunner::exchange(Round& round) {
     std::vector<std::int64_t> last_progress(lanes_.size(), net::now_ns());
     std::vector<pollfd> fds;
     std::vector<std::size_t> polled;
-    std::uint8_t buf[65536];
     for (;;) {
         fds.clear();
         polled.clear();
         bool buffered = false;
         const std::int64_t now = net::now_ns();
         std::int64_t wait_ns = options_.timeout_ms * net::kNsPerMs;
-        if (options_.deadline_ns && now >= options_.deadline_ns) {
-            // Out of time: what is unanswered now is neither a suspect nor a finding.
-            for (Lane* l : lanes_)
-                if (!l->done) {
-                    l->done = true;
-                    l->link.reset();
-                    round.result.cut_by_deadline = true;
-                }
-            return;
-        }
+        if (cut_at_deadline(now, round)) return;
         if (options_.deadline_ns) wait_ns = std::min(wait_ns, options_.deadline_ns - now);
         for (std::size_t li = 0; li < lanes_.size(); ++li) {
             Lane& l = *lanes_[li];
@@ -255,36 +260,51 @@ void BatchRunner::exchange(Round& round) {
             fds.data(), fds.size(),
             buffered ? 0 : static_cast<int>(std::max<std::int64_t>(1, wait_ns / net::kNsPerMs)));
         if (rc < 0 || (rc == 0 && !buffered)) continue;
-        for (std::size_t i = 0; i < fds.size(); ++i) {
-            Lane& l = *lanes_[polled[i]];
-            if (fds[i].revents & POLLOUT) {
-                const ssize_t n = l.link->send(l.out.data() + l.out_pos, l.send_limit - l.out_pos);
-                if (n > 0) {
-                    l.out_pos += static_cast<std::size_t>(n);
-                } else if (n < 0 && n != -EAGAIN) {
-                    fail(l, round, true);
-                    continue;
-                }
-            }
-            if (!(fds[i].revents & (POLLIN | POLLHUP | POLLERR)) && !l.link->has_buffered_input())
-                continue;
-            for (;;) {
-                const ssize_t n = l.link->recv(buf, sizeof buf);
-                if (n > 0) {
-                    last_progress[polled[i]] = net::now_ns();
-                    if (l.in_pos == l.in.size()) {
-                        l.in.clear();
-                        l.in_pos = 0;
-                    }
-                    l.in.insert(l.in.end(), buf, buf + n);
-                    parse(l, round);
-                    if (l.done) break;
-                    continue;
-                }
-                if (n != -EAGAIN) fail(l, round, true);
-                break;
-            }
+        for (std::size_t i = 0; i < fds.size(); ++i)
+            transfer(*lanes_[polled[i]], round, fds[i].revents, last_progress[polled[i]]);
+    }
+}
+
+bool BatchRunner::cut_at_deadline(std::int64_t now, Round& round) {
+    if (!options_.deadline_ns || now < options_.deadline_ns) return false;
+    // Out of time: what is unanswered now is neither a suspect nor a finding.
+    for (Lane* l : lanes_)
+        if (!l->done) {
+            l->done = true;
+            l->link.reset();
+            round.result.cut_by_deadline = true;
         }
+    return true;
+}
+
+// One lane's turn after poll(): sends what the limit allows, then reads and parses all there is.
+void BatchRunner::transfer(Lane& l, Round& round, short revents, std::int64_t& last_progress) {
+    if (revents & POLLOUT) {
+        const ssize_t n = l.link->send(l.out.data() + l.out_pos, l.send_limit - l.out_pos);
+        if (n > 0) {
+            l.out_pos += static_cast<std::size_t>(n);
+        } else if (n < 0 && n != -EAGAIN) {
+            fail(l, round, true);
+            return;
+        }
+    }
+    if (!(revents & (POLLIN | POLLHUP | POLLERR)) && !l.link->has_buffered_input()) return;
+    std::uint8_t buf[65536];
+    for (;;) {
+        const ssize_t n = l.link->recv(buf, sizeof buf);
+        if (n > 0) {
+            last_progress = net::now_ns();
+            if (l.in_pos == l.in.size()) {
+                l.in.clear();
+                l.in_pos = 0;
+            }
+            l.in.insert(l.in.end(), buf, buf + n);
+            parse(l, round);
+            if (l.done) break;
+            continue;
+        }
+        if (n != -EAGAIN) fail(l, round, true);
+        break;
     }
 }
 
@@ -292,37 +312,38 @@ void BatchRunner::exchange(Round& round) {
 // broke blames the first request left unanswered or the one answered just before it, and what
 // came after is run again in a later round.
 void BatchRunner::conclude(Lane& l, Round& round) {
-    const std::vector<Case>& cases = round.cases;
-    BatchResult& result = round.result;
     if (l.cases.empty()) return;
     if (l.suspect_all) {
         for (std::size_t ci : l.cases) round.suspect[ci] = true;
         return;
     }
     if (!l.failed) {
-        for (const Lane::Frame& f : l.frames) {
-            if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
-            if (round.judged[f.case_index]) continue;
-            round.judged[f.case_index] = true;
-            result.verdicts.emplace_back(
-                f.case_index,
-                Verdict{Oracle::Hang,
-                        unanswered_rule(false, culprit_text(cases[f.case_index].cls, &f.info)),
-                        f.info.pdu.empty() ? -1 : f.info.pdu[0],
-                        fmt::format("no answer to request {} (later requests were answered)",
-                                    hex(f.info.pdu, 16)),
-                        "an answer", "silence"});
-        }
+        judge_passed_over(l, round);
         return;
     }
-    std::size_t first = l.frames.size();
-    for (std::size_t k = 0; k < l.frames.size(); ++k) {
-        const Lane::Frame& f = l.frames[k];
-        if (!f.answered && f.info.expect == Expect::Answer) {
-            first = k;
-            break;
-        }
+    round.result.breaks.push_back(describe_break(l, round));
+}
+
+// An intact lane answered what came after these requests: their silence is a hang of theirs.
+void BatchRunner::judge_passed_over(Lane& l, Round& round) {
+    for (const Lane::Frame& f : l.frames) {
+        if (f.fence || f.answered || f.info.expect != Expect::Answer) continue;
+        if (round.judged[f.case_index]) continue;
+        round.judged[f.case_index] = true;
+        round.result.verdicts.emplace_back(
+            f.case_index,
+            Verdict{Oracle::Hang,
+                    unanswered_rule(false, culprit_text(round.cases[f.case_index].cls, &f.info)),
+                    f.info.pdu.empty() ? -1 : f.info.pdu[0],
+                    fmt::format("no answer to request {} (later requests were answered)",
+                                hex(f.info.pdu, 16)),
+                    "an answer", "silence"});
     }
+}
+
+LaneBreak BatchRunner::describe_break(Lane& l, Round& round) {
+    const std::vector<Case>& cases = round.cases;
+    const std::size_t first = l.first_unanswered();
     LaneBreak br;
     br.closed = l.closed;
     for (const Lane::Frame& f : l.frames) {
@@ -330,9 +351,7 @@ void BatchRunner::conclude(Lane& l, Round& round) {
         if (br.unanswered.empty() || br.unanswered.back() != f.case_index)
             br.unanswered.push_back(f.case_index);
     }
-    std::size_t prev = l.frames.size();
-    for (std::size_t k = 0; k < first && k < l.frames.size(); ++k)
-        if (l.frames[k].answered && !l.frames[k].fence) prev = k;
+    const std::size_t prev = l.last_answered_before(first);
     if (prev < l.frames.size()) {
         const Lane::Frame& f = l.frames[prev];
         br.has_previous = true;
@@ -349,19 +368,26 @@ void BatchRunner::conclude(Lane& l, Round& round) {
         br.unanswered_invalid = request_kind(f.info) != "valid";
         br.length_mismatch = br.length_mismatch || (br.closed && pdu_length_mismatch(f.info));
         round.suspect[f.case_index] = true;
-        for (std::size_t k = first + 1; k < l.frames.size(); ++k) {
-            const std::size_t ci = l.frames[k].case_index;
-            if (l.frames[k].fence || ci == f.case_index || round.suspect[ci] ||
-                round.requeued[ci] || round.judged[ci])
-                continue;
-            round.requeued[ci] = true;
-            result.requeue.push_back(ci);
-        }
+        requeue_after(l, first, round);
     } else {
         br.unanswered_case = static_cast<std::size_t>(-1);  // only the fence went unanswered
         br.unanswered_culprit = "fence";
     }
-    result.breaks.push_back(std::move(br));
+    return br;
+}
+
+// The cases after the break's culprit never had a fair hearing: run them again (once) unless
+// they are suspects or were judged already.
+void BatchRunner::requeue_after(Lane& l, std::size_t culprit_frame, Round& round) {
+    const std::size_t culprit = l.frames[culprit_frame].case_index;
+    for (std::size_t k = culprit_frame + 1; k < l.frames.size(); ++k) {
+        const std::size_t ci = l.frames[k].case_index;
+        if (l.frames[k].fence || ci == culprit || round.suspect[ci] || round.requeued[ci] ||
+            round.judged[ci])
+            continue;
+        round.requeued[ci] = true;
+        round.result.requeue.push_back(ci);
+    }
 }
 
 }  // namespace mbstorm::netfuzz

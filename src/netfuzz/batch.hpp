@@ -74,9 +74,14 @@ class BatchRunner {
     struct Round;
     void prepare(Lane& lane, Round& round);
     void exchange(Round& round);
+    bool cut_at_deadline(std::int64_t now, Round& round);  // true: the deadline has come
+    void transfer(Lane& lane, Round& round, short revents, std::int64_t& last_progress);
     void parse(Lane& lane, Round& round);
     void fail(Lane& lane, Round& round, bool closed);
     void conclude(Lane& lane, Round& round);
+    void judge_passed_over(Lane& lane, Round& round);
+    LaneBreak describe_break(Lane& lane, Round& round);
+    void requeue_after(Lane& lane, std::size_t culprit_frame, Round& round);
     Connector& target_;
     const TargetProfile& profile_;
     BatchOptions options_;

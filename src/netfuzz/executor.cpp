@@ -122,6 +122,11 @@ class CaseRunner {
     // the connection, so that the bytes after the gap reach it as a read of their own.
     void await_read_by_target(std::uint8_t index);
     bool wait_for_target_read(std::uint8_t index);  // false: not read, or not knowable
+    // One step of a case: its gap first, then its operation.
+    void perform(const Step& s);
+    void close_out();
+    void send_closing_probe(std::uint8_t index);
+    bool await_close_out();  // false: the timeout came first
     // What judge() gathers across the connections: the worst verdict so far, and whom a
     // whole-server fault is blamed on.
     struct Judgement {
@@ -933,61 +938,62 @@ bool CaseRunner::wait_for_target_read(std::uint8_t index) {
 Execution CaseRunner::run(const Case& c) {
     conns_.resize(std::max<std::size_t>(c.connections(), 1));
     for (const Step& s : c.steps) {
-        if (s.delay_us && s.op == Op::Send) await_read_by_target(s.conn);
-        if (s.delay_us >= 2000) {
-            const std::int64_t until = net::now_ns() + s.delay_us * 1000ll;
-            pump(until, [] { return false; });
-        } else if (s.delay_us) {
-            // Short gaps: poll() rounds up to milliseconds, so sleep precisely instead.
-            ::usleep(s.delay_us);
-        }
-        switch (s.op) {
-            case Op::Send:
-                send_bytes(s.conn, s.bytes);
-                break;
-            case Op::ShutdownWrite:
-                if (ensure_open(s.conn) && !conns_[s.conn].closed && !conns_[s.conn].shut) {
-                    Conn& cn = conns_[s.conn];
-                    cn.link->shutdown_write();
-                    cn.shut = true;
-                    cn.shut_after_frames = !cn.desync && cn.parsed == cn.sent.size();
-                    event(s.conn, TraceKind::ShutdownWrite);
-                }
-                break;
-            case Op::Await: {
-                const Conn& cn = conns_[s.conn];
-                pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs,
-                     [&] { return answered(cn); });
-                break;
-            }
-            case Op::Flood:
-                flood(s.count);
-                break;
-            case Op::SideProbe:
-                side_probe();
-                break;
-        }
+        perform(s);
         if (out_.down_before) return std::move(out_);
     }
     await_answers_before_probes();
-    // Close out each connection: an in-stream probe after intact streams (so that silence
-    // to the case's frames is told apart from a stalled connection), a half-close after
-    // desynchronised ones.
+    close_out();
+    if (!await_close_out()) event(0, TraceKind::Timeout);
+    judge(c);
+    return std::move(out_);
+}
+
+void CaseRunner::perform(const Step& s) {
+    if (s.delay_us && s.op == Op::Send) await_read_by_target(s.conn);
+    if (s.delay_us >= 2000) {
+        const std::int64_t until = net::now_ns() + s.delay_us * 1000ll;
+        pump(until, [] { return false; });
+    } else if (s.delay_us) {
+        // Short gaps: poll() rounds up to milliseconds, so sleep precisely instead.
+        ::usleep(s.delay_us);
+    }
+    switch (s.op) {
+        case Op::Send:
+            send_bytes(s.conn, s.bytes);
+            break;
+        case Op::ShutdownWrite:
+            if (ensure_open(s.conn) && !conns_[s.conn].closed && !conns_[s.conn].shut) {
+                Conn& cn = conns_[s.conn];
+                cn.link->shutdown_write();
+                cn.shut = true;
+                cn.shut_after_frames = !cn.desync && cn.parsed == cn.sent.size();
+                event(s.conn, TraceKind::ShutdownWrite);
+            }
+            break;
+        case Op::Await: {
+            const Conn& cn = conns_[s.conn];
+            pump(net::now_ns() + options_.timeout_ms * net::kNsPerMs, [&] { return answered(cn); });
+            break;
+        }
+        case Op::Flood:
+            flood(s.count);
+            break;
+        case Op::SideProbe:
+            side_probe();
+            break;
+    }
+}
+
+// Close out each connection: an in-stream probe after intact streams (so that silence to the
+// case's frames is told apart from a stalled connection), a half-close after desynchronised
+// ones.
+void CaseRunner::close_out() {
     for (std::size_t i = 0; i < conns_.size(); ++i) {
         Conn& cn = conns_[i];
         if (!cn.opened || !cn.link || cn.closed) continue;
         if (profile_.serial_line && profile_.framing == codec::Framing::Rtu) close_partial(cn);
         if (!cn.shut && !cn.desync && cn.parsed == cn.sent.size()) {
-            std::uint16_t tid = 0xFADE;
-            while (std::any_of(cn.pending.begin(), cn.pending.end(),
-                               [&](const Pending& p) { return p.tid == tid; }))
-                ++tid;
-            const std::size_t before = cn.pending.size();
-            send_bytes(static_cast<std::uint8_t>(i), probe_frame(profile_, tid));
-            if (cn.pending.size() > before) {
-                cn.pending.back().probe = true;
-                cn.pending.back().awaited_probe = profile_.drops_after_exception;
-            }
+            send_closing_probe(static_cast<std::uint8_t>(i));
         } else {
             if (!cn.shut) {
                 cn.link->shutdown_write();
@@ -996,8 +1002,26 @@ Execution CaseRunner::run(const Case& c) {
             }
         }
     }
+}
+
+void CaseRunner::send_closing_probe(std::uint8_t index) {
+    Conn& cn = conns_[index];
+    std::uint16_t tid = 0xFADE;
+    while (std::any_of(cn.pending.begin(), cn.pending.end(),
+                       [&](const Pending& p) { return p.tid == tid; }))
+        ++tid;
+    const std::size_t before = cn.pending.size();
+    send_bytes(index, probe_frame(profile_, tid));
+    if (cn.pending.size() > before) {
+        cn.pending.back().probe = true;
+        cn.pending.back().awaited_probe = profile_.drops_after_exception;
+    }
+}
+
+// Waits until every connection answered its probe or closed after its half-close.
+bool CaseRunner::await_close_out() {
     const std::int64_t deadline = net::now_ns() + options_.timeout_ms * net::kNsPerMs;
-    const bool ok = pump(deadline, [&] {
+    return pump(deadline, [&] {
         for (const Conn& cn : conns_) {
             if (!cn.opened || !cn.link) continue;
             if (cn.shut_after_frames) {
@@ -1008,9 +1032,6 @@ Execution CaseRunner::run(const Case& c) {
         }
         return true;
     });
-    if (!ok) event(0, TraceKind::Timeout);
-    judge(c);
-    return std::move(out_);
 }
 
 }  // namespace

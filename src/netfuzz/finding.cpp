@@ -96,21 +96,40 @@ bool from_hex(const std::string& text, std::vector<std::uint8_t>& out) {
     return true;
 }
 
-bool save_finding(const Finding& f, const std::string& dir, std::string& error) {
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) {
-        error = fmt::format("cannot create {}: {}", dir, ec.message());
-        return false;
-    }
+namespace {
+
+json trace_json(const std::vector<TraceEvent>& events) {
     json trace = json::array();
-    for (const TraceEvent& e : f.trace) {
+    for (const TraceEvent& e : events) {
         json ev = {{"t_us", e.t_us}, {"conn", e.conn}, {"event", trace_kind_name(e.kind)}};
         if (!e.bytes.empty()) ev["hex"] = to_hex(e.bytes);
         if (!e.note.empty()) ev["note"] = e.note;
         trace.push_back(std::move(ev));
     }
-    json j = {
+    return trace;
+}
+
+// What replay needs to know of the target; facts that are the default are left out.
+json profile_json(const TargetProfile& profile) {
+    json p = {{"unit", profile.unit},
+              {"probe", to_hex(profile.probe_pdu)},
+              {"unsupported", bytes_list(profile.unsupported)},
+              {"extended", bytes_list(profile.extended)}};
+    for (std::size_t t = 0; t < profile.unmapped.size(); ++t)
+        if (!profile.unmapped[t].empty()) p["unmapped"][std::to_string(t)] = profile.unmapped[t];
+    if (profile.refuses_length_mismatch) p["refuses_length_mismatch"] = true;
+    if (profile.one_connection) p["one_connection"] = true;
+    if (profile.marker_address >= 0) p["marker_address"] = profile.marker_address;
+    // The framing the case's bytes are in (MBAP when absent): replay needs the same.
+    if (profile.framing != codec::Framing::Mbap) {
+        p["framing"] = codec::framing_name(profile.framing);
+        p["serial_line"] = profile.serial_line;
+    }
+    return p;
+}
+
+json finding_json(const Finding& f) {
+    return {
         {"schema", 1},
         {"id", f.id},
         {"oracle", oracle_name(f.verdict.oracle)},
@@ -135,35 +154,15 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
         {"original_steps", f.original_steps},
         {"timeout_ms", f.timeout_ms},
         {"state_range", {f.state.base, f.state.span}},
-        {"profile",
-         {{"unit", f.profile.unit},
-          {"probe", to_hex(f.profile.probe_pdu)},
-          {"unsupported", bytes_list(f.profile.unsupported)},
-          {"extended", bytes_list(f.profile.extended)}}},
+        {"profile", profile_json(f.profile)},
         {"case", {{"steps", steps_to_json(f.fuzz_case)}}},
         {"original_case", {{"steps", steps_to_json(f.original_case)}}},
-        {"trace", trace},
+        {"trace", trace_json(f.trace)},
     };
-    // The framing the case's bytes are in (MBAP when absent): replay needs the same.
-    for (std::size_t t = 0; t < f.profile.unmapped.size(); ++t)
-        if (!f.profile.unmapped[t].empty())
-            j["profile"]["unmapped"][std::to_string(t)] = f.profile.unmapped[t];
-    if (f.profile.refuses_length_mismatch) j["profile"]["refuses_length_mismatch"] = true;
-    if (f.profile.one_connection) j["profile"]["one_connection"] = true;
-    if (f.profile.marker_address >= 0) j["profile"]["marker_address"] = f.profile.marker_address;
-    if (f.profile.framing != codec::Framing::Mbap) {
-        j["profile"]["framing"] = codec::framing_name(f.profile.framing);
-        j["profile"]["serial_line"] = f.profile.serial_line;
-    }
-    auto write = [&](const std::string& name, const std::string& text) {
-        std::ofstream o(dir + "/" + name, std::ios::trunc);
-        o << text;
-        if (!o) {
-            error = fmt::format("cannot write {}/{}", dir, name);
-            return false;
-        }
-        return true;
-    };
+}
+
+// traffic.txt: the verdict, then one line per trace event.
+std::string traffic_text(const Finding& f) {
     std::ostringstream traffic;
     traffic << "# " << f.verdict.summary << "\n# expected: " << f.verdict.expected
             << "\n# seen:     " << f.verdict.seen << "\n";
@@ -175,10 +174,109 @@ bool save_finding(const Finding& f, const std::string& dir, std::string& error) 
                                trace_kind_name(e.kind), hex(e.bytes, 300),
                                e.note.empty() ? "" : "  (" + e.note + ")");
     }
-    return write("finding.json", j.dump(2) + "\n") &&
-           write("summary.txt", f.verdict.summary + "\n" + (f.note.empty() ? "" : f.note + "\n")) &&
-           write("traffic.txt", traffic.str());
+    return traffic.str();
 }
+
+bool write_text(const std::string& dir, const std::string& name, const std::string& text,
+                std::string& error) {
+    std::ofstream o(dir + "/" + name, std::ios::trunc);
+    o << text;
+    if (!o) {
+        error = fmt::format("cannot write {}/{}", dir, name);
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+bool save_finding(const Finding& f, const std::string& dir, std::string& error) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        error = fmt::format("cannot create {}: {}", dir, ec.message());
+        return false;
+    }
+    return write_text(dir, "finding.json", finding_json(f).dump(2) + "\n", error) &&
+           write_text(dir, "summary.txt",
+                      f.verdict.summary + "\n" + (f.note.empty() ? "" : f.note + "\n"), error) &&
+           write_text(dir, "traffic.txt", traffic_text(f), error);
+}
+
+namespace {
+
+// The verdict's fields and the case's class and function code.
+void load_verdict(const json& j, Finding& out) {
+    if (!oracle_from_name(j.at("oracle").get<std::string>(), out.verdict.oracle))
+        throw std::runtime_error("unknown oracle");
+    out.verdict.rule = j.value("rule", "");
+    out.verdict.summary = j.value("summary", "");
+    out.verdict.expected = j.value("expected", "");
+    out.verdict.seen = j.value("seen", "");
+    out.verdict.culprit_fc = j.at("function").is_null()
+                                 ? -1
+                                 : static_cast<int>(whole_number(j, "function", -1, -1, 255));
+    if (out.verdict.culprit_fc >= 0)
+        out.fuzz_case.function = static_cast<std::uint8_t>(out.verdict.culprit_fc);
+    if (!class_from_name(j.at("class").get<std::string>(), out.fuzz_case.cls))
+        throw std::runtime_error("unknown class");
+}
+
+// Where and how the finding was run and what became of it.
+void load_run(const json& j, Finding& out) {
+    out.target = j.value("target", "");
+    out.seed = j.contains("seed") && j.at("seed").is_number_unsigned()
+                   ? j.at("seed").get<std::uint64_t>()
+                   : static_cast<std::uint64_t>(whole_number(j, "seed", 0, 0, INT64_MAX));
+    out.timeout_ms = static_cast<int>(whole_number(j, "timeout_ms", 1000, 1, 3'600'000));
+    if (j.contains("state_range") && j["state_range"].is_array() && j["state_range"].size() == 2) {
+        const auto base = whole_number(j["state_range"][0], "state_range", 0, 0xFFFF);
+        const auto span = whole_number(j["state_range"][1], "state_range", 1, 0x10000);
+        out.state = StateRange{static_cast<std::uint16_t>(base), static_cast<std::uint32_t>(span)};
+    }
+    out.minimized = j.value("minimized", false);
+    out.wrong_fields = j.value("wrong_fields", std::vector<std::string>{});
+    out.confirmed = j.value("confirmed", true);
+    out.note = j.value("note", "");
+}
+
+codec::Framing framing_from_text(const std::string& framing) {
+    if (framing == "rtu") return codec::Framing::Rtu;
+    if (framing == "ascii") return codec::Framing::Ascii;
+    if (framing != "mbap") throw std::runtime_error("unknown framing");
+    return codec::Framing::Mbap;
+}
+
+void load_unmapped(const json& p, TargetProfile& out) {
+    if (!p.contains("unmapped") || !p["unmapped"].is_object()) return;
+    for (const auto& [table, addrs] : p["unmapped"].items()) {
+        const std::size_t t = table.size() == 1 && table[0] >= '0' && table[0] <= '3'
+                                  ? static_cast<std::size_t>(table[0] - '0')
+                                  : out.unmapped.size();
+        if (t == out.unmapped.size() || !addrs.is_array())
+            throw std::runtime_error("bad 'unmapped'");
+        for (const json& a : addrs)
+            out.unmapped[t].push_back(
+                static_cast<std::uint16_t>(whole_number(a, "unmapped", 0, 0xFFFF)));
+    }
+}
+
+void load_profile(const json& p, TargetProfile& out) {
+    out.unit = static_cast<std::uint8_t>(whole_number(p.at("unit"), "unit", 0, 255));
+    if (!from_hex(p.at("probe").get<std::string>(), out.probe_pdu) || out.probe_pdu.empty())
+        throw std::runtime_error("bad probe");
+    parse_list(p.value("unsupported", ""), out.unsupported);
+    parse_list(p.value("extended", ""), out.extended);
+    out.framing = framing_from_text(p.value("framing", "mbap"));
+    out.serial_line = p.value("serial_line", false);
+    out.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
+    out.one_connection = p.value("one_connection", false);
+    out.marker_address =
+        static_cast<std::int32_t>(whole_number(p, "marker_address", -1, 0, 0xFFFF));
+    load_unmapped(p, out);
+}
+
+}  // namespace
 
 bool load_finding(const std::string& path, Finding& out, std::string& error) {
     std::string file = path;
@@ -193,65 +291,9 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         out = Finding{};
         out.folder = path;
         out.id = static_cast<std::size_t>(whole_number(j, "id", 0, 0, 1'000'000'000));
-        if (!oracle_from_name(j.at("oracle").get<std::string>(), out.verdict.oracle))
-            throw std::runtime_error("unknown oracle");
-        out.verdict.rule = j.value("rule", "");
-        out.verdict.summary = j.value("summary", "");
-        out.verdict.expected = j.value("expected", "");
-        out.verdict.seen = j.value("seen", "");
-        out.verdict.culprit_fc = j.at("function").is_null()
-                                     ? -1
-                                     : static_cast<int>(whole_number(j, "function", -1, -1, 255));
-        if (out.verdict.culprit_fc >= 0)
-            out.fuzz_case.function = static_cast<std::uint8_t>(out.verdict.culprit_fc);
-        if (!class_from_name(j.at("class").get<std::string>(), out.fuzz_case.cls))
-            throw std::runtime_error("unknown class");
-        out.target = j.value("target", "");
-        out.seed = j.contains("seed") && j.at("seed").is_number_unsigned()
-                       ? j.at("seed").get<std::uint64_t>()
-                       : static_cast<std::uint64_t>(whole_number(j, "seed", 0, 0, INT64_MAX));
-        out.timeout_ms = static_cast<int>(whole_number(j, "timeout_ms", 1000, 1, 3'600'000));
-        if (j.contains("state_range") && j["state_range"].is_array() &&
-            j["state_range"].size() == 2) {
-            const auto base = whole_number(j["state_range"][0], "state_range", 0, 0xFFFF);
-            const auto span = whole_number(j["state_range"][1], "state_range", 1, 0x10000);
-            out.state =
-                StateRange{static_cast<std::uint16_t>(base), static_cast<std::uint32_t>(span)};
-        }
-        out.minimized = j.value("minimized", false);
-        out.wrong_fields = j.value("wrong_fields", std::vector<std::string>{});
-        out.confirmed = j.value("confirmed", true);
-        out.note = j.value("note", "");
-        const json& p = j.at("profile");
-        out.profile.unit = static_cast<std::uint8_t>(whole_number(p.at("unit"), "unit", 0, 255));
-        if (!from_hex(p.at("probe").get<std::string>(), out.profile.probe_pdu) ||
-            out.profile.probe_pdu.empty())
-            throw std::runtime_error("bad probe");
-        parse_list(p.value("unsupported", ""), out.profile.unsupported);
-        parse_list(p.value("extended", ""), out.profile.extended);
-        const std::string framing = p.value("framing", "mbap");
-        if (framing == "rtu")
-            out.profile.framing = codec::Framing::Rtu;
-        else if (framing == "ascii")
-            out.profile.framing = codec::Framing::Ascii;
-        else if (framing != "mbap")
-            throw std::runtime_error("unknown framing");
-        out.profile.serial_line = p.value("serial_line", false);
-        out.profile.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
-        out.profile.one_connection = p.value("one_connection", false);
-        out.profile.marker_address =
-            static_cast<std::int32_t>(whole_number(p, "marker_address", -1, 0, 0xFFFF));
-        if (p.contains("unmapped") && p["unmapped"].is_object())
-            for (const auto& [table, addrs] : p["unmapped"].items()) {
-                const std::size_t t = table.size() == 1 && table[0] >= '0' && table[0] <= '3'
-                                          ? static_cast<std::size_t>(table[0] - '0')
-                                          : out.profile.unmapped.size();
-                if (t == out.profile.unmapped.size() || !addrs.is_array())
-                    throw std::runtime_error("bad 'unmapped'");
-                for (const json& a : addrs)
-                    out.profile.unmapped[t].push_back(
-                        static_cast<std::uint16_t>(whole_number(a, "unmapped", 0, 0xFFFF)));
-            }
+        load_verdict(j, out);
+        load_run(j, out);
+        load_profile(j.at("profile"), out.profile);
         out.hits = static_cast<std::uint64_t>(whole_number(j, "hits", 1, 0, INT64_MAX));
         steps_from_json(j.at("case").at("steps"), out.fuzz_case, kMaxLoadedSteps);
         out.original_case.cls = out.fuzz_case.cls;

@@ -174,28 +174,28 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
     }
 }
 
-}  // namespace
-
-std::vector<std::vector<std::uint8_t>> structured_pdus() {
-    std::vector<Pdu> out;
-    add_reads(out, kReadCoils, lim::kMaxReadBits);
-    add_reads(out, kReadDiscreteInputs, lim::kMaxReadBits);
-    add_reads(out, kReadHoldingRegisters, lim::kMaxReadRegisters);
-    add_reads(out, kReadInputRegisters, lim::kMaxReadRegisters);
+void add_single_writes(std::vector<Pdu>& out) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
         for (std::uint16_t v : {0x0000, 0xFF00, 0x0001, 0x00FF, 0xFFFF, 0xFF01, 0x8000})
             out.push_back(pdu5(kWriteSingleCoil, a, v));
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
         for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF})
             out.push_back(pdu5(kWriteSingleRegister, a, v));
+}
+
+// The serial-line status requests (FC07, 0B, 0C, 11): bare, and with a stray byte.
+void add_status_requests(std::vector<Pdu>& out) {
     for (std::uint8_t fc :
          {kReadExceptionStatus, kGetCommEventCounter, kGetCommEventLog, kReportServerId}) {
         out.push_back(Pdu{fc});
         out.push_back(Pdu{fc, 0x00});
     }
-    // FC08: every defined sub-function and some undefined ones, with right and wrong data
-    // sizes. 0x0001 (restart) and 0x0004 (listen-only) are left out: real devices may
-    // legitimately drop the connection or go silent.
+}
+
+// FC08: every defined sub-function and some undefined ones, with right and wrong data sizes,
+// and a long echo. 0x0001 (restart) and 0x0004 (listen-only) are left out: real devices may
+// legitimately drop the connection or go silent.
+void add_diagnostics(std::vector<Pdu>& out) {
     for (std::uint16_t sub :
          {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x000F, 0x0010, 0x0011,
           0x0012, 0x0013, 0x0014, 0x0015, 0x00FF, 0xFFFF}) {
@@ -206,14 +206,12 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
             out.push_back(std::move(p));
         }
     }
-    {
-        Pdu echo{kDiagnostics, 0x00, 0x00};
-        for (int i = 0; i < 250; ++i) echo.push_back(static_cast<std::uint8_t>(i));
-        out.push_back(echo);
-    }
-    add_multi_writes(out, kWriteMultipleCoils, lim::kMaxWriteCoils);
-    add_multi_writes(out, kWriteMultipleRegisters, lim::kMaxWriteRegisters);
-    add_file_records(out);
+    Pdu echo{kDiagnostics, 0x00, 0x00};
+    for (int i = 0; i < 250; ++i) echo.push_back(static_cast<std::uint8_t>(i));
+    out.push_back(echo);
+}
+
+void add_mask_writes(std::vector<Pdu>& out) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFFF}) {
         for (std::uint16_t m : {0x0000, 0xFFFF, 0x00FF}) {
             Pdu p = pdu5(kMaskWriteRegister, a, m);
@@ -221,14 +219,19 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
             out.push_back(std::move(p));
         }
     }
-    add_read_write_multiple(out);
+}
+
+void add_fifo_reads(std::vector<Pdu>& out) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFE0, 0xFFFE, 0xFFFF}) {
         Pdu p{kReadFifoQueue};
         put16(p, a);
         out.push_back(std::move(p));
     }
-    // FC2B: every MEI type worth trying; for 0E every read device id code and object ids at
-    // the edges of the basic, regular, reserved and extended ranges.
+}
+
+// FC2B: every MEI type worth trying; for 0E every read device id code and object ids at the
+// edges of the basic, regular, reserved and extended ranges.
+void add_encapsulated(std::vector<Pdu>& out) {
     for (std::uint8_t code : {0, 1, 2, 3, 4, 5, 0xFF})
         for (std::uint8_t obj : {0x00, 0x01, 0x02, 0x03, 0x06, 0x07, 0x7F, 0x80, 0xFF})
             out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId, code, obj});
@@ -236,12 +239,36 @@ std::vector<std::vector<std::uint8_t>> structured_pdus() {
         out.push_back(Pdu{kEncapsulatedInterface, mei, 0x01, 0x00});
     out.push_back(Pdu{kEncapsulatedInterface});
     out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId});
-    // Every function code 0-255: bare, and with a plausible read body.
+}
+
+// Every function code 0-255: bare, and with a plausible read body.
+void add_every_function_code(std::vector<Pdu>& out) {
     for (unsigned fc = 0; fc < 256; ++fc) {
         const auto b = static_cast<std::uint8_t>(fc);
         if (!codec::is_supported_function(b)) out.push_back(Pdu{b});
         out.push_back(pdu5(b, 0, 1));
     }
+}
+
+}  // namespace
+
+std::vector<std::vector<std::uint8_t>> structured_pdus() {
+    std::vector<Pdu> out;
+    add_reads(out, kReadCoils, lim::kMaxReadBits);
+    add_reads(out, kReadDiscreteInputs, lim::kMaxReadBits);
+    add_reads(out, kReadHoldingRegisters, lim::kMaxReadRegisters);
+    add_reads(out, kReadInputRegisters, lim::kMaxReadRegisters);
+    add_single_writes(out);
+    add_status_requests(out);
+    add_diagnostics(out);
+    add_multi_writes(out, kWriteMultipleCoils, lim::kMaxWriteCoils);
+    add_multi_writes(out, kWriteMultipleRegisters, lim::kMaxWriteRegisters);
+    add_file_records(out);
+    add_mask_writes(out);
+    add_read_write_multiple(out);
+    add_fifo_reads(out);
+    add_encapsulated(out);
+    add_every_function_code(out);
     return out;
 }
 

@@ -49,6 +49,40 @@ std::size_t wire_offset(std::size_t b, codec::Framing framing) noexcept {
 
 constexpr char kHex[] = "0123456789ABCDEF";
 
+// The case's pieces of one MBAP frame (`whole`, all its Send bytes, maybe short of the frame)
+// cut at the same places of the frame reframed; a piece that was all MBAP header is dropped.
+void recut_pieces(Case& out, const std::vector<std::uint8_t>& whole, codec::Framing framing) {
+    const std::size_t full = codec::announced_adu_size(whole.data());
+    std::vector<std::uint8_t> wire;
+    std::size_t wire_end;
+    if (whole.size() == full) {
+        wire = reframe(whole, framing);
+        wire_end = wire.size();
+    } else {  // a partial frame: the reframed bytes up to where the MBAP bytes stopped
+        std::vector<std::uint8_t> head(whole);
+        head.resize(std::max(whole.size(), lim::kMbapHeader));
+        wire = reframe(head, framing);
+        wire_end = std::clamp<std::size_t>(wire_offset(whole.size(), framing), 1, wire.size());
+    }
+    std::vector<Step> steps;
+    std::size_t mbap_at = 0, wire_at = 0;
+    for (Step& s : out.steps) {
+        if (s.op != Op::Send) {
+            steps.push_back(std::move(s));
+            continue;
+        }
+        mbap_at += s.bytes.size();
+        const std::size_t to =
+            mbap_at == whole.size() ? wire_end : std::min(wire_offset(mbap_at, framing), wire_end);
+        if (to <= wire_at) continue;  // this piece was all MBAP header
+        s.bytes.assign(wire.begin() + static_cast<std::ptrdiff_t>(wire_at),
+                       wire.begin() + static_cast<std::ptrdiff_t>(to));
+        wire_at = to;
+        steps.push_back(std::move(s));
+    }
+    out.steps = std::move(steps);
+}
+
 }  // namespace
 
 void Generator::adapt_to_framing(Case& out) {
@@ -83,37 +117,7 @@ void Generator::adapt_to_framing(Case& out) {
         framing_transport(out);
         return;
     }
-    const std::size_t full = codec::announced_adu_size(whole.data());
-    std::vector<std::uint8_t> wire;
-    std::size_t wire_end;
-    if (whole.size() == full) {
-        wire = reframe(whole, options_.framing);
-        wire_end = wire.size();
-    } else {  // a partial frame: the reframed bytes up to where the MBAP bytes stopped
-        std::vector<std::uint8_t> head(whole);
-        head.resize(std::max(whole.size(), lim::kMbapHeader));
-        wire = reframe(head, options_.framing);
-        wire_end =
-            std::clamp<std::size_t>(wire_offset(whole.size(), options_.framing), 1, wire.size());
-    }
-    std::vector<Step> steps;
-    std::size_t mbap_at = 0, wire_at = 0;
-    for (Step& s : out.steps) {
-        if (s.op != Op::Send) {
-            steps.push_back(std::move(s));
-            continue;
-        }
-        mbap_at += s.bytes.size();
-        const std::size_t to = mbap_at == whole.size()
-                                   ? wire_end
-                                   : std::min(wire_offset(mbap_at, options_.framing), wire_end);
-        if (to <= wire_at) continue;  // this piece was all MBAP header
-        s.bytes.assign(wire.begin() + static_cast<std::ptrdiff_t>(wire_at),
-                       wire.begin() + static_cast<std::ptrdiff_t>(to));
-        wire_at = to;
-        steps.push_back(std::move(s));
-    }
-    out.steps = std::move(steps);
+    recut_pieces(out, whole, options_.framing);
 }
 
 void Generator::framing_transport(Case& out) {

@@ -519,6 +519,37 @@ void resolve_masks(std::vector<WriteRecord>& writes) {
     }
 }
 
+// The write whose value a read answered at `address` must show: the latest acknowledged before
+// the read went out (or the read's own, for FC17), with `index` its value's. Null when there
+// is none, or when a write was in flight while the read was (either order is right).
+const WriteRecord* latest_write(const Shadow::Event& e, const std::vector<WriteRecord>& writes,
+                                bool coils, std::uint32_t address, std::size_t& index) {
+    const RequestInfo& rq = *e.request;
+    const WriteRecord* latest = nullptr;
+    bool ambiguous = false;
+    for (const WriteRecord& w : writes) {
+        if (w.coils != coils || address < w.address || address >= w.address + w.values.size())
+            continue;
+        if (w.self == &rq) {  // FC17 writes before it reads
+            latest = &w;
+            index = address - w.address;
+            continue;
+        }
+        const bool before = w.acked != 0 && w.acked <= e.sent_ns;
+        const bool overlaps = w.sent < e.answered_ns && !before;
+        if (overlaps) ambiguous = true;
+        // The later of two: acknowledged later, or in the same reply sent later, or sent in
+        // the same send and later in the stream (the events are in stream order).
+        const bool later = latest && (w.acked > latest->acked ||
+                                      (w.acked == latest->acked && w.sent >= latest->sent));
+        if (before && (!latest || (latest->self != &rq && later))) {
+            latest = &w;
+            index = address - w.address;
+        }
+    }
+    return ambiguous ? nullptr : latest;
+}
+
 // One read's values against the latest acknowledged write of each address it covers, among
 // writes on its own connection or on the others.
 Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& writes,
@@ -540,29 +571,9 @@ Verdict check_read(const Shadow::Event& e, const std::vector<WriteRecord>& write
     for (std::uint32_t i = 0; i < rq.request.quantity; ++i) {
         const std::uint32_t a = start + i;
         if (!state.contains(a)) continue;
-        const WriteRecord* latest = nullptr;
         std::size_t latest_index = 0;
-        bool ambiguous = false;
-        for (const WriteRecord& w : writes) {
-            if (w.coils != coils || a < w.address || a >= w.address + w.values.size()) continue;
-            if (w.self == &rq) {  // FC17 writes before it reads
-                latest = &w;
-                latest_index = a - w.address;
-                continue;
-            }
-            const bool before = w.acked != 0 && w.acked <= e.sent_ns;
-            const bool overlaps = w.sent < e.answered_ns && !before;
-            if (overlaps) ambiguous = true;
-            // The later of two: acknowledged later, or in the same reply sent later, or sent in
-            // the same send and later in the stream (the events are in stream order).
-            const bool later = latest && (w.acked > latest->acked ||
-                                          (w.acked == latest->acked && w.sent >= latest->sent));
-            if (before && (!latest || (latest->self != &rq && later))) {
-                latest = &w;
-                latest_index = a - w.address;
-            }
-        }
-        if (ambiguous || !latest || !latest->values[latest_index]) continue;
+        const WriteRecord* latest = latest_write(e, writes, coils, a, latest_index);
+        if (!latest || !latest->values[latest_index]) continue;
         if ((latest->conn != e.conn) != other_connection) continue;
         const std::uint16_t want = *latest->values[latest_index];
         std::uint16_t got;

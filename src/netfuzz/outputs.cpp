@@ -52,37 +52,58 @@ json baseline_name(BaselineState b) {
     return nullptr;
 }
 
-}  // namespace
+json finding_json(const Finding& f) {
+    return {{"id", f.id},
+            {"oracle", oracle_name(f.oracle())},
+            {"rule", f.verdict.rule},
+            {"root_cause", f.key()},
+            {"function", f.function() >= 0 ? json(f.function()) : json(nullptr)},
+            {"class", class_name(f.fuzz_case.cls)},
+            {"hits", f.hits},
+            {"variants", f.variants},
+            {"minimize_note", f.minimize_note},
+            {"wrong_fields", f.wrong_fields},
+            {"restarts", f.restarts},
+            {"summary", f.verdict.summary},
+            {"expected", f.verdict.expected},
+            {"seen", f.verdict.seen},
+            {"folder", f.folder},
+            {"case_number", f.case_number},
+            {"found_after_s", f.found_after_s},
+            {"minimized", f.minimized},
+            {"confirmed", f.confirmed},
+            {"baseline", baseline_name(f.baseline)},
+            {"note", f.note}};
+}
 
-std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
-    json findings = json::array();
-    for (const Finding& f : r.findings) {
-        findings.push_back({{"id", f.id},
-                            {"oracle", oracle_name(f.oracle())},
-                            {"rule", f.verdict.rule},
-                            {"root_cause", f.key()},
-                            {"function", f.function() >= 0 ? json(f.function()) : json(nullptr)},
-                            {"class", class_name(f.fuzz_case.cls)},
-                            {"hits", f.hits},
-                            {"variants", f.variants},
-                            {"minimize_note", f.minimize_note},
-                            {"wrong_fields", f.wrong_fields},
-                            {"restarts", f.restarts},
-                            {"summary", f.verdict.summary},
-                            {"expected", f.verdict.expected},
-                            {"seen", f.verdict.seen},
-                            {"folder", f.folder},
-                            {"case_number", f.case_number},
-                            {"found_after_s", f.found_after_s},
-                            {"minimized", f.minimized},
-                            {"confirmed", f.confirmed},
-                            {"baseline", baseline_name(f.baseline)},
-                            {"note", f.note}});
-    }
+json cases_by_class_json(const CampaignResult& r) {
     json classes = json::object();
     for (std::size_t i = 0; i < r.cases_by_class.size(); ++i)
         if (r.cases_by_class[i])
             classes[std::string(class_name(static_cast<MutationClass>(i)))] = r.cases_by_class[i];
+    return classes;
+}
+
+json death_marker_json(const CampaignResult& r) {
+    if (r.death_marker < 0) return json();
+    return {{"address", r.death_marker},
+            {"initial", r.death_marker_initial},
+            {"value", r.death_marker_value}};
+}
+
+json baseline_json(const CampaignResult& r) {
+    if (r.baseline_file.empty()) return nullptr;
+    return {{"file", r.baseline_file},
+            {"new", r.new_findings()},
+            {"known", r.findings.size() - r.new_findings()},
+            {"absent", r.baseline_absent}};
+}
+
+}  // namespace
+
+std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
+    json findings = json::array();
+    for (const Finding& f : r.findings) findings.push_back(finding_json(f));
     const json j = {
         {"schema", 1},
         {"tool", "mbstorm fuzz"},
@@ -113,24 +134,17 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"drops_after_exception", r.profile.drops_after_exception},
         {"target_lost", r.target_lost},
         {"stop_reason", r.stop_reason},
-        {"cases_by_class", classes},
+        {"cases_by_class", cases_by_class_json(r)},
         {"model", r.model.source.empty() ? json(nullptr) : json::parse(model_to_json(r.model))},
         {"learn_seconds", r.learn_seconds},
         {"learn_requests", r.learn_requests},
         {"death_watch", r.death_watch},
         {"one_connection_at_a_time", r.profile.one_connection},
         {"not_sent_one_connection", r.not_sent_one_connection},
-        {"death_marker", r.death_marker >= 0 ? nlohmann::json{{"address", r.death_marker},
-                                                              {"initial", r.death_marker_initial},
-                                                              {"value", r.death_marker_value}}
-                                             : nlohmann::json()},
+        {"death_marker", death_marker_json(r)},
         {"rationed", r.rationed},
         {"coverage", coverage_json(r)},
-        {"baseline", r.baseline_file.empty() ? json(nullptr)
-                                             : json{{"file", r.baseline_file},
-                                                    {"new", r.new_findings()},
-                                                    {"known", r.findings.size() - r.new_findings()},
-                                                    {"absent", r.baseline_absent}}},
+        {"baseline", baseline_json(r)},
         {"findings", findings}};
     return j.dump(2) + "\n";
 }
@@ -258,18 +272,9 @@ std::string format_root_causes(const CampaignResult& r) {
     return s;
 }
 
-}  // namespace
-
-std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
-    std::string s = fmt::format("\nmbstorm fuzz summary: target {}, seed {}, {} generator\n",
-                                info.target, info.seed, info.naive ? "naive" : "structured");
-    s += fmt::format("  {} cases in {:.1f} s ({:.0f} cases/s); {} batched, {} isolated runs\n",
-                     r.cases, r.seconds,
-                     r.seconds > 0 ? static_cast<double>(r.cases) / r.seconds : 0.0,
-                     r.batched_cases, r.isolated_runs);
-    s += fmt::format(
-        "  time: {:.1f} s pipelined, {:.1f} s isolated (transport, stateful, suspects)\n",
-        r.batch_seconds, r.isolated_seconds);
+// Grey-box runs: edges, corpus and constants, and the corpus's troubles.
+std::string format_coverage(const CampaignResult& r) {
+    std::string s;
     if (r.coverage)
         s += fmt::format(
             "  coverage: {} edges; corpus {} case(s); {} constant(s) from the target's "
@@ -284,31 +289,55 @@ std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
     if (r.resumed) s += fmt::format("  corpus resumed: {} saved entries run first\n", r.resumed);
     if (!r.corpus_error.empty())
         s += fmt::format("  WARNING: the corpus is no longer saved: {}\n", r.corpus_error);
+    return s;
+}
+
+// The device model the cases were made from, indented (empty when there is none).
+std::string format_model_lines(const CampaignResult& r) {
+    if (r.model.source.empty()) return {};
+    std::string model = format_model(r.model);
+    if (r.model.source == "learned")
+        model.insert(model.find(')'),
+                     fmt::format("; {} requests in {:.2f} s", r.learn_requests, r.learn_seconds));
+    for (std::size_t at = 0; at < model.size(); at = model.find('\n', at) + 1)
+        model.insert(at, "  ");
+    return model;
+}
+
+// How the target's deaths were told: a marker register, idle sentinels, or neither.
+std::string format_death_detection(const CampaignResult& r) {
+    if (r.death_marker >= 0)
+        return fmt::format(
+            "  deaths seen by a marker register: holding {} was given {:04X} (it held {:04X}); "
+            "lost after a case that did not write it, the process restarted\n",
+            r.death_marker, r.death_marker_value, r.death_marker_initial);
+    return fmt::format("  deaths seen by idle sentinel connections: {}\n",
+                       r.death_watch ? "yes (a crash is a crash even when a supervisor "
+                                       "restarts the target)"
+                                     : "no (the target does not serve an idle connection "
+                                       "beside another, or a serial line; and no register of "
+                                       "a learned map keeps what is written)");
+}
+
+}  // namespace
+
+std::string format_fuzz_summary(const CampaignResult& r, const RunInfo& info) {
+    std::string s = fmt::format("\nmbstorm fuzz summary: target {}, seed {}, {} generator\n",
+                                info.target, info.seed, info.naive ? "naive" : "structured");
+    s += fmt::format("  {} cases in {:.1f} s ({:.0f} cases/s); {} batched, {} isolated runs\n",
+                     r.cases, r.seconds,
+                     r.seconds > 0 ? static_cast<double>(r.cases) / r.seconds : 0.0,
+                     r.batched_cases, r.isolated_runs);
+    s += fmt::format(
+        "  time: {:.1f} s pipelined, {:.1f} s isolated (transport, stateful, suspects)\n",
+        r.batch_seconds, r.isolated_seconds);
+    s += format_coverage(r);
     s += fmt::format(
         "  target deaths: {} ({} restarts, {} not repeatable alone); repeats of known root "
         "causes: {}; cases skipped as known crash/hang: {}; unconfirmed suspects: {}\n",
         r.deaths, r.restarts, r.unattributed_deaths, r.duplicates, r.skipped_known, r.unconfirmed);
-    if (!r.model.source.empty()) {
-        std::string model = format_model(r.model);
-        if (r.model.source == "learned")
-            model.insert(model.find(')'), fmt::format("; {} requests in {:.2f} s", r.learn_requests,
-                                                      r.learn_seconds));
-        for (std::size_t at = 0; at < model.size(); at = model.find('\n', at) + 1)
-            model.insert(at, "  ");
-        s += model;
-    }
-    if (r.death_marker >= 0)
-        s += fmt::format(
-            "  deaths seen by a marker register: holding {} was given {:04X} (it held {:04X}); "
-            "lost after a case that did not write it, the process restarted\n",
-            r.death_marker, r.death_marker_value, r.death_marker_initial);
-    else
-        s += fmt::format("  deaths seen by idle sentinel connections: {}\n",
-                         r.death_watch ? "yes (a crash is a crash even when a supervisor "
-                                         "restarts the target)"
-                                       : "no (the target does not serve an idle connection "
-                                         "beside another, or a serial line; and no register of "
-                                         "a learned map keeps what is written)");
+    s += format_model_lines(r);
+    s += format_death_detection(r);
     if (r.profile.one_connection)
         s += fmt::format(
             "  the target serves one connection at a time: {} case(s) needing two at once were "
