@@ -118,6 +118,9 @@ json profile_json(const TargetProfile& profile) {
     for (std::size_t t = 0; t < profile.unmapped.size(); ++t)
         if (!profile.unmapped[t].empty()) p["unmapped"][std::to_string(t)] = profile.unmapped[t];
     if (profile.refuses_length_mismatch) p["refuses_length_mismatch"] = true;
+    // What follows an exception is dropped on purpose: replay blames a silence behind one as
+    // the run did (else a frame of the wrong length answered 03 reads as a lost stream).
+    if (profile.drops_after_exception) p["drops_after_exception"] = true;
     if (profile.one_connection) p["one_connection"] = true;
     if (profile.marker_address >= 0) p["marker_address"] = profile.marker_address;
     // The framing the case's bytes are in (MBAP when absent): replay needs the same.
@@ -270,6 +273,7 @@ void load_profile(const json& p, TargetProfile& out) {
     out.framing = framing_from_text(p.value("framing", "mbap"));
     out.serial_line = p.value("serial_line", false);
     out.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
+    out.drops_after_exception = p.value("drops_after_exception", false);
     out.one_connection = p.value("one_connection", false);
     out.marker_address =
         static_cast<std::int32_t>(whole_number(p, "marker_address", -1, 0, 0xFFFF));

@@ -64,3 +64,32 @@ TEST(SavedFinding, EveryNumberMustFitItsField) {
     }
     std::filesystem::remove(path);
 }
+
+// What replay judges with is what the run judged with: every flag of the target's profile
+// that changes a verdict comes back from finding.json (a finding saved without the target's
+// drop-after-exception policy replayed a frame of the wrong length answered 03 as a lost
+// stream: 0 of 3 on sparse_device_server).
+TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
+    Finding f;
+    f.verdict = Verdict{Oracle::Hang, "drops-requests-after-exception", 0x17, "s", "e", "x"};
+    f.fuzz_case.steps = {Step{Op::Send, 0, 0, 0, {0, 1, 0, 0, 0, 6, 1, 3, 0, 0, 0, 1}}};
+    f.profile.probe_pdu = {0x03, 0, 0, 0, 1};
+    f.profile.drops_after_exception = true;
+    f.profile.refuses_length_mismatch = true;
+    f.profile.one_connection = true;
+    f.profile.marker_address = 1000;
+    f.profile.unmapped[3] = {999, 1040};
+    const auto dir = (std::filesystem::temp_directory_path() /
+                      ("mbstorm-finding-profile-" + std::to_string(::getpid())))
+                         .string();
+    std::string error;
+    ASSERT_TRUE(save_finding(f, dir, error)) << error;
+    Finding g;
+    ASSERT_TRUE(load_finding(dir, g, error)) << error;
+    EXPECT_TRUE(g.profile.drops_after_exception);
+    EXPECT_TRUE(g.profile.refuses_length_mismatch);
+    EXPECT_TRUE(g.profile.one_connection);
+    EXPECT_EQ(g.profile.marker_address, 1000);
+    EXPECT_EQ(g.profile.unmapped[3], (std::vector<std::uint16_t>{999, 1040}));
+    std::filesystem::remove_all(dir);
+}
