@@ -2,8 +2,8 @@
 // (tests/tools/multi_fault_server.cpp: 12 planted bugs, crashes among them, restarted by the
 // fuzzer's --restart-cmd): with a fixed seed every bug the black-box mode can reach is found,
 // each exactly once, no crash costs more than 3 restarts and every restart is charged to one.
-// --max-findings ends that run at the last of them; a second, short run keeps its deadline. Bug 12 needs one
-// value at one address: the black-box mode must not find it (coverage mode does:
+// --max-findings ends that run at the last of them; a second, short run keeps its deadline. Bug 12
+// needs one value at one address: the black-box mode must not find it (coverage mode does:
 // tests/scripts/fuzz_coverage_multi_fault.sh).
 #include <gtest/gtest.h>
 
