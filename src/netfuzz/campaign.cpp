@@ -195,7 +195,10 @@ class Campaign : private Rerun, private Replayer {
     std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
                                                 const std::string& key);
     Outcome record_plain(const Case& plain, Execution whole);
-    std::optional<Outcome> confirm_death(const Case& c, Execution& ex, const std::string& key,
+    // Of a case of several requests on one connection, the one that kills the target alone
+    // (ex its run, `c` made that request alone), if one does; false when the target was lost.
+    bool lone_killer(Case& c, Execution& ex, bool& found);
+    std::optional<Outcome> confirm_death(Case& c, Execution& ex, const std::string& key,
                                          bool batch_died);
     // After a run that crashed the target or hung it as a whole (TargetCare::bring_back).
     bool bring_back(const Execution& ex, const std::string& cause) override {
@@ -543,7 +546,45 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
 
 // A death is a crash only if the case, replayed alone, kills the target again. Nothing when
 // confirmed (`ex` the confirming run) and to be recorded.
-std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Execution& ex,
+// A crash is blamed on the first request left unanswered, which a target that answers a read
+// in one write after the next request was never able to answer: each request alone is asked
+// first (one that does not kill it costs no restart), so that the crash is keyed by the
+// request that does. The restart its death costs is the one confirmation would have cost.
+bool Campaign::lone_killer(Case& c, Execution& ex, bool& found) {
+    found = false;
+    if (is_transport_class(c.cls) || c.connections() > 1) return true;
+    std::vector<Case> alone;
+    for_each_request(c, result_.profile, [&](const RequestInfo& info) {
+        Case one;
+        one.cls = c.cls;
+        one.function = info.pdu.empty() ? 0 : info.pdu[0];
+        one.steps.push_back(Step{Op::Send, 0, 0, 0,
+                                 frame_of(Pdu(info.pdu.begin(), info.pdu.end()), 0x0D00,
+                                          info.header.unit_id, result_.profile.framing)});
+        alone.push_back(std::move(one));
+        return true;
+    });
+    if (alone.size() < 2) return true;
+    for (Case& one : alone) {
+        if (!can_afford(1)) return true;
+        ++result_.isolated_runs;
+        Execution e = run_alone(one);
+        if (!e.target_down) {
+            if (whole_server_hang(e.verdict) && !care_.settle()) return false;
+            continue;
+        }
+        ++result_.deaths;
+        const std::string key = e.verdict ? root_cause_key(e.verdict) : "";
+        if (!care_.recover(key)) return false;
+        c = std::move(one);
+        ex = std::move(e);
+        found = true;
+        return true;
+    }
+    return true;
+}
+
+std::optional<Campaign::Outcome> Campaign::confirm_death(Case& c, Execution& ex,
                                                          const std::string& key, bool batch_died) {
     ++result_.deaths;
     if (!care_.recover(key)) {
@@ -564,6 +605,16 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(const Case& c, Executio
     if (!can_afford(1)) {
         ++result_.suspects_left;
         return Outcome::Clean;
+    }
+    bool alone = false;
+    if (!lone_killer(c, ex, alone)) return Outcome::Lost;
+    if (alone) {
+        // The first death was charged to the request blamed then: it was this one's.
+        care_.move_charges(key, root_cause_key(ex.verdict));
+        Finding* f = known(ex.verdict);
+        if (!f) return std::nullopt;
+        hit(*f, ex.verdict, c);
+        return Outcome::Fired;
     }
     ++result_.isolated_runs;
     Execution again = run_alone(c);

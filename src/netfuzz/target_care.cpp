@@ -24,6 +24,14 @@ unsigned TargetCare::charged(const std::string& cause) const {
     return it == restarts_by_cause_.end() ? 0 : it->second;
 }
 
+void TargetCare::move_charges(const std::string& from, const std::string& to) {
+    const auto it = restarts_by_cause_.find(from);
+    if (from == to || it == restarts_by_cause_.end()) return;
+    const unsigned n = it->second;
+    restarts_by_cause_.erase(it);
+    restarts_by_cause_[to] += n;
+}
+
 TargetCare::Sentinels TargetCare::arm_watch() {
     // A serial line has one link; a target that serves one connection at a time would be
     // blocked by an idle one.

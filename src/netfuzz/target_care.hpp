@@ -64,6 +64,8 @@ class TargetCare {
     // Restarts charged to each root cause (including ones a finding had before minimising).
     void charge(const std::string& cause) { ++restarts_by_cause_[cause]; }
     unsigned charged(const std::string& cause) const;
+    // Restarts charged to `from` were `to`'s (a crash blamed on the wrong request at first).
+    void move_charges(const std::string& from, const std::string& to);
     const std::map<std::string, unsigned>& charges() const noexcept { return restarts_by_cause_; }
 
   private:

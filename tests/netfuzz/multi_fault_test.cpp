@@ -46,17 +46,30 @@ const std::set<std::string> kCoverageOnly = {
     "crash:target-down/fc06",  // 12
 };
 
-TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
+// multi_fault_server on a fixed port (a restarted one must come back on it), started again by
+// the fuzzer's --restart-cmd; every server it started is stopped with this.
+struct MultiFaultTarget {
     int port = 0;
-    auto first = mbstorm::test::start_fixed_port_server("multi_fault_server", port, 7,
-                                                        kServerLifetimeSeconds);
-    ASSERT_TRUE(first) << "multi_fault_server did not start";
-    const std::string dir = mbstorm::test::temp_dir("multi-fault");
-    RestartedServers restarted(dir + "/restarted.pids");
-    const std::string restart_cmd =
-        tool_path("multi_fault_server") + " --port " + std::to_string(port) + " --pid-file " + dir +
-        "/restarted.pids --exit-after-s " + std::to_string(kServerLifetimeSeconds) +
-        " </dev/null >/dev/null 2>&1 &";
+    std::unique_ptr<mbstorm::test::Target> first;
+    std::string dir;
+    std::unique_ptr<RestartedServers> restarted;
+    std::string restart_cmd;
+    explicit MultiFaultTarget(const std::string& name) : dir(mbstorm::test::temp_dir(name)) {
+        first = mbstorm::test::start_fixed_port_server("multi_fault_server", port, 7,
+                                                       kServerLifetimeSeconds);
+        restarted = std::make_unique<RestartedServers>(dir + "/restarted.pids");
+        restart_cmd = tool_path("multi_fault_server") + " --port " + std::to_string(port) +
+                      " --pid-file " + dir + "/restarted.pids --exit-after-s " +
+                      std::to_string(kServerLifetimeSeconds) + " </dev/null >/dev/null 2>&1 &";
+    }
+};
+
+TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
+    MultiFaultTarget t("multi-fault");
+    ASSERT_TRUE(t.first) << "multi_fault_server did not start";
+    const int port = t.port;
+    const std::string& dir = t.dir;
+    const std::string& restart_cmd = t.restart_cmd;
     const auto run =
         run_mbstorm("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed 1 --seconds " +
                         std::to_string(kSeconds) + " --max-findings " +
@@ -94,8 +107,8 @@ TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
     // Every restart is charged to the finding whose bug made it (three at most each, above):
     // none is spent on anything else.
     EXPECT_EQ(s.at("restarts").get<unsigned>(), charged) << run.output;
-    EXPECT_TRUE(restarted.stop_all());
-    first.reset();
+    EXPECT_TRUE(t.restarted->stop_all());
+    t.first.reset();
     std::filesystem::remove_all(dir);
 }
 
@@ -104,20 +117,15 @@ TEST(MultiFault, EveryPlantedBugIsFoundExactlyOnceWithinTheDeadline) {
 // planted bug.
 TEST(MultiFault, ARunEndsAtItsDeadlineWhateverTheTargetDoes) {
     constexpr int kShort = 15;
-    int port = 0;
-    auto first = mbstorm::test::start_fixed_port_server("multi_fault_server", port, 7,
-                                                        kServerLifetimeSeconds);
-    ASSERT_TRUE(first) << "multi_fault_server did not start";
-    const std::string dir = mbstorm::test::temp_dir("multi-fault-deadline");
-    RestartedServers restarted(dir + "/restarted.pids");
-    const std::string restart_cmd =
-        tool_path("multi_fault_server") + " --port " + std::to_string(port) + " --pid-file " + dir +
-        "/restarted.pids --exit-after-s " + std::to_string(kServerLifetimeSeconds) +
-        " </dev/null >/dev/null 2>&1 &";
+    MultiFaultTarget t("multi-fault-deadline");
+    ASSERT_TRUE(t.first) << "multi_fault_server did not start";
+    const int port = t.port;
+    const std::string& dir = t.dir;
+    const std::string& restart_cmd = t.restart_cmd;
     const auto t0 = std::chrono::steady_clock::now();
     const auto run =
         run_mbstorm("fuzz --target 127.0.0.1:" + std::to_string(port) + " --seed 1 --seconds " +
-                        std::to_string(kShort) + " -q --json " + dir +
+                        std::to_string(kShort) + " -q --out " + dir + "/findings --json " + dir +
                         "/summary.json --restart-cmd '" + restart_cmd + "'",
                     kShort + 60);
     const double wall_s =
@@ -138,8 +146,8 @@ TEST(MultiFault, ARunEndsAtItsDeadlineWhateverTheTargetDoes) {
         EXPECT_EQ(++found[key], 1) << key;
     }
     EXPECT_GE(found.size(), 2u) << run.output;  // 4 on the 2-core machine (release build)
-    EXPECT_TRUE(restarted.stop_all());
-    first.reset();
+    EXPECT_TRUE(t.restarted->stop_all());
+    t.first.reset();
     std::filesystem::remove_all(dir);
 }
 

@@ -105,6 +105,13 @@ TEST(TargetCare, ARestartIsChargedToItsRootCause) {
     EXPECT_TRUE(c.care->recover(""));
     EXPECT_EQ(c.result.restarts, 2u);
     EXPECT_EQ(c.care->charges().size(), 1u) << "a restart for no cause is charged to none";
+    // Blamed on the wrong request first: the restart follows the crash to its own key.
+    c.care->move_charges("crash:target-down/fc10", "crash:target-down/fc06");
+    EXPECT_EQ(c.care->charged("crash:target-down/fc10"), 0u);
+    EXPECT_EQ(c.care->charged("crash:target-down/fc06"), 1u);
+    c.care->charge("crash:target-down/fc01");
+    c.care->move_charges("crash:target-down/fc01", "crash:target-down/fc06");
+    EXPECT_EQ(c.care->charged("crash:target-down/fc06"), 2u);
 }
 
 TEST(TargetCare, AWholeServerHangThatEndsIsWaitedOutNotRestarted) {
