@@ -295,6 +295,17 @@ class Campaign : private Rerun, private Replayer {
     Rationing rationing_;  // cases not sent: they cost more than they can show
     // The case being isolated comes from a pipelined batch that killed the target.
     std::vector<Pdu> learned_killers_;  // requests after which learning lost the stream
+    LearnOptions learn_options(double budget_s);
+    // Refines a learned map between rounds, within kRefineShare of the time run so far; true
+    // when the target was lost.
+    bool refine_the_map(std::uint64_t& generated);
+    void save_model() const;
+    // Requests after which learning or refinement lost the stream, as cases to look at first
+    // (at most 8).
+    std::vector<Case> killer_cases(const std::vector<Pdu>& killers) const;
+    bool refining_ = false;  // the model was learned whole: refinement goes on
+    RefineCursor refine_cursor_;
+    std::int64_t refine_ns_ = 0;
 };
 
 Finding* Campaign::known(const Verdict& v) {
@@ -943,34 +954,82 @@ void Campaign::progress(bool force) {
 // Learning the map gets at most a tenth of the run, and never more than this.
 constexpr double kLearnBudgetS = 20;
 
+LearnOptions Campaign::learn_options(double budget_s) {
+    LearnOptions lo;
+    lo.timeout_ms = options_.timeout_ms;
+    lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
+    lo.hints = options_.dict_words;
+    // A target learning crashed is started again by our command, if we have one.
+    if (!options_.restart_cmd.empty()) lo.restart = [this] { return care_.recover(""); };
+    // One request at a time on a serial line or RTU/ASCII: a coarser sweep.
+    if (result_.profile.framing != codec::Framing::Mbap) lo.stride = 256;
+    return lo;
+}
+
 void Campaign::know_the_device() {
     if (!options_.model.empty()) {
         result_.model = options_.model;
     } else if (options_.learn_model && !options_.naive && !result_.profile.serial_line) {
         // Not on a serial line: one request at a time at its baud rate, a sweep would take
         // most of a run (give --map there).
-        LearnOptions lo;
-        lo.timeout_ms = options_.timeout_ms;
         const double budget_s = options_.max_seconds > 0
                                     ? std::min(options_.max_seconds / 10, kLearnBudgetS)
                                     : kLearnBudgetS;
-        lo.budget_ns = static_cast<std::int64_t>(budget_s * 1e9);
-        lo.hints = options_.dict_words;
-        // A target learning crashed is started again by our command, if we have one.
-        if (!options_.restart_cmd.empty()) lo.restart = [this] { return care_.recover(""); };
-        // One request at a time on a serial line or RTU/ASCII: a coarser sweep.
-        if (result_.profile.framing != codec::Framing::Mbap) lo.stride = 256;
         LearnStats st;
-        result_.model = learn_device_model(*options_.connector, result_.profile, lo, &st);
+        result_.model =
+            learn_device_model(*options_.connector, result_.profile, learn_options(budget_s), &st);
         result_.learn_seconds = st.seconds;
         result_.learn_requests = st.requests;
         learned_killers_ = std::move(st.stream_killers);
+        refining_ = true;
+        refine_cursor_.swept_too = result_.model.partial;
     }
     use_probe_inside_the_map();
+    save_model();
+}
+
+void Campaign::save_model() const {
     if (result_.model.source.empty() || options_.out_dir.empty()) return;
     std::error_code ec;
     std::filesystem::create_directories(options_.out_dir, ec);
     std::ofstream(options_.out_dir + "/model.json") << model_to_json(result_.model);
+}
+
+// Refinement's share of the run's time so far, and its reads per turn.
+constexpr double kRefineShare = 0.05;
+constexpr std::uint32_t kRefineReads = 512;
+
+bool Campaign::refine_the_map(std::uint64_t& generated) {
+    const std::int64_t t0 = net::now_ns();
+    if (!refining_ || static_cast<double>(refine_ns_) > kRefineShare * (t0 - start_)) return false;
+    LearnStats st;
+    const double left_s = static_cast<double>(std::max<std::int64_t>(remaining_ns(), 0)) / 1e9;
+    const bool changed =
+        refine_device_model(*options_.connector, result_.profile, learn_options(left_s),
+                            result_.model, refine_cursor_, kRefineReads, st);
+    refine_ns_ += net::now_ns() - t0;
+    result_.refine_seconds = static_cast<double>(refine_ns_) / 1e9;
+    result_.refine_requests += st.requests;
+    refining_ = !refine_cursor_.done;
+    result_.refine_done = refine_cursor_.done;
+    if (changed) {
+        // The found ranges' neighbours were refused (a read of one owes 02), and cases aim at
+        // the ranges now.
+        for (std::size_t t = 0; t < kTableCount; ++t) {
+            TableModel found;
+            found.ranges = result_.model.tables[t].found_during_run;
+            auto& out = result_.profile.unmapped[t];
+            for (const std::uint16_t a : refused_neighbours(found))
+                if (!result_.model.tables[t].contains(a) &&
+                    std::find(out.begin(), out.end(), a) == out.end())
+                    out.push_back(a);
+        }
+        if (!options_.state_given) exec_.state = StateRange{0, 0x10000};
+        gen_->use_model(&result_.model, exec_.state);
+        save_model();
+    }
+    std::vector<Case> killers = killer_cases(st.stream_killers);
+    return !killers.empty() && look_first(std::move(killers), generated);
 }
 
 void Campaign::use_probe_inside_the_map() {
@@ -1048,19 +1107,23 @@ bool Campaign::learn_then_look(std::uint64_t& generated) {
     // is checked (nothing else writes while it runs), unless the user chose the range.
     if (!result_.model.empty() && !options_.state_given) exec_.state = StateRange{0, 0x10000};
     gen_->use_model(&result_.model, exec_.state);
-    // What killed the stream while learning, alone, first (at most 8).
-    std::vector<Case> killers;
-    for (const Pdu& pdu : learned_killers_) {
-        if (killers.size() == 8) break;
+    // What killed the stream while learning, alone, first.
+    return look_first(killer_cases(learned_killers_), generated);
+}
+
+std::vector<Case> Campaign::killer_cases(const std::vector<Pdu>& killers) const {
+    std::vector<Case> out;
+    for (const Pdu& pdu : killers) {
+        if (out.size() == 8) break;
         Case c;
         c.cls = MutationClass::MapEdge;
         c.function = pdu[0];
         c.steps.push_back(
             Step{Op::Send, 0, 0, 0,
                  frame_of(pdu, 0x0E00, result_.profile.unit, result_.profile.framing)});
-        killers.push_back(std::move(c));
+        out.push_back(std::move(c));
     }
-    return look_first(std::move(killers), generated);
+    return out;
 }
 
 Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& generated) {
@@ -1365,6 +1428,7 @@ CampaignResult Campaign::run() {
         Round r = next_round(requeue, generated);
         if (!run_round(r, requeue, requeued_once)) break;
         if (++rounds == 1) check_capacity_once();
+        lost = !out_of_budget() && refine_the_map(generated);
     }
     finish();
     return result_;

@@ -84,6 +84,11 @@ struct CampaignResult {
     DeviceModel model;  // what was known of the device's map (learned or given)
     double learn_seconds = 0;
     std::uint64_t learn_requests = 0;
+    // Refining the learned map during the run (refine_device_model): its reads, its time and
+    // the ranges it added (model's found_during_run).
+    double refine_seconds = 0;
+    std::uint64_t refine_requests = 0;
+    bool refine_done = false;  // every address the learning sweep stepped over was asked
     bool death_watch = false;  // sentinels were held (the target serves them concurrently)
     // Without sentinels: the holding register a marker was written to (state_marker.hpp), and
     // the values it held and was given. -1: none.

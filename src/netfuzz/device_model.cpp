@@ -197,7 +197,10 @@ std::string model_to_json(const DeviceModel& m) {
         const TableModel& tm = m.table(t);
         json ranges = json::array();
         for (const AddressRange& r : tm.ranges) ranges.push_back({r.first, r.last});
+        json found = json::array();
+        for (const AddressRange& r : tm.found_during_run) found.push_back({r.first, r.last});
         tables[std::string(table_label(t))] = {{"ranges", ranges},
+                                               {"found_during_run", found},
                                                {"entries", tm.entries()},
                                                {"max_quantity", tm.max_quantity},
                                                {"writes_stick", writes_stick_name(tm.writes)}};
@@ -222,6 +225,23 @@ std::uint64_t whole_number(const nlohmann::json& v, std::uint64_t max, std::stri
             fmt::format("{} must be a whole number 0..{}, not {}", what, max, v.dump()));
     return v.get<std::uint64_t>();
 }
+
+// A list of [first, last] pairs, sorted and merged.
+bool ranges_from_json(const nlohmann::json& list, const std::string& table,
+                      std::vector<AddressRange>& out, std::string& error) {
+    for (const auto& r : list) {
+        const auto first = whole_number(r.at(0), 0xFFFF, "a range's first address"),
+                   last = whole_number(r.at(1), 0xFFFF, "a range's last address");
+        if (first > last) {
+            error = fmt::format("{}: range {}-{} is not within 0..65535", table, first, last);
+            return false;
+        }
+        out.push_back(
+            AddressRange{static_cast<std::uint16_t>(first), static_cast<std::uint16_t>(last)});
+    }
+    normalise(out);
+    return true;
+}
 }  // namespace
 
 bool model_from_json(const std::string& text, DeviceModel& out, std::string& error) {
@@ -240,18 +260,10 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
                 return false;
             }
             TableModel& tm = out.table(t);
-            for (const auto& r : tj.at("ranges")) {
-                const auto first = whole_number(r.at(0), 0xFFFF, "a range's first address"),
-                           last = whole_number(r.at(1), 0xFFFF, "a range's last address");
-                if (first > last) {
-                    error =
-                        fmt::format("{}: range {}-{} is not within 0..65535", name, first, last);
-                    return false;
-                }
-                tm.ranges.push_back(AddressRange{static_cast<std::uint16_t>(first),
-                                                 static_cast<std::uint16_t>(last)});
-            }
-            normalise(tm.ranges);
+            if (!ranges_from_json(tj.at("ranges"), name, tm.ranges, error)) return false;
+            if (tj.contains("found_during_run") &&
+                !ranges_from_json(tj["found_during_run"], name, tm.found_during_run, error))
+                return false;
             if (tj.contains("max_quantity"))
                 tm.max_quantity = static_cast<std::uint16_t>(
                     whole_number(tj["max_quantity"], 0xFFFF, "max_quantity"));
@@ -303,6 +315,9 @@ std::string format_model(const DeviceModel& m) {
                                                     : fmt::format("{}-{}", r.first, r.last));
         if (ranges.empty()) ranges = "none";
         s += fmt::format("  {:<18} {} ({} entries)", table_label(t), ranges, tm.entries());
+        if (!tm.found_during_run.empty())
+            s += fmt::format(", {} range{} found during the run", tm.found_during_run.size(),
+                             tm.found_during_run.size() == 1 ? "" : "s");
         if (tm.max_quantity) s += fmt::format(", reads up to {}", tm.max_quantity);
         if (tm.writes != WritesStick::Unknown)
             s += fmt::format(", writes stick: {}", writes_stick_name(tm.writes));
@@ -486,21 +501,27 @@ bool normal_answer(const Pdu& a, std::uint8_t fc) {
     return !a.empty() && a[0] == fc;
 }
 
-// Addresses a sweep asks first: the user's, then where vendors start their maps.
+// Where vendors start their maps: the sweep asks each and the one after it.
+constexpr std::array<std::uint32_t, 12> kVendorBases = {0,    100,   1000,  2000,  3000,  4000,
+                                                        5000, 10000, 20000, 30000, 40000, 50000};
+// Small devices keep their few registers low: the sweep asks the first 1,024 addresses four
+// times as densely (256 requests more), so a range of 4 there is found.
+constexpr std::uint32_t kDenseBelow = 1024;
+
+// Whether the learning sweep asks `address` (hints aside).
+bool swept(std::uint32_t address, std::uint32_t stride) {
+    stride = std::max<std::uint32_t>(1, stride);
+    if (address % stride == 0 || address == 0xFFFF) return true;
+    if (address < kDenseBelow && address % std::max<std::uint32_t>(1, stride / 4) == 0) return true;
+    return std::any_of(kVendorBases.begin(), kVendorBases.end(),
+                       [&](std::uint32_t b) { return address == b || address == b + 1; });
+}
+
+// Addresses a sweep asks: the user's, then the swept ones.
 std::vector<std::uint32_t> sample_addresses(const LearnOptions& o) {
-    std::set<std::uint32_t> s;
-    for (std::uint16_t h : o.hints) s.insert(h);
-    for (std::uint32_t base :
-         {0u, 100u, 1000u, 2000u, 3000u, 4000u, 5000u, 10000u, 20000u, 30000u, 40000u, 50000u}) {
-        s.insert(base);
-        s.insert(base + 1);
-    }
-    const std::uint32_t stride = std::max<std::uint32_t>(1, o.stride);
-    for (std::uint32_t a = 0; a < 0x10000; a += stride) s.insert(a);
-    // Small devices keep their few registers low: the first 1,024 addresses four times as
-    // densely (256 requests more), so a range of 4 there is found.
-    for (std::uint32_t a = 0; a < 1024; a += std::max<std::uint32_t>(1, stride / 4)) s.insert(a);
-    s.insert(0xFFFF);
+    std::set<std::uint32_t> s(o.hints.begin(), o.hints.end());
+    for (std::uint32_t a = 0; a < 0x10000; ++a)
+        if (swept(a, o.stride)) s.insert(a);
     return {s.begin(), s.end()};
 }
 
@@ -711,6 +732,118 @@ DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
     m.partial = asker.out_of_time();
     st.seconds = static_cast<double>(net::now_ns() - t0) / 1e9;
     return m;
+}
+
+namespace {
+
+// The offsets within a gap of the sweep in the order refinement asks them: the middle, then
+// the quarters, the eighths, ... (16: 8, 4, 12, 2, 6, 10, 14, 1, 3, ...).
+std::vector<std::uint32_t> gap_order(std::uint32_t stride, bool swept_too) {
+    std::vector<std::uint32_t> order;
+    if (swept_too) order.push_back(0);
+    std::vector<bool> taken(stride);
+    std::uint32_t step = 1;
+    while (step * 2 < stride) step *= 2;
+    for (; step >= 1; step /= 2)
+        for (std::uint32_t o = step; o < stride; o += step)
+            if (!taken[o]) {
+                taken[o] = true;
+                order.push_back(o);
+            }
+    return order;
+}
+
+// Up to `n` of the table's unswept addresses from the cursor on, none in the map: the same
+// offset in every gap, then the next offset. The cursor moves past them.
+std::vector<std::uint32_t> next_unswept(const TableModel& tm, std::uint32_t stride,
+                                        const std::vector<std::uint32_t>& order, bool swept_too,
+                                        std::uint32_t& cursor, std::uint32_t n) {
+    const std::uint32_t gaps = (0x10000 + stride - 1) / stride;
+    const std::uint32_t end = static_cast<std::uint32_t>(order.size()) * gaps;
+    std::vector<std::uint32_t> out;
+    for (; cursor < end && out.size() < n; ++cursor) {
+        const std::uint32_t a = (cursor % gaps) * stride + order[cursor / gaps];
+        if (a <= 0xFFFF && (swept_too || !swept(a, stride)) && !tm.contains(a)) out.push_back(a);
+    }
+    return out;
+}
+
+// The first address of the run of answering addresses that ends at `from`, asked a gap at a
+// time towards `step` (-1: down, +1: up) until one is refused or the map or the table ends.
+std::uint32_t answering_run_end(Asker& asker, std::uint8_t fc, std::uint32_t stride,
+                                std::uint32_t from, int step, const TableModel& tm) {
+    std::uint32_t end = from;
+    for (;;) {
+        std::vector<std::uint32_t> next;
+        for (std::uint32_t a = end; next.size() < stride;) {
+            if ((step < 0 && a == 0) || (step > 0 && a == 0xFFFF)) break;
+            a = step < 0 ? a - 1 : a + 1;
+            if (tm.contains(a)) break;
+            next.push_back(a);
+        }
+        if (next.empty()) return end;
+        const std::vector<bool> ok = readable(asker, fc, next);
+        for (std::size_t i = 0; i < next.size(); ++i) {
+            if (!ok[i]) return end;
+            end = next[i];
+        }
+    }
+}
+
+// The range of answering addresses around `hit`, asked out from it until a refused address
+// (or a known range) on each side, so that its edges are exact: a read just outside it owes
+// 02. Nothing when `hit` does not answer again (a flaky answer).
+std::optional<AddressRange> range_around(Asker& asker, std::uint8_t fc, std::uint32_t stride,
+                                         std::uint32_t hit, const TableModel& tm) {
+    if (!readable(asker, fc, {hit}).front()) return std::nullopt;
+    const std::uint32_t first = answering_run_end(asker, fc, stride, hit, -1, tm);
+    const std::uint32_t last = answering_run_end(asker, fc, stride, hit, +1, tm);
+    return AddressRange{static_cast<std::uint16_t>(first), static_cast<std::uint16_t>(last)};
+}
+
+}  // namespace
+
+bool refine_device_model(Connector& target, const TargetProfile& profile,
+                         const LearnOptions& options, DeviceModel& model, RefineCursor& cursor,
+                         std::uint32_t max_requests, LearnStats& stats) {
+    const std::uint32_t stride = std::max<std::uint32_t>(1, options.stride);
+    const std::vector<std::uint32_t> order = gap_order(stride, cursor.swept_too);
+    const std::uint32_t end =
+        static_cast<std::uint32_t>(order.size()) * ((0x10000 + stride - 1) / stride);
+    const std::int64_t deadline = options.budget_ns ? net::now_ns() + options.budget_ns : 0;
+    Asker asker(target, profile, options, deadline, stats);
+    bool changed = false;
+    cursor.done = true;
+    for (Table t : kTables) {
+        const std::size_t i = static_cast<std::size_t>(t);
+        const std::uint8_t fc = read_function(t);
+        if (profile.unsupported[fc]) continue;
+        if (asker.out_of_time()) {
+            cursor.done = false;
+            continue;
+        }
+        TableModel& tm = model.table(t);
+        const bool had_none = tm.ranges.empty();
+        const std::vector<std::uint32_t> addrs = next_unswept(
+            tm, stride, order, cursor.swept_too, cursor.next[i], max_requests / kTableCount);
+        cursor.done = cursor.done && cursor.next[i] >= end;
+        const std::vector<bool> ok = readable(asker, fc, addrs);
+        for (std::size_t k = 0; k < addrs.size(); ++k) {
+            if (!ok[k] || tm.contains(addrs[k])) continue;
+            const std::optional<AddressRange> found = range_around(asker, fc, stride, addrs[k], tm);
+            if (!found) continue;
+            tm.ranges.push_back(*found);
+            tm.found_during_run.push_back(*found);
+            normalise(tm.ranges);
+            normalise(tm.found_during_run);
+            changed = true;
+        }
+        if (!had_none || tm.ranges.empty() || asker.out_of_time()) continue;
+        tm.max_quantity = learn_max_quantity(asker, t, tm);
+        if (t == Table::Coils || t == Table::HoldingRegisters)
+            tm.writes = learn_writes(asker, t, tm);
+    }
+    return changed;
 }
 
 }  // namespace mbstorm::netfuzz

@@ -32,6 +32,8 @@ struct TableModel {
     std::vector<AddressRange> ranges;           // valid addresses: sorted, disjoint, not adjacent
     std::uint16_t max_quantity = 0;             // most items one read was seen to take (0: unknown)
     WritesStick writes = WritesStick::Unknown;  // coils and holding registers only
+    // Of `ranges`, those refinement found during the run (the learning sweep stepped over them).
+    std::vector<AddressRange> found_during_run;
 
     bool contains(std::uint32_t address) const noexcept;
     // The range holding `address`, or null.
@@ -111,5 +113,26 @@ struct LearnStats {
 // write of another value, a read back, the old value restored), and what an exception costs.
 DeviceModel learn_device_model(Connector& target, const TargetProfile& profile,
                                const LearnOptions& options, LearnStats* stats = nullptr);
+
+// How far refinement has gone through the addresses the learning sweep stepped over.
+struct RefineCursor {
+    std::array<std::uint32_t, kTableCount> next{};  // per table, the next of its unswept addresses
+    bool done = false;                              // every table's unswept address asked
+    // The model is partial (learning ran out of time before it swept every table): the swept
+    // addresses are asked too, first.
+    bool swept_too = false;
+};
+
+// Refines a learned model during the run: reads of one item at the addresses the learning sweep
+// (options.stride) stepped over, its gaps halved in turn across the whole table (the middle of
+// every gap first, then the quarters, ...), so a short range anywhere is found early. At most
+// `max_requests` reads, then it returns (the cursor keeps its place). Around an address that
+// answers, the addresses are asked outwards until one is refused on each side; the ranges found
+// join the model (in `found_during_run` too), and a table that had none has its largest read
+// and its writes learned. A partial model (learning ran out of time) is completed this way.
+// True when the model changed.
+bool refine_device_model(Connector& target, const TargetProfile& profile,
+                         const LearnOptions& options, DeviceModel& model, RefineCursor& cursor,
+                         std::uint32_t max_requests, LearnStats& stats);
 
 }  // namespace mbstorm::netfuzz

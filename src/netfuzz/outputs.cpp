@@ -138,6 +138,9 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"model", r.model.source.empty() ? json(nullptr) : json::parse(model_to_json(r.model))},
         {"learn_seconds", r.learn_seconds},
         {"learn_requests", r.learn_requests},
+        {"refine_seconds", r.refine_seconds},
+        {"refine_requests", r.refine_requests},
+        {"refine_done", r.refine_done},
         {"death_watch", r.death_watch},
         {"one_connection_at_a_time", r.profile.one_connection},
         {"not_sent_one_connection", r.not_sent_one_connection},
@@ -299,6 +302,11 @@ std::string format_model_lines(const CampaignResult& r) {
     if (r.model.source == "learned")
         model.insert(model.find(')'),
                      fmt::format("; {} requests in {:.2f} s", r.learn_requests, r.learn_seconds));
+    if (r.refine_requests)
+        model.insert(model.find(')'), fmt::format("; refined during the run: {} requests in "
+                                                  "{:.2f} s{}",
+                                                  r.refine_requests, r.refine_seconds,
+                                                  r.refine_done ? ", every gap asked" : ""));
     for (std::size_t at = 0; at < model.size(); at = model.find('\n', at) + 1)
         model.insert(at, "  ");
     return model;
