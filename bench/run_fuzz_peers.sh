@@ -39,6 +39,10 @@ if m:
     tables = ", ".join(f"{t} {t_['ranges']}" for t, t_ in m["tables"].items() if t_["ranges"])
     print(f"  model ({j['learn_requests']} requests, {j['learn_seconds']:.2f} s): {tables}; "
           f"pauses {m['exception_pause_ms']}; {j['rationed']} cases rationed")
+    found = {t: t_["found_during_run"] for t, t_ in m["tables"].items() if t_.get("found_during_run")}
+    print(f"  refined during the run: {j.get('refine_requests', 0)} requests, "
+          f"{j.get('refine_seconds', 0):.2f} s, every gap asked: {j.get('refine_done', False)}; "
+          f"found {found or 'nothing'}")
 print(f"  cases by class: {j['cases_by_class']}")
 for f in j["findings"]:
     print(f"  #{f['id']:<3} {f['root_cause']:<70} hits {f['hits']:<6} restarts {f['restarts']} "
