@@ -73,16 +73,22 @@ run = json.load(open(sys.argv[1]))
 timeline = [json.loads(l) for l in open(sys.argv[2]) if l.strip()]
 hlog = [l for l in open(sys.argv[3]) if l[:1].isdigit()]
 problems = []
-# A busy machine may fall short of the schedule: the run then fails its "plan carried out"
-# threshold (exit 1), rightly; any other failure is one.
+# A busy machine may fall short of the schedule: the run must then say so (a "rate" shortfall,
+# and its "plan carried out" threshold failed: exit 1); any other failure is one. How fast the
+# machine is decides nothing here: the pacer never sends more than asked (10% for the stage
+# edges), each stage's schedule shows in the timeline, and a stage short of its rate is owned up.
+shortfalls = [f for f in run.get("plan_shortfalls", []) if f["what"] == "rate"]
 short_only = [t["expression"] for t in run["thresholds"] if not t["passed"]] == ["plan carried out"]
-if sys.argv[4] != "0" and not (sys.argv[4] == "1" and short_only):
-    problems.append(f"run exit {sys.argv[4]}")
+if sys.argv[4] != "0" and not (sys.argv[4] == "1" and short_only and shortfalls):
+    problems.append(f"run exit {sys.argv[4]}, shortfalls {run.get('plan_shortfalls')}")
 stages = {s["name"]: s["totals"]["transactions"] for s in run["stages"]}
-# Open loop at 50/s then 150/s for a second each: never more than asked (10% for the edges),
-# and the second stage at least twice the first even on a busy machine.
 slow, fast = stages.get("slow", 0), stages.get("fast", 0)
-if not 25 <= slow <= 55 or not 2 * slow <= fast <= 165: problems.append(f"stages: {stages}")
+if not 0 < slow <= 55 or not 0 < fast <= 165: problems.append(f"stages: {stages}")
+# The engine owns up below 95% of the schedule; 90% leaves room for where its window ends.
+if slow + fast < 0.9 * 200 and not shortfalls:
+    problems.append(f"stages {stages}: short of 200 in all and no rate shortfall reported")
+rates = {round(i["target_rate_per_s"]) for i in timeline}
+if not {50, 150} <= rates: problems.append(f"scheduled rates in the timeline: {sorted(rates)}")
 if sum(i["transactions"] for i in timeline) != run["totals"]["transactions"]:
     problems.append(f"timeline {[i['transactions'] for i in timeline]} vs {run['totals']}")
 if len(hlog) < 2: problems.append(f"{len(hlog)} interval lines in the hlog")
