@@ -37,6 +37,7 @@
 #include "netfuzz/device_model.hpp"
 #include "netfuzz/discovery.hpp"
 #include "netfuzz/generator.hpp"
+#include "netfuzz/lone_killer.hpp"
 #include "netfuzz/minimize.hpp"
 #include "netfuzz/rationing.hpp"
 #include "netfuzz/restart_command.hpp"
@@ -125,7 +126,7 @@ std::string variant_of(const Verdict& v, const Case& c) {
     return s;
 }
 
-class Campaign : private Rerun, private Replayer {
+class Campaign : private Rerun, private Replayer, private LoneRuns {
   public:
     Campaign(const CampaignOptions& o, const ProgressFn& p, const FindingFn& f)
         : options_(o), on_progress_(p), on_finding_(f) {}
@@ -195,9 +196,16 @@ class Campaign : private Rerun, private Replayer {
     std::optional<Outcome> judge_transport_case(Case& c, Execution& ex, const Case& plain,
                                                 const std::string& key);
     Outcome record_plain(const Case& plain, Execution whole);
-    // Of a case of several requests on one connection, the one that kills the target alone
-    // (ex its run, `c` made that request alone), if one does; false when the target was lost.
-    bool lone_killer(Case& c, Execution& ex, bool& found);
+    // LoneRuns, for find_lone_killer.
+    Execution run_request_alone(const Case& c) override {
+        ++result_.isolated_runs;
+        return run_alone(c);
+    }
+    bool recover_from_death(const std::string& cause) override {
+        ++result_.deaths;
+        return care_.recover(cause);
+    }
+    bool settle_hang() override { return care_.settle(); }
     std::optional<Outcome> confirm_death(Case& c, Execution& ex, const std::string& key,
                                          bool batch_died);
     // After a run that crashed the target or hung it as a whole (TargetCare::bring_back).
@@ -303,9 +311,6 @@ class Campaign : private Rerun, private Replayer {
     // Requests after which learning or refinement lost the stream, as cases to look at first
     // (at most 8).
     std::vector<Case> killer_cases(const std::vector<Pdu>& killers) const;
-    // A case sending one request, framed as the target speaks.
-    Case one_request_case(const Pdu& pdu, std::uint8_t unit, MutationClass cls,
-                          std::uint16_t tid) const;
     bool refining_ = false;  // the model was learned whole: refinement goes on
     RefineCursor refine_cursor_;
     std::int64_t refine_ns_ = 0;
@@ -564,35 +569,6 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
 // in one write after the next request was never able to answer: each request alone is asked
 // first (one that does not kill it costs no restart), so that the crash is keyed by the
 // request that does. The restart its death costs is the one confirmation would have cost.
-bool Campaign::lone_killer(Case& c, Execution& ex, bool& found) {
-    found = false;
-    if (is_transport_class(c.cls) || c.connections() > 1) return true;
-    std::vector<Case> alone;
-    for_each_request(c, result_.profile, [&](const RequestInfo& info) {
-        alone.push_back(one_request_case(Pdu(info.pdu.begin(), info.pdu.end()), info.header.unit_id,
-                                         c.cls, 0x0D00));
-        return true;
-    });
-    if (alone.size() < 2) return true;
-    for (Case& one : alone) {
-        if (!can_afford(1)) return true;
-        ++result_.isolated_runs;
-        Execution e = run_alone(one);
-        if (!e.target_down) {
-            if (whole_server_hang(e.verdict) && !care_.settle()) return false;
-            continue;
-        }
-        ++result_.deaths;
-        const std::string key = e.verdict ? root_cause_key(e.verdict) : "";
-        if (!care_.recover(key)) return false;
-        c = std::move(one);
-        ex = std::move(e);
-        found = true;
-        return true;
-    }
-    return true;
-}
-
 std::optional<Campaign::Outcome> Campaign::confirm_death(Case& c, Execution& ex,
                                                          const std::string& key, bool batch_died) {
     ++result_.deaths;
@@ -615,9 +591,11 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(Case& c, Execution& ex,
         ++result_.suspects_left;
         return Outcome::Clean;
     }
-    bool alone = false;
-    if (!lone_killer(c, ex, alone)) return Outcome::Lost;
-    if (alone) {
+    LoneKiller lone = find_lone_killer(c, result_.profile, *this);
+    if (lone.lost) return Outcome::Lost;
+    if (lone.request) {
+        c = std::move(*lone.request);
+        ex = std::move(lone.run);
         // The first death was charged to the request blamed then: it was this one's.
         care_.move_charges(key, root_cause_key(ex.verdict));
         Finding* f = known(ex.verdict);
@@ -1114,18 +1092,10 @@ std::vector<Case> Campaign::killer_cases(const std::vector<Pdu>& killers) const 
     std::vector<Case> out;
     for (const Pdu& pdu : killers) {
         if (out.size() == 8) break;
-        out.push_back(one_request_case(pdu, result_.profile.unit, MutationClass::MapEdge, 0x0E00));
+        out.push_back(one_request_case(pdu, result_.profile.unit, MutationClass::MapEdge, 0x0E00,
+                                       result_.profile.framing));
     }
     return out;
-}
-
-Case Campaign::one_request_case(const Pdu& pdu, std::uint8_t unit, MutationClass cls,
-                                std::uint16_t tid) const {
-    Case c;
-    c.cls = cls;
-    c.function = pdu.empty() ? 0 : pdu[0];
-    c.steps.push_back(Step{Op::Send, 0, 0, 0, frame_of(pdu, tid, unit, result_.profile.framing)});
-    return c;
 }
 
 Campaign::Round Campaign::next_round(std::vector<Case>& requeue, std::uint64_t& generated) {
