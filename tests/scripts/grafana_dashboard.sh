@@ -15,16 +15,18 @@ scrape() {
   "$mbstorm" "$@" --metrics-listen 127.0.0.1:0 >"$work/out" 2>"$work/err" &
   pid=$!
   local url=""
-  for _ in $(seq 100); do
+  # Up to 30 s to start: the suites run two tests per core beside it (it once missed 10 s).
+  for _ in $(seq 300); do
     url=$(sed -n 's/.*metrics on \(http:[^ ]*\).*/\1/p' "$work/err"); [ -n "$url" ] && break
     sleep 0.1
   done
-  [ -n "$url" ] && curl -s -o "$out" "$url"
+  [ -n "$url" ] && curl -s --retry 3 --retry-connrefused -o "$out" "$url"
   kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; pid=""
   [ -s "$out" ]
 }
 scrape "$work/run.prom" run -d 20s -c 1 -q || { echo "FAIL no scrape of run"; exit 1; }
-scrape "$work/serve.prom" serve --listen 127.0.0.1:0 --threads 1 -d 20s || { echo "FAIL no scrape of serve"; exit 1; }
+scrape "$work/serve.prom" serve --listen 127.0.0.1:0 --threads 1 -d 20s ||
+  { echo "FAIL no scrape of serve"; sed 's/^/  /' "$work/err"; exit 1; }
 /usr/bin/python3 - "$dashboard" "$work/run.prom" "$work/serve.prom" <<'PY'
 import json, re, sys
 dashboard = json.load(open(sys.argv[1]))
