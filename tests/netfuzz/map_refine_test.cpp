@@ -77,14 +77,22 @@ std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list
     return out;
 }
 
-TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst) {
-    ThreadSlave slave(serve);
-    net::Endpoint e;
-    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
-    TcpConnector connector(e);
+// The scripted device on a loopback port, discovered.
+struct Device {
+    ThreadSlave slave{serve};
+    net::Endpoint endpoint;
+    bool parsed = net::parse_endpoint(slave.endpoint(), endpoint, nullptr, 502);
+    TcpConnector connector{endpoint};
     TargetProfile profile;
     std::string error;
-    ASSERT_TRUE(discover_target(connector, 1, 1000, profile, error)) << error;
+    bool discovered() { return parsed && discover_target(connector, 1, 1000, profile, error); }
+};
+
+TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst) {
+    Device d;
+    ASSERT_TRUE(d.discovered()) << d.error;
+    TcpConnector& connector = d.connector;
+    const TargetProfile& profile = d.profile;
     LearnStats learned;
     DeviceModel m = learn_device_model(connector, profile, LearnOptions{}, &learned);
     ASSERT_EQ(m.table(codec::Table::HoldingRegisters).ranges, ranges({{0, 9}, {5000, 5000}}));
@@ -119,13 +127,10 @@ TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst)
 // Learning ran out of time before it swept every table: refinement asks the swept addresses
 // too, and completes the map exactly (a range spanning gaps is asked out to its edges).
 TEST(MapRefine, APartialModelIsCompleted) {
-    ThreadSlave slave(serve);
-    net::Endpoint e;
-    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
-    TcpConnector connector(e);
-    TargetProfile profile;
-    std::string error;
-    ASSERT_TRUE(discover_target(connector, 1, 1000, profile, error)) << error;
+    Device d;
+    ASSERT_TRUE(d.discovered()) << d.error;
+    TcpConnector& connector = d.connector;
+    const TargetProfile& profile = d.profile;
     DeviceModel m;
     m.partial = true;
     RefineCursor cursor;
