@@ -86,29 +86,30 @@ struct Device {
     TargetProfile profile;
     std::string error;
     bool discovered() { return parsed && discover_target(connector, 1, 1000, profile, error); }
+    // One turn of refinement: 512 reads per table.
+    bool refine(DeviceModel& m, RefineCursor& cursor, LearnStats& st) {
+        return refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st);
+    }
 };
 
 TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst) {
     Device d;
     ASSERT_TRUE(d.discovered()) << d.error;
-    TcpConnector& connector = d.connector;
-    const TargetProfile& profile = d.profile;
     LearnStats learned;
-    DeviceModel m = learn_device_model(connector, profile, LearnOptions{}, &learned);
+    DeviceModel m = learn_device_model(d.connector, d.profile, LearnOptions{}, &learned);
     ASSERT_EQ(m.table(codec::Table::HoldingRegisters).ranges, ranges({{0, 9}, {5000, 5000}}));
     ASSERT_TRUE(m.table(codec::Table::InputRegisters).ranges.empty());
 
     RefineCursor cursor;
     LearnStats st;
     // One turn of 4 x 512 reads reaches 7000, the 438th gap's middle.
-    EXPECT_TRUE(refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st));
+    EXPECT_TRUE(d.refine(m, cursor, st));
     EXPECT_EQ(m.table(codec::Table::HoldingRegisters).ranges,
               ranges({{0, 9}, {5000, 5000}, {6998, 7002}}));
     EXPECT_EQ(m.table(codec::Table::HoldingRegisters).found_during_run, ranges({{6998, 7002}}));
     EXPECT_FALSE(cursor.done);
     int turns = 1;
-    for (; !cursor.done && turns < 200; ++turns)
-        refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st);
+    for (; !cursor.done && turns < 200; ++turns) d.refine(m, cursor, st);
     EXPECT_TRUE(cursor.done);
     EXPECT_EQ(m.table(codec::Table::InputRegisters).ranges, ranges({{4099, 4100}}));
     EXPECT_EQ(m.table(codec::Table::InputRegisters).found_during_run, ranges({{4099, 4100}}));
@@ -120,7 +121,7 @@ TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst)
     EXPECT_LE(st.requests, 4u * (65536u - 4096u) + 64u);
     // Done means done: no read more.
     const std::uint64_t before = st.requests;
-    EXPECT_FALSE(refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st));
+    EXPECT_FALSE(d.refine(m, cursor, st));
     EXPECT_EQ(st.requests, before);
 }
 
@@ -129,15 +130,12 @@ TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst)
 TEST(MapRefine, APartialModelIsCompleted) {
     Device d;
     ASSERT_TRUE(d.discovered()) << d.error;
-    TcpConnector& connector = d.connector;
-    const TargetProfile& profile = d.profile;
     DeviceModel m;
     m.partial = true;
     RefineCursor cursor;
     cursor.swept_too = true;
     LearnStats st;
-    for (int turns = 0; !cursor.done && turns < 200; ++turns)
-        refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st);
+    for (int turns = 0; !cursor.done && turns < 200; ++turns) d.refine(m, cursor, st);
     EXPECT_TRUE(cursor.done);
     EXPECT_EQ(m.table(codec::Table::HoldingRegisters).ranges,
               ranges({{0, 9}, {5000, 5000}, {6998, 7002}}));
