@@ -802,6 +802,7 @@ void Campaign::check_random_drops() {
 }
 
 void Campaign::keep(Finding f) {
+    if (f.verdict.rule == kAnswersNonzeroProtocolIdRule) result_.profile.answers_protocol_id = true;
     f.id = result_.findings.size() + 1;
     f.profile = result_.profile;
     f.target = options_.target_text;

@@ -156,6 +156,7 @@ class CaseRunner {
     void judge_side_probes(Judgement& j) const;
     void judge_flood(Judgement& j) const;
     void judge_target(const Case& c, Judgement& j);
+    MutationClass whole_fault_class(const Case& c) const;
     // The marker register back at its initial value: the process restarted.
     bool marker_reset(const Judgement& j, std::uint16_t& seen);
     std::int64_t stall_threshold_ms() const {
@@ -788,6 +789,14 @@ bool CaseRunner::marker_reset(const Judgement& j, std::uint16_t& seen) {
 
 // Whether the target is still there (the fresh probe, then the sentinels): a death or a
 // whole-server hang outranks whatever the case's own connections showed.
+// The class a whole-server fault's culprit is named by: a frame with a protocol id other than 0
+// that the target answers reached its function's handler (TargetProfile::answers_protocol_id).
+MutationClass CaseRunner::whole_fault_class(const Case& c) const {
+    return c.cls == MutationClass::ProtocolId && profile_.answers_protocol_id
+               ? MutationClass::ValidLimits
+               : c.cls;
+}
+
 void CaseRunner::judge_target(const Case& c, Judgement& j) {
     // The fresh probe goes first: on a loaded machine the kernel may deliver the sentinels'
     // closes a little after the case's own; loopback packets are taken in order, so by the
@@ -841,7 +850,8 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
         // The request a whole-server fault is blamed on: the first one owed an answer that
         // got none, else the last one sent.
         const RequestInfo* at = j.first_unanswered ? j.first_unanswered : j.last_sent;
-        j.candidate.rule = rule_with_culprit(j.candidate.rule, culprit_text(c.cls, at));
+        j.candidate.rule =
+            rule_with_culprit(j.candidate.rule, culprit_text(whole_fault_class(c), at));
         j.candidate.culprit_fc = at && !at->pdu.empty() ? at->pdu[0] : -1;
     }
 }

@@ -122,6 +122,7 @@ json profile_json(const TargetProfile& profile) {
     // the run did (else a frame of the wrong length answered 03 reads as a lost stream).
     if (profile.drops_after_exception) p["drops_after_exception"] = true;
     if (profile.one_connection) p["one_connection"] = true;
+    if (profile.answers_protocol_id) p["answers_protocol_id"] = true;
     if (profile.marker_address >= 0) p["marker_address"] = profile.marker_address;
     // The framing the case's bytes are in (MBAP when absent): replay needs the same.
     if (profile.framing != codec::Framing::Mbap) {
@@ -275,6 +276,7 @@ void load_profile(const json& p, TargetProfile& out) {
     out.refuses_length_mismatch = p.value("refuses_length_mismatch", false);
     out.drops_after_exception = p.value("drops_after_exception", false);
     out.one_connection = p.value("one_connection", false);
+    out.answers_protocol_id = p.value("answers_protocol_id", false);
     out.marker_address =
         static_cast<std::int32_t>(whole_number(p, "marker_address", -1, 0, 0xFFFF));
     load_unmapped(p, out);

@@ -77,6 +77,10 @@ struct TargetProfile {
     // need two at once are not sent, pipelined batches use one lane, and a case's connections
     // are closed before a fresh probe (which would otherwise wait behind them).
     bool one_connection = false;
+    // It answers frames with a protocol id other than 0 (found at the first looks): such a frame
+    // reaches its function's handler, so a death or a whole-server hang it causes is named by
+    // that handler, as the same request with protocol id 0 would be.
+    bool answers_protocol_id = false;
     // The holding register whose value tells a restart where there are no sentinels
     // (state_marker.hpp), so that replay watches the same way. -1: none.
     std::int32_t marker_address = -1;

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -254,6 +255,47 @@ TEST(ExecutorFraming, AnAnswerBeforeItsDrippedRequestWasWholeIsTheStreamLost) {
     const Execution ex = execute_case(c, connector, profile, o);
     EXPECT_EQ(root_cause_key(ex.verdict), std::string("stream:") + kStreamLostRule)
         << ex.verdict.summary;
+}
+
+// A server that answers frames whatever their protocol id and stops answering anyone for 2 s
+// after an FC 14 (multi-fault bug 4): reached by a frame with protocol id 1, the whole-server
+// hang is FC 14's handler's once the target is known to answer such frames (one defect, one
+// finding: a coverage run had it twice, as .../fc14 and .../protocol-id), and the class's
+// while it is not.
+TEST(ExecutorFraming, AWholeServerHangThroughAnotherProtocolIdIsTheHandlersItReached) {
+    auto blocked_until = std::make_shared<std::atomic<std::int64_t>>(0);
+    ThreadSlave slave([blocked_until](int fd, Bytes& buf) {
+        while (buf.size() >= codec::limits::kMbapHeader + 1) {
+            const std::size_t whole = codec::announced_adu_size(buf.data());
+            if (buf.size() < whole) return;
+            const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+            if (buf[7] == 0x14) blocked_until->store(now + 2'000'000'000);
+            if (now >= blocked_until->load())
+                send_bytes(fd, {buf[0], buf[1], buf[2], buf[3], 0, 7, buf[6], 0x03, 4, 0, 0, 0, 0});
+            buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(whole));
+        }
+    });
+    net::Endpoint e;
+    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    TcpConnector connector(e);
+    Bytes f = frame_pdu({0x14, 0x07, 0x06, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01}, 9, 1);
+    f[3] = 0x01;  // protocol id 0001
+    Case c;
+    c.cls = MutationClass::ProtocolId;
+    c.function = 0x14;
+    c.steps.push_back(Step{Op::Send, 0, 0, 0, f});
+    ExecOptions o;
+    o.timeout_ms = 300;
+    for (const bool answers : {false, true}) {
+        TargetProfile profile;
+        profile.probe_pdu = kRead;
+        profile.answers_protocol_id = answers;
+        blocked_until->store(0);
+        const Execution ex = execute_case(c, connector, profile, o);
+        EXPECT_EQ(root_cause_key(ex.verdict),
+                  answers ? "hang:whole-server-hang/fc14" : "hang:whole-server-hang/protocol-id")
+            << ex.verdict.summary;
+    }
 }
 
 TEST(ExecutorFraming, SlaveThatDiscardsABadCrcAndAnswersTheNextFrameIsClean) {

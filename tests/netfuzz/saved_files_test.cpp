@@ -77,6 +77,7 @@ TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
     f.profile.drops_after_exception = true;
     f.profile.refuses_length_mismatch = true;
     f.profile.one_connection = true;
+    f.profile.answers_protocol_id = true;
     f.profile.marker_address = 1000;
     f.profile.unmapped[3] = {999, 1040};
     const auto dir = (std::filesystem::temp_directory_path() /
@@ -89,6 +90,7 @@ TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
     EXPECT_TRUE(g.profile.drops_after_exception);
     EXPECT_TRUE(g.profile.refuses_length_mismatch);
     EXPECT_TRUE(g.profile.one_connection);
+    EXPECT_TRUE(g.profile.answers_protocol_id);
     EXPECT_EQ(g.profile.marker_address, 1000);
     EXPECT_EQ(g.profile.unmapped[3], (std::vector<std::uint16_t>{999, 1040}));
     std::filesystem::remove_all(dir);
