@@ -15,7 +15,6 @@
 namespace mbstorm::net {
 namespace {
 
-constexpr std::size_t kMaxRequestHead = 8192;
 // A client has this long from its accept to send a whole request head, and as long again to
 // take the answer: a slow or dripping one is closed then, whatever it keeps sending.
 constexpr std::int64_t kExchangeDeadlineNs = 2 * kNsPerSec;
@@ -92,14 +91,10 @@ bool read_request(Client& c, const HttpServer::Handler& handler) {
         if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return true;
         if (n <= 0) return false;  // closed, or reset
         c.in.append(buffer, static_cast<std::size_t>(n));
-        if (const std::size_t end = c.in.find("\r\n\r\n"); end != std::string::npos) {
-            start_answer(c, reply_to(std::string_view(c.in).substr(0, end + 4), handler), false);
-            return true;
-        }
-        if (c.in.size() > kMaxRequestHead) {
-            start_answer(
-                c, http_response({431, "text/plain; charset=utf-8", "request too large\n"}, false),
-                true);
+        bool too_large = false;
+        std::string answer = answer_received(c.in, handler, too_large);
+        if (!answer.empty()) {
+            start_answer(c, std::move(answer), too_large);
             return true;
         }
     }
@@ -180,6 +175,16 @@ std::string http_response(const HttpReply& reply, bool head) {
                       "\r\nConnection: close\r\n\r\n";
     if (!head) out += reply.body;
     return out;
+}
+
+std::string answer_received(std::string_view received, const HttpServer::Handler& handler,
+                            bool& too_large) {
+    too_large = false;
+    if (const std::size_t end = received.find("\r\n\r\n"); end != std::string_view::npos)
+        return reply_to(received.substr(0, end + 4), handler);
+    if (received.size() <= kMaxRequestHead) return {};
+    too_large = true;
+    return http_response({431, "text/plain; charset=utf-8", "request too large\n"}, false);
 }
 
 bool parse_http_request_line(std::string_view head, std::string& method, std::string& path) {

@@ -55,6 +55,19 @@ class HttpServer {
 // close); head: without the body.
 std::string http_response(const HttpReply& reply, bool head);
 
+// The most a request head may take: a longer one without its blank line is answered 431.
+inline constexpr std::size_t kMaxRequestHead = 8192;
+
+// What the server answers a client that has sent `received` so far (everything it read, its
+// head's end not seen before): "" while the head is incomplete and within kMaxRequestHead,
+// else the whole response: 431 for a head past the cap, 400 for a malformed request line, 405
+// for another method than GET or HEAD, else the handler's reply for the path. `too_large` says
+// which answers are 431s (the server then drains the connection). Pure, so that the fuzz
+// harness (fuzz/http_head.cpp) can feed it exactly what the socket loop does.
+std::string answer_received(std::string_view received,
+                            const std::function<HttpReply(std::string_view path)>& handler,
+                            bool& too_large);
+
 // Parses a request head ("GET /metrics?x HTTP/1.1\r\n..."): method and path (no query), or
 // false when the request line is malformed.
 bool parse_http_request_line(std::string_view head, std::string& method, std::string& path);

@@ -45,6 +45,7 @@ struct TableSizes {
     std::uint32_t holding_registers = kFullTable;
 
     std::uint32_t of(Table t) const noexcept;
+    bool operator==(const TableSizes&) const = default;
 };
 
 // One bit table (coils or discrete inputs), packed 64 bits per atomic word: a single-bit write
@@ -347,6 +348,7 @@ class DeviceIdentity {
     };
 
     DeviceIdentity();  // mbstorm defaults for the seven standard objects
+    bool operator==(const DeviceIdentity&) const = default;
 
     // False (and nothing changes) for ids 0x07-0x7F or values over kMaxObjectLength.
     bool set(std::uint8_t id, std::string value);
@@ -368,6 +370,7 @@ struct ModelConfig {
     bool run_indicator_on = true;                                               // FC11
     DeviceIdentity identity;
     bool track_diagnostics = true;  // false: no per-request atomic increments, counters stay 0
+    bool operator==(const ModelConfig&) const = default;
 };
 
 // FC18 FIFO layout (our convention, the spec leaves it to the device): at pointer address P

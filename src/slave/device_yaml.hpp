@@ -35,6 +35,7 @@ struct InitRange {
     std::uint16_t address = 0;
     std::vector<std::uint16_t> words;
     std::vector<std::uint8_t> units;  // empty: every model
+    bool operator==(const InitRange&) const = default;
 };
 
 // A register that grows by `step` before each read that covers it.
@@ -44,6 +45,7 @@ struct ReadCounterSpec {
     std::uint16_t step = 1;
     std::uint16_t start = 0;
     std::vector<std::uint8_t> units;
+    bool operator==(const ReadCounterSpec&) const = default;
 };
 
 struct DeviceDescription {
@@ -59,6 +61,8 @@ struct DeviceDescription {
     // Modbus/TCP Security: the function codes each client role may use (`tls_roles:`, the
     // same lists as serve --tls-role); applied when the device is served over TLS.
     std::vector<std::pair<std::string, codec::FunctionSet>> tls_roles;
+    // Member by member: a description printed and read back must be the one printed.
+    bool operator==(const DeviceDescription&) const = default;
 };
 
 // The YAML keys of the named identification objects (`identification:`), in object-id order.

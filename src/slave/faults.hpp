@@ -17,6 +17,7 @@ struct DelayConfig {
     std::uint64_t min_ns = 0;    // Uniform: [min_ns, max_ns]
     std::uint64_t max_ns = 0;
     std::uint64_t mean_ns = 0;  // Exponential
+    bool operator==(const DelayConfig&) const = default;
 };
 
 // Every `period_ns` (the first one `period_ns` after the origin) all responses are held for
@@ -24,6 +25,7 @@ struct DelayConfig {
 struct StallConfig {
     std::uint64_t duration_ns = 0;
     std::uint64_t period_ns = 0;  // 0: no stalls
+    bool operator==(const StallConfig&) const = default;
 };
 
 // All off by default. The three rates are exclusive outcomes of one draw, so they must sum to
@@ -38,6 +40,7 @@ struct FaultConfig {
     std::uint64_t seed = 0x6d6273746f726dULL;
 
     bool any() const noexcept;
+    bool operator==(const FaultConfig&) const = default;
 };
 
 // Empty when `config` is usable, otherwise one sentence saying what is wrong.

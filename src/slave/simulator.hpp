@@ -45,6 +45,7 @@ struct SimulatedInput {
     double step = 1.0;  // Counter
     std::uint64_t seed = 0;
     std::vector<std::uint8_t> units;  // empty: every model
+    bool operator==(const SimulatedInput&) const = default;
 };
 
 // The value `input` has `elapsed_ns` after the simulation started (before type conversion).

@@ -7,12 +7,48 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <set>
 #include <stdexcept>
 
 #include "util/closest_name.hpp"
 
 namespace mbstorm::yaml {
+namespace {
+
+// Well-formed UTF-8: no stray continuation bytes, overlong forms, surrogates or code points
+// past U+10FFFF.
+bool is_utf8(std::string_view s) noexcept {
+    for (std::size_t i = 0; i < s.size();) {
+        const auto b = static_cast<unsigned char>(s[i]);
+        std::size_t n = 0;
+        std::uint32_t cp = 0;
+        if (b < 0x80) {
+            ++i;
+            continue;
+        } else if (b >= 0xC2 && b <= 0xDF) {
+            n = 1, cp = b & 0x1Fu;
+        } else if (b >= 0xE0 && b <= 0xEF) {
+            n = 2, cp = b & 0x0Fu;
+        } else if (b >= 0xF0 && b <= 0xF4) {
+            n = 3, cp = b & 0x07u;
+        } else {
+            return false;
+        }
+        if (s.size() - i <= n) return false;
+        for (std::size_t k = 1; k <= n; ++k) {
+            const auto c = static_cast<unsigned char>(s[i + k]);
+            if ((c & 0xC0) != 0x80) return false;
+            cp = (cp << 6) | (c & 0x3Fu);
+        }
+        const std::uint32_t least = n == 2 ? 0x800 : n == 3 ? 0x10000 : 0x80;
+        if (cp < least || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
+        i += n + 1;
+    }
+    return true;
+}
+
+}  // namespace
 
 void Reader::fail(const YAML::Mark& mark, const std::string& message) const {
     const int line = mark.is_null() ? 0 : mark.line + 1;
@@ -56,6 +92,9 @@ void Reader::each_key(const YAML::Node& map, std::string_view what,
 std::string Reader::scalar(const YAML::Node& n, std::string_view what) const {
     if (!n.IsScalar())
         fail(n, fmt::format("{} must be a single value, not a list or mapping", what));
+    // The printers (run --print-scenario, the device print) write through yaml-cpp's emitter,
+    // which turns bytes that are not UTF-8 into U+FFFD: such text would not read back as given.
+    if (!is_utf8(n.Scalar())) fail(n, fmt::format("{} is not UTF-8 text", what));
     return n.Scalar();
 }
 

@@ -115,5 +115,23 @@ TEST(YamlReader, NumbersBooleansAndChoices) {
     EXPECT_THROW(kReader.choice(YAML::Load("medium"), "c", {"slow", "fast"}), TestError);
 }
 
+// The printers write through yaml-cpp's emitter, which turns bytes that are not UTF-8 into
+// U+FFFD: such text is refused where it is read, not changed where it is printed.
+TEST(YamlReader, TextThatIsNotUtf8IsRefused) {
+    EXPECT_EQ(kReader.scalar(YAML::Load("\"caf\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80\""), "s"),
+              "caf\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80");
+    for (const char* bad : {"'a\xFF'", "'\xC0\xAF'", "'\xED\xA0\x80'", "'\xE2\x82'",
+                            "'\xF4\x90\x80\x80'", "'\x80'"}) {
+        try {
+            (void)kReader.scalar(YAML::Load(bad), "vendor_name");
+            ADD_FAILURE() << "accepted " << bad;
+        } catch (const TestError& e) {
+            EXPECT_NE(std::string(e.what()).find("vendor_name is not UTF-8 text"),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+}
+
 }  // namespace
 }  // namespace mbstorm::yaml
