@@ -271,6 +271,7 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
             for (WritesStick ws : {WritesStick::Yes, WritesStick::No, WritesStick::Refused})
                 if (w == writes_stick_name(ws)) tm.writes = ws;
         }
+        out.partial = j.value("partial", false);
         if (j.contains("units"))
             for (const auto& u : j["units"])
                 out.units.push_back(static_cast<std::uint8_t>(whole_number(u, 0xFF, "a unit id")));

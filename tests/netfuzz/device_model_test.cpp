@@ -69,6 +69,8 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     m.table(Table::Coils).writes = WritesStick::Refused;
     m.units = {1, 255};
     m.exception_pause_ms[3] = 100;
+    m.partial = true;
+    m.table(Table::HoldingRegisters).found_during_run = ranges({{1060, 1099}});
     DeviceModel back;
     std::string error;
     ASSERT_TRUE(model_from_json(model_to_json(m), back, error)) << error;
@@ -79,6 +81,8 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     EXPECT_EQ(back.units, m.units);
     EXPECT_EQ(back.exception_pause_ms, m.exception_pause_ms);
     EXPECT_TRUE(back.pauses_after_exceptions());
+    EXPECT_TRUE(back.partial);
+    EXPECT_EQ(back.table(Table::HoldingRegisters).found_during_run, ranges({{1060, 1099}}));
     EXPECT_FALSE(
         model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}", back, error));
     EXPECT_FALSE(model_from_json("[]", back, error));
