@@ -4,7 +4,56 @@
 #include <openssl/err.h>
 #include <openssl/ssl.h>
 
+#include <algorithm>
+#include <cstddef>
+
 namespace mbstorm::net {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+// A big-endian 16-bit field at `at`, or 0 past the end.
+std::size_t field16(const Bytes& b, std::size_t at) {
+    return at + 2 <= b.size() ? static_cast<std::size_t>(b[at] << 8 | b[at + 1]) : 0;
+}
+
+// Sets `n` bytes at `at` (clipped to the record) to a fixed pattern.
+void fix(Bytes& b, std::size_t at, std::size_t n) {
+    for (std::size_t i = 0; i < n && at + i < b.size(); ++i)
+        b[at + i] = static_cast<std::uint8_t>(0xA0 + (i & 0x1F));
+}
+
+// The key shares of a key_share extension whose data starts at `at`.
+void fix_key_shares(Bytes& b, std::size_t at, std::size_t end) {
+    std::size_t p = at + 2;  // client_shares length
+    while (p + 4 <= end) {
+        const std::size_t key = field16(b, p + 2);
+        fix(b, p + 4, std::min(key, end - (p + 4)));
+        p += 4 + key;
+    }
+}
+
+// The fields OpenSSL fills at random (client random, legacy session id, key shares) set to a
+// fixed pattern: the same bytes every time, so that a fuzz run repeats with its seed.
+void fix_random_fields(Bytes& b) {
+    constexpr std::size_t kRandom = 5 + 4 + 2;  // record header, handshake header, version
+    fix(b, kRandom, 32);
+    std::size_t p = kRandom + 32;
+    if (p >= b.size()) return;
+    const std::size_t session_id = b[p];
+    fix(b, p + 1, session_id);
+    p += 1 + session_id;
+    p += 2 + field16(b, p);               // cipher suites
+    p += 1 + (p < b.size() ? b[p] : 0u);  // compression methods
+    const std::size_t end = std::min(b.size(), p + 2 + field16(b, p));
+    for (p += 2; p + 4 <= end;) {
+        const std::size_t type = field16(b, p), size = field16(b, p + 2);
+        if (type == 0x0033) fix_key_shares(b, p + 4, std::min(end, p + 4 + size));
+        p += 4 + size;
+    }
+}
+
+}  // namespace
 
 std::vector<std::uint8_t> tls_client_hello(bool tls12_only) {
     std::vector<std::uint8_t> out;
@@ -32,6 +81,7 @@ std::vector<std::uint8_t> tls_client_hello(bool tls12_only) {
     SSL_free(ssl);
     SSL_CTX_free(ctx);
     ERR_clear_error();
+    fix_random_fields(out);
     return out;
 }
 

@@ -187,6 +187,7 @@ class Campaign : private Rerun, private Replayer, private LoneRuns {
     // it stays down.
     bool first_isolated_run(const Case& c, Execution& ex);
     void take_coverage(const Case& c);
+    bool calibrated_new(const Case& c, const CoverageSample& s);
     void save_to_corpus(const Case& entry);
     bool resume_corpus();
     std::set<std::string> resumed_;  // resumed corpus entries not yet joined again
@@ -463,7 +464,7 @@ void Campaign::make_batch_runner() {
 // corpus; the constants the target compared its input against go to the generator.
 void Campaign::take_coverage(const Case& c) {
     const CoverageSample s = options_.coverage->collect();
-    if (s.new_bits) {
+    if (s.new_bits && calibrated_new(c, s)) {
         gen_->add_to_corpus(c, s.comparisons, s.rarest_edge);
         result_.corpus_size = gen_->corpus_size();
         save_to_corpus(gen_->corpus().back());
@@ -477,6 +478,26 @@ void Campaign::take_coverage(const Case& c) {
         gen_->add_compared(s.compared_words, s.compared_bytes);
         result_.compared_constants += s.compared_words.size() + s.compared_bytes.size();
     }
+}
+
+// A case that set new bits runs 3 times more, alone (AFL's calibration), 8 when a cell changed:
+// cells whose bucket changes count a loop's turns, not the input, and are left out from then on.
+// False when no new bit is left in a stable cell. A run again that does not end cleanly stops
+// the calibration (what it did is the next case's to find).
+bool Campaign::calibrated_new(const Case& c, const CoverageSample& s) {
+    constexpr int kCalibrationRuns = 3, kUnstableRuns = 8;
+    CoverageMap& map = *options_.coverage;
+    const std::vector<std::uint8_t> first = map.trace();
+    int runs = kCalibrationRuns;
+    for (int run = 0; run < runs && remaining_ns() > 0; ++run) {
+        map.clear();
+        const Execution again = execute_case(c, *options_.connector, result_.profile, exec_);
+        ++result_.calibration_runs;
+        if (again.down_before || again.target_down || again.verdict.oracle == Oracle::Hang) break;
+        if (map.mark_unstable(first)) runs = kUnstableRuns;
+    }
+    result_.unstable_cells = map.unstable_cells();
+    return map.still_new(s);
 }
 
 bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
@@ -1339,7 +1360,8 @@ bool Campaign::resume_corpus() {
     std::vector<Case> saved;
     if (!load_corpus(options_.corpus_dir, saved, result_.error)) return false;
     next_corpus_file_ = saved.size();
-    for (const Case& c : saved) resumed_.insert(steps_text(split_frames(c)));
+    for (const Case& c : saved)
+        resumed_.insert(steps_text(split_frames(c, options_.connector->framing())));
     result_.resumed = saved.size();
     gen_->resume(std::move(saved));
     return true;

@@ -136,6 +136,10 @@ struct CampaignResult {
     std::map<std::uint8_t, std::uint32_t> edges_by_function;
     std::string corpus_error;  // why --corpus stopped being written ("": it was not)
     std::size_t compared_constants = 0;
+    // Calibration: runs again of cases that set new bits, and the map cells found to change
+    // between runs of one case (left out of what makes a case new).
+    std::uint64_t calibration_runs = 0;
+    std::uint32_t unstable_cells = 0;
 };
 
 using ProgressFn = std::function<void(const Progress&)>;

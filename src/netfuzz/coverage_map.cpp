@@ -78,6 +78,8 @@ bool CoverageMap::create(std::size_t map_size, std::string& error) {
     virgin_.assign(map_size, 0xFF);
     reached_.assign(map_size, false);
     cases_hitting_.assign(map_size, 0);
+    unstable_.assign(map_size, false);
+    unstable_count_ = 0;
     words_known_.assign(65536 / 8 + 256 / 8, 0);
     clear();
     return true;
@@ -159,7 +161,10 @@ CoverageSample CoverageMap::collect() {
             if (s.edges == 1 || hits < cases_hitting_[s.rarest_edge])
                 s.rarest_edge = static_cast<std::uint32_t>(k);
             if (!(virgin_[k] & b)) continue;
-            s.new_bits = true;
+            if (!unstable_[k]) {
+                s.new_bits = true;
+                s.new_cells.push_back(static_cast<std::uint32_t>(k));
+            }
             if (virgin_[k] == 0xFF) {
                 ++s.new_edges;
                 ++edges_seen_;
@@ -174,6 +179,29 @@ CoverageSample CoverageMap::collect() {
             harvest(log->entries[i], words_known_.data(), words_known_.data() + 65536 / 8, s);
     }
     return s;
+}
+
+std::vector<std::uint8_t> CoverageMap::trace() const {
+    std::vector<std::uint8_t> out(map_size_);
+    for (std::size_t k = 0; k < map_size_; ++k) out[k] = hit_bucket(map_[k]);
+    return out;
+}
+
+std::uint32_t CoverageMap::mark_unstable(const std::vector<std::uint8_t>& first) {
+    std::uint32_t marked = 0;
+    for (std::size_t k = 0; k < map_size_ && k < first.size(); ++k) {
+        if (unstable_[k] || hit_bucket(map_[k]) == first[k]) continue;
+        unstable_[k] = true;
+        ++marked;
+    }
+    unstable_count_ += marked;
+    return marked;
+}
+
+bool CoverageMap::still_new(const CoverageSample& s) const noexcept {
+    for (const std::uint32_t k : s.new_cells)
+        if (k < map_size_ && !unstable_[k]) return true;
+    return false;
 }
 
 }  // namespace mbstorm::netfuzz

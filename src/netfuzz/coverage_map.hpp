@@ -6,8 +6,12 @@
 //
 // Per case: clear() before it, collect() after it. Hit counts are bucketed as AFL does (1, 2,
 // 3, 4-7, 8-15, 16-31, 32-127, 128+); a case is new when it sets a bucket bit no case set
-// before. Apart from that, clear() keeps which edges were ever hit, by anything the target did
-// (its start-up, discovery, confirmation runs too), for --coverage-report.
+// before. A case that sets new bits is calibrated (AFL's way): run again, the cells whose bucket
+// differs between its runs count hits of a loop that turns with timing (a poll loop, a read
+// that returned part of a request), not with the input. They are marked unstable and make no
+// case new from then on, so that a run repeats with its seed. Apart from that, clear() keeps which
+// edges were ever hit, by anything the target did (its start-up, discovery, confirmation runs too),
+// for --coverage-report.
 #pragma once
 
 #include <cstddef>
@@ -24,9 +28,10 @@ struct Comparison {
 };
 
 struct CoverageSample {
-    bool new_bits = false;        // a bucket bit no case set before
-    std::uint32_t new_edges = 0;  // edges never hit before
-    std::uint32_t edges = 0;      // edges this case hit
+    bool new_bits = false;  // a bucket bit no case set before, in a cell not unstable
+    std::vector<std::uint32_t> new_cells;  // the cells of those bits
+    std::uint32_t new_edges = 0;           // edges never hit before
+    std::uint32_t edges = 0;               // edges this case hit
     // Of the edges this case hit, the one the fewest cases of the run have hit (counting this
     // one): a corpus entry's claim to more runs (Generator favours entries of rare edges).
     std::uint32_t rarest_edge = 0;
@@ -62,6 +67,15 @@ class CoverageMap {
         return index < cases_hitting_.size() ? cases_hitting_[index] : 0;
     }
 
+    // Calibration: the map bucketed as the case left it (before the next clear()), then,
+    // after each run of the case again, the cells whose bucket differs from `first` marked
+    // unstable (how many were newly marked). `still_new` says whether `s` has a new bit left
+    // in a cell that is not unstable.
+    std::vector<std::uint8_t> trace() const;
+    std::uint32_t mark_unstable(const std::vector<std::uint8_t>& first);
+    bool still_new(const CoverageSample& s) const noexcept;
+    std::uint32_t unstable_cells() const noexcept { return unstable_count_; }
+
     std::uint32_t edges_seen() const noexcept { return edges_seen_; }
     std::size_t map_size() const noexcept { return map_size_; }
     int id() const noexcept { return id_; }
@@ -75,6 +89,8 @@ class CoverageMap {
     std::vector<std::uint8_t> virgin_;  // bucket bits no case has set yet (AFL's virgin map)
     std::vector<bool> reached_;         // cells hit before the last clear()
     std::vector<std::uint32_t> cases_hitting_;  // per cell: collected cases that hit it
+    std::vector<bool> unstable_;                // cells whose bucket changed in calibration
+    std::uint32_t unstable_count_ = 0;
     std::uint32_t edges_seen_ = 0;
     std::vector<std::uint8_t> words_known_;  // a bit per 16-bit word already reported
 };

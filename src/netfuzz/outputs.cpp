@@ -35,6 +35,8 @@ json coverage_json(const CampaignResult& r) {
             {"corpus", r.corpus_size},
             {"compared_constants", r.compared_constants},
             {"resumed", r.resumed},
+            {"calibration_runs", r.calibration_runs},
+            {"unstable_cells", r.unstable_cells},
             {"edges_by_function", by_function},
             {"corpus_error", r.corpus_error},
             {"edges_over_time", over_time}};
@@ -281,8 +283,10 @@ std::string format_coverage(const CampaignResult& r) {
     if (r.coverage)
         s += fmt::format(
             "  coverage: {} edges; corpus {} case(s); {} constant(s) from the target's "
-            "comparisons\n",
-            r.coverage_edges, r.corpus_size, r.compared_constants);
+            "comparisons; {} map cell(s) unstable (timing, not input) in {} calibration "
+            "run(s)\n",
+            r.coverage_edges, r.corpus_size, r.compared_constants, r.unstable_cells,
+            r.calibration_runs);
     if (!r.edges_by_function.empty()) {
         std::string by;
         for (const auto& [fc, edges] : r.edges_by_function)

@@ -94,6 +94,49 @@ TEST(CoverageMap, ACaseIsNewWhenItSetsABucketBitNoneSetBefore) {
     EXPECT_EQ(m.edges_seen(), 2u);
 }
 
+// Calibration: a case that set new bits runs again; a cell whose bucket changed between the
+// runs counts a loop's turns (a poll loop, a request read in parts), not the input. It makes no
+// case new from then on, so that a run repeats with its seed; cells that held stay new.
+TEST(CoverageMap, CellsThatChangeBetweenRunsOfOneCaseMakeNoCaseNew) {
+    CoverageMap m;
+    std::string error;
+    ASSERT_TRUE(m.create(1 << 16, error)) << error;
+    TargetSide t(m);
+    ASSERT_NE(t.map, nullptr);
+    t.map[10] = 1;  // the input's edge
+    t.map[20] = 5;  // the poll loop's turns
+    const CoverageSample first = m.collect();
+    ASSERT_TRUE(first.new_bits);
+    EXPECT_EQ(first.new_cells, (std::vector<std::uint32_t>{10, 20}));
+    const std::vector<std::uint8_t> trace = m.trace();
+    m.clear();
+    t.map[10] = 1;
+    t.map[20] = 9;  // another bucket: the loop turned more often this time
+    EXPECT_EQ(m.mark_unstable(trace), 1u);
+    EXPECT_EQ(m.unstable_cells(), 1u);
+    EXPECT_TRUE(m.still_new(first));  // cell 10 held
+    // A case new only in the unstable cell is not new; in a stable cell it is.
+    m.clear();
+    t.map[20] = 40;
+    CoverageSample s = m.collect();
+    EXPECT_FALSE(s.new_bits);
+    EXPECT_FALSE(m.still_new(s));
+    m.clear();
+    t.map[10] = 2;
+    t.map[20] = 100;
+    s = m.collect();
+    EXPECT_TRUE(s.new_bits);
+    EXPECT_EQ(s.new_cells, (std::vector<std::uint32_t>{10}));
+    // A case whose only new cell proves unstable in its own calibration is not new.
+    m.clear();
+    t.map[30] = 3;
+    s = m.collect();
+    const std::vector<std::uint8_t> again = m.trace();
+    m.clear();
+    EXPECT_EQ(m.mark_unstable(again), 1u);  // not hit at all the second time
+    EXPECT_FALSE(m.still_new(s));
+}
+
 TEST(CoverageMap, ComparisonsPastTheMapAreReadInOrder) {
     CoverageMap m;
     std::string error;
