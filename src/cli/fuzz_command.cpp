@@ -141,10 +141,6 @@ bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c,
         error = "--coverage needs --target-cmd (mbstorm hands the target its coverage map)";
         return false;
     }
-    if (o.coverage && c.connector->framing() != codec::Framing::Mbap) {
-        error = "--coverage fuzzes Modbus TCP (MBAP) targets for now";
-        return false;
-    }
     if (!o.corpus_dir.empty() && !o.coverage) {
         error = "--corpus keeps a coverage corpus: it needs --coverage";
         return false;

@@ -188,6 +188,8 @@ class Campaign : private Rerun, private Replayer, private LoneRuns {
     bool first_isolated_run(const Case& c, Execution& ex);
     void take_coverage(const Case& c);
     bool calibrated_new(const Case& c, const CoverageSample& s);
+    void note_answer_time(const Execution& ex);
+    std::int64_t slowest_answer_ns_ = 0;
     void save_to_corpus(const Case& entry);
     bool resume_corpus();
     std::set<std::string> resumed_;  // resumed corpus entries not yet joined again
@@ -500,10 +502,23 @@ bool Campaign::calibrated_new(const Case& c, const CoverageSample& s) {
     return map.still_new(s);
 }
 
+// RTU/ASCII: a frame owed no answer is watched for a late one 4 times as long as the slowest
+// answer so far (at least 50 ms, at most the timeout), not the whole timeout: on a slave that
+// answers in a millisecond, a bad-CRC case costs 50 ms, not a second.
+void Campaign::note_answer_time(const Execution& ex) {
+    constexpr std::int64_t kMinWatchMs = 50, kSlowestTimes = 4;
+    slowest_answer_ns_ = std::max(slowest_answer_ns_, ex.slowest_answer_ns);
+    if (result_.profile.framing == codec::Framing::Mbap || !slowest_answer_ns_) return;
+    const std::int64_t watch_ms = kSlowestTimes * slowest_answer_ns_ / net::kNsPerMs;
+    exec_.silence_watch_ms = static_cast<int>(
+        std::clamp<std::int64_t>(watch_ms, kMinWatchMs, std::int64_t{options_.timeout_ms}));
+}
+
 bool Campaign::first_isolated_run(const Case& c, Execution& ex) {
     ++result_.isolated_runs;
     if (options_.coverage) options_.coverage->clear();
     ex = execute_case(c, *options_.connector, result_.profile, exec_);
+    note_answer_time(ex);
     // A case that took the target down or hung it is a finding, not a corpus entry: resumed or
     // mutated, it would crash the target again, or wait out a timeout, first thing (AFL keeps
     // its timeouts out of the queue too).

@@ -426,7 +426,9 @@ void CaseRunner::parse_received_framed(Conn& c) {
             in_flight->answered_ns = now;
             in_flight->rsp_offset = offset;
             in_flight->rsp_size = f.mbap.size();
-        } else {
+        } else if (!c.desync) {
+            // (After a desync, frames sent but not cut may be answered: owed nothing, yet not
+            // unasked either.)
             c.unmatched.emplace_back(offset, f.mbap.size());
         }
         c.rparsed += f.size;
@@ -437,9 +439,13 @@ void CaseRunner::await_in_flight(std::uint8_t index) {
     Conn& c = conns_[index];
     for (std::size_t k = 0; k < c.pending.size(); ++k) {
         if (c.pending[k].answered_ns || c.pending[k].expired) continue;
-        // A frame owed silence is watched as long as one owed an answer: a slow slave's late
-        // answer to it would otherwise be taken for the next request's.
-        pump(net::now_ns() + std::int64_t{options_.timeout_ms} * net::kNsPerMs,
+        // A frame owed silence is watched for a late answer, which would otherwise be taken
+        // for the next request's: as long as one owed an answer, or as the campaign says from
+        // how slowly the target answers at worst.
+        const int watch_ms = c.pending[k].expect != Expect::Answer && options_.silence_watch_ms
+                                 ? std::min(options_.silence_watch_ms, options_.timeout_ms)
+                                 : options_.timeout_ms;
+        pump(net::now_ns() + std::int64_t{watch_ms} * net::kNsPerMs,
              [&] { return c.pending[k].answered_ns != 0 || c.closed; });
         if (!c.pending[k].answered_ns) c.pending[k].expired = true;
         if (c.closed) return;
@@ -955,6 +961,11 @@ Execution CaseRunner::run(const Case& c) {
     close_out();
     if (!await_close_out()) event(0, TraceKind::Timeout);
     judge(c);
+    for (const Conn& cn : conns_)
+        for (const Pending& pd : cn.pending)
+            if (pd.answered_ns)
+                out_.slowest_answer_ns =
+                    std::max(out_.slowest_answer_ns, pd.answered_ns - pd.sent_ns);
     return std::move(out_);
 }
 

@@ -58,6 +58,10 @@ struct ExecOptions {
     // next piece goes out (replay is patient so that a finding reproduces on a loaded host;
     // the campaign is fast).
     int piece_settle_ms = 0;
+    // RTU/ASCII (no transaction ids): how long a frame that may or must get no answer is
+    // watched for a late one before the next frame goes out; 0: the answer timeout. The
+    // campaign shortens it from the slowest answer it has seen (Execution::slowest_answer_ns).
+    int silence_watch_ms = 0;
 };
 
 struct Execution {
@@ -65,6 +69,7 @@ struct Execution {
     std::vector<TraceEvent> trace;
     bool down_before = false;  // the very first connect failed: the target was already down
     bool target_down = false;  // the fresh probe after the case could not connect
+    std::int64_t slowest_answer_ns = 0;  // of the answers matched to the case's requests
 };
 
 Execution execute_case(const Case& c, Connector& target, const TargetProfile& profile,

@@ -2,13 +2,20 @@
 // edges of the target. Fields take the constants the target was seen comparing its input
 // against, so a check like `address == 0x1234 && value == 0xBEEF` is passed one field at a
 // time: the first comparison passed is a new edge, that case joins the corpus, and its
-// mutations try the second constant.
+// mutations try the second constant. Whatever the target's framing (MBAP, RTU, ASCII), the
+// mutations change a frame's MBAP view (unit and PDU behind an MBAP header) and the frame is
+// made again around it: a CRC or an LRC follows its PDU as an MBAP length does.
 #include <algorithm>
+
+#include <fmt/format.h>
+#include <set>
+#include <string>
 
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "netfuzz/generator.hpp"
 #include "netfuzz/minimize.hpp"
+#include "netfuzz/wire.hpp"
 
 namespace mbstorm::netfuzz {
 namespace {
@@ -21,6 +28,51 @@ bool one_frame(const Step& s) {
            codec::load_be16(s.bytes.data() + 4) + 6u == s.bytes.size();
 }
 
+// A case's sends as the mutations see them: each send that is one whole request frame in
+// `framing` turned into its MBAP view, and marked; the others left as they are.
+std::vector<bool> to_mbap_views(Case& c, codec::Framing framing) {
+    std::vector<bool> framed(c.steps.size(), false);
+    for (std::size_t i = 0; i < c.steps.size(); ++i) {
+        Step& s = c.steps[i];
+        if (s.op != Op::Send) continue;
+        if (framing == codec::Framing::Mbap) {
+            framed[i] = one_frame(s);
+            continue;
+        }
+        WireFrame f;
+        if (cut_frame(s.bytes, framing, true, 0, f) != WireCut::Frame || f.size != s.bytes.size() ||
+            !f.discard.empty())
+            continue;
+        s.bytes = std::move(f.mbap);
+        framed[i] = true;
+    }
+    return framed;
+}
+
+// The marked sends framed in `framing` again.
+void from_mbap_views(Case& c, const std::vector<bool>& framed, codec::Framing framing) {
+    if (framing == codec::Framing::Mbap) return;
+    for (std::size_t i = 0; i < c.steps.size(); ++i)
+        if (framed[i]) c.steps[i].bytes = reframe(c.steps[i].bytes, framing);
+}
+
+// The function code of the first marked send (0 when none).
+std::uint8_t first_function(const Case& c, const std::vector<bool>& framed) {
+    for (std::size_t i = 0; i < c.steps.size(); ++i)
+        if (framed[i]) return c.steps[i].bytes[lim::kMbapHeader];
+    return 0;
+}
+
+// What a case sends, step by step: two cases with the same key are the same case.
+std::string sends_key(const Case& c) {
+    std::string key;
+    for (const Step& s : c.steps) {
+        key.append(s.bytes.begin(), s.bytes.end());
+        key.push_back('|');
+    }
+    return key;
+}
+
 // The most recent entries are mutated more often: they are the frontier.
 constexpr std::uint32_t kFrontier = 16;
 constexpr std::size_t kMaxCompared = 4096;
@@ -31,7 +83,7 @@ void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comp
                               std::uint32_t rarest_edge) {
     // A frame per send, so that a mutation or a solved comparison stays inside one frame and
     // its MBAP length can follow it.
-    Case entry = split_frames(c);
+    Case entry = split_frames(c, options_.framing);
     entry.number = 0;
     entry.cls = MutationClass::CoverageMutation;
     coverage_corpus_.push_back(entry);
@@ -41,14 +93,14 @@ void Generator::add_to_corpus(const Case& c, const std::vector<Comparison>& comp
 
 namespace {
 
-// Puts the other operand of `cmp` where the case's frames carry one of them (big-endian, in
-// a PDU); false when neither is there.
-bool apply(Case& c, const Comparison& cmp) {
+// Puts the other operand of `cmp` where the case's marked frames (MBAP views) carry one of
+// them (big-endian, in a PDU); false when neither is there.
+bool apply(Case& c, const std::vector<bool>& framed, const Comparison& cmp) {
     const std::size_t n = cmp.size == 1 ? 1 : 2;
     if (n == 2 && (cmp.a > 0xFFFF || cmp.b > 0xFFFF)) return false;
-    for (Step& s : c.steps) {
-        std::vector<std::uint8_t>& f = s.bytes;
-        if (!one_frame(s)) continue;
+    for (std::size_t i = 0; i < c.steps.size(); ++i) {
+        std::vector<std::uint8_t>& f = c.steps[i].bytes;
+        if (!framed[i]) continue;
         for (std::size_t at = lim::kMbapHeader; at + n <= f.size(); ++at) {
             const std::uint64_t here = n == 1 ? f[at] : codec::load_be16(f.data() + at);
             const std::uint64_t to = here == cmp.a ? cmp.b : here == cmp.b ? cmp.a : here;
@@ -67,24 +119,75 @@ bool apply(Case& c, const Comparison& cmp) {
 
 // A case per failed comparison whose operand the frames carry, and per run of up to three
 // comparisons in a row (`a == X && b == Y && c == Z` may be one branch): at most kMaxSolved
-// per corpus entry.
+// different ones per corpus entry. (A target's framing and its loops compare the same bytes
+// many times over: without telling the cases apart, those used up the budget before the
+// comparisons of the request handler, which come last.)
 void Generator::solve_comparisons(const Case& c, const std::vector<Comparison>& comparisons) {
     constexpr std::size_t kMaxSolved = 96, kMaxRun = 3;
+    Case view = c;
+    const std::vector<bool> framed = to_mbap_views(view, options_.framing);
+    std::set<std::string> made_already;
     std::size_t made = 0;
-    for (std::size_t k = 0; k < comparisons.size() && made < kMaxSolved; ++k) {
-        Case run = c;
+    std::vector<std::uint32_t> seen;
+    for (const std::size_t k : rarest_first(comparisons, seen)) {
+        if (made >= kMaxSolved) break;
+        Case run = view;
         for (std::size_t i = k; i < std::min(comparisons.size(), k + kMaxRun); ++i) {
-            if (!apply(run, comparisons[i])) break;
-            solved_.push_back(run);
+            if (!apply(run, framed, comparisons[i])) break;
+            if (!made_already.insert(sends_key(run)).second) continue;
+            Case solved = run;
+            solved.function = first_function(run, framed);
+            from_mbap_views(solved, framed, options_.framing);
+            push_solved(std::move(solved), seen[k]);
             ++made;
         }
     }
-    for (Case& s : solved_)
-        for (const Step& st : s.steps)
-            if (st.op == Op::Send && st.bytes.size() > lim::kMbapHeader) {
-                s.function = st.bytes[lim::kMbapHeader];
-                break;
-            }
+}
+
+// The indexes of `comparisons`, those fewest corpus entries made before first (a framing's or
+// a loop's comparisons come with every case; a request handler's with few), and (`seen`) how
+// many had made each; counted.
+std::vector<std::size_t> Generator::rarest_first(const std::vector<Comparison>& comparisons,
+                                                 std::vector<std::uint32_t>& seen) {
+    constexpr std::size_t kMaxKnown = 1 << 20;
+    std::vector<std::size_t> order(comparisons.size());
+    seen.assign(comparisons.size(), 0);
+    for (std::size_t i = 0; i < comparisons.size(); ++i) {
+        const Comparison& c = comparisons[i];
+        const std::string key = fmt::format("{}:{:x}:{:x}", c.size, c.a, c.b);
+        const auto it = comparisons_seen_.find(key);
+        seen[i] = it == comparisons_seen_.end() ? 0 : it->second;
+        if (it != comparisons_seen_.end())
+            ++it->second;
+        else if (comparisons_seen_.size() < kMaxKnown)
+            comparisons_seen_.emplace(key, 1);
+        order[i] = i;
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t x, std::size_t y) { return seen[x] < seen[y]; });
+    return order;
+}
+
+namespace {
+
+// The heap's order: the rarer comparison, then the newer case, on top.
+template <typename S>
+bool runs_later(const S& x, const S& y) {
+    return x.rarity != y.rarity ? x.rarity > y.rarity : x.order < y.order;
+}
+
+}  // namespace
+
+void Generator::push_solved(Case c, std::uint32_t rarity) {
+    solved_.push_back(Solved{rarity, solved_order_++, std::move(c)});
+    std::push_heap(solved_.begin(), solved_.end(), runs_later<Solved>);
+}
+
+Case Generator::pop_solved() {
+    std::pop_heap(solved_.begin(), solved_.end(), runs_later<Solved>);
+    Case c = std::move(solved_.back().c);
+    solved_.pop_back();
+    return c;
 }
 
 void Generator::add_compared(const std::vector<std::uint16_t>& words,
@@ -116,17 +219,17 @@ std::size_t Generator::pick_corpus_entry() {
 
 void Generator::corpus_mutation(Case& out) {
     if (!solved_.empty()) {
-        out = std::move(solved_.back());
-        solved_.pop_back();
+        out = pop_solved();
         return;
     }
     out = coverage_corpus_[pick_corpus_entry()];
     out.cls = MutationClass::CoverageMutation;
     out.pipelinable = false;
     // One frame of the case (a sequence keeps its other steps as they were).
+    const std::vector<bool> framed = to_mbap_views(out, options_.framing);
     std::vector<std::size_t> frames;
     for (std::size_t i = 0; i < out.steps.size(); ++i)
-        if (one_frame(out.steps[i])) frames.push_back(i);
+        if (framed[i]) frames.push_back(i);
     if (frames.empty()) return;
     std::vector<std::uint8_t>& f =
         out.steps[frames[rng_.below(static_cast<std::uint32_t>(frames.size()))]].bytes;
@@ -134,6 +237,7 @@ void Generator::corpus_mutation(Case& out) {
     // The header follows the PDU (lying lengths are the mbap-length class's).
     codec::store_be16(f.data() + 4, static_cast<std::uint16_t>(f.size() - 6));
     out.function = f[lim::kMbapHeader];
+    from_mbap_views(out, framed, options_.framing);
 }
 
 // One mutation of the PDU of MBAP frame `f` (its function code included).
@@ -168,10 +272,12 @@ void Generator::mutate_frame(std::vector<std::uint8_t>& f) {
             break;
         }
         case 6: {  // the tail of another entry's first frame
-            const Case& other =
+            Case other =
                 coverage_corpus_[rng_.below(static_cast<std::uint32_t>(coverage_corpus_.size()))];
-            for (const Step& s : other.steps) {
-                if (s.op != Op::Send || s.bytes.size() <= lim::kMbapHeader) continue;
+            const std::vector<bool> framed = to_mbap_views(other, options_.framing);
+            for (std::size_t k = 0; k < other.steps.size(); ++k) {
+                const Step& s = other.steps[k];
+                if (!framed[k] || s.bytes.size() <= lim::kMbapHeader) continue;
                 const std::size_t cut = at(0) + 1;
                 const std::size_t from =
                     lim::kMbapHeader +

@@ -12,6 +12,7 @@
 #include "netfuzz/corpus.hpp"
 #include "netfuzz/coverage_map.hpp"
 #include "netfuzz/generator.hpp"
+#include "netfuzz/wire.hpp"
 
 using namespace mbstorm::netfuzz;
 
@@ -206,6 +207,50 @@ TEST(CoverageCorpus, FailedComparisonsBecomeCasesThatPassThem) {
 
 // --corpus: entries written and read back as they were; a file that is not an entry (a number
 // out of its field's range, bad hex) is an error naming it, not a shorter corpus.
+// A target that speaks RTU (or ASCII): the comparison is solved in the frame's unit and PDU,
+// and the frame made again around them (its CRC or LRC follows), as the target must read it.
+TEST(CoverageCorpus, FailedComparisonsInRtuAndAsciiFramesBecomeFramesThatPassThem) {
+    const std::vector<std::uint8_t> pdu = {0x06, 0x00, 0x10, 0x00, 0x07};
+    for (const auto framing : {mbstorm::codec::Framing::Rtu, mbstorm::codec::Framing::Ascii}) {
+        GeneratorOptions o;
+        o.framing = framing;
+        Generator g(o);
+        Case entry;
+        entry.steps.push_back(Step{Op::Send, 0, 0, 0, frame_pdu(pdu, 0, 1, framing)});
+        g.add_to_corpus(entry, {Comparison{4, 0x0123, 0x0010}, Comparison{2, 0x4D42, 0x0007}});
+        std::vector<std::vector<std::uint8_t>> made;
+        for (int i = 0; i < 3; ++i) {
+            Case c;
+            g.next(c);
+            ASSERT_EQ(c.steps.size(), 1u);
+            EXPECT_EQ(c.function, 0x06);
+            made.push_back(c.steps[0].bytes);
+        }
+        const auto as_sent = [&](std::vector<std::uint8_t> p) {
+            return frame_pdu(p, 0, 1, framing);
+        };
+        EXPECT_NE(std::find(made.begin(), made.end(), as_sent({0x06, 0x01, 0x23, 0x00, 0x07})),
+                  made.end());
+        EXPECT_NE(std::find(made.begin(), made.end(), as_sent({0x06, 0x01, 0x23, 0x4D, 0x42})),
+                  made.end());
+        // Mutations of the entry stay frames of the target's framing, with a checksum that holds.
+        for (int i = 0; i < 200; ++i) {
+            Case c;
+            g.next(c);
+            if (c.cls != MutationClass::CoverageMutation) continue;
+            const auto& bytes = c.steps[0].bytes;
+            if (framing == mbstorm::codec::Framing::Rtu) {
+                EXPECT_TRUE(rtu_crc_ok(bytes));  // its length rule may no longer fit: a fuzz case
+            } else {
+                WireFrame f;
+                ASSERT_EQ(cut_frame(bytes, framing, true, 0, f), WireCut::Frame);
+                EXPECT_EQ(f.size, bytes.size());
+                EXPECT_EQ(f.discard, "");
+            }
+        }
+    }
+}
+
 TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
     const std::string dir =
         (std::filesystem::temp_directory_path() / ("mbstorm-corpus-" + std::to_string(::getpid())))
