@@ -506,7 +506,7 @@ bool Campaign::calibrated_new(const Case& c, const CoverageSample& s) {
 // answer so far (at least 50 ms, at most the timeout), not the whole timeout: on a slave that
 // answers in a millisecond, a bad-CRC case costs 50 ms, not a second.
 void Campaign::note_answer_time(const Execution& ex) {
-    constexpr std::int64_t kMinWatchMs = 50, kSlowestTimes = 4;
+    constexpr std::int64_t kMinWatchMs = 20, kSlowestTimes = 4;
     slowest_answer_ns_ = std::max(slowest_answer_ns_, ex.slowest_answer_ns);
     if (result_.profile.framing == codec::Framing::Mbap || !slowest_answer_ns_) return;
     const std::int64_t watch_ms = kSlowestTimes * slowest_answer_ns_ / net::kNsPerMs;
@@ -1391,8 +1391,12 @@ bool Campaign::start_target() {
         *codec::function_info(codec::to_byte(codec::FunctionCode::ReadHoldingRegisters)));
     care_.restart().own_process_group();
     if (wait_for_target_with(care_.restart(), *options_.connector, any, options_.restart_cmd,
-                             options_.restart_wait_ms, options_.timeout_ms, deadline_))
+                             options_.restart_wait_ms, options_.timeout_ms, deadline_)) {
+        // Its exit is a death the executor sees on any transport (a serial line has no
+        // sentinel connections).
+        exec_.process_exited = [this] { return care_.restart().returned(); };
         return true;
+    }
     care_.restart().stop();
     result_.error =
         fmt::format("--target-cmd did not bring up a target that answers at {} within {} ms",

@@ -823,6 +823,11 @@ void CaseRunner::judge_target(const Case& c, Judgement& j) {
         j.candidate = fresh_probe_verdict(ProbeResult::Closed);
         j.candidate.summary =
             "the target's process died: every idle connection it held was closed at once";
+    } else if (options_.process_exited && options_.process_exited()) {
+        event(kFreshConn, TraceKind::FreshProbe, {}, "the target's process exited");
+        out_.target_down = true;
+        j.candidate = fresh_probe_verdict(ProbeResult::Closed);
+        j.candidate.summary = "the target's process exited during the case";
     } else if (j.need_fresh_probe) {
         if (r == ProbeResult::Closed || r == ProbeResult::ConnectFailed) {
             // A process that is dying may still complete a connect from its backlog, and a
@@ -952,6 +957,11 @@ bool CaseRunner::wait_for_target_read(std::uint8_t index) {
 }
 
 Execution CaseRunner::run(const Case& c) {
+    // A process that exited before the case began was killed by something before it.
+    if (options_.process_exited && options_.process_exited()) {
+        out_.down_before = true;
+        return std::move(out_);
+    }
     conns_.resize(std::max<std::size_t>(c.connections(), 1));
     for (const Step& s : c.steps) {
         perform(s);
@@ -963,7 +973,7 @@ Execution CaseRunner::run(const Case& c) {
     judge(c);
     for (const Conn& cn : conns_)
         for (const Pending& pd : cn.pending)
-            if (pd.answered_ns)
+            if (pd.answered_ns && pd.sent_ns)  // (a frame cut by a silence has no send time)
                 out_.slowest_answer_ns =
                     std::max(out_.slowest_answer_ns, pd.answered_ns - pd.sent_ns);
     return std::move(out_);

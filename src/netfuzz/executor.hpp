@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,6 +63,10 @@ struct ExecOptions {
     // watched for a late one before the next frame goes out; 0: the answer timeout. The
     // campaign shortens it from the slowest answer it has seen (Execution::slowest_answer_ns).
     int silence_watch_ms = 0;
+    // --target-cmd (mbstorm started the target): whether its process has exited. A death on any
+    // transport, a serial line included, where no sentinel connection can tell. Empty: the
+    // process is not mbstorm's.
+    std::function<bool()> process_exited;
 };
 
 struct Execution {

@@ -86,7 +86,7 @@ class Generator {
     // Saved entries of an earlier run: run before anything else, they join the corpus again
     // as they reach what they reached then.
     void resume(std::vector<Case> entries) {
-        for (auto it = entries.rbegin(); it != entries.rend(); ++it) push_solved(*it, 0);
+        for (auto it = entries.rbegin(); it != entries.rend(); ++it) push_solved(*it, nullptr);
     }
     const std::vector<Case>& corpus() const noexcept { return coverage_corpus_; }
 
@@ -111,7 +111,7 @@ class Generator {
     std::uint16_t compared_word();
     void solve_comparisons(const Case& c, const std::vector<Comparison>& comparisons);
     std::vector<std::size_t> rarest_first(const std::vector<Comparison>& comparisons,
-                                          std::vector<std::uint32_t>& seen);
+                                          std::vector<const std::uint32_t*>& counts);
     // Model-aimed cases (generator_map.cpp).
     bool has_model() const noexcept { return options_.model && !options_.model->empty(); }
     void in_map(Case& out);
@@ -153,18 +153,19 @@ class Generator {
     std::vector<Case> coverage_corpus_;
     std::vector<std::uint32_t> corpus_rare_edge_;  // per entry: its rarest edge when it joined
     const CoverageMap* edge_counts_ = nullptr;
-    // Input-to-state cases, run before any other: a heap whose top is the case of the rarest
-    // comparison (how many corpus entries had made it before), of equally rare ones the newest.
-    // Each entry gives up to 96: on a slow target, the comparisons every case makes (its
-    // framing's, its loops') would otherwise bury a request handler's for minutes.
+    // Input-to-state cases, run before any other: first the case of the comparison the fewest
+    // corpus entries have made by now (`count`, null for a resumed entry: first of all), of
+    // equally rare ones the newest. Each entry gives up to 96: on a slow target, the
+    // comparisons every case makes (its framing's, its poll loop's) would otherwise bury a
+    // request handler's for minutes.
     struct Solved {
-        std::uint32_t rarity = 0;
+        const std::uint32_t* count = nullptr;
         std::uint64_t order = 0;
         Case c;
     };
     std::vector<Solved> solved_;
     std::uint64_t solved_order_ = 0;
-    void push_solved(Case c, std::uint32_t rarity);
+    void push_solved(Case c, const std::uint32_t* count);
     Case pop_solved();
     // How many corpus entries made each comparison (size, a, b): the rarest are solved first.
     std::unordered_map<std::string, std::uint32_t> comparisons_seen_;

@@ -128,8 +128,8 @@ void Generator::solve_comparisons(const Case& c, const std::vector<Comparison>& 
     const std::vector<bool> framed = to_mbap_views(view, options_.framing);
     std::set<std::string> made_already;
     std::size_t made = 0;
-    std::vector<std::uint32_t> seen;
-    for (const std::size_t k : rarest_first(comparisons, seen)) {
+    std::vector<const std::uint32_t*> counts;
+    for (const std::size_t k : rarest_first(comparisons, counts)) {
         if (made >= kMaxSolved) break;
         Case run = view;
         for (std::size_t i = k; i < std::min(comparisons.size(), k + kMaxRun); ++i) {
@@ -138,54 +138,54 @@ void Generator::solve_comparisons(const Case& c, const std::vector<Comparison>& 
             Case solved = run;
             solved.function = first_function(run, framed);
             from_mbap_views(solved, framed, options_.framing);
-            push_solved(std::move(solved), seen[k]);
+            push_solved(std::move(solved), counts[k]);
             ++made;
         }
     }
 }
 
 // The indexes of `comparisons`, those fewest corpus entries made before first (a framing's or
-// a loop's comparisons come with every case; a request handler's with few), and (`seen`) how
-// many had made each; counted.
+// a loop's comparisons come with every case; a request handler's with few), and (`counts`)
+// each one's count of entries that made it, kept up to date as more entries come (null when
+// too many different comparisons are counted already); counted.
 std::vector<std::size_t> Generator::rarest_first(const std::vector<Comparison>& comparisons,
-                                                 std::vector<std::uint32_t>& seen) {
+                                                 std::vector<const std::uint32_t*>& counts) {
     constexpr std::size_t kMaxKnown = 1 << 20;
     std::vector<std::size_t> order(comparisons.size());
-    seen.assign(comparisons.size(), 0);
+    std::vector<std::uint32_t> before(comparisons.size(), 0);
+    counts.assign(comparisons.size(), nullptr);
     for (std::size_t i = 0; i < comparisons.size(); ++i) {
         const Comparison& c = comparisons[i];
         const std::string key = fmt::format("{}:{:x}:{:x}", c.size, c.a, c.b);
-        const auto it = comparisons_seen_.find(key);
-        seen[i] = it == comparisons_seen_.end() ? 0 : it->second;
-        if (it != comparisons_seen_.end())
-            ++it->second;
-        else if (comparisons_seen_.size() < kMaxKnown)
-            comparisons_seen_.emplace(key, 1);
+        auto it = comparisons_seen_.find(key);
+        if (it == comparisons_seen_.end() && comparisons_seen_.size() < kMaxKnown)
+            it = comparisons_seen_.emplace(key, 0).first;
+        if (it != comparisons_seen_.end()) {
+            before[i] = it->second++;
+            counts[i] = &it->second;  // unordered_map nodes stay where they are
+        }
         order[i] = i;
     }
     std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t x, std::size_t y) { return seen[x] < seen[y]; });
+                     [&](std::size_t x, std::size_t y) { return before[x] < before[y]; });
     return order;
 }
 
-namespace {
-
-// The heap's order: the rarer comparison, then the newer case, on top.
-template <typename S>
-bool runs_later(const S& x, const S& y) {
-    return x.rarity != y.rarity ? x.rarity > y.rarity : x.order < y.order;
+void Generator::push_solved(Case c, const std::uint32_t* count) {
+    solved_.push_back(Solved{count, solved_order_++, std::move(c)});
 }
 
-}  // namespace
-
-void Generator::push_solved(Case c, std::uint32_t rarity) {
-    solved_.push_back(Solved{rarity, solved_order_++, std::move(c)});
-    std::push_heap(solved_.begin(), solved_.end(), runs_later<Solved>);
-}
-
+// The case of the comparison fewest entries have made by now, of equally rare ones the newest
+// (a scan: the counts change as entries come, and a case run costs far more).
 Case Generator::pop_solved() {
-    std::pop_heap(solved_.begin(), solved_.end(), runs_later<Solved>);
-    Case c = std::move(solved_.back().c);
+    const auto rarity = [](const Solved& s) { return s.count ? *s.count : 0u; };
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < solved_.size(); ++i) {
+        const std::uint32_t r = rarity(solved_[i]), b = rarity(solved_[best]);
+        if (r < b || (r == b && solved_[i].order > solved_[best].order)) best = i;
+    }
+    Case c = std::move(solved_[best].c);
+    solved_[best] = std::move(solved_.back());
     solved_.pop_back();
     return c;
 }

@@ -251,6 +251,30 @@ TEST(CoverageCorpus, FailedComparisonsInRtuAndAsciiFramesBecomeFramesThatPassThe
     }
 }
 
+// A comparison every case makes (the target's framing, its poll loop) is solved after one that
+// few corpus entries made (a request handler's check of an address), however many entries
+// came since: on a slow target the first would otherwise bury the second.
+TEST(CoverageCorpus, TheRarestComparisonIsSolvedFirst) {
+    GeneratorOptions o;
+    Generator g(o);
+    const Comparison everywhere{2, 0x0007, 0x1111};  // made by every entry
+    const auto write_single = [](std::uint16_t address) {
+        Case c;
+        const std::vector<std::uint8_t> pdu = {0x06, 0x00, static_cast<std::uint8_t>(address), 0x00,
+                                               0x07};
+        c.steps.push_back(Step{Op::Send, 0, 0, 0, frame_pdu(pdu, 1, 1)});
+        return c;
+    };
+    g.add_to_corpus(write_single(0x10), {everywhere, Comparison{2, 0x0010, 0x0123}});
+    for (const std::uint16_t address : {0x20, 0x30, 0x40})
+        g.add_to_corpus(write_single(address), {everywhere});
+    Case first;
+    g.next(first);
+    ASSERT_EQ(first.steps.size(), 1u);
+    EXPECT_EQ(codec_load(first.steps[0].bytes, 8), 0x0123);
+    EXPECT_EQ(codec_load(first.steps[0].bytes, 10), 0x0007);
+}
+
 TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
     const std::string dir =
         (std::filesystem::temp_directory_path() / ("mbstorm-corpus-" + std::to_string(::getpid())))

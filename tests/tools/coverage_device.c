@@ -19,7 +19,9 @@
  *
  * The same device speaks RTU over TCP (--framing rtu: unit, PDU, CRC-16, as a gateway does) or
  * RTU or ASCII on a serial line (--tty PATH --framing rtu|ascii), unit 1: an RTU frame ends
- * where its function code says or, for a code it does not know, at the line's silence (5 ms);
+ * where its function code says or, for a code it does not know, at the line's silence, and a
+ * silence of 1 ms inside a frame breaks it (the specification's t1.5 above 19200 baud is
+ * 0.75 ms, its t3.5 1.75 ms);
  * an ASCII frame at its LF. A frame whose CRC or LRC is wrong, or for another unit, gets no
  * answer.
  *
@@ -46,7 +48,7 @@ enum { kIllegalFunction = 1, kIllegalAddress = 2, kIllegalValue = 3 };
 enum framing { kMbap, kRtu, kAscii };
 /* A line's silence ends an RTU frame; over TCP, bytes no frame can be cut from (a frame of a
  * code it does not know whose CRC never matches) are dropped after a longer quiet. */
-enum { kUnit = 1, kSilenceMs = 5, kTcpQuietMs = 20 };
+enum { kUnit = 1, kSilenceMs = 1, kTcpQuietMs = 20 };
 
 static uint16_t registers[kRegisters];
 static uint16_t* volatile null_register; /* volatile: the compiler may not assume it away */
