@@ -34,6 +34,7 @@ struct ThresholdSpec {
     int exception_code = -1;  // Metric::Exceptions: -1 = all codes
     Comparison comparison = Comparison::Less;
     double limit = 0;  // ns for latencies, a fraction for rates, per second, or a count
+    bool operator==(const ThresholdSpec&) const = default;
 };
 
 // Parses an expression; on failure returns false with a message naming the accepted forms.
