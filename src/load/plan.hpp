@@ -31,6 +31,7 @@ struct ValueSpec {
     std::uint16_t value = 0;             // Constant: the value; Counter: the first value
     std::uint16_t step = 1;              // Counter: added after every value (wraps at 65536)
     std::vector<std::uint16_t> pattern;  // Pattern: cycled in order
+    bool operator==(const ValueSpec&) const = default;
 };
 
 // One entry of the weighted operation mix.
@@ -55,6 +56,7 @@ struct Operation {
     std::uint16_t and_mask = 0x0000;   // FC16: the OR mask comes from `values`
     std::uint16_t sub_function = 0;    // FC08 (only 0x0000, return query data, is generated)
     std::uint8_t device_id_code = 1;   // FC2B/0E
+    bool operator==(const Operation&) const = default;
 };
 
 // A stage of a staged run (see stage_schedule.hpp). Unset targets keep the previous stage's
@@ -66,6 +68,7 @@ struct Stage {
     std::optional<std::uint32_t> target_connections;  // 0 closes every connection
     Ramp ramp = Ramp::Constant;
     std::string name;  // for reports; default "stage N"
+    bool operator==(const Stage&) const = default;
 };
 
 struct Plan {
@@ -89,6 +92,7 @@ struct Plan {
         std::string device;
         net::SerialSettings line;
         codec::Framing framing = codec::Framing::Rtu;
+        bool operator==(const Serial&) const = default;
     } serial;
 
     std::vector<Operation> operations;
@@ -126,7 +130,12 @@ struct Plan {
     struct Shard {
         std::uint32_t index = 0;
         std::uint32_t count = 0;
+        bool operator==(const Shard&) const = default;
     } shard;
+
+    // Member by member (`tls` by pointer): a scenario printed and read back must give the plan
+    // it was printed from (the scenario_yaml fuzz harness checks it).
+    bool operator==(const Plan&) const = default;
 };
 
 // Valid ranges, one place.

@@ -22,6 +22,7 @@ struct SerialSettings {
     Parity parity = Parity::Even;
     unsigned data_bits = 8;  // 7 or 8
     unsigned stop_bits = 1;  // 1 or 2
+    bool operator==(const SerialSettings&) const = default;
 };
 
 // Start bit + data bits + parity bit + stop bits.

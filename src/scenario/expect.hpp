@@ -19,6 +19,7 @@ struct Expectation {
     // Item at address A equals values[A - first_address] (covers the operation's range).
     std::vector<std::uint16_t> values;
     std::uint16_t first_address = 0;
+    bool operator==(const Expectation&) const = default;
 };
 
 // True when the function returns data an expectation can check (FC01-04, 17).

@@ -235,7 +235,10 @@ OperationNames parse_operations(const YamlReader& r, const YAML::Node& root, con
     for (std::size_t i = 0; i < parsed.size(); ++i) {
         auto& op = parsed[i].operation;
         if (!parsed[i].named) op.name = names.add_default(op.name);
-        for (auto& t : parsed[i].thresholds) t.operation = op.name;
+        for (auto& t : parsed[i].thresholds) {
+            t.operation = op.name;
+            t.in_operation = true;
+        }
         p.operations.push_back(op);
         s.expectations.push_back(parsed[i].expect);
         s.thresholds.insert(s.thresholds.end(), parsed[i].thresholds.begin(),

@@ -93,6 +93,58 @@ void emit_operation(YAML::Emitter& out, const load::Operation& op, const Expecta
     out << YAML::EndMap;
 }
 
+// The stages (none without), the operations with the thresholds written under them, and the
+// top-level thresholds: each threshold where the scenario wrote it (ThresholdSpec::in_operation).
+void emit_stages(YAML::Emitter& out, const Scenario& s) {
+    if (!s.stages.empty()) {
+        out << YAML::Key << "stages" << YAML::Value << YAML::BeginSeq;
+        for (const auto& st : s.stages) {
+            out << YAML::Flow << YAML::BeginMap;
+            out << YAML::Key << "name" << YAML::Value << st.name;
+            out << YAML::Key << "duration" << YAML::Value << duration_text(st.duration);
+            if (st.rate) out << YAML::Key << "rate" << YAML::Value << number_text(*st.rate);
+            if (st.connections) out << YAML::Key << "connections" << YAML::Value << *st.connections;
+            out << YAML::Key << "ramp" << YAML::Value
+                << (st.ramp == load::Ramp::Constant ? "constant" : "linear");
+            out << YAML::EndMap;
+        }
+        out << YAML::EndSeq;
+    }
+}
+
+void emit_operations(YAML::Emitter& out, const Scenario& s) {
+    const load::Plan& p = s.plan;
+    out << YAML::Key << "operations" << YAML::Value << YAML::BeginSeq;
+    for (std::size_t i = 0; i < p.operations.size(); ++i) {
+        std::vector<ThresholdSpec> own;
+        for (const auto& t : s.thresholds) {
+            if (t.in_operation && t.operation == p.operations[i].name) own.push_back(t);
+        }
+        emit_operation(out, p.operations[i],
+                       i < s.expectations.size() ? s.expectations[i] : Expectation{}, own);
+    }
+    out << YAML::EndSeq;
+}
+
+void emit_top_level_thresholds(YAML::Emitter& out, const Scenario& s) {
+    bool any_top_level = false;
+    for (const auto& t : s.thresholds) any_top_level = any_top_level || !t.in_operation;
+    if (any_top_level) {
+        out << YAML::Key << "thresholds" << YAML::Value << YAML::BeginSeq;
+        for (const auto& t : s.thresholds) {
+            if (t.in_operation) continue;
+            if (t.operation.empty()) {
+                out << YAML::DoubleQuoted << t.text;
+                continue;
+            }
+            out << YAML::Flow << YAML::BeginMap << YAML::Key << "operation" << YAML::Value
+                << t.operation << YAML::Key << "check" << YAML::Value << YAML::DoubleQuoted
+                << t.text << YAML::EndMap;
+        }
+        out << YAML::EndSeq;
+    }
+}
+
 }  // namespace
 
 const char* address_mode_name(load::AddressMode m) {
@@ -151,39 +203,9 @@ std::string format_scenario(const Scenario& s) {
         << "max" << YAML::Value << duration_text(p.reconnect_backoff_max) << YAML::EndMap;
     out << YAML::Key << "allow_writes" << YAML::Value << p.allow_writes;
     out << YAML::Key << "seed" << YAML::Value << p.seed;
-    if (!s.stages.empty()) {
-        out << YAML::Key << "stages" << YAML::Value << YAML::BeginSeq;
-        for (const auto& st : s.stages) {
-            out << YAML::Flow << YAML::BeginMap;
-            out << YAML::Key << "name" << YAML::Value << st.name;
-            out << YAML::Key << "duration" << YAML::Value << duration_text(st.duration);
-            if (st.rate) out << YAML::Key << "rate" << YAML::Value << number_text(*st.rate);
-            if (st.connections) out << YAML::Key << "connections" << YAML::Value << *st.connections;
-            out << YAML::Key << "ramp" << YAML::Value
-                << (st.ramp == load::Ramp::Constant ? "constant" : "linear");
-            out << YAML::EndMap;
-        }
-        out << YAML::EndSeq;
-    }
-    out << YAML::Key << "operations" << YAML::Value << YAML::BeginSeq;
-    for (std::size_t i = 0; i < p.operations.size(); ++i) {
-        std::vector<ThresholdSpec> own;
-        for (const auto& t : s.thresholds) {
-            if (t.operation == p.operations[i].name) own.push_back(t);
-        }
-        emit_operation(out, p.operations[i],
-                       i < s.expectations.size() ? s.expectations[i] : Expectation{}, own);
-    }
-    out << YAML::EndSeq;
-    bool any_overall = false;
-    for (const auto& t : s.thresholds) any_overall = any_overall || t.operation.empty();
-    if (any_overall) {
-        out << YAML::Key << "thresholds" << YAML::Value << YAML::BeginSeq;
-        for (const auto& t : s.thresholds) {
-            if (t.operation.empty()) out << YAML::DoubleQuoted << t.text;
-        }
-        out << YAML::EndSeq;
-    }
+    emit_stages(out, s);
+    emit_operations(out, s);
+    emit_top_level_thresholds(out, s);
     out << YAML::EndMap;
     return std::string(out.c_str()) + "\n";
 }

@@ -35,6 +35,7 @@ struct StageSpec {
     std::optional<double> rate;                // open loop: transactions per second
     std::optional<std::uint32_t> connections;  // open or closed loop
     load::Ramp ramp = load::Ramp::Linear;
+    bool operator==(const StageSpec&) const = default;
 };
 
 // Caps on what a scenario file may ask for, each refused with its file:line:column: a file

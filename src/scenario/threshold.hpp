@@ -34,6 +34,11 @@ struct ThresholdSpec {
     int exception_code = -1;  // Metric::Exceptions: -1 = all codes
     Comparison comparison = Comparison::Less;
     double limit = 0;  // ns for latencies, a fraction for rates, per second, or a count
+    // Where a scenario wrote it: under its operation's `thresholds:` (true), or in the top-level
+    // list (false; `{operation: NAME, check: ...}` when it names one). The printer writes it
+    // back there, so a printed scenario reads back in the same order and within the same caps.
+    bool in_operation = false;
+    bool operator==(const ThresholdSpec&) const = default;
 };
 
 // Parses an expression; on failure returns false with a message naming the accepted forms.

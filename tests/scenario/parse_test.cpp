@@ -2,6 +2,8 @@
 // printed scenario reads back to the same scenario.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "scenario/print.hpp"
 #include "scenario/scenario.hpp"
 #include "slave/device_yaml_print.hpp"
@@ -181,6 +183,78 @@ TEST(ScenarioParse, ZeroDurationIsFineWithATransactionCount) {
         parse_scenario("duration: 0\ntransactions: 500\noperations: [{function: 3}]\n", "t.yaml");
     EXPECT_EQ(s.plan.transactions, 500U);
     EXPECT_EQ(s.plan.duration, 0s);
+}
+
+// The same, member by member rather than as text: a printer that left a member out (or wrote
+// a default in its place) prints its own output identically, yet the plan read back differs.
+// The scenario_yaml fuzz harness checks the same on every scenario it finds.
+void expect_reads_back_member_by_member(const Scenario& s) {
+    const Scenario again = parse_scenario(format_scenario(s), s.source);
+    EXPECT_EQ(again.name, s.name);
+    EXPECT_EQ(again.description, s.description);
+    EXPECT_EQ(again.target, s.target);
+    EXPECT_TRUE(again.plan.operations == s.plan.operations);
+    EXPECT_TRUE(again.plan == s.plan);
+    EXPECT_TRUE(again.stages == s.stages);
+    EXPECT_TRUE(again.thresholds == s.thresholds);
+    EXPECT_TRUE(again.expectations == s.expectations);
+    EXPECT_TRUE(again.slave == s.slave);
+    EXPECT_EQ(again.slave_threads, s.slave_threads);
+}
+
+TEST(ScenarioPrint, ReadsBackToTheSamePlanMemberByMember) {
+    {
+        SCOPED_TRACE("full.yaml");
+        expect_reads_back_member_by_member(parse_scenario(kFull, "full.yaml"));
+    }
+    const std::filesystem::path folder = std::filesystem::path(MBSTORM_SOURCE_DIR) / "scenarios";
+    std::size_t files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+        if (entry.path().extension() != ".yaml") continue;
+        SCOPED_TRACE(entry.path().string());
+        expect_reads_back_member_by_member(load_scenario_file(entry.path().string()));
+        ++files;
+    }
+    EXPECT_GE(files, 7u);
+}
+
+// Found by the scenario_yaml harness once it compared members: a top-level threshold that
+// names an operation was printed under that operation, so the printed scenario read back with
+// its thresholds in another order, and with a longer list under the operation than the cap
+// allows (the file was accepted, its printed form refused).
+TEST(ScenarioPrint, ThresholdsReadBackWhereTheyWereWritten) {
+    const Scenario s = parse_scenario(R"(
+operations:
+  - {name: r, function: 3, thresholds: ["p99 < 5ms"]}
+thresholds:
+  - error_rate < 0.1%
+  - {operation: r, check: "p99.9 <= 20ms"}
+)",
+                                      "t.yaml");
+    ASSERT_EQ(s.thresholds.size(), 3u);
+    EXPECT_TRUE(s.thresholds[0].in_operation);
+    EXPECT_FALSE(s.thresholds[2].in_operation);
+    EXPECT_EQ(s.thresholds[2].operation, "r");
+    const std::string printed = format_scenario(s);
+    EXPECT_NE(printed.find(R"({operation: r, check: "p99.9 <= 20ms"})"), std::string::npos)
+        << printed;
+    const Scenario again = parse_scenario(printed, "t.yaml");
+    EXPECT_TRUE(again.thresholds == s.thresholds);
+}
+
+TEST(ScenarioPrint, ThresholdsWithinTheCapsPrintWithinTheCaps) {
+    // 600 under the operation and 500 more for it in the top-level list: each list within
+    // kMaxThresholds, the operation's 1100 in all are not one list when printed.
+    std::string text = "operations:\n  - name: r\n    function: 3\n    thresholds:\n";
+    for (int i = 1; i <= 600; ++i) text += "      - p99 < " + std::to_string(i) + "ms\n";
+    text += "thresholds:\n";
+    for (int i = 1; i <= 500; ++i)
+        text += "  - {operation: r, check: \"p50 < " + std::to_string(i) + "ms\"}\n";
+    const Scenario s = parse_scenario(text, "cap.yaml");
+    ASSERT_EQ(s.thresholds.size(), 1100u);
+    Scenario again;
+    ASSERT_NO_THROW(again = parse_scenario(format_scenario(s), "cap.yaml"));
+    EXPECT_TRUE(again.thresholds == s.thresholds);
 }
 
 TEST(ScenarioPrint, ReadsBackToTheSameScenario) {
