@@ -63,12 +63,15 @@ struct RunOptions {
     bool fail_on_plan_shortfall = false;
     std::string shard;     // --shard I/N (else the environment)
     std::string start_at;  // --start-at TIME
+    std::string backend = "auto";
     TransportOptions transport;
     bool depth_given = false;  // --depth on the command line (not its default)
 };
 
-// --shard (or the environment) and --start-at into the request; "" or the usage error.
+// --shard (or the environment), --start-at and --backend into the request; "" or the usage
+// error.
 std::string distributed_options(const RunOptions& o, ScenarioRunRequest& request) {
+    net::parse_backend_choice(o.backend, request.backend);  // checked by CLI11
     if (auto e = resolve_shard(o.shard, std::getenv(kShardIndexEnv), std::getenv(kShardCountEnv),
                                request.shard);
         !e.empty())
@@ -338,6 +341,11 @@ void add_run_command(CLI::App& app, Action& action) {
                                 "addresses; default from the environment {} and {} "
                                 "(a Kubernetes Indexed Job); merge the shards with mbstorm merge",
                                 kShardIndexEnv, kShardCountEnv));
+    cmd->add_option("--backend", o->backend,
+                    "event source: io_uring, epoll (where io_uring is refused, e.g. Docker 25+'s "
+                    "default seccomp profile), or auto: io_uring when this process may use it")
+        ->check(CLI::IsMember({"auto", "io_uring", "epoll"}))
+        ->capture_default_str();
     cmd->add_option("--start-at", o->start_at,
                     "connect now, start sending (warm-up first) at this wall-clock time: RFC 3339 "
                     "(2026-11-24T14:00:00Z, or with an offset) or seconds since the epoch; a "

@@ -201,6 +201,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         };
     hooks.shard = shard;
     hooks.start_at = request.start_at;
+    hooks.backend = request.backend;
     load::LoadResult result = scenario::run_scenario(s, hooks);
     if (request.fail_on_plan_shortfall) judge_plan_carried_out(result.run);
     result.run.metadata.test_id = request.outputs.test_id;

@@ -8,6 +8,7 @@
 
 #include "cli/run_output.hpp"
 #include "load/plan.hpp"
+#include "net/backend.hpp"
 #include "scenario/scenario.hpp"
 
 namespace mbstorm::cli {
@@ -26,6 +27,7 @@ struct ScenarioRunRequest {
     load::Plan::Serial serial;            // --serial: the line replaces the scenario's target
     std::vector<std::string> thresholds;  // --threshold EXPR, added to the scenario's
     bool fail_on_plan_shortfall = false;  // a part of the plan not carried out fails the run
+    net::BackendChoice backend = net::BackendChoice::Auto;  // --backend
 };
 
 // --threshold expressions added to the scenario's thresholds (the whole run's); "" or the

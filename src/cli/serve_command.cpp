@@ -37,6 +37,7 @@ struct ServeOptions {
     bool stats = false;
     std::uint64_t duration_ns = 0;
     std::string metrics_listen;
+    std::string backend = "auto";
     TransportOptions transport;
 };
 
@@ -134,6 +135,7 @@ int run_serve(ServeOptions& o) {
     }
 
     if (o.transport.kind() == TransportKind::Serial) return run_serial_serve(o, std::move(units));
+    net::parse_backend_choice(o.backend, c.backend_choice);  // checked by CLI11
     server::block_stop_signals();
     server::Server srv(c);
     std::string error;
@@ -142,6 +144,8 @@ int run_serve(ServeOptions& o) {
     fmt::print("mbstorm serve: listening on {} ({}, {} thread{}, {}); Ctrl-C stops\n",
                srv.endpoint(), transport_name(o.transport.kind()), srv.threads(),
                srv.threads() == 1 ? "" : "s", srv.describe_io());
+    if (!srv.backend_reason().empty())
+        fmt::print("mbstorm serve: epoll backend: {}\n", srv.backend_reason());
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     if (c.tls) fmt::print("mbstorm serve: {}\n", net::describe_tls_path());
@@ -161,7 +165,8 @@ int run_serve(ServeOptions& o) {
 
 void add_serve_command(CLI::App& app, Action& action) {
     auto o = std::make_shared<ServeOptions>();
-    auto* cmd = app.add_subcommand("serve", "Run the reference Modbus TCP slave (io_uring)");
+    auto* cmd = app.add_subcommand(
+        "serve", "Run the reference Modbus TCP slave (io_uring, or epoll where it is refused)");
     cmd->add_option("--listen,-l", o->config.listen,
                     "address to listen on: HOST[:PORT], [IPv6]:PORT or an IPv6 address, "
                     "port 502 if omitted (802 with --transport tls); :PORT, 0.0.0.0 or [::] "
@@ -172,6 +177,11 @@ void add_serve_command(CLI::App& app, Action& action) {
     cmd->add_option("--threads", o->config.threads,
                     "worker threads, each with its own ring (0: one per core)")
         ->check(CLI::Range(0u, 1024u));
+    cmd->add_option("--backend", o->backend,
+                    "event source: io_uring, epoll (where io_uring is refused, e.g. Docker 25+'s "
+                    "default seccomp profile), or auto: io_uring when this process may use it")
+        ->check(CLI::IsMember({"auto", "io_uring", "epoll"}))
+        ->capture_default_str();
     cmd->add_option("--device", o->device_file,
                     "YAML device description: tables, initial data, simulated inputs, faults");
     cmd->add_flag("--stats", o->stats, "print a line of statistics every second");

@@ -300,6 +300,7 @@ struct WorkerLinks {
     std::atomic<bool>& any_connected;
     stats::IntervalTimeline& timeline;
     bool direct_descriptors = false;
+    net::Backend backend = net::Backend::IoUring;
 };
 
 // One worker per thread, each with its share of the connections, the quota and the rate.
@@ -341,6 +342,7 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.timeline = &links.timeline;
         setup.schedule = schedule.empty() ? nullptr : &schedule;
         setup.direct_descriptors = links.direct_descriptors;
+        setup.backend = links.backend;
         setup.live = links.options.live != nullptr ? links.options.live->worker(i) : nullptr;
         workers.push_back(std::make_unique<Worker>(std::move(setup)));
     }
@@ -369,6 +371,7 @@ struct RunSetup {
     std::uint32_t capacity = 0;  // the most connections open at once (the peak stage's)
     std::uint32_t threads = 0;
     bool direct = false;  // sockets as io_uring direct descriptors
+    net::BackendDecision backend;
 };
 
 // "" when the (valid) plan can run against its target; else why not, in one line.
@@ -383,15 +386,22 @@ std::string prepare_run(const Plan& plan, const EngineOptions& options,
     if (std::string why = resolve_sources(plan, setup.endpoint, setup.sources); !why.empty())
         return why;
     setup.capacity = schedule.peak_connections();
+    if (std::string error; !net::choose_backend(options.backend, true, setup.backend, error))
+        return error;
     // The kernel's TLS (where there is one) needs descriptors setsockopt can reach.
-    setup.direct = options.use_direct_descriptors && net::features().direct_descriptors &&
+    setup.direct = setup.backend.backend == net::Backend::IoUring &&
+                   options.use_direct_descriptors && net::features().direct_descriptors &&
                    !(plan.tls && net::kernel_tls().available);
     setup.threads = effective_threads(plan);
     // Threads left to the engine: as many rings as the connections' socket tables need.
     if (setup.direct && plan.threads == 0)
         setup.threads = threads_for_socket_tables(setup.capacity, setup.threads);
-    return check_connection_capacity(setup.capacity, setup.threads, setup.sources.size(),
-                                     setup.direct);
+    std::string why = check_connection_capacity(setup.capacity, setup.threads, setup.sources.size(),
+                                                setup.direct);
+    // Only io_uring's direct descriptors escape the open-files limit.
+    if (!why.empty() && setup.backend.backend == net::Backend::Epoll)
+        why += " (the epoll backend holds each connection as a descriptor)";
+    return why;
 }
 
 // run --serial: one master on the line, one request at a time; writes need leave unless the
@@ -632,6 +642,13 @@ void describe_run(const Plan& plan, const EngineOptions& options, const StageSch
                             static_cast<double>(clock.late_by_ns) / 1e9, meta.start_at_epoch_s));
         }
     }
+    if (!plan.serial.device.empty()) {
+        meta.backend = "serial";
+    } else {
+        meta.backend = std::string(net::backend_name(setup.backend.backend));
+        if (!setup.backend.why.empty())
+            meta.notes.push_back(fmt::format("epoll backend: {}", setup.backend.why));
+    }
     if (plan.model == LoadModel::OpenLoop) {
         meta.notes.push_back(
             "open loop: latency measured from each request's intended send time (coordinated "
@@ -723,7 +740,8 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     } else {
         workers = make_workers(plan, setup.endpoint, setup.sources, setup.threads, setup.capacity,
                                clock.window, schedule,
-                               WorkerLinks{options, abort, any_connected, timeline, setup.direct});
+                               WorkerLinks{options, abort, any_connected, timeline, setup.direct,
+                                           setup.backend.backend});
         open_now = [&workers] {
             std::uint32_t open = 0;
             for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);

@@ -16,6 +16,7 @@
 #include "load/live_metrics.hpp"
 #include "load/plan.hpp"
 #include "load/request_info.hpp"
+#include "net/backend.hpp"
 #include "stats/run_result.hpp"
 
 namespace mbstorm::load {
@@ -66,6 +67,8 @@ struct EngineOptions {
     // Hold sockets as io_uring direct descriptors when the kernel has them, so the open-files
     // limit does not cap the connections (false: plain descriptors, as on older kernels).
     bool use_direct_descriptors = true;
+    // io_uring, epoll, or io_uring where the process may use it and epoll elsewhere.
+    net::BackendChoice backend = net::BackendChoice::Auto;
     // Optional: live totals for --metrics-listen (prepared here, kept by the caller).
     LiveMetrics* live = nullptr;
     IntervalCallback on_interval;  // optional: --timeline

@@ -121,32 +121,24 @@ void Worker::run() noexcept {
 }
 
 bool Worker::setup_io() noexcept {
-    const net::Features& features = net::features();
-    if (!features.ring) {
-        fatal_error =
-            "io_uring is not available in this process (kernel too old or blocked by "
-            "seccomp/sysctl kernel.io_uring_disabled)";
-        return false;
-    }
-    if (!features.buf_ring) {
-        fatal_error = fmt::format("the kernel ({}) lacks io_uring provided buffer rings (5.19+)",
-                                  features.kernel);
-        return false;
-    }
-    multishot_ = features.multishot_recv;
-    direct_ = setup_.direct_descriptors;
+    // The engine chose the backend (net::choose_backend): io_uring has buffer rings here.
+    const bool uring = setup_.backend == net::Backend::IoUring;
+    multishot_ = !uring || net::features().multishot_recv;
+    direct_ = uring && setup_.direct_descriptors;
     // The kernel's TLS needs a hand-off with no recv in flight (single-shot recvs) and a
     // socket setsockopt can reach (the engine gives no direct descriptors then).
     ktls_ = plan_.tls && net::kernel_tls().available;
     if (ktls_) multishot_ = false;
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
-    if (const int rc = ring_.init(options); rc < 0) {
-        fatal_error = fmt::format("io_uring setup failed: {}", std::system_category().message(-rc));
+    if (const int rc = loop_.init(setup_.backend, options); rc < 0) {
+        fatal_error = fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
+                                  std::system_category().message(-rc));
         return false;
     }
+    loop_.set_direct(direct_);
     if (direct_) {
-        if (const int rc = net::register_socket_table(ring_.get(), setup_.connections); rc < 0) {
+        if (const int rc = net::register_socket_table(loop_.ring(), setup_.connections); rc < 0) {
             fatal_error = fmt::format(
                 "io_uring socket table of {} slots failed: {} (a ring's table is capped at the "
                 "open-files limit; more threads spread the connections over more rings)",
@@ -155,9 +147,9 @@ bool Worker::setup_io() noexcept {
         }
     }
     const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
-    if (const int rc = buf_ring_.init(ring_.get(), kBufferGroup, count, 16384); rc < 0) {
-        fatal_error = fmt::format("io_uring buffer ring setup failed: {}",
-                                  std::system_category().message(-rc));
+    if (const int rc = loop_.init_buffers(kBufferGroup, count, 16384); rc < 0) {
+        fatal_error =
+            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc));
         return false;
     }
     return true;
@@ -194,10 +186,10 @@ void Worker::loop() noexcept {
         if (!started_) wake = std::min(wake, setup_.start_ns);
         // A 1 us floor keeps the wait from becoming a pure poll; ready CQEs return at once.
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
-        const int rc = ring_.submit_and_wait(1, wait);
+        const int rc = loop_.submit_and_wait(1, wait);
         if (net::wait_failed(rc)) {
-            fatal_error =
-                fmt::format("io_uring wait failed: {}", std::system_category().message(-rc));
+            fatal_error = fmt::format("{} wait failed: {}", net::backend_name(setup_.backend),
+                                      std::system_category().message(-rc));
             setup_.abort->store(true);
             break;
         }
@@ -208,7 +200,7 @@ void Worker::loop() noexcept {
             interval_.tick(static_cast<std::uint64_t>(now - setup_.measure_start_ns),
                            *setup_.timeline, setup_.index);
         }
-        ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
+        loop_.drain([&](const net::Completion& cqe) { handle(cqe, now); });
         if (setup_.live != nullptr) {
             setup_.live->open_connections.set(open_connections.load(std::memory_order_relaxed));
             setup_.live->in_flight.set(outstanding_);
@@ -229,8 +221,11 @@ void Worker::teardown() noexcept {
         if (c.fd >= 0) {
             if (direct_) {
                 close_socket(c);
-            } else {
+            } else if (loop_.uses_io_uring()) {
                 ::shutdown(c.fd, SHUT_RDWR);
+            } else {
+                loop_.close(c.fd);  // its pending operations end now, -ECANCELED
+                c.fd = -1;
             }
         }
         if (c.state == Connection::State::Open) open_connections.fetch_sub(1);
@@ -243,11 +238,11 @@ void Worker::teardown() noexcept {
     while (inflight_ops_ > 0) {
         const std::int64_t now = net::now_ns();
         if (now >= deadline) break;
-        ring_.submit_and_wait(1, std::min<std::int64_t>(deadline - now, 10 * net::kNsPerMs));
-        ring_.drain([&](const io_uring_cqe& cqe) { handle(cqe, now); });
+        loop_.submit_and_wait(1, std::min<std::int64_t>(deadline - now, 10 * net::kNsPerMs));
+        loop_.drain([&](const net::Completion& cqe) { handle(cqe, now); });
     }
     for (Connection& c : connections_) {
-        if (c.fd >= 0 && !direct_) ::close(c.fd);  // direct: the ring's exit closes the table
+        if (c.fd >= 0 && !direct_) loop_.close(c.fd);  // direct: the ring's exit closes the table
         c.fd = -1;
     }
 }
@@ -375,7 +370,7 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
         return;
     }
     if (direct_) {
-        if (const int rc = net::install_in_slot(ring_.get(), index, fd); rc < 0) {
+        if (const int rc = net::install_in_slot(loop_.ring(), index, fd); rc < 0) {
             on_connect(index, rc, now);
             return;
         }
@@ -386,17 +381,9 @@ void Worker::start_connect(std::uint32_t index, std::int64_t now) noexcept {
     c.state = Connection::State::Connecting;
     c.generation = net::next_generation(c.generation);
     c.connect_started_ns = now;
-    // The connect and its linked timeout must reach the kernel in the same submission.
-    if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
-    io_uring_sqe* sqe = ring_.sqe();
-    io_uring_prep_connect(sqe, c.fd, setup_.endpoint.sa(), setup_.endpoint.len);
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Connect, index, c.generation));
-    sqe->flags |= IOSQE_IO_LINK;
-    io_uring_sqe* timeout = ring_.sqe();
-    io_uring_prep_link_timeout(timeout, &connect_timeout_ts_, 0);
-    io_uring_sqe_set_data64(timeout,
-                            net::encode_user_data(Op::ConnectTimeout, index, c.generation));
+    loop_.connect(c.fd, setup_.endpoint.sa(), setup_.endpoint.len,
+                  net::encode_user_data(Op::Connect, index, c.generation), &connect_timeout_ts_,
+                  net::encode_user_data(Op::ConnectTimeout, index, c.generation));
     inflight_ops_ += 2;
 }
 
@@ -499,19 +486,16 @@ void Worker::drop_socket(Connection& c) noexcept {
 void Worker::close_socket(Connection& c) noexcept {
     if (c.fd < 0) return;
     if (direct_) {
-        // Both SQEs in one submission, linked: the shutdown ends the pending multishot recv.
-        if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
+        // The shutdown ends the pending multishot recv.
         const auto index = static_cast<std::uint32_t>(c.fd);
-        io_uring_sqe* shutdown_sqe = ring_.sqe();  // first: the close is linked to it
-        io_uring_sqe* close_sqe = ring_.sqe();
-        net::prep_shutdown_and_close(shutdown_sqe, close_sqe, index,
-                                     net::encode_user_data(Op::Shutdown, index, c.generation),
-                                     net::encode_user_data(Op::Close, index, c.generation));
-        inflight_ops_ += 2;
-        c.slot_closing = true;
+        if (loop_.shutdown_and_close_slot(index,
+                                          net::encode_user_data(Op::Shutdown, index, c.generation),
+                                          net::encode_user_data(Op::Close, index, c.generation))) {
+            inflight_ops_ += 2;
+            c.slot_closing = true;
+        }
     } else {
-        ::shutdown(c.fd, SHUT_RDWR);  // ends the pending multishot recv
-        ::close(c.fd);
+        loop_.shutdown_and_close(c.fd);
     }
     c.fd = -1;
 }
@@ -528,15 +512,12 @@ void Worker::close_connection(std::uint32_t index, std::int64_t now, stats::Outc
 
 void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
-    io_uring_sqe* sqe = ring_.sqe();
-    net::prep_group_recv(sqe, c.fd, buf_ring_.group_id(), buf_ring_.buffer_size(), multishot_);
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
+    if (!loop_.recv(c.fd, net::encode_user_data(Op::Recv, index, c.generation), multishot_)) return;
     c.recv_armed = true;
     ++inflight_ops_;
 }
 
-void Worker::handle(const io_uring_cqe& cqe, std::int64_t now) noexcept {
+void Worker::handle(const net::Completion& cqe, std::int64_t now) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= connections_.size()) return;
     switch (static_cast<Op>(ud.op)) {
@@ -573,7 +554,7 @@ void Worker::note_unframed(codec::Bytes input) noexcept {
     std::copy_n(input.begin(), unframed_sample_size, unframed_sample.begin());
 }
 
-void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept {
+void Worker::on_recv(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept {
     Connection& c = connections_[index];
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     const bool more = (cqe.flags & IORING_CQE_F_MORE) != 0;
@@ -581,15 +562,15 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     const std::uint16_t buffer_id = net::BufRing::buffer_id(cqe.flags);
     if (!more) --inflight_ops_;
     if (ud.generation != c.generation || stopping_) {
-        if (has_buffer) buf_ring_.recycle(buffer_id);
+        if (has_buffer) loop_.recycle(buffer_id);
         return;
     }
     if (!more) c.recv_armed = false;
 
     if (cqe.res > 0 && has_buffer && c.rtu) {
         const codec::CodecError e =
-            consume_rtu(c, buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res), now);
-        buf_ring_.recycle(buffer_id);
+            consume_rtu(c, loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res), now);
+        loop_.recycle(buffer_id);
         if (e != codec::CodecError::Ok) {
             // No reliable frame boundary after a bad CRC (or an impossible length): the
             // transactions the connection carried end with it, and a fresh one starts.
@@ -604,9 +585,9 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         return;
     }
     if (cqe.res > 0 && has_buffer) {
-        codec::Bytes input(buf_ring_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
+        codec::Bytes input(loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
         if (c.tls && !c.tls->kernel && !tls_input(index, input, now)) {
-            buf_ring_.recycle(buffer_id);
+            loop_.recycle(buffer_id);
             if ((c.state == Connection::State::Handshaking || c.state == Connection::State::Open) &&
                 !c.recv_armed)
                 arm_recv(index);
@@ -632,7 +613,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
                     break;
             }
         }
-        buf_ring_.recycle(buffer_id);
+        loop_.recycle(buffer_id);
         if (fatal) {
             // The stream cannot be resynchronised: count it and start a fresh connection. The
             // transactions it carried end as framing errors, not as a peer's close.
@@ -645,7 +626,7 @@ void Worker::on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
         refill(index, now);
         return;
     }
-    if (has_buffer) buf_ring_.recycle(buffer_id);
+    if (has_buffer) loop_.recycle(buffer_id);
     if (cqe.res == -ENOBUFS) {  // the buffer ring ran dry for a moment: listen again
         arm_recv(index);
         return;
@@ -732,7 +713,7 @@ bool Worker::on_answer(Connection& c, const codec::TcpFrame& frame, std::int64_t
     return true;
 }
 
-void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept {
+void Worker::on_send(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept {
     Connection& c = connections_[index];
     --inflight_ops_;
     const net::UserData ud = net::decode_user_data(cqe.user_data);
@@ -750,13 +731,10 @@ void Worker::on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t 
     }
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
-        io_uring_sqe* sqe = ring_.sqe();
         const std::uint8_t* base =
             c.tls && !c.tls->kernel ? c.tls->cipher.data() : c.inflight_data();
-        io_uring_prep_send(sqe, c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
-                           MSG_NOSIGNAL);
-        net::use_slot_if(sqe, direct_);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+        loop_.send(c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
+                   net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
@@ -881,11 +859,9 @@ void Worker::flush() noexcept {
             tls_send_queued(index);
             return;
         }
-        io_uring_sqe* sqe = ring_.sqe();
-        if (sqe == nullptr) return;
-        io_uring_prep_send(sqe, c.fd, c.queue_data(), c.queued, MSG_NOSIGNAL);
-        net::use_slot_if(sqe, direct_);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+        if (!loop_.send(c.fd, c.queue_data(), c.queued,
+                        net::encode_user_data(Op::Send, index, c.generation)))
+            return;
         ++inflight_ops_;
         c.inflight_len = c.queued;
         c.inflight_done = 0;

@@ -18,9 +18,8 @@
 #include "load/plan.hpp"
 #include "load/preflight.hpp"
 #include "load/stage_schedule.hpp"
-#include "net/buf_ring.hpp"
 #include "net/completion_loop.hpp"
-#include "net/ring.hpp"
+#include "net/event_loop.hpp"
 #include "net/socket.hpp"
 #include "stats/interval_recorder.hpp"
 #include "stats/run_result.hpp"
@@ -54,6 +53,7 @@ struct WorkerSetup {
     // Hold sockets as io_uring direct descriptors (the engine checked the kernel has them and
     // that `connections` fits a ring's table).
     bool direct_descriptors = false;
+    net::Backend backend = net::Backend::IoUring;
     LiveWorkerCells* live = nullptr;  // --metrics-listen only
 };
 
@@ -108,7 +108,7 @@ class Worker {
     void close_socket(Connection& c) noexcept;  // direct: until its close completes, no reopen
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
-    void on_recv(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    void on_recv(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept;
     void note_unframed(codec::Bytes input) noexcept;
     // An answer's frame: matched to its transaction, checked and recorded. on_answer is the
     // body, inlined into on_recv's frame loop (as a call, its prologue and epilogue were about
@@ -123,8 +123,8 @@ class Worker {
     // Rewrites the MBAP request just encoded at `at` as an RTU frame; returns its size.
     std::size_t rtu_request(Connection& c, std::uint8_t* at, std::size_t size,
                             const Transaction& t) noexcept;
-    void on_send(std::uint32_t index, const io_uring_cqe& cqe, std::int64_t now) noexcept;
-    void handle(const io_uring_cqe& cqe, std::int64_t now) noexcept;
+    void on_send(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept;
+    void handle(const net::Completion& cqe, std::int64_t now) noexcept;
 
     // TLS (worker_tls.cpp). tls_begin: TCP is up, the handshake starts. tls_input: ciphertext
     // in; `data` becomes the plaintext it held; false when there is none to take (handshake
@@ -176,10 +176,9 @@ class Worker {
     bool stopping_ = false;
     bool started_ = false;  // past setup_.start_ns: requests may go out
 
-    net::Ring ring_;
-    net::BufRing buf_ring_;  // declared after ring_: unregistered before the ring goes
+    net::EventLoop loop_;
     bool multishot_ = true;
-    bool direct_ = false;  // sockets are slots of ring_'s file table (slot = connection index)
+    bool direct_ = false;  // sockets are slots of the ring's file table (slot = connection index)
     bool ktls_ = false;    // TLS connections are handed to the kernel's TLS when they can be
 
     std::vector<Connection> connections_;

@@ -157,18 +157,17 @@ void Worker::tls_pump(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     TlsLink& t = *c.tls;
     if (c.send_in_flight || c.fd < 0 || !t.session || t.session->pending_output() == 0) return;
-    io_uring_sqe* sqe = ring_.sqe();
-    if (sqe == nullptr) return;  // the session keeps it: the next completion pumps again
     t.cipher.clear();
     try {
         t.session->take_output(t.cipher);
     } catch (...) {
-        io_uring_prep_nop(sqe);
         return;
     }
-    io_uring_prep_send(sqe, c.fd, t.cipher.data(), t.cipher.size(), MSG_NOSIGNAL);
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+    // A send that cannot be queued (a broken ring) loses the ciphertext: the connection then
+    // times out like any other that stops answering.
+    if (!loop_.send(c.fd, t.cipher.data(), static_cast<unsigned>(t.cipher.size()),
+                    net::encode_user_data(Op::Send, index, c.generation)))
+        return;
     ++inflight_ops_;
     c.inflight_len = static_cast<std::uint32_t>(t.cipher.size());
     c.inflight_done = 0;

@@ -110,7 +110,10 @@ Features probe_features() noexcept {
     RingOptions plain;
     plain.entries = 16;
     plain.single_issuer = plain.defer_taskrun = plain.coop_taskrun = false;
-    if (ring.init(plain) != 0) return f;
+    if (const int rc = ring.init(plain); rc != 0) {
+        f.ring_errno = -rc;
+        return f;
+    }
     f.ring = true;
     f.single_issuer = ring_accepts_flags(IORING_SETUP_SINGLE_ISSUER);
     f.defer_taskrun = ring_accepts_flags(IORING_SETUP_SINGLE_ISSUER | IORING_SETUP_DEFER_TASKRUN);

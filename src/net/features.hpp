@@ -11,6 +11,7 @@ namespace mbstorm::net {
 
 struct Features {
     bool ring = false;              // io_uring_queue_init works at all (not blocked by seccomp)
+    int ring_errno = 0;             // why not: EPERM (seccomp, sysctl), ENOSYS (no io_uring)
     bool single_issuer = false;     // IORING_SETUP_SINGLE_ISSUER (6.0)
     bool defer_taskrun = false;     // IORING_SETUP_DEFER_TASKRUN (6.1, needs single_issuer)
     bool coop_taskrun = false;      // IORING_SETUP_COOP_TASKRUN (5.19)

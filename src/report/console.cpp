@@ -139,6 +139,7 @@ std::string format_console_report(const stats::RunResult& r) {
                        m.tool_version.empty() ? "mbstorm" : m.tool_version,
                        stats::load_model_name(m.model), m.target);
     out += fmt::format("  threads {}, connections {}, depth {}", m.threads, m.connections, m.depth);
+    if (!m.backend.empty()) out += fmt::format(", {}", m.backend);
     if (m.model == stats::LoadModel::Open) out += fmt::format(", {}", load_model_text(r));
     out += fmt::format(", duration {} (warm-up {})\n", format_duration(m.measured_duration_ns),
                        format_duration(m.warmup_ns));

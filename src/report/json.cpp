@@ -113,6 +113,7 @@ std::string format_json(const stats::RunResult& r, int indent) {
     const auto& m = r.metadata;
     json run = {{"target", m.target},
                 {"threads", m.threads},
+                {"backend", m.backend},
                 {"connections", m.connections},
                 {"depth", m.depth},
                 {"model", stats::load_model_name(m.model)},

@@ -172,6 +172,7 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         m.tool_version = doc.value("tool", "mbstorm");
         m.target = r.at("target").get<std::string>();
         m.threads = whole<std::uint32_t>(r.at("threads"));
+        m.backend = r.value("backend", std::string());
         m.connections = whole<std::uint32_t>(r.at("connections"));
         m.depth = whole<std::uint32_t>(r.at("depth"));
         m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
@@ -432,6 +433,7 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     m.tool_version = fm.tool_version;
     m.target = fm.target;
     m.depth = fm.depth;
+    m.backend = fm.backend;
     m.model = fm.model;
     m.requested_duration_ns = fm.requested_duration_ns;
     m.warmup_ns = fm.warmup_ns;

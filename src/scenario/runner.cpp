@@ -84,6 +84,18 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         if (hooks.on_message) hooks.on_message(m);
     };
 
+    // One event source for the engine and the embedded slave, chosen (and said) once.
+    net::BackendDecision backend;
+    if (plan.serial.device.empty()) {
+        if (std::string error; !net::choose_backend(hooks.backend, true, backend, error)) {
+            out.error = error;
+            return out;
+        }
+        if (!backend.why.empty()) say(fmt::format("epoll backend: {}", backend.why));
+    }
+    const net::BackendChoice chosen = backend.backend == net::Backend::Epoll
+                                          ? net::BackendChoice::Epoll
+                                          : net::BackendChoice::IoUring;
     // The embedded slave's models must outlive the server: declared first, destroyed last.
     std::unique_ptr<slave::UnitModels> units;
     std::unique_ptr<server::Server> embedded;
@@ -102,6 +114,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         sc.faults = s.slave.faults;
         sc.units = units.get();
         sc.simulated = s.slave.simulated;
+        sc.backend_choice = chosen;
         embedded = std::make_unique<server::Server>(sc);
         std::string error;
         if (!embedded->start(&error)) {
@@ -132,6 +145,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     eo.live = hooks.live;
     eo.on_interval = hooks.on_interval;
     eo.start_at = hooks.start_at;
+    eo.backend = hooks.backend;  // decides as above (the features are probed once), and says why
     out = load::run_load(plan, eo);
 
     for (const load::Operation& op : plan.operations)

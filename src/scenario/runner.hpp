@@ -25,6 +25,7 @@ struct RunHooks {
     load::IntervalCallback on_interval;                       // --timeline
     load::Plan::Shard shard;                                  // run --shard: count 0 = whole plan
     std::optional<std::chrono::system_clock::time_point> start_at;  // run --start-at
+    net::BackendChoice backend = net::BackendChoice::Auto;          // run --backend
 };
 
 // The engine's plan for the scenario (its stages included; host and port as in the file),

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "codec/framing.hpp"
+#include "net/backend.hpp"
 #include "slave/faults.hpp"
 
 #include "slave/simulator.hpp"
@@ -87,6 +88,10 @@ struct ServerConfig {
     // Accepted sockets as io_uring direct descriptors when the kernel has them: the open-files
     // limit then caps each thread's share of the connections (a ring's table), not their sum.
     bool use_direct_descriptors = true;
+    // io_uring, epoll, or io_uring where the process may use it (auto). Server::start sets
+    // `backend` from it.
+    net::BackendChoice backend_choice = net::BackendChoice::Auto;
+    net::Backend backend = net::Backend::IoUring;
     unsigned ring_entries = 4096;
     unsigned buf_ring_count = 2048;  // per thread, power of two
     unsigned buf_size = 4096;

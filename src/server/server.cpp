@@ -1,5 +1,6 @@
 #include "server/server.hpp"
 
+#include <fmt/format.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -30,7 +31,12 @@ bool Server::start(std::string* error) {
         return false;
     };
     if (running_) return true;
-    if (!net::features().ring) return fail("io_uring is not available (kernel or seccomp)");
+    net::BackendDecision backend;
+    if (std::string e; !net::choose_backend(config_.backend_choice, false, backend, e))
+        return fail(e);
+    config_.backend = backend.backend;
+    backend_why_ = backend.why;
+    const bool uring = config_.backend == net::Backend::IoUring;
     if (std::string v = slave::validate(config_.faults); !v.empty()) return fail(v);
     net::Endpoint ep;
     std::string parse_error;
@@ -38,7 +44,7 @@ bool Server::start(std::string* error) {
         return fail(parse_error);
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
-    if (config_.use_direct_descriptors && net::features().direct_descriptors)
+    if (uring && config_.use_direct_descriptors && net::features().direct_descriptors)
         table_slots_ = fit_socket_tables(n);
     else if (config_.max_connections)
         fit_connection_limit_to_descriptors(n);
@@ -99,7 +105,8 @@ bool Server::start(std::string* error) {
     for (auto& w : workers_) {
         while (w->init_status() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         if (w->init_status() < 0)
-            return fail(std::string("cannot set up io_uring: ") + strerror(-w->init_status()));
+            return fail(fmt::format("cannot set up {}: {}", net::backend_name(config_.backend),
+                                    strerror(-w->init_status())));
     }
     return true;
 }
@@ -184,9 +191,13 @@ std::size_t Server::bytes_per_connection() noexcept {
 }
 
 std::string Server::describe_io() const {
-    const net::Features& f = net::features();
+    net::Features f = net::features();
+    if (config_.backend == net::Backend::Epoll) {  // emulated whatever the kernel has
+        f.buf_ring = f.multishot_recv = f.multishot_accept = true;
+    }
     const bool br = config_.use_buf_ring && f.buf_ring;
-    std::string s = "io_uring, " + std::to_string(workers_.size()) + " thread(s): ";
+    std::string s = std::string(net::backend_name(config_.backend)) + ", " +
+                    std::to_string(workers_.size()) + " thread(s): ";
     // (TLS with the kernel's offload: single-shot recvs, see Worker::setup.)
     const bool ktls = config_.tls && net::kernel_tls().available;
     s +=

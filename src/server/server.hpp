@@ -41,6 +41,8 @@ class Server {
     const std::string& warning() const noexcept { return warning_; }
     // One line about the I/O path, e.g. "io_uring: multishot recv + buffer ring (2048 x 4096)".
     std::string describe_io() const;
+    // Why auto chose epoll ("" when io_uring runs or epoll was asked for).
+    const std::string& backend_reason() const noexcept { return backend_why_; }
     // Fixed bytes per open connection (excluding the kernel socket).
     static std::size_t bytes_per_connection() noexcept;
 
@@ -63,6 +65,7 @@ class Server {
     std::uint16_t port_ = 0;
     std::string host_;
     std::string warning_;
+    std::string backend_why_;
     unsigned table_slots_ = 0;  // per thread; 0: plain descriptors
     bool running_ = false;
     // Simulated inputs: one thread writes them every simulate_interval_ms until stop().

@@ -63,18 +63,20 @@ int Worker::setup() noexcept {
     const net::Features& f = net::features();
     net::RingOptions ro;
     ro.entries = config_.ring_entries;
-    if (int rc = ring_.init(ro); rc != 0) return rc;
-    use_buf_ring_ =
-        config_.use_buf_ring && f.buf_ring &&
-        buf_ring_.init(ring_.get(), kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
-    multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && f.multishot_recv;
-    multishot_accept_ = config_.use_multishot_accept && f.multishot_accept;
+    if (int rc = loop_.init(config_.backend, ro); rc != 0) return rc;
+    // epoll emulates buffer rings and multishot operations whatever the kernel has.
+    const bool uring = loop_.uses_io_uring();
+    use_buf_ring_ = config_.use_buf_ring && (f.buf_ring || !uring) &&
+                    loop_.init_buffers(kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
+    multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && (f.multishot_recv || !uring);
+    multishot_accept_ = config_.use_multishot_accept && (f.multishot_accept || !uring);
     // The kernel's TLS needs a socket setsockopt can reach (not a direct descriptor) and a
     // hand-off with no recv in flight (single-shot recvs): worth more than either.
     ktls_ = config_.tls && net::kernel_tls().available;
     if (ktls_) multishot_recv_ = false;
-    direct_ =
-        !ktls_ && table_slots_ > 0 && net::register_socket_table(ring_.get(), table_slots_) == 0;
+    direct_ = uring && !ktls_ && table_slots_ > 0 &&
+              net::register_socket_table(loop_.ring(), table_slots_) == 0;
+    loop_.set_direct(direct_);
     try {
         std::size_t expect = config_.max_connections ? config_.max_connections : 1024;
         expect = std::min<std::size_t>(expect, 65536);
@@ -98,7 +100,7 @@ int Worker::setup() noexcept {
     cross_evict_ = peers_.size() > 1 && config_.max_connections != 0 &&
                    config_.full_policy == FullPolicy::EvictOldestIdle && mail_fd_ >= 0;
     if (cross_evict_) arm_mail();
-    ring_.submit();
+    loop_.submit();
     return 0;
 }
 
@@ -111,33 +113,17 @@ void Worker::run() noexcept {
 }
 
 void Worker::arm_accept() noexcept {
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
     // Direct: the kernel picks a free slot, and -ENFILE when the table is full (handled like
     // running out of descriptors).
-    if (multishot_accept_ && direct_)
-        io_uring_prep_multishot_accept_direct(sqe, listen_fd_, nullptr, nullptr, 0);
-    else if (multishot_accept_)
-        io_uring_prep_multishot_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-    else if (direct_)
-        io_uring_prep_accept_direct(sqe, listen_fd_, nullptr, nullptr, 0, net::kAnySlot);
-    else
-        io_uring_prep_accept(sqe, listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Accept, 0, 0));
+    loop_.accept(listen_fd_, net::encode_user_data(Op::Accept, 0, 0), multishot_accept_);
 }
 
 void Worker::arm_stop() noexcept {
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    io_uring_prep_read(sqe, stop_fd_, &stop_value_, sizeof stop_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Stop, 0, 0));
+    loop_.read(stop_fd_, &stop_value_, sizeof stop_value_, net::encode_user_data(Op::Stop, 0, 0));
 }
 
 void Worker::arm_mail() noexcept {
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    io_uring_prep_read(sqe, mail_fd_, &mail_value_, sizeof mail_value_, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Mail, 0, 0));
+    loop_.read(mail_fd_, &mail_value_, sizeof mail_value_, net::encode_user_data(Op::Mail, 0, 0));
 }
 
 void Worker::request_eviction() noexcept {
@@ -205,34 +191,27 @@ bool Worker::evict_server_wide_oldest() noexcept {
 
 void Worker::arm_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    if (use_buf_ring_) {
-        net::prep_group_recv(sqe, c.fd, kBufGroup, config_.buf_size, multishot_recv_);
-    } else {
-        io_uring_prep_recv(sqe, c.fd, c.plain_buf.get(), config_.buf_size, 0);
-    }
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Recv, index, c.generation));
-    c.recv_armed = true;
+    const std::uint64_t data = net::encode_user_data(Op::Recv, index, c.generation);
+    const bool armed = use_buf_ring_
+                           ? loop_.recv(c.fd, data, multishot_recv_)
+                           : loop_.recv_into(c.fd, c.plain_buf.get(), config_.buf_size, data);
+    if (armed) c.recv_armed = true;
 }
 
 void Worker::cancel_recv(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    io_uring_prep_cancel64(sqe, net::encode_user_data(Op::Recv, index, c.generation), 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, index, c.generation));
+    loop_.cancel_input(c.fd, net::encode_user_data(Op::Recv, index, c.generation),
+                       net::encode_user_data(Op::Cancel, index, c.generation));
 }
 
 void Worker::loop() noexcept {
     while (!stopping_) {
         std::int64_t deadline = next_deadline();
         std::int64_t wait = deadline < 0 ? -1 : std::max<std::int64_t>(deadline - now_, 0);
-        int rc = ring_.submit_and_wait(1, wait);
+        int rc = loop_.submit_and_wait(1, wait);
         if (net::wait_failed(rc)) break;
         now_ = net::now_ns();
-        ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
+        loop_.drain([this](const net::Completion& cqe) { on_cqe(cqe); });
         for (std::uint32_t index : rearm_) {
             Connection& c = conns_[index];
             if (c.state == Connection::State::Open && !c.recv_armed && !c.paused) arm_recv(index);
@@ -252,10 +231,7 @@ void Worker::shutdown_all() noexcept {
     // (sends read our blocks) before the ring and the pool go away.
     ::shutdown(listen_fd_, SHUT_RDWR);
     for (std::uint32_t i = 0; i < conns_.size(); ++i) close_connection(i);
-    if (io_uring_sqe* sqe = ring_.sqe()) {
-        io_uring_prep_cancel64(sqe, 0, IORING_ASYNC_CANCEL_ANY);
-        io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Cancel, 0, 0));
-    }
+    loop_.cancel_all(net::encode_user_data(Op::Cancel, 0, 0));
     std::int64_t until = net::now_ns() + kStopDrainNs;
     auto busy = [this] {
         for (std::uint32_t i = 0; i < conns_.size(); ++i)
@@ -263,12 +239,12 @@ void Worker::shutdown_all() noexcept {
         return false;
     };
     while (busy() && net::now_ns() < until) {
-        ring_.submit_and_wait(1, 50 * net::kNsPerMs);
-        ring_.drain([this](const io_uring_cqe& cqe) { on_cqe(cqe); });
+        loop_.submit_and_wait(1, 50 * net::kNsPerMs);
+        loop_.drain([this](const net::Completion& cqe) { on_cqe(cqe); });
     }
 }
 
-void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
+void Worker::on_cqe(const net::Completion& cqe) noexcept {
     switch (static_cast<Op>(net::decode_user_data(cqe.user_data).op)) {
         case Op::Accept:
             on_accept(cqe);
@@ -296,7 +272,7 @@ void Worker::on_cqe(const io_uring_cqe& cqe) noexcept {
     }
 }
 
-void Worker::on_accept(const io_uring_cqe& cqe) noexcept {
+void Worker::on_accept(const net::Completion& cqe) noexcept {
     if (cqe.res >= 0) {
         if (stopping_)
             close_socket(cqe.res);
@@ -317,13 +293,10 @@ void Worker::on_accept(const io_uring_cqe& cqe) noexcept {
 }
 
 void Worker::pause_accept() noexcept {
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
     // Read by the kernel when the SQE is submitted; a member, so it outlives that.
     accept_pause_ts_.tv_sec = accept_pause_ns_ / net::kNsPerSec;
     accept_pause_ts_.tv_nsec = accept_pause_ns_ % net::kNsPerSec;
-    io_uring_prep_timeout(sqe, &accept_pause_ts_, 0, 0);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::AcceptPause, 0, 0));
+    if (!loop_.timeout(&accept_pause_ts_, net::encode_user_data(Op::AcceptPause, 0, 0))) return;
     accept_pause_ns_ = std::min(accept_pause_ns_ * 2, kAcceptPauseMaxNs);
 }
 
@@ -431,7 +404,7 @@ void Worker::close_connection(std::uint32_t index) noexcept {
     }
     if (c.recv_armed) cancel_recv(index);
     drop_stash(index);
-    if (!direct_) ::close(c.fd);
+    if (!direct_) loop_.close(c.fd);  // epoll: its pending send ends now
     c.fd = -1;
     --open_here_;
     open_connections_.fetch_sub(1, std::memory_order_relaxed);
@@ -441,18 +414,12 @@ void Worker::close_connection(std::uint32_t index) noexcept {
 
 void Worker::close_socket(int fd) noexcept {
     if (!direct_) {
-        ::close(fd);
+        loop_.close(fd);
         return;
     }
-    // Both SQEs in one submission: the close is linked to the shutdown.
-    if (io_uring_sq_space_left(ring_.get()) < 2) ring_.submit();
-    io_uring_sqe* shutdown_sqe = ring_.sqe();
-    io_uring_sqe* close_sqe = ring_.sqe();
-    if (!shutdown_sqe || !close_sqe) return;
     const auto slot = static_cast<std::uint32_t>(fd);
-    net::prep_shutdown_and_close(shutdown_sqe, close_sqe, slot,
-                                 net::encode_user_data(Op::SocketShutdown, slot, 0),
-                                 net::encode_user_data(Op::SocketClose, slot, 0));
+    loop_.shutdown_and_close_slot(slot, net::encode_user_data(Op::SocketShutdown, slot, 0),
+                                  net::encode_user_data(Op::SocketClose, slot, 0));
 }
 
 void Worker::maybe_release(std::uint32_t index) noexcept {
@@ -469,14 +436,14 @@ void Worker::maybe_release(std::uint32_t index) noexcept {
     free_slots_.push_back(index);  // capacity reserved; grows only past the expected maximum
 }
 
-void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
+void Worker::on_recv(const net::Completion& cqe) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= conns_.size()) return;
     Connection& c = conns_[ud.index];
     const bool has_buffer = use_buf_ring_ && net::BufRing::has_buffer(cqe.flags);
     const std::uint16_t bid = has_buffer ? net::BufRing::buffer_id(cqe.flags) : 0;
     if (c.generation != ud.generation || c.state == Connection::State::Free) {
-        if (has_buffer) buf_ring_.recycle(bid);
+        if (has_buffer) loop_.recycle(bid);
         return;
     }
     if (!(cqe.flags & IORING_CQE_F_MORE)) c.recv_armed = false;
@@ -494,7 +461,7 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
                 stash(ud.index, bid, static_cast<std::uint32_t>(cqe.res));
                 keep_buffer = true;
             } else {
-                const std::uint8_t* data = has_buffer ? buf_ring_.buffer(bid) : c.plain_buf.get();
+                const std::uint8_t* data = has_buffer ? loop_.buffer(bid) : c.plain_buf.get();
                 consume_input(ud.index, data, static_cast<std::size_t>(cqe.res));
             }
         } else if (cqe.res == 0) {
@@ -512,7 +479,7 @@ void Worker::on_recv(const io_uring_cqe& cqe) noexcept {
             close_connection(ud.index);
         }
     }
-    if (has_buffer && !keep_buffer) buf_ring_.recycle(bid);
+    if (has_buffer && !keep_buffer) loop_.recycle(bid);
 
     if (c.state == Connection::State::Open && !c.peer_done && !check_backpressure(ud.index) &&
         !c.recv_armed) {
@@ -569,8 +536,8 @@ void Worker::drain_stash(std::uint32_t index) noexcept {
         const std::uint16_t bid = c.stash_head;
         c.stash_head = stash_next_[bid];
         if (c.stash_head == kNoBuffer) c.stash_tail = kNoBuffer;
-        consume_input(index, buf_ring_.buffer(bid), stash_size_[bid]);
-        buf_ring_.recycle(bid);
+        consume_input(index, loop_.buffer(bid), stash_size_[bid]);
+        loop_.recycle(bid);
         if (c.state == Connection::State::Open) check_backpressure(index);
     }
 }
@@ -580,7 +547,7 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
     while (c.stash_head != kNoBuffer) {
         const std::uint16_t bid = c.stash_head;
         c.stash_head = stash_next_[bid];
-        buf_ring_.recycle(bid);
+        loop_.recycle(bid);
     }
     c.stash_tail = kNoBuffer;
 }
@@ -840,15 +807,13 @@ void Worker::flush(std::uint32_t index) noexcept {
     std::size_t size = 0;
     const std::uint8_t* p = c.out.sendable(c.hold_pos, size);
     if (!p) return;
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    io_uring_prep_send(sqe, c.fd, p, size, MSG_NOSIGNAL);
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+    if (!loop_.send(c.fd, p, static_cast<unsigned>(size),
+                    net::encode_user_data(Op::Send, index, c.generation)))
+        return;
     c.send_inflight = true;
 }
 
-void Worker::on_send(const io_uring_cqe& cqe) noexcept {
+void Worker::on_send(const net::Completion& cqe) noexcept {
     const net::UserData ud = net::decode_user_data(cqe.user_data);
     if (ud.index >= conns_.size()) return;
     Connection& c = conns_[ud.index];

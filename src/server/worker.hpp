@@ -7,9 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "net/buf_ring.hpp"
 #include "net/completion_loop.hpp"
-#include "net/ring.hpp"
+#include "net/event_loop.hpp"
 #include "server/config.hpp"
 #include "server/connection.hpp"
 #include "server/connection_table.hpp"
@@ -38,7 +37,7 @@ class Worker {
     unsigned index() const noexcept { return index_; }
     // Bytes of fixed per-connection state (for the memory report).
     static std::size_t connection_bytes() noexcept { return sizeof(Connection); }
-    std::size_t buf_ring_bytes() const noexcept { return buf_ring_.memory_bytes(); }
+    std::size_t buf_ring_bytes() const noexcept { return loop_.buffer_memory_bytes(); }
 
     // Max-connections with the evict-oldest-idle policy over several threads: each worker
     // publishes the last activity of its oldest idle connection, and the worker that accepts
@@ -69,10 +68,10 @@ class Worker {
     int setup() noexcept;
     void loop() noexcept;
     void shutdown_all() noexcept;
-    void on_cqe(const io_uring_cqe& cqe) noexcept;
-    void on_accept(const io_uring_cqe& cqe) noexcept;
-    void on_recv(const io_uring_cqe& cqe) noexcept;
-    void on_send(const io_uring_cqe& cqe) noexcept;
+    void on_cqe(const net::Completion& cqe) noexcept;
+    void on_accept(const net::Completion& cqe) noexcept;
+    void on_recv(const net::Completion& cqe) noexcept;
+    void on_send(const net::Completion& cqe) noexcept;
 
     void arm_accept() noexcept;
     // Out of file descriptors: re-arms the accept after a growing pause (an io_uring timeout,
@@ -167,9 +166,8 @@ class Worker {
     std::atomic<std::uint32_t>& open_connections_;
     slave::FaultInjector faults_;
 
-    net::Ring ring_;
-    net::BufRing buf_ring_;  // after ring_: destroyed first
-    bool use_buf_ring_ = false;
+    net::EventLoop loop_;
+    bool use_buf_ring_ = false;  // receives take provided buffers (a ring, or epoll's pool)
     bool multishot_recv_ = false;
     bool multishot_accept_ = false;
     unsigned table_slots_ = 0;

@@ -137,12 +137,10 @@ void Worker::tls_flush(std::uint32_t index) noexcept {
         }
         if (t.cipher_out.empty()) return;
     }
-    io_uring_sqe* sqe = ring_.sqe();
-    if (!sqe) return;
-    io_uring_prep_send(sqe, c.fd, t.cipher_out.data() + t.cipher_sent,
-                       t.cipher_out.size() - t.cipher_sent, MSG_NOSIGNAL);
-    net::use_slot_if(sqe, direct_);
-    io_uring_sqe_set_data64(sqe, net::encode_user_data(Op::Send, index, c.generation));
+    if (!loop_.send(c.fd, t.cipher_out.data() + t.cipher_sent,
+                    static_cast<unsigned>(t.cipher_out.size() - t.cipher_sent),
+                    net::encode_user_data(Op::Send, index, c.generation)))
+        return;
     c.send_inflight = true;
 }
 

@@ -27,6 +27,7 @@ struct RunMetadata {
     std::string tool_version;  // e.g. "mbstorm 0.1.0"
     std::string target;        // "host:port"
     std::uint32_t threads = 0;
+    std::string backend;            // "io_uring", "epoll" or "serial" (empty: not recorded)
     std::uint32_t connections = 0;  // total across threads
     std::uint32_t depth = 0;        // requests in flight per connection (closed loop)
     LoadModel model = LoadModel::Closed;
