@@ -264,7 +264,8 @@ bool EpollReactor::recv_once(int fd, FdState& s) noexcept {
     const std::uint32_t flags = s.input == Input::PoolRecv && n > 0 ? buffer_flags(id, more) : 0;
     complete(s.input_data, n < 0 ? -error : static_cast<std::int32_t>(n), flags);
     // A stream read short of its buffer emptied the socket: the next arrival is an edge.
-    if (n > 0 && static_cast<unsigned>(n) < size && s.input != Input::Read) s.readable = false;
+    if (n > 0 && static_cast<unsigned>(n) < size && s.input != Input::Read && !s.hangup)
+        s.readable = false;
     if (!more) s.input = Input::None;
     return more;
 }
@@ -357,6 +358,7 @@ int EpollReactor::poll(std::int64_t timeout_ns) noexcept {
         FdState& s = state(fd);
         const std::uint32_t e = events[i].events;
         if (e & (EPOLLIN | EPOLLRDHUP | EPOLLERR | EPOLLHUP)) s.readable = true;
+        if (e & (EPOLLRDHUP | EPOLLERR | EPOLLHUP)) s.hangup = true;
         if (e & (EPOLLOUT | EPOLLERR | EPOLLHUP)) s.writable = true;
         run(fd);
     }

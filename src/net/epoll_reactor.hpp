@@ -92,6 +92,9 @@ class EpollReactor {
         bool registered = false;
         bool readable = false;  // may be: tried until EAGAIN says otherwise
         bool writable = false;
+        // The peer closed or the socket failed: its end of stream or error is queued behind
+        // any data, with no edge to come, so a short read no longer means "drained".
+        bool hangup = false;
         bool listed = false;  // in ready_
         Input input = Input::None;
         bool multishot = false;

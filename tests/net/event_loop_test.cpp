@@ -79,6 +79,20 @@ TEST_P(EventLoopTest, AMultishotRecvReportsEachArrivalInAProvidedBufferUntilTheP
     EXPECT_EQ(seen[1].flags & IORING_CQE_F_MORE, 0u);
 }
 
+TEST_P(EventLoopTest, DataAndTheEndOfStreamArrivingTogetherAreBothReported) {
+    auto [ours, theirs] = stream_pair();
+    ASSERT_TRUE(loop.recv(ours.get(), 7, true));
+    loop.submit_and_wait(0, 0);  // armed, nothing to read yet
+    loop.drain([this](const Completion& c) { seen.push_back(c); });
+    ASSERT_TRUE(seen.empty());
+    ASSERT_EQ(::write(theirs.get(), "bye", 3), 3);
+    theirs.reset();  // a request and a half-close in one wake-up
+    ASSERT_EQ(wait_for(2).size(), 2u);
+    EXPECT_EQ(seen[0].res, 3);
+    EXPECT_EQ(seen[1].res, 0);
+    EXPECT_EQ(seen[1].flags & IORING_CQE_F_MORE, 0u);
+}
+
 TEST_P(EventLoopTest, ARecvEndsWithNoBuffersWhenThePoolRunsDry) {
     auto [ours, theirs] = stream_pair();
     ASSERT_TRUE(loop.recv(ours.get(), 9, true));
