@@ -1,6 +1,7 @@
 // More connections than the open-files limit allows, on both sides: with io_uring direct
 // descriptors the sockets are slots of each ring's table, not descriptors, so `mbstorm run`
 // and `mbstorm serve` limited to 256 descriptors still hold 1000 connections between them.
+// On epoll they are descriptors, and a run says so before it starts.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -57,6 +58,17 @@ TEST(DirectDescriptors, ThousandConnectionsBothSidesUnderA256DescriptorLimit) {
     EXPECT_THAT(serve.output(), HasSubstr("connections: 1000 total"));
     EXPECT_THAT(serve.output(), HasSubstr("0 evicted, 0 refused, 0 accepts out of fds"));
     std::filesystem::remove_all(dir);
+}
+
+// On epoll every connection is a descriptor: a plan that needs more than the limit allows is
+// refused before a socket opens, saying why, rather than failing connects half-way.
+TEST(DirectDescriptors, OnEpollARunNeedingMoreDescriptorsThanTheLimitSaysSoBeforeItStarts) {
+    ChildProcess run({"run", "--backend", "epoll", "--target", "127.0.0.1:1", "-c", "1000",
+                      "--depth", "1", "-d", "1s", "-q"},
+                     kNofile);
+    EXPECT_EQ(run.wait(20000), 2) << run.output();
+    EXPECT_THAT(run.output(), HasSubstr("open-files limit"));
+    EXPECT_THAT(run.output(), HasSubstr("the epoll backend holds each connection as a descriptor"));
 }
 
 }  // namespace
