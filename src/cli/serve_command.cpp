@@ -145,7 +145,7 @@ int run_serve(ServeOptions& o) {
                srv.endpoint(), transport_name(o.transport.kind()), srv.threads(),
                srv.threads() == 1 ? "" : "s", srv.describe_io());
     if (!srv.backend_reason().empty())
-        fmt::print("mbstorm serve: epoll backend: {}\n", srv.backend_reason());
+        fmt::print("mbstorm serve: backend: epoll; {}\n", srv.backend_reason());
     if (!srv.warning().empty()) fmt::print(stderr, "mbstorm serve: warning: {}\n", srv.warning());
     if (f.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     if (c.tls) fmt::print("mbstorm serve: {}\n", net::describe_tls_path());

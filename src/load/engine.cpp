@@ -647,7 +647,7 @@ void describe_run(const Plan& plan, const EngineOptions& options, const StageSch
     } else {
         meta.backend = std::string(net::backend_name(setup.backend.backend));
         if (!setup.backend.why.empty())
-            meta.notes.push_back(fmt::format("epoll backend: {}", setup.backend.why));
+            meta.notes.push_back(fmt::format("backend: epoll; {}", setup.backend.why));
     }
     if (plan.model == LoadModel::OpenLoop) {
         meta.notes.push_back(

@@ -37,12 +37,12 @@ std::string io_uring_unusable(bool need_buf_ring) {
     const Features& f = features();
     if (!f.ring) {
         const int e = f.ring_errno;
-        std::string why = "io_uring_setup refused: " + std::string(std::strerror(e));
+        std::string why = "io_uring_setup refused (" + std::string(std::strerror(e)) + ")";
         if (e == EPERM || e == EACCES)
             why +=
-                " (a seccomp profile such as Docker's or containerd's default, or "
-                "kernel.io_uring_disabled)";
-        if (e == ENOSYS) why += " (a kernel without io_uring)";
+                ": a seccomp profile such as Docker's or containerd's default, or "
+                "kernel.io_uring_disabled";
+        if (e == ENOSYS) why += ": a kernel without io_uring";
         return why;
     }
     if (need_buf_ring && !f.buf_ring)

@@ -91,7 +91,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
             out.error = error;
             return out;
         }
-        if (!backend.why.empty()) say(fmt::format("epoll backend: {}", backend.why));
+        say(backend.why.empty() ? fmt::format("backend: {}", net::backend_name(backend.backend))
+                                : fmt::format("backend: epoll; {}", backend.why));
     }
     const net::BackendChoice chosen = backend.backend == net::Backend::Epoll
                                           ? net::BackendChoice::Epoll
