@@ -341,7 +341,7 @@ void EpollReactor::run_ready() noexcept {
 
 int EpollReactor::poll(std::int64_t timeout_ns) noexcept {
     epoll_event events[kEventsPerWait];
-    int n;
+    int n = -1;
     if (fine_wait_) {
         timespec ts{timeout_ns / kNsPerSec, timeout_ns % kNsPerSec};
         n = ::epoll_pwait2(epoll_fd_, events, kEventsPerWait, timeout_ns < 0 ? nullptr : &ts,
