@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <thread>
@@ -100,6 +101,12 @@ void merge_results(const Plan& plan, std::vector<std::unique_ptr<Worker>>& worke
         run.connections.tls_handshake_ns_max = std::max(run.connections.tls_handshake_ns_max,
                                                         w->connection_stats.tls_handshake_ns_max);
         run.connections.peak_open += w->connection_stats.peak_open;
+        for (std::size_t e = 0; e < w->connect_failures_by_errno.size(); ++e) {
+            if (w->connect_failures_by_errno[e] == 0) continue;
+            const char* name = e == 0 ? nullptr : strerrorname_np(static_cast<int>(e));
+            run.connections.failed_by_cause[name != nullptr ? name : fmt::format("errno {}", e)] +=
+                w->connect_failures_by_errno[e];
+        }
         run.pipelining.skipped_requests += w->skipped_requests;
         for (std::size_t i = 0; i < w->stages.size(); ++i) {
             stats::StageResult& into = run.stages[i];

@@ -436,6 +436,11 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         return;
     }
     ++connection_stats.failed;
+    // A connect past its timeout ends -ECANCELED (its linked timeout fired): counted as such.
+    const int cause = result == -ECANCELED ? ETIMEDOUT : -result;
+    ++connect_failures_by_errno[static_cast<std::size_t>(cause) < connect_failures_by_errno.size()
+                                    ? static_cast<std::size_t>(cause)
+                                    : 0];
     // The TLS path fails its handshakes (refused, malformed, too slow) with -EPROTO.
     const bool handshake_failed = c.tls && result == -EPROTO;
     if (handshake_failed) ++connection_stats.tls_handshake_failures;

@@ -69,6 +69,8 @@ class Worker {
     stats::OutcomeCounters stray;            // UnknownId / DuplicateId and their bytes
     stats::ScheduleLag schedule_lag;
     stats::ConnectionStats connection_stats;
+    // Failed connects by errno (connection_stats.failed by cause; the engine names them).
+    std::array<std::uint64_t, 160> connect_failures_by_errno{};
     std::uint64_t pending_at_end = 0;
     std::uint64_t late_responses = 0;
     std::uint64_t framing_errors = 0;

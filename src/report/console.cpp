@@ -155,9 +155,13 @@ std::string format_console_report(const stats::RunResult& r) {
                        format_count(c.transactions_sent));
     out += fmt::format("Traffic     sent {}, received {}\n", format_bytes(c.bytes_sent),
                        format_bytes(c.bytes_received));
-    out += fmt::format("Connections opened {}, failed {}, reconnects {}, closed by peer {}\n",
+    std::string causes;
+    for (const auto& [name, count] : r.connections.failed_by_cause)
+        causes += fmt::format("{}{} {}", causes.empty() ? " (" : ", ", name, format_count(count));
+    if (!causes.empty()) causes += ")";
+    out += fmt::format("Connections opened {}, failed {}{}, reconnects {}, closed by peer {}\n",
                        format_count(r.connections.opened), format_count(r.connections.failed),
-                       format_count(r.connections.reconnects),
+                       causes, format_count(r.connections.reconnects),
                        format_count(r.connections.closed_by_peer));
     append_tls_lines(out, r.connections, seconds);
     for (const auto& line : schedule_lines(r)) out += fmt::format("Schedule    {}\n", line);

@@ -228,6 +228,9 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
         cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
         cs.tls_offloaded = whole_or(c, "tls_offloaded");
+        if (const auto causes = c.find("failed_by_cause"); causes != c.end())
+            for (const auto& [name, count] : causes->items())
+                cs.failed_by_cause[name] = whole<std::uint64_t>(count);
         cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
         for (const json& s : doc.at("plan_shortfalls")) {
             stats::PlanShortfall p;
@@ -508,6 +511,8 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         c.reconnects += s.summary.connections.reconnects;
         c.closed_by_peer += s.summary.connections.closed_by_peer;
         c.peak_open += s.summary.connections.peak_open;
+        for (const auto& [name, count] : s.summary.connections.failed_by_cause)
+            c.failed_by_cause[name] += count;
         c.tls_handshakes += s.summary.connections.tls_handshakes;
         c.tls_resumed += s.summary.connections.tls_resumed;
         c.tls_handshake_ns_total += s.summary.connections.tls_handshake_ns_total;

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,9 @@ struct ConnectionStats {
     // (close_notify, an alert, a TLS 1.3 KeyUpdate) or by a hand-off that failed half-way.
     std::uint64_t tls_offloaded = 0;
     std::uint64_t tls_offload_errors = 0;
+    // `failed` by cause: the errno's name ("ECONNREFUSED", "EADDRNOTAVAIL"; "ETIMEDOUT" for a
+    // connect that outlived the connect timeout, "EPROTO" for a failed TLS handshake).
+    std::map<std::string, std::uint64_t> failed_by_cause;
 };
 
 // A part of the plan the run could not carry out: every report says so, and thresholds

@@ -161,5 +161,41 @@ TEST(EngineAccounting, TransactionLimitCountsOnlyMeasuredSends) {
     EXPECT_GT(server.stats().transactions, 3000u);
 }
 
+// Failed connects are counted by cause, named by their errno: a refusal as ECONNREFUSED, a
+// connect nobody answers within the connect timeout as ETIMEDOUT.
+TEST(EngineAccounting, FailedConnectsAreCountedByCause) {
+    std::uint16_t port = 0;
+    ::close(test::listen_on_loopback(1, port));  // nothing listens there now
+    Plan plan = one_connection_plan(port);
+    plan.duration = 1s;
+    const LoadResult refused = run_load(plan);
+    EXPECT_FALSE(refused.ok);
+    EXPECT_EQ(refused.run.connections.failed, 1u);
+    EXPECT_EQ(refused.run.connections.failed_by_cause,
+              (std::map<std::string, std::uint64_t>{{"ECONNREFUSED", 1}}));
+
+    // A listener whose accept queue is full drops further SYNs: the connect times out.
+    const int full = test::listen_on_loopback(0, port);
+    std::vector<int> fillers;
+    for (int i = 0; i < 4; ++i) {
+        const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
+        sockaddr_in to{};
+        to.sin_family = AF_INET;
+        to.sin_port = htons(port);
+        to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        ::connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof to);
+        fillers.push_back(fd);
+    }
+    std::this_thread::sleep_for(50ms);
+    plan.port = port;
+    plan.connect_timeout = 200ms;
+    const LoadResult timed_out = run_load(plan);
+    EXPECT_FALSE(timed_out.ok);
+    EXPECT_EQ(timed_out.run.connections.failed_by_cause,
+              (std::map<std::string, std::uint64_t>{{"ETIMEDOUT", 1}}));
+    for (const int fd : fillers) ::close(fd);
+    ::close(full);
+}
+
 }  // namespace
 }  // namespace mbstorm::load

@@ -114,7 +114,10 @@ inline stats::RunResult make_sample_result(std::uint64_t seconds = 30, bool with
     }
     r.timeline_interval_ns = kS;
     r.schedule_lag.engine = {37, 2'400'000, 37 * 600'000};
-    r.connections = {16, 0, 1, 1, 16};
+    r.connections.opened = 16;
+    r.connections.reconnects = 1;
+    r.connections.closed_by_peer = 1;
+    r.connections.peak_open = 16;
     r.thresholds.push_back({"p99 < 5ms", 3.1e6, "3.10ms", true});
     r.thresholds.push_back({"error_rate < 0.1%", 0.0021, "0.21%", false});
     return r;
