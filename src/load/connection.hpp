@@ -55,6 +55,9 @@ struct Connection {
     std::uint64_t answered_up_to = 0;
 
     std::int64_t backoff_ns = 0;
+    // --source-addr: how far past its own port this connection's next bind starts (grows by
+    // the probes tried each time a connect fails with EADDRNOTAVAIL).
+    std::uint32_t port_shift = 0;
     std::int64_t connect_started_ns = 0;
     std::unique_ptr<TlsLink> tls;  // --transport tls only
 };

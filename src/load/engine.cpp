@@ -326,6 +326,9 @@ std::vector<std::unique_ptr<Worker>> make_workers(const Plan& plan, const net::E
         setup.endpoint = endpoint;
         setup.sources = &sources;
         if (!sources.empty() && !read_port_range(setup.ports)) setup.ports = PortRange{1, 0};
+        if (!sources.empty())
+            setup.ports_in_use =
+                static_cast<std::uint32_t>((capacity + sources.size() - 1) / sources.size());
         setup.first_connection = first_connection;
         setup.target = endpoint.to_string();
         setup.index = i;

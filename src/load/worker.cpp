@@ -46,6 +46,9 @@ bool has_response(stats::Outcome o) noexcept {
            o != stats::Outcome::CrcError;
 }
 
+// Ports of the range tried in turn when a connection's own is taken (bind_source).
+constexpr std::uint32_t kPortProbes = 16;
+
 using HeapEntry = std::pair<std::int64_t, std::uint32_t>;
 constexpr auto kHeapOrder = std::greater<HeapEntry>{};  // min-heap on the due time
 
@@ -397,16 +400,35 @@ int Worker::bind_source(int fd, std::uint32_t index) noexcept {
     // costs seconds per thousand connections once tens of thousands are open.
     const int one = 1;
     if (setup_.ports.size() > 0) {
-        source.set_port(static_cast<std::uint16_t>(setup_.ports.low + (number / sources.size()) %
-                                                                          setup_.ports.size()));
         // A slot reconnecting finds its port's previous connection in TIME_WAIT.
         ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-        if (::bind(fd, source.sa(), source.len) == 0) return 0;
-        source.set_port(0);  // taken by another socket: let the kernel pick at connect time
+        if (bind_own_or_spare_port(fd, source, number, connections_[index].port_shift)) return 0;
+        source.set_port(0);  // none free: let the kernel pick at connect time
     }
     // Port 0: chosen at connect time, per destination (bind would take one for good).
     ::setsockopt(fd, SOL_IP, IP_BIND_ADDRESS_NO_PORT, &one, sizeof one);
     return ::bind(fd, source.sa(), source.len) == 0 ? 0 : -errno;
+}
+
+bool Worker::bind_own_or_spare_port(int fd, net::Endpoint& source, std::uint32_t number,
+                                    std::uint32_t shift) noexcept {
+    const std::uint32_t range = setup_.ports.size();
+    const std::uint32_t own = number / static_cast<std::uint32_t>(setup_.sources->size());
+    if (shift == 0 && own < range) {
+        source.set_port(static_cast<std::uint16_t>(setup_.ports.low + own));
+        if (::bind(fd, source.sa(), source.len) == 0) return true;
+    }
+    // Its own port is held by another socket (the target's listener, when the target is on
+    // this machine and the kernel gave it a port of the range), or a connect from it failed:
+    // the ports no connection owns, from the top of the range. Not another connection's port:
+    // with SO_REUSEADDR the bind would share it and the connect then fail (EADDRNOTAVAIL).
+    const std::uint32_t spare = range > setup_.ports_in_use ? range - setup_.ports_in_use : 0;
+    for (std::uint32_t k = 0; k < std::min(kPortProbes, spare); ++k) {
+        const std::uint32_t at = setup_.ports_in_use + (number + shift + k) % spare;
+        source.set_port(static_cast<std::uint16_t>(setup_.ports.low + at));
+        if (::bind(fd, source.sa(), source.len) == 0) return true;
+    }
+    return false;
 }
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
@@ -438,6 +460,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
     ++connection_stats.failed;
     // A connect past its timeout ends -ECANCELED (its linked timeout fired): counted as such.
     const int cause = result == -ECANCELED ? ETIMEDOUT : -result;
+    if (cause == EADDRNOTAVAIL) c.port_shift += kPortProbes;
     ++connect_failures_by_errno[static_cast<std::size_t>(cause) < connect_failures_by_errno.size()
                                     ? static_cast<std::size_t>(cause)
                                     : 0];

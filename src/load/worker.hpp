@@ -33,6 +33,7 @@ struct WorkerSetup {
     const std::vector<net::Endpoint>* sources = nullptr;
     std::uint32_t first_connection = 0;  // number of this thread's first connection in the run
     PortRange ports{1, 0};               // ephemeral ports given out with `sources` (size 0: none)
+    std::uint32_t ports_in_use = 0;      // of them, owned by a connection number (per address)
     std::string target;                  // for messages
     std::uint32_t index = 0;
     std::uint32_t threads = 1;
@@ -104,6 +105,9 @@ class Worker {
     void start_connect(std::uint32_t index, std::int64_t now) noexcept;
     // Binds a connection's socket to its source address, if the run has any: 0 or -errno.
     int bind_source(int fd, std::uint32_t index) noexcept;
+    // Binds connection `number`'s own port of the range, else a spare one: false when none.
+    bool bind_own_or_spare_port(int fd, net::Endpoint& source, std::uint32_t number,
+                                std::uint32_t shift) noexcept;
     void on_connect(std::uint32_t index, int result, std::int64_t now) noexcept;
     void close_connection(std::uint32_t index, std::int64_t now, stats::Outcome why) noexcept;
     void drop_socket(Connection& c) noexcept;   // closes it; the connection waits to reopen

@@ -426,6 +426,54 @@ TEST(EngineSourceAddresses, ConnectionsAreSpreadRoundRobinAndSeenByTheServerFrom
     EXPECT_EQ(ports, expected);
 }
 
+// The target on this machine may hold a port of the range on a source address (the kernel
+// gave its listener one): the connection owning that port takes a spare one above every
+// connection's own, not its neighbour's (sharing it, the connect would fail EADDRNOTAVAIL and
+// one of 100,000 never open).
+TEST(EngineSourceAddresses, AConnectionWhosePortTheTargetHoldsTakesASpareOne) {
+    PortRange range;
+    ASSERT_TRUE(read_port_range(range));
+    std::unique_ptr<server::Server> server;
+    std::uint32_t held = 0;  // the connection number whose own port the target listens on
+    for (; held < 50 && !server; ++held) {
+        server::ServerConfig config;
+        config.listen = "127.0.0.2:" + std::to_string(range.low + held);
+        config.threads = 1;
+        server = std::make_unique<server::Server>(config);
+        if (!server->start()) server.reset();
+    }
+    ASSERT_TRUE(server) << "no free port near the bottom of the range on 127.0.0.2";
+    --held;
+    Plan plan = base_plan(server->port());
+    plan.host = "127.0.0.2";
+    plan.connections = held + 3;
+    plan.threads = 1;
+    plan.duration = 1s;
+    plan.source_addresses = "127.0.0.2";
+    std::set<std::string> ports;
+    std::thread watch([&] {
+        for (int i = 0; i < 8 && ports.size() < plan.connections; ++i) {
+            std::this_thread::sleep_for(100ms);
+            ports.clear();
+            peers_of_port(server->port(), &ports);
+        }
+    });
+    const LoadResult r = run_load(plan);
+    watch.join();
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.run.connections.opened, plan.connections);
+    EXPECT_EQ(r.run.connections.failed, 0u) << r.run.connections.failed_by_cause.size();
+    // Every other connection on its own port; the one whose port is held above them all.
+    ASSERT_EQ(ports.size(), plan.connections);
+    std::uint32_t above = 0;
+    for (const std::string& p : ports) {
+        const auto port = static_cast<std::uint32_t>(std::stoul(p.substr(p.rfind(':') + 1)));
+        EXPECT_NE(port, range.low + held) << p;
+        if (port >= range.low + plan.connections) ++above;
+    }
+    EXPECT_EQ(above, 1u);
+}
+
 TEST(EngineSourceAddresses, BadListsAreRefusedBeforeConnecting) {
     Plan plan = base_plan(1);
     plan.source_addresses = "127.0.0.2-127.0.0.x";
