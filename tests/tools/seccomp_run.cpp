@@ -104,7 +104,7 @@ bool names_this_arch(const json& arches) {
     return false;
 }
 
-// "6.1" <= "6.18.44-fc": compares the numeric fields in order.
+// minKernel "4.8" against a release such as "6.18.44-fc": the major, then the minor number.
 bool kernel_at_least(const std::string& minimum) {
     utsname host{};
     if (uname(&host) != 0) return false;
