@@ -15,6 +15,7 @@ packages=(
   liburing-dev libgtest-dev libgmock-dev googletest libbenchmark-dev
   libcli11-dev libyaml-cpp-dev nlohmann-json3-dev libfmt-dev libmodbus-dev
   zlib1g-dev
+  libseccomp-dev   # tests/tools/seccomp_run: seccomp filters as container runtimes apply them
   libssl-dev   # --transport tls (Modbus/TCP Security): OpenSSL
   dpkg-dev   # cpack -G DEB: dpkg-shlibdeps finds the package's dependencies
   help2man   # the man pages, written at build time from mbstorm's own --help

@@ -42,7 +42,9 @@ std::string io_uring_unusable(bool need_buf_ring) {
             why +=
                 ": a seccomp profile such as Docker's or containerd's default, or "
                 "kernel.io_uring_disabled";
-        if (e == ENOSYS) why += ": a kernel without io_uring";
+        // podman's default profile answers ENOSYS where Docker's answers EPERM.
+        if (e == ENOSYS)
+            why += ": a kernel without io_uring, or a seccomp profile (podman's default)";
         return why;
     }
     if (need_buf_ring && !f.buf_ring)

@@ -4,7 +4,11 @@
 # whose pods take their shard from the environment (no --shard) and run with --start-at,
 # --json, --hlog and --test-id onto a ReadWriteMany volume; a merge Job over the same files
 # with the same shard count whose exit code is the verdict; the image recipe installs the
-# project's .deb on Debian 12 slim.
+# project's .deb on Debian 12 slim. Every pod passes the "restricted" Pod Security Standard
+# (issue #32): not root (runAsNonRoot, a non-zero runAsUser that is the image's numeric USER), no
+# privilege escalation, capabilities dropped (ALL, none added but NET_BIND_SERVICE), seccomp
+# RuntimeDefault or Localhost, no host namespaces, ports or paths, only the volume types it
+# allows; the shards' pod names the Localhost opt-in (deploy/seccomp/'s profile) in a comment.
 #   bash kubernetes_manifests.sh <mbstorm-binary> <scripts-dir>
 set -u
 deploy=$(cd "$2/../../deploy/kubernetes" && pwd) || { echo "FAIL no deploy/kubernetes"; exit 1; }
@@ -103,5 +107,43 @@ check(re.search(r"^FROM debian:12-slim", recipe, re.M) is not None, "Containerfi
 check(re.search(r"^COPY mbstorm_\*\.deb", recipe, re.M) is not None and
       "apt-get install -y --no-install-recommends ./mbstorm_*.deb" in recipe,
       "Containerfile: installs the project's mbstorm_*.deb with apt-get")
+
+# The "restricted" Pod Security Standard (kubernetes.io/docs/concepts/security/pod-security-standards).
+user = re.search(r"^USER (\d+)(:\d+)?\s*$", recipe, re.M)
+image_uid = int(user.group(1)) if user else None
+check(image_uid not in (None, 0), f"Containerfile: USER is a numeric non-root uid ({image_uid})")
+RESTRICTED_VOLUMES = {"configMap", "csi", "downwardAPI", "emptyDir", "ephemeral",
+                      "persistentVolumeClaim", "projected", "secret"}
+def seccomp_ok(context):
+    kind = context.get("seccompProfile", {}).get("type")
+    return kind in ("RuntimeDefault", "Localhost")
+def restricted(job):
+    name = job["metadata"]["name"]
+    pod = job["spec"]["template"]["spec"]
+    ctx = pod.get("securityContext", {})
+    check(ctx.get("runAsNonRoot") is True, f"{name}: runAsNonRoot")
+    check(ctx.get("runAsUser") == image_uid, f"{name}: runAsUser is the image's uid ({ctx.get('runAsUser')})")
+    check(ctx.get("seccompProfile", {}).get("type") == "RuntimeDefault", f"{name}: pod seccompProfile RuntimeDefault")
+    check(not any(pod.get(k) for k in ("hostNetwork", "hostPID", "hostIPC")), f"{name}: no host namespaces")
+    kinds = {k for v in pod.get("volumes", []) for k in v if k != "name"}
+    check(kinds <= RESTRICTED_VOLUMES, f"{name}: only restricted volume types ({sorted(kinds)})")
+    for c in pod["containers"] + pod.get("initContainers", []):
+        cctx = c.get("securityContext", {})
+        caps = cctx.get("capabilities", {})
+        check(cctx.get("allowPrivilegeEscalation") is False, f"{name}/{c['name']}: allowPrivilegeEscalation false")
+        check("ALL" in caps.get("drop", []) and set(caps.get("add", [])) <= {"NET_BIND_SERVICE"},
+              f"{name}/{c['name']}: capabilities drop ALL, none added ({caps})")
+        check(not cctx.get("privileged") and cctx.get("runAsUser", 1) != 0 and
+              cctx.get("runAsNonRoot", True) is True and ("seccompProfile" not in cctx or seccomp_ok(cctx)),
+              f"{name}/{c['name']}: not privileged, not root, no seccomp override but RuntimeDefault/Localhost")
+        check(not any("hostPort" in p for p in c.get("ports", [])), f"{name}/{c['name']}: no host ports")
+for job in (shards, merge):
+    restricted(job)
+with open(os.path.join(deploy, "shards-job.yaml")) as f:
+    opt_in = re.search(r"^\s*#\s*seccompProfile: \{type: Localhost, localhostProfile: profiles/(\S+)\}$",
+                       f.read(), re.M)
+profile = opt_in and os.path.join(deploy, "..", "seccomp", opt_in.group(1))
+check(opt_in is not None and os.path.isfile(profile),
+      f"shards: the Localhost opt-in, commented, names deploy/seccomp/'s profile ({opt_in and opt_in.group(1)})")
 sys.exit(1 if problems else 0)
 PY
