@@ -103,46 +103,33 @@ void EpollReactor::complete(std::uint64_t user_data, std::int32_t res,
     completions_.push_back(Completion{user_data, res, flags});
 }
 
-void EpollReactor::recv(int fd, std::uint64_t user_data, bool multishot) noexcept {
+void EpollReactor::arm_input(int fd, Input input, const InputTarget& target) noexcept {
     FdState& s = state(fd);
-    if (!watch(fd, s)) return complete(user_data, -errno);
-    s.input = Input::PoolRecv;
-    s.input_data = user_data;
-    s.multishot = multishot;
+    // Sockets made elsewhere (a listener, an eventfd) may block: never here.
+    if (input == Input::Read || input == Input::Accept) make_non_blocking(fd);
+    if (!watch(fd, s)) return complete(target.user_data, -errno);
+    s.input = input;
+    s.input_data = target.user_data;
+    s.multishot = target.multishot;
+    s.in_ptr = static_cast<std::uint8_t*>(target.data);
+    s.in_size = target.size;
     if (s.readable) list_ready(fd, s);
+}
+
+void EpollReactor::recv(int fd, std::uint64_t user_data, bool multishot) noexcept {
+    arm_input(fd, Input::PoolRecv, InputTarget{user_data, multishot, nullptr, 0});
 }
 
 void EpollReactor::recv_into(int fd, void* data, unsigned size, std::uint64_t user_data) noexcept {
-    FdState& s = state(fd);
-    if (!watch(fd, s)) return complete(user_data, -errno);
-    s.input = Input::RecvInto;
-    s.input_data = user_data;
-    s.multishot = false;
-    s.in_ptr = static_cast<std::uint8_t*>(data);
-    s.in_size = size;
-    if (s.readable) list_ready(fd, s);
+    arm_input(fd, Input::RecvInto, InputTarget{user_data, false, data, size});
 }
 
 void EpollReactor::read(int fd, void* data, unsigned size, std::uint64_t user_data) noexcept {
-    FdState& s = state(fd);
-    make_non_blocking(fd);
-    if (!watch(fd, s)) return complete(user_data, -errno);
-    s.input = Input::Read;
-    s.input_data = user_data;
-    s.multishot = false;
-    s.in_ptr = static_cast<std::uint8_t*>(data);
-    s.in_size = size;
-    if (s.readable) list_ready(fd, s);
+    arm_input(fd, Input::Read, InputTarget{user_data, false, data, size});
 }
 
 void EpollReactor::accept(int listen_fd, std::uint64_t user_data, bool multishot) noexcept {
-    FdState& s = state(listen_fd);
-    make_non_blocking(listen_fd);
-    if (!watch(listen_fd, s)) return complete(user_data, -errno);
-    s.input = Input::Accept;
-    s.input_data = user_data;
-    s.multishot = multishot;
-    if (s.readable) list_ready(listen_fd, s);
+    arm_input(listen_fd, Input::Accept, InputTarget{user_data, multishot, nullptr, 0});
 }
 
 void EpollReactor::send(int fd, const void* data, unsigned size, std::uint64_t user_data) noexcept {

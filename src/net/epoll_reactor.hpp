@@ -115,6 +115,13 @@ class EpollReactor {
         int fd;  // a connect's timeout: its descriptor; -1 for a plain timeout
     };
 
+    struct InputTarget {
+        std::uint64_t user_data;
+        bool multishot;
+        void* data;  // RecvInto and Read: the caller's memory
+        unsigned size;
+    };
+    void arm_input(int fd, Input input, const InputTarget& target) noexcept;
     FdState& state(int fd) noexcept;
     bool watch(int fd, FdState& s) noexcept;  // registers once; false when epoll refused
     void list_ready(int fd, FdState& s) noexcept;
