@@ -211,6 +211,10 @@ class Campaign : private Rerun, private Replayer, private LoneRuns {
     bool settle_hang() override { return care_.settle(); }
     std::optional<Outcome> confirm_death(Case& c, Execution& ex, const std::string& key,
                                          bool batch_died);
+    // Which request of a case of several kills the target alone (find_lone_killer). Found:
+    // `c` and `ex` are now it and its run, and the deaths charged to `key` are its own.
+    enum class Blame { None, Found, Known, Lost };
+    Blame blame_lone_killer(Case& c, Execution& ex, const std::string& key);
     // After a run that crashed the target or hung it as a whole (TargetCare::bring_back).
     bool bring_back(const Execution& ex, const std::string& cause) override {
         return care_.bring_back(ex, cause);
@@ -587,24 +591,50 @@ Campaign::Outcome Campaign::record_plain(const Case& plain, Execution whole) {
         if (!bring_back(whole, key)) return Outcome::Lost;
         return Outcome::Fired;
     }
+    Case blamed = plain;
     if (whole.target_down) {
         ++result_.deaths;
         care_.charge(key);  // the transport case's death was this one's too
         if (!care_.recover(key)) return Outcome::Lost;
         whole.target_down = false;  // confirmed: it killed the target twice
+        switch (blame_lone_killer(blamed, whole, key)) {
+            case Blame::Lost:
+                return Outcome::Lost;
+            case Blame::Known:
+                return care_.up() ? Outcome::Fired : Outcome::Lost;
+            case Blame::Found:
+            case Blame::None:
+                break;
+        }
     } else if (whole_server_hang(whole.verdict) && !care_.settle(key)) {
         return Outcome::Lost;
     }
-    record(plain, std::move(whole));
+    record(blamed, std::move(whole));
     return care_.up() ? Outcome::Fired : Outcome::Lost;
 }
 
-// A death is a crash only if the case, replayed alone, kills the target again. Nothing when
-// confirmed (`ex` the confirming run) and to be recorded.
 // A crash is blamed on the first request left unanswered, which a target that answers a read
 // in one write after the next request was never able to answer: each request alone is asked
-// first (one that does not kill it costs no restart), so that the crash is keyed by the
-// request that does. The restart its death costs is the one confirmation would have cost.
+// (one that does not kill it costs no restart), so that the crash is keyed by the request
+// that does.
+Campaign::Blame Campaign::blame_lone_killer(Case& c, Execution& ex, const std::string& key) {
+    if (!can_afford(1)) return Blame::None;
+    LoneKiller lone = find_lone_killer(c, result_.profile, *this);
+    if (lone.lost) return Blame::Lost;
+    if (!lone.request) return Blame::None;
+    c = std::move(*lone.request);
+    ex = std::move(lone.run);
+    // The deaths charged to the request blamed first were this one's.
+    care_.move_charges(key, root_cause_key(ex.verdict));
+    Finding* f = known(ex.verdict);
+    if (!f) return Blame::Found;
+    hit(*f, ex.verdict, c);
+    return Blame::Known;
+}
+
+// A death is a crash only if the case, replayed alone, kills the target again. Nothing when
+// confirmed (`ex` the confirming run) and to be recorded. The request of several that kills
+// alone is asked for first (blame_lone_killer): its death is the one confirmation would cost.
 std::optional<Campaign::Outcome> Campaign::confirm_death(Case& c, Execution& ex,
                                                          const std::string& key, bool batch_died) {
     ++result_.deaths;
@@ -617,28 +647,27 @@ std::optional<Campaign::Outcome> Campaign::confirm_death(Case& c, Execution& ex,
         keep(std::move(f));
         return Outcome::Lost;
     }
-    // A case from a batch that died killed the target twice already: the batch and now. The
-    // batch's restart is charged now, before minimisation spends what is left of the budget.
+    // A case from a batch that died killed the target twice already: the batch and now, so it
+    // needs no confirming run. The batch's restart is charged now, before minimisation spends
+    // what is left of the budget. Its culprit is still asked for: a coalesced case blamed on
+    // its first request, never answered, would file another handler's crash under it.
     if (batch_died) {
         care_.charge(key);
-        return std::nullopt;
-    }
-    if (!can_afford(1)) {
+    } else if (!can_afford(1)) {
         ++result_.suspects_left;
         return Outcome::Clean;
     }
-    LoneKiller lone = find_lone_killer(c, result_.profile, *this);
-    if (lone.lost) return Outcome::Lost;
-    if (lone.request) {
-        c = std::move(*lone.request);
-        ex = std::move(lone.run);
-        // The first death was charged to the request blamed then: it was this one's.
-        care_.move_charges(key, root_cause_key(ex.verdict));
-        Finding* f = known(ex.verdict);
-        if (!f) return std::nullopt;
-        hit(*f, ex.verdict, c);
-        return Outcome::Fired;
+    switch (blame_lone_killer(c, ex, key)) {
+        case Blame::Lost:
+            return Outcome::Lost;
+        case Blame::Known:
+            return Outcome::Fired;
+        case Blame::Found:
+            return std::nullopt;
+        case Blame::None:
+            break;
     }
+    if (batch_died) return std::nullopt;
     ++result_.isolated_runs;
     Execution again = run_alone(c);
     const bool same = again.verdict && root_cause_key(again.verdict) == key;
@@ -699,9 +728,14 @@ Campaign::Outcome Campaign::isolate_case(Case c, bool batch_died, Isolated& show
     if (!ex.target_down && depends_on_line_timing(c.cls) &&
         !confirmed(shows_every_time(c, key, *this)))
         return care_.up() ? Outcome::Clean : Outcome::Lost;
-    if (ex.target_down)
-        if (const auto done = confirm_death(c, ex, key, batch_died)) return *done;
-    shown.confirmed_death = ex.target_down;
+    if (ex.target_down) {
+        const auto done = confirm_death(c, ex, key, batch_died);
+        // Fired: blamed on a request that kills alone, a known crash (its death was charged).
+        if (done && *done != Outcome::Fired) return *done;
+        shown.key = root_cause_key(ex.verdict);  // the lone killer's, if one was found
+        shown.confirmed_death = true;
+        if (done) return *done;
+    }
     record(c, std::move(ex));
     return care_.up() ? Outcome::Fired : Outcome::Lost;
 }
