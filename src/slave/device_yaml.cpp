@@ -189,6 +189,9 @@ std::vector<std::uint8_t> parse_entry_units(const Parser& p, const YAML::Node& n
         p.fail(n, "per-entry 'units' needs per-unit models (a top-level 'units:' list)");
     }
     std::vector<std::uint8_t> ids = parse_unit_list(p, n);
+    // Each unit once: a repeated id would only repeat the entry's work.
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     for (std::uint8_t id : ids) {
         if (!std::binary_search(layout.units.begin(), layout.units.end(), id)) {
             p.fail(n, "unit " + std::to_string(id) + " is not in the top-level 'units' list");
@@ -261,9 +264,74 @@ void parse_identification(const Parser& p, const YAML::Node& n, DeviceIdentity& 
     });
 }
 
+// `random:` of an init entry: `n` values drawn as a simulated random input would be.
+void push_random_words(const Parser& p, const YAML::Node& random, ValueType vt, std::int64_t n,
+                       InitRange& r) {
+    double lo = 0, hi = is_bit_table(r.table) ? 1 : 65535;
+    std::uint64_t seed = 1;
+    p.each_key(random, "random", {"min", "max", "seed"},
+               [&](const std::string& key, const YAML::Node& v) {
+                   if (key == "min")
+                       lo = p.number(v, "random.min");
+                   else if (key == "max")
+                       hi = p.number(v, "random.max");
+                   else if (key == "seed")
+                       seed = static_cast<std::uint64_t>(p.integer(v, "random.seed", 0, INT64_MAX));
+                   else
+                       return false;
+                   return true;
+               });
+    if (lo > hi) p.fail(random, "random.min must not exceed random.max");
+    SimulatedInput gen;
+    gen.wave = Waveform::Random;
+    gen.type = is_bit_table(r.table) ? ValueType::UInt16 : vt;
+    gen.min = lo;
+    gen.max = hi;
+    gen.seed = seed;
+    gen.period_ns = 1;
+    for (std::int64_t i = 0; i < n; ++i) {
+        std::uint16_t regs[2] = {0, 0};
+        encode_value(simulated_value(gen, static_cast<std::uint64_t>(i)), gen.type, regs);
+        if (is_bit_table(r.table)) regs[0] = regs[0] != 0;
+        for (std::uint32_t k = 0; k < value_width(gen.type); ++k) r.words.push_back(regs[k]);
+    }
+}
+
+// What init entries may ask of start-up. YAML aliases repeat an entry for a few bytes each, so
+// a small file could otherwise hold gigabytes of values or hours of writes: every register of
+// every unit written once is the most a description needs, and four times the tables' worth of
+// values (entries may overlap) the most it keeps.
+class InitBudget {
+  public:
+    static constexpr std::uint64_t kMaxValues = 4ull * 4 * kFullTable;
+    static constexpr std::uint64_t kMaxWrites = 4ull * kFullTable * 256;
+
+    void charge(const Parser& p, const YAML::Node& entry, std::size_t index, const InitRange& r,
+                const Layout& layout) {
+        const std::uint64_t models =
+            layout.shared ? 1 : (r.units.empty() ? layout.units.size() : r.units.size());
+        values_ += r.words.size();
+        writes_ += r.words.size() * models;
+        if (values_ > kMaxValues)
+            p.fail(entry, "init entry " + std::to_string(index + 1) + ": init holds more than " +
+                              std::to_string(kMaxValues) +
+                              " values in all (an alias counts each time it is used)");
+        if (writes_ > kMaxWrites)
+            p.fail(entry, "init entry " + std::to_string(index + 1) + ": init writes more than " +
+                              std::to_string(kMaxWrites) +
+                              " values in all, each unit an entry applies to counted (every "
+                              "register of every unit once)");
+    }
+
+  private:
+    std::uint64_t values_ = 0;
+    std::uint64_t writes_ = 0;
+};
+
 void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
                 std::vector<InitRange>& out) {
     if (!list.IsSequence()) p.fail(list, "init must be a list");
+    InitBudget budget;
     for (const auto& e : list) {
         InitRange r;
         OptNode table, address, values, value, count, random, type;
@@ -309,38 +377,10 @@ void parse_init(const Parser& p, const YAML::Node& list, const Layout& layout,
             for (std::int64_t i = 0; i < n; ++i)
                 r.words.insert(r.words.end(), one.begin(), one.end());
         } else {
-            double lo = 0, hi = is_bit_table(r.table) ? 1 : 65535;
-            std::uint64_t seed = 1;
-            p.each_key(*random, "random", {"min", "max", "seed"},
-                       [&](const std::string& key, const YAML::Node& v) {
-                           if (key == "min")
-                               lo = p.number(v, "random.min");
-                           else if (key == "max")
-                               hi = p.number(v, "random.max");
-                           else if (key == "seed")
-                               seed = static_cast<std::uint64_t>(
-                                   p.integer(v, "random.seed", 0, INT64_MAX));
-                           else
-                               return false;
-                           return true;
-                       });
-            if (lo > hi) p.fail(*random, "random.min must not exceed random.max");
-            SimulatedInput gen;
-            gen.wave = Waveform::Random;
-            gen.type = is_bit_table(r.table) ? ValueType::UInt16 : vt;
-            gen.min = lo;
-            gen.max = hi;
-            gen.seed = seed;
-            gen.period_ns = 1;
-            for (std::int64_t i = 0; i < n; ++i) {
-                std::uint16_t regs[2] = {0, 0};
-                encode_value(simulated_value(gen, static_cast<std::uint64_t>(i)), gen.type, regs);
-                if (is_bit_table(r.table)) regs[0] = regs[0] != 0;
-                for (std::uint32_t k = 0; k < value_width(gen.type); ++k)
-                    r.words.push_back(regs[k]);
-            }
+            push_random_words(p, *random, vt, n, r);
         }
         check_fits(p, e, layout, r.table, r.address, r.words.size());
+        budget.charge(p, e, out.size(), r, layout);
         out.push_back(std::move(r));
     }
 }
@@ -709,9 +749,16 @@ DeviceDescription parse_device_yaml(std::string_view text, std::string_view sour
 DeviceDescription load_device_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw DeviceYamlError(path + ": cannot open the device file", 0, 0);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_device_yaml(text.str(), path);
+    // Every table written out value by value is about 2 MB of YAML: a file far larger is not a
+    // device description, and is not read into memory whole.
+    constexpr std::size_t kMaxBytes = 16u << 20;
+    std::string text;
+    char chunk[1 << 16];
+    while (text.size() <= kMaxBytes && in.read(chunk, sizeof chunk).gcount() > 0)
+        text.append(chunk, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxBytes)
+        throw DeviceYamlError(path + ": larger than 16 MiB: not a device description", 0, 0);
+    return parse_device_yaml(text, path);
 }
 
 UnitModels build_units(const DeviceDescription& d) {
