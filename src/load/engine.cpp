@@ -196,6 +196,26 @@ void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopp
 }
 
 // Each stage's name and the targets it moves between; offsets come after the run.
+// The run ended before any connection was set up, and none failed: a silent target, or a run
+// shorter than setting its connections up. One connect now tells which (a target that is up
+// answers it at once), so that the second is not reported as an unreachable target.
+std::string no_connection_error(const Plan& plan, const net::Endpoint& target, double ran_s) {
+    using namespace std::chrono;
+    const double timeout_s = duration<double>(plan.connect_timeout).count();
+    const auto probe_ms =
+        duration_cast<milliseconds>(std::min<nanoseconds>(plan.connect_timeout, 1s));
+    if (net::connect_within(target, static_cast<int>(probe_ms.count())) == 0) {
+        return fmt::format(
+            "the run ended after {:.3g}s, before any of its {} connection(s) to {} was set up "
+            "(the target accepts connections): nothing was measured; run for longer (-d)",
+            ran_s, plan.connections, target.to_string());
+    }
+    return fmt::format(
+        "cannot connect to {}: no connection was established during the run ({:.3g}s; connect "
+        "timeout {:.3g}s)",
+        target.to_string(), ran_s, timeout_s);
+}
+
 void describe_stages(const Plan& plan, const StageSchedule& schedule,
                      std::vector<stats::StageResult>& stages) {
     if (!schedule.empty()) {
@@ -796,16 +816,9 @@ LoadResult run_load(const Plan& plan, const EngineOptions& options) {
         finished_ns = std::max(finished_ns, w->finished_ns);
         if (result.error.empty() && !w->fatal_error.empty()) result.error = w->fatal_error;
     }
-    if (result.error.empty() && !line && !any_connected.load()) {
-        // The run ended before a connect attempt even failed (a silent address and a run
-        // shorter than the connect timeout): still an unreachable target.
-        result.error = fmt::format(
-            "cannot connect to {}: no connection was established during the run ({:.3g}s; "
-            "connect timeout {:.3g}s)",
-            setup.endpoint.to_string(),
-            static_cast<double>(finished_ns - clock.window.start_ns) / 1e9,
-            std::chrono::duration<double>(plan.connect_timeout).count());
-    }
+    if (result.error.empty() && !line && !any_connected.load())
+        result.error = no_connection_error(
+            plan, setup.endpoint, static_cast<double>(finished_ns - clock.window.start_ns) / 1e9);
     result.ok = result.error.empty();
 
     stats::RunMetadata& meta = result.run.metadata;

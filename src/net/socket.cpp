@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <netdb.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -182,6 +183,19 @@ int connect_blocking(const Endpoint& ep) noexcept {
         return -e;
     }
     return fd;
+}
+
+int connect_within(const Endpoint& ep, int timeout_ms) noexcept {
+    const int fd = connect_nonblocking(ep);
+    if (fd < 0) return -fd;
+    pollfd p{fd, POLLOUT, 0};
+    int rc;
+    do {
+        rc = ::poll(&p, 1, timeout_ms);
+    } while (rc < 0 && errno == EINTR);
+    const int result = rc < 0 ? errno : rc == 0 ? ETIMEDOUT : socket_error(fd);
+    ::close(fd);
+    return result;
 }
 
 int set_nodelay(int fd, bool on) noexcept {

@@ -75,6 +75,9 @@ int connect_nonblocking(const Endpoint& ep) noexcept;
 
 // Blocking connect (tests, tools). fd or -errno.
 int connect_blocking(const Endpoint& ep) noexcept;
+// Whether a connect completes within `timeout_ms` (the socket is closed again): 0, or the
+// positive errno (ETIMEDOUT when it did not complete in time).
+int connect_within(const Endpoint& ep, int timeout_ms) noexcept;
 
 int set_nodelay(int fd, bool on = true) noexcept;
 int set_nonblocking(int fd, bool on = true) noexcept;

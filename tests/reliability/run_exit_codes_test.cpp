@@ -44,6 +44,21 @@ TEST(RunExitCodes, SilentTargetShorterThanTheConnectTimeoutExitsTwo) {
                 HasSubstr("cannot connect to 127.0.0.1:" + std::to_string(silent.port())));
 }
 
+// Before: a run shorter than its start-up said "cannot connect to" a target that was up (issue
+// #31 item 5: 19 runs of 20 at -c 1 -d 1ms). Now the run says it ended first, and that the
+// target accepts connections (or, when its connection was set up in time, reports what it saw).
+TEST(RunExitCodes, ARunShorterThanItsStartUpDoesNotCallAnUpTargetUnreachable) {
+    HostileTarget target(HostileTarget::Mode::Honest);
+    for (int i = 0; i < 5; ++i) {
+        auto r = run_mbstorm(target_flag(target.port()) + " -c 1 -d 1ms -q", 30);
+        EXPECT_THAT(r.output, testing::Not(HasSubstr("cannot connect"))) << r.output;
+        if (r.output.find("the run ended after") == std::string::npos) continue;
+        EXPECT_EQ(r.exit_code, 2) << r.output;
+        EXPECT_THAT(r.output, HasSubstr("before any of its 1 connection(s) to 127.0.0.1:" +
+                                        std::to_string(target.port()) + " was set up"));
+    }
+}
+
 // Before: a run with 100 % errors exited 0.
 TEST(RunExitCodes, NoTransactionSucceededExitsOne) {
     HostileTarget target(HostileTarget::Mode::AllExceptions);
