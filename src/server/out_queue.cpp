@@ -1,5 +1,7 @@
 #include "server/out_queue.hpp"
 
+#include <algorithm>
+
 namespace mbstorm::server {
 
 BlockPool::~BlockPool() {
@@ -12,9 +14,12 @@ OutBlock* BlockPool::get() {
         free_ = b->next;
         b->next = nullptr;
         b->begin = b->end = 0;
+        --free_count_;
+        unused_since_trim_ = std::min(unused_since_trim_, free_count_);
         return b;
     }
-    all_.reserve(all_.size() + 1);
+    // Room first (doubling), so that a failed allocation cannot leave a block unowned.
+    if (all_.size() == all_.capacity()) all_.reserve(std::max<std::size_t>(64, 2 * all_.size()));
     auto* b = new OutBlock;
     all_.push_back(b);
     return b;
@@ -32,6 +37,29 @@ void BlockPool::prewarm(std::size_t count) {
 void BlockPool::put(OutBlock* b) noexcept {
     b->next = free_;
     free_ = b;
+    ++free_count_;
+}
+
+std::size_t BlockPool::trim(std::size_t keep) noexcept {
+    // Marked in place rather than listed, so that giving memory back allocates none.
+    constexpr std::uint32_t kReleased = UINT32_MAX;
+    std::size_t release = std::min(unused_since_trim_, free_count_);
+    release = std::min(release, all_.size() > keep ? all_.size() - keep : 0);
+    for (std::size_t i = 0; i < release; ++i) {
+        OutBlock* b = free_;
+        free_ = b->next;
+        b->end = kReleased;
+    }
+    free_count_ -= release;
+    unused_since_trim_ = free_count_;
+    if (release != 0) {
+        std::erase_if(all_, [](OutBlock* b) {
+            if (b->end != kReleased) return false;
+            delete b;  // remove_if asks once per block
+            return true;
+        });
+    }
+    return release;
 }
 
 std::uint8_t* OutQueue::reserve_new_block(BlockPool& pool) {

@@ -30,9 +30,19 @@ class BlockPool {
     OutBlock* get();  // may allocate when the pool is empty
     void put(OutBlock* b) noexcept;
     std::size_t allocated() const noexcept { return all_.size(); }
+    std::size_t free_blocks() const noexcept { return free_count_; }
+
+    // Gives back to the heap the free blocks no get() needed since the last trim (a crowd of
+    // slow readers gone), keeping at least `keep` blocks allocated; returns how many went.
+    // Blocks that kept being used stay pooled, so a steady load is not made to allocate again.
+    std::size_t trim(std::size_t keep) noexcept;
+    // Whether trim(keep) may release something, now or at a later call.
+    bool above(std::size_t keep) const noexcept { return all_.size() > keep; }
 
   private:
     OutBlock* free_ = nullptr;
+    std::size_t free_count_ = 0;
+    std::size_t unused_since_trim_ = 0;  // the fewest free blocks since the last trim
     std::vector<OutBlock*> all_;
 };
 

@@ -35,6 +35,7 @@ ServerStats& ServerStats::operator+=(const ServerStats& o) noexcept {
     pending_output += o.pending_output;
     if (o.pending_output_peak > pending_output_peak) pending_output_peak = o.pending_output_peak;
     output_blocks += o.output_blocks;
+    output_blocks_held += o.output_blocks_held;
     tls_handshakes += o.tls_handshakes;
     tls_resumed += o.tls_resumed;
     tls_refused += o.tls_refused;
@@ -74,6 +75,7 @@ ServerStats ServerCounters::snapshot() const noexcept {
     s.pending_output = v(PendingOutput);
     s.pending_output_peak = v(PendingOutputPeak);
     s.output_blocks = v(OutputBlocks);
+    s.output_blocks_held = v(OutputBlocksHeld);
     s.tls_handshakes = v(TlsHandshakes);
     s.tls_resumed = v(TlsResumed);
     s.tls_refused = v(TlsRefused);
@@ -127,13 +129,15 @@ std::string format_summary(const ServerStats& t, double elapsed_s) {
                "CRC (dropped)\n"
                "  emulation: {} busy (06), {} other-unit requests\n"
                "  faults: {} delayed, {} dropped connections, {} unanswered\n"
-               "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks\n",
+               "  backpressure: {} pauses, peak queue {} B on one connection, {} output blocks at "
+               "the peak ({} held at the end)\n",
                elapsed_s, t.transactions, static_cast<double>(t.transactions) / secs, t.requests,
                t.connections_total, t.connections_current, t.idle_closes, t.frame_timeouts,
                t.evictions, t.refusals, t.accept_fd_exhausted, t.bytes_in, t.bytes_out,
                t.exceptions_total(), exceptions_text(t), t.discarded_frames, t.bad_framing_closes,
                t.crc_errors, t.busy_rejects, t.foreign_unit, t.fault_delayed, t.fault_drops,
-               t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak, t.output_blocks) +
+               t.fault_no_answer, t.backpressure_pauses, t.pending_output_peak, t.output_blocks,
+               t.output_blocks_held) +
            (t.tls_handshakes + t.tls_refused == 0
                 ? std::string()
                 : fmt::format("  tls: {} handshakes ({} resumed), {} refused at the handshake, {} "

@@ -35,7 +35,8 @@ struct ServerStats {
     std::uint64_t backpressure_pauses = 0;
     std::uint64_t pending_output = 0;       // bytes queued for sending right now
     std::uint64_t pending_output_peak = 0;  // largest queue one connection ever had
-    std::uint64_t output_blocks = 0;        // output blocks allocated (pooled)
+    std::uint64_t output_blocks = 0;        // output blocks allocated (pooled), at the peak
+    std::uint64_t output_blocks_held = 0;   // of them, still allocated (idle ones are given back)
     std::uint64_t tls_handshakes = 0;       // --transport tls: handshakes completed
     std::uint64_t tls_resumed = 0;          // of them, sessions resumed
     std::uint64_t tls_refused = 0;          // closed at the handshake (certificate, role, protocol)
@@ -76,6 +77,7 @@ class ServerCounters {
         PendingOutput,
         PendingOutputPeak,
         OutputBlocks,
+        OutputBlocksHeld,
         CrcErrors,
         TlsHandshakes,
         TlsResumed,
@@ -95,6 +97,7 @@ class ServerCounters {
         auto& c = values_[id];
         c.store(c.load(std::memory_order_relaxed) - n, std::memory_order_relaxed);
     }
+    void set(Id id, std::uint64_t v) noexcept { values_[id].store(v, std::memory_order_relaxed); }
     void set_max(Id id, std::uint64_t v) noexcept {
         auto& c = values_[id];
         if (v > c.load(std::memory_order_relaxed)) c.store(v, std::memory_order_relaxed);

@@ -1,5 +1,6 @@
 #include "server/worker.hpp"
 
+#include <malloc.h>
 #include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -897,7 +898,26 @@ void Worker::run_timers() noexcept {
             close_connection(lru_head_);
         }
     }
+    trim_output_blocks();
     counters_.set_max(ServerCounters::OutputBlocks, pool_.allocated());
+    counters_.set(ServerCounters::OutputBlocksHeld, pool_.allocated());
+}
+
+// A crowd of slow readers may have needed thousands of blocks (140 MB stayed after 1,500
+// non-reading clients left, issue #31): those no get() took for a whole interval are freed,
+// keeping the prewarmed ones and 1 MiB of slack, so that a steady load never allocates again.
+std::size_t Worker::blocks_kept() const noexcept {
+    constexpr std::size_t kSlackBlocks = 64;
+    return config_.prealloc_output_blocks + kSlackBlocks;
+}
+
+void Worker::trim_output_blocks() noexcept {
+    constexpr std::int64_t kTrimIntervalNs = net::kNsPerSec;
+    if (now_ < next_trim_ns_) return;
+    next_trim_ns_ = now_ + kTrimIntervalNs;
+    // glibc keeps freed 16 KB chunks in its arenas: malloc_trim hands their pages to the
+    // kernel, so that the process's resident memory falls too.
+    if (pool_.trim(blocks_kept()) != 0) ::malloc_trim(0);
 }
 
 std::int64_t Worker::next_deadline() const noexcept {
@@ -921,6 +941,9 @@ std::int64_t Worker::next_deadline() const noexcept {
             static_cast<std::int64_t>(config_.idle_timeout_ms) * net::kNsPerMs;
         if (deadline < 0 || idle < deadline) deadline = idle;
     }
+    // Blocks above what is kept: wake to give the idle ones back, even with nothing else due.
+    if (pool_.above(blocks_kept()) && (deadline < 0 || next_trim_ns_ < deadline))
+        deadline = next_trim_ns_;
     return deadline;
 }
 

@@ -149,6 +149,10 @@ class Worker {
     void mark_dirty(Connection& c, std::uint32_t index) noexcept;
     void flush(std::uint32_t index) noexcept;
     void run_timers() noexcept;
+    // Output blocks no connection used for a whole interval go back to the heap.
+    void trim_output_blocks() noexcept;
+    std::size_t blocks_kept() const noexcept;
+    std::int64_t next_trim_ns_ = 0;
     std::int64_t next_deadline() const noexcept;
 
     void lru_unlink(std::uint32_t index) noexcept;
