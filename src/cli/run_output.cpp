@@ -117,11 +117,13 @@ int judge_run(const load::LoadResult& result) {
             const auto o = static_cast<stats::Outcome>(i);
             if (!stats::is_stray(o) && c.count(o) > c.count(worst)) worst = o;
         }
+        // None failed (all still pending when a short run ended): there is no commonest failure.
+        const std::string most =
+            c.errors() == 0 ? "" : fmt::format(", most as {}", stats::outcome_name(worst));
         fmt::print(stderr,
-                   "mbstorm run: no transaction succeeded ({} sent, {} failed, most as {}, {} "
-                   "pending at the end)\n",
-                   c.transactions_sent, c.errors(), stats::outcome_name(worst),
-                   result.pending_at_end);
+                   "mbstorm run: no transaction succeeded ({} sent, {} failed{}, {} pending at "
+                   "the end)\n",
+                   c.transactions_sent, c.errors(), most, result.pending_at_end);
         const stats::ConnectionStats& conns = result.run.connections;
         if (worst == stats::Outcome::ConnectionClosed && conns.tls_handshakes > 0)
             // TLS 1.3: the client's handshake ends before the server has checked its

@@ -52,6 +52,10 @@ TEST(RunExitCodes, ARunShorterThanItsStartUpDoesNotCallAnUpTargetUnreachable) {
     for (int i = 0; i < 5; ++i) {
         auto r = run_mbstorm(target_flag(target.port()) + " -c 1 -d 1ms -q", 30);
         EXPECT_THAT(r.output, testing::Not(HasSubstr("cannot connect"))) << r.output;
+        // Set up in time, with every request still pending at the end: no failure to name.
+        if (r.output.find(" 0 failed") != std::string::npos) {
+            EXPECT_THAT(r.output, testing::Not(HasSubstr("most as"))) << r.output;
+        }
         if (r.output.find("the run ended after") == std::string::npos) continue;
         EXPECT_EQ(r.exit_code, 2) << r.output;
         EXPECT_THAT(r.output, HasSubstr("before any of its 1 connection(s) to 127.0.0.1:" +
