@@ -109,27 +109,27 @@ json interval_json(const stats::IntervalSummary& i) {
             {"open_connections", i.open_connections}};
 }
 
-std::string format_json(const stats::RunResult& r, int indent) {
+namespace {
+
+json run_json(const stats::RunResult& r) {
     const auto& m = r.metadata;
-    json run = {{"target", m.target},
-                {"threads", m.threads},
-                {"backend", m.backend},
-                {"connections", m.connections},
-                {"depth", m.depth},
-                {"model", stats::load_model_name(m.model)},
-                {"rate_per_second", m.rate_per_second},
-                {"rate_schedule_per_s", rate_schedule(r)},
-                {"requested_duration_s", seconds(m.requested_duration_ns)},
-                {"measured_duration_s", seconds(m.measured_duration_ns)},
-                {"warmup_s", seconds(m.warmup_ns)},
-                {"start_time", format_utc(m.start_time)},
-                {"coordinated_omission_corrected", m.coordinated_omission_corrected},
-                {"notes", m.notes}};
+    return {{"target", m.target},
+            {"threads", m.threads},
+            {"backend", m.backend},
+            {"connections", m.connections},
+            {"depth", m.depth},
+            {"model", stats::load_model_name(m.model)},
+            {"rate_per_second", m.rate_per_second},
+            {"rate_schedule_per_s", rate_schedule(r)},
+            {"requested_duration_s", seconds(m.requested_duration_ns)},
+            {"measured_duration_s", seconds(m.measured_duration_ns)},
+            {"warmup_s", seconds(m.warmup_ns)},
+            {"start_time", format_utc(m.start_time)},
+            {"coordinated_omission_corrected", m.coordinated_omission_corrected},
+            {"notes", m.notes}};
+}
 
-    json operations = json::array();
-    for (const auto& op : r.operations)
-        operations.push_back(operation_json(op, m.measured_duration_ns));
-
+json stages_json(const stats::RunResult& r) {
     json stages = json::array();
     for (const auto& st : r.stages) {
         const std::uint64_t span = st.end_offset_ns - st.start_offset_ns;
@@ -149,10 +149,10 @@ std::string format_json(const stats::RunResult& r, int indent) {
                           {"exceptions", exceptions_json(st.counters)},
                           {"operations", stage_ops}});
     }
+    return stages;
+}
 
-    json intervals = json::array();
-    for (const auto& i : r.timeline) intervals.push_back(interval_json(i));
-
+json thresholds_json(const stats::RunResult& r) {
     json thresholds = json::array();
     for (const auto& t : r.thresholds) {
         thresholds.push_back({{"expression", t.expression},
@@ -160,13 +160,21 @@ std::string format_json(const stats::RunResult& r, int indent) {
                               {"observed_text", t.observed_text},
                               {"passed", t.passed}});
     }
+    return thresholds;
+}
 
+json shortfalls_json(const stats::RunResult& r) {
     json shortfalls = json::array();
     for (const auto& s : r.shortfalls) {
         shortfalls.push_back(
             {{"what", s.what}, {"planned", s.planned}, {"achieved", s.achieved}, {"text", s.text}});
     }
+    return shortfalls;
+}
 
+// The test this run belongs to: what `mbstorm merge` reads to put runs together.
+json test_json(const stats::RunResult& r) {
+    const auto& m = r.metadata;
     const double measure_start =
         m.start_time.time_since_epoch().count() == 0
             ? 0.0
@@ -191,14 +199,47 @@ std::string format_json(const stats::RunResult& r, int indent) {
         test["start_at_epoch_s"] = m.start_at_epoch_s;
         test["late_by_seconds"] = seconds(m.late_by_ns);
     }
+    return test;
+}
 
+json connections_json(const stats::ConnectionStats& c) {
+    return {{"opened", c.opened},
+            {"failed", c.failed},
+            {"reconnects", c.reconnects},
+            {"closed_by_peer", c.closed_by_peer},
+            {"peak_open", c.peak_open},
+            {"tls_handshakes", c.tls_handshakes},
+            {"tls_resumed", c.tls_resumed},
+            {"tls_handshake_ns_total", c.tls_handshake_ns_total},
+            {"tls_handshake_ns_max", c.tls_handshake_ns_max},
+            {"tls_handshake_failures", c.tls_handshake_failures},
+            {"tls_offloaded", c.tls_offloaded},
+            {"tls_offload_errors", c.tls_offload_errors},
+            {"failed_by_cause", c.failed_by_cause}};
+}
+
+json schedule_lag_json(const stats::RunResult& r) {
     const auto& lag = r.schedule_lag;
     const stats::LagCounts all_lag = lag.total();
+    return {{"late_sends", all_lag.late_sends},     {"max_lag_ns", all_lag.max_lag_ns},
+            {"mean_lag_ns", all_lag.mean_lag_ns()}, {"cause", schedule_lag_cause(lag)},
+            {"engine", lag_json(lag.engine)},       {"target", lag_json(lag.target)}};
+}
+
+}  // namespace
+
+std::string format_json(const stats::RunResult& r, int indent) {
+    const auto& m = r.metadata;
+    json operations = json::array();
+    for (const auto& op : r.operations)
+        operations.push_back(operation_json(op, m.measured_duration_ns));
+    json intervals = json::array();
+    for (const auto& i : r.timeline) intervals.push_back(interval_json(i));
     json doc = {
         {"schema_version", kJsonSchemaVersion},
         {"tool", m.tool_version},
-        {"run", run},
-        {"test", test},
+        {"run", run_json(r)},
+        {"test", test_json(r)},
         {"totals", totals_json(r.counters, m.measured_duration_ns)},
         {"latency", latency_json(r.latency)},
         {"service_time",
@@ -208,34 +249,15 @@ std::string format_json(const stats::RunResult& r, int indent) {
         {"outcomes", outcomes_json(r.counters)},
         {"exceptions", exceptions_json(r.counters)},
         {"operations", operations},
-        {"stages", stages},
+        {"stages", stages_json(r)},
         {"timeline", {{"interval_s", seconds(r.timeline_interval_ns)}, {"intervals", intervals}}},
-        {"schedule_lag",
-         {{"late_sends", all_lag.late_sends},
-          {"max_lag_ns", all_lag.max_lag_ns},
-          {"mean_lag_ns", all_lag.mean_lag_ns()},
-          {"cause", schedule_lag_cause(lag)},
-          {"engine", lag_json(lag.engine)},
-          {"target", lag_json(lag.target)}}},
-        {"connections",
-         {{"opened", r.connections.opened},
-          {"failed", r.connections.failed},
-          {"reconnects", r.connections.reconnects},
-          {"closed_by_peer", r.connections.closed_by_peer},
-          {"peak_open", r.connections.peak_open},
-          {"tls_handshakes", r.connections.tls_handshakes},
-          {"tls_resumed", r.connections.tls_resumed},
-          {"tls_handshake_ns_total", r.connections.tls_handshake_ns_total},
-          {"tls_handshake_ns_max", r.connections.tls_handshake_ns_max},
-          {"tls_handshake_failures", r.connections.tls_handshake_failures},
-          {"tls_offloaded", r.connections.tls_offloaded},
-          {"tls_offload_errors", r.connections.tls_offload_errors},
-          {"failed_by_cause", r.connections.failed_by_cause}}},
+        {"schedule_lag", schedule_lag_json(r)},
+        {"connections", connections_json(r.connections)},
         {"plan_carried_out", r.shortfalls.empty()},
-        {"plan_shortfalls", shortfalls},
+        {"plan_shortfalls", shortfalls_json(r)},
         {"pipelining", {{"skipped_requests", r.pipelining.skipped_requests}}},
         {"hints", hint_lines(r)},
-        {"thresholds", thresholds},
+        {"thresholds", thresholds_json(r)},
         {"thresholds_passed", r.thresholds_passed()}};
     // Replace invalid UTF-8 in user-supplied names instead of throwing.
     return doc.dump(indent, ' ', false, json::error_handler_t::replace);

@@ -134,49 +134,56 @@ void write_tls_counters(PrometheusWriter& w, std::string_view prefix, PromLabels
     }
 }
 
-std::string format_load_metrics(const stats::LiveLoad& live) {
-    PrometheusWriter w;
-    // On every series: the test and, for a shard of a distributed run, its index (so a sum
-    // over `shard` is the whole test).
-    std::vector<PromLabel> run_labels{{"test", live.test_id}};
-    if (!live.shard.empty()) run_labels.push_back({"shard", live.shard});
-    const PromLabels run_only(run_labels);
-    struct OperationLabels {
-        std::string function, unit;
-    };
-    std::vector<OperationLabels> op_labels;
-    for (const auto& op : live.operations)
-        op_labels.push_back({function_label(op.function_code), fmt::format("{}", op.unit_id)});
-    // Every operation's labels plus `extra`, in one fixed order.
-    auto for_each_operation = [&](auto&& emit) {
-        for (std::size_t i = 0; i < live.operations.size(); ++i) {
-            std::vector<PromLabel> labels = run_labels;
-            labels.push_back({"operation", live.operations[i].name});
-            labels.push_back({"function", op_labels[i].function});
-            labels.push_back({"unit", op_labels[i].unit});
-            emit(live.operations[i], PromLabels(labels));
+namespace {
+
+// Every operation's series: the run's labels plus its operation, function and unit, in one
+// fixed order.
+class OperationSeries {
+  public:
+    OperationSeries(const stats::LiveLoad& live, const std::vector<PromLabel>& run_labels)
+        : live_(live), run_labels_(run_labels) {
+        for (const auto& op : live.operations) {
+            functions_.push_back(function_label(op.function_code));
+            units_.push_back(fmt::format("{}", op.unit_id));
         }
-    };
-    auto with = [](PromLabels base, PromLabel extra) {
-        std::vector<PromLabel> all(base.begin(), base.end());
-        all.push_back(extra);
-        return all;
-    };
+    }
+    template <class Emit>
+    void each(Emit&& emit) const {
+        for (std::size_t i = 0; i < live_.operations.size(); ++i) {
+            std::vector<PromLabel> labels = run_labels_;
+            labels.push_back({"operation", live_.operations[i].name});
+            labels.push_back({"function", functions_[i]});
+            labels.push_back({"unit", units_[i]});
+            emit(live_.operations[i], PromLabels(labels));
+        }
+    }
 
-    w.family("mbstorm_running", "gauge",
-             "1 while the load test runs, 0 before it starts and after it ends.");
-    w.sample("mbstorm_running", run_only, std::uint64_t{live.running ? 1u : 0u});
+  private:
+    const stats::LiveLoad& live_;
+    const std::vector<PromLabel>& run_labels_;
+    // Label values are views: the strings they view live here.
+    std::vector<std::string> functions_, units_;
+};
 
+std::vector<PromLabel> with(PromLabels base, PromLabel extra) {
+    std::vector<PromLabel> all(base.begin(), base.end());
+    all.push_back(extra);
+    return all;
+}
+
+// Requests sent, transactions by outcome and exception code, and the responses that answered
+// none.
+void write_outcome_families(PrometheusWriter& w, const stats::LiveLoad& live,
+                            const OperationSeries& ops, PromLabels run_only) {
     w.family("mbstorm_requests_sent_total", "counter",
              "Requests sent after warm-up (each one a transaction once it ends).");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         w.sample("mbstorm_requests_sent_total", labels, op.counters.transactions_sent);
     });
-
     w.family("mbstorm_transactions_total", "counter",
              "Transactions that ended, by outcome (ok, or the class of error: exception, "
              "timeout, connection_closed, ...).");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         for (std::size_t i = 0; i < stats::kOutcomeCount; ++i) {
             const auto outcome = static_cast<stats::Outcome>(i);
             if (stats::is_stray(outcome)) continue;
@@ -185,10 +192,9 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
                      op.counters.count(outcome));
         }
     });
-
     w.family("mbstorm_exceptions_total", "counter",
              "Exception responses, by exception code (also counted as outcome=\"exception\").");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         for (std::size_t code = 0; code < op.counters.exceptions.size(); ++code) {
             if (op.counters.exceptions[code] == 0) continue;
             const std::string text = fmt::format("0x{:02x}", code);
@@ -196,31 +202,34 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
                      op.counters.exceptions[code]);
         }
     });
-
     w.family("mbstorm_stray_responses_total", "counter",
              "Responses that answered no transaction (unknown or duplicate transaction id).");
     for (const auto outcome : {stats::Outcome::UnknownId, stats::Outcome::DuplicateId}) {
         const auto labels = with(run_only, {"outcome", stats::outcome_name(outcome)});
         w.sample("mbstorm_stray_responses_total", labels, live.stray.count(outcome));
     }
+}
 
+void write_traffic_families(PrometheusWriter& w, const OperationSeries& ops) {
     w.family("mbstorm_sent_bytes_total", "counter", "Request bytes sent after warm-up (ADUs).");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         w.sample("mbstorm_sent_bytes_total", labels, op.counters.bytes_sent);
     });
     w.family("mbstorm_received_bytes_total", "counter",
              "Response bytes received for transactions sent after warm-up (ADUs).");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         w.sample("mbstorm_received_bytes_total", labels, op.counters.bytes_received);
     });
-
     w.family("mbstorm_transaction_latency_seconds", "histogram",
              "Latency of answered transactions (open loop: from the intended send time).");
-    for_each_operation([&](const stats::LiveOperation& op, PromLabels labels) {
+    ops.each([&](const stats::LiveOperation& op, PromLabels labels) {
         w.histogram("mbstorm_transaction_latency_seconds", labels, stats::kLatencyBucketBoundsNs,
                     op.latency_buckets, op.latency_sum_ns);
     });
+}
 
+void write_connection_families(PrometheusWriter& w, const stats::LiveLoad& live,
+                               PromLabels run_only) {
     w.family("mbstorm_connections_opened_total", "counter",
              "Connections opened (reconnects included).");
     w.sample("mbstorm_connections_opened_total", run_only, live.connections_opened);
@@ -239,7 +248,6 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
     w.family("mbstorm_achieved_transactions_per_second", "gauge",
              "Transactions that ended per second over the last full interval.");
     w.sample("mbstorm_achieved_transactions_per_second", run_only, live.achieved_rate);
-
     const stats::LiveTls& tls = live.tls;
     write_tls_counters(
         w, "mbstorm_", run_only,
@@ -249,6 +257,24 @@ std::string format_load_metrics(const stats::LiveLoad& live) {
              "(divided by mbstorm_tls_handshakes_total: the mean).");
     w.sample("mbstorm_tls_handshake_seconds_total", run_only,
              static_cast<double>(tls.handshake_ns_total) / 1e9);
+}
+
+}  // namespace
+
+std::string format_load_metrics(const stats::LiveLoad& live) {
+    PrometheusWriter w;
+    // On every series: the test and, for a shard of a distributed run, its index (so a sum
+    // over `shard` is the whole test).
+    std::vector<PromLabel> run_labels{{"test", live.test_id}};
+    if (!live.shard.empty()) run_labels.push_back({"shard", live.shard});
+    const PromLabels run_only(run_labels);
+    const OperationSeries ops(live, run_labels);
+    w.family("mbstorm_running", "gauge",
+             "1 while the load test runs, 0 before it starts and after it ends.");
+    w.sample("mbstorm_running", run_only, std::uint64_t{live.running ? 1u : 0u});
+    write_outcome_families(w, live, ops, run_only);
+    write_traffic_families(w, ops);
+    write_connection_families(w, live, run_only);
     return w.text();
 }
 
