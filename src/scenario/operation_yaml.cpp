@@ -211,6 +211,132 @@ bool takes_values(std::uint8_t fc) noexcept {
     return false;
 }
 
+namespace {
+
+// An operation's keys read in any order; what depends on several is checked once all are read.
+struct OperationKeys {
+    const YamlReader& r;
+    ParsedOperation& out;
+    QuantityLimits q;
+    std::string fname;
+    NodeSlot address{}, quantity{}, expect{}, thresholds{}, zipf{};
+
+    // `key` is refused unless `ok`: it does not apply to this function.
+    void only_for(const YAML::Node& key_node, const std::string& key, bool ok,
+                  const std::string& valid) const {
+        if (!ok)
+            r.fail(key_node,
+                   fmt::format("{} does not apply to {} (only to {})", key, fname, valid));
+    }
+    void read(const std::string& key, const YAML::Node& key_node, const YAML::Node& v);
+    // The keys only some request shapes have; false for any other key.
+    bool read_shape_key(const std::string& key, const YAML::Node& key_node, const YAML::Node& v);
+};
+
+bool OperationKeys::read_shape_key(const std::string& key, const YAML::Node& key_node,
+                                   const YAML::Node& v) {
+    load::Operation& op = out.operation;
+    if (key == "values") {
+        only_for(key_node, key, takes_values(op.function),
+                 "writes: " + functions_where(takes_values, false));
+        op.values = parse_values(r, v);
+    } else if (key == "write_quantity") {
+        only_for(key_node, key, codec::request_is(op.function, RequestShape::ReadWriteRegisters),
+                 functions_where(shape_is<RequestShape::ReadWriteRegisters>, true));
+        op.write_quantity = static_cast<std::uint16_t>(
+            r.integer(v, "write_quantity", 1, lim::kMaxRwWriteRegisters));
+    } else if (key == "and_mask") {
+        only_for(key_node, key, codec::request_is(op.function, RequestShape::MaskWrite),
+                 functions_where(shape_is<RequestShape::MaskWrite>, true));
+        op.and_mask = static_cast<std::uint16_t>(r.integer(v, "and_mask", 0, 65535));
+    } else if (key == "device_id_code") {
+        only_for(key_node, key, codec::request_is(op.function, RequestShape::MeiTransport),
+                 functions_where(shape_is<RequestShape::MeiTransport>, true));
+        op.device_id_code = static_cast<std::uint8_t>(
+            r.integer(v, "device_id_code", lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
+    } else {
+        return false;
+    }
+    return true;
+}
+
+void OperationKeys::read(const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
+    load::Operation& op = out.operation;
+    if (read_shape_key(key, key_node, v)) return;
+    if (key == "name") {
+        op.name = r.scalar(v, "name");
+        if (op.name.empty()) r.fail(v, "name must not be empty");
+        out.named = true;
+    } else if (key == "unit") {
+        op.unit_id = static_cast<std::uint8_t>(r.integer(v, "unit", 0, 255));
+    } else if (key == "address") {
+        only_for(key_node, key, function_table(op.function).has_value(),
+                 "functions with an address: " +
+                     functions_where([](std::uint8_t fc) { return function_table(fc).has_value(); },
+                                     false));
+        address = v;
+    } else if (key == "quantity") {
+        only_for(key_node, key, q.max != 0,
+                 "functions with a quantity: " +
+                     functions_where([](std::uint8_t fc) { return quantity_limits(fc).max != 0; },
+                                     false));
+        quantity = v;
+        op.quantity = static_cast<std::uint16_t>(
+            r.integer(v, fmt::format("quantity for {}", fname), q.min, q.max));
+    } else if (key == "distribution") {
+        const std::string d = r.choice(v, "distribution", {"sequential", "uniform", "zipf"});
+        op.address_mode = d == "uniform" ? load::AddressMode::Uniform
+                          : d == "zipf"  ? load::AddressMode::Zipf
+                                         : load::AddressMode::Sequential;
+    } else if (key == "zipf_exponent") {
+        zipf = v;
+        op.zipf_exponent = r.number(v, "zipf_exponent", 0, load::kMaxZipfExponent);
+        if (op.zipf_exponent <= 0)
+            r.fail(v, fmt::format("zipf_exponent: 0 is out of range (valid > 0 and <= {:g})",
+                                  load::kMaxZipfExponent));
+    } else if (key == "weight") {
+        op.weight = static_cast<std::uint32_t>(r.integer(v, "weight", 1, 4294967295LL));
+    } else if (key == "expect") {
+        expect = v;
+    } else if (key == "thresholds") {
+        thresholds = v;
+    }  // "function": read first
+}
+
+// The whole block must fit the address space and the range.
+void check_address_block(const YamlReader& r, const YAML::Node& at, const load::Operation& op) {
+    const std::uint32_t span = load::address_span(op);
+    if (op.first_address + span - 1 > 0xFFFF) {
+        r.fail(at, fmt::format("address {} + quantity {} runs past 65535 (the first address "
+                               "must be <= {})",
+                               op.first_address, span, 0x10000 - span));
+    }
+    if (op.last_address && *op.last_address - op.first_address + 1U < span) {
+        r.fail(at, fmt::format("address range {}-{} holds {} items but each request needs {} "
+                               "(widen the range or lower the quantity)",
+                               op.first_address, *op.last_address,
+                               *op.last_address - op.first_address + 1, span));
+    }
+}
+
+std::vector<ThresholdSpec> parse_operation_thresholds(const YamlReader& r, const YAML::Node& n) {
+    if (!n.IsSequence()) r.fail(n, "thresholds must be a list of expressions like \"p99 < 5ms\"");
+    if (n.size() > kMaxThresholds) {
+        r.fail(n[kMaxThresholds],
+               fmt::format("too many thresholds: {} (at most {})", n.size(), kMaxThresholds));
+    }
+    std::vector<ThresholdSpec> out;
+    for (const auto& t : n) {
+        ThresholdSpec spec;
+        std::string error;
+        if (!parse_threshold(r.scalar(t, "threshold"), spec, error)) r.fail(t, error);
+        out.push_back(std::move(spec));
+    }
+    return out;
+}
+
+}  // namespace
+
 ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std::size_t index) {
     ParsedOperation out;
     load::Operation& op = out.operation;
@@ -224,126 +350,28 @@ ParsedOperation parse_operation(const YamlReader& r, const YAML::Node& node, std
                          ": `function` is required (a number like 3 or a name like "
                          "read_holding_registers)");
     }
-    const QuantityLimits q = quantity_limits(op.function);
-    op.quantity = q.max == 1 ? 1 : 10;
-    const std::string fname = codec::function_label(op.function);
-
-    NodeSlot address_node, quantity_node, expect_node, thresholds_node, zipf_node;
-    r.each_key(
-        node, what,
-        {"name", "function", "unit", "address", "quantity", "distribution", "zipf_exponent",
-         "values", "weight", "write_quantity", "and_mask", "device_id_code", "expect",
-         "thresholds"},
-        [&](const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
-            auto only_for = [&](bool ok, const std::string& valid) {
-                if (!ok) {
-                    r.fail(key_node,
-                           fmt::format("{} does not apply to {} (only to {})", key, fname, valid));
-                }
-            };
-            if (key == "name") {
-                op.name = r.scalar(v, "name");
-                if (op.name.empty()) r.fail(v, "name must not be empty");
-                out.named = true;
-            } else if (key == "function") {
-                // read above
-            } else if (key == "unit") {
-                op.unit_id = static_cast<std::uint8_t>(r.integer(v, "unit", 0, 255));
-            } else if (key == "address") {
-                only_for(
-                    function_table(op.function).has_value(),
-                    "functions with an address: " +
-                        functions_where(
-                            [](std::uint8_t fc) { return function_table(fc).has_value(); }, false));
-                address_node = v;
-            } else if (key == "quantity") {
-                only_for(
-                    q.max != 0,
-                    "functions with a quantity: " +
-                        functions_where(
-                            [](std::uint8_t fc) { return quantity_limits(fc).max != 0; }, false));
-                quantity_node = v;
-                op.quantity = static_cast<std::uint16_t>(
-                    r.integer(v, fmt::format("quantity for {}", fname), q.min, q.max));
-            } else if (key == "distribution") {
-                const std::string d =
-                    r.choice(v, "distribution", {"sequential", "uniform", "zipf"});
-                op.address_mode = d == "uniform" ? load::AddressMode::Uniform
-                                  : d == "zipf"  ? load::AddressMode::Zipf
-                                                 : load::AddressMode::Sequential;
-            } else if (key == "zipf_exponent") {
-                zipf_node = v;
-                op.zipf_exponent = r.number(v, "zipf_exponent", 0, load::kMaxZipfExponent);
-                if (op.zipf_exponent <= 0) {
-                    r.fail(v,
-                           fmt::format("zipf_exponent: 0 is out of range (valid > 0 and <= {:g})",
-                                       load::kMaxZipfExponent));
-                }
-            } else if (key == "values") {
-                only_for(takes_values(op.function),
-                         "writes: " + functions_where(takes_values, false));
-                op.values = parse_values(r, v);
-            } else if (key == "weight") {
-                op.weight = static_cast<std::uint32_t>(r.integer(v, "weight", 1, 4294967295LL));
-            } else if (key == "write_quantity") {
-                only_for(codec::request_is(op.function, RequestShape::ReadWriteRegisters),
-                         functions_where(shape_is<RequestShape::ReadWriteRegisters>, true));
-                op.write_quantity = static_cast<std::uint16_t>(
-                    r.integer(v, "write_quantity", 1, lim::kMaxRwWriteRegisters));
-            } else if (key == "and_mask") {
-                only_for(codec::request_is(op.function, RequestShape::MaskWrite),
-                         functions_where(shape_is<RequestShape::MaskWrite>, true));
-                op.and_mask = static_cast<std::uint16_t>(r.integer(v, "and_mask", 0, 65535));
-            } else if (key == "device_id_code") {
-                only_for(codec::request_is(op.function, RequestShape::MeiTransport),
-                         functions_where(shape_is<RequestShape::MeiTransport>, true));
-                op.device_id_code = static_cast<std::uint8_t>(
-                    r.integer(v, "device_id_code", lim::kMinDeviceIdCode, lim::kMaxDeviceIdCode));
-            } else if (key == "expect") {
-                expect_node = v;
-            } else if (key == "thresholds") {
-                thresholds_node = v;
-            }
-        });
-    if (zipf_node && op.address_mode != load::AddressMode::Zipf) {
-        r.fail(zipf_node, "zipf_exponent is only used with distribution: zipf");
-    }
-    if (address_node) parse_address(r, address_node, op);
+    OperationKeys keys{r, out, quantity_limits(op.function), codec::function_label(op.function)};
+    op.quantity = keys.q.max == 1 ? 1 : 10;
+    r.each_key(node, what,
+               {"name", "function", "unit", "address", "quantity", "distribution", "zipf_exponent",
+                "values", "weight", "write_quantity", "and_mask", "device_id_code", "expect",
+                "thresholds"},
+               [&](const std::string& key, const YAML::Node& key_node, const YAML::Node& v) {
+                   keys.read(key, key_node, v);
+               });
+    if (keys.zipf && op.address_mode != load::AddressMode::Zipf)
+        r.fail(keys.zipf, "zipf_exponent is only used with distribution: zipf");
+    if (keys.address) parse_address(r, keys.address, op);
     if (function_table(op.function)) {
-        // The whole block must fit the address space and the range.
-        const std::uint32_t span = load::address_span(op);
-        const YAML::Node& at =
-            address_node ? address_node.node : (quantity_node ? quantity_node.node : node);
-        if (op.first_address + span - 1 > 0xFFFF) {
-            r.fail(at, fmt::format("address {} + quantity {} runs past 65535 (the first address "
-                                   "must be <= {})",
-                                   op.first_address, span, 0x10000 - span));
-        }
-        if (op.last_address && *op.last_address - op.first_address + 1U < span) {
-            r.fail(at, fmt::format("address range {}-{} holds {} items but each request needs {} "
-                                   "(widen the range or lower the quantity)",
-                                   op.first_address, *op.last_address,
-                                   *op.last_address - op.first_address + 1, span));
-        }
+        check_address_block(r,
+                            keys.address    ? keys.address.node
+                            : keys.quantity ? keys.quantity.node
+                                            : node,
+                            op);
     }
     if (op.name.empty()) op.name = std::string(codec::function_name(op.function));
-    if (expect_node) out.expect = parse_expect(r, expect_node, op);
-    if (thresholds_node) {
-        if (!thresholds_node.node.IsSequence()) {
-            r.fail(thresholds_node, "thresholds must be a list of expressions like \"p99 < 5ms\"");
-        }
-        if (thresholds_node.node.size() > kMaxThresholds) {
-            r.fail(thresholds_node.node[kMaxThresholds],
-                   fmt::format("too many thresholds: {} (at most {})", thresholds_node.node.size(),
-                               kMaxThresholds));
-        }
-        for (const auto& t : thresholds_node.node) {
-            ThresholdSpec spec;
-            std::string error;
-            if (!parse_threshold(r.scalar(t, "threshold"), spec, error)) r.fail(t, error);
-            out.thresholds.push_back(std::move(spec));
-        }
-    }
+    if (keys.expect) out.expect = parse_expect(r, keys.expect, op);
+    if (keys.thresholds) out.thresholds = parse_operation_thresholds(r, keys.thresholds);
     return out;
 }
 
