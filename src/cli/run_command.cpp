@@ -266,20 +266,9 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     return run_scenario_file(r);
 }
 
-}  // namespace
-
-void add_run_command(CLI::App& app, Action& action) {
-    auto o = std::make_shared<RunOptions>();
-    o->plan.operations.push_back({});
-    o->plan.connections = 16;
-    o->plan.depth = 16;
-    auto& p = o->plan;
-    auto* cmd = app.add_subcommand(
-        "run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
-    cmd->add_option("--target", o->target,
-                    "server to test: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if "
-                    "omitted (default: start the embedded slave)");
-    add_transport_options(cmd, o->transport, TransportSide::Client);
+// How much load: connections, depth, threads, duration, the loop model and the rate.
+void add_load_shape_options(CLI::App* cmd, RunOptions& o) {
+    auto& p = o.plan;
     cmd->add_option("-c,--connections", p.connections, "connections")
         ->check(CLI::Range(1u, load::kMaxConnections))
         ->capture_default_str();
@@ -289,40 +278,50 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_option("--threads", p.threads,
                     "engine threads, one ring each (0: the cores left over)")
         ->check(CLI::Range(0u, load::kMaxThreads));
-    cmd->add_option("--slave-threads", o->slave_threads,
+    cmd->add_option("--slave-threads", o.slave_threads,
                     "threads of the embedded slave (0: half the cores)")
         ->check(CLI::Range(0u, 1024u));
-    add_duration_option(cmd, "-d,--duration", o->duration_ns,
+    add_duration_option(cmd, "-d,--duration", o.duration_ns,
                         "how long to measure (default 10s; 0 with --transactions)");
     cmd->add_option("-n,--transactions", p.transactions,
                     "stop after this many measured transactions (warm-up sends not counted)");
-    add_duration_option(cmd, "--warmup", o->warmup_ns, "run this long first without recording");
-    cmd->add_option("--model", o->model,
+    add_duration_option(cmd, "--warmup", o.warmup_ns, "run this long first without recording");
+    cmd->add_option("--model", o.model,
                     "closed loop (keep --depth outstanding) or open loop (--rate)")
         ->check(CLI::IsMember({"closed", "open"}));
     add_number_option(cmd, "-R,--rate", p.rate, 0.0, load::kMaxRate,
                       "open loop: total transactions per second; latency is measured from each "
                       "transaction's intended send time (coordinated-omission corrected)");
-    cmd->add_option("--arrival", o->arrival, "open-loop arrivals: evenly spread or Poisson")
+    cmd->add_option("--arrival", o.arrival, "open-loop arrivals: evenly spread or Poisson")
         ->check(CLI::IsMember({"even", "poisson"}));
-    cmd->add_option("--fc,-f", o->function,
+}
+
+// What each transaction asks: function, addresses, quantity, unit, values.
+void add_request_options(CLI::App* cmd, RunOptions& o) {
+    auto& p = o.plan;
+    cmd->add_option("--fc,-f", o.function,
                     "function code (default " + codec::function_label(kDefaultFunction) +
                         "): " + std::string(codec::kFunctionCodeForms));
-    cmd->add_option("--addr,-a", o->address, std::string(codec::kAddressRuleHelp));
+    cmd->add_option("--addr,-a", o.address, std::string(codec::kAddressRuleHelp));
     cmd->add_option(
-           "--quantity", o->quantity,
+           "--quantity", o.quantity,
            "registers or bits per request (default 10; 1 for " + single_item_functions() + ")")
         ->check(CLI::Range(1, 2000));
-    add_deprecated_option(cmd, "--count", "--quantity", o->quantity)->check(CLI::Range(1, 2000));
+    add_deprecated_option(cmd, "--count", "--quantity", o.quantity)->check(CLI::Range(1, 2000));
     cmd->add_option("--unit,-u", p.operations[0].unit_id, "unit id")->check(CLI::Range(0, 255));
-    cmd->add_option("--addr-mode", o->addr_mode, "how addresses move within --addr's range")
+    cmd->add_option("--addr-mode", o.addr_mode, "how addresses move within --addr's range")
         ->check(CLI::IsMember({"sequential", "uniform", "zipf"}));
     add_number_option(cmd, "--zipf", p.operations[0].zipf_exponent, 0.0, load::kMaxZipfExponent,
                       "zipf exponent");
-    cmd->add_option("--value", o->value, "value written by write operations")
+    cmd->add_option("--value", o.value, "value written by write operations")
         ->check(CLI::Range(0, 65535));
-    add_duration_option(cmd, "--timeout", o->timeout_ns, "per-transaction timeout (default 1s)");
-    add_duration_option(cmd, "--connect-timeout", o->connect_timeout_ns,
+}
+
+// How the run connects and what it writes out: timeouts, sources, outputs, shards, backend.
+void add_connection_options(CLI::App* cmd, RunOptions& o) {
+    auto& p = o.plan;
+    add_duration_option(cmd, "--timeout", o.timeout_ns, "per-transaction timeout (default 1s)");
+    add_duration_option(cmd, "--connect-timeout", o.connect_timeout_ns,
                         "connect timeout (default 3s)");
     add_number_option(cmd, "--connect-rate", p.connect_rate, 1.0, 1e7,
                       "new connections per second");
@@ -332,25 +331,29 @@ void add_run_command(CLI::App& app, Action& action) {
     cmd->add_flag("--allow-writes", p.allow_writes,
                   "allow write function codes to a target outside loopback");
     cmd->add_option("--seed", p.seed, "seed for address and value generators");
-    cmd->add_flag("-q,--quiet", o->quiet, "no live progress line");
-    add_output_options(cmd, o->outputs);
-    add_run_identity_options(cmd, o->outputs);
-    cmd->add_option("--shard", o->shard,
+    cmd->add_flag("-q,--quiet", o.quiet, "no live progress line");
+    add_output_options(cmd, o.outputs);
+    add_run_identity_options(cmd, o.outputs);
+    cmd->add_option("--shard", o.shard,
                     fmt::format("run shard I of N of the plan (I counts from 0, e.g. 0/3): its "
                                 "part of the connections, rates, stages, transactions and "
                                 "addresses; default from the environment {} and {} "
                                 "(a Kubernetes Indexed Job); merge the shards with mbstorm merge",
                                 kShardIndexEnv, kShardCountEnv));
-    cmd->add_option("--backend", o->backend,
+    cmd->add_option("--backend", o.backend,
                     "event source: io_uring, epoll (where io_uring is refused, e.g. Docker 25+'s "
                     "default seccomp profile), or auto: io_uring when this process may use it")
         ->check(CLI::IsMember({"auto", "io_uring", "epoll"}))
         ->capture_default_str();
-    cmd->add_option("--start-at", o->start_at,
+    cmd->add_option("--start-at", o.start_at,
                     "connect now, start sending (warm-up first) at this wall-clock time: RFC 3339 "
                     "(2026-11-24T14:00:00Z, or with an offset) or seconds since the epoch; a "
                     "late start begins at once and reports by how much");
-    cmd->add_option("file", o->scenario_file,
+}
+
+// A scenario file instead of flags, and the run's verdict: thresholds, JUnit, shortfalls.
+void add_scenario_options(CLI::App* cmd, RunOptions& o) {
+    cmd->add_option("file", o.scenario_file,
                     "scenario file (YAML, see scenarios/README.md), or the name of a packaged "
                     "one (quickstart, ci-gate, soak, ...); flags override its values")
         ->transform(CLI::Validator(
@@ -366,17 +369,36 @@ void add_run_command(CLI::App& app, Action& action) {
                 return std::string();
             },
             "FILE|NAME"));
-    cmd->add_flag("--print-scenario", o->print_scenario,
+    cmd->add_flag("--print-scenario", o.print_scenario,
                   "print the fully resolved scenario (defaults included) as YAML and exit");
-    cmd->add_option("--junit", o->junit, "write the thresholds as JUnit XML test cases");
-    cmd->add_option("--threshold", o->thresholds,
+    cmd->add_option("--junit", o.junit, "write the thresholds as JUnit XML test cases");
+    cmd->add_option("--threshold", o.thresholds,
                     "pass/fail check, as in a scenario's thresholds (e.g. 'p99 < 5ms', "
                     "'error_rate < 0.1%', 'throughput > 50000/s'); repeatable; a breach exits 1")
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    cmd->add_flag("--fail-on-plan-shortfall", o->fail_on_plan_shortfall,
+    cmd->add_flag("--fail-on-plan-shortfall", o.fail_on_plan_shortfall,
                   "exit 1 when the plan was not carried out (connections not opened, the rate "
                   "not reached, the run cut short), thresholds or not");
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, Action& action) {
+    auto o = std::make_shared<RunOptions>();
+    o->plan.operations.push_back({});
+    o->plan.connections = 16;
+    o->plan.depth = 16;
+    auto* cmd = app.add_subcommand(
+        "run", "Run a Modbus TCP load test (against the built-in slave when no --target)");
+    cmd->add_option("--target", o->target,
+                    "server to test: HOST[:PORT], [IPv6]:PORT or an IPv6 address, port 502 if "
+                    "omitted (default: start the embedded slave)");
+    add_transport_options(cmd, o->transport, TransportSide::Client);
+    add_load_shape_options(cmd, *o);
+    add_request_options(cmd, *o);
+    add_connection_options(cmd, *o);
+    add_scenario_options(cmd, *o);
     cmd->callback([o, cmd, &action] {
         action = [o, cmd] {
             OutputFiles outputs = o->outputs;
