@@ -8,10 +8,12 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "report/units.hpp"
 
@@ -47,8 +49,35 @@ std::uint64_t whole_or(const json& j, const char* name) {
     return it == j.end() ? 0 : whole<std::uint64_t>(*it);
 }
 
+// Saturates rather than converting out of range (a mean lag times a count may be anything).
 std::uint64_t ns_from_s(double s) {
-    return s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(s * 1e9));
+    if (!(s > 0.0)) return 0;
+    const double ns = std::round(s * 1e9);
+    return ns >= 1.8e19 ? UINT64_MAX : static_cast<std::uint64_t>(ns);
+}
+
+// Bounds on what a run's JSON may say, so that no edited number makes the merge allocate
+// without bound (a timeline slot per interval of a year-long span, 2e9 shards to list) or
+// convert out of range (1e300 s in ns).
+constexpr double kMaxRunSeconds = 1e8;     // about three years: any soak, in ns easily
+constexpr double kMaxEpochSeconds = 1e10;  // the year 2286
+constexpr double kMaxRatePerSecond = 1e12;
+constexpr double kMinIntervalSeconds = 1e-3;  // run's timeline intervals are 1 ms or longer
+constexpr int kMaxShards = 100'000;           // as run --shard allows
+
+// The number `name` of `j`, finite and within [lo, hi], else the file is refused naming it.
+double number_within(const json& j, const char* name, double lo, double hi) {
+    const json& v = j.at(name);
+    const double x = v.is_number() ? v.get<double>() : std::nan("");
+    if (!(x >= lo && x <= hi))
+        throw std::runtime_error(
+            fmt::format("{} is {}: not a number from {} to {}", name, v.dump(), lo, hi));
+    return x;
+}
+
+std::uint64_t ns_within(const json& j, const char* name, double lo_s = 0.0,
+                        double hi_s = kMaxRunSeconds) {
+    return ns_from_s(number_within(j, name, lo_s, hi_s));
 }
 
 void read_counters(const json& outcomes, const json& exceptions, const json& totals,
@@ -131,12 +160,136 @@ std::string overlap_warning(const std::vector<ShardRun>& shards) {
         last_end - spans.front().start, std::max(0.0, earliest_end - latest_start), idle);
 }
 
-struct MergedInterval {
-    stats::Histogram latency;
+// A merged interval's counts, from the runs' JSONs. Its latencies are reduced to their summary
+// as soon as every run's histogram of that interval has been added (see LatencySlots): a
+// histogram per interval of an 8-hour test would take 7.8 GB.
+struct SlotCounts {
     std::uint64_t transactions = 0, errors = 0;
     double target_rate = 0.0;
     std::uint32_t open_connections = 0;
 };
+
+// The longest merged timeline: 11.5 days of 1 s intervals, some 120 MB of summaries. Past it
+// the runs are refused (runs of one test days apart, an edited start time) rather than
+// allocated for.
+constexpr double kMaxTimelineSlots = 1'000'000;
+// How far outside its run's own span a log line may start (the last interval runs past the
+// measured end; a run's first answers can land in the interval before its start).
+constexpr double kLineAllowanceSeconds = 1.0;
+// Logs kept open at once while their untagged lines are read again in time order; past it
+// each is reopened per line (a file descriptor per run of a 1000-shard test is too many).
+constexpr std::size_t kMaxOpenLogs = 64;
+
+// A run's interval lines: streamed from its log file (read_shards), one decoded histogram at
+// a time, or from memory (ShardRun::log.intervals, as tests build runs).
+class IntervalLines {
+  public:
+    explicit IntervalLines(const ShardRun& run) : run_(&run) {}
+
+    // use(line, position) for every line in the log's order, until use returns false.
+    // False with error on a bad line or when use said stop (error then its own).
+    template <class Use>
+    bool each(Use&& use, HlogInterval& scratch, std::string& error) {
+        if (!run_->log_from_file) {
+            for (std::size_t i = 0; i < run_->log.intervals.size(); ++i)
+                if (!use(run_->log.intervals[i], i)) return false;
+            return true;
+        }
+        if (!open(error)) return false;
+        while (reader_->next(scratch))
+            if (!use(scratch, reader_->line_offset())) return false;
+        if (reader_->error().empty()) return true;
+        error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
+        return false;
+    }
+    // The line at a position each() gave (decoded into scratch when read from the file).
+    const HlogInterval* at(std::uint64_t position, HlogInterval& scratch, std::string& error) {
+        if (!run_->log_from_file) return &run_->log.intervals[position];
+        if (!reader_ && !open(error)) return nullptr;
+        if (reader_->read_at(position, scratch)) return &scratch;
+        error = fmt::format("{}: changed while being merged ({})", run_->hlog_path,
+                            reader_->error().empty() ? "a line is gone" : reader_->error());
+        return nullptr;
+    }
+    void close() {
+        reader_.reset();
+        file_.reset();
+    }
+
+  private:
+    bool open(std::string& error) {
+        file_ = std::make_unique<std::ifstream>(run_->hlog_path, std::ios::binary);
+        if (!*file_) {
+            error = fmt::format("{}: cannot open", run_->hlog_path);
+            return false;
+        }
+        reader_ = std::make_unique<HlogReader>(*file_);
+        return true;
+    }
+
+    const ShardRun* run_;
+    std::unique_ptr<std::ifstream> file_;
+    std::unique_ptr<HlogReader> reader_;
+};
+
+// An untagged (all operations) line of a run's log and the merged interval it falls in.
+struct SlotLine {
+    std::int64_t slot;
+    std::uint32_t run;
+    std::uint64_t position;  // IntervalLines::at()
+};
+
+// The runs' untagged lines, added interval by interval in time order into one histogram
+// that is reduced to the interval's summary before the next: memory is two histograms
+// (this and a decoded line) however long the test. Each line is also added into `total`
+// and counted in `logged` (per run). Summaries only for intervals some line falls in.
+bool summarize_latency_slots(std::vector<SlotLine>& lines, std::vector<IntervalLines>& runs,
+                             std::uint64_t interval_ns, stats::Histogram& total,
+                             std::vector<std::uint64_t>& logged,
+                             std::map<std::int64_t, stats::IntervalSummary>& out,
+                             std::string& error) {
+    std::sort(lines.begin(), lines.end(), [](const SlotLine& a, const SlotLine& b) {
+        return std::tie(a.slot, a.run, a.position) < std::tie(b.slot, b.run, b.position);
+    });
+    const bool keep_open = runs.size() <= kMaxOpenLogs;
+    stats::Histogram slot_latency;
+    HlogInterval scratch;
+    for (std::size_t i = 0; i < lines.size();) {
+        const std::int64_t slot = lines[i].slot;
+        slot_latency.reset();
+        for (; i < lines.size() && lines[i].slot == slot; ++i) {
+            IntervalLines& run = runs[lines[i].run];
+            const HlogInterval* line = run.at(lines[i].position, scratch, error);
+            if (line == nullptr) return false;
+            slot_latency.add(line->histogram);
+            total.add(line->histogram);
+            logged[lines[i].run] += line->histogram.total_count();
+            if (!keep_open) run.close();
+        }
+        out.emplace(slot, stats::summarize_interval(0, interval_ns, slot_latency, 0, 0));
+    }
+    for (auto& run : runs) run.close();
+    return true;
+}
+
+// Merged interval k: its counts (if any run's JSON has the interval) and its latency summary
+// (if any run's log does); an interval with neither is a gap, empty, with no histogram.
+stats::IntervalSummary merged_interval(
+    std::int64_t k, std::uint64_t interval_ns, const std::map<std::int64_t, SlotCounts>& counts,
+    const std::map<std::int64_t, stats::IntervalSummary>& latency) {
+    stats::IntervalSummary s;
+    if (const auto it = latency.find(k); it != latency.end()) s = it->second;
+    s.index = static_cast<std::uint64_t>(k);
+    s.start_offset_ns = s.index * interval_ns;
+    s.duration_ns = interval_ns;
+    if (const auto it = counts.find(k); it != counts.end()) {
+        s.transactions = it->second.transactions;
+        s.errors = it->second.errors;
+        s.target_rate = it->second.target_rate;
+        s.open_connections = it->second.open_connections;
+    }
+    return s;
+}
 
 }  // namespace
 
@@ -160,9 +313,13 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         if (m.merged_runs != 0)
             throw std::runtime_error(fmt::format(
                 "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
-        out.measure_start_epoch_s = t.at("measure_start_epoch_s").get<double>();
+        out.measure_start_epoch_s = number_within(t, "measure_start_epoch_s", 0, kMaxEpochSeconds);
         out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
         out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
+        if (out.shard_count < 0 || out.shard_count > kMaxShards)
+            throw std::runtime_error(
+                fmt::format("shard_count {} is not one run --shard makes (0, or 1 to {})",
+                            out.shard_count, kMaxShards));
         const json& h = t.at("histogram");
         out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
         out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
@@ -177,10 +334,10 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         m.depth = whole<std::uint32_t>(r.at("depth"));
         m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
                                                              : stats::LoadModel::Closed;
-        m.rate_per_second = r.at("rate_per_second").get<double>();
-        m.requested_duration_ns = ns_from_s(r.at("requested_duration_s").get<double>());
-        m.measured_duration_ns = ns_from_s(r.at("measured_duration_s").get<double>());
-        m.warmup_ns = ns_from_s(r.at("warmup_s").get<double>());
+        m.rate_per_second = number_within(r, "rate_per_second", 0, kMaxRatePerSecond);
+        m.requested_duration_ns = ns_within(r, "requested_duration_s");
+        m.measured_duration_ns = ns_within(r, "measured_duration_s");
+        m.warmup_ns = ns_within(r, "warmup_s");
         m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
         m.notes = r.at("notes").get<std::vector<std::string>>();
 
@@ -200,14 +357,14 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
             out.summary.operations.push_back(std::move(o));
         }
         const json& tl = doc.at("timeline");
-        out.summary.timeline_interval_ns = ns_from_s(tl.at("interval_s").get<double>());
+        out.summary.timeline_interval_ns = ns_within(tl, "interval_s", kMinIntervalSeconds);
         for (const json& iv : tl.at("intervals")) {
             stats::IntervalSummary s;
             s.index = whole<std::uint64_t>(iv.at("index"));
-            s.start_offset_ns = ns_from_s(iv.at("start_offset_s").get<double>());
+            s.start_offset_ns = ns_within(iv, "start_offset_s");
             s.transactions = whole<std::uint64_t>(iv.at("transactions"));
             s.errors = whole<std::uint64_t>(iv.at("errors"));
-            s.target_rate = iv.at("target_rate_per_s").get<double>();
+            s.target_rate = number_within(iv, "target_rate_per_s", 0, kMaxRatePerSecond);
             s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
             out.summary.timeline.push_back(s);
         }
@@ -250,10 +407,10 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
             stats::StageResult stage;
             stage.index = whole<std::uint32_t>(st.at("index"));
             stage.name = st.at("name").get<std::string>();
-            stage.start_offset_ns = ns_from_s(st.at("start_offset_s").get<double>());
-            stage.end_offset_ns = ns_from_s(st.at("end_offset_s").get<double>());
-            stage.rate_from = st.at("target_rate_from_per_s").get<double>();
-            stage.rate_to = st.at("target_rate_to_per_s").get<double>();
+            stage.start_offset_ns = ns_within(st, "start_offset_s");
+            stage.end_offset_ns = ns_within(st, "end_offset_s");
+            stage.rate_from = number_within(st, "target_rate_from_per_s", 0, kMaxRatePerSecond);
+            stage.rate_to = number_within(st, "target_rate_to_per_s", 0, kMaxRatePerSecond);
             stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
             stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
             read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
@@ -286,9 +443,14 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
             if (!read_shard_summary(path, run, error)) return false;
             runs.push_back(std::move(run));
         } else if (first == '#' || first == '"' || first == 'T' || std::isdigit(first)) {
-            Hlog log;
-            if (!read_hlog(path, log, error)) return false;
-            logs.emplace_back(path, std::move(log));
+            // The header only (it names the run): the intervals are streamed when merged.
+            in.seekg(0);
+            HlogReader reader(in);
+            if (!reader.read_header()) {
+                error = fmt::format("{}: {}", path, reader.error());
+                return false;
+            }
+            logs.emplace_back(path, std::move(reader.header()));
         } else {
             error = fmt::format(
                 "{}: neither a JSON summary (run --json) nor an interval log "
@@ -305,6 +467,7 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
             used.insert(i);
             run.hlog_path = logs[i].first;
             run.log = std::move(logs[i].second);
+            run.log_from_file = true;
             break;
         }
         if (run.hlog_path.empty()) {
@@ -433,6 +596,13 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         end = std::max(end, s.measure_start_epoch_s +
                                 static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
     }
+    if (const double slots = (end - origin) * 1e9 / static_cast<double>(interval);
+        slots > kMaxTimelineSlots)
+        return refuse(fmt::format(
+            "the runs span {:.0f} s from the first start to the last end, {:.0f} intervals of "
+            "{} s: more than the {:.0f} a merged timeline holds (runs of one test started days "
+            "apart? each JSON's test.measure_start_epoch_s says when its run started)",
+            end - origin, slots, static_cast<double>(interval) / 1e9, kMaxTimelineSlots));
     m.tool_version = fm.tool_version;
     m.target = fm.target;
     m.depth = fm.depth;
@@ -467,11 +637,16 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         stage_max(out.stages.size(), 0);
     std::vector<std::string> without_stage_lines;
 
-    std::map<std::int64_t, MergedInterval> timeline;
+    std::map<std::int64_t, SlotCounts> counts_by_slot;
+    std::vector<SlotLine> untagged_lines;
+    std::vector<IntervalLines> logs;
+    for (const auto& s : shards) logs.emplace_back(s);
+    HlogInterval scratch;
     std::uint64_t min_ns = UINT64_MAX, max_ns = 0;
     std::vector<std::uint64_t> op_min(out.operations.size(), UINT64_MAX),
         op_max(out.operations.size(), 0);
-    for (const auto& s : shards) {
+    for (std::uint32_t run_index = 0; run_index < shards.size(); ++run_index) {
+        const ShardRun& s = shards[run_index];
         const auto& sm = s.summary.metadata;
         m.threads += sm.threads;
         m.connections += sm.connections;
@@ -534,57 +709,82 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             return static_cast<std::int64_t>(
                 std::floor(middle * 1e9 / static_cast<double>(interval)));
         };
+        const double run_s = static_cast<double>(sm.measured_duration_ns) / 1e9;
+        const double allowance = static_cast<double>(interval) / 1e9 + kLineAllowanceSeconds;
         for (const auto& iv : s.summary.timeline) {
-            MergedInterval& into = timeline[slot(static_cast<double>(iv.start_offset_ns) / 1e9)];
+            const double start_s = static_cast<double>(iv.start_offset_ns) / 1e9;
+            if (start_s > run_s + allowance)
+                return refuse(fmt::format(
+                    "{}: timeline interval {} starts at {:.3f} s, after the run's own {:.3f} s "
+                    "(measured_duration_s)",
+                    s.json_path, iv.index, start_s, run_s));
+            SlotCounts& into = counts_by_slot[slot(start_s)];
             into.transactions += iv.transactions;
             into.errors += iv.errors;
             into.target_rate += iv.target_rate;
             into.open_connections += iv.open_connections;
         }
-        std::uint64_t logged = 0;
         bool stage_lines = false;
-        for (const auto& line : s.log.intervals) {
-            if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
-                stage_lines = true;
-                if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
-                continue;
-            }
-            if (line.tag.empty()) {
-                out.latency.add(line.histogram);
-                timeline[slot(line.start_s)].latency.add(line.histogram);
-                logged += line.histogram.total_count();
-                continue;
-            }
-            for (auto& op : out.operations)
-                if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
-        }
+        std::string why;
+        const bool read = logs[run_index].each(
+            [&](const HlogInterval& line, std::uint64_t position) {
+                if (!(line.start_s >= -allowance && line.start_s <= run_s + allowance &&
+                      line.length_s <= run_s + allowance)) {
+                    why = fmt::format(
+                        "{}: a line of {:.3f} s starting at {:.3f} s, outside the run's own "
+                        "{:.3f} s (measured_duration_s of {})",
+                        s.hlog_path, line.length_s, line.start_s, run_s, s.json_path);
+                    return false;
+                }
+                if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
+                    stage_lines = true;
+                    if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
+                } else if (line.tag.empty()) {
+                    untagged_lines.push_back({slot(line.start_s), run_index, position});
+                } else {
+                    for (auto& op : out.operations)
+                        if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
+                }
+                return true;
+            },
+            scratch, why);
+        if (!read) return refuse(why);
         if (!out.stages.empty() && !stage_lines) without_stage_lines.push_back(name_of(s));
-        if (logged != s.latency_count)
+    }
+    std::map<std::int64_t, stats::IntervalSummary> latency_by_slot;
+    std::vector<std::uint64_t> logged(shards.size(), 0);
+    if (std::string why; !summarize_latency_slots(untagged_lines, logs, interval, out.latency,
+                                                  logged, latency_by_slot, why))
+        return refuse(why);
+    for (std::size_t i = 0; i < shards.size(); ++i)
+        if (logged[i] != shards[i].latency_count)
             r.warnings.push_back(fmt::format(
                 "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
                 "answers that came in after their interval was logged)",
-                name_of(s), logged, s.latency_count));
-    }
+                name_of(shards[i]), logged[i], shards[i].latency_count));
     out.latency.narrow_extremes(min_ns, max_ns);
     for (std::size_t i = 0; i < out.operations.size(); ++i)
         out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
     for (std::size_t i = 0; i < out.stages.size(); ++i)
         out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
-    if (!timeline.empty()) {
-        const std::int64_t last = timeline.rbegin()->first;
-        for (std::int64_t k = std::max<std::int64_t>(0, timeline.begin()->first); k <= last; ++k) {
-            const MergedInterval& iv = timeline[k];
-            stats::IntervalSummary s = stats::summarize_interval(
-                static_cast<std::uint64_t>(k), interval, iv.latency, iv.transactions, iv.errors);
-            s.target_rate = iv.target_rate;
-            s.open_connections = iv.open_connections;
-            out.timeline.push_back(s);
+    if (!counts_by_slot.empty() || !latency_by_slot.empty()) {
+        std::int64_t first_slot = INT64_MAX, last_slot = INT64_MIN;
+        if (!counts_by_slot.empty()) {
+            first_slot = counts_by_slot.begin()->first;
+            last_slot = counts_by_slot.rbegin()->first;
         }
+        if (!latency_by_slot.empty()) {
+            first_slot = std::min(first_slot, latency_by_slot.begin()->first);
+            last_slot = std::max(last_slot, latency_by_slot.rbegin()->first);
+        }
+        // Every interval of the span (bounded above), gaps included, each without a histogram.
+        for (std::int64_t k = std::max<std::int64_t>(0, first_slot); k <= last_slot; ++k)
+            out.timeline.push_back(merged_interval(k, interval, counts_by_slot, latency_by_slot));
         // The last interval runs to the end of the last run: runs that started apart end
         // mid-interval, and their last stretch lands there (its throughput divides by this).
-        auto& back = out.timeline.back();
-        if (back.start_offset_ns < m.measured_duration_ns)
-            back.duration_ns = m.measured_duration_ns - back.start_offset_ns;
+        if (!out.timeline.empty() && out.timeline.back().start_offset_ns < m.measured_duration_ns)
+            out.timeline.back().duration_ns =
+                m.measured_duration_ns - out.timeline.back().start_offset_ns;
     }
     if (std::string w = overlap_warning(shards); !w.empty()) r.warnings.push_back(std::move(w));
     m.notes.push_back(fmt::format(
