@@ -58,7 +58,9 @@ craft shards_2e9 "0 1" "d['test']['shard_count'] = 2000000000"
 sed -i '1s|/2]$|/2000000000]|' shards_2e9/s0.hlog shards_2e9/s1.hlog
 craft duration_1e300 1 "d['run']['measured_duration_s'] = 1e300"
 
-echo "files: $(du -h long/s0.hlog | cut -f1) + $(du -h long/s1.hlog | cut -f1) of interval logs for ${hours} h"
+for dir in short long; do
+    echo "$dir: $(du -h $dir/s0.hlog | cut -f1) + $(du -h $dir/s1.hlog | cut -f1) of interval logs"
+done
 for bin in "$mbstorm" ${other:+"$other"}; do
     echo "$bin:"
     for dir in short long day_apart interval_1us shards_2e9 duration_1e300; do
