@@ -506,103 +506,95 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
     return true;
 }
 
-MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
-    MergeOutcome r;
-    auto refuse = [&r](std::string why) {
-        r.error = std::move(why);
-        return r;
-    };
-    if (shards.empty()) return refuse("no runs to merge");
-    const ShardRun& first = shards.front();
+namespace {
 
-    // Identity: duplicates, other tests, other histogram settings.
+// Identity: duplicates, other tests, other histogram settings. Empty when the runs are parts
+// of one test.
+std::string identity_refusal(const std::vector<ShardRun>& shards) {
+    const ShardRun& first = shards.front();
     for (std::size_t i = 0; i < shards.size(); ++i) {
         const ShardRun& s = shards[i];
         for (std::size_t j = 0; j < i; ++j) {
             if (shards[j].summary.metadata.run_id == s.summary.metadata.run_id)
-                return refuse(fmt::format("duplicate run: {} and {} are the same run ({})",
-                                          shards[j].json_path, s.json_path,
-                                          s.summary.metadata.run_id));
+                return fmt::format("duplicate run: {} and {} are the same run ({})",
+                                   shards[j].json_path, s.json_path, s.summary.metadata.run_id);
         }
         if (s.summary.metadata.test_id != first.summary.metadata.test_id)
-            return refuse(fmt::format(
-                "{} is from another test: test id '{}', {} has '{}' (run --test-id)", name_of(s),
-                s.summary.metadata.test_id, name_of(first), first.summary.metadata.test_id));
+            return fmt::format("{} is from another test: test id '{}', {} has '{}' (run --test-id)",
+                               name_of(s), s.summary.metadata.test_id, name_of(first),
+                               first.summary.metadata.test_id);
         if (plan_of(s) != plan_of(first))
-            return refuse(fmt::format("{} is from another test: its plan is {}; {} has {}",
-                                      name_of(s), plan_of(s), name_of(first), plan_of(first)));
+            return fmt::format("{} is from another test: its plan is {}; {} has {}", name_of(s),
+                               plan_of(s), name_of(first), plan_of(first));
         if (s.significant_digits != stats::Histogram::kSignificantDigits ||
             s.lowest_discernible_ns != 1 || s.highest_trackable_ns != first.highest_trackable_ns)
-            return refuse(fmt::format(
+            return fmt::format(
                 "different histogram settings: {} has {} significant digits, lowest {} ns, "
                 "highest {} ns; {} has {}, {} ns, {} ns",
                 name_of(s), s.significant_digits, s.lowest_discernible_ns, s.highest_trackable_ns,
                 name_of(first), first.significant_digits, first.lowest_discernible_ns,
-                first.highest_trackable_ns));
+                first.highest_trackable_ns);
         if (s.threshold_expressions != first.threshold_expressions)
-            return refuse(fmt::format("{} is from another test: its thresholds differ from {}'s",
-                                      name_of(s), name_of(first)));
+            return fmt::format("{} is from another test: its thresholds differ from {}'s",
+                               name_of(s), name_of(first));
         if (s.summary.metadata.merged_runs != 0)
-            return refuse(fmt::format("{} is itself a merged result: merge the runs' own files",
-                                      s.json_path));
+            return fmt::format("{} is itself a merged result: merge the runs' own files",
+                               s.json_path);
     }
-    // Completeness.
+    return {};
+}
+
+// Shard numbers: each index 0..count-1 exactly once. Empty when whole.
+std::string shard_set_refusal(const std::vector<ShardRun>& shards) {
+    const ShardRun& first = shards.front();
+    std::map<int, const ShardRun*> by_index;
+    for (const auto& s : shards) {
+        if (s.shard_index < 0 || s.shard_index >= s.shard_count)
+            return fmt::format("{}: shard index {} outside 0..{}", name_of(s), s.shard_index,
+                               s.shard_count - 1);
+        if (auto [it, fresh] = by_index.emplace(s.shard_index, &s); !fresh)
+            return fmt::format("duplicate shard {}: {} and {}", s.shard_index, name_of(*it->second),
+                               name_of(s));
+    }
+    std::string missing;
+    for (int i = 0; i < first.shard_count; ++i)
+        if (by_index.count(i) == 0) missing += fmt::format("{}{}", missing.empty() ? "" : ", ", i);
+    if (!missing.empty())
+        return fmt::format("missing shards: {} of {} given, shard {} missing", shards.size(),
+                           first.shard_count, missing);
+    return {};
+}
+
+// Completeness: every shard once, or --expect's number of runs. Empty when whole.
+std::string completeness_refusal(const std::vector<ShardRun>& shards, std::uint32_t expect_runs) {
+    const ShardRun& first = shards.front();
     const bool numbered = first.shard_count > 0;
     for (const auto& s : shards) {
         if ((s.shard_count > 0) != numbered)
-            return refuse(
-                fmt::format("{} is {}, {} is {}: shards merge only with the other "
-                            "shards of their test",
-                            name_of(s), shard_text(s.shard_index, s.shard_count), name_of(first),
-                            shard_text(first.shard_index, first.shard_count)));
+            return fmt::format(
+                "{} is {}, {} is {}: shards merge only with the other shards of their test",
+                name_of(s), shard_text(s.shard_index, s.shard_count), name_of(first),
+                shard_text(first.shard_index, first.shard_count));
         if (s.shard_count != first.shard_count)
-            return refuse(fmt::format("{} and {} disagree on the shard count ({} vs {})",
-                                      name_of(s), name_of(first), s.shard_count,
-                                      first.shard_count));
+            return fmt::format("{} and {} disagree on the shard count ({} vs {})", name_of(s),
+                               name_of(first), s.shard_count, first.shard_count);
     }
-    if (numbered) {
-        std::map<int, const ShardRun*> by_index;
-        for (const auto& s : shards) {
-            if (s.shard_index < 0 || s.shard_index >= s.shard_count)
-                return refuse(fmt::format("{}: shard index {} outside 0..{}", name_of(s),
-                                          s.shard_index, s.shard_count - 1));
-            if (auto [it, fresh] = by_index.emplace(s.shard_index, &s); !fresh)
-                return refuse(fmt::format("duplicate shard {}: {} and {}", s.shard_index,
-                                          name_of(*it->second), name_of(s)));
-        }
-        std::string missing;
-        for (int i = 0; i < first.shard_count; ++i)
-            if (by_index.count(i) == 0)
-                missing += fmt::format("{}{}", missing.empty() ? "" : ", ", i);
-        if (!missing.empty())
-            return refuse(fmt::format("missing shards: {} of {} given, shard {} missing",
-                                      shards.size(), first.shard_count, missing));
-    }
+    if (numbered)
+        if (std::string why = shard_set_refusal(shards); !why.empty()) return why;
     if (expect_runs != 0 && shards.size() != expect_runs)
-        return refuse(fmt::format("{} runs given, --expect says the test has {}{}", shards.size(),
-                                  expect_runs,
-                                  shards.size() < expect_runs ? ": missing runs" : ""));
+        return fmt::format("{} runs given, --expect says the test has {}{}", shards.size(),
+                           expect_runs, shards.size() < expect_runs ? ": missing runs" : "");
+    return {};
+}
 
-    // Merge.
-    stats::RunResult& out = r.run;
-    auto& m = out.metadata;
+// The merged run's metadata (the first run's plan over the span from origin to end, in epoch
+// seconds), operations and stages with their counts cleared. True when the runs' stages merge
+// into one table (all have as many).
+bool shape_merged_run(const std::vector<ShardRun>& shards, std::uint64_t interval, double origin,
+                      double end, stats::RunResult& out) {
+    const ShardRun& first = shards.front();
     const auto& fm = first.summary.metadata;
-    const std::uint64_t interval = first.summary.timeline_interval_ns == 0
-                                       ? 1'000'000'000
-                                       : first.summary.timeline_interval_ns;
-    double origin = first.measure_start_epoch_s, end = 0.0;
-    for (const auto& s : shards) {
-        origin = std::min(origin, s.measure_start_epoch_s);
-        end = std::max(end, s.measure_start_epoch_s +
-                                static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
-    }
-    if (const double slots = (end - origin) * 1e9 / static_cast<double>(interval);
-        slots > kMaxTimelineSlots)
-        return refuse(fmt::format(
-            "the runs span {:.0f} s from the first start to the last end, {:.0f} intervals of "
-            "{} s: more than the {:.0f} a merged timeline holds (runs of one test started days "
-            "apart? each JSON's test.measure_start_epoch_s says when its run started)",
-            end - origin, slots, static_cast<double>(interval) / 1e9, kMaxTimelineSlots));
+    auto& m = out.metadata;
     m.tool_version = fm.tool_version;
     m.target = fm.target;
     m.depth = fm.depth;
@@ -614,10 +606,10 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     m.coordinated_omission_corrected = fm.coordinated_omission_corrected;
     m.test_id = fm.test_id;
     m.merged_runs = static_cast<std::uint32_t>(shards.size());
-    const auto origin_time = std::chrono::system_clock::time_point(
-        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-            std::chrono::duration<double>(origin)));
-    m.start_time = origin_time - std::chrono::nanoseconds(m.warmup_ns);
+    m.start_time = std::chrono::system_clock::time_point(
+                       std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                           std::chrono::duration<double>(origin))) -
+                   std::chrono::nanoseconds(m.warmup_ns);
     out.timeline_interval_ns = interval;
     out.operations = first.summary.operations;
     for (auto& op : out.operations) op.counters.reset();
@@ -633,127 +625,273 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             st.connections_from = st.connections_to = 0;
         }
     }
-    std::vector<std::uint64_t> stage_min(out.stages.size(), UINT64_MAX),
-        stage_max(out.stages.size(), 0);
-    std::vector<std::string> without_stage_lines;
+    return stages_merge;
+}
 
-    std::map<std::int64_t, SlotCounts> counts_by_slot;
-    std::vector<SlotLine> untagged_lines;
-    std::vector<IntervalLines> logs;
-    for (const auto& s : shards) logs.emplace_back(s);
-    HlogInterval scratch;
+// Exact extremes from the runs' JSONs (the logs only know buckets), narrowed into the merged
+// histograms at the end.
+struct Extremes {
     std::uint64_t min_ns = UINT64_MAX, max_ns = 0;
-    std::vector<std::uint64_t> op_min(out.operations.size(), UINT64_MAX),
-        op_max(out.operations.size(), 0);
+    std::vector<std::uint64_t> op_min, op_max, stage_min, stage_max;
+    Extremes(std::size_t operations, std::size_t stages)
+        : op_min(operations, UINT64_MAX),
+          op_max(operations, 0),
+          stage_min(stages, UINT64_MAX),
+          stage_max(stages, 0) {}
+    void narrow(stats::RunResult& out) const {
+        out.latency.narrow_extremes(min_ns, max_ns);
+        for (std::size_t i = 0; i < out.operations.size(); ++i)
+            out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
+        for (std::size_t i = 0; i < out.stages.size(); ++i)
+            out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
+    }
+};
+
+void add_connections(const stats::ConnectionStats& from, stats::ConnectionStats& c) {
+    c.opened += from.opened;
+    c.failed += from.failed;
+    c.reconnects += from.reconnects;
+    c.closed_by_peer += from.closed_by_peer;
+    c.peak_open += from.peak_open;
+    for (const auto& [name, count] : from.failed_by_cause) c.failed_by_cause[name] += count;
+    c.tls_handshakes += from.tls_handshakes;
+    c.tls_resumed += from.tls_resumed;
+    c.tls_handshake_ns_total += from.tls_handshake_ns_total;
+    c.tls_handshake_ns_max = std::max(c.tls_handshake_ns_max, from.tls_handshake_ns_max);
+    c.tls_handshake_failures += from.tls_handshake_failures;
+    c.tls_offloaded += from.tls_offloaded;
+    c.tls_offload_errors += from.tls_offload_errors;
+}
+
+// A run's JSON counts by operation and stage into out's, with their exact extremes.
+void add_operation_and_stage_counts(const ShardRun& s, stats::RunResult& out, Extremes& x) {
+    for (std::size_t i = 0; i < out.operations.size(); ++i) {
+        out.operations[i].counters.add(s.summary.operations[i].counters);
+        if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
+            x.op_min[i] = std::min(x.op_min[i], s.op_min_ns[i]);
+            x.op_max[i] = std::max(x.op_max[i], s.op_max_ns[i]);
+        }
+    }
+    for (std::size_t i = 0; i < out.stages.size(); ++i) {
+        const stats::StageResult& from = s.summary.stages[i];
+        stats::StageResult& into = out.stages[i];
+        into.counters.add(from.counters);
+        into.rate_from += from.rate_from;
+        into.rate_to += from.rate_to;
+        into.connections_from += from.connections_from;
+        into.connections_to += from.connections_to;
+        if (s.stage_max_ns[i] != 0 || s.stage_min_ns[i] != 0) {
+            x.stage_min[i] = std::min(x.stage_min[i], s.stage_min_ns[i]);
+            x.stage_max[i] = std::max(x.stage_max[i], s.stage_max_ns[i]);
+        }
+    }
+}
+
+// A run's JSON (everything but its timeline and log) added into out.
+void add_run_summary(const ShardRun& s, stats::RunResult& out, Extremes& x) {
+    const auto& sm = s.summary.metadata;
+    auto& m = out.metadata;
+    m.threads += sm.threads;
+    m.connections += sm.connections;
+    m.rate_per_second += sm.rate_per_second;
+    for (const auto& note : sm.notes) m.notes.push_back(fmt::format("run {}: {}", sm.run_id, note));
+    out.counters.add(s.summary.counters);
+    add_operation_and_stage_counts(s, out, x);
+    if (s.latency_count != 0) {
+        x.min_ns = std::min(x.min_ns, s.min_ns);
+        x.max_ns = std::max(x.max_ns, s.max_ns);
+    }
+    out.schedule_lag.engine.add(s.summary.schedule_lag.engine);
+    out.schedule_lag.target.add(s.summary.schedule_lag.target);
+    add_connections(s.summary.connections, out.connections);
+    for (auto p : s.summary.shortfalls) {
+        p.text = fmt::format("run {}: {}", sm.run_id, p.text);
+        out.shortfalls.push_back(std::move(p));
+    }
+    out.pipelining.skipped_requests += s.summary.pipelining.skipped_requests;
+}
+
+// Where a run's intervals fall on the merged timeline, and how far its lines may start.
+struct RunOnTimeline {
+    double offset_s;     // the run's start after the earliest run's
+    double run_s;        // its measured duration
+    double allowance_s;  // a line may start this far outside [0, run_s]
+    std::uint64_t interval_ns;
+
+    RunOnTimeline(const ShardRun& s, double origin, std::uint64_t interval)
+        : offset_s(s.measure_start_epoch_s - origin),
+          run_s(static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9),
+          allowance_s(static_cast<double>(interval) / 1e9 + kLineAllowanceSeconds),
+          interval_ns(interval) {}
+    // On the wall clock: a run's interval goes to the merged interval holding its middle.
+    std::int64_t slot(double start_s) const {
+        const double middle = offset_s + start_s + static_cast<double>(interval_ns) / 2e9;
+        return static_cast<std::int64_t>(
+            std::floor(middle * 1e9 / static_cast<double>(interval_ns)));
+    }
+    bool holds(double start_s, double length_s) const {
+        return start_s >= -allowance_s && start_s <= run_s + allowance_s &&
+               length_s <= run_s + allowance_s;
+    }
+};
+
+// A run's JSON timeline into the merged intervals' counts. Empty, or why it is refused.
+std::string add_timeline_counts(const ShardRun& s, const RunOnTimeline& place,
+                                std::map<std::int64_t, SlotCounts>& counts) {
+    for (const auto& iv : s.summary.timeline) {
+        const double start_s = static_cast<double>(iv.start_offset_ns) / 1e9;
+        if (!place.holds(start_s, 0.0))
+            return fmt::format(
+                "{}: timeline interval {} starts at {:.3f} s, after the run's own {:.3f} s "
+                "(measured_duration_s)",
+                s.json_path, iv.index, start_s, place.run_s);
+        SlotCounts& into = counts[place.slot(start_s)];
+        into.transactions += iv.transactions;
+        into.errors += iv.errors;
+        into.target_rate += iv.target_rate;
+        into.open_connections += iv.open_connections;
+    }
+    return {};
+}
+
+// What a run's log gave: its untagged lines' places, whether it had stage lines.
+struct LogPass {
+    std::vector<SlotLine> untagged;
+    bool stage_lines = false;
+};
+
+// A run's log, streamed: tagged lines added into their operation, stage lines into their
+// stage, untagged lines noted (merged interval, position) for summarize_latency_slots.
+// Empty, or why it is refused.
+std::string add_log_lines(const ShardRun& s, std::uint32_t run_index, const RunOnTimeline& place,
+                          IntervalLines& lines, HlogInterval& scratch, stats::RunResult& out,
+                          LogPass& pass) {
+    std::string why;
+    pass.stage_lines = false;
+    const bool read = lines.each(
+        [&](const HlogInterval& line, std::uint64_t position) {
+            if (!place.holds(line.start_s, line.length_s)) {
+                why = fmt::format(
+                    "{}: a line of {:.3f} s starting at {:.3f} s, outside the run's own {:.3f} s "
+                    "(measured_duration_s of {})",
+                    s.hlog_path, line.length_s, line.start_s, place.run_s, s.json_path);
+                return false;
+            }
+            if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
+                pass.stage_lines = true;
+                if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
+            } else if (line.tag.empty()) {
+                pass.untagged.push_back({place.slot(line.start_s), run_index, position});
+            } else {
+                for (auto& op : out.operations)
+                    if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
+            }
+            return true;
+        },
+        scratch, why);
+    return read ? std::string() : why;
+}
+
+// Every merged interval from the first to the last that holds anything (none before 0), gaps
+// included, each without a histogram. The last runs to the end of the last run: runs that
+// started apart end mid-interval, and their last stretch lands there.
+void fill_timeline(const std::map<std::int64_t, SlotCounts>& counts,
+                   const std::map<std::int64_t, stats::IntervalSummary>& latency,
+                   stats::RunResult& out) {
+    if (counts.empty() && latency.empty()) return;
+    std::int64_t first_slot = INT64_MAX, last_slot = INT64_MIN;
+    for (const std::int64_t k : {counts.empty() ? INT64_MAX : counts.begin()->first,
+                                 latency.empty() ? INT64_MAX : latency.begin()->first})
+        first_slot = std::min(first_slot, k);
+    for (const std::int64_t k : {counts.empty() ? INT64_MIN : counts.rbegin()->first,
+                                 latency.empty() ? INT64_MIN : latency.rbegin()->first})
+        last_slot = std::max(last_slot, k);
+    for (std::int64_t k = std::max<std::int64_t>(0, first_slot); k <= last_slot; ++k)
+        out.timeline.push_back(merged_interval(k, out.timeline_interval_ns, counts, latency));
+    const std::uint64_t measured = out.metadata.measured_duration_ns;
+    if (!out.timeline.empty() && out.timeline.back().start_offset_ns < measured)
+        out.timeline.back().duration_ns = measured - out.timeline.back().start_offset_ns;
+}
+
+// The per-stage table kept, or left out with a warning saying why.
+void settle_stage_table(const std::vector<ShardRun>& shards, bool stages_merge,
+                        const std::vector<std::string>& without_stage_lines, MergeOutcome& r) {
+    const bool any_stages = std::any_of(
+        shards.begin(), shards.end(), [](const ShardRun& s) { return !s.summary.stages.empty(); });
+    if (!without_stage_lines.empty()) {
+        r.warnings.push_back(fmt::format(
+            "no per-stage table: the interval log of {} holds no stage histograms (an mbstorm "
+            "that did not write them); the timeline shows the stages",
+            without_stage_lines.front()));
+        r.run.stages.clear();
+    } else if (any_stages && !stages_merge) {
+        r.warnings.push_back(
+            "no per-stage table: the runs do not have the same stages; the timeline shows them");
+    } else if (stages_merge) {
+        r.run.metadata.notes.push_back(
+            "per-stage table: each run's stage histograms (its interval log's stage lines) "
+            "added, stage by stage, on each run's own clock");
+    }
+}
+
+// The runs' span on the wall clock, epoch seconds: the earliest start, the latest end.
+std::pair<double, double> span_of(const std::vector<ShardRun>& shards) {
+    double origin = shards.front().measure_start_epoch_s, end = 0.0;
+    for (const auto& s : shards) {
+        origin = std::min(origin, s.measure_start_epoch_s);
+        end = std::max(end, s.measure_start_epoch_s +
+                                static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
+    }
+    return {origin, end};
+}
+
+}  // namespace
+
+MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
+    MergeOutcome r;
+    auto refuse = [&r](std::string why) {
+        r.error = std::move(why);
+        return r;
+    };
+    if (shards.empty()) return refuse("no runs to merge");
+    if (std::string why = identity_refusal(shards); !why.empty()) return refuse(why);
+    if (std::string why = completeness_refusal(shards, expect_runs); !why.empty())
+        return refuse(why);
+    const std::uint64_t interval = shards.front().summary.timeline_interval_ns == 0
+                                       ? 1'000'000'000
+                                       : shards.front().summary.timeline_interval_ns;
+    const auto [origin, end] = span_of(shards);
+    if (const double slots = (end - origin) * 1e9 / static_cast<double>(interval);
+        slots > kMaxTimelineSlots)
+        return refuse(fmt::format(
+            "the runs span {:.0f} s from the first start to the last end, {:.0f} intervals of "
+            "{} s: more than the {:.0f} a merged timeline holds (runs of one test started days "
+            "apart? each JSON's test.measure_start_epoch_s says when its run started)",
+            end - origin, slots, static_cast<double>(interval) / 1e9, kMaxTimelineSlots));
+
+    stats::RunResult& out = r.run;
+    const bool stages_merge = shape_merged_run(shards, interval, origin, end, out);
+    Extremes extremes(out.operations.size(), out.stages.size());
+    std::map<std::int64_t, SlotCounts> counts_by_slot;
+    std::vector<IntervalLines> logs(shards.begin(), shards.end());
+    HlogInterval scratch;
+    LogPass pass;
+    std::vector<std::string> without_stage_lines;
     for (std::uint32_t run_index = 0; run_index < shards.size(); ++run_index) {
         const ShardRun& s = shards[run_index];
-        const auto& sm = s.summary.metadata;
-        m.threads += sm.threads;
-        m.connections += sm.connections;
-        m.rate_per_second += sm.rate_per_second;
-        for (const auto& note : sm.notes)
-            m.notes.push_back(fmt::format("run {}: {}", sm.run_id, note));
-        out.counters.add(s.summary.counters);
-        for (std::size_t i = 0; i < out.operations.size(); ++i) {
-            out.operations[i].counters.add(s.summary.operations[i].counters);
-            if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
-                op_min[i] = std::min(op_min[i], s.op_min_ns[i]);
-                op_max[i] = std::max(op_max[i], s.op_max_ns[i]);
-            }
-        }
-        for (std::size_t i = 0; i < out.stages.size(); ++i) {
-            const stats::StageResult& from = s.summary.stages[i];
-            stats::StageResult& into = out.stages[i];
-            into.counters.add(from.counters);
-            into.rate_from += from.rate_from;
-            into.rate_to += from.rate_to;
-            into.connections_from += from.connections_from;
-            into.connections_to += from.connections_to;
-            if (s.stage_max_ns[i] != 0 || s.stage_min_ns[i] != 0) {
-                stage_min[i] = std::min(stage_min[i], s.stage_min_ns[i]);
-                stage_max[i] = std::max(stage_max[i], s.stage_max_ns[i]);
-            }
-        }
-        if (s.latency_count != 0) {
-            min_ns = std::min(min_ns, s.min_ns);
-            max_ns = std::max(max_ns, s.max_ns);
-        }
-        out.schedule_lag.engine.add(s.summary.schedule_lag.engine);
-        out.schedule_lag.target.add(s.summary.schedule_lag.target);
-        auto& c = out.connections;
-        c.opened += s.summary.connections.opened;
-        c.failed += s.summary.connections.failed;
-        c.reconnects += s.summary.connections.reconnects;
-        c.closed_by_peer += s.summary.connections.closed_by_peer;
-        c.peak_open += s.summary.connections.peak_open;
-        for (const auto& [name, count] : s.summary.connections.failed_by_cause)
-            c.failed_by_cause[name] += count;
-        c.tls_handshakes += s.summary.connections.tls_handshakes;
-        c.tls_resumed += s.summary.connections.tls_resumed;
-        c.tls_handshake_ns_total += s.summary.connections.tls_handshake_ns_total;
-        c.tls_handshake_ns_max =
-            std::max(c.tls_handshake_ns_max, s.summary.connections.tls_handshake_ns_max);
-        c.tls_handshake_failures += s.summary.connections.tls_handshake_failures;
-        c.tls_offloaded += s.summary.connections.tls_offloaded;
-        c.tls_offload_errors += s.summary.connections.tls_offload_errors;
-        for (auto p : s.summary.shortfalls) {
-            p.text = fmt::format("run {}: {}", sm.run_id, p.text);
-            out.shortfalls.push_back(std::move(p));
-        }
-        out.pipelining.skipped_requests += s.summary.pipelining.skipped_requests;
-
-        // On the wall clock: a run's interval k goes to the merged interval holding its middle.
-        const double offset = s.measure_start_epoch_s - origin;
-        auto slot = [&](double start_s) {
-            const double middle = offset + start_s + static_cast<double>(interval) / 2e9;
-            return static_cast<std::int64_t>(
-                std::floor(middle * 1e9 / static_cast<double>(interval)));
-        };
-        const double run_s = static_cast<double>(sm.measured_duration_ns) / 1e9;
-        const double allowance = static_cast<double>(interval) / 1e9 + kLineAllowanceSeconds;
-        for (const auto& iv : s.summary.timeline) {
-            const double start_s = static_cast<double>(iv.start_offset_ns) / 1e9;
-            if (start_s > run_s + allowance)
-                return refuse(fmt::format(
-                    "{}: timeline interval {} starts at {:.3f} s, after the run's own {:.3f} s "
-                    "(measured_duration_s)",
-                    s.json_path, iv.index, start_s, run_s));
-            SlotCounts& into = counts_by_slot[slot(start_s)];
-            into.transactions += iv.transactions;
-            into.errors += iv.errors;
-            into.target_rate += iv.target_rate;
-            into.open_connections += iv.open_connections;
-        }
-        bool stage_lines = false;
-        std::string why;
-        const bool read = logs[run_index].each(
-            [&](const HlogInterval& line, std::uint64_t position) {
-                if (!(line.start_s >= -allowance && line.start_s <= run_s + allowance &&
-                      line.length_s <= run_s + allowance)) {
-                    why = fmt::format(
-                        "{}: a line of {:.3f} s starting at {:.3f} s, outside the run's own "
-                        "{:.3f} s (measured_duration_s of {})",
-                        s.hlog_path, line.length_s, line.start_s, run_s, s.json_path);
-                    return false;
-                }
-                if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
-                    stage_lines = true;
-                    if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
-                } else if (line.tag.empty()) {
-                    untagged_lines.push_back({slot(line.start_s), run_index, position});
-                } else {
-                    for (auto& op : out.operations)
-                        if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
-                }
-                return true;
-            },
-            scratch, why);
-        if (!read) return refuse(why);
-        if (!out.stages.empty() && !stage_lines) without_stage_lines.push_back(name_of(s));
+        add_run_summary(s, out, extremes);
+        const RunOnTimeline place(s, origin, interval);
+        if (std::string why = add_timeline_counts(s, place, counts_by_slot); !why.empty())
+            return refuse(why);
+        if (std::string why =
+                add_log_lines(s, run_index, place, logs[run_index], scratch, out, pass);
+            !why.empty())
+            return refuse(why);
+        if (!out.stages.empty() && !pass.stage_lines) without_stage_lines.push_back(name_of(s));
     }
     std::map<std::int64_t, stats::IntervalSummary> latency_by_slot;
     std::vector<std::uint64_t> logged(shards.size(), 0);
-    if (std::string why; !summarize_latency_slots(untagged_lines, logs, interval, out.latency,
+    if (std::string why; !summarize_latency_slots(pass.untagged, logs, interval, out.latency,
                                                   logged, latency_by_slot, why))
         return refuse(why);
     for (std::size_t i = 0; i < shards.size(); ++i)
@@ -762,52 +900,16 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
                 "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
                 "answers that came in after their interval was logged)",
                 name_of(shards[i]), logged[i], shards[i].latency_count));
-    out.latency.narrow_extremes(min_ns, max_ns);
-    for (std::size_t i = 0; i < out.operations.size(); ++i)
-        out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
-    for (std::size_t i = 0; i < out.stages.size(); ++i)
-        out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
-    if (!counts_by_slot.empty() || !latency_by_slot.empty()) {
-        std::int64_t first_slot = INT64_MAX, last_slot = INT64_MIN;
-        if (!counts_by_slot.empty()) {
-            first_slot = counts_by_slot.begin()->first;
-            last_slot = counts_by_slot.rbegin()->first;
-        }
-        if (!latency_by_slot.empty()) {
-            first_slot = std::min(first_slot, latency_by_slot.begin()->first);
-            last_slot = std::max(last_slot, latency_by_slot.rbegin()->first);
-        }
-        // Every interval of the span (bounded above), gaps included, each without a histogram.
-        for (std::int64_t k = std::max<std::int64_t>(0, first_slot); k <= last_slot; ++k)
-            out.timeline.push_back(merged_interval(k, interval, counts_by_slot, latency_by_slot));
-        // The last interval runs to the end of the last run: runs that started apart end
-        // mid-interval, and their last stretch lands there (its throughput divides by this).
-        if (!out.timeline.empty() && out.timeline.back().start_offset_ns < m.measured_duration_ns)
-            out.timeline.back().duration_ns =
-                m.measured_duration_ns - out.timeline.back().start_offset_ns;
-    }
+    extremes.narrow(out);
+    fill_timeline(counts_by_slot, latency_by_slot, out);
     if (std::string w = overlap_warning(shards); !w.empty()) r.warnings.push_back(std::move(w));
-    m.notes.push_back(fmt::format(
+    out.metadata.notes.push_back(fmt::format(
         "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
         "timeline on wall-clock time from {}",
-        shards.size(), m.test_id, format_utc(origin_time)));
-    const bool any_stages = std::any_of(
-        shards.begin(), shards.end(), [](const ShardRun& s) { return !s.summary.stages.empty(); });
-    if (!without_stage_lines.empty()) {
-        r.warnings.push_back(fmt::format(
-            "no per-stage table: the interval log of {} holds no stage histograms (an mbstorm "
-            "that did not write them); the timeline shows the stages",
-            without_stage_lines.front()));
-        out.stages.clear();
-    } else if (any_stages && !stages_merge) {
-        r.warnings.push_back(
-            "no per-stage table: the runs do not have the same stages; the timeline shows them");
-    } else if (stages_merge) {
-        m.notes.push_back(
-            "per-stage table: each run's stage histograms (its interval log's stage lines) "
-            "added, stage by stage, on each run's own clock");
-    }
-    r.threshold_expressions = first.threshold_expressions;
+        shards.size(), out.metadata.test_id,
+        format_utc(out.metadata.start_time + std::chrono::nanoseconds(out.metadata.warmup_ns))));
+    settle_stage_table(shards, stages_merge, without_stage_lines, r);
+    r.threshold_expressions = shards.front().threshold_expressions;
     r.ok = true;
     return r;
 }
