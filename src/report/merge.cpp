@@ -293,6 +293,146 @@ stats::IntervalSummary merged_interval(
 
 }  // namespace
 
+namespace {
+
+// The JSON summary's parts, each throwing what is wrong (read_shard_summary names the file).
+void read_test_object(const json& doc, ShardRun& out) {
+    if (!doc.contains("test"))
+        throw std::runtime_error(
+            "no 'test' object: written by an mbstorm without --hlog support; run it again");
+    const json& t = doc.at("test");
+    auto& m = out.summary.metadata;
+    m.test_id = t.at("id").get<std::string>();
+    m.run_id = t.at("run_id").get<std::string>();
+    m.merged_runs = whole<std::uint32_t>(t.at("merged_runs"));
+    if (m.merged_runs != 0)
+        throw std::runtime_error(fmt::format(
+            "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
+    out.measure_start_epoch_s = number_within(t, "measure_start_epoch_s", 0, kMaxEpochSeconds);
+    out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
+    out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
+    if (out.shard_count < 0 || out.shard_count > kMaxShards)
+        throw std::runtime_error(
+            fmt::format("shard_count {} is not one run --shard makes (0, or 1 to {})",
+                        out.shard_count, kMaxShards));
+    const json& h = t.at("histogram");
+    out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
+    out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
+    out.significant_digits = whole<int>(h.at("significant_digits"));
+}
+
+void read_run_object(const json& doc, ShardRun& out) {
+    auto& m = out.summary.metadata;
+    const json& r = doc.at("run");
+    m.tool_version = doc.value("tool", "mbstorm");
+    m.target = r.at("target").get<std::string>();
+    m.threads = whole<std::uint32_t>(r.at("threads"));
+    m.backend = r.value("backend", std::string());
+    m.connections = whole<std::uint32_t>(r.at("connections"));
+    m.depth = whole<std::uint32_t>(r.at("depth"));
+    m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
+                                                         : stats::LoadModel::Closed;
+    m.rate_per_second = number_within(r, "rate_per_second", 0, kMaxRatePerSecond);
+    m.requested_duration_ns = ns_within(r, "requested_duration_s");
+    m.measured_duration_ns = ns_within(r, "measured_duration_s");
+    m.warmup_ns = ns_within(r, "warmup_s");
+    m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
+    m.notes = r.at("notes").get<std::vector<std::string>>();
+}
+
+void read_counts_and_operations(const json& doc, ShardRun& out) {
+    read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"), out.summary.counters);
+    const json& lat = doc.at("latency");
+    out.latency_count = whole<std::uint64_t>(lat.at("count"));
+    out.min_ns = whole<std::uint64_t>(lat.at("min_ns"));
+    out.max_ns = whole<std::uint64_t>(lat.at("max_ns"));
+    for (const json& op : doc.at("operations")) {
+        stats::OperationResult o;
+        o.name = op.at("name").get<std::string>();
+        o.function_code = whole<std::uint8_t>(op.at("function_code"));
+        read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
+        out.op_min_ns.push_back(whole<std::uint64_t>(op.at("latency").at("min_ns")));
+        out.op_max_ns.push_back(whole<std::uint64_t>(op.at("latency").at("max_ns")));
+        out.summary.operations.push_back(std::move(o));
+    }
+}
+
+void read_timeline(const json& doc, ShardRun& out) {
+    const json& tl = doc.at("timeline");
+    out.summary.timeline_interval_ns = ns_within(tl, "interval_s", kMinIntervalSeconds);
+    for (const json& iv : tl.at("intervals")) {
+        stats::IntervalSummary s;
+        s.index = whole<std::uint64_t>(iv.at("index"));
+        s.start_offset_ns = ns_within(iv, "start_offset_s");
+        s.transactions = whole<std::uint64_t>(iv.at("transactions"));
+        s.errors = whole<std::uint64_t>(iv.at("errors"));
+        s.target_rate = number_within(iv, "target_rate_per_s", 0, kMaxRatePerSecond);
+        s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
+        out.summary.timeline.push_back(s);
+    }
+}
+
+void read_connections(const json& doc, ShardRun& out) {
+    const json& lag = doc.at("schedule_lag");
+    read_lag(lag.at("engine"), out.summary.schedule_lag.engine);
+    read_lag(lag.at("target"), out.summary.schedule_lag.target);
+    const json& c = doc.at("connections");
+    auto& cs = out.summary.connections;
+    cs.opened = whole<std::uint64_t>(c.at("opened"));
+    cs.failed = whole<std::uint64_t>(c.at("failed"));
+    cs.reconnects = whole<std::uint64_t>(c.at("reconnects"));
+    cs.closed_by_peer = whole<std::uint64_t>(c.at("closed_by_peer"));
+    cs.peak_open = whole<std::uint64_t>(c.at("peak_open"));
+    // TLS counters (written by every run; absent from reports older than them: 0).
+    cs.tls_handshakes = whole_or(c, "tls_handshakes");
+    cs.tls_resumed = whole_or(c, "tls_resumed");
+    cs.tls_handshake_ns_total = whole_or(c, "tls_handshake_ns_total");
+    cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
+    cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
+    cs.tls_offloaded = whole_or(c, "tls_offloaded");
+    if (const auto causes = c.find("failed_by_cause"); causes != c.end())
+        for (const auto& [name, count] : causes->items())
+            cs.failed_by_cause[name] = whole<std::uint64_t>(count);
+    cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
+}
+
+void read_shortfalls_and_thresholds(const json& doc, ShardRun& out) {
+    for (const json& s : doc.at("plan_shortfalls")) {
+        stats::PlanShortfall p;
+        p.what = s.at("what").get<std::string>();
+        p.planned = s.at("planned").get<double>();
+        p.achieved = s.at("achieved").get<double>();
+        p.text = s.at("text").get<std::string>();
+        out.summary.shortfalls.push_back(std::move(p));
+    }
+    out.summary.pipelining.skipped_requests =
+        whole<std::uint64_t>(doc.at("pipelining").at("skipped_requests"));
+    for (const json& th : doc.at("thresholds")) {
+        std::string e = th.at("expression").get<std::string>();
+        if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
+    }
+}
+
+void read_stages(const json& doc, ShardRun& out) {
+    for (const json& st : doc.at("stages")) {
+        stats::StageResult stage;
+        stage.index = whole<std::uint32_t>(st.at("index"));
+        stage.name = st.at("name").get<std::string>();
+        stage.start_offset_ns = ns_within(st, "start_offset_s");
+        stage.end_offset_ns = ns_within(st, "end_offset_s");
+        stage.rate_from = number_within(st, "target_rate_from_per_s", 0, kMaxRatePerSecond);
+        stage.rate_to = number_within(st, "target_rate_to_per_s", 0, kMaxRatePerSecond);
+        stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
+        stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
+        read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
+        out.stage_min_ns.push_back(whole<std::uint64_t>(st.at("latency").at("min_ns")));
+        out.stage_max_ns.push_back(whole<std::uint64_t>(st.at("latency").at("max_ns")));
+        out.summary.stages.push_back(std::move(stage));
+    }
+}
+
+}  // namespace
+
 bool read_shard_summary(const std::string& path, ShardRun& out, std::string& error) {
     std::ifstream in(path);
     if (!in) {
@@ -302,122 +442,13 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
     try {
         const json doc = json::parse(in);
         out.json_path = path;
-        if (!doc.contains("test"))
-            throw std::runtime_error(
-                "no 'test' object: written by an mbstorm without --hlog support; run it again");
-        const json& t = doc.at("test");
-        auto& m = out.summary.metadata;
-        m.test_id = t.at("id").get<std::string>();
-        m.run_id = t.at("run_id").get<std::string>();
-        m.merged_runs = whole<std::uint32_t>(t.at("merged_runs"));
-        if (m.merged_runs != 0)
-            throw std::runtime_error(fmt::format(
-                "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
-        out.measure_start_epoch_s = number_within(t, "measure_start_epoch_s", 0, kMaxEpochSeconds);
-        out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
-        out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
-        if (out.shard_count < 0 || out.shard_count > kMaxShards)
-            throw std::runtime_error(
-                fmt::format("shard_count {} is not one run --shard makes (0, or 1 to {})",
-                            out.shard_count, kMaxShards));
-        const json& h = t.at("histogram");
-        out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
-        out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
-        out.significant_digits = whole<int>(h.at("significant_digits"));
-
-        const json& r = doc.at("run");
-        m.tool_version = doc.value("tool", "mbstorm");
-        m.target = r.at("target").get<std::string>();
-        m.threads = whole<std::uint32_t>(r.at("threads"));
-        m.backend = r.value("backend", std::string());
-        m.connections = whole<std::uint32_t>(r.at("connections"));
-        m.depth = whole<std::uint32_t>(r.at("depth"));
-        m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
-                                                             : stats::LoadModel::Closed;
-        m.rate_per_second = number_within(r, "rate_per_second", 0, kMaxRatePerSecond);
-        m.requested_duration_ns = ns_within(r, "requested_duration_s");
-        m.measured_duration_ns = ns_within(r, "measured_duration_s");
-        m.warmup_ns = ns_within(r, "warmup_s");
-        m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
-        m.notes = r.at("notes").get<std::vector<std::string>>();
-
-        read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"),
-                      out.summary.counters);
-        const json& lat = doc.at("latency");
-        out.latency_count = whole<std::uint64_t>(lat.at("count"));
-        out.min_ns = whole<std::uint64_t>(lat.at("min_ns"));
-        out.max_ns = whole<std::uint64_t>(lat.at("max_ns"));
-        for (const json& op : doc.at("operations")) {
-            stats::OperationResult o;
-            o.name = op.at("name").get<std::string>();
-            o.function_code = whole<std::uint8_t>(op.at("function_code"));
-            read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
-            out.op_min_ns.push_back(whole<std::uint64_t>(op.at("latency").at("min_ns")));
-            out.op_max_ns.push_back(whole<std::uint64_t>(op.at("latency").at("max_ns")));
-            out.summary.operations.push_back(std::move(o));
-        }
-        const json& tl = doc.at("timeline");
-        out.summary.timeline_interval_ns = ns_within(tl, "interval_s", kMinIntervalSeconds);
-        for (const json& iv : tl.at("intervals")) {
-            stats::IntervalSummary s;
-            s.index = whole<std::uint64_t>(iv.at("index"));
-            s.start_offset_ns = ns_within(iv, "start_offset_s");
-            s.transactions = whole<std::uint64_t>(iv.at("transactions"));
-            s.errors = whole<std::uint64_t>(iv.at("errors"));
-            s.target_rate = number_within(iv, "target_rate_per_s", 0, kMaxRatePerSecond);
-            s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
-            out.summary.timeline.push_back(s);
-        }
-        const json& lag = doc.at("schedule_lag");
-        read_lag(lag.at("engine"), out.summary.schedule_lag.engine);
-        read_lag(lag.at("target"), out.summary.schedule_lag.target);
-        const json& c = doc.at("connections");
-        auto& cs = out.summary.connections;
-        cs.opened = whole<std::uint64_t>(c.at("opened"));
-        cs.failed = whole<std::uint64_t>(c.at("failed"));
-        cs.reconnects = whole<std::uint64_t>(c.at("reconnects"));
-        cs.closed_by_peer = whole<std::uint64_t>(c.at("closed_by_peer"));
-        cs.peak_open = whole<std::uint64_t>(c.at("peak_open"));
-        // TLS counters (written by every run; absent from reports older than them: 0).
-        cs.tls_handshakes = whole_or(c, "tls_handshakes");
-        cs.tls_resumed = whole_or(c, "tls_resumed");
-        cs.tls_handshake_ns_total = whole_or(c, "tls_handshake_ns_total");
-        cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
-        cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
-        cs.tls_offloaded = whole_or(c, "tls_offloaded");
-        if (const auto causes = c.find("failed_by_cause"); causes != c.end())
-            for (const auto& [name, count] : causes->items())
-                cs.failed_by_cause[name] = whole<std::uint64_t>(count);
-        cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
-        for (const json& s : doc.at("plan_shortfalls")) {
-            stats::PlanShortfall p;
-            p.what = s.at("what").get<std::string>();
-            p.planned = s.at("planned").get<double>();
-            p.achieved = s.at("achieved").get<double>();
-            p.text = s.at("text").get<std::string>();
-            out.summary.shortfalls.push_back(std::move(p));
-        }
-        out.summary.pipelining.skipped_requests =
-            whole<std::uint64_t>(doc.at("pipelining").at("skipped_requests"));
-        for (const json& th : doc.at("thresholds")) {
-            std::string e = th.at("expression").get<std::string>();
-            if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
-        }
-        for (const json& st : doc.at("stages")) {
-            stats::StageResult stage;
-            stage.index = whole<std::uint32_t>(st.at("index"));
-            stage.name = st.at("name").get<std::string>();
-            stage.start_offset_ns = ns_within(st, "start_offset_s");
-            stage.end_offset_ns = ns_within(st, "end_offset_s");
-            stage.rate_from = number_within(st, "target_rate_from_per_s", 0, kMaxRatePerSecond);
-            stage.rate_to = number_within(st, "target_rate_to_per_s", 0, kMaxRatePerSecond);
-            stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
-            stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
-            read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
-            out.stage_min_ns.push_back(whole<std::uint64_t>(st.at("latency").at("min_ns")));
-            out.stage_max_ns.push_back(whole<std::uint64_t>(st.at("latency").at("max_ns")));
-            out.summary.stages.push_back(std::move(stage));
-        }
+        read_test_object(doc, out);
+        read_run_object(doc, out);
+        read_counts_and_operations(doc, out);
+        read_timeline(doc, out);
+        read_connections(doc, out);
+        read_shortfalls_and_thresholds(doc, out);
+        read_stages(doc, out);
     } catch (const std::exception& e) {
         error =
             fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what());
