@@ -196,11 +196,13 @@ class IntervalLines {
             return true;
         }
         if (!open(error)) return false;
-        while (reader_->next(scratch))
-            if (!use(scratch, reader_->line_offset())) return false;
-        if (reader_->error().empty()) return true;
-        error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
-        return false;
+        bool stopped = false;
+        while (!stopped && reader_->next(scratch)) stopped = !use(scratch, reader_->line_offset());
+        if (!stopped && !reader_->error().empty())
+            error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
+        const bool read = !stopped && reader_->error().empty();
+        close();  // reopened by at(): a test of 1000 shards may not hold 1000 files open
+        return read;
     }
     // The line at a position each() gave (decoded into scratch when read from the file).
     const HlogInterval* at(std::uint64_t position, HlogInterval& scratch, std::string& error) {
