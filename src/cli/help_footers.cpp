@@ -80,7 +80,8 @@ constexpr Footer kFooters[] = {
      "  mbstorm merge a.json a.hlog b.json b.hlog --scenario ci-gate.yaml --junit all.xml",
      "  0  merged, every threshold passed\n"
      "  1  a threshold was breached on the merged result\n"
-     "  2  bad or missing shard files, shards of different tests, bad flags"},
+     "  2  bad or missing shard files, shards of different tests, times or counts no run\n"
+     "     writes (offsets outside a run, a span of over 1,000,000 intervals), bad flags"},
 };
 
 }  // namespace

@@ -69,10 +69,12 @@ void LiveProgress::update(const load::ProgressSnapshot& s) {
 
 int report_run(load::LoadResult& result, const OutputFiles& files) {
     int code = kExitOk;
-    auto write = [&code](const std::string& path, const std::string& content, const char* what) {
+    // The content is made only for a file asked for: a merged soak's JSON document alone is
+    // some 2 KB per timeline interval.
+    auto write = [&code](const std::string& path, const auto& make_content, const char* what) {
         if (path.empty()) return;
         std::string error;
-        if (!report::write_text_file(path, content, error)) {
+        if (!report::write_text_file(path, make_content(), error)) {
             fmt::print(stderr, "mbstorm run: cannot write {} {}: {}\n", what, path, error);
             code = kExitUsage;
         } else {
@@ -81,9 +83,13 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
     };
     auto write_junit = [&] {
         if (files.junit.empty()) return;
-        write(files.junit,
-              report::format_junit(result.run, files.junit_suite, result.ok ? "" : result.error),
-              "JUnit XML");
+        write(
+            files.junit,
+            [&] {
+                return report::format_junit(result.run, files.junit_suite,
+                                            result.ok ? "" : result.error);
+            },
+            "JUnit XML");
     };
     for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
     if (!result.ok && result.run.counters.transactions_sent == 0) {
@@ -100,9 +106,12 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
         fmt::print(out, "  {} transaction(s) still pending when the run ended\n",
                    result.pending_at_end);
     std::fflush(out);
-    write(files.json, report::format_json(result.run), "JSON summary");
-    write(files.hdr, report::format_hgrm(result.run.latency), ".hgrm distribution");
-    write(files.html, report::format_html(result.run), "HTML report");
+    write(
+        files.json, [&] { return report::format_json(result.run); }, "JSON summary");
+    write(
+        files.hdr, [&] { return report::format_hgrm(result.run.latency); }, ".hgrm distribution");
+    write(
+        files.html, [&] { return report::format_html(result.run); }, "HTML report");
     write_junit();
     if (code == kExitOk) code = judge_run(result);
     return code;

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <thread>
 #include <utility>
@@ -45,14 +46,17 @@ load::IntervalHistogramsCallback hlog_lines(report::HlogWriter& writer,
                                             const scenario::Scenario& s) {
     std::vector<std::string> tags;
     for (const auto& op : s.plan.operations) tags.push_back(report::hlog_tag(op.name));
-    return [&writer, tags](const stats::IntervalHistograms& interval,
-                           std::chrono::system_clock::time_point measure_start) {
+    // Every tag has its line in every interval: empty when the interval had no tag histograms.
+    auto empty = std::make_shared<const stats::Histogram>();
+    return [&writer, tags, empty](const stats::IntervalHistograms& interval,
+                                  std::chrono::system_clock::time_point measure_start) {
         writer.start(measure_start);
         const double start = static_cast<double>(interval.start_offset_ns) / 1e9;
         const double length = static_cast<double>(interval.duration_ns) / 1e9;
         writer.write_interval("", start, length, interval.all);
-        for (std::size_t i = 0; i < interval.by_tag.size() && i < tags.size(); ++i)
-            writer.write_interval(tags[i], start, length, interval.by_tag[i]);
+        for (std::size_t i = 0; i < tags.size(); ++i)
+            writer.write_interval(tags[i], start, length,
+                                  i < interval.by_tag.size() ? interval.by_tag[i] : *empty);
         writer.end_interval();
     };
 }

@@ -170,62 +170,112 @@ double Hlog::absolute_start_s(const HlogInterval& interval) const {
     return interval.start_s + base;
 }
 
-bool parse_hlog(std::string_view text, Hlog& out, std::string& error) {
-    out = Hlog{};
-    std::size_t line_number = 0;
-    while (!text.empty()) {
-        const auto eol = text.find('\n');
-        std::string_view line = text.substr(0, eol);
-        text = eol == std::string_view::npos ? std::string_view{} : text.substr(eol + 1);
-        ++line_number;
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        if (line.empty()) continue;
-        auto fail = [&](const std::string& why) {
-            error = fmt::format("line {}: {}", line_number, why);
-            return false;
-        };
-        if (line.front() == '#') {
-            const std::string_view comment = line.substr(1);
-            out.comments.emplace_back(comment);
-            double value = 0;
-            if (header_number(comment, "[StartTime:", value)) {
-                out.has_start_time = true;
-                out.start_time_s = value;
-            } else if (header_number(comment, "[BaseTime:", value)) {
-                out.has_base_time = true;
-                out.base_time_s = value;
-            }
-            continue;
+namespace {
+
+bool refuse_line(std::string& why, const char* text) {
+    why = text;
+    return false;
+}
+
+// One line of a log: a header comment (into header), a legend (skipped) or an interval (into
+// interval, decoded; `is_interval` set). False with `why` when the line is neither.
+bool parse_hlog_line(std::string_view line, Hlog& header, HlogInterval& interval, bool& is_interval,
+                     std::string& why) {
+    is_interval = false;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty()) return true;
+    if (line.front() == '#') {
+        const std::string_view comment = line.substr(1);
+        header.comments.emplace_back(comment);
+        double value = 0;
+        if (header_number(comment, "[StartTime:", value)) {
+            header.has_start_time = true;
+            header.start_time_s = value;
+        } else if (header_number(comment, "[BaseTime:", value)) {
+            header.has_base_time = true;
+            header.base_time_s = value;
         }
-        if (line.front() == '"' || line.substr(0, 9) == "StartTime" ||
-            line.substr(0, 9) == "Timestamp")
-            continue;  // a legend
-        HlogInterval interval;
-        if (line.substr(0, 4) == "Tag=") {
-            const auto comma = line.find(',');
-            if (comma == std::string_view::npos) return fail("a tag and nothing else");
-            interval.tag = std::string(line.substr(4, comma - 4));
-            line.remove_prefix(comma + 1);
-        }
-        std::string_view fields[4];
-        for (int i = 0; i < 4; ++i) {
-            const auto comma = i < 3 ? line.find(',') : std::string_view::npos;
-            if (i < 3 && comma == std::string_view::npos)
-                return fail("an interval line has four fields: start,length,max,histogram");
-            fields[i] = line.substr(0, comma);
-            if (i < 3) line.remove_prefix(comma + 1);
-        }
-        if (!parse_double(fields[0], interval.start_s) ||
-            !parse_double(fields[1], interval.length_s) ||
-            !parse_double(fields[2], interval.max_ms))
-            return fail("start, length and max must be numbers");
-        if (interval.length_s < 0) return fail("negative interval length");
-        std::string why;
-        if (!stats::decode_hdr_compressed_base64(fields[3], interval.histogram, why))
-            return fail(why);
-        out.intervals.push_back(std::move(interval));
+        return true;
     }
+    if (line.front() == '"' || line.substr(0, 9) == "StartTime" || line.substr(0, 9) == "Timestamp")
+        return true;  // a legend
+    interval.tag.clear();
+    if (line.substr(0, 4) == "Tag=") {
+        const auto comma = line.find(',');
+        if (comma == std::string_view::npos) return refuse_line(why, "a tag and nothing else");
+        interval.tag = std::string(line.substr(4, comma - 4));
+        line.remove_prefix(comma + 1);
+    }
+    std::string_view fields[4];
+    for (int i = 0; i < 4; ++i) {
+        const auto comma = i < 3 ? line.find(',') : std::string_view::npos;
+        if (i < 3 && comma == std::string_view::npos)
+            return refuse_line(why, "an interval line has four fields: start,length,max,histogram");
+        fields[i] = line.substr(0, comma);
+        if (i < 3) line.remove_prefix(comma + 1);
+    }
+    if (!parse_double(fields[0], interval.start_s) || !parse_double(fields[1], interval.length_s) ||
+        !parse_double(fields[2], interval.max_ms))
+        return refuse_line(why, "start, length and max must be numbers");
+    if (interval.length_s < 0) return refuse_line(why, "negative interval length");
+    if (!stats::decode_hdr_compressed_base64(fields[3], interval.histogram, why)) return false;
+    is_interval = true;
     return true;
+}
+
+}  // namespace
+
+HlogReader::HlogReader(std::istream& in) : in_(in) {}
+
+bool HlogReader::next(HlogInterval& out) {
+    std::string why;
+    while (error_.empty()) {
+        line_offset_ = static_cast<std::uint64_t>(in_.tellg());
+        if (!std::getline(in_, line_)) return false;
+        ++line_number_;
+        bool is_interval = false;
+        if (!parse_hlog_line(line_, header_, out, is_interval, why))
+            error_ = fmt::format("line {}: {}", line_number_, why);
+        else if (is_interval)
+            return true;
+    }
+    return false;
+}
+
+bool HlogReader::read_header() {
+    while (error_.empty()) {
+        const auto at = in_.tellg();
+        if (!std::getline(in_, line_)) return true;
+        if (!line_.empty() && line_.front() != '#' && line_.front() != '"' &&
+            line_.substr(0, 9) != "StartTime" && line_.substr(0, 9) != "Timestamp") {
+            in_.clear();
+            in_.seekg(at);
+            return true;
+        }
+        ++line_number_;
+        HlogInterval unused;
+        bool is_interval = false;
+        std::string why;
+        if (!parse_hlog_line(line_, header_, unused, is_interval, why))
+            error_ = fmt::format("line {}: {}", line_number_, why);
+    }
+    return false;
+}
+
+bool HlogReader::read_at(std::uint64_t offset, HlogInterval& out) {
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(offset));
+    return next(out);
+}
+
+bool parse_hlog(std::string_view text, Hlog& out, std::string& error) {
+    std::istringstream in{std::string(text)};
+    HlogReader reader(in);
+    HlogInterval interval;
+    while (reader.next(interval)) reader.header().intervals.push_back(interval);
+    out = std::move(reader.header());
+    error = reader.error();
+    return error.empty();
 }
 
 bool read_hlog(const std::string& path, Hlog& out, std::string& error) {

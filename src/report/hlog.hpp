@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <istream>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -80,6 +81,35 @@ struct Hlog {
 
     // Seconds since the epoch of an interval's start, as HdrHistogram's reader computes it.
     double absolute_start_s(const HlogInterval& interval) const;
+};
+
+// Reads a log one interval line at a time, so that a reader of a long log holds one decoded
+// histogram instead of all of them (an 8-hour log at 1 s has some 60,000 lines of 270 KB
+// each once decoded).
+class HlogReader {
+  public:
+    explicit HlogReader(std::istream& in);
+    // The next interval line, decoded into out; header lines met on the way go to header().
+    // False at the end of the log or on a bad line (error() then says which).
+    bool next(HlogInterval& out);
+    // Reads the header lines only (up to the first interval line). False on a bad line.
+    bool read_header();
+    // The line that starts at offset (a line_offset() of an earlier next()): a second look
+    // at a line without keeping it. Its line number in errors is not the file's.
+    bool read_at(std::uint64_t offset, HlogInterval& out);
+    // Where the line next() returned last starts, in bytes from the start of the stream.
+    std::uint64_t line_offset() const noexcept { return line_offset_; }
+    std::size_t line_number() const noexcept { return line_number_; }
+    Hlog& header() noexcept { return header_; }
+    const std::string& error() const noexcept { return error_; }
+
+  private:
+    std::istream& in_;
+    Hlog header_;
+    std::string line_;
+    std::string error_;
+    std::uint64_t line_offset_ = 0;
+    std::size_t line_number_ = 0;
 };
 
 // Parses a log (as read_hlog does a file). Errors name the line: "line 7: ...".

@@ -8,10 +8,12 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "report/units.hpp"
 
@@ -47,8 +49,35 @@ std::uint64_t whole_or(const json& j, const char* name) {
     return it == j.end() ? 0 : whole<std::uint64_t>(*it);
 }
 
+// Saturates rather than converting out of range (a mean lag times a count may be anything).
 std::uint64_t ns_from_s(double s) {
-    return s <= 0.0 ? 0 : static_cast<std::uint64_t>(std::llround(s * 1e9));
+    if (!(s > 0.0)) return 0;
+    const double ns = std::round(s * 1e9);
+    return ns >= 1.8e19 ? UINT64_MAX : static_cast<std::uint64_t>(ns);
+}
+
+// Bounds on what a run's JSON may say, so that no edited number makes the merge allocate
+// without bound (a timeline slot per interval of a year-long span, 2e9 shards to list) or
+// convert out of range (1e300 s in ns).
+constexpr double kMaxRunSeconds = 1e8;     // about three years: any soak, in ns easily
+constexpr double kMaxEpochSeconds = 1e10;  // the year 2286
+constexpr double kMaxRatePerSecond = 1e12;
+constexpr double kMinIntervalSeconds = 1e-3;  // run's timeline intervals are 1 ms or longer
+constexpr int kMaxShards = 100'000;           // as run --shard allows
+
+// The number `name` of `j`, finite and within [lo, hi], else the file is refused naming it.
+double number_within(const json& j, const char* name, double lo, double hi) {
+    const json& v = j.at(name);
+    const double x = v.is_number() ? v.get<double>() : std::nan("");
+    if (!(x >= lo && x <= hi))
+        throw std::runtime_error(
+            fmt::format("{} is {}: not a number from {} to {}", name, v.dump(), lo, hi));
+    return x;
+}
+
+std::uint64_t ns_within(const json& j, const char* name, double lo_s = 0.0,
+                        double hi_s = kMaxRunSeconds) {
+    return ns_from_s(number_within(j, name, lo_s, hi_s));
 }
 
 void read_counters(const json& outcomes, const json& exceptions, const json& totals,
@@ -131,12 +160,278 @@ std::string overlap_warning(const std::vector<ShardRun>& shards) {
         last_end - spans.front().start, std::max(0.0, earliest_end - latest_start), idle);
 }
 
-struct MergedInterval {
-    stats::Histogram latency;
+// A merged interval's counts, from the runs' JSONs. Its latencies are reduced to their summary
+// as soon as every run's histogram of that interval has been added (see LatencySlots): a
+// histogram per interval of an 8-hour test would take 7.8 GB.
+struct SlotCounts {
     std::uint64_t transactions = 0, errors = 0;
     double target_rate = 0.0;
     std::uint32_t open_connections = 0;
 };
+
+// The longest merged timeline: 11.5 days of 1 s intervals, some 120 MB of summaries. Past it
+// the runs are refused (runs of one test days apart, an edited start time) rather than
+// allocated for.
+constexpr double kMaxTimelineSlots = 1'000'000;
+// How far outside its run's own span a log line may start (the last interval runs past the
+// measured end; a run's first answers can land in the interval before its start).
+constexpr double kLineAllowanceSeconds = 1.0;
+// Logs kept open at once while their untagged lines are read again in time order; past it
+// each is reopened per line (a file descriptor per run of a 1000-shard test is too many).
+constexpr std::size_t kMaxOpenLogs = 64;
+
+// A run's interval lines: streamed from its log file (read_shards), one decoded histogram at
+// a time, or from memory (ShardRun::log.intervals, as tests build runs).
+class IntervalLines {
+  public:
+    explicit IntervalLines(const ShardRun& run) : run_(&run) {}
+
+    // use(line, position) for every line in the log's order, until use returns false.
+    // False with error on a bad line or when use said stop (error then its own).
+    template <class Use>
+    bool each(Use&& use, HlogInterval& scratch, std::string& error) {
+        if (!run_->log_from_file) {
+            for (std::size_t i = 0; i < run_->log.intervals.size(); ++i)
+                if (!use(run_->log.intervals[i], i)) return false;
+            return true;
+        }
+        if (!open(error)) return false;
+        bool stopped = false;
+        while (!stopped && reader_->next(scratch)) stopped = !use(scratch, reader_->line_offset());
+        if (!stopped && !reader_->error().empty())
+            error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
+        const bool read = !stopped && reader_->error().empty();
+        close();  // reopened by at(): a test of 1000 shards may not hold 1000 files open
+        return read;
+    }
+    // The line at a position each() gave (decoded into scratch when read from the file).
+    const HlogInterval* at(std::uint64_t position, HlogInterval& scratch, std::string& error) {
+        if (!run_->log_from_file) return &run_->log.intervals[position];
+        if (!reader_ && !open(error)) return nullptr;
+        if (reader_->read_at(position, scratch)) return &scratch;
+        error = fmt::format("{}: changed while being merged ({})", run_->hlog_path,
+                            reader_->error().empty() ? "a line is gone" : reader_->error());
+        return nullptr;
+    }
+    void close() {
+        reader_.reset();
+        file_.reset();
+    }
+
+  private:
+    bool open(std::string& error) {
+        file_ = std::make_unique<std::ifstream>(run_->hlog_path, std::ios::binary);
+        if (!*file_) {
+            error = fmt::format("{}: cannot open", run_->hlog_path);
+            return false;
+        }
+        reader_ = std::make_unique<HlogReader>(*file_);
+        return true;
+    }
+
+    const ShardRun* run_;
+    std::unique_ptr<std::ifstream> file_;
+    std::unique_ptr<HlogReader> reader_;
+};
+
+// An untagged (all operations) line of a run's log and the merged interval it falls in.
+struct SlotLine {
+    std::int64_t slot;
+    std::uint32_t run;
+    std::uint64_t position;  // IntervalLines::at()
+};
+
+// The runs' untagged lines, added interval by interval in time order into one histogram
+// that is reduced to the interval's summary before the next: memory is two histograms
+// (this and a decoded line) however long the test. Each line is also added into `total`
+// and counted in `logged` (per run). Summaries only for intervals some line falls in.
+bool summarize_latency_slots(std::vector<SlotLine>& lines, std::vector<IntervalLines>& runs,
+                             std::uint64_t interval_ns, stats::Histogram& total,
+                             std::vector<std::uint64_t>& logged,
+                             std::map<std::int64_t, stats::IntervalSummary>& out,
+                             std::string& error) {
+    std::sort(lines.begin(), lines.end(), [](const SlotLine& a, const SlotLine& b) {
+        return std::tie(a.slot, a.run, a.position) < std::tie(b.slot, b.run, b.position);
+    });
+    const bool keep_open = runs.size() <= kMaxOpenLogs;
+    stats::Histogram slot_latency;
+    HlogInterval scratch;
+    for (std::size_t i = 0; i < lines.size();) {
+        const std::int64_t slot = lines[i].slot;
+        slot_latency.reset();
+        for (; i < lines.size() && lines[i].slot == slot; ++i) {
+            IntervalLines& run = runs[lines[i].run];
+            const HlogInterval* line = run.at(lines[i].position, scratch, error);
+            if (line == nullptr) return false;
+            slot_latency.add(line->histogram);
+            total.add(line->histogram);
+            logged[lines[i].run] += line->histogram.total_count();
+            if (!keep_open) run.close();
+        }
+        out.emplace(slot, stats::summarize_interval(0, interval_ns, slot_latency, 0, 0));
+    }
+    for (auto& run : runs) run.close();
+    return true;
+}
+
+// Merged interval k: its counts (if any run's JSON has the interval) and its latency summary
+// (if any run's log does); an interval with neither is a gap, empty, with no histogram.
+stats::IntervalSummary merged_interval(
+    std::int64_t k, std::uint64_t interval_ns, const std::map<std::int64_t, SlotCounts>& counts,
+    const std::map<std::int64_t, stats::IntervalSummary>& latency) {
+    stats::IntervalSummary s;
+    if (const auto it = latency.find(k); it != latency.end()) s = it->second;
+    s.index = static_cast<std::uint64_t>(k);
+    s.start_offset_ns = s.index * interval_ns;
+    s.duration_ns = interval_ns;
+    if (const auto it = counts.find(k); it != counts.end()) {
+        s.transactions = it->second.transactions;
+        s.errors = it->second.errors;
+        s.target_rate = it->second.target_rate;
+        s.open_connections = it->second.open_connections;
+    }
+    return s;
+}
+
+}  // namespace
+
+namespace {
+
+// The JSON summary's parts, each throwing what is wrong (read_shard_summary names the file).
+void read_test_object(const json& doc, ShardRun& out) {
+    if (!doc.contains("test"))
+        throw std::runtime_error(
+            "no 'test' object: written by an mbstorm without --hlog support; run it again");
+    const json& t = doc.at("test");
+    auto& m = out.summary.metadata;
+    m.test_id = t.at("id").get<std::string>();
+    m.run_id = t.at("run_id").get<std::string>();
+    m.merged_runs = whole<std::uint32_t>(t.at("merged_runs"));
+    if (m.merged_runs != 0)
+        throw std::runtime_error(fmt::format(
+            "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
+    out.measure_start_epoch_s = number_within(t, "measure_start_epoch_s", 0, kMaxEpochSeconds);
+    out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
+    out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
+    if (out.shard_count < 0 || out.shard_count > kMaxShards)
+        throw std::runtime_error(
+            fmt::format("shard_count {} is not one run --shard makes (0, or 1 to {})",
+                        out.shard_count, kMaxShards));
+    const json& h = t.at("histogram");
+    out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
+    out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
+    out.significant_digits = whole<int>(h.at("significant_digits"));
+}
+
+void read_run_object(const json& doc, ShardRun& out) {
+    auto& m = out.summary.metadata;
+    const json& r = doc.at("run");
+    m.tool_version = doc.value("tool", "mbstorm");
+    m.target = r.at("target").get<std::string>();
+    m.threads = whole<std::uint32_t>(r.at("threads"));
+    m.backend = r.value("backend", std::string());
+    m.connections = whole<std::uint32_t>(r.at("connections"));
+    m.depth = whole<std::uint32_t>(r.at("depth"));
+    m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
+                                                         : stats::LoadModel::Closed;
+    m.rate_per_second = number_within(r, "rate_per_second", 0, kMaxRatePerSecond);
+    m.requested_duration_ns = ns_within(r, "requested_duration_s");
+    m.measured_duration_ns = ns_within(r, "measured_duration_s");
+    m.warmup_ns = ns_within(r, "warmup_s");
+    m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
+    m.notes = r.at("notes").get<std::vector<std::string>>();
+}
+
+void read_counts_and_operations(const json& doc, ShardRun& out) {
+    read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"), out.summary.counters);
+    const json& lat = doc.at("latency");
+    out.latency_count = whole<std::uint64_t>(lat.at("count"));
+    out.min_ns = whole<std::uint64_t>(lat.at("min_ns"));
+    out.max_ns = whole<std::uint64_t>(lat.at("max_ns"));
+    for (const json& op : doc.at("operations")) {
+        stats::OperationResult o;
+        o.name = op.at("name").get<std::string>();
+        o.function_code = whole<std::uint8_t>(op.at("function_code"));
+        read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
+        out.op_min_ns.push_back(whole<std::uint64_t>(op.at("latency").at("min_ns")));
+        out.op_max_ns.push_back(whole<std::uint64_t>(op.at("latency").at("max_ns")));
+        out.summary.operations.push_back(std::move(o));
+    }
+}
+
+void read_timeline(const json& doc, ShardRun& out) {
+    const json& tl = doc.at("timeline");
+    out.summary.timeline_interval_ns = ns_within(tl, "interval_s", kMinIntervalSeconds);
+    for (const json& iv : tl.at("intervals")) {
+        stats::IntervalSummary s;
+        s.index = whole<std::uint64_t>(iv.at("index"));
+        s.start_offset_ns = ns_within(iv, "start_offset_s");
+        s.transactions = whole<std::uint64_t>(iv.at("transactions"));
+        s.errors = whole<std::uint64_t>(iv.at("errors"));
+        s.target_rate = number_within(iv, "target_rate_per_s", 0, kMaxRatePerSecond);
+        s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
+        out.summary.timeline.push_back(s);
+    }
+}
+
+void read_connections(const json& doc, ShardRun& out) {
+    const json& lag = doc.at("schedule_lag");
+    read_lag(lag.at("engine"), out.summary.schedule_lag.engine);
+    read_lag(lag.at("target"), out.summary.schedule_lag.target);
+    const json& c = doc.at("connections");
+    auto& cs = out.summary.connections;
+    cs.opened = whole<std::uint64_t>(c.at("opened"));
+    cs.failed = whole<std::uint64_t>(c.at("failed"));
+    cs.reconnects = whole<std::uint64_t>(c.at("reconnects"));
+    cs.closed_by_peer = whole<std::uint64_t>(c.at("closed_by_peer"));
+    cs.peak_open = whole<std::uint64_t>(c.at("peak_open"));
+    // TLS counters (written by every run; absent from reports older than them: 0).
+    cs.tls_handshakes = whole_or(c, "tls_handshakes");
+    cs.tls_resumed = whole_or(c, "tls_resumed");
+    cs.tls_handshake_ns_total = whole_or(c, "tls_handshake_ns_total");
+    cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
+    cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
+    cs.tls_offloaded = whole_or(c, "tls_offloaded");
+    if (const auto causes = c.find("failed_by_cause"); causes != c.end())
+        for (const auto& [name, count] : causes->items())
+            cs.failed_by_cause[name] = whole<std::uint64_t>(count);
+    cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
+}
+
+void read_shortfalls_and_thresholds(const json& doc, ShardRun& out) {
+    for (const json& s : doc.at("plan_shortfalls")) {
+        stats::PlanShortfall p;
+        p.what = s.at("what").get<std::string>();
+        p.planned = s.at("planned").get<double>();
+        p.achieved = s.at("achieved").get<double>();
+        p.text = s.at("text").get<std::string>();
+        out.summary.shortfalls.push_back(std::move(p));
+    }
+    out.summary.pipelining.skipped_requests =
+        whole<std::uint64_t>(doc.at("pipelining").at("skipped_requests"));
+    for (const json& th : doc.at("thresholds")) {
+        std::string e = th.at("expression").get<std::string>();
+        if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
+    }
+}
+
+void read_stages(const json& doc, ShardRun& out) {
+    for (const json& st : doc.at("stages")) {
+        stats::StageResult stage;
+        stage.index = whole<std::uint32_t>(st.at("index"));
+        stage.name = st.at("name").get<std::string>();
+        stage.start_offset_ns = ns_within(st, "start_offset_s");
+        stage.end_offset_ns = ns_within(st, "end_offset_s");
+        stage.rate_from = number_within(st, "target_rate_from_per_s", 0, kMaxRatePerSecond);
+        stage.rate_to = number_within(st, "target_rate_to_per_s", 0, kMaxRatePerSecond);
+        stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
+        stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
+        read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
+        out.stage_min_ns.push_back(whole<std::uint64_t>(st.at("latency").at("min_ns")));
+        out.stage_max_ns.push_back(whole<std::uint64_t>(st.at("latency").at("max_ns")));
+        out.summary.stages.push_back(std::move(stage));
+    }
+}
 
 }  // namespace
 
@@ -149,118 +444,13 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
     try {
         const json doc = json::parse(in);
         out.json_path = path;
-        if (!doc.contains("test"))
-            throw std::runtime_error(
-                "no 'test' object: written by an mbstorm without --hlog support; run it again");
-        const json& t = doc.at("test");
-        auto& m = out.summary.metadata;
-        m.test_id = t.at("id").get<std::string>();
-        m.run_id = t.at("run_id").get<std::string>();
-        m.merged_runs = whole<std::uint32_t>(t.at("merged_runs"));
-        if (m.merged_runs != 0)
-            throw std::runtime_error(fmt::format(
-                "it is a merged result ({} runs): merge the runs' own files", m.merged_runs));
-        out.measure_start_epoch_s = t.at("measure_start_epoch_s").get<double>();
-        out.shard_index = t.contains("shard_index") ? whole<int>(t.at("shard_index")) : -1;
-        out.shard_count = t.contains("shard_count") ? whole<int>(t.at("shard_count")) : 0;
-        const json& h = t.at("histogram");
-        out.lowest_discernible_ns = whole<std::uint64_t>(h.at("lowest_discernible_ns"));
-        out.highest_trackable_ns = whole<std::uint64_t>(h.at("highest_trackable_ns"));
-        out.significant_digits = whole<int>(h.at("significant_digits"));
-
-        const json& r = doc.at("run");
-        m.tool_version = doc.value("tool", "mbstorm");
-        m.target = r.at("target").get<std::string>();
-        m.threads = whole<std::uint32_t>(r.at("threads"));
-        m.backend = r.value("backend", std::string());
-        m.connections = whole<std::uint32_t>(r.at("connections"));
-        m.depth = whole<std::uint32_t>(r.at("depth"));
-        m.model = r.at("model").get<std::string>() == "open" ? stats::LoadModel::Open
-                                                             : stats::LoadModel::Closed;
-        m.rate_per_second = r.at("rate_per_second").get<double>();
-        m.requested_duration_ns = ns_from_s(r.at("requested_duration_s").get<double>());
-        m.measured_duration_ns = ns_from_s(r.at("measured_duration_s").get<double>());
-        m.warmup_ns = ns_from_s(r.at("warmup_s").get<double>());
-        m.coordinated_omission_corrected = r.at("coordinated_omission_corrected").get<bool>();
-        m.notes = r.at("notes").get<std::vector<std::string>>();
-
-        read_counters(doc.at("outcomes"), doc.at("exceptions"), doc.at("totals"),
-                      out.summary.counters);
-        const json& lat = doc.at("latency");
-        out.latency_count = whole<std::uint64_t>(lat.at("count"));
-        out.min_ns = whole<std::uint64_t>(lat.at("min_ns"));
-        out.max_ns = whole<std::uint64_t>(lat.at("max_ns"));
-        for (const json& op : doc.at("operations")) {
-            stats::OperationResult o;
-            o.name = op.at("name").get<std::string>();
-            o.function_code = whole<std::uint8_t>(op.at("function_code"));
-            read_counters(op.at("outcomes"), op.at("exceptions"), op.at("totals"), o.counters);
-            out.op_min_ns.push_back(whole<std::uint64_t>(op.at("latency").at("min_ns")));
-            out.op_max_ns.push_back(whole<std::uint64_t>(op.at("latency").at("max_ns")));
-            out.summary.operations.push_back(std::move(o));
-        }
-        const json& tl = doc.at("timeline");
-        out.summary.timeline_interval_ns = ns_from_s(tl.at("interval_s").get<double>());
-        for (const json& iv : tl.at("intervals")) {
-            stats::IntervalSummary s;
-            s.index = whole<std::uint64_t>(iv.at("index"));
-            s.start_offset_ns = ns_from_s(iv.at("start_offset_s").get<double>());
-            s.transactions = whole<std::uint64_t>(iv.at("transactions"));
-            s.errors = whole<std::uint64_t>(iv.at("errors"));
-            s.target_rate = iv.at("target_rate_per_s").get<double>();
-            s.open_connections = whole<std::uint32_t>(iv.at("open_connections"));
-            out.summary.timeline.push_back(s);
-        }
-        const json& lag = doc.at("schedule_lag");
-        read_lag(lag.at("engine"), out.summary.schedule_lag.engine);
-        read_lag(lag.at("target"), out.summary.schedule_lag.target);
-        const json& c = doc.at("connections");
-        auto& cs = out.summary.connections;
-        cs.opened = whole<std::uint64_t>(c.at("opened"));
-        cs.failed = whole<std::uint64_t>(c.at("failed"));
-        cs.reconnects = whole<std::uint64_t>(c.at("reconnects"));
-        cs.closed_by_peer = whole<std::uint64_t>(c.at("closed_by_peer"));
-        cs.peak_open = whole<std::uint64_t>(c.at("peak_open"));
-        // TLS counters (written by every run; absent from reports older than them: 0).
-        cs.tls_handshakes = whole_or(c, "tls_handshakes");
-        cs.tls_resumed = whole_or(c, "tls_resumed");
-        cs.tls_handshake_ns_total = whole_or(c, "tls_handshake_ns_total");
-        cs.tls_handshake_ns_max = whole_or(c, "tls_handshake_ns_max");
-        cs.tls_handshake_failures = whole_or(c, "tls_handshake_failures");
-        cs.tls_offloaded = whole_or(c, "tls_offloaded");
-        if (const auto causes = c.find("failed_by_cause"); causes != c.end())
-            for (const auto& [name, count] : causes->items())
-                cs.failed_by_cause[name] = whole<std::uint64_t>(count);
-        cs.tls_offload_errors = whole_or(c, "tls_offload_errors");
-        for (const json& s : doc.at("plan_shortfalls")) {
-            stats::PlanShortfall p;
-            p.what = s.at("what").get<std::string>();
-            p.planned = s.at("planned").get<double>();
-            p.achieved = s.at("achieved").get<double>();
-            p.text = s.at("text").get<std::string>();
-            out.summary.shortfalls.push_back(std::move(p));
-        }
-        out.summary.pipelining.skipped_requests =
-            whole<std::uint64_t>(doc.at("pipelining").at("skipped_requests"));
-        for (const json& th : doc.at("thresholds")) {
-            std::string e = th.at("expression").get<std::string>();
-            if (e != "plan carried out") out.threshold_expressions.push_back(std::move(e));
-        }
-        for (const json& st : doc.at("stages")) {
-            stats::StageResult stage;
-            stage.index = whole<std::uint32_t>(st.at("index"));
-            stage.name = st.at("name").get<std::string>();
-            stage.start_offset_ns = ns_from_s(st.at("start_offset_s").get<double>());
-            stage.end_offset_ns = ns_from_s(st.at("end_offset_s").get<double>());
-            stage.rate_from = st.at("target_rate_from_per_s").get<double>();
-            stage.rate_to = st.at("target_rate_to_per_s").get<double>();
-            stage.connections_from = whole<std::uint32_t>(st.at("target_connections_from"));
-            stage.connections_to = whole<std::uint32_t>(st.at("target_connections_to"));
-            read_counters(st.at("outcomes"), st.at("exceptions"), st.at("totals"), stage.counters);
-            out.stage_min_ns.push_back(whole<std::uint64_t>(st.at("latency").at("min_ns")));
-            out.stage_max_ns.push_back(whole<std::uint64_t>(st.at("latency").at("max_ns")));
-            out.summary.stages.push_back(std::move(stage));
-        }
+        read_test_object(doc, out);
+        read_run_object(doc, out);
+        read_counts_and_operations(doc, out);
+        read_timeline(doc, out);
+        read_connections(doc, out);
+        read_shortfalls_and_thresholds(doc, out);
+        read_stages(doc, out);
     } catch (const std::exception& e) {
         error =
             fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what());
@@ -286,9 +476,14 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
             if (!read_shard_summary(path, run, error)) return false;
             runs.push_back(std::move(run));
         } else if (first == '#' || first == '"' || first == 'T' || std::isdigit(first)) {
-            Hlog log;
-            if (!read_hlog(path, log, error)) return false;
-            logs.emplace_back(path, std::move(log));
+            // The header only (it names the run): the intervals are streamed when merged.
+            in.seekg(0);
+            HlogReader reader(in);
+            if (!reader.read_header()) {
+                error = fmt::format("{}: {}", path, reader.error());
+                return false;
+            }
+            logs.emplace_back(path, std::move(reader.header()));
         } else {
             error = fmt::format(
                 "{}: neither a JSON summary (run --json) nor an interval log "
@@ -305,6 +500,7 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
             used.insert(i);
             run.hlog_path = logs[i].first;
             run.log = std::move(logs[i].second);
+            run.log_from_file = true;
             break;
         }
         if (run.hlog_path.empty()) {
@@ -343,96 +539,95 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
     return true;
 }
 
-MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
-    MergeOutcome r;
-    auto refuse = [&r](std::string why) {
-        r.error = std::move(why);
-        return r;
-    };
-    if (shards.empty()) return refuse("no runs to merge");
-    const ShardRun& first = shards.front();
+namespace {
 
-    // Identity: duplicates, other tests, other histogram settings.
+// Identity: duplicates, other tests, other histogram settings. Empty when the runs are parts
+// of one test.
+std::string identity_refusal(const std::vector<ShardRun>& shards) {
+    const ShardRun& first = shards.front();
     for (std::size_t i = 0; i < shards.size(); ++i) {
         const ShardRun& s = shards[i];
         for (std::size_t j = 0; j < i; ++j) {
             if (shards[j].summary.metadata.run_id == s.summary.metadata.run_id)
-                return refuse(fmt::format("duplicate run: {} and {} are the same run ({})",
-                                          shards[j].json_path, s.json_path,
-                                          s.summary.metadata.run_id));
+                return fmt::format("duplicate run: {} and {} are the same run ({})",
+                                   shards[j].json_path, s.json_path, s.summary.metadata.run_id);
         }
         if (s.summary.metadata.test_id != first.summary.metadata.test_id)
-            return refuse(fmt::format(
-                "{} is from another test: test id '{}', {} has '{}' (run --test-id)", name_of(s),
-                s.summary.metadata.test_id, name_of(first), first.summary.metadata.test_id));
+            return fmt::format("{} is from another test: test id '{}', {} has '{}' (run --test-id)",
+                               name_of(s), s.summary.metadata.test_id, name_of(first),
+                               first.summary.metadata.test_id);
         if (plan_of(s) != plan_of(first))
-            return refuse(fmt::format("{} is from another test: its plan is {}; {} has {}",
-                                      name_of(s), plan_of(s), name_of(first), plan_of(first)));
+            return fmt::format("{} is from another test: its plan is {}; {} has {}", name_of(s),
+                               plan_of(s), name_of(first), plan_of(first));
         if (s.significant_digits != stats::Histogram::kSignificantDigits ||
             s.lowest_discernible_ns != 1 || s.highest_trackable_ns != first.highest_trackable_ns)
-            return refuse(fmt::format(
+            return fmt::format(
                 "different histogram settings: {} has {} significant digits, lowest {} ns, "
                 "highest {} ns; {} has {}, {} ns, {} ns",
                 name_of(s), s.significant_digits, s.lowest_discernible_ns, s.highest_trackable_ns,
                 name_of(first), first.significant_digits, first.lowest_discernible_ns,
-                first.highest_trackable_ns));
+                first.highest_trackable_ns);
         if (s.threshold_expressions != first.threshold_expressions)
-            return refuse(fmt::format("{} is from another test: its thresholds differ from {}'s",
-                                      name_of(s), name_of(first)));
+            return fmt::format("{} is from another test: its thresholds differ from {}'s",
+                               name_of(s), name_of(first));
         if (s.summary.metadata.merged_runs != 0)
-            return refuse(fmt::format("{} is itself a merged result: merge the runs' own files",
-                                      s.json_path));
+            return fmt::format("{} is itself a merged result: merge the runs' own files",
+                               s.json_path);
     }
-    // Completeness.
+    return {};
+}
+
+// Shard numbers: each index 0..count-1 exactly once. Empty when whole.
+std::string shard_set_refusal(const std::vector<ShardRun>& shards) {
+    const ShardRun& first = shards.front();
+    std::map<int, const ShardRun*> by_index;
+    for (const auto& s : shards) {
+        if (s.shard_index < 0 || s.shard_index >= s.shard_count)
+            return fmt::format("{}: shard index {} outside 0..{}", name_of(s), s.shard_index,
+                               s.shard_count - 1);
+        if (auto [it, fresh] = by_index.emplace(s.shard_index, &s); !fresh)
+            return fmt::format("duplicate shard {}: {} and {}", s.shard_index, name_of(*it->second),
+                               name_of(s));
+    }
+    std::string missing;
+    for (int i = 0; i < first.shard_count; ++i)
+        if (by_index.count(i) == 0) missing += fmt::format("{}{}", missing.empty() ? "" : ", ", i);
+    if (!missing.empty())
+        return fmt::format("missing shards: {} of {} given, shard {} missing", shards.size(),
+                           first.shard_count, missing);
+    return {};
+}
+
+// Completeness: every shard once, or --expect's number of runs. Empty when whole.
+std::string completeness_refusal(const std::vector<ShardRun>& shards, std::uint32_t expect_runs) {
+    const ShardRun& first = shards.front();
     const bool numbered = first.shard_count > 0;
     for (const auto& s : shards) {
         if ((s.shard_count > 0) != numbered)
-            return refuse(
-                fmt::format("{} is {}, {} is {}: shards merge only with the other "
-                            "shards of their test",
-                            name_of(s), shard_text(s.shard_index, s.shard_count), name_of(first),
-                            shard_text(first.shard_index, first.shard_count)));
+            return fmt::format(
+                "{} is {}, {} is {}: shards merge only with the other shards of their test",
+                name_of(s), shard_text(s.shard_index, s.shard_count), name_of(first),
+                shard_text(first.shard_index, first.shard_count));
         if (s.shard_count != first.shard_count)
-            return refuse(fmt::format("{} and {} disagree on the shard count ({} vs {})",
-                                      name_of(s), name_of(first), s.shard_count,
-                                      first.shard_count));
+            return fmt::format("{} and {} disagree on the shard count ({} vs {})", name_of(s),
+                               name_of(first), s.shard_count, first.shard_count);
     }
-    if (numbered) {
-        std::map<int, const ShardRun*> by_index;
-        for (const auto& s : shards) {
-            if (s.shard_index < 0 || s.shard_index >= s.shard_count)
-                return refuse(fmt::format("{}: shard index {} outside 0..{}", name_of(s),
-                                          s.shard_index, s.shard_count - 1));
-            if (auto [it, fresh] = by_index.emplace(s.shard_index, &s); !fresh)
-                return refuse(fmt::format("duplicate shard {}: {} and {}", s.shard_index,
-                                          name_of(*it->second), name_of(s)));
-        }
-        std::string missing;
-        for (int i = 0; i < first.shard_count; ++i)
-            if (by_index.count(i) == 0)
-                missing += fmt::format("{}{}", missing.empty() ? "" : ", ", i);
-        if (!missing.empty())
-            return refuse(fmt::format("missing shards: {} of {} given, shard {} missing",
-                                      shards.size(), first.shard_count, missing));
-    }
+    if (numbered)
+        if (std::string why = shard_set_refusal(shards); !why.empty()) return why;
     if (expect_runs != 0 && shards.size() != expect_runs)
-        return refuse(fmt::format("{} runs given, --expect says the test has {}{}", shards.size(),
-                                  expect_runs,
-                                  shards.size() < expect_runs ? ": missing runs" : ""));
+        return fmt::format("{} runs given, --expect says the test has {}{}", shards.size(),
+                           expect_runs, shards.size() < expect_runs ? ": missing runs" : "");
+    return {};
+}
 
-    // Merge.
-    stats::RunResult& out = r.run;
-    auto& m = out.metadata;
+// The merged run's metadata (the first run's plan over the span from origin to end, in epoch
+// seconds), operations and stages with their counts cleared. True when the runs' stages merge
+// into one table (all have as many).
+bool shape_merged_run(const std::vector<ShardRun>& shards, std::uint64_t interval, double origin,
+                      double end, stats::RunResult& out) {
+    const ShardRun& first = shards.front();
     const auto& fm = first.summary.metadata;
-    const std::uint64_t interval = first.summary.timeline_interval_ns == 0
-                                       ? 1'000'000'000
-                                       : first.summary.timeline_interval_ns;
-    double origin = first.measure_start_epoch_s, end = 0.0;
-    for (const auto& s : shards) {
-        origin = std::min(origin, s.measure_start_epoch_s);
-        end = std::max(end, s.measure_start_epoch_s +
-                                static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
-    }
+    auto& m = out.metadata;
     m.tool_version = fm.tool_version;
     m.target = fm.target;
     m.depth = fm.depth;
@@ -444,10 +639,10 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
     m.coordinated_omission_corrected = fm.coordinated_omission_corrected;
     m.test_id = fm.test_id;
     m.merged_runs = static_cast<std::uint32_t>(shards.size());
-    const auto origin_time = std::chrono::system_clock::time_point(
-        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-            std::chrono::duration<double>(origin)));
-    m.start_time = origin_time - std::chrono::nanoseconds(m.warmup_ns);
+    m.start_time = std::chrono::system_clock::time_point(
+                       std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                           std::chrono::duration<double>(origin))) -
+                   std::chrono::nanoseconds(m.warmup_ns);
     out.timeline_interval_ns = interval;
     out.operations = first.summary.operations;
     for (auto& op : out.operations) op.counters.reset();
@@ -463,134 +658,197 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             st.connections_from = st.connections_to = 0;
         }
     }
-    std::vector<std::uint64_t> stage_min(out.stages.size(), UINT64_MAX),
-        stage_max(out.stages.size(), 0);
-    std::vector<std::string> without_stage_lines;
+    return stages_merge;
+}
 
-    std::map<std::int64_t, MergedInterval> timeline;
+// Exact extremes from the runs' JSONs (the logs only know buckets), narrowed into the merged
+// histograms at the end.
+struct Extremes {
     std::uint64_t min_ns = UINT64_MAX, max_ns = 0;
-    std::vector<std::uint64_t> op_min(out.operations.size(), UINT64_MAX),
-        op_max(out.operations.size(), 0);
-    for (const auto& s : shards) {
-        const auto& sm = s.summary.metadata;
-        m.threads += sm.threads;
-        m.connections += sm.connections;
-        m.rate_per_second += sm.rate_per_second;
-        for (const auto& note : sm.notes)
-            m.notes.push_back(fmt::format("run {}: {}", sm.run_id, note));
-        out.counters.add(s.summary.counters);
-        for (std::size_t i = 0; i < out.operations.size(); ++i) {
-            out.operations[i].counters.add(s.summary.operations[i].counters);
-            if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
-                op_min[i] = std::min(op_min[i], s.op_min_ns[i]);
-                op_max[i] = std::max(op_max[i], s.op_max_ns[i]);
-            }
-        }
-        for (std::size_t i = 0; i < out.stages.size(); ++i) {
-            const stats::StageResult& from = s.summary.stages[i];
-            stats::StageResult& into = out.stages[i];
-            into.counters.add(from.counters);
-            into.rate_from += from.rate_from;
-            into.rate_to += from.rate_to;
-            into.connections_from += from.connections_from;
-            into.connections_to += from.connections_to;
-            if (s.stage_max_ns[i] != 0 || s.stage_min_ns[i] != 0) {
-                stage_min[i] = std::min(stage_min[i], s.stage_min_ns[i]);
-                stage_max[i] = std::max(stage_max[i], s.stage_max_ns[i]);
-            }
-        }
-        if (s.latency_count != 0) {
-            min_ns = std::min(min_ns, s.min_ns);
-            max_ns = std::max(max_ns, s.max_ns);
-        }
-        out.schedule_lag.engine.add(s.summary.schedule_lag.engine);
-        out.schedule_lag.target.add(s.summary.schedule_lag.target);
-        auto& c = out.connections;
-        c.opened += s.summary.connections.opened;
-        c.failed += s.summary.connections.failed;
-        c.reconnects += s.summary.connections.reconnects;
-        c.closed_by_peer += s.summary.connections.closed_by_peer;
-        c.peak_open += s.summary.connections.peak_open;
-        for (const auto& [name, count] : s.summary.connections.failed_by_cause)
-            c.failed_by_cause[name] += count;
-        c.tls_handshakes += s.summary.connections.tls_handshakes;
-        c.tls_resumed += s.summary.connections.tls_resumed;
-        c.tls_handshake_ns_total += s.summary.connections.tls_handshake_ns_total;
-        c.tls_handshake_ns_max =
-            std::max(c.tls_handshake_ns_max, s.summary.connections.tls_handshake_ns_max);
-        c.tls_handshake_failures += s.summary.connections.tls_handshake_failures;
-        c.tls_offloaded += s.summary.connections.tls_offloaded;
-        c.tls_offload_errors += s.summary.connections.tls_offload_errors;
-        for (auto p : s.summary.shortfalls) {
-            p.text = fmt::format("run {}: {}", sm.run_id, p.text);
-            out.shortfalls.push_back(std::move(p));
-        }
-        out.pipelining.skipped_requests += s.summary.pipelining.skipped_requests;
+    std::vector<std::uint64_t> op_min, op_max, stage_min, stage_max;
+    Extremes(std::size_t operations, std::size_t stages)
+        : op_min(operations, UINT64_MAX),
+          op_max(operations, 0),
+          stage_min(stages, UINT64_MAX),
+          stage_max(stages, 0) {}
+    void narrow(stats::RunResult& out) const {
+        out.latency.narrow_extremes(min_ns, max_ns);
+        for (std::size_t i = 0; i < out.operations.size(); ++i)
+            out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
+        for (std::size_t i = 0; i < out.stages.size(); ++i)
+            out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
+    }
+};
 
-        // On the wall clock: a run's interval k goes to the merged interval holding its middle.
-        const double offset = s.measure_start_epoch_s - origin;
-        auto slot = [&](double start_s) {
-            const double middle = offset + start_s + static_cast<double>(interval) / 2e9;
-            return static_cast<std::int64_t>(
-                std::floor(middle * 1e9 / static_cast<double>(interval)));
-        };
-        for (const auto& iv : s.summary.timeline) {
-            MergedInterval& into = timeline[slot(static_cast<double>(iv.start_offset_ns) / 1e9)];
-            into.transactions += iv.transactions;
-            into.errors += iv.errors;
-            into.target_rate += iv.target_rate;
-            into.open_connections += iv.open_connections;
+void add_connections(const stats::ConnectionStats& from, stats::ConnectionStats& c) {
+    c.opened += from.opened;
+    c.failed += from.failed;
+    c.reconnects += from.reconnects;
+    c.closed_by_peer += from.closed_by_peer;
+    c.peak_open += from.peak_open;
+    for (const auto& [name, count] : from.failed_by_cause) c.failed_by_cause[name] += count;
+    c.tls_handshakes += from.tls_handshakes;
+    c.tls_resumed += from.tls_resumed;
+    c.tls_handshake_ns_total += from.tls_handshake_ns_total;
+    c.tls_handshake_ns_max = std::max(c.tls_handshake_ns_max, from.tls_handshake_ns_max);
+    c.tls_handshake_failures += from.tls_handshake_failures;
+    c.tls_offloaded += from.tls_offloaded;
+    c.tls_offload_errors += from.tls_offload_errors;
+}
+
+// A run's JSON counts by operation and stage into out's, with their exact extremes.
+void add_operation_and_stage_counts(const ShardRun& s, stats::RunResult& out, Extremes& x) {
+    for (std::size_t i = 0; i < out.operations.size(); ++i) {
+        out.operations[i].counters.add(s.summary.operations[i].counters);
+        if (s.op_max_ns[i] != 0 || s.op_min_ns[i] != 0) {
+            x.op_min[i] = std::min(x.op_min[i], s.op_min_ns[i]);
+            x.op_max[i] = std::max(x.op_max[i], s.op_max_ns[i]);
         }
-        std::uint64_t logged = 0;
-        bool stage_lines = false;
-        for (const auto& line : s.log.intervals) {
+    }
+    for (std::size_t i = 0; i < out.stages.size(); ++i) {
+        const stats::StageResult& from = s.summary.stages[i];
+        stats::StageResult& into = out.stages[i];
+        into.counters.add(from.counters);
+        into.rate_from += from.rate_from;
+        into.rate_to += from.rate_to;
+        into.connections_from += from.connections_from;
+        into.connections_to += from.connections_to;
+        if (s.stage_max_ns[i] != 0 || s.stage_min_ns[i] != 0) {
+            x.stage_min[i] = std::min(x.stage_min[i], s.stage_min_ns[i]);
+            x.stage_max[i] = std::max(x.stage_max[i], s.stage_max_ns[i]);
+        }
+    }
+}
+
+// A run's JSON (everything but its timeline and log) added into out.
+void add_run_summary(const ShardRun& s, stats::RunResult& out, Extremes& x) {
+    const auto& sm = s.summary.metadata;
+    auto& m = out.metadata;
+    m.threads += sm.threads;
+    m.connections += sm.connections;
+    m.rate_per_second += sm.rate_per_second;
+    for (const auto& note : sm.notes) m.notes.push_back(fmt::format("run {}: {}", sm.run_id, note));
+    out.counters.add(s.summary.counters);
+    add_operation_and_stage_counts(s, out, x);
+    if (s.latency_count != 0) {
+        x.min_ns = std::min(x.min_ns, s.min_ns);
+        x.max_ns = std::max(x.max_ns, s.max_ns);
+    }
+    out.schedule_lag.engine.add(s.summary.schedule_lag.engine);
+    out.schedule_lag.target.add(s.summary.schedule_lag.target);
+    add_connections(s.summary.connections, out.connections);
+    for (auto p : s.summary.shortfalls) {
+        p.text = fmt::format("run {}: {}", sm.run_id, p.text);
+        out.shortfalls.push_back(std::move(p));
+    }
+    out.pipelining.skipped_requests += s.summary.pipelining.skipped_requests;
+}
+
+// Where a run's intervals fall on the merged timeline, and how far its lines may start.
+struct RunOnTimeline {
+    double offset_s;     // the run's start after the earliest run's
+    double run_s;        // its measured duration
+    double allowance_s;  // a line may start this far outside [0, run_s]
+    std::uint64_t interval_ns;
+
+    RunOnTimeline(const ShardRun& s, double origin, std::uint64_t interval)
+        : offset_s(s.measure_start_epoch_s - origin),
+          run_s(static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9),
+          allowance_s(static_cast<double>(interval) / 1e9 + kLineAllowanceSeconds),
+          interval_ns(interval) {}
+    // On the wall clock: a run's interval goes to the merged interval holding its middle.
+    std::int64_t slot(double start_s) const {
+        const double middle = offset_s + start_s + static_cast<double>(interval_ns) / 2e9;
+        return static_cast<std::int64_t>(
+            std::floor(middle * 1e9 / static_cast<double>(interval_ns)));
+    }
+    bool holds(double start_s, double length_s) const {
+        return start_s >= -allowance_s && start_s <= run_s + allowance_s &&
+               length_s <= run_s + allowance_s;
+    }
+};
+
+// A run's JSON timeline into the merged intervals' counts. Empty, or why it is refused.
+std::string add_timeline_counts(const ShardRun& s, const RunOnTimeline& place,
+                                std::map<std::int64_t, SlotCounts>& counts) {
+    for (const auto& iv : s.summary.timeline) {
+        const double start_s = static_cast<double>(iv.start_offset_ns) / 1e9;
+        if (!place.holds(start_s, 0.0))
+            return fmt::format(
+                "{}: timeline interval {} starts at {:.3f} s, after the run's own {:.3f} s "
+                "(measured_duration_s)",
+                s.json_path, iv.index, start_s, place.run_s);
+        SlotCounts& into = counts[place.slot(start_s)];
+        into.transactions += iv.transactions;
+        into.errors += iv.errors;
+        into.target_rate += iv.target_rate;
+        into.open_connections += iv.open_connections;
+    }
+    return {};
+}
+
+// What a run's log gave: its untagged lines' places, whether it had stage lines.
+struct LogPass {
+    std::vector<SlotLine> untagged;
+    bool stage_lines = false;
+};
+
+// A run's log, streamed: tagged lines added into their operation, stage lines into their
+// stage, untagged lines noted (merged interval, position) for summarize_latency_slots.
+// Empty, or why it is refused.
+std::string add_log_lines(const ShardRun& s, std::uint32_t run_index, const RunOnTimeline& place,
+                          IntervalLines& lines, HlogInterval& scratch, stats::RunResult& out,
+                          LogPass& pass) {
+    std::string why;
+    pass.stage_lines = false;
+    const bool read = lines.each(
+        [&](const HlogInterval& line, std::uint64_t position) {
+            if (!place.holds(line.start_s, line.length_s)) {
+                why = fmt::format(
+                    "{}: a line of {:.3f} s starting at {:.3f} s, outside the run's own {:.3f} s "
+                    "(measured_duration_s of {})",
+                    s.hlog_path, line.length_s, line.start_s, place.run_s, s.json_path);
+                return false;
+            }
             if (const std::uint32_t k = stage_of_hlog_tag(line.tag); k != 0) {
-                stage_lines = true;
+                pass.stage_lines = true;
                 if (k <= out.stages.size()) out.stages[k - 1].latency.add(line.histogram);
-                continue;
+            } else if (line.tag.empty()) {
+                pass.untagged.push_back({place.slot(line.start_s), run_index, position});
+            } else {
+                for (auto& op : out.operations)
+                    if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
             }
-            if (line.tag.empty()) {
-                out.latency.add(line.histogram);
-                timeline[slot(line.start_s)].latency.add(line.histogram);
-                logged += line.histogram.total_count();
-                continue;
-            }
-            for (auto& op : out.operations)
-                if (hlog_tag(op.name) == line.tag) op.latency.add(line.histogram);
-        }
-        if (!out.stages.empty() && !stage_lines) without_stage_lines.push_back(name_of(s));
-        if (logged != s.latency_count)
-            r.warnings.push_back(fmt::format(
-                "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
-                "answers that came in after their interval was logged)",
-                name_of(s), logged, s.latency_count));
-    }
-    out.latency.narrow_extremes(min_ns, max_ns);
-    for (std::size_t i = 0; i < out.operations.size(); ++i)
-        out.operations[i].latency.narrow_extremes(op_min[i], op_max[i]);
-    for (std::size_t i = 0; i < out.stages.size(); ++i)
-        out.stages[i].latency.narrow_extremes(stage_min[i], stage_max[i]);
-    if (!timeline.empty()) {
-        const std::int64_t last = timeline.rbegin()->first;
-        for (std::int64_t k = std::max<std::int64_t>(0, timeline.begin()->first); k <= last; ++k) {
-            const MergedInterval& iv = timeline[k];
-            stats::IntervalSummary s = stats::summarize_interval(
-                static_cast<std::uint64_t>(k), interval, iv.latency, iv.transactions, iv.errors);
-            s.target_rate = iv.target_rate;
-            s.open_connections = iv.open_connections;
-            out.timeline.push_back(s);
-        }
-        // The last interval runs to the end of the last run: runs that started apart end
-        // mid-interval, and their last stretch lands there (its throughput divides by this).
-        auto& back = out.timeline.back();
-        if (back.start_offset_ns < m.measured_duration_ns)
-            back.duration_ns = m.measured_duration_ns - back.start_offset_ns;
-    }
-    if (std::string w = overlap_warning(shards); !w.empty()) r.warnings.push_back(std::move(w));
-    m.notes.push_back(fmt::format(
-        "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
-        "timeline on wall-clock time from {}",
-        shards.size(), m.test_id, format_utc(origin_time)));
+            return true;
+        },
+        scratch, why);
+    return read ? std::string() : why;
+}
+
+// Every merged interval from the first to the last that holds anything (none before 0), gaps
+// included, each without a histogram. The last runs to the end of the last run: runs that
+// started apart end mid-interval, and their last stretch lands there.
+void fill_timeline(const std::map<std::int64_t, SlotCounts>& counts,
+                   const std::map<std::int64_t, stats::IntervalSummary>& latency,
+                   stats::RunResult& out) {
+    if (counts.empty() && latency.empty()) return;
+    std::int64_t first_slot = INT64_MAX, last_slot = INT64_MIN;
+    for (const std::int64_t k : {counts.empty() ? INT64_MAX : counts.begin()->first,
+                                 latency.empty() ? INT64_MAX : latency.begin()->first})
+        first_slot = std::min(first_slot, k);
+    for (const std::int64_t k : {counts.empty() ? INT64_MIN : counts.rbegin()->first,
+                                 latency.empty() ? INT64_MIN : latency.rbegin()->first})
+        last_slot = std::max(last_slot, k);
+    for (std::int64_t k = std::max<std::int64_t>(0, first_slot); k <= last_slot; ++k)
+        out.timeline.push_back(merged_interval(k, out.timeline_interval_ns, counts, latency));
+    const std::uint64_t measured = out.metadata.measured_duration_ns;
+    if (!out.timeline.empty() && out.timeline.back().start_offset_ns < measured)
+        out.timeline.back().duration_ns = measured - out.timeline.back().start_offset_ns;
+}
+
+// The per-stage table kept, or left out with a warning saying why.
+void settle_stage_table(const std::vector<ShardRun>& shards, bool stages_merge,
+                        const std::vector<std::string>& without_stage_lines, MergeOutcome& r) {
     const bool any_stages = std::any_of(
         shards.begin(), shards.end(), [](const ShardRun& s) { return !s.summary.stages.empty(); });
     if (!without_stage_lines.empty()) {
@@ -598,16 +856,93 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
             "no per-stage table: the interval log of {} holds no stage histograms (an mbstorm "
             "that did not write them); the timeline shows the stages",
             without_stage_lines.front()));
-        out.stages.clear();
+        r.run.stages.clear();
     } else if (any_stages && !stages_merge) {
         r.warnings.push_back(
             "no per-stage table: the runs do not have the same stages; the timeline shows them");
     } else if (stages_merge) {
-        m.notes.push_back(
+        r.run.metadata.notes.push_back(
             "per-stage table: each run's stage histograms (its interval log's stage lines) "
             "added, stage by stage, on each run's own clock");
     }
-    r.threshold_expressions = first.threshold_expressions;
+}
+
+// The runs' span on the wall clock, epoch seconds: the earliest start, the latest end.
+std::pair<double, double> span_of(const std::vector<ShardRun>& shards) {
+    double origin = shards.front().measure_start_epoch_s, end = 0.0;
+    for (const auto& s : shards) {
+        origin = std::min(origin, s.measure_start_epoch_s);
+        end = std::max(end, s.measure_start_epoch_s +
+                                static_cast<double>(s.summary.metadata.measured_duration_ns) / 1e9);
+    }
+    return {origin, end};
+}
+
+}  // namespace
+
+MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
+    MergeOutcome r;
+    auto refuse = [&r](std::string why) {
+        r.error = std::move(why);
+        return r;
+    };
+    if (shards.empty()) return refuse("no runs to merge");
+    if (std::string why = identity_refusal(shards); !why.empty()) return refuse(why);
+    if (std::string why = completeness_refusal(shards, expect_runs); !why.empty())
+        return refuse(why);
+    const std::uint64_t interval = shards.front().summary.timeline_interval_ns == 0
+                                       ? 1'000'000'000
+                                       : shards.front().summary.timeline_interval_ns;
+    const auto [origin, end] = span_of(shards);
+    if (const double slots = (end - origin) * 1e9 / static_cast<double>(interval);
+        slots > kMaxTimelineSlots)
+        return refuse(fmt::format(
+            "the runs span {:.0f} s from the first start to the last end, {:.0f} intervals of "
+            "{} s: more than the {:.0f} a merged timeline holds (runs of one test started days "
+            "apart? each JSON's test.measure_start_epoch_s says when its run started)",
+            end - origin, slots, static_cast<double>(interval) / 1e9, kMaxTimelineSlots));
+
+    stats::RunResult& out = r.run;
+    const bool stages_merge = shape_merged_run(shards, interval, origin, end, out);
+    Extremes extremes(out.operations.size(), out.stages.size());
+    std::map<std::int64_t, SlotCounts> counts_by_slot;
+    std::vector<IntervalLines> logs(shards.begin(), shards.end());
+    HlogInterval scratch;
+    LogPass pass;
+    std::vector<std::string> without_stage_lines;
+    for (std::uint32_t run_index = 0; run_index < shards.size(); ++run_index) {
+        const ShardRun& s = shards[run_index];
+        add_run_summary(s, out, extremes);
+        const RunOnTimeline place(s, origin, interval);
+        if (std::string why = add_timeline_counts(s, place, counts_by_slot); !why.empty())
+            return refuse(why);
+        if (std::string why =
+                add_log_lines(s, run_index, place, logs[run_index], scratch, out, pass);
+            !why.empty())
+            return refuse(why);
+        if (!out.stages.empty() && !pass.stage_lines) without_stage_lines.push_back(name_of(s));
+    }
+    std::map<std::int64_t, stats::IntervalSummary> latency_by_slot;
+    std::vector<std::uint64_t> logged(shards.size(), 0);
+    if (std::string why; !summarize_latency_slots(pass.untagged, logs, interval, out.latency,
+                                                  logged, latency_by_slot, why))
+        return refuse(why);
+    for (std::size_t i = 0; i < shards.size(); ++i)
+        if (logged[i] != shards[i].latency_count)
+            r.warnings.push_back(fmt::format(
+                "{}: its interval log holds {} latencies, its JSON {} (a log cut short, or "
+                "answers that came in after their interval was logged)",
+                name_of(shards[i]), logged[i], shards[i].latency_count));
+    extremes.narrow(out);
+    fill_timeline(counts_by_slot, latency_by_slot, out);
+    if (std::string w = overlap_warning(shards); !w.empty()) r.warnings.push_back(std::move(w));
+    out.metadata.notes.push_back(fmt::format(
+        "merged from {} runs (test '{}'): latencies from their interval logs' histograms, the "
+        "timeline on wall-clock time from {}",
+        shards.size(), out.metadata.test_id,
+        format_utc(out.metadata.start_time + std::chrono::nanoseconds(out.metadata.warmup_ns))));
+    settle_stage_table(shards, stages_merge, without_stage_lines, r);
+    r.threshold_expressions = shards.front().threshold_expressions;
     r.ok = true;
     return r;
 }

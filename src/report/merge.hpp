@@ -38,7 +38,10 @@ struct ShardRun {
     std::uint64_t min_ns = 0, max_ns = 0, latency_count = 0;
     std::vector<std::uint64_t> op_min_ns, op_max_ns;
     std::vector<std::uint64_t> stage_min_ns, stage_max_ns;  // by stage (summary.stages)
+    // The log's header; its intervals too unless log_from_file, when merge_shards streams
+    // them from hlog_path (read_shards: a decoded interval is a 270 KB histogram).
     Hlog log;
+    bool log_from_file = false;
 };
 
 // Reads a run's JSON summary (not its log). False with error naming the file on failure.

@@ -52,7 +52,8 @@ IntervalSummary summarize_interval(std::uint64_t index, std::uint64_t interval_n
                                    std::uint64_t errors) noexcept;
 
 // One interval's full histograms, kept for an interval log (IntervalTimeline::keep_histograms):
-// all operations, and one per tag (operation) in the order the recorders number them.
+// all operations, and one per tag (operation) in the order the recorders number them (none
+// when no worker contributed to the interval).
 struct IntervalHistograms {
     std::uint64_t index = 0;
     std::uint64_t start_offset_ns = 0;
@@ -173,6 +174,9 @@ class IntervalTimeline {
     void copy_summaries(std::size_t from, std::vector<IntervalSummary>& out) const;
     std::uint64_t interval_ns() const noexcept { return interval_ns_; }
     std::uint64_t dropped_intervals() const;
+    // Sets of per-tag histograms made so far (keep_histograms()): each is tags() histograms;
+    // only intervals in flight or waiting for the drain hold one.
+    std::size_t tag_sets_made() const;
     std::uint64_t late_contributions() const;
 
   private:
@@ -181,10 +185,11 @@ class IntervalTimeline {
         Histogram latency;
         std::uint64_t transactions = 0;
         std::uint64_t errors = 0;
-        std::vector<Histogram> by_tag;  // keep_histograms() only
+        std::vector<Histogram> by_tag;  // keep_histograms(): from its first contribution
     };
-    void summarize_next() noexcept;               // requires mutex_ held
-    void keep_completed(Pending& slot) noexcept;  // requires mutex_ held
+    void summarize_next() noexcept;                            // requires mutex_ held
+    void keep_completed(Pending& slot) noexcept;               // requires mutex_ held
+    void take_tag_set(std::vector<Histogram>& into) noexcept;  // requires mutex_ held
 
     mutable std::mutex mutex_;
     std::uint64_t interval_ns_;
@@ -203,6 +208,8 @@ class IntervalTimeline {
     std::vector<std::unique_ptr<IntervalHistograms>> completed_;
     std::vector<std::unique_ptr<IntervalHistograms>> spare_;
     std::vector<std::unique_ptr<IntervalHistograms>> draining_;  // drain_histograms() only
+    std::vector<std::vector<Histogram>> spare_tag_sets_;         // by_tag sets between intervals
+    std::size_t tag_sets_made_ = 0;
 };
 
 }  // namespace mbstorm::stats

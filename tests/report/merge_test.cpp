@@ -1,9 +1,12 @@
 #include "report/merge.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -380,6 +383,283 @@ TEST(Merge, RefusesACountThatIsNotAWholeNumberThatFits) {
         EXPECT_FALSE(read_with(bad, error)) << bad.dump();
         EXPECT_NE(error.find("is not a whole number"), std::string::npos) << error;
     }
+}
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
+constexpr int kMergedExit = 0, kRefusedExit = 2, kOutOfMemoryExit = 3;
+
+// merge_shards(runs) in a child process limited to `megabytes` of address space: kMergedExit,
+// kRefusedExit or kOutOfMemoryExit (bad_alloc). Before issue #31 these inputs allocated a
+// 270 KB histogram per timeline interval until the machine ran out: the limit keeps a
+// regression from taking the machine with it.
+int merge_limited(const std::vector<ShardRun>& runs, decltype(RLIMIT_AS) resource, rlim_t value) {
+    const pid_t child = ::fork();
+    if (child == 0) {
+        const rlimit limit{value, value};
+        ::setrlimit(resource, &limit);
+        try {
+            ::_exit(merge_shards(runs).ok ? kMergedExit : kRefusedExit);
+        } catch (const std::bad_alloc&) {
+            ::_exit(kOutOfMemoryExit);
+        }
+    }
+    int status = 0;
+    ::waitpid(child, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+int merge_within(const std::vector<ShardRun>& runs, rlim_t megabytes) {
+    return merge_limited(runs, RLIMIT_AS, megabytes << 20);
+}
+
+std::vector<ShardRun> two_runs(double second_start_s, int intervals = 2) {
+    std::mt19937_64 rng(31);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> v;
+    v.push_back(make_shard("a", 1000.0, intervals, rng, all, all_read));
+    v.push_back(make_shard("b", second_start_s, intervals, rng, all, all_read));
+    return v;
+}
+
+}  // namespace
+
+// Issue #31: two legitimate runs a day apart (or one start time edited a day later) made the
+// merge allocate a histogram for each of the 86,400 empty intervals between them (23 GB). They
+// merge now with the overlap warning, every interval of the span in the timeline and a
+// histogram only while an interval with latencies is being summarized.
+TEST(Merge, RunsADayApartMergeInBoundedMemory) {
+    const auto v = two_runs(1000.0 + 86'400.0);
+    if (!kAddressSanitizer) {
+        ASSERT_EQ(merge_within(v, 1024), kMergedExit);
+    }
+    const MergeOutcome r = merge_shards(v);
+    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_EQ(r.warnings.size(), 1u);
+    EXPECT_NE(r.warnings[0].find("did not all run at the same time"), std::string::npos);
+    ASSERT_EQ(r.run.timeline.size(), 86'402u);
+    std::size_t with_latencies = 0;
+    for (const auto& iv : r.run.timeline) with_latencies += iv.latency_count != 0 ? 1 : 0;
+    EXPECT_EQ(with_latencies, 4u);
+    EXPECT_EQ(r.run.timeline[86'400].latency_count, 1000u);
+    EXPECT_EQ(r.run.timeline[86'400].transactions, 1000u);
+    EXPECT_EQ(r.run.timeline[5].transactions, 0u);
+    EXPECT_EQ(r.run.latency.total_count(), 4000u);
+}
+
+// A span no timeline should hold (a start time edited a year on, an interval of 1 µs) is
+// refused with the reason, not allocated for.
+TEST(Merge, RefusesASpanOfMoreIntervalsThanATimelineHolds) {
+    const auto year = two_runs(1000.0 + 365 * 86'400.0);
+    if (!kAddressSanitizer) {
+        ASSERT_EQ(merge_within(year, 1024), kRefusedExit);
+    }
+    const MergeOutcome r = merge_shards(year);
+    ASSERT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("more than the 1000000 a merged timeline holds"), std::string::npos)
+        << r.error;
+    auto micro = two_runs(1000.0);
+    for (auto& s : micro) s.summary.timeline_interval_ns = 1000;
+    EXPECT_FALSE(merge_shards(micro).ok);
+}
+
+// A log line far outside its run (an edited start: 1e6 s in a 2 s run) made the timeline a
+// million intervals long; a JSON interval likewise. Both are refused naming the file.
+TEST(Merge, RefusesALineOutsideItsRunsOwnDuration) {
+    auto v = two_runs(1000.0);
+    v[1].log.intervals[3].start_s = 1e6;  // b's second untagged line
+    if (!kAddressSanitizer) {
+        ASSERT_EQ(merge_within(v, 1024), kRefusedExit);
+    }
+    MergeOutcome r = merge_shards(v);
+    ASSERT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("b.hlog: a line of 1.000 s starting at 1000000.000 s, outside the "
+                           "run's own 2.000 s"),
+              std::string::npos)
+        << r.error;
+    v = two_runs(1000.0);
+    v[0].summary.timeline[1].start_offset_ns = 1'000'000 * kSecond;
+    r = merge_shards(v);
+    ASSERT_FALSE(r.ok);
+    EXPECT_NE(r.error.find("a.json: timeline interval 1 starts at 1000000.000 s"),
+              std::string::npos)
+        << r.error;
+}
+
+// mbstorm merge streams each log from its file (read_shards): the result is the one the
+// decoded logs give.
+TEST(Merge, LogsStreamedFromTheirFilesMergeAsTheirDecodedLines) {
+    auto in_memory = two_runs(1000.0, 3);
+    auto streamed = in_memory;
+    const auto dir = std::filesystem::temp_directory_path();
+    for (auto& s : streamed) {
+        s.hlog_path = (dir / ("merge-stream-" + std::to_string(::getpid()) + s.hlog_path)).string();
+        HlogWriter writer;
+        std::string error;
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        writer.start(std::chrono::system_clock::time_point{});
+        for (const auto& line : s.log.intervals)
+            writer.write_interval(line.tag, line.start_s, line.length_s, line.histogram);
+        ASSERT_TRUE(writer.close(error)) << error;
+        s.log.intervals.clear();
+        s.log_from_file = true;
+    }
+    const MergeOutcome a = merge_shards(in_memory), b = merge_shards(streamed);
+    for (const auto& s : streamed) std::remove(s.hlog_path.c_str());
+    ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
+    expect_same_histogram(b.run.latency, a.run.latency);
+    expect_same_histogram(b.run.operations[1].latency, a.run.operations[1].latency);
+    ASSERT_EQ(b.run.timeline.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(b.run.timeline[k].p99_ns, a.run.timeline[k].p99_ns);
+        EXPECT_EQ(b.run.timeline[k].latency_count, 2000u);
+    }
+    EXPECT_EQ(b.warnings, a.warnings);
+}
+
+// Past 64 runs the logs are not all held open while their lines are read again in time order
+// (a descriptor per run of a 1000-shard test is too many): each is reopened per line, with the
+// same result, and 70 runs merge with 32 descriptors.
+TEST(Merge, ManyStreamedLogsMergeAsTheirDecodedLines) {
+    std::mt19937_64 rng(3);
+    stats::Histogram all, all_read;
+    std::vector<ShardRun> in_memory;
+    for (int i = 0; i < 70; ++i)
+        in_memory.push_back(make_shard("m" + std::to_string(i), 1000.0, 2, rng, all, all_read));
+    auto streamed = in_memory;
+    for (auto& s : streamed) {
+        s.hlog_path = (std::filesystem::temp_directory_path() /
+                       ("merge-many-" + std::to_string(::getpid()) + s.hlog_path))
+                          .string();
+        HlogWriter writer;
+        std::string error;
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        writer.start(std::chrono::system_clock::time_point{});
+        for (const auto& line : s.log.intervals)
+            writer.write_interval(line.tag, line.start_s, line.length_s, line.histogram);
+        ASSERT_TRUE(writer.close(error)) << error;
+        s.log.intervals.clear();
+        s.log_from_file = true;
+    }
+    const int with_32_descriptors = merge_limited(streamed, RLIMIT_NOFILE, 32);
+    const MergeOutcome a = merge_shards(in_memory), b = merge_shards(streamed);
+    for (const auto& s : streamed) std::remove(s.hlog_path.c_str());
+    EXPECT_EQ(with_32_descriptors, kMergedExit);
+    ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
+    expect_same_histogram(b.run.latency, all);
+    ASSERT_EQ(b.run.timeline.size(), 2u);
+    EXPECT_EQ(b.run.timeline[1].latency_count, 70'000u);
+    EXPECT_EQ(b.run.timeline[1].p99_ns, a.run.timeline[1].p99_ns);
+    EXPECT_EQ(b.warnings, a.warnings);
+}
+
+// Issue #31: merge decoded every line of every log before adding any (a 270 KB histogram per
+// line: a 366 KB log took 2.6 GB, an 8-hour soak 23 GB). Two 20-minute logs of 3,600 lines
+// each (1.9 GB once decoded) merge now in a child limited to 512 MB of address space.
+TEST(Merge, LongLogsMergeStreamedInBoundedMemory) {
+    constexpr int kIntervals = 1200;
+    constexpr std::uint64_t kPerInterval = 100;
+    std::mt19937_64 rng(5);
+    stats::Histogram unused, unused_read;
+    std::vector<ShardRun> runs;
+    for (const char* id : {"long-a", "long-b"}) {
+        ShardRun s = make_shard(id, 1000.0, 0, rng, unused, unused_read);
+        s.summary.metadata.requested_duration_ns = kIntervals * kSecond;
+        s.summary.metadata.measured_duration_ns = kIntervals * kSecond;
+        s.latency_count = kIntervals * kPerInterval;
+        s.hlog_path = (std::filesystem::temp_directory_path() /
+                       ("merge-long-" + std::to_string(::getpid()) + s.hlog_path))
+                          .string();
+        s.log_from_file = true;
+        HlogWriter writer;
+        std::string error;
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        writer.start(std::chrono::system_clock::time_point{});
+        stats::Histogram all, read;
+        for (int k = 0; k < kIntervals; ++k) {
+            all.reset();
+            read.reset();
+            for (std::uint64_t i = 0; i < kPerInterval; ++i) {
+                const std::uint64_t v = 1000 + rng() % 5'000'000;
+                all.record(v);
+                read.record(v);
+            }
+            writer.write_interval("", k, 1.0, all);
+            writer.write_interval("read", k, 1.0, read);
+            writer.write_interval("write", k, 1.0, stats::Histogram());
+            stats::IntervalSummary iv;
+            iv.index = static_cast<std::uint64_t>(k);
+            iv.start_offset_ns = k * kSecond;
+            iv.transactions = kPerInterval;
+            s.summary.timeline.push_back(iv);
+        }
+        ASSERT_TRUE(writer.close(error)) << error;
+        runs.push_back(std::move(s));
+    }
+    auto remove_logs = [&runs] {
+        for (const auto& s : runs) std::remove(s.hlog_path.c_str());
+    };
+    // The child first: merged in the test's own process, a regression would take 1.9 GB.
+    if (!kAddressSanitizer && merge_within(runs, 512) != kMergedExit) {
+        remove_logs();
+        FAIL() << "the merge did not fit in 512 MB";
+    }
+    const MergeOutcome r = merge_shards(runs);
+    remove_logs();
+    ASSERT_TRUE(r.ok) << r.error;
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    EXPECT_EQ(r.run.latency.total_count(), 2 * kIntervals * kPerInterval);
+    EXPECT_EQ(r.run.operations[0].latency.total_count(), 2 * kIntervals * kPerInterval);
+    ASSERT_EQ(r.run.timeline.size(), static_cast<std::size_t>(kIntervals));
+    EXPECT_EQ(r.run.timeline[kIntervals - 1].latency_count, 2 * kPerInterval);
+}
+
+// Numbers a run never writes (found by editing one field of a real summary): each refused
+// naming the field, never converted out of range or allocated for.
+TEST(Merge, RefusesTimesIntervalsAndShardCountsNoRunWrites) {
+    std::ifstream in(std::string(MBSTORM_SOURCE_DIR) + "/fuzz/corpus/merge_json/1.json");
+    const nlohmann::json real = nlohmann::json::parse(in);
+    const std::string path = (std::filesystem::temp_directory_path() /
+                              ("merge-bounds-" + std::to_string(::getpid()) + ".json"))
+                                 .string();
+    auto error_with = [&](const nlohmann::json::json_pointer& field, const nlohmann::json& value) {
+        nlohmann::json doc = real;
+        doc[field] = value;
+        std::ofstream(path) << doc.dump();
+        ShardRun run;
+        std::string error;
+        const bool ok = read_shard_summary(path, run, error);
+        std::remove(path.c_str());
+        return ok ? std::string("read") : error;
+    };
+    using ptr = nlohmann::json::json_pointer;
+    EXPECT_EQ(error_with(ptr("/timeline/interval_s"), 1.0), "read");
+    EXPECT_NE(error_with(ptr("/timeline/interval_s"), 1e-6)
+                  .find("interval_s is 1e-06: not a number from 0.001"),
+              std::string::npos);
+    EXPECT_NE(
+        error_with(ptr("/run/measured_duration_s"), 1e300).find("measured_duration_s is 1e+300"),
+        std::string::npos);
+    EXPECT_NE(
+        error_with(ptr("/run/requested_duration_s"), -5.0).find("requested_duration_s is -5.0"),
+        std::string::npos);
+    EXPECT_NE(error_with(ptr("/test/measure_start_epoch_s"), 1e300).find("measure_start_epoch_s"),
+              std::string::npos);
+    EXPECT_NE(error_with(ptr("/test/shard_count"), 2'000'000'000)
+                  .find("shard_count 2000000000 is not one run --shard makes"),
+              std::string::npos);
 }
 
 }  // namespace mbstorm::report
