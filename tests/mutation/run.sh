@@ -3,7 +3,8 @@
 # HEAD), builds the release preset there (incrementally after the first build), runs the
 # suite named for it and reports whether a test caught it. Exit 1 when any survives.
 #   bash tests/mutation/run.sh [SCRATCH_DIR]
-# About 6 min for the first build on 2 cores, then a minute or two per mutation.
+# About 6 min for the first build on 2 cores, then a minute or two per mutation (12 mutants:
+# 33 min on 2026-11-29 beside other builds, all caught).
 set -uo pipefail
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 scratch=${1:-$repo/build/mutation}
