@@ -24,8 +24,10 @@ trap cleanup EXIT
 
 start_server "$work/server.out" "$tool" --threads 1 --seconds 120 || { echo "server did not start"; exit 1; }
 
-# The capture stops by itself (-a duration), so it always ends with every packet flushed.
-timeout 60 tshark -i lo -f "tcp port $port" -a duration:4 -w "$work/capture.pcapng" >"$work/tshark.log" 2>&1 &
+# The capture is stopped (SIGINT, which finishes the file) once the run is done, not after a
+# fixed time: a busy machine made a 4-s window too short for the same kind of capture in
+# rtu_over_tcp_interop.sh. -a duration only bounds it.
+timeout 90 tshark -i lo -f "tcp port $port" -a duration:80 -w "$work/capture.pcapng" >"$work/tshark.log" 2>&1 &
 capture_pid=$!
 for _ in $(seq 100); do
   grep -q "Capturing on" "$work/tshark.log" && break
@@ -77,6 +79,8 @@ YAML
 if ! "$mbstorm" run "$work/all.yaml" -q --json "$work/run.json" >"$work/run.log" 2>&1; then
   echo "FAIL mbstorm run"; sed 's/^/  /' "$work/run.log"; exit 1
 fi
+sleep 0.5  # what is still in flight on lo reaches the capture
+pkill -INT -P "$capture_pid" tshark 2>/dev/null || kill -INT "$capture_pid" 2>/dev/null
 wait "$capture_pid" 2>/dev/null; capture_pid=""
 
 # The dissector tells query from response by the server port.
