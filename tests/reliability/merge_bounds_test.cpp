@@ -20,6 +20,7 @@
 
 #include "../server/client_test_support.hpp"
 #include "../support/run_mbstorm.hpp"
+#include "../support/sanitizers.hpp"
 #include "server/server.hpp"
 
 namespace mbstorm {
@@ -28,17 +29,7 @@ namespace {
 using testing::HasSubstr;
 namespace fs = std::filesystem;
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+using test::kAddressSanitizer;
 
 // The memory bound: an address space of 2 GB (ulimit -v), or, for a binary built with ASan,
 // whose shadow memory alone reserves terabytes of it, a resident size of 2 GB (ASan's own limit).

@@ -13,6 +13,8 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
+#include "../support/sanitizers.hpp"
+
 namespace mbstorm::report {
 namespace {
 
@@ -387,17 +389,7 @@ TEST(Merge, RefusesACountThatIsNotAWholeNumberThatFits) {
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__)
-constexpr bool kAddressSanitizer = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-constexpr bool kAddressSanitizer = true;
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
-#else
-constexpr bool kAddressSanitizer = false;
-#endif
+using test::kAddressSanitizer;
 
 constexpr int kMergedExit = 0, kRefusedExit = 2, kOutOfMemoryExit = 3;
 
