@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
+
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace mbstorm::stats {
 namespace {
@@ -33,41 +37,80 @@ std::uint64_t rank_for_percentile(double percentile, std::uint64_t total) noexce
 
 }  // namespace
 
+Histogram::Counts Histogram::allocate_counts(std::size_t length) {
+    const std::size_t bytes = length * sizeof(std::uint64_t);
+    const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+    const std::size_t mapped = (bytes + page - 1) / page * page;
+    void* memory =
+        ::mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (memory == MAP_FAILED) return Counts(new std::uint64_t[length](), CountsRelease{});
+    // A huge page would commit 2 MB on the first write: the point is to commit little.
+    ::madvise(memory, mapped, MADV_NOHUGEPAGE);
+    return Counts(static_cast<std::uint64_t*>(memory), CountsRelease{mapped});
+}
+
+void Histogram::CountsRelease::operator()(std::uint64_t* counts) const noexcept {
+    if (mapped_bytes == 0) {
+        delete[] counts;
+    } else {
+        ::munmap(counts, mapped_bytes);
+    }
+}
+
+std::size_t Histogram::committed_bytes() const noexcept {
+    const std::size_t mapped = counts_.get_deleter().mapped_bytes;
+    if (mapped == 0) return counts_length_ * sizeof(std::uint64_t);
+    const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+    std::vector<unsigned char> resident(mapped / page);
+    if (::mincore(counts_.get(), mapped, resident.data()) != 0) return mapped;
+    const auto pages = std::count_if(resident.begin(), resident.end(),
+                                     [](unsigned char flags) { return (flags & 1) != 0; });
+    return static_cast<std::size_t>(pages) * page;
+}
+
 Histogram::Histogram(std::uint64_t highest_trackable_ns)
     : highest_trackable_(std::clamp<std::uint64_t>(highest_trackable_ns, 2 * kSubBucketCount,
                                                    kMaxHighestTrackable)),
       bucket_count_(buckets_to_cover(highest_trackable_)),
       counts_length_(static_cast<std::size_t>(bucket_count_ + 1) * kSubBucketHalfCount),
-      counts_(new std::uint64_t[counts_length_]()) {}
+      counts_(allocate_counts(counts_length_)) {}
 
 Histogram::Histogram(const Histogram& other)
     : highest_trackable_(other.highest_trackable_),
       bucket_count_(other.bucket_count_),
       counts_length_(other.counts_length_),
-      counts_(new std::uint64_t[counts_length_]),
-      total_count_(other.total_count_),
-      saturated_(other.saturated_),
-      min_(other.min_),
-      max_(other.max_),
-      beyond_max_(other.beyond_max_) {
-    std::memcpy(counts_.get(), other.counts_.get(), counts_length_ * sizeof(std::uint64_t));
+      counts_(allocate_counts(counts_length_)) {
+    copy_used_counts(other);
 }
 
 Histogram& Histogram::operator=(const Histogram& other) {
     if (this == &other) return *this;
-    if (!counts_ || counts_length_ != other.counts_length_) {
-        counts_.reset(new std::uint64_t[other.counts_length_]);
+    if (counts_ && counts_length_ == other.counts_length_) {
+        reset();  // zeroes the range in use, so that all of the array is zero
+    } else {
+        counts_ = allocate_counts(other.counts_length_);
     }
     highest_trackable_ = other.highest_trackable_;
     bucket_count_ = other.bucket_count_;
     counts_length_ = other.counts_length_;
-    std::memcpy(counts_.get(), other.counts_.get(), counts_length_ * sizeof(std::uint64_t));
+    copy_used_counts(other);
+    return *this;
+}
+
+void Histogram::copy_used_counts(const Histogram& other) noexcept {
+    // Only the used range is copied: outside it both arrays are zero, and copying the zeros
+    // would commit every page.
+    const std::size_t first = other.first_used_index();
+    const std::size_t last = other.last_used_index();
+    if (first <= last) {
+        std::memcpy(counts_.get() + first, other.counts_.get() + first,
+                    (last - first + 1) * sizeof(std::uint64_t));
+    }
     total_count_ = other.total_count_;
     saturated_ = other.saturated_;
     min_ = other.min_;
     max_ = other.max_;
     beyond_max_ = other.beyond_max_;
-    return *this;
 }
 
 std::uint64_t Histogram::value_at_index(std::size_t index) noexcept {

@@ -7,7 +7,11 @@
 //
 // The counts array is allocated once in the constructor; record() never allocates and has
 // no branches apart from the clamp of oversized values (which are counted as saturated).
-// Not thread-safe: give each thread its own histogram and merge them with add().
+// The array is anonymous memory the kernel commits a page at a time on first write, so a
+// histogram costs the pages its values touch (latencies within a few powers of two touch a
+// handful of its 68 pages), not all 272 KB: a run keeping one per operation per thread and
+// interval stays small. Not thread-safe: give each thread its own histogram and merge them
+// with add().
 #pragma once
 
 #include <bit>
@@ -112,6 +116,10 @@ class Histogram {
     std::size_t first_used_index() const noexcept;
     std::size_t last_used_index() const noexcept;
 
+    // Bytes of the counts array the kernel has committed (resident pages), for tests and
+    // memory accounting.
+    std::size_t committed_bytes() const noexcept;
+
     static std::size_t counts_index(std::uint64_t value) noexcept {
         const int bucket = bucket_index(value);
         const auto sub_bucket = static_cast<std::size_t>(value >> bucket);
@@ -120,10 +128,21 @@ class Histogram {
     }
 
   private:
+    // Unmaps (or deletes, when the mapping failed and the heap served) a counts array.
+    struct CountsRelease {
+        std::size_t mapped_bytes = 0;  // 0: from new[]
+        void operator()(std::uint64_t* counts) const noexcept;
+    };
+    using Counts = std::unique_ptr<std::uint64_t[], CountsRelease>;
+    // Zeroed counts, committed page by page on first write.
+    static Counts allocate_counts(std::size_t length);
+    // Copies other's used range into this one's zeroed-elsewhere array.
+    void copy_used_counts(const Histogram& other) noexcept;
+
     std::uint64_t highest_trackable_;
     std::uint32_t bucket_count_;
     std::size_t counts_length_;
-    std::unique_ptr<std::uint64_t[]> counts_;
+    Counts counts_;
     std::uint64_t total_count_ = 0;
     std::uint64_t saturated_ = 0;
     std::uint64_t min_ = UINT64_MAX;

@@ -365,5 +365,37 @@ TEST(PercentileIterator, SingleValue) {
     EXPECT_EQ(points[1].value, 1234u);
 }
 
+// A run keeps one histogram per operation per thread (and per interval with --hlog): each must
+// cost the pages its values touch, not the 272 KB a one-hour layout spans (issue #31: a
+// 1,000-operation scenario took 1.3 GB with --hlog).
+TEST(HistogramMemory, LatenciesWithinTwoPowersOfTwoCommitAFewPages) {
+    Histogram histogram;
+    const std::size_t whole = histogram.counts_length() * sizeof(std::uint64_t);
+    EXPECT_LE(histogram.committed_bytes(), 4096u) << "a new histogram commits next to nothing";
+    for (std::uint64_t ns = 100'000; ns < 200'000; ns += 7) histogram.record(ns);
+    EXPECT_LE(histogram.committed_bytes(), 4u * 4096) << "of " << whole << " bytes";
+    EXPECT_EQ(histogram.min(), 100'000u);
+    EXPECT_EQ(histogram.total_count(), (200'000u - 100'000u + 6) / 7);
+}
+
+TEST(HistogramMemory, ACopyCommitsOnlyTheRangeInUse) {
+    Histogram original;
+    original.record(150'000);
+    original.record(151'000);
+    const Histogram copy(original);
+    EXPECT_LE(copy.committed_bytes(), 2u * 4096);
+    Histogram assigned;
+    assigned.record(3'000'000'000);  // a different range, cleared by the assignment
+    assigned = original;
+    EXPECT_LE(assigned.committed_bytes(), 3u * 4096);
+    for (const Histogram* h : std::vector<const Histogram*>{&copy, &assigned}) {
+        EXPECT_EQ(h->total_count(), 2u);
+        EXPECT_EQ(h->min(), 150'000u);
+        EXPECT_EQ(h->max(), 151'000u);
+        EXPECT_EQ(h->value_at_percentile(100.0), 151'000u);
+        EXPECT_EQ(h->count_at_index(Histogram::counts_index(3'000'000'000)), 0u);
+    }
+}
+
 }  // namespace
 }  // namespace mbstorm::stats
