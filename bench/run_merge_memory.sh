@@ -53,6 +53,7 @@ json.dump(d, open('$name/s$i.json', 'w'))"
     done
 }
 craft day_apart 1 "d['test']['measure_start_epoch_s'] += 86400"
+craft ten_days_apart 1 "d['test']['measure_start_epoch_s'] += 864000"  # near the 1e6-slot cap
 craft interval_1us "0 1" "d['timeline']['interval_s'] = 1e-6"
 craft shards_2e9 "0 1" "d['test']['shard_count'] = 2000000000"
 sed -i '1s|/2]$|/2000000000]|' shards_2e9/s0.hlog shards_2e9/s1.hlog
@@ -63,7 +64,7 @@ for dir in short long; do
 done
 for bin in "$mbstorm" ${other:+"$other"}; do
     echo "$bin:"
-    for dir in short long day_apart interval_1us shards_2e9 duration_1e300; do
+    for dir in short long day_apart ten_days_apart interval_1us shards_2e9 duration_1e300; do
         measure "$bin" "$dir" $((6 * 1024 * 1024))
     done
 done

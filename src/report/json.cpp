@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -228,13 +230,53 @@ json schedule_lag_json(const stats::RunResult& r) {
 
 }  // namespace
 
+namespace {
+
+// Stands in the document for the timeline's intervals until they are written as text.
+constexpr std::string_view kIntervalsPlaceholder = "\x01intervals\x01";
+
+// The intervals as the document's dump would print them at nesting `depth`, made one at a
+// time: as a tree an interval takes some 4 KB, as text about 400 bytes, and a merged
+// timeline may hold a million (an 11-day test).
+std::string intervals_text(const std::vector<stats::IntervalSummary>& timeline, int indent,
+                           int depth) {
+    if (timeline.empty()) return "[]";
+    const bool pretty = indent >= 0;
+    const std::string outer(pretty ? static_cast<std::size_t>(indent * depth) : 0, ' ');
+    const std::string inner(pretty ? static_cast<std::size_t>(indent * (depth + 1)) : 0, ' ');
+    std::string text = pretty ? "[\n" : "[";
+    for (std::size_t n = 0; n < timeline.size(); ++n) {
+        if (n != 0) text += pretty ? ",\n" : ",";
+        text += inner;
+        // Numbers only, so every new line in the dump is one of its own lines: indent it.
+        for (const char c : interval_json(timeline[n]).dump(indent)) {
+            text += c;
+            if (c == '\n') text += inner;
+        }
+    }
+    text += pretty ? "\n" + outer + "]" : "]";
+    return text;
+}
+
+// Puts the intervals where the placeholder was dumped (the value of "intervals": only a key
+// is followed by an unescaped quote, so a user's string cannot look like it).
+void splice_intervals(std::string& text, const stats::RunResult& r, int indent) {
+    const std::string key = json(std::string(kIntervalsPlaceholder)).dump();
+    const std::string needle = (indent >= 0 ? "\"intervals\": " : "\"intervals\":") + key;
+    const std::size_t at = text.find(needle);
+    if (at == std::string::npos) return;
+    const std::size_t value = at + needle.size() - key.size();
+    text.replace(value, key.size(), intervals_text(r.timeline, indent, 2));
+}
+
+}  // namespace
+
 std::string format_json(const stats::RunResult& r, int indent) {
     const auto& m = r.metadata;
     json operations = json::array();
     for (const auto& op : r.operations)
         operations.push_back(operation_json(op, m.measured_duration_ns));
-    json intervals = json::array();
-    for (const auto& i : r.timeline) intervals.push_back(interval_json(i));
+    const json intervals = std::string(kIntervalsPlaceholder);
     json doc = {
         {"schema_version", kJsonSchemaVersion},
         {"tool", m.tool_version},
@@ -260,7 +302,9 @@ std::string format_json(const stats::RunResult& r, int indent) {
         {"thresholds", thresholds_json(r)},
         {"thresholds_passed", r.thresholds_passed()}};
     // Replace invalid UTF-8 in user-supplied names instead of throwing.
-    return doc.dump(indent, ' ', false, json::error_handler_t::replace);
+    std::string text = doc.dump(indent, ' ', false, json::error_handler_t::replace);
+    splice_intervals(text, r, indent);
+    return text;
 }
 
 }  // namespace mbstorm::report

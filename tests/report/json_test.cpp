@@ -7,6 +7,7 @@
 #include <regex>
 #include <sstream>
 
+#include "report/interval_json.hpp"
 #include "sample_result.hpp"
 
 namespace mbstorm::report {
@@ -158,6 +159,34 @@ TEST(Json, EmptyRunAndCompactForm) {
     EXPECT_TRUE(doc["stages"].is_array());
     EXPECT_TRUE(doc["stages"].empty());
     EXPECT_EQ(doc["thresholds_passed"], true);
+}
+
+// The timeline's intervals are written one at a time (a merged 11-day timeline holds a million)
+// and spliced into the document: the text must be what dumping the whole tree would print.
+TEST(Json, TheTimelineIsPrintedAsTheWholeDocumentWouldBe) {
+    auto r = testing::make_sample_result();
+    // A name that spells the placeholder's key and value: escaped, so it is not replaced.
+    r.operations.front().name = "\"intervals\": \"\x01intervals\x01\"";
+    for (std::uint64_t n = 0; n < 3; ++n) {
+        stats::IntervalSummary i;
+        i.index = 10 + n;
+        i.transactions = 1000 * n + 7;
+        i.mean_ns = 1234.5 + static_cast<double>(n) / 3.0;
+        r.timeline.push_back(i);
+    }
+    for (const int indent : {-1, 0, 2, 4}) {
+        const std::string text = format_json(r, indent);
+        const json doc = json::parse(text);
+        EXPECT_EQ(text, doc.dump(indent, ' ', false, json::error_handler_t::replace)) << indent;
+        ASSERT_EQ(doc["timeline"]["intervals"].size(), r.timeline.size());
+        for (std::size_t n = 0; n < r.timeline.size(); ++n)
+            EXPECT_EQ(doc["timeline"]["intervals"][n], interval_json(r.timeline[n]));
+        EXPECT_EQ(doc["operations"][0]["name"], r.operations.front().name);
+    }
+    r.timeline.clear();
+    const json empty = json::parse(format_json(r));
+    EXPECT_TRUE(empty["timeline"]["intervals"].is_array());
+    EXPECT_TRUE(empty["timeline"]["intervals"].empty());
 }
 
 }  // namespace
