@@ -149,7 +149,14 @@ int run_cli(int argc, char** argv) {
     CLI::App app{"mbstorm: Modbus TCP load tester, reference slave and fuzzer", "mbstorm"};
     app.require_subcommand(1);
     // Probed only when asked: the io_uring probe opens rings and sockets.
-    app.set_version_flag("--version", [] { return version_text(build_info(), net::features()); });
+    app.set_version_flag("--version", [] {
+        // What `--backend auto` picks (run needs provided-buffer rings, serve does not).
+        net::BackendDecision run, serve;
+        std::string unused;
+        net::choose_backend(net::BackendChoice::Auto, true, run, unused);
+        net::choose_backend(net::BackendChoice::Auto, false, serve, unused);
+        return version_text(build_info(), net::features(), run, serve);
+    });
     Action action;
     add_all_commands(app, action);
     std::string command;

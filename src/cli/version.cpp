@@ -18,11 +18,25 @@ std::string io_uring_line(const net::Features& kernel) {
     return line;
 }
 
+std::string backend_text(const net::BackendDecision& decision) {
+    std::string text(net::backend_name(decision.backend));
+    if (!decision.why.empty()) text += fmt::format(" ({})", decision.why);
+    return text;
+}
+
+std::string backend_line(const net::BackendDecision& run, const net::BackendDecision& serve) {
+    if (run.backend == serve.backend) return "backend: " + backend_text(run);
+    return fmt::format("backend: run on {}, serve on {}", backend_text(run), backend_text(serve));
+}
+
 }  // namespace
 
-std::string version_text(const BuildInfo& build, const net::Features& kernel) {
-    return fmt::format("mbstorm {}\ncommit: {}\ncompiler: {}\nbuild type: {}\n{}", build.version,
-                       build.commit, build.compiler, build.build_type, io_uring_line(kernel));
+std::string version_text(const BuildInfo& build, const net::Features& kernel,
+                         const net::BackendDecision& run_backend,
+                         const net::BackendDecision& serve_backend) {
+    return fmt::format("mbstorm {}\ncommit: {}\ncompiler: {}\nbuild type: {}\n{}\n{}",
+                       build.version, build.commit, build.compiler, build.build_type,
+                       io_uring_line(kernel), backend_line(run_backend, serve_backend));
 }
 
 }  // namespace mbstorm::cli

@@ -21,6 +21,8 @@ json_backend() { /usr/bin/python3 -c 'import json,sys;print(json.load(open(sys.a
 # The filter works: a process under it cannot set up a ring (mbstorm --version says so).
 "$deny" "$mbstorm" --version >"$work/version" 2>&1
 check "under the filter io_uring is unavailable" grep -q 'unavailable' "$work/version"
+check "--version names the epoll backend and why" \
+  grep -q '^backend: epoll (io_uring_setup refused (Operation not permitted): a seccomp profile' "$work/version"
 
 # run, auto: epoll, said on the start-up lines, in the report and in the JSON; it measures.
 "$deny" "$mbstorm" run -d 1s -q --json "$work/auto.json" >"$work/auto.out" 2>"$work/auto.err"

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `mbstorm --version` names the version (CMake's project(VERSION), written nowhere else), the
-# git commit built, the compiler, the build type and this kernel's io_uring features; the
+# git commit built, the compiler, the build type, this kernel's io_uring features and the backend
+# run and serve would use (epoll, and why, where io_uring is refused); the
 # commit is "unknown" outside a git checkout of mbstorm (cmake/build_info.cmake run on a plain
 # folder and on a folder inside another repository).
 set -euo pipefail
@@ -13,7 +14,7 @@ fail() { echo "FAIL $*" >&2; exit 1; }
 
 "$mbstorm" --version >"$work/out" || fail "mbstorm --version exited $?"
 mapfile -t lines <"$work/out"
-[ ${#lines[@]} -eq 5 ] || fail "--version printed ${#lines[@]} lines, not 5:$(printf '\n  %s' "${lines[@]}")"
+[ ${#lines[@]} -eq 6 ] || fail "--version printed ${#lines[@]} lines, not 6:$(printf '\n  %s' "${lines[@]}")"
 
 version=$(sed -n 's/^project(mbstorm VERSION \([0-9.]*\) .*/\1/p' "$root/CMakeLists.txt")
 [ -n "$version" ] || fail "no project(mbstorm VERSION ...) in CMakeLists.txt"
@@ -48,6 +49,9 @@ if [ "$io" != "$prefix unavailable (kernel too old, or io_uring blocked)" ]; the
     count=$((count + 1))
   done
   [ "$count" -eq 8 ] || fail "'$io' names $count features, not each of the 8 once"
+  [ "${lines[5]}" = "backend: io_uring" ] || fail "sixth line '${lines[5]}', io_uring is here"
+else
+  [[ "${lines[5]}" == "backend: epoll ("*")" ]] || fail "sixth line '${lines[5]}' names no reason for epoll"
 fi
 
 # The commit outside a checkout: a plain folder, and a folder inside another repository.
