@@ -235,16 +235,21 @@ namespace {
 // Stands in the document for the timeline's intervals until they are written as text.
 constexpr std::string_view kIntervalsPlaceholder = "\x01intervals\x01";
 
-// The intervals as the document's dump would print them at nesting `depth`, made one at a
-// time: as a tree an interval takes some 4 KB, as text about 400 bytes, and a merged
+// Appends the intervals as the document's dump would print them at nesting `depth`, made one
+// at a time: as a tree an interval takes some 4 KB, as text about 450 bytes, and a merged
 // timeline may hold a million (an 11-day test).
-std::string intervals_text(const std::vector<stats::IntervalSummary>& timeline, int indent,
-                           int depth) {
-    if (timeline.empty()) return "[]";
+// `then`: bytes that will follow, reserved with the rest.
+void append_intervals(std::string& text, const std::vector<stats::IntervalSummary>& timeline,
+                      int indent, int depth, std::size_t then) {
+    if (timeline.empty()) {
+        text += "[]";
+        return;
+    }
     const bool pretty = indent >= 0;
     const std::string outer(pretty ? static_cast<std::size_t>(indent * depth) : 0, ' ');
     const std::string inner(pretty ? static_cast<std::size_t>(indent * (depth + 1)) : 0, ' ');
-    std::string text = pretty ? "[\n" : "[";
+    text += pretty ? "[\n" : "[";
+    const std::size_t start = text.size();
     for (std::size_t n = 0; n < timeline.size(); ++n) {
         if (n != 0) text += pretty ? ",\n" : ",";
         text += inner;
@@ -253,20 +258,28 @@ std::string intervals_text(const std::vector<stats::IntervalSummary>& timeline, 
             text += c;
             if (c == '\n') text += inner;
         }
+        // Room for the rest at the first one's size and a little more (numbers vary in
+        // length), so that the text is not copied as it grows.
+        if (n == 0) {
+            const std::size_t each = text.size() - start + 2;
+            text.reserve(text.size() + each * timeline.size() * 9 / 8 + outer.size() + then + 8);
+        }
     }
     text += pretty ? "\n" + outer + "]" : "]";
-    return text;
 }
 
 // Puts the intervals where the placeholder was dumped (the value of "intervals": only a key
 // is followed by an unescaped quote, so a user's string cannot look like it).
-void splice_intervals(std::string& text, const stats::RunResult& r, int indent) {
+std::string splice_intervals(const std::string& text, const stats::RunResult& r, int indent) {
     const std::string key = json(std::string(kIntervalsPlaceholder)).dump();
     const std::string needle = (indent >= 0 ? "\"intervals\": " : "\"intervals\":") + key;
     const std::size_t at = text.find(needle);
-    if (at == std::string::npos) return;
+    if (at == std::string::npos) return text;
     const std::size_t value = at + needle.size() - key.size();
-    text.replace(value, key.size(), intervals_text(r.timeline, indent, 2));
+    std::string out = text.substr(0, value);
+    append_intervals(out, r.timeline, indent, 2, text.size() - value - key.size());
+    out.append(text, value + key.size());
+    return out;
 }
 
 }  // namespace
@@ -302,9 +315,8 @@ std::string format_json(const stats::RunResult& r, int indent) {
         {"thresholds", thresholds_json(r)},
         {"thresholds_passed", r.thresholds_passed()}};
     // Replace invalid UTF-8 in user-supplied names instead of throwing.
-    std::string text = doc.dump(indent, ' ', false, json::error_handler_t::replace);
-    splice_intervals(text, r, indent);
-    return text;
+    return splice_intervals(doc.dump(indent, ' ', false, json::error_handler_t::replace), r,
+                            indent);
 }
 
 }  // namespace mbstorm::report
