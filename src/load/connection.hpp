@@ -1,14 +1,14 @@
-// One client connection of a worker: socket state, its outstanding transactions, the MBAP
-// splitter for its byte stream, and a double send buffer (one half being sent by the kernel,
-// the other collecting the requests of the current loop iteration).
+// One client connection of a worker: socket state, its outstanding transactions, its link (how
+// its bytes become answers and its requests bytes: link.hpp), and a double send buffer (one
+// half being sent by the kernel, the other collecting the requests of the current loop
+// iteration).
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 
-#include "codec/mbap.hpp"
-#include "codec/rtu_stream.hpp"
-#include "load/tls_link.hpp"
+#include "load/link.hpp"
 #include "load/transaction_table.hpp"
 
 namespace mbstorm::load {
@@ -16,8 +16,10 @@ namespace mbstorm::load {
 struct Connection {
     enum class State : std::uint8_t { Waiting, Connecting, Handshaking, Open };
 
-    Connection(std::uint32_t depth, std::uint32_t send_half_bytes, std::uint16_t first_id)
+    Connection(std::uint32_t depth, std::uint32_t send_half_bytes, std::uint16_t first_id,
+               Link link_of_run)
         : table(depth, first_id),
+          link(std::move(link_of_run)),
           send_buffer(std::make_unique<std::uint8_t[]>(2ull * send_half_bytes)),
           send_half(send_half_bytes) {}
 
@@ -31,16 +33,13 @@ struct Connection {
     bool slot_closing = false;     // direct: the slot's close has not completed yet
     std::uint32_t generation = 0;  // bumped on close: completions of older sockets are ignored
     TransactionTable table;
-    codec::MbapSplitter splitter;
-    // RTU over TCP only (null otherwise): its splitter, and the id of the one outstanding
-    // transaction, which the next answer is taken to be for.
-    std::unique_ptr<codec::RtuSplitter> rtu;
-    std::uint16_t rtu_transaction = 0;
+    Link link;
 
     std::unique_ptr<std::uint8_t[]> send_buffer;
     std::uint32_t send_half;
     std::uint32_t queued = 0;  // bytes waiting in the queue half
     std::uint32_t queue_half = 0;
+    const std::uint8_t* inflight_base = nullptr;  // what the send in flight sends
     std::uint32_t inflight_len = 0;
     std::uint32_t inflight_done = 0;
     bool send_in_flight = false;  // one send at a time per connection, whatever its generation
@@ -59,7 +58,6 @@ struct Connection {
     // the probes tried each time a connect fails with EADDRNOTAVAIL).
     std::uint32_t port_shift = 0;
     std::int64_t connect_started_ns = 0;
-    std::unique_ptr<TlsLink> tls;  // --transport tls only
 };
 
 }  // namespace mbstorm::load

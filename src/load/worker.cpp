@@ -79,16 +79,17 @@ Worker::Worker(WorkerSetup setup)
     active_ = setup_.connections;
     const auto half = static_cast<std::uint32_t>(plan_.depth * max_request_size(plan_.operations));
     connections_.reserve(setup_.connections);
+    // The transport is chosen here, once: each connection's link knows it from now on.
+    const Link::Kind kind = plan_.tls                              ? Link::Kind::Tls
+                            : plan_.framing == codec::Framing::Rtu ? Link::Kind::Rtu
+                                                                   : Link::Kind::Mbap;
     for (std::uint32_t i = 0; i < setup_.connections; ++i) {
-        connections_.emplace_back(plan_.depth, half, std::uint16_t{0});
+        connections_.emplace_back(plan_.depth, half, std::uint16_t{0},
+                                  Link(kind, plan_.tls, plan_.tls_resume));
         connections_.back().backoff_ns = plan_.reconnect_backoff_min.count();
-        if (plan_.framing == codec::Framing::Rtu)
-            connections_.back().rtu =
-                std::make_unique<codec::RtuSplitter>(codec::RtuSplitter::Direction::Responses);
-        if (plan_.tls) connections_.back().tls = std::make_unique<TlsLink>();
     }
     // A recv's plaintext is at most its ciphertext plus one record the session held back.
-    if (plan_.tls) tls_plain_.resize(16384 + 17 * 1024);
+    if (kind == Link::Kind::Tls) link_scratch_.resize(16384 + 17 * 1024);
     dirty_.reserve(setup_.connections);
     ready_.assign(setup_.connections, 0);
     connect_heap_.reserve(setup_.connections);
@@ -433,9 +434,20 @@ bool Worker::bind_own_or_spare_port(int fd, net::Endpoint& source, std::uint32_t
 
 void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexcept {
     Connection& c = connections_[index];
-    if (result == 0 && c.tls && c.state == Connection::State::Connecting) {
-        tls_begin(index, now);  // back here once the handshake is done
-        return;
+    if (result == 0 && c.state == Connection::State::Connecting) {
+        switch (c.link.connected(now, ktls_)) {
+            case LinkStart::Open:
+                break;
+            case LinkStart::SettingUp:  // back here once the link is set up
+                c.state = Connection::State::Handshaking;
+                arm_recv(index);
+                send_link_output(index);
+                return;
+            case LinkStart::SetUpFailed:
+                link_error_ = c.link.error();
+                result = kLinkSetUpFailed;
+                break;
+        }
     }
     if (result == 0) {
         c.state = Connection::State::Open;
@@ -447,8 +459,6 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
         setup_.any_connected->store(true, std::memory_order_relaxed);
         const std::uint32_t open = open_connections.fetch_add(1, std::memory_order_relaxed) + 1;
         connection_stats.peak_open = std::max<std::uint64_t>(connection_stats.peak_open, open);
-        c.splitter.reset();
-        if (c.rtu) c.rtu->reset();
         if (!c.recv_armed) arm_recv(index);
         if (open_loop_ && !pacer_started_ && started_) {
             pacer_ = Pacer(rate_, plan_.arrival, derive_seed(plan_.seed, 1000 + setup_.index), now);
@@ -464,8 +474,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
     ++connect_failures_by_errno[static_cast<std::size_t>(cause) < connect_failures_by_errno.size()
                                     ? static_cast<std::size_t>(cause)
                                     : 0];
-    // The TLS path fails its handshakes (refused, malformed, too slow) with -EPROTO.
-    const bool handshake_failed = c.tls && result == -EPROTO;
+    // A link's set-up (a TLS handshake) that failed: refused, malformed or too slow.
+    const bool handshake_failed = result == kLinkSetUpFailed;
     if (handshake_failed) ++connection_stats.tls_handshake_failures;
     if (setup_.live != nullptr) {
         setup_.live->connections_failed.add();
@@ -477,7 +487,7 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
     if (!setup_.any_connected->load(std::memory_order_relaxed)) {
         // Nothing ever connected: the target is wrong or down. Say so now, not after retries.
         const std::string reason =
-            result == -EPROTO && !tls_error_.empty() ? "TLS handshake failed: " + tls_error_
+            handshake_failed && !link_error_.empty() ? "TLS handshake failed: " + link_error_
             : result == -ECANCELED
                 ? fmt::format("no answer within the connect timeout ({}s)",
                               std::chrono::duration<double>(plan_.connect_timeout).count())
@@ -500,15 +510,13 @@ void Worker::schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept 
 void Worker::drop_socket(Connection& c) noexcept {
     if (c.state == Connection::State::Open)
         open_connections.fetch_sub(1, std::memory_order_relaxed);
-    if (c.tls) tls_end(c);
+    c.link.closed();
     close_socket(c);
     // A new generation makes the old socket's late completions stale.
     c.generation = net::next_generation(c.generation);
     c.state = Connection::State::Waiting;
     c.queued = 0;
     c.recv_armed = false;
-    c.splitter.reset();
-    if (c.rtu) c.rtu->reset();
 }
 
 void Worker::close_socket(Connection& c) noexcept {
@@ -594,85 +602,39 @@ void Worker::on_recv(std::uint32_t index, const net::Completion& cqe, std::int64
         return;
     }
     if (!more) c.recv_armed = false;
+    if (cqe.res <= 0 || !has_buffer) {
+        if (has_buffer) loop_.recycle(buffer_id);
+        on_recv_ended(index, cqe.res, now);
+        return;
+    }
+    const codec::Bytes input(loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
+    codec::Bytes unframed;
+    const LinkInput got =
+        c.link.input(input, now, link_scratch_, bad_protocol_frames, unframed,
+                     [&](const codec::TcpFrame& frame) { on_answer(c, frame, now); });
+    if (got == LinkInput::FramingLost) note_unframed(unframed);  // it may be the buffer's
+    loop_.recycle(buffer_id);
+    if (got != LinkInput::Answers && !on_link_event(index, got, now)) return;
+    send_link_output(index);  // tickets, key updates
+    if (!try_hand_off(index, now)) return;
+    if (!c.recv_armed) arm_recv(index);
+    refill(index, now);
+}
 
-    if (cqe.res > 0 && has_buffer && c.rtu) {
-        const codec::CodecError e =
-            consume_rtu(c, loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res), now);
-        loop_.recycle(buffer_id);
-        if (e != codec::CodecError::Ok) {
-            // No reliable frame boundary after a bad CRC (or an impossible length): the
-            // transactions the connection carried end with it, and a fresh one starts.
-            const bool crc = e == codec::CodecError::BadCrc;
-            ++(crc ? crc_errors : framing_errors);
-            close_connection(index, now,
-                             crc ? stats::Outcome::CrcError : stats::Outcome::FramingError);
-            return;
-        }
-        if (!c.recv_armed) arm_recv(index);
-        refill(index, now);
-        return;
-    }
-    if (cqe.res > 0 && has_buffer) {
-        codec::Bytes input(loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
-        if (c.tls && !c.tls->kernel && !tls_input(index, input, now)) {
-            loop_.recycle(buffer_id);
-            if ((c.state == Connection::State::Handshaking || c.state == Connection::State::Open) &&
-                !c.recv_armed)
-                arm_recv(index);
-            return;
-        }
-        c.splitter.feed(input);
-        codec::TcpFrame frame;
-        bool fatal = false;
-        for (bool done = false; !done;) {
-            switch (c.splitter.next(frame)) {
-                case codec::MbapSplitter::Status::Frame:
-                    on_answer(c, frame, now);
-                    break;
-                case codec::MbapSplitter::Status::BadProtocolId:
-                    ++bad_protocol_frames;
-                    break;
-                case codec::MbapSplitter::Status::NeedMore:
-                    done = true;
-                    break;
-                case codec::MbapSplitter::Status::Fatal:
-                    fatal = true;
-                    done = true;
-                    break;
-            }
-        }
-        loop_.recycle(buffer_id);
-        if (fatal) {
-            // The stream cannot be resynchronised: count it and start a fresh connection. The
-            // transactions it carried end as framing errors, not as a peer's close.
-            ++framing_errors;
-            note_unframed(input);
-            close_connection(index, now, stats::Outcome::FramingError);
-            return;
-        }
-        if (!c.recv_armed) arm_recv(index);
-        refill(index, now);
-        return;
-    }
-    if (has_buffer) loop_.recycle(buffer_id);
-    if (cqe.res == -ENOBUFS) {  // the buffer ring ran dry for a moment: listen again
+void Worker::on_recv_ended(std::uint32_t index, int result, std::int64_t now) noexcept {
+    Connection& c = connections_[index];
+    if (result == -ENOBUFS) {  // the buffer ring ran dry for a moment: listen again
         arm_recv(index);
         return;
     }
-    if (cqe.res > 0) return;  // cannot happen with buffer select; nothing to read
-    // The kernel's TLS passes no record but data: close_notify, an alert, or a TLS 1.3
-    // KeyUpdate it cannot follow end the connection like a close, counted.
-    if (cqe.res == -EIO && c.tls && c.tls->kernel) {
+    if (result > 0) return;  // cannot happen with buffer select; nothing to read
+    if (c.link.is_record_layer_error(result)) {
         ++connection_stats.tls_offload_errors;
         if (setup_.live != nullptr) setup_.live->tls_offload_errors.add();
     }
     ++connection_stats.closed_by_peer;
     if (setup_.live != nullptr) setup_.live->connections_closed_by_peer.add();
     close_connection(index, now, stats::Outcome::ConnectionClosed);
-}
-
-bool Worker::on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
-    return on_answer(c, frame, now);
 }
 
 bool Worker::on_answer(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept {
@@ -748,7 +710,7 @@ void Worker::on_send(std::uint32_t index, const net::Completion& cqe, std::int64
     if (ud.generation != c.generation || stopping_) {
         // The socket it went to is gone; its buffer half is free again.
         c.send_in_flight = false;
-        if (c.tls && !stopping_) tls_pump(index);  // a new connection's handshake waited
+        if (!stopping_) send_link_output(index);  // a new connection's set-up waited
         if (c.state == Connection::State::Open && c.queued > 0) dirty_.mark(c.dirty, index);
         return;
     }
@@ -759,15 +721,13 @@ void Worker::on_send(std::uint32_t index, const net::Completion& cqe, std::int64
     }
     c.inflight_done += static_cast<std::uint32_t>(cqe.res);
     if (c.inflight_done < c.inflight_len) {  // short send: the rest goes next
-        const std::uint8_t* base =
-            c.tls && !c.tls->kernel ? c.tls->cipher.data() : c.inflight_data();
-        loop_.send(c.fd, base + c.inflight_done, c.inflight_len - c.inflight_done,
+        loop_.send(c.fd, c.inflight_base + c.inflight_done, c.inflight_len - c.inflight_done,
                    net::encode_user_data(Op::Send, index, c.generation));
         ++inflight_ops_;
         return;
     }
     c.send_in_flight = false;
-    if (c.tls) tls_pump(index);
+    send_link_output(index);
     if (c.queued > 0) dirty_.mark(c.dirty, index);
 }
 
@@ -783,7 +743,7 @@ Transaction* Worker::enqueue(std::uint32_t index, std::int64_t now, std::int64_t
         c.table.cancel(t);
         return nullptr;
     }
-    if (c.rtu) written = rtu_request(c, c.queue_data() + c.queued, written, *t);
+    written = c.link.frame_request(c.queue_data() + c.queued, written, t->transaction_id());
     size = static_cast<std::uint32_t>(written);
     c.queued += size;
     ++outstanding_;
@@ -883,27 +843,38 @@ void Worker::flush() noexcept {
         Connection& c = connections_[index];
         c.dirty = false;
         if (c.state != Connection::State::Open || c.send_in_flight || c.queued == 0) return;
-        if (c.tls && !c.tls->kernel) {
-            tls_send_queued(index);
+        codec::Bytes wire;
+        if (!c.link.seal(c.queue_data(), c.queued, wire)) {
+            close_connection(index, net::now_ns(), stats::Outcome::ConnectionClosed);
             return;
         }
-        if (!loop_.send(c.fd, c.queue_data(), c.queued,
-                        net::encode_user_data(Op::Send, index, c.generation)))
-            return;
-        ++inflight_ops_;
-        c.inflight_len = c.queued;
-        c.inflight_done = 0;
-        c.send_in_flight = true;
+        // The queue half itself goes, or the link took its bytes into its own (ciphertext).
+        const bool own_half = wire.data() == c.queue_data();
+        if (!own_half) c.queued = 0;
+        if (wire.empty() || !start_send(index, wire) || !own_half) return;
         c.queue_half ^= 1u;
         c.queued = 0;
     });
+}
+
+bool Worker::start_send(std::uint32_t index, codec::Bytes wire) noexcept {
+    Connection& c = connections_[index];
+    if (!loop_.send(c.fd, wire.data(), static_cast<unsigned>(wire.size()),
+                    net::encode_user_data(Op::Send, index, c.generation)))
+        return false;
+    ++inflight_ops_;
+    c.inflight_base = wire.data();
+    c.inflight_len = static_cast<std::uint32_t>(wire.size());
+    c.inflight_done = 0;
+    c.send_in_flight = true;
+    return true;
 }
 
 void Worker::sweep_timeouts(std::int64_t now) noexcept {
     const std::int64_t deadline = now - plan_.transaction_timeout.count();
     for (std::uint32_t index = 0; index < connections_.size(); ++index) {
         Connection& c = connections_[index];
-        if (c.state == Connection::State::Handshaking) tls_check_handshake_time(index, now);
+        if (c.state == Connection::State::Handshaking) check_set_up_time(index, now);
         if (c.state != Connection::State::Open || c.table.outstanding() == 0) continue;
         const std::uint32_t expired = c.table.expire(deadline, [&](const Transaction& t) {
             --outstanding_;
@@ -912,7 +883,7 @@ void Worker::sweep_timeouts(std::int64_t now) noexcept {
             record(t, stats::Outcome::Timeout, 0, now);
         });
         if (expired == 0) continue;
-        if (c.rtu) {
+        if (!c.link.matches_answers_by_id()) {
             // No transaction ids: on this connection the late answer would pass for the next
             // request's. A fresh connection leaves it nowhere to land.
             drop_socket(c);

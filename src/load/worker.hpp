@@ -3,6 +3,7 @@
 
 #include <array>
 #include <atomic>
+#include <cerrno>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -90,6 +91,8 @@ class Worker {
   private:
     // What a completion is for (the op field of its user_data).
     enum class Op : std::uint8_t { Connect = 1, ConnectTimeout, Recv, Send, Shutdown, Close };
+    // on_connect's result for a link whose set-up (a TLS handshake) failed or timed out.
+    static constexpr int kLinkSetUpFailed = -EPROTO;
 
     bool setup_io() noexcept;
     void loop() noexcept;
@@ -114,39 +117,33 @@ class Worker {
     void close_socket(Connection& c) noexcept;  // direct: until its close completes, no reopen
     void schedule_reconnect(std::uint32_t index, std::int64_t now) noexcept;
     void arm_recv(std::uint32_t index) noexcept;
+    // Errors first: a receive that ended (the peer closed, a failed recv) or brought no
+    // buffer; then the bytes go to the connection's link, which hands on the answers.
     void on_recv(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept;
+    void on_recv_ended(std::uint32_t index, int result, std::int64_t now) noexcept;
     void note_unframed(codec::Bytes input) noexcept;
-    // An answer's frame: matched to its transaction, checked and recorded. on_answer is the
-    // body, inlined into on_recv's frame loop (as a call, its prologue and epilogue were about
-    // 18 instructions per answer); on_frame is the same for the other files (rtu_io.cpp).
-    bool on_frame(Connection& c, const codec::TcpFrame& frame, std::int64_t now) noexcept;
+    // An answer's frame: matched to its transaction, checked and recorded (inlined into the
+    // link's frame loop: as a call, its prologue and epilogue were about 18 instructions per
+    // answer).
     [[gnu::always_inline]] inline bool on_answer(Connection& c, const codec::TcpFrame& frame,
                                                  std::int64_t now) noexcept;
-    // RTU over TCP (rtu_io.cpp). Feeds received bytes; answers are matched to the one
-    // outstanding transaction. Not Ok when framing was lost (BadCrc, FrameTooLong).
-    codec::CodecError consume_rtu(Connection& c, const std::uint8_t* data, std::size_t size,
-                                  std::int64_t now) noexcept;
-    // Rewrites the MBAP request just encoded at `at` as an RTU frame; returns its size.
-    std::size_t rtu_request(Connection& c, std::uint8_t* at, std::size_t size,
-                            const Transaction& t) noexcept;
     void on_send(std::uint32_t index, const net::Completion& cqe, std::int64_t now) noexcept;
     void handle(const net::Completion& cqe, std::int64_t now) noexcept;
+    // Sends `wire` on the connection (no send of it in flight): false when it could not go.
+    bool start_send(std::uint32_t index, codec::Bytes wire) noexcept;
 
-    // TLS (worker_tls.cpp). tls_begin: TCP is up, the handshake starts. tls_input: ciphertext
-    // in; `data` becomes the plaintext it held; false when there is none to take (handshake
-    // still going, or the connection was closed). tls_send_queued: the queued requests
-    // encrypted and sent; tls_pump: whatever ciphertext the session has, sent.
-    void tls_begin(std::uint32_t index, std::int64_t now) noexcept;
-    bool tls_input(std::uint32_t index, codec::Bytes& data, std::int64_t now) noexcept;
-    void tls_send_queued(std::uint32_t index) noexcept;
-    void tls_pump(std::uint32_t index) noexcept;
-    void tls_end(Connection& c) noexcept;  // the socket goes: keep the session to resume
-    void tls_refused(const std::string& why) noexcept;  // an alert before any answer: stop
-    // A handshake gets the connect timeout too: a peer that accepts and never answers fails.
-    void tls_check_handshake_time(std::uint32_t index, std::int64_t now) noexcept;
-    // Hands the record layer to the kernel when it can take it now (ktls_offload.hpp).
-    // False when a half-done hand-off closed the connection.
-    bool tls_offload(std::uint32_t index, std::int64_t now) noexcept;
+    // What the links say (worker_link.cpp). on_link_event: anything but answers from a link's
+    // input; true when the connection is open and goes on. send_link_output: bytes the link
+    // itself has to send (a handshake's, tickets). try_hand_off: the kernel's TLS takes the
+    // link's record layer when it can now; false when a half-done hand-off closed it.
+    bool on_link_event(std::uint32_t index, LinkInput event, std::int64_t now) noexcept;
+    void send_link_output(std::uint32_t index) noexcept;
+    bool try_hand_off(std::uint32_t index, std::int64_t now) noexcept;
+    void count_set_up(const Link& link) noexcept;  // a handshake done: timed and counted
+    // A session refused before any answer (a TLS alert after the handshake): stop the run.
+    void link_refused(const std::string& why) noexcept;
+    // A set-up gets the connect timeout too: a peer that accepts and never answers fails.
+    void check_set_up_time(std::uint32_t index, std::int64_t now) noexcept;
 
     bool may_send() const noexcept {
         return started_ && !stopping_ && (quota_ == 0 || measured_sent_ < quota_);
@@ -208,9 +205,9 @@ class Worker {
     std::int64_t sweep_interval_ns_ = 0;
     __kernel_timespec connect_timeout_ts_{};
     codec::Response response_scratch_;
-    std::vector<std::uint8_t> tls_plain_;  // decrypted input of one recv
-    std::string tls_error_;                // why the last handshake failed
-    bool tls_answered_ = false;            // a TLS session here has carried a response
+    std::vector<std::uint8_t> link_scratch_;  // decrypted input of one recv (TLS links')
+    std::string link_error_;                  // why the last link set-up failed
+    bool links_answered_ = false;             // a link here has carried an answer's bytes
 };
 
 }  // namespace mbstorm::load
