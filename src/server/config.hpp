@@ -15,7 +15,7 @@
 #include "slave/simulator.hpp"
 
 #include "net/tls_context.hpp"
-#include "server/tls_link.hpp"
+#include "server/tls_roles.hpp"
 
 namespace mbstorm::slave {
 class DataModel;

@@ -7,10 +7,8 @@
 #include <limits>
 #include <memory>
 
-#include "codec/mbap.hpp"
-#include "codec/rtu_stream.hpp"
+#include "server/link.hpp"
 #include "server/out_queue.hpp"
-#include "server/tls_link.hpp"
 
 namespace mbstorm::server {
 
@@ -34,6 +32,9 @@ struct Connection {
     bool peer_done = false;
     bool framing_lost = false;
     bool in_partial_list = false;
+    // Admitted one over the connection limit when every connection held had authenticated:
+    // the oldest idle one is evicted only once this link's set-up (TLS handshake) succeeds.
+    bool evict_when_set_up = false;
 
     // LRU list of open connections (least recently active at the head), for idle timeouts
     // and "evict the oldest idle connection".
@@ -56,10 +57,7 @@ struct Connection {
 
     OutQueue out;
     std::unique_ptr<std::uint8_t[]> plain_buf;  // only without a buffer ring
-    codec::MbapSplitter splitter;
-    // RTU over TCP only: made when the slot is first used, kept for its next connections.
-    std::unique_ptr<codec::RtuSplitter> rtu;
-    std::unique_ptr<TlsLink> tls;  // --transport tls only
+    Link link;  // how its bytes become requests and its answers bytes (link.hpp)
 };
 
 }  // namespace mbstorm::server

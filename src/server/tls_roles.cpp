@@ -1,5 +1,5 @@
+#include "server/tls_roles.hpp"
 #include "codec/function_set.hpp"
-#include "server/tls_link.hpp"
 
 namespace mbstorm::server {
 

@@ -42,6 +42,10 @@ Worker::Worker(const ServerConfig& config, slave::DataModel& model, int listen_f
       faults_(config.faults, index, stall_origin_ns) {
     plain_frames_ = !units_ && !config_.only_unit && config_.max_outstanding == 0 &&
                     !faults_.enabled() && config_.framing == codec::Framing::Mbap;
+    // The transport is chosen here, once: each connection's link knows it from now on.
+    link_kind_ = config_.tls                              ? Link::Kind::Tls
+                 : config_.framing == codec::Framing::Rtu ? Link::Kind::Rtu
+                                                          : Link::Kind::Mbap;
     stop_fd_ = eventfd(0, EFD_CLOEXEC);
     mail_fd_ = eventfd(0, EFD_CLOEXEC);
 }
@@ -87,7 +91,8 @@ int Worker::setup() noexcept {
         held_.reserve(expect);
         partial_.reserve(expect);
         pool_.prewarm(config_.prealloc_output_blocks);
-        if (config_.tls) tls_plain_.resize(16 * 1024);  // one TLS record's plaintext at most
+        if (link_kind_ == Link::Kind::Tls)
+            link_scratch_.resize(16 * 1024);  // one TLS record's plaintext at most
         if (use_buf_ring_) {
             stash_next_.assign(config_.buf_ring_count, kNoBuffer);
             stash_size_.assign(config_.buf_ring_count, 0);
@@ -138,7 +143,7 @@ std::uint32_t Worker::eviction_victim() const noexcept {
     // authenticated session, oldest first.
     if (handshaking_ > 0)
         for (std::uint32_t i = lru_head_; i != kNoConn; i = conns_[i].lru_next)
-            if (conns_[i].tls && !conns_[i].tls->session.established()) return i;
+            if (conns_[i].link.setting_up()) return i;
     return lru_head_;
 }
 
@@ -332,9 +337,6 @@ void Worker::admit(int fd) noexcept {
         }
         Connection& c = conns_[index];
         if (!use_buf_ring_ && !c.plain_buf) c.plain_buf.reset(new std::uint8_t[config_.buf_size]);
-        if (config_.framing == codec::Framing::Rtu && !c.rtu)
-            c.rtu = std::make_unique<codec::RtuSplitter>(codec::RtuSplitter::Direction::Requests,
-                                                         /*skip_bad_crc=*/true);
     } catch (...) {
         counters_.add(ServerCounters::Refusals);
         close_socket(fd);
@@ -355,27 +357,16 @@ void Worker::admit(int fd) noexcept {
     c.frame_started_ns = 0;
     c.hold_pos = kNoHold;
     c.unanswered = 0;
-    c.splitter.reset();
-    if (c.rtu) c.rtu->reset();
-    if (config_.tls) {
-        try {
-            c.tls = std::make_unique<TlsLink>(config_.tls);
-            c.tls->evict_when_established = evict_when_established;
-            if (ktls_) c.tls->session.track_for_offload();
-        } catch (...) {
-            c.tls.reset();
-        }
-        if (!c.tls || !c.tls->session.valid()) {
-            c.tls.reset();
-            c.state = Connection::State::Free;
-            free_slots_.push_back(index);
-            counters_.add(ServerCounters::Refusals);
-            close_socket(fd);
-            return;
-        }
+    c.evict_when_set_up = evict_when_established;
+    if (!c.link.accepted(link_kind_, config_.tls, &config_.tls_roles, ktls_)) {
+        c.state = Connection::State::Free;  // no TLS session could be made
+        free_slots_.push_back(index);
+        counters_.add(ServerCounters::Refusals);
+        close_socket(fd);
+        return;
     }
     c.last_active_ns = now_ ? now_ : net::now_ns();
-    if (c.tls) {
+    if (c.link.setting_up()) {
         // The handshake is timed from the accept: a socket that never sends a byte holds a
         // TLS slot as surely as one that stops half-way.
         ++handshaking_;
@@ -394,7 +385,7 @@ void Worker::close_connection(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     if (c.state != Connection::State::Open) return;
     c.state = Connection::State::Closing;
-    if (c.tls && !c.tls->session.established()) --handshaking_;
+    if (c.link.setting_up()) --handshaking_;
     lru_unlink(index);
     // shutdown() ends a pending recv/send at once; the ops still hold the socket, so the
     // descriptor can be closed now and the slot released when they have completed.
@@ -428,8 +419,7 @@ void Worker::maybe_release(std::uint32_t index) noexcept {
     if (c.state != Connection::State::Closing || c.recv_armed || c.send_inflight) return;
     counters_.sub(ServerCounters::PendingOutput, c.out.bytes());
     c.out.clear(pool_);
-    c.splitter.reset();
-    c.tls.reset();
+    c.link.released();
     c.hold_pos = kNoHold;
     c.frame_started_ns = 0;
     c.state = Connection::State::Free;
@@ -470,7 +460,7 @@ void Worker::on_recv(const net::Completion& cqe) noexcept {
             c.peer_done = true;
             c.frame_started_ns = 0;  // a partial frame can no longer complete: not timed
             if (c.recv_armed) cancel_recv(ud.index);
-        } else if (cqe.res == -EIO && c.tls && c.tls->kernel) {
+        } else if (c.link.is_record_layer_error(cqe.res)) {
             // The kernel's TLS passes no record but data (close_notify, an alert, a TLS 1.3
             // KeyUpdate it cannot follow): the input ends there, counted; answers still go.
             counters_.add(ServerCounters::TlsOffloadErrors);
@@ -496,7 +486,7 @@ void Worker::on_recv(const net::Completion& cqe) noexcept {
 void Worker::close_if_answered(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
     if (c.state != Connection::State::Open || !(c.peer_done || c.framing_lost)) return;
-    if (c.out.empty() && c.stash_head == kNoBuffer && !(c.tls && c.tls->has_output()))
+    if (c.out.empty() && c.stash_head == kNoBuffer && !c.link.has_own_output())
         close_connection(index);
 }
 
@@ -553,54 +543,34 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
     c.stash_tail = kNoBuffer;
 }
 
-void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
-                           std::size_t size) noexcept {
-    if (conns_[index].tls && !conns_[index].tls->kernel) {
-        tls_input(index, data, size);
-        return;
-    }
-    consume_frames(index, data, size);
+bool Worker::FrameSink::frame(const codec::TcpFrame& f) noexcept {
+    return worker.on_frame(c, index, f);
 }
 
-void Worker::consume_frames(std::uint32_t index, const std::uint8_t* data,
-                            std::size_t size) noexcept {
+void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
+                           std::size_t size) noexcept {
     Connection& c = conns_[index];
-    if (c.rtu) return consume_rtu_input(index, data, size);
-    c.splitter.feed(codec::Bytes(data, size));
-    codec::TcpFrame frame;
+    FrameSink sink{*this, c, index};
     bool completed = false;
-    for (;;) {
-        switch (c.splitter.next(frame)) {
-            case codec::MbapSplitter::Status::NeedMore:
-                // One dirty mark per frame loop, not per frame (7 instructions a frame).
-                if (completed) mark_dirty(c, index);
-                flush_tally();
-                counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
-                note_partial_frame(c, index, completed);
-                return;
-            case codec::MbapSplitter::Status::BadProtocolId:
-                counters_.add(ServerCounters::DiscardedFrames);
-                completed = true;
-                break;
-            case codec::MbapSplitter::Status::Fatal:
-                // The frames before this one are answered; the connection closes after that.
-                if (completed) mark_dirty(c, index);
-                flush_tally();
-                lose_framing(index);
-                return;
-            case codec::MbapSplitter::Status::Frame:
-                if (!on_frame(c, index, frame)) {
-                    flush_tally();
-                    return;
-                }
-                completed = true;
-                break;
-        }
+    const LinkInput got = c.link.input(codec::Bytes(data, size), link_scratch_, sink, completed);
+    if (got == LinkInput::Stopped) {  // closed while serving: the slot may be free already
+        flush_tally();
+        return;
     }
+    // One dirty mark per input, not per frame (7 instructions a frame).
+    if (completed) mark_dirty(c, index);
+    flush_tally();
+    if (got == LinkInput::Drained) [[likely]] {
+        counters_.set_max(ServerCounters::PendingOutputPeak, c.out.bytes());
+        note_partial_frame(c, index, completed);
+    } else if (!on_link_event(index, got)) {
+        return;
+    }
+    after_link_input(index);
 }
 
 void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool completed) noexcept {
-    if ((c.rtu ? c.rtu->buffered() : c.splitter.buffered()) == 0) {
+    if (c.link.buffered() == 0) {
         c.frame_started_ns = 0;
         return;
     }
@@ -614,14 +584,6 @@ void Worker::start_frame_clock(Connection& c, std::uint32_t index) noexcept {
         c.in_partial_list = true;
         partial_.push_back(index);
     }
-}
-
-bool Worker::serve_frame(Connection& c, std::uint32_t index,
-                         const codec::TcpFrame& frame) noexcept {
-    const bool open = on_frame(c, index, frame);
-    if (open) mark_dirty(c, index);
-    flush_tally();
-    return open;
 }
 
 void Worker::flush_reads() noexcept {
@@ -652,7 +614,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
     // The load test's request on a plain server: an FC03/04 answered inline, with none of the
     // checks below configured (plain_frames_: RTU framing among them) or owed to this
     // connection (TLS roles).
-    if (plain_frames_ && !c.tls) [[likely]] {
+    if (plain_frames_ && c.link.allowed() == nullptr) [[likely]] {
         std::uint8_t* p;
         try {
             // The slack: the shortcut copies whole words past the answer's end.
@@ -679,7 +641,8 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         }
     }
     if (!frame.pdu.empty()) counters_.add_request(frame.pdu[0]);
-    if (c.tls && c.tls->allowed && !frame.pdu.empty() && !c.tls->allowed->test(frame.pdu[0])) {
+    if (const FunctionSet* allowed = c.link.allowed();
+        allowed != nullptr && !frame.pdu.empty() && !allowed->test(frame.pdu[0])) {
         counters_.add(ServerCounters::TlsRoleDenied);
         queue_exception(c, frame, codec::ExceptionCode::IllegalFunction);
         return true;
@@ -730,8 +693,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
         close_connection(index);
         return false;
     }
-    const std::size_t head = c.rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
-    const codec::MutableBytes pdu_out(p + head, slave::kMinOutput);
+    const codec::MutableBytes pdu_out(p + c.link.answer_offset(), slave::kMinOutput);
     slave::HandleResult r;
     flush_reads();  // this request's diagnostics come after the reads before it
     if (units_ || !slave::read_registers_inline(frame.pdu, model_, pdu_out.data(), r)) {
@@ -739,14 +701,7 @@ bool Worker::on_frame(Connection& c, std::uint32_t index, const codec::TcpFrame&
                    : slave::handle_request(frame.pdu, model_, pdu_out);
     }
     if (r.outcome == slave::Outcome::NoResponse || r.size == 0) return true;
-    std::size_t n;
-    if (c.rtu) {
-        p[0] = frame.header.unit_id;
-        n = codec::append_rtu_crc(p, 1 + r.size);
-    } else {
-        codec::write_mbap_header(p, frame.header.transaction_id, frame.header.unit_id, r.size);
-        n = codec::limits::kMbapHeader + r.size;
-    }
+    const std::size_t n = c.link.frame_answer(p, frame, r.size);
     c.out.commit(n);
     tally_.pending_output += n;
     ++tally_.transactions;
@@ -760,18 +715,11 @@ void Worker::queue_exception(Connection& c, const codec::TcpFrame& frame,
                              codec::ExceptionCode code) noexcept {
     std::uint8_t* p;
     try {
-        p = c.out.reserve(pool_, codec::kExceptionAduSize);
+        p = c.out.reserve(pool_, Link::kMaxExceptionSize);
     } catch (...) {
         return;
     }
-    std::size_t n = codec::kExceptionAduSize;
-    if (c.rtu) {
-        n = codec::kRtuExceptionAduSize;
-        codec::write_rtu_exception(p, frame.header.unit_id, frame.pdu.empty() ? 0 : frame.pdu[0],
-                                   static_cast<std::uint8_t>(code));
-    } else {
-        codec::write_exception_frame(p, frame, code);
-    }
+    const std::size_t n = c.link.write_exception(p, frame, code);
     c.out.commit(n);
     tally_.pending_output += n;
     ++tally_.transactions;
@@ -800,15 +748,16 @@ void Worker::mark_dirty(Connection& c, std::uint32_t index) noexcept {
 
 void Worker::flush(std::uint32_t index) noexcept {
     Connection& c = conns_[index];
-    if (c.tls && !c.tls->kernel) {
-        tls_flush(index);
-        return;
-    }
     if (c.state != Connection::State::Open || c.send_inflight) return;
     std::size_t size = 0;
     const std::uint8_t* p = c.out.sendable(c.hold_pos, size);
-    if (!p) return;
-    if (!loop_.send(c.fd, p, static_cast<unsigned>(size),
+    codec::Bytes wire;
+    if (!c.link.outgoing(p, size, wire)) {
+        close_connection(index);
+        return;
+    }
+    if (wire.empty()) return;
+    if (!loop_.send(c.fd, wire.data(), static_cast<unsigned>(wire.size()),
                     net::encode_user_data(Op::Send, index, c.generation)))
         return;
     c.send_inflight = true;
@@ -828,11 +777,8 @@ void Worker::on_send(const net::Completion& cqe) noexcept {
         close_connection(ud.index);
         return;
     }
-    auto n = static_cast<std::size_t>(cqe.res);
-    if (c.tls && !c.tls->kernel)
-        n = tls_sent(*c.tls, n);
-    else
-        counters_.add(ServerCounters::BytesOut, n);
+    counters_.add(ServerCounters::BytesOut, static_cast<std::uint64_t>(cqe.res));
+    const std::size_t n = c.link.sent(static_cast<std::size_t>(cqe.res));
     counters_.sub(ServerCounters::PendingOutput, n);
     if (n != 0) c.out.consume(pool_, n);  // TLS: 0 until a record carrying output is sent
     if (c.out.empty()) c.unanswered = 0;

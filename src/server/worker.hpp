@@ -99,21 +99,29 @@ class Worker {
     void drop_stash(std::uint32_t index) noexcept;
     // Pauses reading when the output queue is over the cap. True when paused.
     bool check_backpressure(std::uint32_t index) noexcept;
-    // Bytes from the socket: ciphertext goes through tls_input, the rest to consume_frames.
+    // Bytes from the socket go to the connection's link, which hands each request to
+    // on_frame through a FrameSink; then the worker does what the link said.
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
-    // RTU over TCP (rtu_input.cpp): the same, with RTU frames.
-    void consume_rtu_input(std::uint32_t index, const std::uint8_t* data,
-                           std::size_t size) noexcept;
-    void consume_frames(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
-    // TLS (worker_tls.cpp): decrypts into consume_frames; encrypts the output queue's head and
-    // sends the ciphertext; a send's ciphertext bytes to the plaintext bytes they complete.
-    void tls_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
-    void tls_flush(std::uint32_t index) noexcept;
-    std::size_t tls_sent(TlsLink& t, std::size_t n) noexcept;
-    // The handshake failed: the alert goes out, then the connection closes.
-    void tls_refuse(std::uint32_t index) noexcept;
-    // Hands the record layer to the kernel when it can take it now (ktls_offload.hpp).
-    void tls_offload(std::uint32_t index) noexcept;
+    struct FrameSink {
+        Worker& worker;
+        Connection& c;
+        std::uint32_t index;
+        // on_frame, inlined into the link's frame loop (worker.cpp).
+        [[gnu::always_inline]] inline bool frame(const codec::TcpFrame& f) noexcept;
+        void discarded() noexcept { worker.counters_.add(ServerCounters::DiscardedFrames); }
+        void crc_skipped() noexcept { worker.counters_.add(ServerCounters::CrcErrors); }
+        void set_up() noexcept { worker.on_link_set_up(index); }
+    };
+    // What the links say (worker_link.cpp). on_link_event: anything but "drained" from a
+    // link's input; true when the connection goes on to after_link_input (frame clock for a
+    // partial TLS record, the link's own output, the kernel hand-off).
+    bool on_link_event(std::uint32_t index, LinkInput event) noexcept;
+    void on_link_set_up(std::uint32_t index) noexcept;  // a TLS handshake done
+    void after_link_input(std::uint32_t index) noexcept;
+    // The set-up failed: the alert goes out, then the connection closes.
+    void link_refused(std::uint32_t index) noexcept;
+    // Hands the link's record layer to the kernel's TLS when it can take it now.
+    void try_hand_off(std::uint32_t index) noexcept;
     // Tracks when the partial frame the splitter holds began (frame timeout).
     void note_partial_frame(Connection& c, std::uint32_t index, bool frame_completed) noexcept;
     // Times what arrived so far against --frame-timeout (a frame, or a TLS handshake).
@@ -130,8 +138,6 @@ class Worker {
     // cost 28 instructions per transaction at FC03 x 10, 9 % of the server's.
     [[gnu::always_inline]] inline bool on_frame(Connection& c, std::uint32_t index,
                                                 const codec::TcpFrame& frame) noexcept;
-    // on_frame as a call, for the frame loops in other files (RTU over TCP).
-    bool serve_frame(Connection& c, std::uint32_t index, const codec::TcpFrame& frame) noexcept;
     // The per-frame counters (requests, transactions, bytes queued) summed in tally_ over a
     // frame loop and added to counters_ once at its end: three load-add-store sequences per
     // frame were a twentieth of the server's instructions at FC03 x 10.
@@ -204,7 +210,8 @@ class Worker {
     std::vector<std::uint16_t> stash_next_;  // per buffer id
     std::vector<std::uint32_t> stash_size_;  // per buffer id
 
-    std::vector<std::uint8_t> tls_plain_;  // decrypted input, one record at a time
+    Link::Kind link_kind_ = Link::Kind::Mbap;  // every connection's transport
+    std::vector<std::uint8_t> link_scratch_;   // decrypted input, one record at a time
 
     ServerCounters counters_;
     struct FrameTally {

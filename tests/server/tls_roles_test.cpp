@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "server/tls_link.hpp"
+#include "server/tls_roles.hpp"
 
 namespace mbstorm::server {
 namespace {

@@ -1,0 +1,210 @@
+// How a served connection's received bytes become requests and its answers become bytes to
+// send, chosen once per server: plain MBAP, RTU over TCP, or Modbus/TCP Security (TLS over
+// memory BIOs, handed to the kernel's TLS once it can take the records). The worker gives its
+// link what a recv brought and what its output queue holds, and reacts to what the link says;
+// it never asks which link it has (wrk's `struct sock`). A plain MBAP link costs a predictable
+// branch per receive and per send; its frame loop is inlined into the worker's.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "codec/bytes.hpp"
+#include "codec/exception_code.hpp"
+#include "codec/limits.hpp"
+#include "codec/mbap.hpp"
+#include "codec/rtu_stream.hpp"
+#include "net/ktls_offload.hpp"
+#include "net/tls_session.hpp"
+#include "server/tls_roles.hpp"
+
+namespace mbstorm::server {
+
+// What a link made of received bytes, besides the requests it handed on.
+enum class LinkInput : std::uint8_t {
+    Drained,      // every whole request handed on; a partial one waits for more bytes
+    Stopped,      // the worker closed the connection while serving a request
+    SettingUp,    // the link's own set-up (a TLS handshake) took the bytes; its reply waits
+    SetUpFailed,  // the set-up was refused or malformed: its alert may wait in output
+    PeerClosed,   // the peer ended its input (close_notify): what came before is answered
+    PeerFailed,   // a record that does not verify: the connection goes
+    FramingLost,  // no frame boundary can be found again
+    BadCrc,       // an RTU frame's CRC failed and no length rule finds the next frame
+};
+
+class Link {
+  public:
+    enum class Kind : std::uint8_t { Mbap, Rtu, Tls };
+
+    Link();
+    Link(Link&&) noexcept;
+    Link& operator=(Link&&) noexcept;
+    ~Link();
+
+    // A new connection on this slot. tls: the server context (Kind::Tls); roles: which
+    // functions each client role may use; offload: track the session for the kernel's TLS.
+    // False when its TLS session could not be made.
+    bool accepted(Kind kind, const std::shared_ptr<net::TlsContext>& tls, const TlsRoles* roles,
+                  bool offload);
+    // The slot is free again (a TLS session goes; an RTU splitter stays for the next one).
+    void released() noexcept;
+
+    // Received bytes. Each whole request goes to sink.frame(frame) (false: the connection was
+    // closed, stop at once); sink.discarded() counts an MBAP frame with a wrong protocol id,
+    // sink.crc_skipped() an RTU frame dropped for its CRC, sink.set_up() a finished set-up
+    // (before the requests after it). `completed`: a request was handed on (or discarded).
+    template <class Sink>
+    LinkInput input(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
+                    bool& completed);
+    // Bytes of a request still arriving that the link holds, or a TLS record's that has not
+    // all come (nonzero: the frame clock runs on them).
+    std::size_t buffered() const noexcept {
+        if (kind_ == Kind::Rtu) return rtu_->buffered();
+        return mbap_.buffered() + (!bytes_pass_through_ && record_partly_in() ? 1 : 0);
+    }
+    // Part of a TLS record has come and the rest has not: a frame still arriving, timed too.
+    bool record_partly_in() const noexcept;
+    // Setting up (a TLS handshake not finished yet).
+    bool setting_up() const noexcept;
+
+    // Answers: the PDU goes `answer_offset()` bytes into the reserved space; frame_answer
+    // writes the framing around `pdu_size` bytes of it and returns the answer's size.
+    std::size_t answer_offset() const noexcept {
+        return kind_ == Kind::Rtu ? 1 : codec::limits::kMbapHeader;  // RTU: the address
+    }
+    std::size_t frame_answer(std::uint8_t* p, const codec::TcpFrame& request,
+                             std::size_t pdu_size) const noexcept;
+    static constexpr std::size_t kMaxExceptionSize =
+        codec::kExceptionAduSize > codec::kRtuExceptionAduSize ? codec::kExceptionAduSize
+                                                               : codec::kRtuExceptionAduSize;
+    // An exception answer to `request` at p (kMaxExceptionSize bytes reserved); its size.
+    std::size_t write_exception(std::uint8_t* p, const codec::TcpFrame& request,
+                                codec::ExceptionCode code) const noexcept;
+    // Which functions the peer may use (a TLS client's role); nullptr: every one.
+    const FunctionSet* allowed() const noexcept { return allowed_; }
+
+    // What to send: the output queue's bytes themselves (`queued`, `size`), or the link's own
+    // (ciphertext of them, a handshake's messages). Empty when there is nothing; false when the
+    // link failed. Call only with no send in flight.
+    bool outgoing(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire);
+    // `n` bytes of the last outgoing() went: how many of the output queue's bytes are done.
+    std::size_t sent(std::size_t n) noexcept;
+    // The link has bytes of its own to send (a handshake's flight, tickets, an alert).
+    bool has_own_output() const noexcept;
+
+    // The error a receive ended with is the kernel's TLS refusing a record the peer sent.
+    bool is_record_layer_error(int result) const noexcept;
+    // The kernel's TLS: whether the link could hand its record layer over now (none of its
+    // bytes in flight or held), and doing it.
+    bool may_hand_off() const noexcept;
+    net::KtlsHandOffResult hand_off(int fd, bool real_fd) noexcept;
+    bool resumed() const noexcept;
+
+  private:
+    struct Tls;
+
+    template <class Sink>
+    LinkInput split_mbap(codec::Bytes bytes, Sink& sink, bool& completed);
+    template <class Sink>
+    LinkInput split_rtu(codec::Bytes bytes, Sink& sink, bool& completed);
+    template <class Sink>
+    LinkInput input_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
+                        bool& completed);
+    // The handshake's step on new ciphertext: SetUp when it finished now (roles looked up).
+    enum class Handshake : std::uint8_t { Done, SetUp, Going, Failed };
+    Handshake step_handshake(codec::Bytes received);
+    // The next plaintext into scratch: its size, 0 with `end` set when the input ended.
+    std::size_t read_plain(std::vector<std::uint8_t>& scratch, LinkInput& end);
+
+    Kind kind_ = Kind::Mbap;
+    bool bytes_pass_through_ = true;  // the socket carries the Modbus bytes themselves
+    codec::MbapSplitter mbap_;
+    std::unique_ptr<codec::RtuSplitter> rtu_;  // made when an RTU link first uses the slot
+    std::unique_ptr<Tls> tls_;                 // Kind::Tls, per connection
+    const FunctionSet* allowed_ = nullptr;
+};
+
+template <class Sink>
+LinkInput Link::input(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
+                      bool& completed) {
+    if (bytes_pass_through_) [[likely]]
+        return kind_ == Kind::Rtu ? split_rtu(received, sink, completed)
+                                  : split_mbap(received, sink, completed);
+    return input_tls(received, scratch, sink, completed);
+}
+
+template <class Sink>
+LinkInput Link::split_mbap(codec::Bytes bytes, Sink& sink, bool& completed) {
+    mbap_.feed(bytes);
+    codec::TcpFrame frame;
+    for (;;) {
+        switch (mbap_.next(frame)) {
+            case codec::MbapSplitter::Status::NeedMore:
+                return LinkInput::Drained;
+            case codec::MbapSplitter::Status::BadProtocolId:
+                sink.discarded();
+                completed = true;
+                break;
+            case codec::MbapSplitter::Status::Fatal:
+                return LinkInput::FramingLost;
+            case codec::MbapSplitter::Status::Frame:
+                // Nothing of this link may be touched after a close: the slot may be free.
+                if (!sink.frame(frame)) return LinkInput::Stopped;
+                completed = true;
+                break;
+        }
+    }
+}
+
+template <class Sink>
+LinkInput Link::split_rtu(codec::Bytes bytes, Sink& sink, bool& completed) {
+    rtu_->feed(bytes);
+    codec::TcpFrame frame;
+    for (;;) {
+        switch (rtu_->next(frame)) {
+            case codec::RtuSplitter::Status::NeedMore:
+                return LinkInput::Drained;
+            case codec::RtuSplitter::Status::Skipped:  // dropped, as a serial slave does
+                sink.crc_skipped();
+                break;
+            case codec::RtuSplitter::Status::Fatal:
+                // No length rule to resynchronise on: the frames before it are answered and
+                // the connection closes after that.
+                return rtu_->error() == codec::CodecError::BadCrc ? LinkInput::BadCrc
+                                                                  : LinkInput::FramingLost;
+            case codec::RtuSplitter::Status::Frame:
+                if (!sink.frame(frame)) return LinkInput::Stopped;
+                completed = true;
+                break;
+        }
+    }
+}
+
+template <class Sink>
+LinkInput Link::input_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
+                          bool& completed) {
+    switch (step_handshake(received)) {
+        case Handshake::Going:
+            return LinkInput::SettingUp;
+        case Handshake::Failed:
+            return LinkInput::SetUpFailed;
+        case Handshake::SetUp:
+            sink.set_up();
+            break;
+        case Handshake::Done:
+            break;
+    }
+    for (;;) {
+        LinkInput end = LinkInput::Drained;
+        const std::size_t n = read_plain(scratch, end);
+        if (n == 0) return end;
+        const LinkInput split = split_mbap(codec::Bytes(scratch.data(), n), sink, completed);
+        if (split != LinkInput::Drained) return split;
+    }
+}
+
+}  // namespace mbstorm::server
