@@ -91,7 +91,7 @@ std::size_t Link::read_plain(std::vector<std::uint8_t>& scratch, LinkInput& end)
 }
 
 bool Link::record_partly_in() const noexcept {
-    return !bytes_pass_through_ && tls_->session.partial_input();
+    return !bytes_pass_through_ && tls_ && tls_->session.partial_input();
 }
 
 bool Link::setting_up() const noexcept {

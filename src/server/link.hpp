@@ -63,8 +63,15 @@ class Link {
     // Bytes of a request still arriving that the link holds, or a TLS record's that has not
     // all come (nonzero: the frame clock runs on them).
     std::size_t buffered() const noexcept {
-        if (kind_ == Kind::Rtu) return rtu_->buffered();
-        return mbap_.buffered() + (!bytes_pass_through_ && record_partly_in() ? 1 : 0);
+        switch (kind_) {
+            case Kind::Mbap:
+                return mbap_.buffered();
+            case Kind::Rtu:
+                return rtu_->buffered();
+            case Kind::Tls:
+                return mbap_.buffered() + (record_partly_in() ? 1 : 0);
+        }
+        return 0;
     }
     // Part of a TLS record has come and the rest has not: a frame still arriving, timed too.
     bool record_partly_in() const noexcept;
@@ -131,10 +138,16 @@ class Link {
 template <class Sink>
 LinkInput Link::input(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
                       bool& completed) {
-    if (bytes_pass_through_) [[likely]]
-        return kind_ == Kind::Rtu ? split_rtu(received, sink, completed)
-                                  : split_mbap(received, sink, completed);
-    return input_tls(received, scratch, sink, completed);
+    switch (kind_) {
+        case Kind::Mbap:
+            return split_mbap(received, sink, completed);
+        case Kind::Rtu:
+            return split_rtu(received, sink, completed);
+        case Kind::Tls:  // MBAP inside, once the kernel has the records
+            if (bytes_pass_through_) return split_mbap(received, sink, completed);
+            return input_tls(received, scratch, sink, completed);
+    }
+    return LinkInput::Stopped;
 }
 
 template <class Sink>
