@@ -67,8 +67,15 @@ std::string values_fault(std::uint8_t fc, std::size_t given) {
             // One sub-request: 7 header bytes + 2 per register within the byte count.
             max = (codec::limits::kMaxFileWriteBytes - 7) / 2;
             break;
-        default:
-            return {};
+        case codec::RequestShape::FunctionOnly:
+        case codec::RequestShape::AddressQuantity:
+        case codec::RequestShape::SingleCoil:
+        case codec::RequestShape::SingleRegister:
+        case codec::RequestShape::SubFunction:
+        case codec::RequestShape::MaskWrite:
+        case codec::RequestShape::FifoPointer:
+        case codec::RequestShape::MeiTransport:
+            return {};  // no --values count to check
     }
     if (given >= 1 && given <= max) return {};
     return fmt::format("--values holds {} value(s): valid 1..{} for {}", given, max,
@@ -217,8 +224,19 @@ std::string build_request(const EncodeOptions& o, std::uint8_t fc, std::uint16_t
             }
             break;
         }
-        default:
-            break;
+        case FC::ReadCoils:
+        case FC::ReadDiscreteInputs:
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+        case FC::WriteSingleRegister:
+        case FC::ReadExceptionStatus:
+        case FC::GetCommEventCounter:
+        case FC::GetCommEventLog:
+        case FC::ReportServerId:
+        case FC::MaskWriteRegister:
+        case FC::ReadFifoQueue:
+        case FC::EncapsulatedInterface:
+            break;  // the fields set above are the whole request
     }
     r.payload = codec::Bytes(payload.data(), n);
     return {};

@@ -366,8 +366,8 @@ std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
     std::vector<std::uint8_t> f = frame_pdu(pdu, tid(), unit);
     // However the PDU was made (a mutation, random bytes), never diagnostics 0001 (restart)
     // or 0004 (listen-only): a device may rightly go quiet after either. Echo (0000) instead.
-    const bool restart_or_listen_only =
-        pdu.size() >= 3 && pdu[0] == 0x08 && pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
+    const bool restart_or_listen_only = pdu.size() >= 3 && pdu[0] == kDiagnostics &&
+                                        pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
     if (restart_or_listen_only) f[lim::kMbapHeader + 2] = 0x00;
     return f;
 }
@@ -538,7 +538,7 @@ void Generator::mutate_recorded(Case& out) {
                 pdu.erase(pdu.begin() + 1 + rng_.below(static_cast<std::uint32_t>(pdu.size() - 1)));
             break;
     }
-    if (pdu.empty()) pdu.push_back(0x03);
+    if (pdu.empty()) pdu.push_back(kReadHoldingRegisters);
     if (pdu.size() > lim::kMaxPdu) pdu.resize(lim::kMaxPdu);
     out.cls = MutationClass::RecordedMutation;
     out.function = pdu[0];
@@ -720,17 +720,18 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
                                                     std::uint32_t room, std::uint16_t& qty,
                                                     bool& coils) {
     std::vector<std::uint8_t> w{fc};
-    switch (fc) {
-        case kWriteSingleCoil:
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(fc)) {
+        case FC::WriteSingleCoil:
             coils = true;
             put16(w, base);
             put16(w, rng_.chance(2) ? 0xFF00 : 0x0000);
             break;
-        case kWriteSingleRegister:
+        case FC::WriteSingleRegister:
             put16(w, base);
             put16(w, word());
             break;
-        case kWriteMultipleCoils: {
+        case FC::WriteMultipleCoils: {
             coils = true;
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteCoils)));
@@ -740,7 +741,7 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
             for (int i = 0; i < (qty + 7) / 8; ++i) w.push_back(rng_.byte());
             break;
         }
-        case kWriteMultipleRegisters: {
+        case FC::WriteMultipleRegisters: {
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteRegisters)));
             put16(w, base);
@@ -749,38 +750,13 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
             for (int i = 0; i < qty; ++i) put16(w, word());
             break;
         }
-        case kReadWriteMultipleRegisters: {
+        case FC::ReadWriteMultipleRegisters:
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwWriteRegisters)));
-            // Read back an overlapping range in the same request, then again separately.
-            const std::uint16_t rq = static_cast<std::uint16_t>(
-                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
-            put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
-            const std::uint32_t end = std::min<std::uint32_t>(
-                0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
-            put16(w, static_cast<std::uint16_t>(std::max<std::uint32_t>(
-                         1, std::min<std::uint32_t>(rq, end - base - qty))));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>(2 * qty));
-            // First the complement of what it will write, so that its read part shows whether
-            // the write came first however often the case runs (a rerun would otherwise find
-            // the values already there).
-            std::vector<std::uint8_t> pre{kWriteMultipleRegisters};
-            put16(pre, base);
-            put16(pre, qty);
-            pre.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) {
-                const std::uint16_t v = word();
-                put16(w, v);
-                put16(pre, static_cast<std::uint16_t>(~v));
-            }
-            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
-            out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+            read_write_over(out, w, base, room, qty);
             break;
-        }
-        case kMaskWriteRegister: {  // after a plain write, so the old value is known
-            std::vector<std::uint8_t> pre{0x06};
+        case FC::MaskWriteRegister: {  // after a plain write, so the old value is known
+            std::vector<std::uint8_t> pre{kWriteSingleRegister};
             put16(pre, base);
             put16(pre, word());
             out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
@@ -790,8 +766,53 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
             put16(w, word());
             break;
         }
+        case FC::ReadCoils:  // not among the writes a stateful case picks
+        case FC::ReadDiscreteInputs:
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+        case FC::ReadExceptionStatus:
+        case FC::Diagnostics:
+        case FC::GetCommEventCounter:
+        case FC::GetCommEventLog:
+        case FC::ReportServerId:
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord:
+        case FC::ReadFifoQueue:
+        case FC::EncapsulatedInterface:
+            break;
     }
     return w;
+}
+
+// FC 17's request after its function code in `w`: the write of `qty` registers at `base`, its
+// read part over a range overlapping them. Reads back in the same request, then again
+// separately (read_back).
+void Generator::read_write_over(Case& out, std::vector<std::uint8_t>& w, std::uint16_t base,
+                                std::uint32_t room, std::uint16_t qty) {
+    const std::uint16_t rq = static_cast<std::uint16_t>(
+        1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
+    put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
+    const std::uint32_t end =
+        std::min<std::uint32_t>(0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
+    put16(w, static_cast<std::uint16_t>(
+                 std::max<std::uint32_t>(1, std::min<std::uint32_t>(rq, end - base - qty))));
+    put16(w, base);
+    put16(w, qty);
+    w.push_back(static_cast<std::uint8_t>(2 * qty));
+    // First the complement of what it will write, so that its read part shows whether
+    // the write came first however often the case runs (a rerun would otherwise find
+    // the values already there).
+    std::vector<std::uint8_t> pre{kWriteMultipleRegisters};
+    put16(pre, base);
+    put16(pre, qty);
+    pre.push_back(static_cast<std::uint8_t>(2 * qty));
+    for (int i = 0; i < qty; ++i) {
+        const std::uint16_t v = word();
+        put16(w, v);
+        put16(pre, static_cast<std::uint16_t>(~v));
+    }
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+    out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
 }
 
 // Reads a stateful write back: its exact range and one straddling its start, on the writer's
@@ -829,7 +850,7 @@ void Generator::read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t 
         const std::uint32_t scratch =
             last >= std::uint32_t{before} + span ? last : std::uint32_t{options_.state.base};
         if (scratch < before || scratch >= std::uint32_t{before} + span) {
-            std::vector<std::uint8_t> rw{0x17};
+            std::vector<std::uint8_t> rw{kReadWriteMultipleRegisters};
             put16(rw, before);
             put16(rw, span);
             put16(rw, static_cast<std::uint16_t>(scratch));
