@@ -719,51 +719,48 @@ void Generator::stateful(Case& out, bool cross) {
 std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, std::uint16_t base,
                                                     std::uint32_t room, std::uint16_t& qty,
                                                     bool& coils) {
-    std::vector<std::uint8_t> w{fc};
+    codec::Request w;
+    w.function = fc;
+    w.address = base;
+    std::vector<std::uint8_t> payload;
+    std::vector<std::uint16_t> registers;
     using FC = codec::FunctionCode;
     switch (static_cast<FC>(fc)) {
         case FC::WriteSingleCoil:
             coils = true;
-            put16(w, base);
-            put16(w, rng_.chance(2) ? 0xFF00 : 0x0000);
+            w.value = rng_.chance(2) ? lim::kCoilOn : lim::kCoilOff;
             break;
         case FC::WriteSingleRegister:
-            put16(w, base);
-            put16(w, word());
+            w.value = word();
             break;
-        case FC::WriteMultipleCoils: {
+        case FC::WriteMultipleCoils:
             coils = true;
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteCoils)));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>((qty + 7) / 8));
-            for (int i = 0; i < (qty + 7) / 8; ++i) w.push_back(rng_.byte());
+            w.quantity = qty;
+            for (int i = 0; i < (qty + 7) / 8; ++i) payload.push_back(rng_.byte());
             break;
-        }
-        case FC::WriteMultipleRegisters: {
+        case FC::WriteMultipleRegisters:
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteRegisters)));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) put16(w, word());
+            w.quantity = qty;
+            for (int i = 0; i < qty; ++i) registers.push_back(word());
+            payload = register_bytes(registers);
             break;
-        }
         case FC::ReadWriteMultipleRegisters:
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwWriteRegisters)));
-            read_write_over(out, w, base, room, qty);
+            read_write_over(out, w, payload, room, qty);
             break;
         case FC::MaskWriteRegister: {  // after a plain write, so the old value is known
-            std::vector<std::uint8_t> pre{kWriteSingleRegister};
-            put16(pre, base);
-            put16(pre, word());
-            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+            codec::Request pre;
+            pre.function = kWriteSingleRegister;
+            pre.address = base;
+            pre.value = word();
+            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(encode_pdu(pre), options_.unit)});
             out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
-            put16(w, base);
-            put16(w, word());
-            put16(w, word());
+            w.and_mask = word();
+            w.or_mask = word();
             break;
         }
         case FC::ReadCoils:  // not among the writes a stateful case picks
@@ -781,37 +778,41 @@ std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, 
         case FC::EncapsulatedInterface:
             break;
     }
-    return w;
+    w.payload = payload;
+    return encode_pdu(w);
 }
 
-// FC 17's request after its function code in `w`: the write of `qty` registers at `base`, its
-// read part over a range overlapping them. Reads back in the same request, then again
-// separately (read_back).
-void Generator::read_write_over(Case& out, std::vector<std::uint8_t>& w, std::uint16_t base,
+// FC 17's request `w` (its address the written block's `base`): the write of `qty` registers
+// there, its read part over a range overlapping them, the values in `payload`. Reads back in
+// the same request, then again separately (read_back).
+void Generator::read_write_over(Case& out, codec::Request& w, std::vector<std::uint8_t>& payload,
                                 std::uint32_t room, std::uint16_t qty) {
+    const std::uint16_t base = w.address;
     const std::uint16_t rq = static_cast<std::uint16_t>(
         1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
-    put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
+    w.address = static_cast<std::uint16_t>(base + rng_.below(qty));
     const std::uint32_t end =
         std::min<std::uint32_t>(0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
-    put16(w, static_cast<std::uint16_t>(
-                 std::max<std::uint32_t>(1, std::min<std::uint32_t>(rq, end - base - qty))));
-    put16(w, base);
-    put16(w, qty);
-    w.push_back(static_cast<std::uint8_t>(2 * qty));
+    w.quantity = static_cast<std::uint16_t>(
+        std::max<std::uint32_t>(1, std::min<std::uint32_t>(rq, end - base - qty)));
+    w.write_address = base;
+    w.write_quantity = qty;
     // First the complement of what it will write, so that its read part shows whether
     // the write came first however often the case runs (a rerun would otherwise find
     // the values already there).
-    std::vector<std::uint8_t> pre{kWriteMultipleRegisters};
-    put16(pre, base);
-    put16(pre, qty);
-    pre.push_back(static_cast<std::uint8_t>(2 * qty));
+    std::vector<std::uint16_t> values, complement;
     for (int i = 0; i < qty; ++i) {
-        const std::uint16_t v = word();
-        put16(w, v);
-        put16(pre, static_cast<std::uint16_t>(~v));
+        values.push_back(word());
+        complement.push_back(static_cast<std::uint16_t>(~values.back()));
     }
-    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+    payload = register_bytes(values);
+    const std::vector<std::uint8_t> complement_bytes = register_bytes(complement);
+    codec::Request pre;
+    pre.function = kWriteMultipleRegisters;
+    pre.address = base;
+    pre.quantity = qty;
+    pre.payload = complement_bytes;
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(encode_pdu(pre), options_.unit)});
     out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
 }
 
@@ -850,15 +851,16 @@ void Generator::read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t 
         const std::uint32_t scratch =
             last >= std::uint32_t{before} + span ? last : std::uint32_t{options_.state.base};
         if (scratch < before || scratch >= std::uint32_t{before} + span) {
-            std::vector<std::uint8_t> rw{kReadWriteMultipleRegisters};
-            put16(rw, before);
-            put16(rw, span);
-            put16(rw, static_cast<std::uint16_t>(scratch));
-            put16(rw, 1);
-            rw.push_back(2);
-            put16(rw, word());
+            const std::vector<std::uint8_t> value = register_bytes({word()});
+            codec::Request rw;
+            rw.function = kReadWriteMultipleRegisters;
+            rw.address = before;
+            rw.quantity = span;
+            rw.write_address = static_cast<std::uint16_t>(scratch);
+            rw.write_quantity = 1;
+            rw.payload = value;
             out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
-                                     frame(rw, options_.unit)});
+                                     frame(encode_pdu(rw), options_.unit)});
         }
     }
 }
