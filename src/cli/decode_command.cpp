@@ -11,6 +11,7 @@
 #include "cli/commands.hpp"
 #include "cli/frame_describe.hpp"
 #include "codec/ascii.hpp"
+#include "codec/function_code.hpp"
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "codec/rtu.hpp"
@@ -78,7 +79,8 @@ Direction likely_direction(codec::Bytes pdu, const DecodeOptions& o) {
     if (o.request || o.response) return o.request ? Direction::Request : Direction::Response;
     if (pdu.empty()) return Direction::Request;
     if (pdu[0] & codec::kExceptionBit) return Direction::Response;
-    bool counted_read = pdu[0] <= 0x04 || pdu[0] == 0x17;
+    const bool counted_read = codec::response_is(pdu[0], codec::ResponseShape::Bits) ||
+                              codec::response_is(pdu[0], codec::ResponseShape::Registers);
     if (counted_read && pdu.size() >= 2 && pdu[1] + 2u == pdu.size()) return Direction::Response;
     return Direction::Request;
 }

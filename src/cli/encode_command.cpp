@@ -67,8 +67,15 @@ std::string values_fault(std::uint8_t fc, std::size_t given) {
             // One sub-request: 7 header bytes + 2 per register within the byte count.
             max = (codec::limits::kMaxFileWriteBytes - 7) / 2;
             break;
-        default:
-            return {};
+        case codec::RequestShape::FunctionOnly:
+        case codec::RequestShape::AddressQuantity:
+        case codec::RequestShape::SingleCoil:
+        case codec::RequestShape::SingleRegister:
+        case codec::RequestShape::SubFunction:
+        case codec::RequestShape::MaskWrite:
+        case codec::RequestShape::FifoPointer:
+        case codec::RequestShape::MeiTransport:
+            return {};  // no --values count to check
     }
     if (given >= 1 && given <= max) return {};
     return fmt::format("--values holds {} value(s): valid 1..{} for {}", given, max,
@@ -201,24 +208,36 @@ std::string build_request(const EncodeOptions& o, std::uint8_t fc, std::uint16_t
             break;
         case FC::ReadFileRecord:
         case FC::WriteFileRecord: {
-            bool write = fc == codec::to_byte(FC::WriteFileRecord);
-            std::uint16_t length = static_cast<std::uint16_t>(write ? o.values.size() : o.quantity);
-            payload[n++] = codec::limits::kFileReferenceType;
-            codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(o.file));
-            codec::store_be16(payload.data() + n + 2, static_cast<std::uint16_t>(o.record));
-            codec::store_be16(payload.data() + n + 4, length);
-            n += 6;
-            if (write) {
-                if (n + o.values.size() * 2 > payload.size()) return "too many values";
-                for (int v : o.values) {
-                    codec::store_be16(payload.data() + n, static_cast<std::uint16_t>(v));
-                    n += 2;
-                }
+            const bool write = fc == codec::to_byte(FC::WriteFileRecord);
+            std::vector<std::uint8_t> data;
+            for (int v : o.values) {
+                data.push_back(static_cast<std::uint8_t>(v >> 8));
+                data.push_back(static_cast<std::uint8_t>(v & 0xFF));
             }
+            codec::FileSubRequest sub;
+            sub.reference_type = codec::limits::kFileReferenceType;
+            sub.file_number = static_cast<std::uint16_t>(o.file);
+            sub.record_number = static_cast<std::uint16_t>(o.record);
+            sub.record_length = static_cast<std::uint16_t>(write ? o.values.size() : o.quantity);
+            if (write) sub.record_data = data;
+            const codec::EncodeResult written = codec::encode_file_sub_request(sub, payload);
+            if (!written.ok()) return "too many values";
+            n = written.size;
             break;
         }
-        default:
-            break;
+        case FC::ReadCoils:
+        case FC::ReadDiscreteInputs:
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+        case FC::WriteSingleRegister:
+        case FC::ReadExceptionStatus:
+        case FC::GetCommEventCounter:
+        case FC::GetCommEventLog:
+        case FC::ReportServerId:
+        case FC::MaskWriteRegister:
+        case FC::ReadFifoQueue:
+        case FC::EncapsulatedInterface:
+            break;  // the fields set above are the whole request
     }
     r.payload = codec::Bytes(payload.data(), n);
     return {};

@@ -9,6 +9,7 @@
 #include "codec/function_code.hpp"
 #include "codec/limits.hpp"
 #include "codec/pdu.hpp"
+#include "codec/pdu_layout.hpp"
 #include "codec/rtu.hpp"
 #include "codec/values.hpp"
 
@@ -69,6 +70,11 @@ class RowWriter {
         if (pos_ < pdu_.size()) field(name, pdu_.size() - pos_, byte_count(pdu_.size() - pos_));
     }
     std::size_t pos() const { return pos_; }
+    // The next byte or big-endian word, without taking it; 0 past the end.
+    std::uint8_t next_byte() const { return pos_ < pdu_.size() ? pdu_[pos_] : 0; }
+    std::uint16_t next_word() const {
+        return pos_ + 2 <= pdu_.size() ? codec::load_be16(pdu_.data() + pos_) : 0;
+    }
 
   private:
     Bytes pdu_;
@@ -82,9 +88,56 @@ const char* coil_meaning(std::uint16_t value) {
     return "(neither ON nor OFF)";
 }
 
-// FC14 and FC15 requests and the FC15 response: a byte count, then sub-requests.
+// The counts and first addresses a layout's fields refer to, from a request or a response.
+struct LayoutValues {
+    Bytes payload;
+    std::size_t quantity = 0, write_quantity = 0, fifo_count = 0;
+    int address = -1, write_address = -1;
+    bool more_follows = false;
+};
+
+LayoutValues values_of(const codec::Request& r) {
+    return {r.payload, r.quantity, r.write_quantity, 0, r.address, r.write_address, false};
+}
+LayoutValues values_of(const codec::Response& r) {
+    return {r.payload, 0, 0, r.fifo_count, -1, -1, r.more_follows != 0};
+}
+
+std::size_t item_count(const codec::PduField& f, const LayoutValues& v) {
+    using codec::FieldCount;
+    switch (f.count) {
+        case FieldCount::One:
+            return 1;
+        case FieldCount::PayloadBytes:
+            return v.payload.size();
+        case FieldCount::PayloadWords:
+            return v.payload.size() / 2;
+        case FieldCount::Quantity:
+            return v.quantity;
+        case FieldCount::WriteQuantity:
+            return v.write_quantity;
+        case FieldCount::FifoCount:
+            return v.fifo_count;
+    }
+    return 1;
+}
+
+// The address of a field's first item, or -1 when its items are numbered 1, 2, ...
+int first_address(const codec::PduField& f, const LayoutValues& v) {
+    using codec::FieldNumbering;
+    switch (f.numbering) {
+        case FieldNumbering::Ordinal:
+            return -1;
+        case FieldNumbering::FromAddress:
+            return v.address;
+        case FieldNumbering::FromWriteAddress:
+            return v.write_address;
+    }
+    return -1;
+}
+
+// FC14 and FC15 sub-requests (FC15's answer echoes them), after the byte count.
 void describe_file_sub_requests(Bytes payload, bool with_data, RowWriter& w) {
-    w.u8("Byte count");
     codec::FileRecordIterator it(payload, with_data);
     codec::FileSubRequest sub;
     for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
@@ -96,171 +149,85 @@ void describe_file_sub_requests(Bytes payload, bool with_data, RowWriter& w) {
     }
 }
 
-void describe_request_fields(const codec::Request& r, RowWriter& w) {
-    using FC = codec::FunctionCode;
-    switch (static_cast<FC>(r.function)) {
-        case FC::ReadCoils:
-        case FC::ReadDiscreteInputs:
-            w.u16("Starting address");
-            w.u16("Quantity of bits");
+void describe_file_sub_responses(Bytes payload, RowWriter& w) {
+    codec::FileResponseIterator it(payload);
+    codec::FileSubResponse sub;
+    for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
+        w.u8(fmt::format("Sub-rsp {} length", n));
+        w.u8(fmt::format("Sub-rsp {} reference type", n));
+        w.registers(fmt::format("Sub-rsp {} data", n), sub.record_data.size() / 2, -1);
+    }
+}
+
+void describe_device_id_objects(Bytes payload, RowWriter& w) {
+    codec::DeviceIdObjectIterator it(payload);
+    codec::DeviceIdObject obj;
+    while (it.next(obj) == codec::CodecError::Ok) {
+        w.u8("Object id");
+        w.u8("Object length");
+        std::string text(obj.value.begin(), obj.value.end());
+        w.field("Object value", obj.value.size(), fmt::format("\"{}\"", text));
+    }
+}
+
+void describe_field(const codec::PduField& f, const LayoutValues& v, RowWriter& w) {
+    using codec::FieldKind;
+    const std::string name(f.name);
+    switch (f.kind) {
+        case FieldKind::Byte:
+            w.u8(name);
             break;
-        case FC::ReadHoldingRegisters:
-        case FC::ReadInputRegisters:
-            w.u16("Starting address");
-            w.u16("Quantity of registers");
+        case FieldKind::Word:
+            w.u16(name);
             break;
-        case FC::WriteSingleCoil:
-            w.u16("Output address");
-            w.u16("Output value", coil_meaning(r.value));
+        case FieldKind::CoilValue:
+            w.u16(name, coil_meaning(w.next_word()));
             break;
-        case FC::WriteSingleRegister:
-            w.u16("Register address");
-            w.u16("Register value");
+        case FieldKind::MeiType:
+            w.u8(name,
+                 w.next_byte() == codec::kMeiReadDeviceId ? "read device identification" : "");
             break;
-        case FC::Diagnostics:
-            w.u16("Sub-function");
-            w.rest("Data");
+        case FieldKind::MoreFollows:
+            w.u8(name, v.more_follows ? "(more)" : "(last)");
             break;
-        case FC::WriteMultipleCoils:
-            w.u16("Starting address");
-            w.u16("Quantity of outputs");
-            w.u8("Byte count");
-            w.bits("Outputs", r.payload.size(), r.address);
+        case FieldKind::Registers:
+            w.registers(name, item_count(f, v), first_address(f, v));
             break;
-        case FC::WriteMultipleRegisters:
-            w.u16("Starting address");
-            w.u16("Quantity of registers");
-            w.u8("Byte count");
-            w.registers("Register", r.quantity, r.address);
+        case FieldKind::PackedBits:
+            w.bits(name, item_count(f, v), first_address(f, v));
             break;
-        case FC::ReadFileRecord:
-        case FC::WriteFileRecord:
-            describe_file_sub_requests(r.payload, r.function == codec::to_byte(FC::WriteFileRecord),
-                                       w);
+        case FieldKind::Rest:
+            w.rest(name);
             break;
-        case FC::MaskWriteRegister:
-            w.u16("Reference address");
-            w.u16("AND mask");
-            w.u16("OR mask");
+        case FieldKind::FileSubRequests:
+        case FieldKind::FileSubRequestsWithData:
+            describe_file_sub_requests(v.payload, f.kind == FieldKind::FileSubRequestsWithData, w);
             break;
-        case FC::ReadWriteMultipleRegisters:
-            w.u16("Read starting address");
-            w.u16("Quantity to read");
-            w.u16("Write starting address");
-            w.u16("Quantity to write");
-            w.u8("Write byte count");
-            w.registers("Write register", r.write_quantity, r.write_address);
+        case FieldKind::FileSubResponses:
+            describe_file_sub_responses(v.payload, w);
             break;
-        case FC::ReadFifoQueue:
-            w.u16("FIFO pointer address");
-            break;
-        case FC::EncapsulatedInterface:
-            w.u8("MEI type",
-                 r.mei_type == codec::kMeiReadDeviceId ? "read device identification" : "");
-            w.u8("Read device id code");
-            w.u8("Object id");
-            break;
-        default:
+        case FieldKind::DeviceIdObjects:
+            describe_device_id_objects(v.payload, w);
             break;
     }
+}
+
+// The fields after the function code, as the codec lays them out for this function, then
+// whatever the layout does not account for.
+void describe_layout(const codec::PduLayout& layout, const LayoutValues& v, RowWriter& w) {
+    for (const codec::PduField& f : layout.fields) describe_field(f, v, w);
     w.rest("Unparsed bytes");
 }
 
-void describe_response_fields(const codec::Response& r, RowWriter& w, Bytes pdu) {
-    using FC = codec::FunctionCode;
-    switch (static_cast<FC>(r.function)) {
-        case FC::ReadCoils:
-        case FC::ReadDiscreteInputs:
-            w.u8("Byte count");
-            w.bits("Status", r.payload.size(), -1);
-            break;
-        case FC::ReadHoldingRegisters:
-        case FC::ReadInputRegisters:
-        case FC::ReadWriteMultipleRegisters:
-            w.u8("Byte count");
-            w.registers("Register value", r.payload.size() / 2, -1);
-            break;
-        case FC::WriteSingleCoil:
-            w.u16("Output address");
-            w.u16("Output value", coil_meaning(r.value));
-            break;
-        case FC::WriteSingleRegister:
-            w.u16("Register address");
-            w.u16("Register value");
-            break;
-        case FC::ReadExceptionStatus:
-            w.u8("Output data");
-            break;
-        case FC::Diagnostics:
-            w.u16("Sub-function");
-            w.rest("Data");
-            break;
-        case FC::GetCommEventCounter:
-            w.u16("Status");
-            w.u16("Event count");
-            break;
-        case FC::GetCommEventLog:
-            w.u8("Byte count");
-            w.u16("Status");
-            w.u16("Event count");
-            w.u16("Message count");
-            w.rest("Events");
-            break;
-        case FC::WriteMultipleCoils:
-        case FC::WriteMultipleRegisters:
-            w.u16("Starting address");
-            w.u16("Quantity");
-            break;
-        case FC::ReportServerId:
-            w.u8("Byte count");
-            w.rest("Server id and run indicator");
-            break;
-        case FC::ReadFileRecord: {
-            w.u8("Response data length");
-            codec::FileResponseIterator it(r.payload);
-            codec::FileSubResponse sub;
-            for (int n = 1; it.next(sub) == codec::CodecError::Ok; ++n) {
-                w.u8(fmt::format("Sub-rsp {} length", n));
-                w.u8(fmt::format("Sub-rsp {} reference type", n));
-                w.registers(fmt::format("Sub-rsp {} data", n), sub.record_data.size() / 2, -1);
-            }
-            break;
-        }
-        case FC::WriteFileRecord:  // the response echoes the request
-            describe_file_sub_requests(r.payload, true, w);
-            break;
-        case FC::MaskWriteRegister:
-            w.u16("Reference address");
-            w.u16("AND mask");
-            w.u16("OR mask");
-            break;
-        case FC::ReadFifoQueue:
-            w.u16("Byte count");
-            w.u16("FIFO count");
-            w.registers("FIFO value", r.fifo_count, -1);
-            break;
-        case FC::EncapsulatedInterface: {
-            w.u8("MEI type");
-            w.u8("Read device id code");
-            w.u8("Conformity level");
-            w.u8("More follows", r.more_follows ? "(more)" : "(last)");
-            w.u8("Next object id");
-            w.u8("Number of objects");
-            codec::DeviceIdObjectIterator it(r.payload);
-            codec::DeviceIdObject obj;
-            while (it.next(obj) == codec::CodecError::Ok) {
-                w.u8("Object id");
-                w.u8("Object length");
-                std::string text(obj.value.begin(), obj.value.end());
-                w.field("Object value", obj.value.size(), fmt::format("\"{}\"", text));
-            }
-            break;
-        }
-        default:
-            break;
-    }
-    (void)pdu;
-    w.rest("Unparsed bytes");
+void describe_request_fields(const codec::Request& r, RowWriter& w) {
+    const codec::FunctionInfo* f = codec::function_info(r.function);
+    describe_layout(f != nullptr ? codec::request_layout(*f) : codec::PduLayout{}, values_of(r), w);
+}
+
+void describe_response_fields(const codec::Response& r, RowWriter& w) {
+    const codec::FunctionInfo* f = codec::function_info(r.function);
+    describe_layout(f != nullptr ? codec::response_layout(*f) : codec::PduLayout{}, values_of(r),
+                    w);
 }
 
 std::uint16_t be16_at(Bytes pdu, std::size_t at) {
@@ -268,6 +235,15 @@ std::uint16_t be16_at(Bytes pdu, std::size_t at) {
 }
 Bytes bytes_from(Bytes pdu, std::size_t at) {
     return at < pdu.size() ? pdu.subspan(at) : Bytes{};
+}
+
+// Where the variable part of a PDU the decoder refused begins, by the codec's layout.
+Bytes raw_payload(Bytes pdu, std::uint8_t fc, Direction dir) {
+    const codec::FunctionInfo* f = codec::function_info(fc);
+    if (f == nullptr) return {};
+    const codec::PduLayout layout =
+        dir == Direction::Request ? codec::request_layout(*f) : codec::response_layout(*f);
+    return layout.payload_at != 0 ? bytes_from(pdu, layout.payload_at) : Bytes{};
 }
 
 // The fields of a request read straight from the bytes, without any validation, so a PDU the
@@ -281,18 +257,7 @@ codec::Request raw_request(Bytes pdu) {
     r.write_address = be16_at(pdu, 5);
     r.write_quantity = be16_at(pdu, 7);
     r.mei_type = pdu.size() > 1 ? pdu[1] : 0;
-    using FC = codec::FunctionCode;
-    switch (static_cast<FC>(r.function)) {
-        case FC::WriteMultipleCoils:
-            r.payload = bytes_from(pdu, 6);
-            break;
-        case FC::ReadFileRecord:
-        case FC::WriteFileRecord:
-            r.payload = bytes_from(pdu, 2);
-            break;
-        default:
-            break;
-    }
+    r.payload = raw_payload(pdu, r.function, Direction::Request);
     return r;
 }
 
@@ -302,20 +267,7 @@ codec::Response raw_response(Bytes pdu) {
     if (pdu[0] & codec::kExceptionBit) r.exception = codec::ExceptionCode::IllegalFunction;
     r.value = be16_at(pdu, 3);
     r.fifo_count = be16_at(pdu, 3);
-    using FC = codec::FunctionCode;
-    switch (static_cast<FC>(r.function)) {
-        case FC::ReadCoils:
-        case FC::ReadDiscreteInputs:
-        case FC::ReadHoldingRegisters:
-        case FC::ReadInputRegisters:
-        case FC::ReadWriteMultipleRegisters:
-        case FC::ReadFileRecord:
-        case FC::WriteFileRecord:
-            r.payload = bytes_from(pdu, 2);
-            break;
-        default:
-            break;
-    }
+    r.payload = raw_payload(pdu, r.function, Direction::Response);
     return r;
 }
 
@@ -336,29 +288,33 @@ std::size_t needed_size(Bytes pdu, Direction dir) {
 
 // A quantity field of a request and the range the specification allows it.
 struct QuantityField {
-    const char* row;
+    std::string_view row;
     std::size_t offset;
     codec::limits::QuantityRange range;
 };
+// The name the layout gives the request field at PDU offset `at`; "" when none starts there.
+std::string_view request_field_at(const codec::FunctionInfo& f, std::size_t at) {
+    std::size_t offset = 1;  // after the function code
+    for (const codec::PduField& field : codec::request_layout(f).fields) {
+        if (offset == at) return field.name;
+        const std::size_t width = codec::fixed_width(field.kind);
+        if (width == 0) break;
+        offset += width;
+    }
+    return {};
+}
+
+// The request's count fields (the codec's request_fields) and their ranges.
 std::vector<QuantityField> quantity_fields(std::uint8_t fc) {
-    using codec::RequestShape;
     const codec::FunctionInfo* f = codec::function_info(fc);
     if (f == nullptr) return {};
-    switch (f->request) {
-        case RequestShape::AddressQuantity:
-            return {{f->table && codec::is_bit_table(*f->table) ? "Quantity of bits"
-                                                                : "Quantity of registers",
-                     3, f->quantity}};
-        case RequestShape::MultipleRegisters:
-            return {{"Quantity of registers", 3, f->quantity}};
-        case RequestShape::MultipleCoils:
-            return {{"Quantity of outputs", 3, f->quantity}};
-        case RequestShape::ReadWriteRegisters:
-            return {{"Quantity to read", 3, f->quantity},
-                    {"Quantity to write", 7, {1, codec::limits::kMaxRwWriteRegisters}}};
-        default:
-            return {};
-    }
+    const codec::RequestFields at = codec::request_fields(fc);
+    std::vector<QuantityField> fields;
+    if (at.quantity != 0)
+        fields.push_back({request_field_at(*f, at.quantity), at.quantity, at.quantity_range});
+    if (at.written != 0 && at.written != at.quantity)
+        fields.push_back({request_field_at(*f, at.written), at.written, at.written_range});
+    return fields;
 }
 
 // Appends the marker to the first row (from `first` on) whose name starts with `prefix` or
@@ -503,7 +459,7 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
             w.rest("Unparsed bytes");
         } else {
             w.field("Function code", 1, codec::function_label(raw.function));
-            describe_response_fields(raw, w, pdu);
+            describe_response_fields(raw, w);
         }
         error = fmt::format("not a valid response: {}",
                             pdu_fault(pdu, Direction::Response, err, rows, first));
@@ -518,7 +474,7 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
         return true;
     }
     w.field("Function code", 1, codec::function_label(rsp.function));
-    describe_response_fields(rsp, w, pdu);
+    describe_response_fields(rsp, w);
     return true;
 }
 

@@ -129,6 +129,11 @@ class FileRecordIterator {
     bool with_data_;
 };
 
+// Writes one FC14/15 sub-request into `out`: reference type, file, record, length and (FC15)
+// `record_data`, as many bytes as it carries. The bytes a Request's payload holds after the
+// byte count; several sub-requests are written one after another.
+EncodeResult encode_file_sub_request(const FileSubRequest& sub, MutableBytes out) noexcept;
+
 // Iterates FC14 response sub-responses: (length, reference type, data).
 struct FileSubResponse {
     std::uint8_t reference_type = 0;

@@ -1,4 +1,5 @@
 // Iterators over the variable parts of FC14/15 and FC2B/0E PDUs, and the FC14/15 checks.
+#include <algorithm>
 #include <cstddef>
 
 #include "codec/pdu.hpp"
@@ -20,6 +21,19 @@ CodecError FileRecordIterator::next(FileSubRequest& out) noexcept {
     out.record_data = rest_.subspan(kHeader, data_size);
     rest_ = rest_.subspan(kHeader + data_size);
     return CodecError::Ok;
+}
+
+EncodeResult encode_file_sub_request(const FileSubRequest& sub, MutableBytes out) noexcept {
+    constexpr std::size_t kHeader = 7;  // reference type, file, record, length
+    const std::size_t size = kHeader + sub.record_data.size();
+    if (out.size() < size) return {0, CodecError::BufferTooSmall};
+    std::uint8_t* p = out.data();
+    p[0] = sub.reference_type;
+    store_be16(p + 1, sub.file_number);
+    store_be16(p + 3, sub.record_number);
+    store_be16(p + 5, sub.record_length);
+    std::copy(sub.record_data.begin(), sub.record_data.end(), p + kHeader);
+    return {size, CodecError::Ok};
 }
 
 CodecError FileResponseIterator::next(FileSubResponse& out) noexcept {

@@ -352,9 +352,20 @@ int expected_read_byte_count(const Request& req) noexcept {
             return static_cast<int>(detail::packed_coil_bytes(req.quantity));
         case ResponseShape::Registers:
             return 2 * static_cast<int>(req.quantity);
-        default:
+        case ResponseShape::EchoValue:
+        case ResponseShape::EchoQuantity:
+        case ResponseShape::EchoMask:
+        case ResponseShape::EchoSubFunction:
+        case ResponseShape::ExceptionStatus:
+        case ResponseShape::EventCounter:
+        case ResponseShape::EventLog:
+        case ResponseShape::ServerId:
+        case ResponseShape::FileRecords:
+        case ResponseShape::FifoValues:
+        case ResponseShape::MeiObjects:
             return -1;  // no fixed data size
     }
+    return -1;
 }
 
 }  // namespace mbstorm::codec

@@ -9,25 +9,42 @@ using stats::Outcome;
 
 namespace {
 
+// An answer of `bytes` data bytes to this read, byte count and function code as asked.
+bool read_data_fits(const RequestInfo& request, codec::Bytes pdu, std::size_t bytes) noexcept {
+    return bytes != 0 && bytes <= 2u * codec::limits::kMaxReadRegisters &&
+           pdu.size() == 2 + bytes && pdu[0] == request.function && pdu[1] == bytes;
+}
+
 // A FC01-04 answer with exactly the data the request asked for: what decode_response() and
 // the size check below would accept, decided without them (the answer to nearly every
 // request of a load test). Anything else, exceptions included, takes the full check.
 bool read_data_as_expected(const RequestInfo& request, codec::Bytes pdu) noexcept {
-    std::size_t bytes;
-    switch (static_cast<codec::FunctionCode>(request.function)) {
-        case codec::FunctionCode::ReadCoils:
-        case codec::FunctionCode::ReadDiscreteInputs:
-            bytes = (request.quantity + 7u) / 8u;
-            break;
-        case codec::FunctionCode::ReadHoldingRegisters:
-        case codec::FunctionCode::ReadInputRegisters:
-            bytes = 2u * request.quantity;
-            break;
-        default:
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(request.function)) {
+        case FC::ReadCoils:
+        case FC::ReadDiscreteInputs:
+            return read_data_fits(request, pdu, (request.quantity + 7u) / 8u);
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+            return read_data_fits(request, pdu, 2u * request.quantity);
+        case FC::WriteSingleCoil:
+        case FC::WriteSingleRegister:
+        case FC::ReadExceptionStatus:
+        case FC::Diagnostics:
+        case FC::GetCommEventCounter:
+        case FC::GetCommEventLog:
+        case FC::WriteMultipleCoils:
+        case FC::WriteMultipleRegisters:
+        case FC::ReportServerId:
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord:
+        case FC::MaskWriteRegister:
+        case FC::ReadWriteMultipleRegisters:
+        case FC::ReadFifoQueue:
+        case FC::EncapsulatedInterface:
             return false;
     }
-    return bytes != 0 && bytes <= 2u * codec::limits::kMaxReadRegisters &&
-           pdu.size() == 2 + bytes && pdu[0] == request.function && pdu[1] == bytes;
+    return false;  // not a public code
 }
 
 }  // namespace

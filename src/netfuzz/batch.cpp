@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 
+#include "codec/exception_code.hpp"
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
 #include "net/clock.hpp"
@@ -208,8 +209,12 @@ void BatchRunner::parse(Lane& l, Round& round) {
             Lane::Frame& f = l.frames[k];
             f.answered = true;
             ++result.answers;
-            f.exception = size > lim::kMbapHeader + 1 && (p[7] & codec::kExceptionBit);
-            if (f.exception && p[8] == 0x06) ++result.busy_answers;
+            f.exception =
+                size > lim::kMbapHeader + 1 && (p[lim::kMbapHeader] & codec::kExceptionBit);
+            if (f.exception &&
+                p[lim::kMbapHeader + 1] ==
+                    static_cast<std::uint8_t>(codec::ExceptionCode::ServerDeviceBusy))
+                ++result.busy_answers;
             if (f.fence) {
                 l.fence_answered = true;
             } else {

@@ -121,6 +121,21 @@ std::uint8_t Case::connections() const noexcept {
     return n;
 }
 
+std::vector<std::uint8_t> encode_pdu(const codec::Request& request) {
+    std::array<std::uint8_t, codec::limits::kMaxPdu + 1> buffer;
+    const codec::EncodeResult written =
+        codec::encode_request(request, buffer, /*allow_invalid=*/true);
+    return std::vector<std::uint8_t>(buffer.begin(),
+                                     buffer.begin() + static_cast<std::ptrdiff_t>(written.size));
+}
+
+std::vector<std::uint8_t> register_bytes(const std::vector<std::uint16_t>& values) {
+    std::vector<std::uint8_t> bytes(2 * values.size());
+    for (std::size_t i = 0; i < values.size(); ++i)
+        codec::store_be16(bytes.data() + 2 * i, values[i]);
+    return bytes;
+}
+
 std::vector<std::uint8_t> frame_pdu(const std::vector<std::uint8_t>& pdu, std::uint16_t tid,
                                     std::uint8_t unit, codec::Framing framing) {
     if (framing == codec::Framing::Rtu) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "codec/framing.hpp"
+#include "codec/pdu.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -101,6 +102,13 @@ struct Case {
     bool pipelinable = false;
     std::uint8_t connections() const noexcept;
 };
+
+// The PDU of `request` as the codec's encoder writes it, unchecked: a case may get a field
+// wrong on purpose (a coil value, padding bits), and the bytes are then still the codec's.
+std::vector<std::uint8_t> encode_pdu(const codec::Request& request);
+
+// The payload bytes of registers: each value big-endian, as a request carries them.
+std::vector<std::uint8_t> register_bytes(const std::vector<std::uint16_t>& values);
 
 // One frame around `pdu` in the given framing: MBAP (header written by the codec), RTU (unit,
 // PDU, CRC-16; `tid` unused) or ASCII (':' hex of unit, PDU and LRC, CR LF; `tid` unused). Any

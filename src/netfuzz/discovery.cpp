@@ -3,13 +3,16 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <thread>
 
 #include "codec/exception_code.hpp"
 #include "codec/function_code.hpp"
+#include "codec/limits.hpp"
 #include "codec/mbap.hpp"
+#include "codec/pdu.hpp"
 #include "net/clock.hpp"
 #include "netfuzz/ask.hpp"
 #include "netfuzz/executor.hpp"
@@ -151,42 +154,81 @@ void learn_functions(const std::vector<Pdu>& pdus, const std::vector<Pdu>& answe
     }
 }
 
+// One sub-request of record 0 in file 1: a read of one register, or a write of one (zero).
+Pdu file_record_request(const codec::FunctionInfo& info) {
+    static constexpr std::uint8_t kZeroWord[] = {0, 0};
+    codec::FileSubRequest sub;
+    sub.reference_type = codec::limits::kFileReferenceType;
+    sub.file_number = 1;
+    sub.record_length = 1;
+    if (info.writes) sub.record_data = kZeroWord;
+    std::array<std::uint8_t, codec::limits::kMaxPdu> payload;
+    const codec::EncodeResult written = codec::encode_file_sub_request(sub, payload);
+    codec::Request r;
+    r.function = codec::to_byte(info.code);
+    r.payload = codec::Bytes(payload.data(), written.size);
+    return encode_pdu(r);
+}
+
 }  // namespace
 
 Pdu canonical_request(const codec::FunctionInfo& info) {
     using codec::RequestShape;
-    const std::uint8_t fc = codec::to_byte(info.code);
+    constexpr std::uint16_t kStateAddress = 0x5FFF;  // where writes change nothing that matters
+    static constexpr std::uint8_t kZeroWord[] = {0, 0};
+    static constexpr std::uint8_t kQueryData[] = {0x12, 0x34};  // echoed by sub-function 0000
+    codec::Request r;
+    r.function = codec::to_byte(info.code);
     switch (info.request) {
         case RequestShape::FunctionOnly:
-            return {fc};
+            break;
         case RequestShape::AddressQuantity:
-            return {fc, 0, 0, 0, 1};
+            r.quantity = 1;
+            break;
         case RequestShape::SingleCoil:
-            return {fc, 0x5F, 0xFF, 0xFF, 0x00};
+            r.address = kStateAddress;
+            r.value = codec::limits::kCoilOn;
+            break;
         case RequestShape::SingleRegister:
-            return {fc, 0x5F, 0xFF, 0, 0};
+            r.address = kStateAddress;
+            break;
         case RequestShape::SubFunction:
-            return {fc, 0, 0, 0x12, 0x34};  // return query data
+            r.sub_function =
+                static_cast<std::uint16_t>(codec::DiagnosticSubFunction::ReturnQueryData);
+            r.payload = kQueryData;
+            break;
         case RequestShape::MultipleCoils:
-            return {fc, 0x5F, 0xFF, 0, 1, 1, 0};
+            r.address = kStateAddress;
+            r.quantity = 1;
+            r.payload = codec::Bytes(kZeroWord, 1);
+            break;
         case RequestShape::MultipleRegisters:
-            return {fc, 0x5F, 0xFF, 0, 1, 2, 0, 0};
+            r.address = kStateAddress;
+            r.quantity = 1;
+            r.payload = kZeroWord;
+            break;
         case RequestShape::FileRecords:
-            // One sub-request of record 0 in file 1: a read, or a write of one register.
-            if (info.writes) return {fc, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0};
-            return {fc, 7, 6, 0, 1, 0, 0, 0, 1};
+            return file_record_request(info);
         case RequestShape::MaskWrite:
-            return {fc, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0};
+            r.address = kStateAddress;
+            r.and_mask = 0xFFFF;  // keeps every bit
+            break;
         case RequestShape::ReadWriteRegisters:
-            return {fc, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0};
+            r.quantity = 1;
+            r.write_address = kStateAddress;
+            r.write_quantity = 1;
+            r.payload = kZeroWord;
+            break;
         case RequestShape::FifoPointer:
-            return {fc, 0x5F, 0xFF};
-        case RequestShape::MeiTransport: {
-            const std::uint8_t basic = 0x01;  // read device id code 01: the basic objects
-            return {fc, codec::kMeiReadDeviceId, basic, 0x00};
-        }
+            r.address = kStateAddress;
+            break;
+        case RequestShape::MeiTransport:
+            r.mei_type = codec::kMeiReadDeviceId;
+            r.device_id_code = 0x01;  // the basic objects
+            r.object_id = 0x00;
+            break;
     }
-    return {fc};
+    return encode_pdu(r);
 }
 
 const std::vector<Pdu>& canonical_requests() {

@@ -20,36 +20,22 @@ void put16(Pdu& p, std::uint16_t v) {
     p.push_back(static_cast<std::uint8_t>(v));
 }
 
-// The function codes the generator builds boundary cases for, by the codec's names.
+// The function codes the generator's own cases name (the stateful writes and their read-backs,
+// the filter of restarts), by the codec's names; boundary cases come from the table.
 constexpr std::uint8_t kReadCoils = codec::to_byte(codec::FunctionCode::ReadCoils);
-constexpr std::uint8_t kReadDiscreteInputs =
-    codec::to_byte(codec::FunctionCode::ReadDiscreteInputs);
 constexpr std::uint8_t kReadHoldingRegisters =
     codec::to_byte(codec::FunctionCode::ReadHoldingRegisters);
-constexpr std::uint8_t kReadInputRegisters =
-    codec::to_byte(codec::FunctionCode::ReadInputRegisters);
 constexpr std::uint8_t kWriteSingleCoil = codec::to_byte(codec::FunctionCode::WriteSingleCoil);
 constexpr std::uint8_t kWriteSingleRegister =
     codec::to_byte(codec::FunctionCode::WriteSingleRegister);
-constexpr std::uint8_t kReadExceptionStatus =
-    codec::to_byte(codec::FunctionCode::ReadExceptionStatus);
 constexpr std::uint8_t kDiagnostics = codec::to_byte(codec::FunctionCode::Diagnostics);
-constexpr std::uint8_t kGetCommEventCounter =
-    codec::to_byte(codec::FunctionCode::GetCommEventCounter);
-constexpr std::uint8_t kGetCommEventLog = codec::to_byte(codec::FunctionCode::GetCommEventLog);
 constexpr std::uint8_t kWriteMultipleCoils =
     codec::to_byte(codec::FunctionCode::WriteMultipleCoils);
 constexpr std::uint8_t kWriteMultipleRegisters =
     codec::to_byte(codec::FunctionCode::WriteMultipleRegisters);
-constexpr std::uint8_t kReportServerId = codec::to_byte(codec::FunctionCode::ReportServerId);
-constexpr std::uint8_t kReadFileRecord = codec::to_byte(codec::FunctionCode::ReadFileRecord);
-constexpr std::uint8_t kWriteFileRecord = codec::to_byte(codec::FunctionCode::WriteFileRecord);
 constexpr std::uint8_t kMaskWriteRegister = codec::to_byte(codec::FunctionCode::MaskWriteRegister);
 constexpr std::uint8_t kReadWriteMultipleRegisters =
     codec::to_byte(codec::FunctionCode::ReadWriteMultipleRegisters);
-constexpr std::uint8_t kReadFifoQueue = codec::to_byte(codec::FunctionCode::ReadFifoQueue);
-constexpr std::uint8_t kEncapsulatedInterface =
-    codec::to_byte(codec::FunctionCode::EncapsulatedInterface);
 
 Pdu pdu5(std::uint8_t fc, std::uint16_t a, std::uint16_t b) {
     Pdu p{fc};
@@ -79,8 +65,7 @@ void add_reads(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
 }
 
 // FC0F/FC10: quantity, and byte counts that agree or disagree with it.
-void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max) {
-    const bool coils = fc == kWriteMultipleCoils;
+void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max, bool coils) {
     const std::uint32_t qs[] = {0u, 1u, 2u, 8u, 9u, max - 1u, max, max + 1u, 0xFFFFu};
     for (std::uint32_t q : qs) {
         const std::uint32_t right = coils ? (q + 7) / 8 : 2 * q;
@@ -101,7 +86,7 @@ void add_multi_writes(std::vector<Pdu>& out, std::uint8_t fc, std::uint16_t max)
     }
 }
 
-void add_file_records(std::vector<Pdu>& out) {
+void add_file_records(std::vector<Pdu>& out, std::uint8_t fc, bool with_data) {
     struct Sub {
         std::uint8_t ref;
         std::uint16_t file, record, length;
@@ -109,34 +94,31 @@ void add_file_records(std::vector<Pdu>& out) {
     const Sub subs[] = {{6, 1, 0, 1},      {6, 1, 9999, 1}, {6, 1, 10000, 1}, {6, 0, 0, 1},
                         {6, 0xFFFF, 0, 1}, {5, 1, 0, 1},    {7, 1, 0, 1},     {6, 1, 0, 0},
                         {6, 1, 9990, 20},  {6, 4, 0, 120},  {6, 5, 0, 1},     {0xFF, 1, 0, 1}};
-    for (std::uint8_t fc : {kReadFileRecord, kWriteFileRecord}) {
-        for (const Sub& s : subs) {
-            for (int copies : {1, 2}) {
-                Pdu body;
-                for (int c = 0; c < copies; ++c) {
-                    body.push_back(s.ref);
-                    put16(body, s.file);
-                    put16(body, s.record);
-                    put16(body, s.length);
-                    if (fc == kWriteFileRecord)
-                        for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u;
-                             ++i)
-                            body.push_back(static_cast<std::uint8_t>(i));
-                }
-                if (body.size() > lim::kMaxPdu - 2) body.resize(lim::kMaxPdu - 2);
-                for (int skew : {0, 1, -1}) {
-                    Pdu p{fc, static_cast<std::uint8_t>(body.size() + skew)};
-                    p.insert(p.end(), body.begin(), body.end());
-                    out.push_back(std::move(p));
-                }
+    for (const Sub& s : subs) {
+        for (int copies : {1, 2}) {
+            Pdu body;
+            for (int c = 0; c < copies; ++c) {
+                body.push_back(s.ref);
+                put16(body, s.file);
+                put16(body, s.record);
+                put16(body, s.length);
+                if (with_data)
+                    for (std::uint32_t i = 0; i < std::min<std::uint32_t>(s.length, 100) * 2u; ++i)
+                        body.push_back(static_cast<std::uint8_t>(i));
+            }
+            if (body.size() > lim::kMaxPdu - 2) body.resize(lim::kMaxPdu - 2);
+            for (int skew : {0, 1, -1}) {
+                Pdu p{fc, static_cast<std::uint8_t>(body.size() + skew)};
+                p.insert(p.end(), body.begin(), body.end());
+                out.push_back(std::move(p));
             }
         }
-        out.push_back(Pdu{fc, 0});
-        out.push_back(Pdu{fc, 0xFF});
     }
+    out.push_back(Pdu{fc, 0});
+    out.push_back(Pdu{fc, 0xFF});
 }
 
-void add_read_write_multiple(std::vector<Pdu>& out) {
+void add_read_write_multiple(std::vector<Pdu>& out, std::uint8_t fc) {
     const std::uint32_t rqs[] = {0, 1, 125, 126};
     const std::uint32_t wqs[] = {0, 1, 121, 122};
     for (std::uint32_t rq : rqs) {
@@ -151,7 +133,7 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
                 for (int skew : {0, 1, -1}) {
                     const int bc = static_cast<int>(2 * wq) + skew;
                     if (bc < 0) continue;
-                    Pdu p = pdu5(kReadWriteMultipleRegisters, ra, static_cast<std::uint16_t>(rq));
+                    Pdu p = pdu5(fc, ra, static_cast<std::uint16_t>(rq));
                     put16(p, wa);
                     put16(p, static_cast<std::uint16_t>(wq));
                     const int room = static_cast<int>(lim::kMaxPdu) - 10;
@@ -163,8 +145,7 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
             }
         }
         // The read range itself at the top of the address space.
-        Pdu p = pdu5(kReadWriteMultipleRegisters,
-                     static_cast<std::uint16_t>(0x10000 - std::max(rq, 1u) + 1),
+        Pdu p = pdu5(fc, static_cast<std::uint16_t>(0x10000 - std::max(rq, 1u) + 1),
                      static_cast<std::uint16_t>(rq));
         put16(p, 0);
         put16(p, 1);
@@ -174,56 +155,55 @@ void add_read_write_multiple(std::vector<Pdu>& out) {
     }
 }
 
-void add_single_writes(std::vector<Pdu>& out) {
+void add_single_coil_writes(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
         for (std::uint16_t v : {0x0000, 0xFF00, 0x0001, 0x00FF, 0xFFFF, 0xFF01, 0x8000})
-            out.push_back(pdu5(kWriteSingleCoil, a, v));
+            out.push_back(pdu5(fc, a, v));
+}
+
+void add_single_register_writes(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0x8000, 0xFFFF})
-        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF})
-            out.push_back(pdu5(kWriteSingleRegister, a, v));
+        for (std::uint16_t v : {0x0000, 0xFFFF, 0x8000, 0x7FFF}) out.push_back(pdu5(fc, a, v));
 }
 
 // The serial-line status requests (FC07, 0B, 0C, 11): bare, and with a stray byte.
-void add_status_requests(std::vector<Pdu>& out) {
-    for (std::uint8_t fc :
-         {kReadExceptionStatus, kGetCommEventCounter, kGetCommEventLog, kReportServerId}) {
-        out.push_back(Pdu{fc});
-        out.push_back(Pdu{fc, 0x00});
-    }
+void add_status_request(std::vector<Pdu>& out, std::uint8_t fc) {
+    out.push_back(Pdu{fc});
+    out.push_back(Pdu{fc, 0x00});
 }
 
 // FC08: every defined sub-function and some undefined ones, with right and wrong data sizes,
 // and a long echo. 0x0001 (restart) and 0x0004 (listen-only) are left out: real devices may
 // legitimately drop the connection or go silent.
-void add_diagnostics(std::vector<Pdu>& out) {
+void add_diagnostics(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint16_t sub :
          {0x0000, 0x0002, 0x0003, 0x000A, 0x000B, 0x000C, 0x000D, 0x000E, 0x000F, 0x0010, 0x0011,
           0x0012, 0x0013, 0x0014, 0x0015, 0x00FF, 0xFFFF}) {
         for (int words : {0, 1, 2}) {
-            Pdu p{kDiagnostics};
+            Pdu p{fc};
             put16(p, sub);
             for (int i = 0; i < words; ++i) put16(p, sub == 0 ? 0xA55A : 0x0000);
             out.push_back(std::move(p));
         }
     }
-    Pdu echo{kDiagnostics, 0x00, 0x00};
+    Pdu echo{fc, 0x00, 0x00};
     for (int i = 0; i < 250; ++i) echo.push_back(static_cast<std::uint8_t>(i));
     out.push_back(echo);
 }
 
-void add_mask_writes(std::vector<Pdu>& out) {
+void add_mask_writes(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFFF}) {
         for (std::uint16_t m : {0x0000, 0xFFFF, 0x00FF}) {
-            Pdu p = pdu5(kMaskWriteRegister, a, m);
+            Pdu p = pdu5(fc, a, m);
             put16(p, static_cast<std::uint16_t>(~m));
             out.push_back(std::move(p));
         }
     }
 }
 
-void add_fifo_reads(std::vector<Pdu>& out) {
+void add_fifo_reads(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint16_t a : {0, 1, 0x7FFF, 0xFFE0, 0xFFFE, 0xFFFF}) {
-        Pdu p{kReadFifoQueue};
+        Pdu p{fc};
         put16(p, a);
         out.push_back(std::move(p));
     }
@@ -231,14 +211,15 @@ void add_fifo_reads(std::vector<Pdu>& out) {
 
 // FC2B: every MEI type worth trying; for 0E every read device id code and object ids at the
 // edges of the basic, regular, reserved and extended ranges.
-void add_encapsulated(std::vector<Pdu>& out) {
+void add_encapsulated(std::vector<Pdu>& out, std::uint8_t fc) {
     for (std::uint8_t code : {0, 1, 2, 3, 4, 5, 0xFF})
         for (std::uint8_t obj : {0x00, 0x01, 0x02, 0x03, 0x06, 0x07, 0x7F, 0x80, 0xFF})
-            out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId, code, obj});
+            out.push_back(Pdu{fc, codec::kMeiReadDeviceId, code, obj});
+    const std::uint8_t basic_objects = 0x01;  // read device id code 01
     for (std::uint8_t mei : {0x00, 0x0D, 0x0F, 0xFF})
-        out.push_back(Pdu{kEncapsulatedInterface, mei, 0x01, 0x00});
-    out.push_back(Pdu{kEncapsulatedInterface});
-    out.push_back(Pdu{kEncapsulatedInterface, codec::kMeiReadDeviceId});
+        out.push_back(Pdu{fc, mei, basic_objects, 0x00});
+    out.push_back(Pdu{fc});
+    out.push_back(Pdu{fc, codec::kMeiReadDeviceId});
 }
 
 // Every function code 0-255: bare, and with a plausible read body.
@@ -250,24 +231,79 @@ void add_every_function_code(std::vector<Pdu>& out) {
     }
 }
 
+// The boundary requests of function `f`, by its request shape: a code of a known shape gets
+// them with no change here, a new shape is named by -Wswitch.
+void add_boundaries(std::vector<Pdu>& out, const codec::FunctionInfo& f) {
+    using codec::RequestShape;
+    const std::uint8_t fc = codec::to_byte(f.code);
+    switch (f.request) {
+        case RequestShape::AddressQuantity:
+            return add_reads(out, fc, f.quantity.max);
+        case RequestShape::SingleCoil:
+            return add_single_coil_writes(out, fc);
+        case RequestShape::SingleRegister:
+            return add_single_register_writes(out, fc);
+        case RequestShape::FunctionOnly:
+            return add_status_request(out, fc);
+        case RequestShape::SubFunction:
+            return add_diagnostics(out, fc);
+        case RequestShape::MultipleCoils:
+            return add_multi_writes(out, fc, f.quantity.max, true);
+        case RequestShape::MultipleRegisters:
+            return add_multi_writes(out, fc, f.quantity.max, false);
+        case RequestShape::FileRecords:
+            return add_file_records(out, fc, f.writes);
+        case RequestShape::MaskWrite:
+            return add_mask_writes(out, fc);
+        case RequestShape::ReadWriteRegisters:
+            return add_read_write_multiple(out, fc);
+        case RequestShape::FifoPointer:
+            return add_fifo_reads(out, fc);
+        case RequestShape::MeiTransport:
+            return add_encapsulated(out, fc);
+    }
+}
+
+// Where a shape's boundary requests come in the list: the order it has always had (reads,
+// single writes, status, diagnostics, multiple writes, ...), so that a seed keeps giving the
+// same cases.
+int boundary_group(codec::RequestShape shape) {
+    using codec::RequestShape;
+    switch (shape) {
+        case RequestShape::AddressQuantity:
+            return 0;
+        case RequestShape::SingleCoil:
+        case RequestShape::SingleRegister:
+            return 1;
+        case RequestShape::FunctionOnly:
+            return 2;
+        case RequestShape::SubFunction:
+            return 3;
+        case RequestShape::MultipleCoils:
+        case RequestShape::MultipleRegisters:
+            return 4;
+        case RequestShape::FileRecords:
+            return 5;
+        case RequestShape::MaskWrite:
+            return 6;
+        case RequestShape::ReadWriteRegisters:
+            return 7;
+        case RequestShape::FifoPointer:
+            return 8;
+        case RequestShape::MeiTransport:
+            return 9;
+    }
+    return 0;
+}
+constexpr int kBoundaryGroups = 10;
+
 }  // namespace
 
 std::vector<std::vector<std::uint8_t>> structured_pdus() {
     std::vector<Pdu> out;
-    add_reads(out, kReadCoils, lim::kMaxReadBits);
-    add_reads(out, kReadDiscreteInputs, lim::kMaxReadBits);
-    add_reads(out, kReadHoldingRegisters, lim::kMaxReadRegisters);
-    add_reads(out, kReadInputRegisters, lim::kMaxReadRegisters);
-    add_single_writes(out);
-    add_status_requests(out);
-    add_diagnostics(out);
-    add_multi_writes(out, kWriteMultipleCoils, lim::kMaxWriteCoils);
-    add_multi_writes(out, kWriteMultipleRegisters, lim::kMaxWriteRegisters);
-    add_file_records(out);
-    add_mask_writes(out);
-    add_read_write_multiple(out);
-    add_fifo_reads(out);
-    add_encapsulated(out);
+    for (int group = 0; group < kBoundaryGroups; ++group)
+        for (const codec::FunctionInfo& f : codec::public_functions())
+            if (boundary_group(f.request) == group) add_boundaries(out, f);
     add_every_function_code(out);
     return out;
 }
@@ -366,8 +402,8 @@ std::vector<std::uint8_t> Generator::frame(const std::vector<std::uint8_t>& pdu,
     std::vector<std::uint8_t> f = frame_pdu(pdu, tid(), unit);
     // However the PDU was made (a mutation, random bytes), never diagnostics 0001 (restart)
     // or 0004 (listen-only): a device may rightly go quiet after either. Echo (0000) instead.
-    const bool restart_or_listen_only =
-        pdu.size() >= 3 && pdu[0] == 0x08 && pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
+    const bool restart_or_listen_only = pdu.size() >= 3 && pdu[0] == kDiagnostics &&
+                                        pdu[1] == 0x00 && (pdu[2] == 0x01 || pdu[2] == 0x04);
     if (restart_or_listen_only) f[lim::kMbapHeader + 2] = 0x00;
     return f;
 }
@@ -538,7 +574,7 @@ void Generator::mutate_recorded(Case& out) {
                 pdu.erase(pdu.begin() + 1 + rng_.below(static_cast<std::uint32_t>(pdu.size() - 1)));
             break;
     }
-    if (pdu.empty()) pdu.push_back(0x03);
+    if (pdu.empty()) pdu.push_back(kReadHoldingRegisters);
     if (pdu.size() > lim::kMaxPdu) pdu.resize(lim::kMaxPdu);
     out.cls = MutationClass::RecordedMutation;
     out.function = pdu[0];
@@ -719,79 +755,101 @@ void Generator::stateful(Case& out, bool cross) {
 std::vector<std::uint8_t> Generator::stateful_write(Case& out, std::uint8_t fc, std::uint16_t base,
                                                     std::uint32_t room, std::uint16_t& qty,
                                                     bool& coils) {
-    std::vector<std::uint8_t> w{fc};
-    switch (fc) {
-        case kWriteSingleCoil:
+    codec::Request w;
+    w.function = fc;
+    w.address = base;
+    std::vector<std::uint8_t> payload;
+    std::vector<std::uint16_t> registers;
+    using FC = codec::FunctionCode;
+    switch (static_cast<FC>(fc)) {
+        case FC::WriteSingleCoil:
             coils = true;
-            put16(w, base);
-            put16(w, rng_.chance(2) ? 0xFF00 : 0x0000);
+            w.value = rng_.chance(2) ? lim::kCoilOn : lim::kCoilOff;
             break;
-        case kWriteSingleRegister:
-            put16(w, base);
-            put16(w, word());
+        case FC::WriteSingleRegister:
+            w.value = word();
             break;
-        case kWriteMultipleCoils: {
+        case FC::WriteMultipleCoils:
             coils = true;
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteCoils)));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>((qty + 7) / 8));
-            for (int i = 0; i < (qty + 7) / 8; ++i) w.push_back(rng_.byte());
+            w.quantity = qty;
+            for (int i = 0; i < (qty + 7) / 8; ++i) payload.push_back(rng_.byte());
             break;
-        }
-        case kWriteMultipleRegisters: {
+        case FC::WriteMultipleRegisters:
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxWriteRegisters)));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) put16(w, word());
+            w.quantity = qty;
+            for (int i = 0; i < qty; ++i) registers.push_back(word());
+            payload = register_bytes(registers);
             break;
-        }
-        case kReadWriteMultipleRegisters: {
+        case FC::ReadWriteMultipleRegisters:
             qty = static_cast<std::uint16_t>(
                 1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwWriteRegisters)));
-            // Read back an overlapping range in the same request, then again separately.
-            const std::uint16_t rq = static_cast<std::uint16_t>(
-                1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
-            put16(w, static_cast<std::uint16_t>(base + rng_.below(qty)));
-            const std::uint32_t end = std::min<std::uint32_t>(
-                0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
-            put16(w, static_cast<std::uint16_t>(std::max<std::uint32_t>(
-                         1, std::min<std::uint32_t>(rq, end - base - qty))));
-            put16(w, base);
-            put16(w, qty);
-            w.push_back(static_cast<std::uint8_t>(2 * qty));
-            // First the complement of what it will write, so that its read part shows whether
-            // the write came first however often the case runs (a rerun would otherwise find
-            // the values already there).
-            std::vector<std::uint8_t> pre{kWriteMultipleRegisters};
-            put16(pre, base);
-            put16(pre, qty);
-            pre.push_back(static_cast<std::uint8_t>(2 * qty));
-            for (int i = 0; i < qty; ++i) {
-                const std::uint16_t v = word();
-                put16(w, v);
-                put16(pre, static_cast<std::uint16_t>(~v));
-            }
-            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
+            read_write_over(out, w, payload, room, qty);
+            break;
+        case FC::MaskWriteRegister: {  // after a plain write, so the old value is known
+            codec::Request pre;
+            pre.function = kWriteSingleRegister;
+            pre.address = base;
+            pre.value = word();
+            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(encode_pdu(pre), options_.unit)});
             out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
+            w.and_mask = word();
+            w.or_mask = word();
             break;
         }
-        case kMaskWriteRegister: {  // after a plain write, so the old value is known
-            std::vector<std::uint8_t> pre{0x06};
-            put16(pre, base);
-            put16(pre, word());
-            out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(pre, options_.unit)});
-            out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
-            put16(w, base);
-            put16(w, word());
-            put16(w, word());
+        case FC::ReadCoils:  // not among the writes a stateful case picks
+        case FC::ReadDiscreteInputs:
+        case FC::ReadHoldingRegisters:
+        case FC::ReadInputRegisters:
+        case FC::ReadExceptionStatus:
+        case FC::Diagnostics:
+        case FC::GetCommEventCounter:
+        case FC::GetCommEventLog:
+        case FC::ReportServerId:
+        case FC::ReadFileRecord:
+        case FC::WriteFileRecord:
+        case FC::ReadFifoQueue:
+        case FC::EncapsulatedInterface:
             break;
-        }
     }
-    return w;
+    w.payload = payload;
+    return encode_pdu(w);
+}
+
+// FC 17's request `w` (its address the written block's `base`): the write of `qty` registers
+// there, its read part over a range overlapping them, the values in `payload`. Reads back in
+// the same request, then again separately (read_back).
+void Generator::read_write_over(Case& out, codec::Request& w, std::vector<std::uint8_t>& payload,
+                                std::uint32_t room, std::uint16_t qty) {
+    const std::uint16_t base = w.address;
+    const std::uint16_t rq = static_cast<std::uint16_t>(
+        1 + rng_.below(std::min<std::uint32_t>(room, lim::kMaxRwReadRegisters)));
+    w.address = static_cast<std::uint16_t>(base + rng_.below(qty));
+    const std::uint32_t end =
+        std::min<std::uint32_t>(0x10000u, std::uint32_t{options_.state.base} + options_.state.span);
+    w.quantity = static_cast<std::uint16_t>(
+        std::max<std::uint32_t>(1, std::min<std::uint32_t>(rq, end - base - qty)));
+    w.write_address = base;
+    w.write_quantity = qty;
+    // First the complement of what it will write, so that its read part shows whether
+    // the write came first however often the case runs (a rerun would otherwise find
+    // the values already there).
+    std::vector<std::uint16_t> values, complement;
+    for (int i = 0; i < qty; ++i) {
+        values.push_back(word());
+        complement.push_back(static_cast<std::uint16_t>(~values.back()));
+    }
+    payload = register_bytes(values);
+    const std::vector<std::uint8_t> complement_bytes = register_bytes(complement);
+    codec::Request pre;
+    pre.function = kWriteMultipleRegisters;
+    pre.address = base;
+    pre.quantity = qty;
+    pre.payload = complement_bytes;
+    out.steps.push_back(Step{Op::Send, 0, 0, 0, frame(encode_pdu(pre), options_.unit)});
+    out.steps.push_back(Step{Op::Await, 0, 0, 0, {}});
 }
 
 // Reads a stateful write back: its exact range and one straddling its start, on the writer's
@@ -829,15 +887,16 @@ void Generator::read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t 
         const std::uint32_t scratch =
             last >= std::uint32_t{before} + span ? last : std::uint32_t{options_.state.base};
         if (scratch < before || scratch >= std::uint32_t{before} + span) {
-            std::vector<std::uint8_t> rw{0x17};
-            put16(rw, before);
-            put16(rw, span);
-            put16(rw, static_cast<std::uint16_t>(scratch));
-            put16(rw, 1);
-            rw.push_back(2);
-            put16(rw, word());
+            const std::vector<std::uint8_t> value = register_bytes({word()});
+            codec::Request rw;
+            rw.function = kReadWriteMultipleRegisters;
+            rw.address = before;
+            rw.quantity = span;
+            rw.write_address = static_cast<std::uint16_t>(scratch);
+            rw.write_quantity = 1;
+            rw.payload = value;
             out.steps.push_back(Step{Op::Send, static_cast<std::uint8_t>(1 - reader), 0, 0,
-                                     frame(rw, options_.unit)});
+                                     frame(encode_pdu(rw), options_.unit)});
         }
     }
 }

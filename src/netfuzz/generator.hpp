@@ -103,6 +103,8 @@ class Generator {
     void stateful(Case& out, bool cross);
     std::vector<std::uint8_t> stateful_write(Case& out, std::uint8_t fc, std::uint16_t base,
                                              std::uint32_t room, std::uint16_t& qty, bool& coils);
+    void read_write_over(Case& out, codec::Request& w, std::vector<std::uint8_t>& payload,
+                         std::uint32_t room, std::uint16_t qty);
     void read_back(Case& out, bool cross, std::uint8_t fc, std::uint16_t base, std::uint16_t qty,
                    bool coils);
     void burst_split(Case& out);

@@ -16,11 +16,6 @@ namespace lim = codec::limits;
 using Pdu = std::vector<std::uint8_t>;
 using codec::RequestShape;
 
-void put16(Pdu& p, std::uint32_t v) {
-    p.push_back(static_cast<std::uint8_t>(v >> 8));
-    p.push_back(static_cast<std::uint8_t>(v));
-}
-
 // The most items one request of function `fc` may carry (v1.1b3, from the codec's table): the
 // count its byte count follows (FC 0F, 10, FC 17's write part), else its quantity (01-04),
 // else one item (05, 06, 16, 18).
@@ -37,56 +32,50 @@ template <class Value>
 Pdu request_at(std::uint8_t fc, std::uint16_t address, std::uint16_t quantity, std::uint16_t second,
                Value&& value) {
     const codec::FunctionInfo* info = codec::function_info(fc);
-    Pdu p{fc};
+    codec::Request r;
+    r.function = fc;
+    r.address = address;
+    r.quantity = quantity;
+    std::vector<std::uint8_t> payload;
+    std::vector<std::uint16_t> registers;
     switch (info->request) {
         case RequestShape::AddressQuantity:
-            put16(p, address);
-            put16(p, quantity);
+        case RequestShape::FifoPointer:
             break;
         case RequestShape::SingleCoil:
-            put16(p, address);
-            put16(p, value() & 1 ? 0xFF00 : 0x0000);
+            r.value = value() & 1 ? lim::kCoilOn : lim::kCoilOff;
             break;
         case RequestShape::SingleRegister:
-            put16(p, address);
-            put16(p, value());
+            r.value = static_cast<std::uint16_t>(value());
             break;
         case RequestShape::MultipleCoils:
-            put16(p, address);
-            put16(p, quantity);
-            p.push_back(static_cast<std::uint8_t>((quantity + 7) / 8));
             for (int i = 0; i < (quantity + 7) / 8; ++i)
-                p.push_back(static_cast<std::uint8_t>(value()));
+                payload.push_back(static_cast<std::uint8_t>(value()));
             break;
         case RequestShape::MultipleRegisters:
-            put16(p, address);
-            put16(p, quantity);
-            p.push_back(static_cast<std::uint8_t>(2 * quantity));
-            for (int i = 0; i < quantity; ++i) put16(p, value());
+            for (int i = 0; i < quantity; ++i)
+                registers.push_back(static_cast<std::uint16_t>(value()));
+            payload = register_bytes(registers);
             break;
         case RequestShape::MaskWrite:
-            put16(p, address);
-            put16(p, value());
-            put16(p, value());
+            r.and_mask = static_cast<std::uint16_t>(value());
+            r.or_mask = static_cast<std::uint16_t>(value());
             break;
         case RequestShape::ReadWriteRegisters:
-            put16(p, address);
-            put16(p, quantity);
-            put16(p, second);
-            put16(p, quantity);
-            p.push_back(static_cast<std::uint8_t>(2 * quantity));
-            for (int i = 0; i < quantity; ++i) put16(p, value());
-            break;
-        case RequestShape::FifoPointer:
-            put16(p, address);
+            r.write_address = second;
+            r.write_quantity = quantity;
+            for (int i = 0; i < quantity; ++i)
+                registers.push_back(static_cast<std::uint16_t>(value()));
+            payload = register_bytes(registers);
             break;
         case RequestShape::FunctionOnly:
         case RequestShape::SubFunction:
         case RequestShape::FileRecords:
         case RequestShape::MeiTransport:
-            break;  // no address: never asked for (see addressed())
+            return Pdu{fc};  // no address: never asked for (see addressed())
     }
-    return p;
+    r.payload = payload;
+    return encode_pdu(r);
 }
 
 bool addressed(std::uint8_t fc) {

@@ -491,7 +491,12 @@ std::optional<WriteRecord> write_of(const RequestInfo& rq) {
             w.values = {std::nullopt};  // depends on the old value: see resolve_masks
             w.mask = true;
             break;
-        default:
+        case codec::RequestShape::FunctionOnly:
+        case codec::RequestShape::AddressQuantity:
+        case codec::RequestShape::SubFunction:  // restarts and clears counters, not data
+        case codec::RequestShape::FileRecords:  // file records are not in the shadow
+        case codec::RequestShape::FifoPointer:
+        case codec::RequestShape::MeiTransport:
             return {};
     }
     return w;

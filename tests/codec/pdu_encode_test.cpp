@@ -334,5 +334,31 @@ TEST(ResponseEncode, PayloadAlreadyInOutputBuffer) {
     EXPECT_EQ(to_hex(Bytes(rq, e3.size)), "0F 00 13 00 0A 02 CD 01");
 }
 
+// FC15's sub-requests written one after another read back with the iterator, and the
+// request around them is the specification's example.
+TEST(PduEncode, FileSubRequestsReadBackAndMakeTheSpecExample) {
+    const std::uint8_t data[] = {0x06, 0xAF, 0x04, 0xBE, 0x10, 0x0D};
+    FileSubRequest sub{limits::kFileReferenceType, 4, 7, 3, Bytes(data, sizeof data)};
+    std::uint8_t payload[16];
+    const EncodeResult written =
+        encode_file_sub_request(sub, MutableBytes(payload, sizeof payload));
+    ASSERT_TRUE(written.ok());
+    EXPECT_EQ(written.size, 13u);
+    Request r;
+    r.function = 0x15;
+    r.payload = Bytes(payload, written.size);
+    EXPECT_EQ(encode_req_hex(r), "15 0D 06 00 04 00 07 00 03 06 AF 04 BE 10 0D");
+    FileRecordIterator it(r.payload, true);
+    FileSubRequest back;
+    ASSERT_EQ(it.next(back), CodecError::Ok);
+    EXPECT_EQ(back.file_number, 4);
+    EXPECT_EQ(back.record_number, 7);
+    EXPECT_EQ(back.record_length, 3);
+    EXPECT_EQ(to_hex(back.record_data), "06 AF 04 BE 10 0D");
+    EXPECT_EQ(it.next(back), CodecError::Empty);
+    EXPECT_EQ(encode_file_sub_request(sub, MutableBytes(payload, 12)).error,
+              CodecError::BufferTooSmall);
+}
+
 }  // namespace
 }  // namespace mbstorm::codec::test

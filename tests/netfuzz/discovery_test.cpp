@@ -11,6 +11,7 @@
 
 #include "codec/limits.hpp"
 #include "codec/mbap.hpp"
+#include "codec/pdu.hpp"
 #include "net/socket.hpp"
 #include "netfuzz/discovery.hpp"
 #include "netfuzz/link.hpp"
@@ -82,6 +83,39 @@ TEST(Discovery, AConformingTargetKeepsWhatFollowsAnException) {
     EXPECT_FALSE(p.drops_after_exception);
     EXPECT_EQ(p.probe_pdu.at(0), 0x03);
     EXPECT_TRUE(p.unsupported[0x41]);
+}
+
+// Discovery's requests, one per public code: valid (the codec decodes each), and these bytes,
+// so a target's recorded answers and saved findings keep meaning the same requests.
+TEST(Discovery, CanonicalRequestsAreValidAndStable) {
+    const std::vector<std::vector<std::uint8_t>> expected = {
+        {0x01, 0, 0, 0, 1},
+        {0x02, 0, 0, 0, 1},
+        {0x03, 0, 0, 0, 1},
+        {0x04, 0, 0, 0, 1},
+        {0x05, 0x5F, 0xFF, 0xFF, 0x00},
+        {0x06, 0x5F, 0xFF, 0, 0},
+        {0x07},
+        {0x08, 0, 0, 0x12, 0x34},
+        {0x0B},
+        {0x0C},
+        {0x0F, 0x5F, 0xFF, 0, 1, 1, 0},
+        {0x10, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+        {0x11},
+        {0x14, 7, 6, 0, 1, 0, 0, 0, 1},
+        {0x15, 9, 6, 0, 1, 0, 0, 0, 1, 0, 0},
+        {0x16, 0x5F, 0xFF, 0xFF, 0xFF, 0, 0},
+        {0x17, 0, 0, 0, 1, 0x5F, 0xFF, 0, 1, 2, 0, 0},
+        {0x18, 0x5F, 0xFF},
+        {0x2B, 0x0E, 0x01, 0x00},
+    };
+    ASSERT_EQ(canonical_requests().size(), expected.size());
+    for (std::size_t i = 0; i < expected.size(); ++i) {
+        const std::vector<std::uint8_t>& pdu = canonical_requests()[i];
+        EXPECT_EQ(pdu, expected[i]) << "function 0x" << std::hex << int{expected[i][0]};
+        codec::Request decoded;
+        EXPECT_TRUE(codec::decode_request(pdu, decoded).ok()) << int{expected[i][0]};
+    }
 }
 
 }  // namespace

@@ -14,14 +14,23 @@ trap 'rm -rf "$work"' EXIT
 
 mkdir -p "$work/src/load" "$work/src/codec" "$work/tests/scripts"
 cp "$scripts/one_place_allow.txt" "$work/tests/scripts/"
+# The codes are the codec's table: a code added there (0x7E here) is looked for too.
+sed 's|^    EncapsulatedInterface = 0x2B,|&\n    PlantedCode = 0x7E,|' "$root/src/codec/function_code.hpp" >"$work/src/codec/function_code.hpp"
+sed 's|^constexpr std::array<FunctionInfo, [0-9]*> kFunctions{{|&\n    {PlantedCode, "planted_code"},|' "$root/src/codec/function_code.cpp" >"$work/src/codec/function_code.cpp"
+grep -q 'PlantedCode = 0x7E' "$work/src/codec/function_code.hpp" && grep -q '"planted_code"' "$work/src/codec/function_code.cpp" ||
+  { echo "FAIL could not plant a code in a copy of the codec's table" >&2; exit 1; }
 printf 'int f(int fc) {\n    switch (fc) {\n        case 0x17:\n            return 1;\n    }\n    return 0;\n}\n' >"$work/src/load/planted.cpp"
 printf 'unsigned cut(const H& h) { return 6u + h.length; }\n' >>"$work/src/load/planted.cpp"
+printf 'int n(int fc) { return fc == 0x7E; }\n' >>"$work/src/load/planted.cpp"
+printf 'std::vector<std::uint8_t> pre{0x06};\n' >>"$work/src/load/planted.cpp"
+printf 'bool d(Pdu pdu) { return pdu[0] == 0x08; }\n' >>"$work/src/load/planted.cpp"
+printf 'bool busy(const std::uint8_t* p) { return p[8] == 0x06; }\n' >>"$work/src/load/planted.cpp"
 printf 'int g(int fc) { return fc == 0x17; }  // codec/ owns the codes\n' >"$work/src/codec/owner.cpp"
 printf '// one-place: a justified site\nint j(int fc) { return fc == 0x10; }\n' >"$work/src/load/justified.cpp"
 if /usr/bin/python3 "$scripts/lib/one_place.py" "$work" >"$work/self.log" 2>&1; then
   echo "FAIL the check passed planted sites:" >&2; cat "$work/self.log" >&2; exit 1
 fi
-for expected in "case 0x17:" "6u + h.length"; do
+for expected in "case 0x17:" "6u + h.length" "fc == 0x7E" "pre{0x06}" "pdu[0] == 0x08" "p[8] == 0x06"; do
   grep -qF "$expected" "$work/self.log" || { echo "FAIL the check did not report '$expected'" >&2; cat "$work/self.log" >&2; exit 1; }
 done
 if grep -q "owner.cpp\|justified.cpp" "$work/self.log"; then

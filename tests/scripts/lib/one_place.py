@@ -8,10 +8,15 @@ the slave that serves it) and how an MBAP frame is laid out (codec/). This finds
 elsewhere under src/ that still know them:
 
   function-code sites: a line naming a public function code as a literal (case 0x17:,
-    fc == 0x16, function == 5, a 0x.. literal on a line about a function code, or a
-    label like "0x05 write_single_coil" in text);
+    fc == 0x16, function == 5, pdu[0] == 0x08, a PDU started as {0x06} or pdu5(0x17, ..,
+    a 0x.. literal on a line about a function code, or a label like
+    "0x05 write_single_coil" in text);
   MBAP sites: a line framing or cutting MBAP by hand (the length at byte 4, 6 + length,
-    protocol id 0 at byte 2, function | 0x80).
+    protocol id 0 at byte 2, function | 0x80, the function or exception code at byte 7 or 8).
+
+The public codes are the codec's: the FunctionCode enumerators of src/codec/function_code.hpp
+and their names in the table of src/codec/function_code.cpp, so a new code is looked for
+without a change here.
 
 A site is allowed when its line or the line above carries a comment "one-place: WHY". The
 rest must fit the budget that tests/scripts/one_place_allow.txt gives its file (one line:
@@ -21,32 +26,52 @@ import pathlib
 import re
 import sys
 
-PUBLIC = {0x01: "read_coils", 0x02: "read_discrete_inputs", 0x03: "read_holding_registers",
-          0x04: "read_input_registers", 0x05: "write_single_coil",
-          0x06: "write_single_register", 0x07: "read_exception_status", 0x08: "diagnostics",
-          0x0B: "get_comm_event_counter", 0x0C: "get_comm_event_log",
-          0x0F: "write_multiple_coils", 0x10: "write_multiple_registers",
-          0x11: "report_server_id", 0x14: "read_file_record", 0x15: "write_file_record",
-          0x16: "mask_write_register", 0x17: "read_write_multiple_registers",
-          0x18: "read_fifo_queue", 0x2B: "encapsulated_interface"}
+
+def public_codes(root):
+    """The codec's table: {code: name} for each FunctionCode enumerator of
+    src/codec/function_code.hpp, named by its row in src/codec/function_code.cpp."""
+    header = (root / "src/codec/function_code.hpp").read_text(encoding="utf-8")
+    body = re.search(r"enum class FunctionCode\b[^{]*\{(.*?)\};", header, re.S)
+    if body is None:
+        sys.exit("one_place.py: no 'enum class FunctionCode' in src/codec/function_code.hpp")
+    codes = {m.group(1): int(m.group(2), 0)
+             for m in re.finditer(r"(\w+)\s*=\s*(0x[0-9A-Fa-f]+|\d+)", body.group(1))}
+    table = (root / "src/codec/function_code.cpp").read_text(encoding="utf-8")
+    names = dict(re.findall(r"\{\s*(\w+),\s*\"(\w+)\"", table))
+    missing = sorted(set(codes) - set(names))
+    if not codes or missing:
+        sys.exit(f"one_place.py: could not read the codec's table (no row for {missing})")
+    return {code: names[enumerator] for enumerator, code in codes.items()}
+
+
 OWNERS_FC = ("src/codec/", "src/slave/")
 OWNERS_MBAP = ("src/codec/",)
 
-HEX = "|".join(f"0x{c:02X}" for c in PUBLIC) + "|" + "|".join(f"0x{c:02x}" for c in PUBLIC)
-DEC = "|".join(str(c) for c in PUBLIC)
-FC_PATTERNS = [
-    re.compile(rf"\bcase\s+({HEX})\s*:"),
-    re.compile(rf"\b(fc|function|function_code)\w*(\[\w+\])?\s*(==|!=|<=|>=)\s*({HEX}|{DEC})\b"),
-    re.compile(rf"({HEX})\b[^;]*\b(fc|function)\b|\b(fc|function)\b[^;]*\b({HEX})\b"),
-    re.compile(r"0x[0-9A-Fa-f]{2} (" + "|".join(PUBLIC.values()) + r")\b"),
-    re.compile(rf"[({{]\s*({HEX})\s*,"),  # a PDU built from its function code: pdu5(0x17, ..
-]
-MBAP_PATTERNS = [
-    re.compile(r"\b6u?\s*\+\s*[\w.>-]*length\b|\blength\s*\+\s*6u?\b"),
-    re.compile(r"load_be16\(\s*[\w.]+\s*\+\s*4\s*\)"),
-    re.compile(r"store_be16\(\s*[\w.]+\s*\+\s*2\s*,\s*0\s*\)"),
-    re.compile(r"\|\s*0x80\b"),
-]
+
+def patterns(public):
+    hexes = "|".join(f"0x{c:02X}" for c in public) + "|" + "|".join(f"0x{c:02x}" for c in public)
+    decimals = "|".join(str(c) for c in public)
+    fc = [
+        re.compile(rf"\bcase\s+({hexes})\s*:"),
+        re.compile(rf"\b(fc|function|function_code)\w*(\[\w+\])?\s*(==|!=|<=|>=)\s*({hexes}|{decimals})\b"),
+        re.compile(rf"({hexes})\b[^;]*\b(fc|function)\b|\b(fc|function)\b[^;]*\b({hexes})\b"),
+        re.compile(r"0x[0-9A-Fa-f]{2} (" + "|".join(public.values()) + r")\b"),
+        # A PDU built from its function code: pdu5(0x17, .., std::vector<std::uint8_t> w{0x06}.
+        re.compile(rf"[({{]\s*({hexes})\s*[,}})]"),
+        # A PDU's first byte compared with a code: pdu[0] == 0x08, pdu[0] <= 0x04.
+        re.compile(rf"\w*pdu\w*\[0\]\s*(==|!=|<=|>=|<|>)\s*({hexes}|{decimals})\b"),
+    ]
+    mbap = [
+        re.compile(r"\b6u?\s*\+\s*[\w.>-]*length\b|\blength\s*\+\s*6u?\b"),
+        re.compile(r"load_be16\(\s*[\w.]+\s*\+\s*4\s*\)"),
+        re.compile(r"store_be16\(\s*[\w.]+\s*\+\s*2\s*,\s*0\s*\)"),
+        re.compile(r"\|\s*0x80\b"),
+        # An ADU's function code or exception code read at its MBAP offset: p[7] & 0x80, p[8] == 6.
+        re.compile(r"\b\w+\[\s*[78]\s*\]\s*(&|==|!=)\s*[^'\s]"),
+    ]
+    return fc, mbap
+
+
 MARK = "one-place:"
 
 
@@ -62,6 +87,7 @@ def strip_comment(line):
 
 
 def sites(root):
+    fc_patterns, mbap_patterns = patterns(public_codes(root))
     found = {"fc": {}, "mbap": {}}
     for path in sorted((root / "src").rglob("*")):
         if path.suffix not in (".cpp", ".hpp"):
@@ -72,11 +98,11 @@ def sites(root):
             if MARK in raw or (n > 0 and MARK in lines[n - 1]):
                 continue
             code = strip_comment(raw)
-            for kind, owners, patterns in (("fc", OWNERS_FC, FC_PATTERNS),
-                                           ("mbap", OWNERS_MBAP, MBAP_PATTERNS)):
+            for kind, owners, kind_patterns in (("fc", OWNERS_FC, fc_patterns),
+                                                ("mbap", OWNERS_MBAP, mbap_patterns)):
                 if rel.startswith(owners):
                     continue
-                if any(p.search(code) for p in patterns):
+                if any(p.search(code) for p in kind_patterns):
                     found[kind].setdefault(rel, []).append((n + 1, raw.strip()))
     return found
 
