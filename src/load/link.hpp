@@ -89,6 +89,8 @@ class Link {
     codec::Bytes take_output() noexcept {
         return bytes_pass_through_ ? codec::Bytes() : take_tls_output();
     }
+    // False when take_output() is always empty (the socket carries the Modbus bytes).
+    bool may_have_output() const noexcept { return !bytes_pass_through_; }
 
     // With RTU answers carry no transaction id: after a timeout a late answer would pass for
     // the next request's, so the connection has to go.

@@ -137,8 +137,15 @@ class Worker {
     // itself has to send (a handshake's, tickets). try_hand_off: the kernel's TLS takes the
     // link's record layer when it can now; false when a half-done hand-off closed it.
     bool on_link_event(std::uint32_t index, LinkInput event, std::int64_t now) noexcept;
-    void send_link_output(std::uint32_t index) noexcept;
-    bool try_hand_off(std::uint32_t index, std::int64_t now) noexcept;
+    // Inline for the plain links' sake: once per receive and per send, a call each was a cost.
+    void send_link_output(std::uint32_t index) noexcept {
+        if (connections_[index].link.may_have_output()) send_link_bytes(index);
+    }
+    void send_link_bytes(std::uint32_t index) noexcept;
+    bool try_hand_off(std::uint32_t index, std::int64_t now) noexcept {
+        return !ktls_ || hand_off_now(index, now);
+    }
+    bool hand_off_now(std::uint32_t index, std::int64_t now) noexcept;
     void count_set_up(const Link& link) noexcept;  // a handshake done: timed and counted
     // A session refused before any answer (a TLS alert after the handshake): stop the run.
     void link_refused(const std::string& why) noexcept;

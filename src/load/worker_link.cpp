@@ -74,7 +74,7 @@ void Worker::count_set_up(const Link& link) noexcept {
     }
 }
 
-void Worker::send_link_output(std::uint32_t index) noexcept {
+void Worker::send_link_bytes(std::uint32_t index) noexcept {
     Connection& c = connections_[index];
     if (c.send_in_flight || c.fd < 0) return;
     // A send that cannot be queued (a broken ring) loses these bytes: the connection then
@@ -82,12 +82,12 @@ void Worker::send_link_output(std::uint32_t index) noexcept {
     if (const codec::Bytes wire = c.link.take_output(); !wire.empty()) start_send(index, wire);
 }
 
-bool Worker::try_hand_off(std::uint32_t index, std::int64_t now) noexcept {
+bool Worker::hand_off_now(std::uint32_t index, std::int64_t now) noexcept {
     Connection& c = connections_[index];
     // Only while every byte of ciphertext is in OpenSSL or in the kernel's queue: no recv in
     // flight (single-shot recvs with kTLS: this is the completion of the last one) and no
     // send of ours (its ciphertext must reach the wire before the kernel's records).
-    if (!ktls_ || c.state != Connection::State::Open || c.recv_armed || c.send_in_flight ||
+    if (c.state != Connection::State::Open || c.recv_armed || c.send_in_flight ||
         !c.link.may_hand_off())
         return true;
     switch (c.link.hand_off(c.fd, !direct_)) {

@@ -120,11 +120,7 @@ std::size_t Link::write_exception(std::uint8_t* p, const codec::TcpFrame& reques
     return codec::kExceptionAduSize;
 }
 
-bool Link::outgoing(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire) {
-    if (bytes_pass_through_) {
-        wire = codec::Bytes(queued, size);
-        return true;
-    }
+bool Link::outgoing_tls(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire) {
     Tls& t = *tls_;
     if (t.cipher_sent == t.cipher_out.size()) {
         t.cipher_out.clear();
@@ -143,8 +139,7 @@ bool Link::outgoing(const std::uint8_t* queued, std::size_t size, codec::Bytes& 
     return true;
 }
 
-std::size_t Link::sent(std::size_t n) noexcept {
-    if (bytes_pass_through_) return n;
+std::size_t Link::sent_tls(std::size_t n) noexcept {
     Tls& t = *tls_;
     t.cipher_sent += n;
     if (t.cipher_sent < t.cipher_out.size()) return 0;

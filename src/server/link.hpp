@@ -97,11 +97,18 @@ class Link {
     // What to send: the output queue's bytes themselves (`queued`, `size`), or the link's own
     // (ciphertext of them, a handshake's messages). Empty when there is nothing; false when the
     // link failed. Call only with no send in flight.
-    bool outgoing(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire);
+    bool outgoing(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire) {
+        if (!bytes_pass_through_) return outgoing_tls(queued, size, wire);
+        wire = codec::Bytes(queued, size);
+        return true;
+    }
     // `n` bytes of the last outgoing() went: how many of the output queue's bytes are done.
-    std::size_t sent(std::size_t n) noexcept;
+    std::size_t sent(std::size_t n) noexcept { return bytes_pass_through_ ? n : sent_tls(n); }
     // The link has bytes of its own to send (a handshake's flight, tickets, an alert).
     bool has_own_output() const noexcept;
+    // False when the link never has bytes of its own, holds no partial record and has no
+    // record layer to hand to the kernel: the socket carries the Modbus bytes themselves.
+    bool may_need_care() const noexcept { return !bytes_pass_through_; }
 
     // The error a receive ended with is the kernel's TLS refusing a record the peer sent.
     bool is_record_layer_error(int result) const noexcept;
@@ -124,6 +131,8 @@ class Link {
     // The handshake's step on new ciphertext: SetUp when it finished now (roles looked up).
     enum class Handshake : std::uint8_t { Done, SetUp, Going, Failed };
     Handshake step_handshake(codec::Bytes received);
+    bool outgoing_tls(const std::uint8_t* queued, std::size_t size, codec::Bytes& wire);
+    std::size_t sent_tls(std::size_t n) noexcept;
     // The next plaintext into scratch: its size, 0 with `end` set when the input ended.
     std::size_t read_plain(std::vector<std::uint8_t>& scratch, LinkInput& end);
 

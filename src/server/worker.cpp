@@ -566,7 +566,7 @@ void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
     } else if (!on_link_event(index, got)) {
         return;
     }
-    after_link_input(index);
+    if (c.link.may_need_care()) after_link_input(index);
 }
 
 void Worker::note_partial_frame(Connection& c, std::uint32_t index, bool completed) noexcept {
