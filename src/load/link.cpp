@@ -28,6 +28,10 @@ struct Link::Tls {
     // ways from here on; the session stays only to be resumed.
     bool kernel = false;
     bool stays_in_userspace = false;  // the hand-off was refused for good, or not wanted
+    std::int64_t set_up_started_ns = 0;
+    std::uint64_t set_up_ns = 0;
+    bool carried_data = false;  // over all its connections
+    std::string error;
 };
 
 Link::Link(Kind kind, std::shared_ptr<net::TlsContext> tls, bool resume)
@@ -49,7 +53,7 @@ LinkStart Link::connected(std::int64_t now, bool offload) {
     t.session.reset();
     t.session.emplace(t.ctx, t.resume ? t.saved : nullptr);
     if (!t.session->valid()) {
-        error_ = t.session->error();
+        t.error = t.session->error();
         return LinkStart::SetUpFailed;
     }
     t.kernel = false;
@@ -62,7 +66,7 @@ LinkStart Link::connected(std::int64_t now, bool offload) {
             t.stays_in_userspace = true;  // no memory for the tracker: OpenSSL keeps the records
         }
     }
-    set_up_started_ns_ = now;
+    t.set_up_started_ns = now;
     t.session->handshake();  // the ClientHello
     return LinkStart::SettingUp;
 }
@@ -82,7 +86,7 @@ void Link::closed() noexcept {
 }
 
 bool Link::set_up_overdue(std::int64_t now, std::int64_t timeout_ns) const noexcept {
-    return now - set_up_started_ns_ >= timeout_ns;
+    return kind_ == Kind::Tls && now - tls_->set_up_started_ns >= timeout_ns;
 }
 
 LinkInput Link::open_tls(codec::Bytes received, std::int64_t now,
@@ -99,11 +103,11 @@ LinkInput Link::open_tls(codec::Bytes received, std::int64_t now,
         const net::TlsStatus hs = session.handshake();
         if (hs == net::TlsStatus::WantMore) return LinkInput::SettingUp;
         if (hs != net::TlsStatus::Ok) {
-            error_ = session.error();
+            t.error = session.error();
             return LinkInput::SetUpFailed;
         }
-        set_up_ns_ =
-            static_cast<std::uint64_t>(std::max<std::int64_t>(now - set_up_started_ns_, 0));
+        t.set_up_ns =
+            static_cast<std::uint64_t>(std::max<std::int64_t>(now - t.set_up_started_ns, 0));
         done = LinkInput::SetUp;
     }
     std::size_t size = 0;
@@ -113,13 +117,13 @@ LinkInput Link::open_tls(codec::Bytes received, std::int64_t now,
         size += n;
         if (n > 0 && size < scratch.size()) continue;
         if (st == net::TlsStatus::Failed) {
-            error_ = session.error();
+            t.error = session.error();
             return LinkInput::PeerFailed;
         }
         if (st == net::TlsStatus::Closed) return LinkInput::PeerClosed;
         break;
     }
-    if (size > 0) carried_data_ = true;
+    if (size > 0) t.carried_data = true;
     plain = codec::Bytes(scratch.data(), size);
     return done;
 }
@@ -158,6 +162,19 @@ net::KtlsHandOffResult Link::hand_off(int fd, bool real_fd) noexcept {
     if (handed == net::KtlsHandOffResult::Userspace || handed == net::KtlsHandOffResult::Broken)
         t.stays_in_userspace = true;
     return handed;
+}
+
+std::uint64_t Link::set_up_ns() const noexcept {
+    return kind_ == Kind::Tls ? tls_->set_up_ns : 0;
+}
+
+bool Link::carried_data() const noexcept {
+    return kind_ == Kind::Tls && tls_->carried_data;
+}
+
+const std::string& Link::error() const noexcept {
+    static const std::string none;
+    return kind_ == Kind::Tls ? tls_->error : none;
 }
 
 bool Link::resumed() const noexcept {
