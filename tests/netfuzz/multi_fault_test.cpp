@@ -134,7 +134,14 @@ TEST(MultiFault, ARunEndsAtItsDeadlineWhateverTheTargetDoes) {
     std::ifstream in(dir + "/summary.json");
     const auto s = nlohmann::json::parse(in, nullptr, false);
     ASSERT_FALSE(s.is_discarded()) << run.output;
-    EXPECT_EQ(s.at("stop_reason"), "time limit reached") << run.output;
+    // The deadline ends the run; where it falls varies with the machine's load: between cases
+    // ("time limit reached") or while a restarted target is awaited, which says so
+    // (target_care.cpp). Either is this behaviour; any other reason is not.
+    const std::string reason = s.at("stop_reason").get<std::string>();
+    EXPECT_TRUE(reason == "time limit reached" ||
+                reason == "time limit reached while waiting for the target to come back")
+        << reason << "\n"
+        << run.output;
     // What docs/fuzz.md promises (Budget): the end within --seconds + 5 s, on the campaign's
     // own clock and as a user waits for the process (start-up and the files written after).
     EXPECT_LE(s.at("seconds").get<double>(), kShort + 5.0) << run.output;
