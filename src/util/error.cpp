@@ -1,0 +1,37 @@
+#include "util/error.hpp"
+
+namespace mbstorm {
+
+std::string_view error_code_name(ErrorCode code) noexcept {
+    switch (code) {
+        case ErrorCode::Ok:
+            return "ok";
+        case ErrorCode::InvalidInput:
+            return "invalid input";
+        case ErrorCode::NotFound:
+            return "not found";
+        case ErrorCode::Io:
+            return "i/o error";
+        case ErrorCode::Network:
+            return "network error";
+        case ErrorCode::Unsupported:
+            return "unsupported";
+        case ErrorCode::Refused:
+            return "refused";
+        case ErrorCode::Interrupted:
+            return "interrupted";
+    }
+    return "unknown";
+}
+
+std::string Error::text() const {
+    if (place_.empty()) return message_;
+    return place_ + ": " + message_;
+}
+
+Error& Error::prefixed(std::string_view prefix) {
+    message_.insert(0, std::string(prefix) + ": ");
+    return *this;
+}
+
+}  // namespace mbstorm
