@@ -79,7 +79,6 @@ int merge(const MergeOptions& o) {
     scenario::evaluate_thresholds(s, merged.run);
 
     load::LoadResult result;
-    result.ok = true;
     result.run = std::move(merged.run);
     fmt::print(stderr, "mbstorm merge: {} runs of test '{}'{}\n", result.run.metadata.merged_runs,
                result.run.metadata.test_id,

@@ -175,8 +175,8 @@ int run_load_test(RunOptions& o) {
         plan.threads = 1;
         // Writes to a tty that is not a pseudo-terminal need leave: the engine checks.
     }
-    if (auto problems = load::validate_plan(plan); !problems.empty())
-        return usage_error("run", problems.front());
+    if (const Error problems = load::validate_plan(plan); !problems.ok())
+        return usage_error("run", problems.text());
 
     // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
     // there is no target, and reports the same way.

@@ -86,18 +86,18 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
         write(
             files.junit,
             [&] {
-                return report::format_junit(result.run, files.junit_suite,
-                                            result.ok ? "" : result.error);
+                return report::format_junit(result.run, files.junit_suite, result.error.text());
             },
             "JUnit XML");
     };
     for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
-    if (!result.ok && result.run.counters.transactions_sent == 0) {
-        fmt::print(stderr, "mbstorm run: {}\n", result.error);
+    if (!result.ok() && result.run.counters.transactions_sent == 0) {
+        fmt::print(stderr, "mbstorm run: {}\n", result.error.text());
         write_junit();
         return kExitUsage;
     }
-    if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
+    if (!result.ok())
+        fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error.text());
     // Everything measured is reported, even after an early end; on stderr when a report file
     // takes stdout.
     std::FILE* out = files.uses_stdout() ? stderr : stdout;

@@ -136,24 +136,28 @@ bool Worker::setup_io() noexcept {
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
     if (const int rc = loop_.init(setup_.backend, options); rc < 0) {
-        fatal_error = fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
-                                  std::system_category().message(-rc));
+        fatal_error = Error(ErrorCode::Unsupported,
+                            fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
+                                        std::system_category().message(-rc)));
         return false;
     }
     loop_.set_direct(direct_);
     if (direct_) {
         if (const int rc = net::register_socket_table(loop_.ring(), setup_.connections); rc < 0) {
-            fatal_error = fmt::format(
-                "io_uring socket table of {} slots failed: {} (a ring's table is capped at the "
-                "open-files limit; more threads spread the connections over more rings)",
-                setup_.connections, std::system_category().message(-rc));
+            fatal_error =
+                Error(ErrorCode::Refused,
+                      fmt::format("io_uring socket table of {} slots failed: {} (a ring's table is "
+                                  "capped at the open-files limit; more threads spread the "
+                                  "connections over more rings)",
+                                  setup_.connections, std::system_category().message(-rc)));
             return false;
         }
     }
     const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
     if (const int rc = loop_.init_buffers(kBufferGroup, count, 16384); rc < 0) {
-        fatal_error =
-            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc));
+        fatal_error = Error(
+            ErrorCode::Unsupported,
+            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc)));
         return false;
     }
     return true;
@@ -192,8 +196,9 @@ void Worker::loop() noexcept {
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
         const int rc = loop_.submit_and_wait(1, wait);
         if (net::wait_failed(rc)) {
-            fatal_error = fmt::format("{} wait failed: {}", net::backend_name(setup_.backend),
-                                      std::system_category().message(-rc));
+            fatal_error = Error(ErrorCode::Io,
+                                fmt::format("{} wait failed: {}", net::backend_name(setup_.backend),
+                                            std::system_category().message(-rc)));
             setup_.abort->store(true);
             break;
         }
@@ -492,7 +497,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
                 ? fmt::format("no answer within the connect timeout ({}s)",
                               std::chrono::duration<double>(plan_.connect_timeout).count())
                 : std::system_category().message(-result);
-        fatal_error = fmt::format("cannot connect to {}: {}", setup_.target, reason);
+        fatal_error = Error(ErrorCode::Network,
+                            fmt::format("cannot connect to {}: {}", setup_.target, reason));
         setup_.abort->store(true);
         return;
     }

@@ -24,6 +24,7 @@
 #include "net/socket.hpp"
 #include "stats/interval_recorder.hpp"
 #include "stats/run_result.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -85,7 +86,7 @@ class Worker {
     std::uint64_t bad_protocol_frames = 0;
     std::uint64_t skipped_requests = 0;  // see stats::PipeliningSigns
     std::int64_t finished_ns = 0;
-    std::string fatal_error;
+    Error fatal_error;  // what ended the run early, if anything did
     std::atomic<std::uint32_t> open_connections{0};
 
   private:

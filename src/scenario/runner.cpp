@@ -50,8 +50,8 @@ load::Plan engine_plan(const Scenario& s) {
     return plan;
 }
 
-load::ShardedPlan engine_plan(const Scenario& s, load::Plan::Shard shard) {
-    if (shard.count == 0) return {engine_plan(s), {}};
+Result<load::Plan> engine_plan(const Scenario& s, load::Plan::Shard shard) {
+    if (shard.count == 0) return engine_plan(s);
     return load::shard_plan(engine_plan(s), shard.index, shard.count);
 }
 
@@ -74,12 +74,12 @@ void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
 
 load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     load::LoadResult out;
-    load::ShardedPlan part = engine_plan(s, hooks.shard);
-    if (!part.error.empty()) {
-        out.error = part.error;
+    Result<load::Plan> part = engine_plan(s, hooks.shard);
+    if (!part.ok()) {
+        out.error = std::move(part).error();
         return out;
     }
-    load::Plan plan = std::move(part.plan);
+    load::Plan plan = std::move(part).value();
     auto say = [&hooks](const std::string& m) {
         if (hooks.on_message) hooks.on_message(m);
     };
@@ -88,7 +88,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     net::BackendDecision backend;
     if (plan.serial.device.empty()) {
         if (std::string error; !net::choose_backend(hooks.backend, true, backend, error)) {
-            out.error = error;
+            out.error = Error(ErrorCode::Unsupported, std::move(error));
             return out;
         }
         say(backend.why.empty() ? fmt::format("backend: {}", net::backend_name(backend.backend))
@@ -119,7 +119,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         embedded = std::make_unique<server::Server>(sc);
         std::string error;
         if (!embedded->start(&error)) {
-            out.error = "cannot start the embedded reference slave: " + error;
+            out.error =
+                Error(ErrorCode::Network, "cannot start the embedded reference slave: " + error);
             return out;
         }
         plan.host = "127.0.0.1";
@@ -131,7 +132,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     } else {
         std::string error;
         if (!parse_target(s.target, plan.host, plan.port, error)) {
-            out.error = "target: " + error;
+            out.error = Error(ErrorCode::InvalidInput, "target: " + error);
             return out;
         }
     }

@@ -31,9 +31,9 @@ struct RunHooks {
 // The engine's plan for the scenario (its stages included; host and port as in the file),
 // or a shard's part of it (load/shard.hpp; the error says why a shard has no part).
 load::Plan engine_plan(const Scenario& scenario);
-load::ShardedPlan engine_plan(const Scenario& scenario, load::Plan::Shard shard);
+Result<load::Plan> engine_plan(const Scenario& scenario, load::Plan::Shard shard);
 
-// The result; result.ok false with result.error when nothing could be run.
+// The result; result.error says why when nothing could be run or the run ended early.
 load::LoadResult run_scenario(const Scenario& scenario, const RunHooks& hooks = {});
 
 // Thresholds of the scenario evaluated against `run` (fills run.thresholds).

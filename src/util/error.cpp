@@ -1,5 +1,7 @@
 #include "util/error.hpp"
 
+#include <ostream>
+
 namespace mbstorm {
 
 std::string_view error_code_name(ErrorCode code) noexcept {
@@ -32,6 +34,10 @@ std::string Error::text() const {
 Error& Error::prefixed(std::string_view prefix) {
     message_.insert(0, std::string(prefix) + ": ");
     return *this;
+}
+
+std::ostream& operator<<(std::ostream& out, const Error& error) {
+    return out << error.text();
 }
 
 }  // namespace mbstorm
