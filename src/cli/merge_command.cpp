@@ -51,8 +51,8 @@ bool thresholds_from_runs(const std::vector<std::string>& expressions, const sta
 }
 
 int merge(const MergeOptions& o) {
-    if (auto conflict = stdout_conflict(o.outputs); !conflict.empty())
-        return usage_error("merge", conflict);
+    if (const Error conflict = stdout_conflict(o.outputs); !conflict.ok())
+        return usage_error("merge", conflict.text());
     for (const std::string* path :
          {&o.outputs.json, &o.outputs.hdr, &o.outputs.html, &o.outputs.junit}) {
         std::string error;

@@ -42,11 +42,13 @@ void add_run_identity_options(CLI::App* cmd, OutputFiles& files) {
         ->needs(cmd->get_option("--metrics-listen"));
 }
 
-std::string stdout_conflict(const OutputFiles& files) {
+Error stdout_conflict(const OutputFiles& files) {
     int n = 0;
     for (const std::string* f : {&files.json, &files.hdr, &files.html, &files.junit})
         n += *f == "-" ? 1 : 0;
-    return n > 1 ? "only one of --json, --hdr, --html and --junit can be '-' (stdout)" : "";
+    if (n <= 1) return {};
+    return Error(ErrorCode::InvalidInput,
+                 "only one of --json, --hdr, --html and --junit can be '-' (stdout)");
 }
 
 void LiveProgress::update(const load::ProgressSnapshot& s) {

@@ -103,12 +103,12 @@ void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::
 
 }  // namespace
 
-std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
+Error add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
     for (const std::string& text : texts) {
         scenario::ThresholdSpec spec;
         std::string error;
         if (!scenario::parse_threshold(text, spec, error))
-            return fmt::format("--threshold '{}': {}", text, error);
+            return Error(ErrorCode::InvalidInput, fmt::format("--threshold '{}': {}", text, error));
         s.thresholds.push_back(std::move(spec));
     }
     return {};
@@ -117,7 +117,8 @@ std::string add_threshold_flags(const std::vector<std::string>& texts, scenario:
 int print_flag_scenario(const load::Plan& plan, const std::string& target,
                         const std::vector<std::string>& thresholds) {
     scenario::Scenario s = scenario::scenario_from_plan(plan, target);
-    if (auto e = add_threshold_flags(thresholds, s); !e.empty()) return usage_error("run", e);
+    if (const Error e = add_threshold_flags(thresholds, s); !e.ok())
+        return usage_error("run", e.text());
     fmt::print("{}", scenario::format_scenario(s));
     return kExitOk;
 }
@@ -362,8 +363,8 @@ int run_scenario_file(const ScenarioRunRequest& request) {
         for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
         return kExitUsage;
     }
-    if (auto e = add_threshold_flags(request.thresholds, s); !e.empty())
-        return usage_error("run", e);
+    if (const Error e = add_threshold_flags(request.thresholds, s); !e.ok())
+        return usage_error("run", e.text());
     if (request.print) {
         fmt::print("{}", scenario::format_scenario(s));
         return kExitOk;
