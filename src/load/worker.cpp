@@ -614,11 +614,15 @@ void Worker::on_recv(std::uint32_t index, const net::Completion& cqe, std::int64
         return;
     }
     const codec::Bytes input(loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
-    codec::Bytes unframed;
-    const LinkInput got =
-        c.link.input(input, now, link_scratch_, bad_protocol_frames, unframed,
-                     [&](const codec::TcpFrame& frame) { on_answer(c, frame, now); });
-    if (got == LinkInput::FramingLost) note_unframed(unframed);  // it may be the buffer's
+    codec::Bytes plain;
+    LinkInput got = c.link.take(input, now, link_scratch_, plain);
+    if (got == LinkInput::Answers || got == LinkInput::SetUp) {
+        codec::TcpFrame frame;
+        LinkInput end = LinkInput::Answers;
+        while (c.link.next_answer(frame, bad_protocol_frames, end)) on_answer(c, frame, now);
+        if (end != LinkInput::Answers) got = end;
+        if (got == LinkInput::FramingLost) note_unframed(plain);  // it may be the buffer's
+    }
     loop_.recycle(buffer_id);
     if (got != LinkInput::Answers && !on_link_event(index, got, now)) return;
     send_link_output(index);  // tickets, key updates
