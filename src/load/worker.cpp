@@ -867,19 +867,6 @@ void Worker::flush() noexcept {
     });
 }
 
-bool Worker::start_send(std::uint32_t index, codec::Bytes wire) noexcept {
-    Connection& c = connections_[index];
-    if (!loop_.send(c.fd, wire.data(), static_cast<unsigned>(wire.size()),
-                    net::encode_user_data(Op::Send, index, c.generation)))
-        return false;
-    ++inflight_ops_;
-    c.inflight_base = wire.data();
-    c.inflight_len = static_cast<std::uint32_t>(wire.size());
-    c.inflight_done = 0;
-    c.send_in_flight = true;
-    return true;
-}
-
 void Worker::sweep_timeouts(std::int64_t now) noexcept {
     const std::int64_t deadline = now - plan_.transaction_timeout.count();
     for (std::uint32_t index = 0; index < connections_.size(); ++index) {
