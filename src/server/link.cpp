@@ -25,6 +25,8 @@ struct Link::Tls {
     // they leave the queue once all of cipher_out has been sent.
     std::size_t plain_carried = 0;
     const TlsRoles* roles = nullptr;
+    // The worker's plaintext buffer while next_request() reads this input (take_tls).
+    std::vector<std::uint8_t>* scratch = nullptr;
     // The kernel's TLS carries the records (ktls_offload.hpp): plaintext both ways from here
     // on; the session stays for the role and is never used again.
     bool kernel = false;
@@ -79,6 +81,68 @@ Link::Handshake Link::step_handshake(codec::Bytes received) {
     if (hs != net::TlsStatus::Ok) return Handshake::Failed;
     allowed_ = t.roles != nullptr ? t.roles->allowed_for(t.session.peer_role()) : nullptr;
     return Handshake::SetUp;
+}
+
+LinkInput Link::take_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, bool& set_up) {
+    switch (step_handshake(received)) {
+        case Handshake::Going:
+            return LinkInput::SettingUp;
+        case Handshake::Failed:
+            return LinkInput::SetUpFailed;
+        case Handshake::SetUp:
+            set_up = true;
+            break;
+        case Handshake::Done:
+            break;
+    }
+    tls_->scratch = &scratch;
+    return LinkInput::Drained;
+}
+
+bool Link::next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint32_t& discarded,
+                             std::uint32_t& crc_skipped) noexcept {
+    end = LinkInput::Drained;
+    if (kind_ == Kind::Rtu) {
+        for (;;) {
+            switch (rtu_->next(frame)) {
+                case codec::RtuSplitter::Status::Frame:
+                    return true;
+                case codec::RtuSplitter::Status::Skipped:  // dropped, as a serial slave does
+                    ++crc_skipped;
+                    continue;
+                case codec::RtuSplitter::Status::NeedMore:
+                    return false;
+                case codec::RtuSplitter::Status::Fatal:
+                    // No length rule to resynchronise on: the frames before it are answered
+                    // and the connection closes after that.
+                    end = rtu_->error() == codec::CodecError::BadCrc ? LinkInput::BadCrc
+                                                                     : LinkInput::FramingLost;
+                    return false;
+            }
+        }
+    }
+    if (bytes_pass_through_) return false;  // the kernel's TLS: the splitter had it all
+    // TLS in userspace: the next record's plaintext, split like plain MBAP.
+    for (;;) {
+        const std::size_t n = read_plain(*tls_->scratch, end);
+        if (n == 0) return false;
+        mbap_.feed(codec::Bytes(tls_->scratch->data(), n));
+        for (bool more = true; more;) {
+            switch (mbap_.next(frame)) {
+                case codec::MbapSplitter::Status::Frame:
+                    return true;
+                case codec::MbapSplitter::Status::BadProtocolId:
+                    ++discarded;
+                    break;
+                case codec::MbapSplitter::Status::Fatal:
+                    end = LinkInput::FramingLost;
+                    return false;
+                case codec::MbapSplitter::Status::NeedMore:
+                    more = false;
+                    break;
+            }
+        }
+    }
 }
 
 std::size_t Link::read_plain(std::vector<std::uint8_t>& scratch, LinkInput& end) {

@@ -24,9 +24,9 @@
 
 namespace mbstorm::server {
 
-// What a link made of received bytes, besides the requests it handed on.
+// What a link made of received bytes, besides the requests read from it.
 enum class LinkInput : std::uint8_t {
-    Drained,      // every whole request handed on; a partial one waits for more bytes
+    Drained,      // requests to read (or all read); a partial one waits for more bytes
     Stopped,      // the worker closed the connection while serving a request
     SettingUp,    // the link's own set-up (a TLS handshake) took the bytes; its reply waits
     SetUpFailed,  // the set-up was refused or malformed: its alert may wait in output
@@ -53,16 +53,52 @@ class Link {
     // The slot is free again (a TLS session goes; an RTU splitter stays for the next one).
     void released() noexcept;
 
-    // Received bytes. Each whole request goes to sink.frame(frame) (false: the connection was
-    // closed, stop at once); sink.discarded() counts an MBAP frame with a wrong protocol id,
-    // sink.crc_skipped() an RTU frame dropped for its CRC, sink.set_up() a finished set-up
-    // (before the requests after it). `completed`: a request was handed on (or discarded).
-    // Forced inline, with the splitter loops: the frame loop runs inside the worker's receive
-    // handler with its locals in registers, as it did before the link.
-    template <class Sink>
-    [[gnu::always_inline]] inline LinkInput input(codec::Bytes received,
-                                                  std::vector<std::uint8_t>& scratch, Sink& sink,
-                                                  bool& completed);
+    // Received bytes, taken in: Drained when requests may follow from next_request(),
+    // SettingUp / SetUpFailed when a set-up took them. `set_up`: a set-up finished with them
+    // (before the requests after it). `scratch` holds a TLS link's plaintext (shared by the
+    // worker's links), read by next_request() until it returns false.
+    LinkInput take(codec::Bytes received, std::vector<std::uint8_t>& scratch, bool& set_up) {
+        if (kind_ == Kind::Rtu) {
+            rtu_->feed(received);
+            return LinkInput::Drained;
+        }
+        if (bytes_pass_through_) [[likely]] {  // MBAP, or TLS once the kernel has the records
+            mbap_.feed(received);
+            return LinkInput::Drained;
+        }
+        return take_tls(received, scratch, set_up);
+    }
+    // The next whole request of the bytes taken: true with `frame` set. False when none is
+    // left, `end` saying why: Drained (a partial one waits for more bytes), FramingLost,
+    // BadCrc, PeerClosed, PeerFailed. `discarded` counts MBAP frames with a wrong protocol id,
+    // `crc_skipped` RTU frames dropped for their CRC. Nothing of the link may be touched after
+    // the worker closed the connection (its slot may be free).
+    // Inline, pulled by the worker's own loop: the request's handling stays in the receive
+    // handler with its locals in registers (a sink called per frame through references cost
+    // about 6 instructions a request); RTU and TLS plaintext are asked for only once the MBAP
+    // splitter is drained.
+    [[gnu::always_inline]] bool next_request(codec::TcpFrame& frame, LinkInput& end,
+                                             std::uint32_t& discarded,
+                                             std::uint32_t& crc_skipped) noexcept {
+        for (;;) {
+            switch (mbap_.next(frame)) {
+                case codec::MbapSplitter::Status::Frame:
+                    return true;
+                case codec::MbapSplitter::Status::BadProtocolId:
+                    ++discarded;
+                    continue;
+                case codec::MbapSplitter::Status::Fatal:
+                    end = LinkInput::FramingLost;
+                    return false;
+                case codec::MbapSplitter::Status::NeedMore:
+                    if (kind_ == Kind::Mbap) [[likely]] {
+                        end = LinkInput::Drained;
+                        return false;
+                    }
+                    return next_request_rest(frame, end, discarded, crc_skipped);
+            }
+        }
+    }
     // Bytes of a request still arriving that the link holds, or a TLS record's that has not
     // all come (nonzero: the frame clock runs on them).
     std::size_t buffered() const noexcept {
@@ -124,15 +160,11 @@ class Link {
   private:
     struct Tls;
 
-    template <class Sink>
-    [[gnu::always_inline]] inline LinkInput split_mbap(codec::Bytes bytes, Sink& sink,
-                                                       bool& completed);
-    template <class Sink>
-    [[gnu::always_inline]] inline LinkInput split_rtu(codec::Bytes bytes, Sink& sink,
-                                                      bool& completed);
-    template <class Sink>
-    LinkInput input_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
-                        bool& completed);
+    LinkInput take_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, bool& set_up);
+    // After the MBAP splitter is drained: an RTU link's next frame, or a TLS link's next
+    // plaintext split (next_request's contract).
+    bool next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint32_t& discarded,
+                           std::uint32_t& crc_skipped) noexcept;
     // The handshake's step on new ciphertext: SetUp when it finished now (roles looked up).
     enum class Handshake : std::uint8_t { Done, SetUp, Going, Failed };
     Handshake step_handshake(codec::Bytes received);
@@ -148,90 +180,5 @@ class Link {
     std::unique_ptr<Tls> tls_;                 // Kind::Tls, per connection
     const FunctionSet* allowed_ = nullptr;
 };
-
-template <class Sink>
-LinkInput Link::input(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
-                      bool& completed) {
-    switch (kind_) {
-        case Kind::Mbap:
-            return split_mbap(received, sink, completed);
-        case Kind::Rtu:
-            return split_rtu(received, sink, completed);
-        case Kind::Tls:  // MBAP inside, once the kernel has the records
-            if (bytes_pass_through_) return split_mbap(received, sink, completed);
-            return input_tls(received, scratch, sink, completed);
-    }
-    return LinkInput::Stopped;
-}
-
-template <class Sink>
-LinkInput Link::split_mbap(codec::Bytes bytes, Sink& sink, bool& completed) {
-    mbap_.feed(bytes);
-    codec::TcpFrame frame;
-    for (;;) {
-        switch (mbap_.next(frame)) {
-            case codec::MbapSplitter::Status::NeedMore:
-                return LinkInput::Drained;
-            case codec::MbapSplitter::Status::BadProtocolId:
-                sink.discarded();
-                completed = true;
-                break;
-            case codec::MbapSplitter::Status::Fatal:
-                return LinkInput::FramingLost;
-            case codec::MbapSplitter::Status::Frame:
-                // Nothing of this link may be touched after a close: the slot may be free.
-                if (!sink.frame(frame)) return LinkInput::Stopped;
-                completed = true;
-                break;
-        }
-    }
-}
-
-template <class Sink>
-LinkInput Link::split_rtu(codec::Bytes bytes, Sink& sink, bool& completed) {
-    rtu_->feed(bytes);
-    codec::TcpFrame frame;
-    for (;;) {
-        switch (rtu_->next(frame)) {
-            case codec::RtuSplitter::Status::NeedMore:
-                return LinkInput::Drained;
-            case codec::RtuSplitter::Status::Skipped:  // dropped, as a serial slave does
-                sink.crc_skipped();
-                break;
-            case codec::RtuSplitter::Status::Fatal:
-                // No length rule to resynchronise on: the frames before it are answered and
-                // the connection closes after that.
-                return rtu_->error() == codec::CodecError::BadCrc ? LinkInput::BadCrc
-                                                                  : LinkInput::FramingLost;
-            case codec::RtuSplitter::Status::Frame:
-                if (!sink.frame(frame)) return LinkInput::Stopped;
-                completed = true;
-                break;
-        }
-    }
-}
-
-template <class Sink>
-LinkInput Link::input_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, Sink& sink,
-                          bool& completed) {
-    switch (step_handshake(received)) {
-        case Handshake::Going:
-            return LinkInput::SettingUp;
-        case Handshake::Failed:
-            return LinkInput::SetUpFailed;
-        case Handshake::SetUp:
-            sink.set_up();
-            break;
-        case Handshake::Done:
-            break;
-    }
-    for (;;) {
-        LinkInput end = LinkInput::Drained;
-        const std::size_t n = read_plain(scratch, end);
-        if (n == 0) return end;
-        const LinkInput split = split_mbap(codec::Bytes(scratch.data(), n), sink, completed);
-        if (split != LinkInput::Drained) return split;
-    }
-}
 
 }  // namespace mbstorm::server

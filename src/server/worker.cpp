@@ -543,16 +543,28 @@ void Worker::drop_stash(std::uint32_t index) noexcept {
     c.stash_tail = kNoBuffer;
 }
 
-bool Worker::FrameSink::frame(const codec::TcpFrame& f) noexcept {
-    return worker.on_frame(c, index, f);
-}
-
 void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
                            std::size_t size) noexcept {
     Connection& c = conns_[index];
-    FrameSink sink{*this, c, index};
+    bool set_up = false;
+    LinkInput got = c.link.take(codec::Bytes(data, size), link_scratch_, set_up);
+    if (set_up) on_link_set_up(index);  // before the requests after it
     bool completed = false;
-    const LinkInput got = c.link.input(codec::Bytes(data, size), link_scratch_, sink, completed);
+    if (got == LinkInput::Drained) [[likely]] {
+        codec::TcpFrame frame;
+        std::uint32_t discarded = 0;
+        std::uint32_t crc_skipped = 0;
+        while (c.link.next_request(frame, got, discarded, crc_skipped)) {
+            // Nothing of the link may be touched after a close: the slot may be free.
+            if (!on_frame(c, index, frame)) {
+                got = LinkInput::Stopped;
+                break;
+            }
+            completed = true;
+        }
+        count_dropped_frames(discarded, crc_skipped);
+        completed = completed || discarded != 0;
+    }
     if (got == LinkInput::Stopped) {  // closed while serving: the slot may be free already
         flush_tally();
         return;

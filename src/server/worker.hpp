@@ -99,19 +99,14 @@ class Worker {
     void drop_stash(std::uint32_t index) noexcept;
     // Pauses reading when the output queue is over the cap. True when paused.
     bool check_backpressure(std::uint32_t index) noexcept;
-    // Bytes from the socket go to the connection's link, which hands each request to
-    // on_frame through a FrameSink; then the worker does what the link said.
+    // Bytes from the socket go to the connection's link; the worker reads the requests from
+    // it (on_frame for each), then does what the link said.
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
-    struct FrameSink {
-        Worker& worker;
-        Connection& c;
-        std::uint32_t index;
-        // on_frame, inlined into the link's frame loop (worker.cpp).
-        [[gnu::always_inline]] inline bool frame(const codec::TcpFrame& f) noexcept;
-        void discarded() noexcept { worker.counters_.add(ServerCounters::DiscardedFrames); }
-        void crc_skipped() noexcept { worker.counters_.add(ServerCounters::CrcErrors); }
-        void set_up() noexcept { worker.on_link_set_up(index); }
-    };
+    // Frames a link dropped: MBAP frames with a wrong protocol id, RTU frames with a bad CRC.
+    void count_dropped_frames(std::uint32_t discarded, std::uint32_t crc_skipped) noexcept {
+        if (discarded != 0) counters_.add(ServerCounters::DiscardedFrames, discarded);
+        if (crc_skipped != 0) counters_.add(ServerCounters::CrcErrors, crc_skipped);
+    }
     // What the links say (worker_link.cpp). on_link_event: anything but "drained" from a
     // link's input; true when the connection goes on to after_link_input (frame clock for a
     // partial TLS record, the link's own output, the kernel hand-off).
