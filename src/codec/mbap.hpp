@@ -130,6 +130,24 @@ class MbapSplitter {
         }
         return next_rest(out);
     }
+    // The next frame whose protocol id is 0, counting the others in `skipped` and passing
+    // them by: true with `out` set; false when the fed bytes are used up or the framing is
+    // lost (failed()). What the receive loops of both workers' links want.
+    bool next_modbus(TcpFrame& out, std::uint64_t& skipped) noexcept {
+        for (;;) {
+            switch (next(out)) {
+                case Status::Frame:
+                    return true;
+                case Status::BadProtocolId:
+                    ++skipped;
+                    continue;
+                case Status::NeedMore:
+                case Status::Fatal:
+                    return false;
+            }
+        }
+    }
+    bool failed() const noexcept { return error_ != CodecError::Ok; }
     CodecError error() const noexcept { return error_; }
     // Bytes of a partial frame held in the internal buffer.
     std::size_t buffered() const noexcept { return partial_size_; }

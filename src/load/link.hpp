@@ -90,25 +90,17 @@ class Link {
     // epoll at 16 x 16).
     [[gnu::always_inline]] bool next_answer(codec::TcpFrame& frame, std::uint64_t& bad_protocol,
                                             LinkInput& end) noexcept {
-        for (;;) {
-            switch (mbap_.next(frame)) {
-                case codec::MbapSplitter::Status::Frame:
-                    return true;
-                case codec::MbapSplitter::Status::BadProtocolId:
-                    ++bad_protocol;
-                    continue;
-                case codec::MbapSplitter::Status::NeedMore:
-                    // An RTU link feeds no MBAP splitter: asked here, once its (empty) MBAP
-                    // splitter is done, the kind costs the plain path nothing per answer.
-                    if (kind_ == Kind::Rtu) [[unlikely]]
-                        return next_rtu_answer(frame, end);
-                    end = LinkInput::Answers;
-                    return false;
-                case codec::MbapSplitter::Status::Fatal:
-                    end = LinkInput::FramingLost;
-                    return false;
-            }
+        if (mbap_.next_modbus(frame, bad_protocol)) return true;
+        if (mbap_.failed()) {
+            end = LinkInput::FramingLost;
+            return false;
         }
+        // An RTU link feeds no MBAP splitter: asked here, once its (empty) MBAP splitter is
+        // done, the kind costs the plain path nothing per answer.
+        if (kind_ == Kind::Rtu) [[unlikely]]
+            return next_rtu_answer(frame, end);
+        end = LinkInput::Answers;
+        return false;
     }
 
     // A request encoded as MBAP at `at` (`size` bytes, transaction id `id`), rewritten in place

@@ -99,8 +99,8 @@ LinkInput Link::take_tls(codec::Bytes received, std::vector<std::uint8_t>& scrat
     return LinkInput::Drained;
 }
 
-bool Link::next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint32_t& discarded,
-                             std::uint32_t& crc_skipped) noexcept {
+bool Link::next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint64_t& discarded,
+                             std::uint64_t& crc_skipped) noexcept {
     end = LinkInput::Drained;
     if (kind_ == Kind::Rtu) {
         for (;;) {
@@ -122,27 +122,12 @@ bool Link::next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint32
         }
     }
     if (bytes_pass_through_) return false;  // the kernel's TLS: the splitter had it all
-    // TLS in userspace: the next record's plaintext, split like plain MBAP.
-    for (;;) {
-        const std::size_t n = read_plain(*tls_->scratch, end);
-        if (n == 0) return false;
-        mbap_.feed(codec::Bytes(tls_->scratch->data(), n));
-        for (bool more = true; more;) {
-            switch (mbap_.next(frame)) {
-                case codec::MbapSplitter::Status::Frame:
-                    return true;
-                case codec::MbapSplitter::Status::BadProtocolId:
-                    ++discarded;
-                    break;
-                case codec::MbapSplitter::Status::Fatal:
-                    end = LinkInput::FramingLost;
-                    return false;
-                case codec::MbapSplitter::Status::NeedMore:
-                    more = false;
-                    break;
-            }
-        }
-    }
+    // TLS in userspace: the next record's plaintext, split like plain MBAP (back here when it
+    // holds no more whole requests, until no plaintext is left).
+    const std::size_t n = read_plain(*tls_->scratch, end);
+    if (n == 0) return false;
+    mbap_.feed(codec::Bytes(tls_->scratch->data(), n));
+    return next_request(frame, end, discarded, crc_skipped);
 }
 
 std::size_t Link::read_plain(std::vector<std::uint8_t>& scratch, LinkInput& end) {

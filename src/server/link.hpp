@@ -78,26 +78,18 @@ class Link {
     // about 6 instructions a request); RTU and TLS plaintext are asked for only once the MBAP
     // splitter is drained.
     [[gnu::always_inline]] bool next_request(codec::TcpFrame& frame, LinkInput& end,
-                                             std::uint32_t& discarded,
-                                             std::uint32_t& crc_skipped) noexcept {
-        for (;;) {
-            switch (mbap_.next(frame)) {
-                case codec::MbapSplitter::Status::Frame:
-                    return true;
-                case codec::MbapSplitter::Status::BadProtocolId:
-                    ++discarded;
-                    continue;
-                case codec::MbapSplitter::Status::Fatal:
-                    end = LinkInput::FramingLost;
-                    return false;
-                case codec::MbapSplitter::Status::NeedMore:
-                    if (kind_ == Kind::Mbap) [[likely]] {
-                        end = LinkInput::Drained;
-                        return false;
-                    }
-                    return next_request_rest(frame, end, discarded, crc_skipped);
-            }
+                                             std::uint64_t& discarded,
+                                             std::uint64_t& crc_skipped) noexcept {
+        if (mbap_.next_modbus(frame, discarded)) return true;
+        if (mbap_.failed()) {
+            end = LinkInput::FramingLost;
+            return false;
         }
+        if (kind_ == Kind::Mbap) [[likely]] {
+            end = LinkInput::Drained;
+            return false;
+        }
+        return next_request_rest(frame, end, discarded, crc_skipped);
     }
     // Bytes of a request still arriving that the link holds, or a TLS record's that has not
     // all come (nonzero: the frame clock runs on them).
@@ -163,8 +155,8 @@ class Link {
     LinkInput take_tls(codec::Bytes received, std::vector<std::uint8_t>& scratch, bool& set_up);
     // After the MBAP splitter is drained: an RTU link's next frame, or a TLS link's next
     // plaintext split (next_request's contract).
-    bool next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint32_t& discarded,
-                           std::uint32_t& crc_skipped) noexcept;
+    bool next_request_rest(codec::TcpFrame& frame, LinkInput& end, std::uint64_t& discarded,
+                           std::uint64_t& crc_skipped) noexcept;
     // The handshake's step on new ciphertext: SetUp when it finished now (roles looked up).
     enum class Handshake : std::uint8_t { Done, SetUp, Going, Failed };
     Handshake step_handshake(codec::Bytes received);

@@ -552,8 +552,8 @@ void Worker::consume_input(std::uint32_t index, const std::uint8_t* data,
     bool completed = false;
     if (got == LinkInput::Drained) [[likely]] {
         codec::TcpFrame frame;
-        std::uint32_t discarded = 0;
-        std::uint32_t crc_skipped = 0;
+        std::uint64_t discarded = 0;
+        std::uint64_t crc_skipped = 0;
         while (c.link.next_request(frame, got, discarded, crc_skipped)) {
             // Nothing of the link may be touched after a close: the slot may be free.
             if (!on_frame(c, index, frame)) {

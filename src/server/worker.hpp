@@ -103,7 +103,7 @@ class Worker {
     // it (on_frame for each), then does what the link said.
     void consume_input(std::uint32_t index, const std::uint8_t* data, std::size_t size) noexcept;
     // Frames a link dropped: MBAP frames with a wrong protocol id, RTU frames with a bad CRC.
-    void count_dropped_frames(std::uint32_t discarded, std::uint32_t crc_skipped) noexcept {
+    void count_dropped_frames(std::uint64_t discarded, std::uint64_t crc_skipped) noexcept {
         if (discarded != 0) counters_.add(ServerCounters::DiscardedFrames, discarded);
         if (crc_skipped != 0) counters_.add(ServerCounters::CrcErrors, crc_skipped);
     }

@@ -354,5 +354,36 @@ TEST(MbapSplitter, MaximumFrameArrivingInTwoChunks) {
     }
 }
 
+TEST(MbapSplitterNextModbus, PassesFramesOfAnotherProtocolByCountingThem) {
+    ByteVec stream = adu(1, 0, 0x01, {0x03, 0x00, 0x00, 0x00, 0x01});
+    const ByteVec other = adu(2, 0x0001, 0x01, {0x03, 0x00, 0x00, 0x00, 0x01});
+    const ByteVec last = adu(3, 0, 0x01, {0x07});
+    stream.insert(stream.end(), other.begin(), other.end());
+    stream.insert(stream.end(), other.begin(), other.end());
+    stream.insert(stream.end(), last.begin(), last.end());
+    MbapSplitter splitter;
+    splitter.feed(Bytes(stream.data(), stream.size()));
+    TcpFrame frame;
+    std::uint64_t skipped = 0;
+    ASSERT_TRUE(splitter.next_modbus(frame, skipped));
+    EXPECT_EQ(frame.header.transaction_id, 1);
+    ASSERT_TRUE(splitter.next_modbus(frame, skipped));
+    EXPECT_EQ(frame.header.transaction_id, 3);
+    EXPECT_EQ(skipped, 2u);
+    EXPECT_FALSE(splitter.next_modbus(frame, skipped));
+    EXPECT_FALSE(splitter.failed());  // used up, not lost
+}
+
+TEST(MbapSplitterNextModbus, StopsAndSaysSoWhenTheFramingIsLost) {
+    const ByteVec bad = raw_header(1, 0, 0, 0x01);  // length 0 cannot be resynchronised
+    MbapSplitter splitter;
+    splitter.feed(Bytes(bad.data(), bad.size()));
+    TcpFrame frame;
+    std::uint64_t skipped = 0;
+    EXPECT_FALSE(splitter.next_modbus(frame, skipped));
+    EXPECT_TRUE(splitter.failed());
+    EXPECT_EQ(skipped, 0u);
+}
+
 }  // namespace
 }  // namespace mbstorm::codec
