@@ -105,11 +105,9 @@ void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::
 
 std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
     for (const std::string& text : texts) {
-        scenario::ThresholdSpec spec;
-        std::string error;
-        if (!scenario::parse_threshold(text, spec, error))
-            return fmt::format("--threshold '{}': {}", text, error);
-        s.thresholds.push_back(std::move(spec));
+        Result<scenario::ThresholdSpec> spec = scenario::parse_threshold(text);
+        if (!spec.ok()) return fmt::format("--threshold '{}': {}", text, spec.error().text());
+        s.thresholds.push_back(std::move(spec).value());
     }
     return {};
 }
@@ -156,9 +154,9 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         return usage_error("run", "--timeline needs a file (it is written as the run goes)");
     const load::Plan::Shard shard = request.shard;
     if (shard.count != 0) {
-        const load::ShardedPlan part = scenario::engine_plan(s, shard);
-        if (!part.error.empty()) return usage_error("run", part.error);
-        fmt::print(stderr, "mbstorm run: {}\n", describe_shard(part.plan));
+        const Result<load::Plan> part = scenario::engine_plan(s, shard);
+        if (!part.ok()) return fail("run", part.error());
+        fmt::print(stderr, "mbstorm run: {}\n", describe_shard(*part));
     }
     if (request.start_at) announce_start(*request.start_at);
     const std::string run_id = new_run_id();
@@ -290,16 +288,10 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
 }
 
 int run_scenario_file(const ScenarioRunRequest& request) {
-    scenario::Scenario s;
-    try {
-        s = scenario::load_scenario_file(request.file);
-    } catch (const scenario::ScenarioError& e) {
-        return usage_error("run", e.what());
-    }
-    if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
-        for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
-        return kExitUsage;
-    }
+    Result<scenario::Scenario> loaded = scenario::load_scenario_file(request.file);
+    if (!loaded.ok()) return fail("run", loaded.error());
+    scenario::Scenario s = std::move(loaded).value();
+    if (Error e = scenario::apply_overrides(s, request.overrides); !e.ok()) return fail("run", e);
     if (auto e = add_threshold_flags(request.thresholds, s); !e.empty())
         return usage_error("run", e);
     if (request.print) {

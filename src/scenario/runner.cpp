@@ -50,9 +50,11 @@ load::Plan engine_plan(const Scenario& s) {
     return plan;
 }
 
-load::ShardedPlan engine_plan(const Scenario& s, load::Plan::Shard shard) {
-    if (shard.count == 0) return {engine_plan(s), {}};
-    return load::shard_plan(engine_plan(s), shard.index, shard.count);
+Result<load::Plan> engine_plan(const Scenario& s, load::Plan::Shard shard) {
+    if (shard.count == 0) return engine_plan(s);
+    load::ShardedPlan part = load::shard_plan(engine_plan(s), shard.index, shard.count);
+    if (!part.error.empty()) return Error(ErrorCode::InvalidInput, std::move(part.error));
+    return std::move(part.plan);
 }
 
 void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
@@ -74,12 +76,12 @@ void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
 
 load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     load::LoadResult out;
-    load::ShardedPlan part = engine_plan(s, hooks.shard);
-    if (!part.error.empty()) {
-        out.error = part.error;
+    Result<load::Plan> part = engine_plan(s, hooks.shard);
+    if (!part.ok()) {
+        out.error = part.error().text();
         return out;
     }
-    load::Plan plan = std::move(part.plan);
+    load::Plan plan = std::move(part).value();
     auto say = [&hooks](const std::string& m) {
         if (hooks.on_message) hooks.on_message(m);
     };
@@ -129,11 +131,13 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
                         embedded->endpoint(), embedded->threads(),
                         embedded->threads() == 1 ? "" : "s"));
     } else {
-        std::string error;
-        if (!parse_target(s.target, plan.host, plan.port, error)) {
-            out.error = "target: " + error;
+        const Result<Target> target = parse_target(s.target);
+        if (!target.ok()) {
+            out.error = "target: " + target.error().message();
             return out;
         }
+        plan.host = target->host;
+        plan.port = target->port;
     }
 
     load::EngineOptions eo;

@@ -29,9 +29,9 @@ struct RunHooks {
 };
 
 // The engine's plan for the scenario (its stages included; host and port as in the file),
-// or a shard's part of it (load/shard.hpp; the error says why a shard has no part).
+// or a shard's part of it (load/shard.hpp; an InvalidInput error says why a shard has none).
 load::Plan engine_plan(const Scenario& scenario);
-load::ShardedPlan engine_plan(const Scenario& scenario, load::Plan::Shard shard);
+Result<load::Plan> engine_plan(const Scenario& scenario, load::Plan::Shard shard);
 
 // The result; result.ok false with result.error when nothing could be run.
 load::LoadResult run_scenario(const Scenario& scenario, const RunHooks& hooks = {});
