@@ -98,3 +98,10 @@ TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
     EXPECT_EQ(g.profile.unmapped[3], (std::vector<std::uint16_t>{999, 1040}));
     std::filesystem::remove_all(dir);
 }
+
+// replay and the fuzz harness tell a finding that is not there from one that is not a finding.
+TEST(SavedFinding, AMissingFindingIsNotFound) {
+    const Error error = load_finding("/nonexistent/mbstorm-finding").error();
+    EXPECT_EQ(error.code(), ErrorCode::NotFound) << error.text();
+    EXPECT_EQ(error.text(), "cannot read /nonexistent/mbstorm-finding");
+}
