@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -66,11 +65,7 @@ bool from_sarif(const json& j, Baseline& out, std::string& error) {
 Result<Baseline> load_baseline(const std::string& path) {
     Baseline out{path, {}};
     std::ifstream in(path);
-    if (!in) {
-        std::error_code ec;
-        return Error(std::filesystem::exists(path, ec) ? ErrorCode::Io : ErrorCode::NotFound,
-                     fmt::format("cannot read --baseline {}", path));
-    }
+    if (!in) return Error(open_failure(path), fmt::format("cannot read --baseline {}", path));
     std::stringstream text;
     text << in.rdbuf();
     const json j = json::parse(text.str(), nullptr, false);

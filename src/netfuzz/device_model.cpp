@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -302,11 +301,8 @@ Result<DeviceModel> model_from_json(const std::string& text) {
 
 Result<DeviceModel> load_model(const std::string& path) {
     std::ifstream in(path);
-    if (!in) {
-        std::error_code ec;
-        return Error(std::filesystem::exists(path, ec) ? ErrorCode::Io : ErrorCode::NotFound,
-                     fmt::format("--device-model {}: cannot read it", path));
-    }
+    if (!in)
+        return Error(open_failure(path), fmt::format("--device-model {}: cannot read it", path));
     std::stringstream text;
     text << in.rdbuf();
     Result<DeviceModel> model = model_from_json(text.str());

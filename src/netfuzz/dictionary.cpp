@@ -4,7 +4,6 @@
 
 #include <cctype>
 #include <charconv>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -111,11 +110,7 @@ Result<Dictionary> parse_dictionary(const std::string& text, const std::string& 
 
 Result<Dictionary> load_dictionary(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
-    if (!f) {
-        std::error_code ec;
-        return Error(std::filesystem::exists(path, ec) ? ErrorCode::Io : ErrorCode::NotFound,
-                     fmt::format("cannot read --dict {}", path));
-    }
+    if (!f) return Error(open_failure(path), fmt::format("cannot read --dict {}", path));
     std::ostringstream all;
     all << f.rdbuf();
     if (all.str().size() > 16u << 20)

@@ -282,11 +282,7 @@ Result<Finding> load_finding(const std::string& path) {
     std::string file = path;
     if (std::filesystem::is_directory(path)) file = path + "/finding.json";
     std::ifstream in(file);
-    if (!in) {
-        std::error_code ec;
-        return Error(std::filesystem::exists(file, ec) ? ErrorCode::Io : ErrorCode::NotFound,
-                     fmt::format("cannot read {}", file));
-    }
+    if (!in) return Error(open_failure(file), fmt::format("cannot read {}", file));
     // The JSON reader throws (nlohmann's, and the loaders' refusals above): caught here.
     Finding out;
     try {

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -452,12 +451,7 @@ Result<Scenario> parse_scenario(std::string_view text, std::string_view source) 
 
 Result<Scenario> load_scenario_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        std::error_code ec;
-        const bool exists = std::filesystem::exists(path, ec);
-        return Error(exists ? ErrorCode::Io : ErrorCode::NotFound, "cannot open the scenario file",
-                     path);
-    }
+    if (!in) return Error(open_failure(path), "cannot open the scenario file", path);
     // Read at most one chunk past the cap: a huge file is refused without being loaded.
     std::string text;
     char chunk[64 * 1024];
