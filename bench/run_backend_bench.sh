@@ -23,37 +23,13 @@ for f in "$mbstorm" "$limit" "$client"; do
 done
 ulimit -n 20000 2>/dev/null || true
 
-server_pid=""
-stop_server() { [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null; server_pid=""; }
+# shellcheck source=lib/limit_pair.bash
+source "$here/lib/limit_pair.bash"
 trap stop_server EXIT
-median() { sort -n | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 
-start_limit() {
-  local out; out=$(mktemp)
-  taskset -c 0 "$limit" --seconds 3600 >"$out" 2>/dev/null & server_pid=$!
-  for _ in $(seq 100); do grep -q PORT "$out" && break; sleep 0.05; done
-  port=$(awk '/PORT/ {print $2}' "$out"); rm -f "$out"
-}
-start_serve() {  # start_serve BACKEND
-  port=$((20000 + RANDOM % 20000))
-  taskset -c 0 "$mbstorm" serve --backend "$1" --listen "127.0.0.1:$port" --threads 1 \
-    --max-connections 0 >/dev/null 2>&1 & server_pid=$!
-  sleep 0.5
-}
-pair_client() {  # pair_client CONNECTIONS DEPTH
-  taskset -c 1 "$client" --port "$port" --connections "$1" --depth "$2" --seconds "$secs" \
-    --warmup 1 2>/dev/null | sed -n 's/^RESULT tps=\([0-9]*\).*/\1/p'
-}
-mbstorm_client() {  # mbstorm_client BACKEND CONNECTIONS DEPTH
-  taskset -c 1 "$mbstorm" run --backend "$1" --target "127.0.0.1:$port" --threads 1 -c "$2" \
-    --depth "$3" -d "${secs}s" --warmup 1s -q --json /tmp/mbstorm-backend-bench.json >/dev/null 2>&1
-  /usr/bin/python3 -c 'import json;d=json.load(open("/tmp/mbstorm-backend-bench.json"));print(round(d["totals"]["throughput_per_s"]))'
-}
 row() {  # row LABEL RUNS_A RUNS_B RUNS_C: medians and the ratios against the first two
   local a b c
-  a=$(tr ' ' '\n' <<<"$2" | grep -v '^$' | median)
-  b=$(tr ' ' '\n' <<<"$3" | grep -v '^$' | median)
-  c=$(tr ' ' '\n' <<<"$4" | grep -v '^$' | median)
+  a=$(median <<<"$2"); b=$(median <<<"$3"); c=$(median <<<"$4")
   printf '| %s | %s | %s | %s | %.2fx | %.2fx |\n' "$1" "$a" "$b" "$c" \
     "$(echo "$c / $b" | bc -l)" "$(echo "$c / $a" | bc -l)"
 }
@@ -69,8 +45,8 @@ for shape in $shapes; do
   a="" b="" e=""
   for _ in $(seq "$repeats"); do
     a+="$(pair_client "$c" "$d") "
-    b+="$(mbstorm_client io_uring "$c" "$d") "
-    e+="$(mbstorm_client epoll "$c" "$d") "
+    b+="$(mbstorm_client "$mbstorm" io_uring "$c" "$d") "
+    e+="$(mbstorm_client "$mbstorm" epoll "$c" "$d") "
   done
   stop_server
   row "$c x $d" "$a" "$b" "$e"
@@ -86,8 +62,8 @@ for shape in $shapes; do
   a="" b="" e=""
   for _ in $(seq "$repeats"); do
     start_limit; a+="$(pair_client "$c" "$d") "; stop_server
-    start_serve io_uring; b+="$(pair_client "$c" "$d") "; stop_server
-    start_serve epoll; e+="$(pair_client "$c" "$d") "; stop_server
+    start_serve "$mbstorm" io_uring; b+="$(pair_client "$c" "$d") "; stop_server
+    start_serve "$mbstorm" epoll; e+="$(pair_client "$c" "$d") "; stop_server
   done
   row "$c x $d" "$a" "$b" "$e"
 done

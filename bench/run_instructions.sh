@@ -8,6 +8,7 @@
 #
 #   bench/run_instructions.sh [build-dir] [N] [connections] [depth] [serve|run|both]
 #   KEEP=dir: keep the callgrind.out files there (for callgrind_annotate)
+#   BACKEND=epoll|io_uring: the event backend of both sides (default: auto, io_uring here)
 # The server's counters are dumped and zeroed with callgrind_control around each client run
 # (the server does not exit on SIGINT under valgrind).
 set -euo pipefail
@@ -20,6 +21,7 @@ which=${5:-both}
 mb="$build/mbstorm"
 work=$(mktemp -d)
 keep=${KEEP:-}
+backend=${BACKEND:-auto}
 server_pid=""
 cleanup() {
   if [ -n "$server_pid" ]; then kill -9 "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; fi
@@ -39,14 +41,15 @@ wait_port() {
 }
 client_run() {  # client_run <port> <transactions> [valgrind prefix...]
   local p=$1 count=$2; shift 2
-  "$@" "$mb" run --target "127.0.0.1:$p" -c "$conns" --depth "$depth" -n "$count" -d 0 \
-    --warmup 0 >/dev/null 2>&1
+  "$@" "$mb" run --backend "$backend" --target "127.0.0.1:$p" -c "$conns" --depth "$depth" \
+    -n "$count" -d 0 --warmup 0 >/dev/null 2>&1
 }
 
 if [ "$which" = serve ] || [ "$which" = both ]; then
   port=$(free_port)
   valgrind --tool=callgrind --callgrind-out-file="$work/serve.%p" \
-    "$mb" serve --threads 1 --listen "127.0.0.1:$port" >/dev/null 2>"$work/serve.log" &
+    "$mb" serve --backend "$backend" --threads 1 --listen "127.0.0.1:$port" >/dev/null \
+    2>"$work/serve.log" &
   server_pid=$!
   wait_port "$port"
   client_run "$port" 1000  # connections, first buffers, page faults
@@ -66,7 +69,7 @@ fi
 
 if [ "$which" = run ] || [ "$which" = both ]; then
   port=$(free_port)
-  "$mb" serve --threads 1 --listen "127.0.0.1:$port" >/dev/null 2>&1 &
+  "$mb" serve --backend "$backend" --threads 1 --listen "127.0.0.1:$port" >/dev/null 2>&1 &
   server_pid=$!
   wait_port "$port"
   client_run "$port" "$n" valgrind --tool=callgrind --callgrind-out-file="$work/run.small"

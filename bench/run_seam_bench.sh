@@ -19,33 +19,11 @@ for f in "$before/mbstorm" "$after/mbstorm" "$limit" "$client"; do
   [ -x "$f" ] || { echo "missing $f: build the release preset first" >&2; exit 1; }
 done
 ulimit -n 20000 2>/dev/null || true
-json=$(mktemp)
-server_pid=""
-stop_server() { [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null; server_pid=""; }
-trap 'stop_server; rm -f "$json"' EXIT
-median() { tr ' ' '\n' | grep -v '^$' | sort -n | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
+here=$(cd "$(dirname "$0")" && pwd)
+# shellcheck source=lib/limit_pair.bash
+source "$here/lib/limit_pair.bash"
+trap stop_server EXIT
 
-start_limit() {
-  local out; out=$(mktemp)
-  taskset -c 0 "$limit" --seconds 3600 >"$out" 2>/dev/null & server_pid=$!
-  for _ in $(seq 100); do grep -q PORT "$out" && break; sleep 0.05; done
-  port=$(awk '/PORT/ {print $2}' "$out"); rm -f "$out"
-}
-start_serve() {  # start_serve BUILD BACKEND
-  port=$((20000 + RANDOM % 20000))
-  taskset -c 0 "$1/mbstorm" serve --backend "$2" --listen "127.0.0.1:$port" --threads 1 \
-    --max-connections 0 >/dev/null 2>&1 & server_pid=$!
-  sleep 0.5
-}
-pair_client() {  # pair_client CONNECTIONS DEPTH
-  taskset -c 1 "$client" --port "$port" --connections "$1" --depth "$2" --seconds "$secs" \
-    --warmup 1 2>/dev/null | sed -n 's/^RESULT tps=\([0-9]*\).*/\1/p'
-}
-mbstorm_client() {  # mbstorm_client BUILD BACKEND CONNECTIONS DEPTH
-  taskset -c 1 "$1/mbstorm" run --backend "$2" --target "127.0.0.1:$port" --threads 1 -c "$3" \
-    --depth "$4" -d "${secs}s" --warmup 1s -q --json "$json" >/dev/null 2>&1
-  /usr/bin/python3 -c 'import json,sys;print(round(json.load(open(sys.argv[1]))["totals"]["throughput_per_s"]))' "$json"
-}
 row() {  # row LABEL RUNS_LIMIT RUNS_BEFORE RUNS_AFTER
   local a b c
   a=$(median <<<"$2"); b=$(median <<<"$3"); c=$(median <<<"$4")
@@ -64,8 +42,8 @@ for backend in $backends; do
     a="" b="" e=""
     for _ in $(seq "$repeats"); do
       a+="$(pair_client "$c" "$d") "
-      b+="$(mbstorm_client "$before" "$backend" "$c" "$d") "
-      e+="$(mbstorm_client "$after" "$backend" "$c" "$d") "
+      b+="$(mbstorm_client "$before/mbstorm" "$backend" "$c" "$d") "
+      e+="$(mbstorm_client "$after/mbstorm" "$backend" "$c" "$d") "
     done
     stop_server
     row "engine, $backend, $c x $d" "$a" "$b" "$e"
@@ -75,8 +53,8 @@ for backend in $backends; do
     a="" b="" e=""
     for _ in $(seq "$repeats"); do
       start_limit; a+="$(pair_client "$c" "$d") "; stop_server
-      start_serve "$before" "$backend"; b+="$(pair_client "$c" "$d") "; stop_server
-      start_serve "$after" "$backend"; e+="$(pair_client "$c" "$d") "; stop_server
+      start_serve "$before/mbstorm" "$backend"; b+="$(pair_client "$c" "$d") "; stop_server
+      start_serve "$after/mbstorm" "$backend"; e+="$(pair_client "$c" "$d") "; stop_server
     done
     row "slave, $backend, $c x $d" "$a" "$b" "$e"
   done

@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
         };
     }
     const load::LoadResult r = load::run_load(plan, options);
-    if (!r.ok) std::fprintf(stderr, "load_driver: %s\n", r.error.c_str());
+    if (!r.ok()) std::fprintf(stderr, "load_driver: %s\n", r.error.text().c_str());
     const auto& h = r.run.latency;
     const auto& k = r.run.counters;
     fmt::print(
@@ -139,5 +139,5 @@ int main(int argc, char** argv) {
                    lag.total().late_sends, lag.total().max_lag_ns / 1e3, lag.engine.late_sends,
                    lag.target.late_sends);
     }
-    return r.ok ? 0 : 1;
+    return r.ok() ? 0 : 1;
 }

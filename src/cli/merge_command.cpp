@@ -49,8 +49,8 @@ Error thresholds_from_runs(const std::vector<std::string>& expressions, const st
 }
 
 int merge(const MergeOptions& o) {
-    if (auto conflict = stdout_conflict(o.outputs); !conflict.empty())
-        return usage_error("merge", conflict);
+    if (const Error conflict = stdout_conflict(o.outputs); !conflict.ok())
+        return usage_error("merge", conflict.text());
     for (const std::string* path :
          {&o.outputs.json, &o.outputs.hdr, &o.outputs.html, &o.outputs.junit}) {
         std::string error;
@@ -76,7 +76,6 @@ int merge(const MergeOptions& o) {
     scenario::evaluate_thresholds(s, merged.run);
 
     load::LoadResult result;
-    result.ok = true;
     result.run = std::move(merged.run);
     fmt::print(stderr, "mbstorm merge: {} runs of test '{}'{}\n", result.run.metadata.merged_runs,
                result.run.metadata.test_id,

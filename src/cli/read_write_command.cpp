@@ -399,9 +399,9 @@ int run_serial_io(const IoOptions& o, IoPlan& p,
                                        "needs --allow-writes",
                                        device));
     load::SerialMaster master;
-    if (auto why = master.open(device, serial_settings(o.transport), o.transport.framing_kind());
-        !why.empty())
-        return usage_error(name, why);
+    if (Error why = master.open(device, serial_settings(o.transport), o.transport.framing_kind());
+        !why.ok())
+        return usage_error(name, why.text());
     int exit_code = kExitOk;
     const auto interval = std::chrono::nanoseconds(o.interval_ns);
     auto next = std::chrono::steady_clock::now();
@@ -473,7 +473,7 @@ int run_io(const IoOptions& o) {
         op.function = p.request.function;
         auto verdict =
             load::check_write_safety({op}, load::numeric_address(p.target), o.allow_writes);
-        if (!verdict.allowed) return usage(verdict.message);
+        if (!verdict.allowed()) return usage(verdict.refusal.text());
     }
     std::shared_ptr<net::TlsContext> tls;
     if (std::string e = client_tls(o.transport, tls); !e.empty()) return usage(e);

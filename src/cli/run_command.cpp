@@ -175,8 +175,8 @@ int run_load_test(RunOptions& o) {
         plan.threads = 1;
         // Writes to a tty that is not a pseudo-terminal need leave: the engine checks.
     }
-    if (auto problems = load::validate_plan(plan); !problems.empty())
-        return usage_error("run", problems.front());
+    if (const Error problems = load::validate_plan(plan); !problems.ok())
+        return usage_error("run", problems.text());
 
     // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
     // there is no target, and reports the same way.
@@ -188,7 +188,8 @@ int run_load_test(RunOptions& o) {
     s.plan.tls_resume = o.transport.tls_resume;
     s.name.clear();
     s.slave_threads = o.slave_threads;
-    if (auto e = add_threshold_flags(o.thresholds, s); !e.empty()) return usage_error("run", e);
+    if (const Error e = add_threshold_flags(o.thresholds, s); !e.ok())
+        return usage_error("run", e.text());
     fmt::print(
         stderr, "mbstorm run: load test of {}: {} connection{} x depth {}, {} {}, {}\n",
         !plan.serial.device.empty()
@@ -403,7 +404,8 @@ void add_run_command(CLI::App& app, Action& action) {
         action = [o, cmd] {
             OutputFiles outputs = o->outputs;
             outputs.junit = o->junit;
-            if (std::string e = stdout_conflict(outputs); !e.empty()) return usage_error("run", e);
+            if (const Error e = stdout_conflict(outputs); !e.ok())
+                return usage_error("run", e.text());
             if (std::string e = check_transport(o->transport, "run"); !e.empty())
                 return usage_error("run", e);
             o->depth_given = cmd->count("--depth") != 0;

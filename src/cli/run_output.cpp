@@ -42,11 +42,13 @@ void add_run_identity_options(CLI::App* cmd, OutputFiles& files) {
         ->needs(cmd->get_option("--metrics-listen"));
 }
 
-std::string stdout_conflict(const OutputFiles& files) {
+Error stdout_conflict(const OutputFiles& files) {
     int n = 0;
     for (const std::string* f : {&files.json, &files.hdr, &files.html, &files.junit})
         n += *f == "-" ? 1 : 0;
-    return n > 1 ? "only one of --json, --hdr, --html and --junit can be '-' (stdout)" : "";
+    if (n <= 1) return {};
+    return Error(ErrorCode::InvalidInput,
+                 "only one of --json, --hdr, --html and --junit can be '-' (stdout)");
 }
 
 void LiveProgress::update(const load::ProgressSnapshot& s) {
@@ -86,18 +88,18 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
         write(
             files.junit,
             [&] {
-                return report::format_junit(result.run, files.junit_suite,
-                                            result.ok ? "" : result.error);
+                return report::format_junit(result.run, files.junit_suite, result.error.text());
             },
             "JUnit XML");
     };
     for (const auto& w : result.warnings) fmt::print(stderr, "mbstorm run: warning: {}\n", w);
-    if (!result.ok && result.run.counters.transactions_sent == 0) {
-        fmt::print(stderr, "mbstorm run: {}\n", result.error);
+    if (!result.ok() && result.run.counters.transactions_sent == 0) {
+        fmt::print(stderr, "mbstorm run: {}\n", result.error.text());
         write_junit();
         return kExitUsage;
     }
-    if (!result.ok) fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error);
+    if (!result.ok())
+        fmt::print(stderr, "mbstorm run: the run ended early: {}\n", result.error.text());
     // Everything measured is reported, even after an early end; on stderr when a report file
     // takes stdout.
     std::FILE* out = files.uses_stdout() ? stderr : stdout;

@@ -9,6 +9,7 @@
 
 #include "load/engine.hpp"
 #include "report/console.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -33,8 +34,8 @@ struct OutputFiles {
     bool uses_stdout() const { return json == "-" || hdr == "-" || html == "-" || junit == "-"; }
 };
 
-// Empty, or the usage error for more than one output on stdout.
-std::string stdout_conflict(const OutputFiles& files);
+// None, or the usage error for more than one output on stdout.
+Error stdout_conflict(const OutputFiles& files);
 
 void add_output_options(CLI::App* cmd, OutputFiles& files);
 // run only: --hlog and --test-id.

@@ -103,10 +103,11 @@ void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::
 
 }  // namespace
 
-std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
+Error add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
     for (const std::string& text : texts) {
         Result<scenario::ThresholdSpec> spec = scenario::parse_threshold(text);
-        if (!spec.ok()) return fmt::format("--threshold '{}': {}", text, spec.error().text());
+        if (!spec.ok())
+            return std::move(spec).error().prefixed(fmt::format("--threshold '{}'", text));
         s.thresholds.push_back(std::move(spec).value());
     }
     return {};
@@ -115,7 +116,8 @@ std::string add_threshold_flags(const std::vector<std::string>& texts, scenario:
 int print_flag_scenario(const load::Plan& plan, const std::string& target,
                         const std::vector<std::string>& thresholds) {
     scenario::Scenario s = scenario::scenario_from_plan(plan, target);
-    if (auto e = add_threshold_flags(thresholds, s); !e.empty()) return usage_error("run", e);
+    if (const Error e = add_threshold_flags(thresholds, s); !e.ok())
+        return usage_error("run", e.text());
     fmt::print("{}", scenario::format_scenario(s));
     return kExitOk;
 }
@@ -135,10 +137,8 @@ void judge_plan_carried_out(stats::RunResult& run) {
     run.thresholds.push_back(std::move(t));
 }
 
-}  // namespace
-
-int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
-    // A report that cannot be written must not cost a whole run first.
+// A report that cannot be written must not cost a whole run first.
+Error check_outputs(const ScenarioRunRequest& request) {
     const std::pair<const char*, const std::string*> outputs[] = {
         {"--json", &request.outputs.json},         {"--hdr", &request.outputs.hdr},
         {"--html", &request.outputs.html},         {"--hlog", &request.outputs.hlog},
@@ -146,12 +146,166 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     for (const auto& [flag, path] : outputs) {
         std::string error;
         if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return usage_error("run", fmt::format("cannot write {} {}", flag, error));
+            return Error(ErrorCode::Io, fmt::format("cannot write {} {}", flag, error));
     }
     if (request.outputs.hlog == "-")
-        return usage_error("run", "--hlog needs a file (it is written as the run goes)");
+        return Error(ErrorCode::InvalidInput,
+                     "--hlog needs a file (it is written as the run goes)");
     if (request.outputs.timeline == "-")
-        return usage_error("run", "--timeline needs a file (it is written as the run goes)");
+        return Error(ErrorCode::InvalidInput,
+                     "--timeline needs a file (it is written as the run goes)");
+    return {};
+}
+
+// --hlog and --timeline: the files written as the run goes, interval by interval.
+class RunStreams {
+  public:
+    Error open(const ScenarioRunRequest& request, const std::string& run_id) {
+        const OutputFiles& outputs = request.outputs;
+        std::string error;
+        if (!outputs.hlog.empty()) {
+            const std::string identity = report::hlog_identity_text(
+                {outputs.test_id, run_id, request.shard.index, request.shard.count});
+            if (!hlog_.open(outputs.hlog, identity, error))
+                return Error(ErrorCode::Io, fmt::format("cannot write --hlog {}", error));
+        }
+        if (!outputs.timeline.empty() &&
+            !timeline_.open(outputs.timeline, outputs.test_id, run_id, error))
+            return Error(ErrorCode::Io, fmt::format("cannot write --timeline {}", error));
+        return {};
+    }
+
+    void hook(const scenario::Scenario& s, scenario::RunHooks& hooks) {
+        if (hlog_.is_open()) hooks.on_interval_histograms = hlog_lines(hlog_, s);
+        if (timeline_.is_open())
+            hooks.on_interval = [this](const stats::IntervalSummary& interval,
+                                       std::chrono::system_clock::time_point measure_start) {
+                timeline_.write(interval, measure_start);
+            };
+    }
+
+    // Finishes both files, saying so on stderr; false when one could not be written.
+    bool close(const stats::RunResult& run, const OutputFiles& outputs) {
+        bool written = true;
+        if (hlog_.is_open()) {
+            add_stage_histograms(run);
+            std::string error;
+            if (!hlog_.close(error)) {
+                fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", outputs.hlog,
+                           error);
+                written = false;
+            } else {
+                fmt::print(stderr, "wrote HdrHistogram interval log {}\n", outputs.hlog);
+            }
+        }
+        if (timeline_.is_open()) {
+            std::string error;
+            if (!timeline_.close(error)) {
+                fmt::print(stderr, "mbstorm run: cannot write --timeline {}: {}\n",
+                           outputs.timeline, error);
+                written = false;
+            } else {
+                fmt::print(stderr, "wrote timeline {}\n", outputs.timeline);
+            }
+        }
+        return written;
+    }
+
+  private:
+    // Each stage's whole histogram last, tagged: the per-stage table of a merge. A run that
+    // never started still leaves a valid (empty) log.
+    void add_stage_histograms(const stats::RunResult& run) {
+        const auto start = run.metadata.start_time;
+        if (!hlog_.started())
+            hlog_.start(start.time_since_epoch().count() != 0 ? start
+                                                              : std::chrono::system_clock::now());
+        for (const stats::StageResult& stage : run.stages) {
+            hlog_.write_interval(
+                report::hlog_stage_tag(stage.index),
+                static_cast<double>(stage.start_offset_ns) / 1e9,
+                static_cast<double>(stage.end_offset_ns - stage.start_offset_ns) / 1e9,
+                stage.latency);
+            hlog_.end_interval();
+        }
+    }
+
+    report::HlogWriter hlog_;
+    report::TimelineWriter timeline_;
+};
+
+// The engine's hooks: stop on a signal, progress on stderr, streams and live metrics fed.
+scenario::RunHooks run_hooks(const ScenarioRunRequest& request, LiveProgress& progress,
+                             load::LiveMetrics* live) {
+    scenario::RunHooks hooks;
+    hooks.stop = &g_scenario_stop;
+    hooks.tool_version = "mbstorm 0.1.0";
+    hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
+    hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
+    hooks.live = live;
+    hooks.shard = request.shard;
+    hooks.start_at = request.start_at;
+    hooks.backend = request.backend;
+    return hooks;
+}
+
+// Ctrl-C (SIGINT) and SIGTERM end the run early, reports written (a second one at once).
+void catch_stop_signals() {
+    g_scenario_stop = false;
+    g_scenario_signal = 0;
+    signal(SIGINT, on_scenario_stop_signal);
+    signal(SIGTERM, on_scenario_stop_signal);
+}
+
+// The signal that stopped the run, or 0.
+int stop_catching_signals() {
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    return g_scenario_signal.load();
+}
+
+// The thresholds' verdict on top of the reports' exit code: a shard's breaches are no
+// verdict (mbstorm merge judges the whole test).
+int judge_thresholds(const stats::RunResult& run, load::Plan::Shard shard, int code) {
+    if (code != kExitOk || run.thresholds_passed()) return code;
+    std::size_t failed = 0;
+    for (const auto& t : run.thresholds) failed += t.passed ? 0 : 1;
+    const std::size_t all = run.thresholds.size();
+    if (shard.count != 0) {
+        // A shard's thresholds see its part only ("throughput > X" cannot pass on a third
+        // of the load): the verdict is mbstorm merge's, on the whole test.
+        fmt::print(stderr,
+                   "mbstorm run: shard {}/{}: {} of {} threshold{} breached on this shard's "
+                   "part (not a verdict: mbstorm merge judges the whole test)\n",
+                   shard.index, shard.count, failed, all, all == 1 ? "" : "s");
+        return code;
+    }
+    fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed, all,
+               all == 1 ? "" : "s");
+    return kExitFailed;
+}
+
+// Reports are written before: the exit code says the run did not finish (128 + the signal),
+// unless a report could not be written.
+int note_interrupt(int stopped_by, int code) {
+    if (stopped_by == 0) return code;
+    fmt::print(stderr, "mbstorm run: interrupted by {}: exit code {}\n", signal_name(stopped_by),
+               exit_code_for_signal(stopped_by));
+    return code == kExitUsage ? code : exit_code_for_signal(stopped_by);
+}
+
+// The metadata the command line adds: which test and run, and a late start.
+void note_run(const ScenarioRunRequest& request, const std::string& run_id, stats::RunResult& run) {
+    run.metadata.test_id = request.outputs.test_id;
+    run.metadata.run_id = run_id;
+    if (const auto late = run.metadata.late_by_ns; late != 0)
+        fmt::print(stderr, "mbstorm run: started {:.3f}s late (after --start-at): began at once\n",
+                   static_cast<double>(late) / 1e9);
+}
+
+}  // namespace
+
+int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
+    if (Error e = check_outputs(request); !e.ok()) return usage_error("run", e.text());
     const load::Plan::Shard shard = request.shard;
     if (shard.count != 0) {
         const Result<load::Plan> part = scenario::engine_plan(s, shard);
@@ -160,20 +314,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     }
     if (request.start_at) announce_start(*request.start_at);
     const std::string run_id = new_run_id();
-    report::HlogWriter hlog;
-    if (!request.outputs.hlog.empty()) {
-        std::string error;
-        const std::string identity =
-            report::hlog_identity_text({request.outputs.test_id, run_id, shard.index, shard.count});
-        if (!hlog.open(request.outputs.hlog, identity, error))
-            return usage_error("run", fmt::format("cannot write --hlog {}", error));
-    }
-    report::TimelineWriter timeline;
-    if (!request.outputs.timeline.empty()) {
-        std::string error;
-        if (!timeline.open(request.outputs.timeline, request.outputs.test_id, run_id, error))
-            return usage_error("run", fmt::format("cannot write --timeline {}", error));
-    }
+    RunStreams streams;
+    if (Error e = streams.open(request, run_id); !e.ok()) return usage_error("run", e.text());
     load::LiveMetrics live(request.outputs.test_id,
                            shard.count != 0 ? fmt::format("{}", shard.index) : std::string());
     net::HttpServer metrics;
@@ -184,72 +326,16 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
             return report::format_load_metrics(live.snapshot());
         }))
         return kExitUsage;
-    g_scenario_stop = false;
-    g_scenario_signal = 0;
-    signal(SIGINT, on_scenario_stop_signal);
-    signal(SIGTERM, on_scenario_stop_signal);
     LiveProgress progress(stderr, request.quiet);
-    scenario::RunHooks hooks;
-    hooks.stop = &g_scenario_stop;
-    hooks.tool_version = "mbstorm 0.1.0";
-    hooks.on_progress = [&progress](const load::ProgressSnapshot& snap) { progress.update(snap); };
-    hooks.on_message = [](const std::string& m) { fmt::print(stderr, "mbstorm run: {}\n", m); };
-    if (hlog.is_open()) hooks.on_interval_histograms = hlog_lines(hlog, s);
-    if (metrics.running()) hooks.live = &live;
-    if (timeline.is_open())
-        hooks.on_interval = [&timeline](const stats::IntervalSummary& interval,
-                                        std::chrono::system_clock::time_point measure_start) {
-            timeline.write(interval, measure_start);
-        };
-    hooks.shard = shard;
-    hooks.start_at = request.start_at;
-    hooks.backend = request.backend;
+    scenario::RunHooks hooks = run_hooks(request, progress, metrics.running() ? &live : nullptr);
+    streams.hook(s, hooks);
+    catch_stop_signals();
     load::LoadResult result = scenario::run_scenario(s, hooks);
     if (request.fail_on_plan_shortfall) judge_plan_carried_out(result.run);
-    result.run.metadata.test_id = request.outputs.test_id;
-    result.run.metadata.run_id = run_id;
-    if (const auto late = result.run.metadata.late_by_ns; late != 0)
-        fmt::print(stderr, "mbstorm run: started {:.3f}s late (after --start-at): began at once\n",
-                   static_cast<double>(late) / 1e9);
-    bool stream_failed = false;
-    if (hlog.is_open()) {
-        std::string error;
-        // A run that never started still leaves a valid (empty) log.
-        const auto start = result.run.metadata.start_time;
-        if (!hlog.started())
-            hlog.start(start.time_since_epoch().count() != 0 ? start
-                                                             : std::chrono::system_clock::now());
-        // Each stage's whole histogram last, tagged: the per-stage table of a merge.
-        for (const stats::StageResult& stage : result.run.stages) {
-            hlog.write_interval(
-                report::hlog_stage_tag(stage.index),
-                static_cast<double>(stage.start_offset_ns) / 1e9,
-                static_cast<double>(stage.end_offset_ns - stage.start_offset_ns) / 1e9,
-                stage.latency);
-            hlog.end_interval();
-        }
-        if (!hlog.close(error)) {
-            fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
-                       error);
-            stream_failed = true;
-        } else {
-            fmt::print(stderr, "wrote HdrHistogram interval log {}\n", request.outputs.hlog);
-        }
-    }
-    if (timeline.is_open()) {
-        std::string error;
-        if (!timeline.close(error)) {
-            fmt::print(stderr, "mbstorm run: cannot write --timeline {}: {}\n",
-                       request.outputs.timeline, error);
-            stream_failed = true;
-        } else {
-            fmt::print(stderr, "wrote timeline {}\n", request.outputs.timeline);
-        }
-    }
+    note_run(request, run_id, result.run);
+    const bool streams_written = streams.close(result.run, request.outputs);
     progress.finish();
-    signal(SIGINT, SIG_DFL);
-    signal(SIGTERM, SIG_DFL);
-    const int stopped_by = g_scenario_signal.load();
+    const int stopped_by = stop_catching_signals();
     if (stopped_by != 0)
         result.run.metadata.notes.push_back(
             fmt::format("interrupted by {}", signal_name(stopped_by)));
@@ -258,30 +344,8 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     files.junit = request.junit;
     files.junit_suite = s.name.empty() ? std::string("run") : s.name;
     int code = report_run(result, files);
-    if (stream_failed && code == kExitOk) code = kExitUsage;
-    if (code == kExitOk && !result.run.thresholds_passed()) {
-        std::size_t failed = 0;
-        for (const auto& t : result.run.thresholds) failed += t.passed ? 0 : 1;
-        if (shard.count != 0) {
-            // A shard's thresholds see its part only ("throughput > X" cannot pass on a third
-            // of the load): the verdict is mbstorm merge's, on the whole test.
-            fmt::print(stderr,
-                       "mbstorm run: shard {}/{}: {} of {} threshold{} breached on this shard's "
-                       "part (not a verdict: mbstorm merge judges the whole test)\n",
-                       shard.index, shard.count, failed, result.run.thresholds.size(),
-                       result.run.thresholds.size() == 1 ? "" : "s");
-        } else {
-            fmt::print(stderr, "mbstorm run: {} of {} threshold{} breached\n", failed,
-                       result.run.thresholds.size(), result.run.thresholds.size() == 1 ? "" : "s");
-            code = kExitFailed;
-        }
-    }
-    if (stopped_by != 0) {
-        // Reports are written above; the exit code says the run did not finish.
-        fmt::print(stderr, "mbstorm run: interrupted by {}: exit code {}\n",
-                   signal_name(stopped_by), exit_code_for_signal(stopped_by));
-        if (code != kExitUsage) code = exit_code_for_signal(stopped_by);
-    }
+    if (!streams_written && code == kExitOk) code = kExitUsage;
+    code = note_interrupt(stopped_by, judge_thresholds(result.run, shard, code));
     if (metrics.running() && request.outputs.metrics_linger_ns != 0 && stopped_by == 0)
         linger_for_a_scrape(metrics, scrapes, request.outputs.metrics_linger_ns);
     return code;
@@ -292,8 +356,8 @@ int run_scenario_file(const ScenarioRunRequest& request) {
     if (!loaded.ok()) return fail("run", loaded.error());
     scenario::Scenario s = std::move(loaded).value();
     if (Error e = scenario::apply_overrides(s, request.overrides); !e.ok()) return fail("run", e);
-    if (auto e = add_threshold_flags(request.thresholds, s); !e.empty())
-        return usage_error("run", e);
+    if (const Error e = add_threshold_flags(request.thresholds, s); !e.ok())
+        return usage_error("run", e.text());
     if (request.print) {
         fmt::print("{}", scenario::format_scenario(s));
         return kExitOk;

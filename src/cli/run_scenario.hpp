@@ -10,6 +10,7 @@
 #include "load/plan.hpp"
 #include "net/backend.hpp"
 #include "scenario/scenario.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -30,9 +31,9 @@ struct ScenarioRunRequest {
     net::BackendChoice backend = net::BackendChoice::Auto;  // --backend
 };
 
-// --threshold expressions added to the scenario's thresholds (the whole run's); "" or the
-// first expression that does not parse, with the forms accepted.
-std::string add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s);
+// --threshold expressions added to the scenario's thresholds (the whole run's), or the first
+// expression that does not parse, with the forms accepted (InvalidInput).
+Error add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s);
 
 // Exit code: 0 all thresholds passed, 1 a threshold breached, 2 usage/configuration error.
 int run_scenario_file(const ScenarioRunRequest& request);

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "load/preflight.hpp"
@@ -199,21 +200,22 @@ void note_shortfalls(const Plan& plan, const StageSchedule& schedule, bool stopp
 // The run ended before any connection was set up, and none failed: a silent target, or a run
 // shorter than setting its connections up. One connect now tells which (a target that is up
 // answers it at once), so that the second is not reported as an unreachable target.
-std::string no_connection_error(const Plan& plan, const net::Endpoint& target, double ran_s) {
+Error no_connection_error(const Plan& plan, const net::Endpoint& target, double ran_s) {
     using namespace std::chrono;
     const double timeout_s = duration<double>(plan.connect_timeout).count();
     const auto probe_ms =
         duration_cast<milliseconds>(std::min<nanoseconds>(plan.connect_timeout, 1s));
     if (net::connect_within(target, static_cast<int>(probe_ms.count())) == 0) {
-        return fmt::format(
-            "the run ended after {:.3g}s, before any of its {} connection(s) to {} was set up "
-            "(the target accepts connections): nothing was measured; run for longer (-d)",
-            ran_s, plan.connections, target.to_string());
+        return Error(ErrorCode::Interrupted,
+                     fmt::format("the run ended after {:.3g}s, before any of its {} connection(s) "
+                                 "to {} was set up (the target accepts connections): nothing was "
+                                 "measured; run for longer (-d)",
+                                 ran_s, plan.connections, target.to_string()));
     }
-    return fmt::format(
-        "cannot connect to {}: no connection was established during the run ({:.3g}s; connect "
-        "timeout {:.3g}s)",
-        target.to_string(), ran_s, timeout_s);
+    return Error(ErrorCode::Network,
+                 fmt::format("cannot connect to {}: no connection was established during the "
+                             "run ({:.3g}s; connect timeout {:.3g}s)",
+                             target.to_string(), ran_s, timeout_s));
 }
 
 void describe_stages(const Plan& plan, const StageSchedule& schedule,
@@ -292,22 +294,22 @@ void note_outages(const OutageWatch& outages, std::int64_t measure_start_ns, Loa
     }
 }
 
-// The plan's source addresses, each checked to be of the target's family and local. Empty
-// when usable, else the reason.
-std::string resolve_sources(const Plan& plan, const net::Endpoint& target,
-                            std::vector<net::Endpoint>& sources) {
+// The plan's source addresses, each checked to be of the target's family and local.
+Error resolve_sources(const Plan& plan, const net::Endpoint& target,
+                      std::vector<net::Endpoint>& sources) {
     std::string error;
     if (!net::parse_source_addresses(plan.source_addresses, sources, error))
-        return "source_addr: " + error;
+        return Error(ErrorCode::InvalidInput, "source_addr: " + error);
     for (const net::Endpoint& source : sources) {
         if (source.family() != target.family()) {
-            return fmt::format("source_addr: {} is {} but the target {} is {}",
-                               numeric_address(source),
-                               source.family() == AF_INET ? "IPv4" : "IPv6", target.to_string(),
-                               target.family() == AF_INET ? "IPv4" : "IPv6");
+            return Error(
+                ErrorCode::InvalidInput,
+                fmt::format("source_addr: {} is {} but the target {} is {}",
+                            numeric_address(source), source.family() == AF_INET ? "IPv4" : "IPv6",
+                            target.to_string(), target.family() == AF_INET ? "IPv4" : "IPv6"));
         }
         if (std::string why = net::check_source_is_local(source); !why.empty())
-            return "source_addr: " + why;
+            return Error(ErrorCode::InvalidInput, "source_addr: " + why);
     }
     return {};
 }
@@ -404,20 +406,21 @@ struct RunSetup {
     net::BackendDecision backend;
 };
 
-// "" when the (valid) plan can run against its target; else why not, in one line.
-std::string prepare_run(const Plan& plan, const EngineOptions& options,
-                        const StageSchedule& schedule, RunSetup& setup) {
+// Where the (valid) plan's connections go and from where, and whether the machine can hold
+// them; an error when it cannot run against its target.
+Error prepare_run(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
+                  RunSetup& setup) {
     const std::string target = endpoint_text(plan.host, plan.port);
     std::string resolve_error;
     if (!net::parse_endpoint(target, setup.endpoint, &resolve_error, plan.port))
-        return fmt::format("cannot resolve {}: {}", target, resolve_error);
+        return Error(ErrorCode::Network,
+                     fmt::format("cannot resolve {}: {}", target, resolve_error));
     setup.verdict = check_write_safety(plan, numeric_address(setup.endpoint));
-    if (!setup.verdict.allowed) return setup.verdict.message;
-    if (std::string why = resolve_sources(plan, setup.endpoint, setup.sources); !why.empty())
-        return why;
+    if (!setup.verdict.allowed()) return setup.verdict.refusal;
+    if (Error why = resolve_sources(plan, setup.endpoint, setup.sources); !why.ok()) return why;
     setup.capacity = schedule.peak_connections();
     if (std::string error; !net::choose_backend(options.backend, true, setup.backend, error))
-        return error;
+        return Error(ErrorCode::Unsupported, std::move(error));
     // The kernel's TLS (where there is one) needs descriptors setsockopt can reach.
     setup.direct = setup.backend.backend == net::Backend::IoUring &&
                    options.use_direct_descriptors && net::features().direct_descriptors &&
@@ -426,21 +429,22 @@ std::string prepare_run(const Plan& plan, const EngineOptions& options,
     // Threads left to the engine: as many rings as the connections' socket tables need.
     if (setup.direct && plan.threads == 0)
         setup.threads = threads_for_socket_tables(setup.capacity, setup.threads);
-    std::string why = check_connection_capacity(setup.capacity, setup.threads, setup.sources.size(),
-                                                setup.direct);
+    Error why = check_connection_capacity(setup.capacity, setup.threads, setup.sources.size(),
+                                          setup.direct);
     // Only io_uring's direct descriptors escape the open-files limit.
-    if (!why.empty() && setup.backend.backend == net::Backend::Epoll)
-        why += " (the epoll backend holds each connection as a descriptor)";
+    if (!why.ok() && setup.backend.backend == net::Backend::Epoll)
+        return Error(why.code(),
+                     why.message() + " (the epoll backend holds each connection as a descriptor)");
     return why;
 }
 
 // run --serial: one master on the line, one request at a time; writes need leave unless the
-// line is a pseudo-terminal (a test). "" when the plan can run, else why not.
-std::string prepare_serial_run(const Plan& plan, RunSetup& setup) {
+// line is a pseudo-terminal (a test).
+Error prepare_serial_run(const Plan& plan, RunSetup& setup) {
     const bool test_line = net::is_pseudo_terminal(plan.serial.device);
     setup.verdict = check_write_safety(
         plan.operations, test_line ? "127.0.0.1" : plan.serial.device, plan.allow_writes);
-    if (!setup.verdict.allowed) return setup.verdict.message;
+    if (!setup.verdict.allowed()) return setup.verdict.refusal;
     setup.capacity = 1;
     setup.threads = 1;
     return {};
@@ -716,134 +720,188 @@ void describe_serial_run(const Plan& plan, const StageSchedule& schedule, const 
                         plan.serial.framing == codec::Framing::Ascii ? "LRC" : "CRC"));
 }
 
+// How the run's timeline is cut: each interval's length and how many the run needs at most.
+struct TimelineShape {
+    std::int64_t interval_ns = 0;
+    std::int64_t run_ns = 0;  // warm-up and measured time; 0 when the count ends the run
+    std::size_t max_intervals = 0;
+};
+
+TimelineShape shape_timeline(const Plan& plan, const EngineOptions& options,
+                             const StageSchedule& schedule) {
+    TimelineShape shape;
+    shape.interval_ns = std::max<std::int64_t>(options.progress_interval_ns, 1000);
+    // The warm-up comes on top of the measured time, for flag runs and stages alike.
+    const std::int64_t measured_ns = schedule.empty() ? plan.duration.count() : schedule.total_ns();
+    shape.run_ns = measured_ns > 0 ? plan.warmup.count() + measured_ns : 0;
+    shape.max_intervals =
+        shape.run_ns > 0 ? static_cast<std::size_t>(shape.run_ns / shape.interval_ns) + 16 : 86400;
+    return shape;
+}
+
+// One run once the plan is known to be able to run: its workers (rings over TCP, or the one
+// master of a serial line), the threads they run on, the watch over them, and what they
+// measured gathered and described.
+class EngineRun {
+  public:
+    EngineRun(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
+              const RunSetup& setup)
+        : plan_(plan),
+          options_(options),
+          schedule_(schedule),
+          setup_(setup),
+          shape_(shape_timeline(plan, options, schedule)),
+          timeline_(static_cast<std::uint64_t>(shape_.interval_ns), setup.threads,
+                    shape_.max_intervals),
+          clock_(start_clock(plan, options, shape_.run_ns)) {
+        if (options.on_interval_histograms)
+            timeline_.keep_histograms(static_cast<std::uint32_t>(plan.operations.size()));
+    }
+
+    // Makes the workers (opens the serial line): an error when the line cannot be opened.
+    Error start() {
+        if (options_.live != nullptr) {
+            options_.live->prepare(plan_, setup_.threads);
+            options_.live->set_running(true);
+        }
+        if (plan_.serial.device.empty()) {
+            workers_ = make_workers(plan_, setup_.endpoint, setup_.sources, setup_.threads,
+                                    setup_.capacity, clock_.window, schedule_,
+                                    WorkerLinks{options_, abort_, any_connected_, timeline_,
+                                                setup_.direct, setup_.backend.backend});
+            return {};
+        }
+        line_ = std::make_unique<SerialRunner>(SerialRunSetup{
+            &plan_, &options_, &schedule_, &timeline_,
+            options_.live != nullptr ? options_.live->worker(0) : nullptr, clock_.window.start_ns,
+            clock_.window.measure_start_ns, clock_.window.end_ns, &abort_});
+        Error opened = line_->open();
+        if (!opened.ok() && options_.live != nullptr) options_.live->set_running(false);
+        return opened;
+    }
+
+    // Runs the workers on their threads, watching them every 10 ms, until all are done.
+    void drive() {
+        std::atomic<std::uint32_t> finished{0};
+        std::vector<std::thread> pool;
+        pool.reserve(setup_.threads);
+        if (line_) {
+            pool.emplace_back([&finished, line = line_.get()] {
+                line->run();
+                finished.fetch_add(1);
+            });
+        }
+        for (auto& w : workers_) {
+            pool.emplace_back([&finished, worker = w.get()] {
+                worker->run();
+                finished.fetch_add(1);
+            });
+        }
+        watch_.emplace(
+            plan_, options_, schedule_, clock_, timeline_, [this] { return open_connections(); },
+            shape_.max_intervals);
+        while (finished.load() < setup_.threads) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+            watch_->look(abort_.load() ||
+                         (options_.stop && options_.stop->load(std::memory_order_relaxed)));
+        }
+        for (auto& t : pool) t.join();
+        if (options_.live != nullptr) options_.live->set_running(false);
+        timeline_.finish();
+        watch_->drain_histograms();
+    }
+
+    // What the workers measured, and the first error that ended the run early.
+    void gather(LoadResult& result) {
+        describe_stages(plan_, schedule_, result.run.stages);
+        finished_ns_ = clock_.window.measure_start_ns;
+        if (line_) {
+            take_serial_results(*line_, result);
+            finished_ns_ = std::max(finished_ns_, line_->finished_ns);
+        } else {
+            merge_results(plan_, workers_, result);
+        }
+        for (auto& w : workers_) {
+            finished_ns_ = std::max(finished_ns_, w->finished_ns);
+            if (result.error.ok() && !w->fatal_error.ok()) result.error = w->fatal_error;
+        }
+        if (result.error.ok() && !line_ && !any_connected_.load())
+            result.error = no_connection_error(
+                plan_, setup_.endpoint,
+                static_cast<double>(finished_ns_ - clock_.window.start_ns) / 1e9);
+    }
+
+    // The metadata, timeline, stages and notes every report shows.
+    void describe(LoadResult& result) {
+        stats::RunMetadata& meta = result.run.metadata;
+        describe_run(plan_, options_, schedule_, setup_, clock_, finished_ns_, meta);
+        if (line_) describe_serial_run(plan_, schedule_, *line_, result);
+        if (plan_.tls) meta.notes.push_back(net::describe_tls_path());
+        result.run.timeline = timeline_.summaries();
+        result.run.timeline_interval_ns = static_cast<std::uint64_t>(shape_.interval_ns);
+        auto& series = result.run.timeline;
+        fit_timeline_to_run(series, meta.measured_duration_ns, shape_.interval_ns);
+        for (auto& iv : series) watch_->complete_interval(iv);
+        watch_->stream_the_rest(series);
+        place_stages(schedule_, meta.measured_duration_ns, result.run.stages);
+        note_outages(watch_->outages(), clock_.window.measure_start_ns, result);
+        if (!schedule_.empty()) {
+            meta.notes.push_back(fmt::format(
+                "stages: {} stage{}, rate and connections changed live (connections stay open)",
+                schedule_.stages(), schedule_.stages() == 1 ? "" : "s"));
+        }
+        note_shortfalls(plan_, schedule_, options_.stop != nullptr && options_.stop->load(),
+                        result.run);
+        if (!setup_.verdict.write_operations.empty()) {
+            result.warnings.push_back(
+                fmt::format("write operations sent to {}: {}", meta.target,
+                            fmt::join(setup_.verdict.write_operations, ", ")));
+        }
+        note_foreign_protocol(result);
+    }
+
+  private:
+    // Connections open across the workers (the serial line counts as one while open).
+    std::uint32_t open_connections() const {
+        if (line_) return line_->open_connections();
+        std::uint32_t open = 0;
+        for (auto& w : workers_) open += w->open_connections.load(std::memory_order_relaxed);
+        return open;
+    }
+
+    const Plan& plan_;
+    const EngineOptions& options_;
+    const StageSchedule& schedule_;
+    const RunSetup& setup_;
+    const TimelineShape shape_;
+    stats::IntervalTimeline timeline_;
+    const RunClock clock_;
+    std::atomic<bool> abort_{false};
+    std::atomic<bool> any_connected_{false};
+    std::vector<std::unique_ptr<Worker>> workers_;
+    std::unique_ptr<SerialRunner> line_;
+    std::optional<RunWatch> watch_;
+    std::int64_t finished_ns_ = 0;
+};
+
 }  // namespace
 
 LoadResult run_load(const Plan& plan, const EngineOptions& options) {
     LoadResult result;
-    if (const auto errors = validate_plan(plan); !errors.empty()) {
-        result.error = fmt::format("invalid plan: {}", fmt::join(errors, "; "));
+    if (result.error = validate_plan(plan); !result.error.ok()) {
+        result.error.prefixed("invalid plan");
         return result;
     }
-    const bool serial = !plan.serial.device.empty();
     const StageSchedule schedule(plan);
     RunSetup setup;
-    if (std::string why =
-            serial ? prepare_serial_run(plan, setup) : prepare_run(plan, options, schedule, setup);
-        !why.empty()) {
-        result.error = std::move(why);
-        return result;
-    }
-
-    const std::int64_t interval_ns = std::max<std::int64_t>(options.progress_interval_ns, 1000);
-    // The warm-up comes on top of the measured time, for flag runs and stages alike.
-    const std::int64_t measured_ns = schedule.empty() ? plan.duration.count() : schedule.total_ns();
-    const std::int64_t run_ns = measured_ns > 0 ? plan.warmup.count() + measured_ns : 0;
-    const std::size_t max_intervals =
-        run_ns > 0 ? static_cast<std::size_t>(run_ns / interval_ns) + 16 : 86400;
-    stats::IntervalTimeline timeline(static_cast<std::uint64_t>(interval_ns), setup.threads,
-                                     max_intervals);
-    if (options.on_interval_histograms)
-        timeline.keep_histograms(static_cast<std::uint32_t>(plan.operations.size()));
-
-    std::atomic<bool> abort{false};
-    std::atomic<bool> any_connected{false};
-    const RunClock clock = start_clock(plan, options, run_ns);
-    if (options.live != nullptr) {
-        options.live->prepare(plan, setup.threads);
-        options.live->set_running(true);
-    }
-    // The workers: io_uring rings over TCP, or the one master of a serial line.
-    std::vector<std::unique_ptr<Worker>> workers;
-    std::unique_ptr<SerialRunner> line;
-    std::function<std::uint32_t()> open_now;
-    if (serial) {
-        line = std::make_unique<SerialRunner>(SerialRunSetup{
-            &plan, &options, &schedule, &timeline,
-            options.live != nullptr ? options.live->worker(0) : nullptr, clock.window.start_ns,
-            clock.window.measure_start_ns, clock.window.end_ns, &abort});
-        if (std::string why = line->open(); !why.empty()) {
-            if (options.live != nullptr) options.live->set_running(false);
-            result.error = std::move(why);
-            return result;
-        }
-        open_now = [&line] { return line->open_connections(); };
-    } else {
-        workers = make_workers(plan, setup.endpoint, setup.sources, setup.threads, setup.capacity,
-                               clock.window, schedule,
-                               WorkerLinks{options, abort, any_connected, timeline, setup.direct,
-                                           setup.backend.backend});
-        open_now = [&workers] {
-            std::uint32_t open = 0;
-            for (auto& w : workers) open += w->open_connections.load(std::memory_order_relaxed);
-            return open;
-        };
-    }
-
-    std::atomic<std::uint32_t> finished{0};
-    std::vector<std::thread> pool;
-    pool.reserve(setup.threads);
-    if (line) {
-        pool.emplace_back([&finished, &line] {
-            line->run();
-            finished.fetch_add(1);
-        });
-    }
-    for (auto& w : workers) {
-        pool.emplace_back([&finished, worker = w.get()] {
-            worker->run();
-            finished.fetch_add(1);
-        });
-    }
-    RunWatch watch(plan, options, schedule, clock, timeline, open_now, max_intervals);
-    while (finished.load() < setup.threads) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-        watch.look(abort.load() || (options.stop && options.stop->load(std::memory_order_relaxed)));
-    }
-    for (auto& t : pool) t.join();
-    if (options.live != nullptr) options.live->set_running(false);
-    timeline.finish();
-    watch.drain_histograms();
-
-    describe_stages(plan, schedule, result.run.stages);
-    std::int64_t finished_ns = clock.window.measure_start_ns;
-    if (line) {
-        take_serial_results(*line, result);
-        finished_ns = std::max(finished_ns, line->finished_ns);
-    } else {
-        merge_results(plan, workers, result);
-    }
-    for (auto& w : workers) {
-        finished_ns = std::max(finished_ns, w->finished_ns);
-        if (result.error.empty() && !w->fatal_error.empty()) result.error = w->fatal_error;
-    }
-    if (result.error.empty() && !line && !any_connected.load())
-        result.error = no_connection_error(
-            plan, setup.endpoint, static_cast<double>(finished_ns - clock.window.start_ns) / 1e9);
-    result.ok = result.error.empty();
-
-    stats::RunMetadata& meta = result.run.metadata;
-    describe_run(plan, options, schedule, setup, clock, finished_ns, meta);
-    if (line) describe_serial_run(plan, schedule, *line, result);
-    if (plan.tls) meta.notes.push_back(net::describe_tls_path());
-    result.run.timeline = timeline.summaries();
-    result.run.timeline_interval_ns = static_cast<std::uint64_t>(interval_ns);
-    auto& series = result.run.timeline;
-    fit_timeline_to_run(series, meta.measured_duration_ns, interval_ns);
-    for (auto& iv : series) watch.complete_interval(iv);
-    watch.stream_the_rest(series);
-    place_stages(schedule, meta.measured_duration_ns, result.run.stages);
-    note_outages(watch.outages(), clock.window.measure_start_ns, result);
-    if (!schedule.empty()) {
-        meta.notes.push_back(fmt::format(
-            "stages: {} stage{}, rate and connections changed live (connections stay open)",
-            schedule.stages(), schedule.stages() == 1 ? "" : "s"));
-    }
-    note_shortfalls(plan, schedule, options.stop != nullptr && options.stop->load(), result.run);
-    if (!setup.verdict.write_operations.empty()) {
-        result.warnings.push_back(fmt::format("write operations sent to {}: {}", meta.target,
-                                              fmt::join(setup.verdict.write_operations, ", ")));
-    }
-    note_foreign_protocol(result);
+    result.error = plan.serial.device.empty() ? prepare_run(plan, options, schedule, setup)
+                                              : prepare_serial_run(plan, setup);
+    if (!result.error.ok()) return result;
+    EngineRun run(plan, options, schedule, setup);
+    if (result.error = run.start(); !result.error.ok()) return result;
+    run.drive();
+    run.gather(result);
+    run.describe(result);
     return result;
 }
 

@@ -18,6 +18,7 @@
 #include "load/request_info.hpp"
 #include "net/backend.hpp"
 #include "stats/run_result.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -78,8 +79,10 @@ struct EngineOptions {
 };
 
 struct LoadResult {
-    bool ok = false;    // false: could not start or a fatal error ended the run (see error)
-    std::string error;  // e.g. "cannot connect to 10.0.0.9:502: Connection refused"
+    // Why the run could not start or ended early ("cannot connect to 10.0.0.9:502: Connection
+    // refused"); what it measured until then is below either way.
+    Error error;
+    bool ok() const noexcept { return error.ok(); }
     std::vector<std::string> warnings;
     stats::RunResult run;
     // Accounting: run.counters.transactions_sent == run.counters.completed() + pending_at_end

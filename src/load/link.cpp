@@ -89,6 +89,25 @@ bool Link::set_up_overdue(std::int64_t now, std::int64_t timeout_ns) const noexc
     return kind_ == Kind::Tls && now - tls_->set_up_started_ns >= timeout_ns;
 }
 
+bool Link::next_rtu_answer(codec::TcpFrame& frame, LinkInput& end) noexcept {
+    switch (rtu_->next(frame)) {
+        case codec::RtuSplitter::Status::Frame:
+            frame.header.transaction_id = rtu_transaction_;
+            return true;
+        case codec::RtuSplitter::Status::NeedMore:
+            end = LinkInput::Answers;
+            return false;
+        case codec::RtuSplitter::Status::Skipped:  // not asked for here: an answer with a bad
+            end = LinkInput::BadCrc;               // CRC is an error of the target's
+            return false;
+        case codec::RtuSplitter::Status::Fatal:
+            end = rtu_->error() == codec::CodecError::BadCrc ? LinkInput::BadCrc
+                                                             : LinkInput::FramingLost;
+            return false;
+    }
+    return false;
+}
+
 LinkInput Link::open_tls(codec::Bytes received, std::int64_t now,
                          std::vector<std::uint8_t>& scratch, codec::Bytes& plain) {
     Tls& t = *tls_;

@@ -1,6 +1,7 @@
 #include "load/plan.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -155,9 +156,8 @@ void check_stages(const Plan& plan, std::vector<std::string>& errors) {
     }
 }
 
-}  // namespace
-
-std::vector<std::string> validate_plan(const Plan& plan) {
+// Every problem with the plan, each naming its field and valid range.
+std::vector<std::string> plan_problems(const Plan& plan) {
     std::vector<std::string> errors;
     auto fail = [&](std::string what) { errors.push_back(std::move(what)); };
 
@@ -243,6 +243,14 @@ std::vector<std::string> validate_plan(const Plan& plan) {
     }
     check_stages(plan, errors);
     return errors;
+}
+
+}  // namespace
+
+Error validate_plan(const Plan& plan) {
+    const std::vector<std::string> problems = plan_problems(plan);
+    if (problems.empty()) return {};
+    return Error(ErrorCode::InvalidInput, fmt::format("{}", fmt::join(problems, "; ")));
 }
 
 }  // namespace mbstorm::load

@@ -12,8 +12,8 @@
 #include "codec/framing.hpp"
 #include "codec/function_code.hpp"
 #include "net/serial_port.hpp"
-
 #include "net/tls_context.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -168,8 +168,9 @@ enum class LoadModelConflict : std::uint8_t {
 LoadModelConflict settle_load_model(const LoadModelAsked& asked, LoadModel& model);
 
 // Every problem with a plan, each naming the field and the valid range ("connections: 0 is
-// out of range (valid 1..100000)"). Empty when the plan is usable.
-std::vector<std::string> validate_plan(const Plan& plan);
+// out of range (valid 1..100000)"), joined by "; " in one InvalidInput error. None when the
+// plan is usable.
+Error validate_plan(const Plan& plan);
 
 // True for the function codes the load generator can produce: every public one whose
 // request shape it knows how to fill (all but the file records).

@@ -37,8 +37,11 @@ std::string numeric_address(const net::Endpoint& endpoint) {
     return text;
 }
 
-std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
-                                      std::size_t source_addresses, bool direct) {
+namespace {
+
+// "" when the connections fit, else why not.
+std::string capacity_problem(std::uint32_t connections, std::uint32_t threads,
+                             std::size_t source_addresses, bool direct) {
     // Ports first: no descriptor limit helps when the ports run out.
     PortRange range;
     const std::uint64_t addresses = std::max<std::uint64_t>(source_addresses, 1);
@@ -79,6 +82,15 @@ std::string check_connection_capacity(std::uint32_t connections, std::uint32_t t
             connections, limit > 8ull * threads + 64 ? limit - 8ull * threads - 64 : 0, why);
     }
     return {};
+}
+
+}  // namespace
+
+Error check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
+                                std::size_t source_addresses, bool direct) {
+    std::string why = capacity_problem(connections, threads, source_addresses, direct);
+    if (why.empty()) return {};
+    return Error(ErrorCode::Refused, std::move(why));
 }
 
 std::uint32_t threads_for_socket_tables(std::uint32_t connections, std::uint32_t threads) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "net/socket.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -24,12 +25,12 @@ std::string endpoint_text(const std::string& host, std::uint16_t port);
 // The numeric address of an endpoint, without port ("127.0.0.1", "::1").
 std::string numeric_address(const net::Endpoint& endpoint);
 
-// Empty when `connections` fit both limits (raising RLIMIT_NOFILE if needed), else the reason.
+// None when `connections` fit both limits (raising RLIMIT_NOFILE if needed), else Refused.
 // Each source address has the whole ephemeral port range (0 sources: the kernel's one).
 // With `direct` descriptors sockets take no descriptor, but each thread's ring holds its share
 // of the connections in a table the kernel caps at the open-files limit.
-std::string check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
-                                      std::size_t source_addresses = 0, bool direct = false);
+Error check_connection_capacity(std::uint32_t connections, std::uint32_t threads,
+                                std::size_t source_addresses = 0, bool direct = false);
 
 // Direct descriptors: the threads needed (at least `threads`) so that each ring's share of
 // `connections` fits the open-files limit, raised first as far as allowed.

@@ -49,7 +49,7 @@ SerialRunner::SerialRunner(const SerialRunSetup& setup)
     stages = stage_rows(setup_.schedule->stages(), operations);
 }
 
-std::string SerialRunner::open() {
+Error SerialRunner::open() {
     const Plan& plan = *setup_.plan;
     return master_.open(plan.serial.device, plan.serial.line, plan.serial.framing);
 }
@@ -122,7 +122,7 @@ void SerialRunner::run() noexcept {
         RequestInfo info;
         const std::size_t size = generator.next(++tid, adu, info);
         if (size <= codec::limits::kMbapHeader) {
-            fatal_error = "the operation could not be encoded";
+            fatal_error = Error(ErrorCode::InvalidInput, "the operation could not be encoded");
             break;
         }
         const codec::Bytes pdu(adu.data() + codec::limits::kMbapHeader,
@@ -162,7 +162,7 @@ void SerialRunner::run() noexcept {
         }
         if (so == SerialOutcome::IoError) {
             fatal_error =
-                fmt::format("{}: {}", plan.serial.device, std::strerror(master_.io_error()));
+                Error(ErrorCode::Io, std::strerror(master_.io_error()), plan.serial.device);
             break;
         }
     }

@@ -16,6 +16,7 @@
 #include "load/stage_schedule.hpp"
 #include "stats/interval_recorder.hpp"
 #include "stats/run_result.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -35,8 +36,8 @@ class SerialRunner {
   public:
     explicit SerialRunner(const SerialRunSetup& setup);
 
-    // Opens the line: "" on success, else why not.
-    std::string open();
+    // Opens the line, or says why not.
+    Error open();
     std::string describe() const { return master_.describe(); }
     // The run's thread: until the end, the count, a stop or a failed line.
     void run() noexcept;
@@ -52,7 +53,7 @@ class SerialRunner {
     std::vector<stats::StageResult> stages;  // sized like the schedule's stages
     stats::LagCounts target_lag;             // open loop: sends the busy line delayed
     std::uint64_t bad_checks = 0;            // answers whose CRC/LRC failed
-    std::string fatal_error;                 // the tty failed
+    Error fatal_error;                       // the tty failed
     std::int64_t finished_ns = 0;
 
   private:

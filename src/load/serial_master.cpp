@@ -31,11 +31,13 @@ std::string_view serial_outcome_name(SerialOutcome o) noexcept {
     return "?";
 }
 
-std::string SerialMaster::open(const std::string& device, const net::SerialSettings& settings,
-                               codec::Framing framing) {
+Error SerialMaster::open(const std::string& device, const net::SerialSettings& settings,
+                         codec::Framing framing) {
     framing_ = framing;
     reader_ = codec::SerialFrameReader(framing, codec::SerialFrameReader::Reads::Responses);
-    return port_.open(device, settings);
+    if (std::string why = port_.open(device, settings); !why.empty())
+        return Error(ErrorCode::Io, std::move(why));
+    return {};
 }
 
 std::string SerialMaster::describe() const {

@@ -13,6 +13,7 @@
 #include "codec/limits.hpp"
 #include "codec/serial_frame_reader.hpp"
 #include "net/serial_port.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -30,9 +31,9 @@ std::string_view serial_outcome_name(SerialOutcome o) noexcept;
 
 class SerialMaster {
   public:
-    // Opens the tty; "" on success, else why not.
-    std::string open(const std::string& device, const net::SerialSettings& settings,
-                     codec::Framing framing);
+    // Opens the tty, or says why not (Io; the device is the error's place).
+    Error open(const std::string& device, const net::SerialSettings& settings,
+               codec::Framing framing);
 
     // Sends `pdu` to `unit` and waits up to `timeout_ns` for the answer. `response` views an
     // internal buffer, valid until the next call. `sent_ns`: when the request went out (after

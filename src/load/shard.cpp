@@ -22,41 +22,39 @@ std::uint32_t sequential_start(const Operation& op, std::uint32_t index, std::ui
     return static_cast<std::uint32_t>(blocks * index / count) * stride;
 }
 
+Error refused(std::string why) {
+    return Error(ErrorCode::InvalidInput, std::move(why));
+}
+
 }  // namespace
 
-ShardedPlan shard_plan(const Plan& plan, std::uint32_t index, std::uint32_t count) {
-    ShardedPlan out{plan, {}};
-    if (count < 1 || count > kMaxShards) {
-        out.error = fmt::format("shard count {} is out of range (valid 1..{})", count, kMaxShards);
-        return out;
-    }
-    if (index >= count) {
-        out.error = fmt::format("shard index {} is out of range for {} shards (valid 0..{})", index,
-                                count, count - 1);
-        return out;
-    }
-    Plan& p = out.plan;
+Result<Plan> shard_plan(const Plan& plan, std::uint32_t index, std::uint32_t count) {
+    if (count < 1 || count > kMaxShards)
+        return refused(
+            fmt::format("shard count {} is out of range (valid 1..{})", count, kMaxShards));
+    if (index >= count)
+        return refused(fmt::format("shard index {} is out of range for {} shards (valid 0..{})",
+                                   index, count, count - 1));
+    Plan p = plan;
     p.shard = {index, count};
-    if (count == 1) return out;
+    if (count == 1) return p;
 
     auto share = [&](std::uint64_t total) { return thread_share(total, count, index); };
     const std::string who = fmt::format("shard {}/{}", index, count);
     p.connections = static_cast<std::uint32_t>(share(plan.connections));
     if (p.connections == 0) {
-        out.error = fmt::format(
+        return refused(fmt::format(
             "{} gets 0 of the plan's {} connection{}: every shard needs one (use at most {} "
             "shards)",
-            who, plan.connections, plan.connections == 1 ? "" : "s", plan.connections);
-        return out;
+            who, plan.connections, plan.connections == 1 ? "" : "s", plan.connections));
     }
     if (plan.transactions != 0) {
         p.transactions = share(plan.transactions);
         if (p.transactions == 0) {
-            out.error = fmt::format(
+            return refused(fmt::format(
                 "{} gets 0 of the plan's {} transactions: every shard needs one (use at most {} "
                 "shards)",
-                who, plan.transactions, plan.transactions);
-            return out;
+                who, plan.transactions, plan.transactions));
         }
     }
     // Rates follow the connections: each connection paces what it would on one machine.
@@ -85,7 +83,7 @@ ShardedPlan shard_plan(const Plan& plan, std::uint32_t index, std::uint32_t coun
         if (op.address_mode == AddressMode::Sequential)
             op.start_offset = op.start_offset + sequential_start(op, index, count);
     }
-    return out;
+    return p;
 }
 
 }  // namespace mbstorm::load

@@ -11,18 +11,14 @@
 #include <string>
 
 #include "load/plan.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
 inline constexpr std::uint32_t kMaxShards = kMaxConnections;
 
-struct ShardedPlan {
-    Plan plan;
-    std::string error;  // empty when the shard has a part of the plan
-};
-
-// Shard `index` (0-based) of `count`. Refused (error set) when the shard would get no
+// Shard `index` (0-based) of `count`. Refused (InvalidInput) when the shard would get no
 // connection or no transaction, or index/count are out of range. plan.shard records the shard.
-ShardedPlan shard_plan(const Plan& plan, std::uint32_t index, std::uint32_t count);
+Result<Plan> shard_plan(const Plan& plan, std::uint32_t index, std::uint32_t count);
 
 }  // namespace mbstorm::load

@@ -136,24 +136,28 @@ bool Worker::setup_io() noexcept {
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
     if (const int rc = loop_.init(setup_.backend, options); rc < 0) {
-        fatal_error = fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
-                                  std::system_category().message(-rc));
+        fatal_error = Error(ErrorCode::Unsupported,
+                            fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
+                                        std::system_category().message(-rc)));
         return false;
     }
     loop_.set_direct(direct_);
     if (direct_) {
         if (const int rc = net::register_socket_table(loop_.ring(), setup_.connections); rc < 0) {
-            fatal_error = fmt::format(
-                "io_uring socket table of {} slots failed: {} (a ring's table is capped at the "
-                "open-files limit; more threads spread the connections over more rings)",
-                setup_.connections, std::system_category().message(-rc));
+            fatal_error =
+                Error(ErrorCode::Refused,
+                      fmt::format("io_uring socket table of {} slots failed: {} (a ring's table is "
+                                  "capped at the open-files limit; more threads spread the "
+                                  "connections over more rings)",
+                                  setup_.connections, std::system_category().message(-rc)));
             return false;
         }
     }
     const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
     if (const int rc = loop_.init_buffers(kBufferGroup, count, 16384); rc < 0) {
-        fatal_error =
-            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc));
+        fatal_error = Error(
+            ErrorCode::Unsupported,
+            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc)));
         return false;
     }
     return true;
@@ -192,8 +196,9 @@ void Worker::loop() noexcept {
         const std::int64_t wait = std::max<std::int64_t>(wake - now, 1000);
         const int rc = loop_.submit_and_wait(1, wait);
         if (net::wait_failed(rc)) {
-            fatal_error = fmt::format("{} wait failed: {}", net::backend_name(setup_.backend),
-                                      std::system_category().message(-rc));
+            fatal_error = Error(ErrorCode::Io,
+                                fmt::format("{} wait failed: {}", net::backend_name(setup_.backend),
+                                            std::system_category().message(-rc)));
             setup_.abort->store(true);
             break;
         }
@@ -492,7 +497,8 @@ void Worker::on_connect(std::uint32_t index, int result, std::int64_t now) noexc
                 ? fmt::format("no answer within the connect timeout ({}s)",
                               std::chrono::duration<double>(plan_.connect_timeout).count())
                 : std::system_category().message(-result);
-        fatal_error = fmt::format("cannot connect to {}: {}", setup_.target, reason);
+        fatal_error = Error(ErrorCode::Network,
+                            fmt::format("cannot connect to {}: {}", setup_.target, reason));
         setup_.abort->store(true);
         return;
     }
@@ -608,11 +614,15 @@ void Worker::on_recv(std::uint32_t index, const net::Completion& cqe, std::int64
         return;
     }
     const codec::Bytes input(loop_.buffer(buffer_id), static_cast<std::size_t>(cqe.res));
-    codec::Bytes unframed;
-    const LinkInput got =
-        c.link.input(input, now, link_scratch_, bad_protocol_frames, unframed,
-                     [&](const codec::TcpFrame& frame) { on_answer(c, frame, now); });
-    if (got == LinkInput::FramingLost) note_unframed(unframed);  // it may be the buffer's
+    codec::Bytes plain;
+    LinkInput got = c.link.take(input, now, link_scratch_, plain);
+    if (got == LinkInput::Answers || got == LinkInput::SetUp) {
+        codec::TcpFrame frame;
+        LinkInput end = LinkInput::Answers;
+        while (c.link.next_answer(frame, bad_protocol_frames, end)) on_answer(c, frame, now);
+        if (end != LinkInput::Answers) got = end;
+        if (got == LinkInput::FramingLost) note_unframed(plain);  // it may be the buffer's
+    }
     loop_.recycle(buffer_id);
     if (got != LinkInput::Answers && !on_link_event(index, got, now)) return;
     send_link_output(index);  // tickets, key updates
@@ -855,19 +865,6 @@ void Worker::flush() noexcept {
         c.queue_half ^= 1u;
         c.queued = 0;
     });
-}
-
-bool Worker::start_send(std::uint32_t index, codec::Bytes wire) noexcept {
-    Connection& c = connections_[index];
-    if (!loop_.send(c.fd, wire.data(), static_cast<unsigned>(wire.size()),
-                    net::encode_user_data(Op::Send, index, c.generation)))
-        return false;
-    ++inflight_ops_;
-    c.inflight_base = wire.data();
-    c.inflight_len = static_cast<std::uint32_t>(wire.size());
-    c.inflight_done = 0;
-    c.send_in_flight = true;
-    return true;
 }
 
 void Worker::sweep_timeouts(std::int64_t now) noexcept {

@@ -115,7 +115,9 @@ void Worker::link_refused(const std::string& why) noexcept {
     // half of a handshake that failed, counted as such.
     ++connection_stats.tls_handshake_failures;
     if (setup_.live != nullptr) setup_.live->tls_handshake_failures.add();
-    fatal_error = fmt::format("cannot talk to {}: TLS session refused: {}", setup_.target, why);
+    fatal_error =
+        Error(ErrorCode::Network,
+              fmt::format("cannot talk to {}: TLS session refused: {}", setup_.target, why));
     setup_.abort->store(true);
 }
 

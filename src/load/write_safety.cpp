@@ -48,12 +48,12 @@ WriteSafetyVerdict check_write_safety(const std::vector<Operation>& operations,
     if (verdict.write_operations.empty() || allow_writes || is_loopback_address(resolved_address)) {
         return verdict;
     }
-    verdict.allowed = false;
-    verdict.message = fmt::format(
-        "refusing to send write operations to {} (not a loopback address) without allow_writes: "
-        "{}. These change the device's state; set allow_writes (--allow-writes) if that is "
-        "intended.",
-        resolved_address, fmt::join(verdict.write_operations, ", "));
+    verdict.refusal = Error(
+        ErrorCode::Refused,
+        fmt::format("refusing to send write operations to {} (not a loopback address) without "
+                    "allow_writes: {}. These change the device's state; set allow_writes "
+                    "(--allow-writes) if that is intended.",
+                    resolved_address, fmt::join(verdict.write_operations, ", ")));
     return verdict;
 }
 

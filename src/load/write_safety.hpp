@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "load/plan.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::load {
 
@@ -16,9 +17,9 @@ namespace mbstorm::load {
 bool is_loopback_address(std::string_view address) noexcept;
 
 struct WriteSafetyVerdict {
-    bool allowed = true;
     std::vector<std::string> write_operations;  // "name (0x10 write_multiple_registers)"
-    std::string message;                        // why it was refused; empty when allowed
+    Error refusal;                              // Refused, saying why; none when allowed
+    bool allowed() const noexcept { return refusal.ok(); }
 };
 
 // `resolved_address`: the numeric address the engine will connect to.

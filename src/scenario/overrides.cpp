@@ -27,7 +27,7 @@ std::vector<std::string> problems_of(const Scenario& s) {
             problems.push_back("target: " + target.error().message());
         }
     }
-    for (auto& p : load::validate_plan(check)) problems.push_back(std::move(p));
+    if (const Error e = load::validate_plan(check); !e.ok()) problems.push_back(e.message());
     if (s.expectations.size() != s.plan.operations.size() && !s.expectations.empty()) {
         problems.push_back("internal: expectations do not match the operations");
     }

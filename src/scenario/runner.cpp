@@ -52,9 +52,7 @@ load::Plan engine_plan(const Scenario& s) {
 
 Result<load::Plan> engine_plan(const Scenario& s, load::Plan::Shard shard) {
     if (shard.count == 0) return engine_plan(s);
-    load::ShardedPlan part = load::shard_plan(engine_plan(s), shard.index, shard.count);
-    if (!part.error.empty()) return Error(ErrorCode::InvalidInput, std::move(part.error));
-    return std::move(part.plan);
+    return load::shard_plan(engine_plan(s), shard.index, shard.count);
 }
 
 void evaluate_thresholds(const Scenario& s, stats::RunResult& run) {
@@ -78,7 +76,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     load::LoadResult out;
     Result<load::Plan> part = engine_plan(s, hooks.shard);
     if (!part.ok()) {
-        out.error = part.error().text();
+        out.error = std::move(part).error();
         return out;
     }
     load::Plan plan = std::move(part).value();
@@ -90,7 +88,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     net::BackendDecision backend;
     if (plan.serial.device.empty()) {
         if (std::string error; !net::choose_backend(hooks.backend, true, backend, error)) {
-            out.error = error;
+            out.error = Error(ErrorCode::Unsupported, std::move(error));
             return out;
         }
         say(backend.why.empty() ? fmt::format("backend: {}", net::backend_name(backend.backend))
@@ -121,7 +119,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         embedded = std::make_unique<server::Server>(sc);
         std::string error;
         if (!embedded->start(&error)) {
-            out.error = "cannot start the embedded reference slave: " + error;
+            out.error =
+                Error(ErrorCode::Network, "cannot start the embedded reference slave: " + error);
             return out;
         }
         plan.host = "127.0.0.1";
@@ -133,7 +132,7 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     } else {
         const Result<Target> target = parse_target(s.target);
         if (!target.ok()) {
-            out.error = "target: " + target.error().message();
+            out.error = Error(ErrorCode::InvalidInput, "target: " + target.error().message());
             return out;
         }
         plan.host = target->host;

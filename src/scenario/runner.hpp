@@ -33,7 +33,7 @@ struct RunHooks {
 load::Plan engine_plan(const Scenario& scenario);
 Result<load::Plan> engine_plan(const Scenario& scenario, load::Plan::Shard shard);
 
-// The result; result.ok false with result.error when nothing could be run.
+// The result; result.error says why when nothing could be run or the run ended early.
 load::LoadResult run_scenario(const Scenario& scenario, const RunHooks& hooks = {});
 
 // Thresholds of the scenario evaluated against `run` (fills run.thresholds).

@@ -1,6 +1,7 @@
 #include "util/error.hpp"
 
 #include <filesystem>
+#include <ostream>
 #include <system_error>
 
 namespace mbstorm {
@@ -40,6 +41,10 @@ std::string Error::text() const {
 Error& Error::prefixed(std::string_view prefix) {
     message_.insert(0, std::string(prefix) + ": ");
     return *this;
+}
+
+std::ostream& operator<<(std::ostream& out, const Error& error) {
+    return out << error.text();
 }
 
 }  // namespace mbstorm

@@ -8,6 +8,7 @@
 
 #include <cassert>
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -62,6 +63,9 @@ class [[nodiscard]] Error {
     std::string message_;
     std::string place_;
 };
+
+// Its text(), for logs and test messages.
+std::ostream& operator<<(std::ostream& out, const Error& error);
 
 // A value or the Error that stopped it; never both. std::expected is not in clang 14's library.
 template <class T>

@@ -163,7 +163,7 @@ TEST_F(RunMetricsTls, TheLiveEndpointCountsHandshakesWhileTheRunGoesAndEndsAtThe
     const load::LoadResult r = load::run_load(plan, options);
     done = true;
     scraper.join();
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_FALSE(during.empty()) << "no scrape saw the run going with its 3 connections open";
 
     EXPECT_EQ(value(during, "mbstorm_tls_handshakes_total"), 3.0);
@@ -194,8 +194,8 @@ TEST_F(RunMetricsTls, TheLiveEndpointCountsHandshakesWhileTheRunGoesAndEndsAtThe
 // the refusal ends the client's own handshake), which the endpoint counts as a failure.
 TEST_F(RunMetricsTls, ARefusedHandshakeIsCountedAsAFailure) {
     const auto [r, text] = run_refused(TLS1_2_VERSION, "tls-refused");
-    EXPECT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("TLS handshake failed"), std::string::npos) << r.error;
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.error.message().find("TLS handshake failed"), std::string::npos) << r.error;
     const std::string labels = R"({test="tls-refused"})";
     const double failures = sample(text, "mbstorm_tls_handshake_failures_total" + labels);
     EXPECT_GE(failures, 1.0) << text;
@@ -210,8 +210,8 @@ TEST_F(RunMetricsTls, ARefusedHandshakeIsCountedAsAFailure) {
 // refusal comes as an alert after it, before any answer. It is a handshake failure all the same.
 TEST_F(RunMetricsTls, ACertificateRefusedAfterATls13HandshakeIsCountedAsAFailure) {
     const auto [r, text] = run_refused(TLS1_3_VERSION, "tls13-refused");
-    EXPECT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("TLS session refused"), std::string::npos) << r.error;
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.error.message().find("TLS session refused"), std::string::npos) << r.error;
     EXPECT_GE(r.run.connections.tls_handshake_failures, 1u);
     EXPECT_EQ(sample(text, R"(mbstorm_tls_handshake_failures_total{test="tls13-refused"})"),
               static_cast<double>(r.run.connections.tls_handshake_failures))

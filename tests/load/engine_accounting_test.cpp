@@ -122,7 +122,7 @@ TEST(EngineAccounting, StrayResponsesAreCountedButAreNeitherTransactionsNorError
     plan.duration = 0s;
     plan.transactions = 2000;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     const auto& c = r.run.counters;
     EXPECT_EQ(c.transactions_sent, 2000u);
     EXPECT_EQ(c.completed(), 2000u);
@@ -153,7 +153,7 @@ TEST(EngineAccounting, TransactionLimitCountsOnlyMeasuredSends) {
     plan.warmup = 300ms;
     plan.transactions = 3000;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(r.run.counters.transactions_sent, 3000u);
     EXPECT_EQ(r.run.counters.ok(), 3000u);
     EXPECT_EQ(r.run.latency.total_count(), 3000u);
@@ -169,7 +169,7 @@ TEST(EngineAccounting, FailedConnectsAreCountedByCause) {
     Plan plan = one_connection_plan(port);
     plan.duration = 1s;
     const LoadResult refused = run_load(plan);
-    EXPECT_FALSE(refused.ok);
+    EXPECT_FALSE(refused.ok());
     EXPECT_EQ(refused.run.connections.failed, 1u);
     EXPECT_EQ(refused.run.connections.failed_by_cause,
               (std::map<std::string, std::uint64_t>{{"ECONNREFUSED", 1}}));
@@ -190,7 +190,7 @@ TEST(EngineAccounting, FailedConnectsAreCountedByCause) {
     plan.port = port;
     plan.connect_timeout = 200ms;
     const LoadResult timed_out = run_load(plan);
-    EXPECT_FALSE(timed_out.ok);
+    EXPECT_FALSE(timed_out.ok());
     EXPECT_EQ(timed_out.run.connections.failed_by_cause,
               (std::map<std::string, std::uint64_t>{{"ETIMEDOUT", 1}}));
     for (const int fd : fillers) ::close(fd);

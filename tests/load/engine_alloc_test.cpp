@@ -94,7 +94,7 @@ void run_steady_state_check(LoadModel model, bool keep_histograms = false) {
         };
     }
     const LoadResult r = run_load(plan, options);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_GE(reports, 3);
     EXPECT_GT(at_first, 0u);  // the counter does count (setup allocates)
     EXPECT_GT(r.run.counters.ok(), 10000u);

@@ -69,7 +69,7 @@ TEST(EngineHonestNumbers, ASaturatedTargetIsBlamedNotTheEngine) {
     plan.depth = 2;
     plan.transaction_timeout = 3s;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     const auto& lag = r.run.schedule_lag;
     EXPECT_GT(lag.target.late_sends, 50u);
     EXPECT_LT(lag.engine.late_sends, lag.target.late_sends);
@@ -107,7 +107,7 @@ TEST(EngineHonestNumbers, AStalledEngineIsBlamedNotTheTarget) {
     EngineOptions options;
     options.verifier.check = &stall_now_and_then;
     const LoadResult r = run_load(plan, options);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     const auto& lag = r.run.schedule_lag;
     EXPECT_GT(lag.engine.late_sends, 0u);
     EXPECT_EQ(lag.target.late_sends, 0u);
@@ -122,7 +122,7 @@ TEST(EngineHonestNumbers, ConnectionsThatNeverOpenedAreAShortfall) {
     plan.connect_rate = 5;
     plan.duration = 500ms;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_LT(r.run.connections.peak_open, 8u);
     ASSERT_TRUE(has_shortfall(r.run, "connections"));
     for (const auto& s : r.run.shortfalls) {
@@ -146,21 +146,21 @@ TEST(EngineHonestNumbers, ARunStoppedEarlyIsAShortfallAndACarriedOutPlanHasNone)
     });
     const LoadResult stopped = run_load(plan, options);
     stopper.join();
-    ASSERT_TRUE(stopped.ok) << stopped.error;
+    ASSERT_TRUE(stopped.ok()) << stopped.error;
     ASSERT_TRUE(has_shortfall(stopped.run, "duration"));
     EXPECT_NE(stopped.run.shortfalls.front().text.find("stopped early"), std::string::npos);
 
     plan.duration = 400ms;
     plan.connections = 2;
     const LoadResult whole = run_load(plan);
-    ASSERT_TRUE(whole.ok) << whole.error;
+    ASSERT_TRUE(whole.ok()) << whole.error;
     EXPECT_TRUE(whole.run.shortfalls.empty()) << whole.run.shortfalls.front().text;
 
     // A run ended by its transaction count ended as planned.
     plan.duration = 0s;
     plan.transactions = 300;
     const LoadResult counted = run_load(plan);
-    ASSERT_TRUE(counted.ok) << counted.error;
+    ASSERT_TRUE(counted.ok()) << counted.error;
     EXPECT_TRUE(counted.run.shortfalls.empty()) << counted.run.shortfalls.front().text;
 }
 
@@ -172,7 +172,7 @@ TEST(EngineHonestNumbers, PerOperationTrafficIsCounted) {
     plan.duration = 400ms;
     plan.warmup = 200ms;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     const auto& op = r.run.operations.at(0).counters;
     ASSERT_GT(op.transactions_sent, 0u);
     EXPECT_EQ(op.bytes_sent, 12 * op.transactions_sent);
@@ -236,7 +236,7 @@ TEST(EngineHonestNumbers, ATargetThatDoesNotPipelineIsSeenSkippingRequests) {
     plan.transaction_timeout = 150ms;
     plan.duration = 800ms;
     const LoadResult piped = run_load(plan);
-    ASSERT_TRUE(piped.ok) << piped.error;
+    ASSERT_TRUE(piped.ok()) << piped.error;
     EXPECT_GT(piped.run.counters.count(stats::Outcome::Timeout), 0u);
     EXPECT_GT(piped.run.pipelining.skipped_requests, 0u);
 
@@ -247,7 +247,7 @@ TEST(EngineHonestNumbers, ATargetThatDoesNotPipelineIsSeenSkippingRequests) {
     plan.duration = 20s;
     plan.transaction_timeout = 5s;
     const LoadResult one = run_load(plan);
-    ASSERT_TRUE(one.ok) << one.error;
+    ASSERT_TRUE(one.ok()) << one.error;
     EXPECT_GT(one.run.counters.ok(), 100u);
     EXPECT_EQ(one.run.counters.count(stats::Outcome::Timeout), 0u);
     EXPECT_EQ(one.run.pipelining.skipped_requests, 0u);

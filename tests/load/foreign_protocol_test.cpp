@@ -99,7 +99,7 @@ TEST(ForeignProtocol, ARunAgainstAnHttpServerSaysItLooksLikeOne) {
     plan.duration = 0s;
     plan.transactions = 20;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.framing_errors, 0u);
     EXPECT_GT(r.unframed_bytes, 0u);
     bool named = false;

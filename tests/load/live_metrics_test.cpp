@@ -73,7 +73,7 @@ TEST(LiveMetrics, EndsEqualToTheReportAndOnlyGrowsMeanwhile) {
     const LoadResult r = run_load(plan, options);
     done = true;
     reader.join();
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(snapshots, 0u);
     EXPECT_TRUE(monotone);
 

@@ -20,28 +20,33 @@ Plan valid_plan() {
     return plan;
 }
 
-bool any_contains(const std::vector<std::string>& errors, const std::string& needle) {
-    for (const auto& e : errors) {
-        if (e.find(needle) != std::string::npos) return true;
-    }
-    return false;
+bool any_contains(const Error& error, const std::string& needle) {
+    return error.message().find(needle) != std::string::npos;
 }
 
 TEST(PlanValidation, DefaultPlanWithOneOperationIsValid) {
-    EXPECT_TRUE(validate_plan(valid_plan()).empty());
+    EXPECT_TRUE(validate_plan(valid_plan()).ok());
+}
+
+TEST(PlanValidation, EveryProblemIsNamedInOneError) {
+    Plan plan = valid_plan();
+    plan.connections = 0;
+    plan.depth = 0;
+    EXPECT_EQ(validate_plan(plan).message(),
+              "connections: 0 is out of range (valid 1..100000); depth: 0 is out of range (valid "
+              "1..32768)");
 }
 
 TEST(PlanValidation, ConnectionsOutOfRangeNamesTheRange) {
     Plan plan = valid_plan();
     plan.connections = 0;
-    auto errors = validate_plan(plan);
-    ASSERT_EQ(errors.size(), 1u);
-    EXPECT_NE(errors[0].find("connections"), std::string::npos);
-    EXPECT_NE(errors[0].find("valid 1..100000"), std::string::npos);
+    const Error error = validate_plan(plan);
+    EXPECT_EQ(error.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(error.message(), "connections: 0 is out of range (valid 1..100000)");
     plan.connections = 100001;
     EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..100000"));
     plan.connections = 100000;
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
 }
 
 TEST(PlanValidation, DepthAndThreads) {
@@ -49,7 +54,7 @@ TEST(PlanValidation, DepthAndThreads) {
     plan.depth = 0;
     EXPECT_TRUE(any_contains(validate_plan(plan), "depth: 0 is out of range (valid 1..32768)"));
     plan.depth = 32768;
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan.threads = 5000;
     EXPECT_TRUE(any_contains(validate_plan(plan), "threads"));
 }
@@ -59,7 +64,7 @@ TEST(PlanValidation, OpenLoopNeedsARate) {
     plan.model = LoadModel::OpenLoop;
     EXPECT_TRUE(any_contains(validate_plan(plan), "rate"));
     plan.rate = 1000;
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
 }
 
 TEST(PlanValidation, QuantityLimitsComeFromTheSpec) {
@@ -68,7 +73,7 @@ TEST(PlanValidation, QuantityLimitsComeFromTheSpec) {
     plan.operations[0].last_address = 1000;
     EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..125"));
     plan.operations[0].function = 0x01;  // FC01 allows 1..2000
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan.operations[0].quantity = 2001;
     plan.operations[0].last_address = 65535;
     EXPECT_TRUE(any_contains(validate_plan(plan), "valid 1..2000"));
@@ -108,10 +113,10 @@ TEST(PlanValidation, DurationWarmupAndEmptyMix) {
     plan.duration = Duration::zero();
     EXPECT_TRUE(any_contains(validate_plan(plan), "never ends"));
     plan.transactions = 100;
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan = valid_plan();
     plan.warmup = plan.duration;  // comes on top of the duration: nothing is cut
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan.warmup = -plan.duration;
     EXPECT_TRUE(any_contains(validate_plan(plan), "warmup"));
     plan = valid_plan();
@@ -128,7 +133,7 @@ TEST(PlanValidation, StageTargetsAreCheckedAgainstTheModel) {
     EXPECT_TRUE(any_contains(validate_plan(plan), "stages[0]: a target rate needs an open-loop"));
     plan.model = LoadModel::OpenLoop;
     plan.rate = 0;  // a ramp up from nothing is fine when a stage has a rate
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan.stages[0].target_rate = 0;
     EXPECT_TRUE(any_contains(validate_plan(plan), "rate: 0 is out of range"));
     plan.stages[0].target_rate = 500;
@@ -138,7 +143,7 @@ TEST(PlanValidation, StageTargetsAreCheckedAgainstTheModel) {
     plan.stages[0].target_connections = kMaxConnections + 1;
     EXPECT_TRUE(any_contains(validate_plan(plan), "target connections 100001 is out of range"));
     plan.stages[0].target_connections = 0;  // closes every connection: allowed
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
     plan.transactions = 5;
     EXPECT_TRUE(any_contains(validate_plan(plan), "transactions: not supported with stages"));
 }

@@ -56,7 +56,7 @@ TEST(RtuOverTcpEngine, AgainstTheRtuSlaveEveryAnswerIsMatchedAndChecked) {
     plan.connections = 4;
     plan.transactions = 2000;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(r.run.counters.transactions_sent, 2000u);
     EXPECT_EQ(r.run.counters.ok(), 2000u);
     EXPECT_EQ(r.crc_errors, 0u);
@@ -156,7 +156,7 @@ TEST(RtuOverTcpEngine, BadCrcIsItsOwnErrorClassAndTheConnectionIsRenewed) {
     plan.reconnect_backoff_min = 1ms;
     plan.reconnect_backoff_max = 10ms;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(r.run.counters.ok(), 0u);
     EXPECT_EQ(r.run.counters.count(Outcome::CrcError), 5u);
     EXPECT_EQ(r.crc_errors, 5u);
@@ -184,7 +184,7 @@ TEST(RtuOverTcpEngine, ATimedOutRequestRenewsTheConnectionSoItsLateAnswerPassesF
     plan.reconnect_backoff_min = 1ms;
     plan.reconnect_backoff_max = 10ms;
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_EQ(r.run.counters.count(Outcome::Timeout), 1u);
     EXPECT_EQ(r.run.counters.ok(), 4u);
     EXPECT_EQ(r.late_responses, 0u);
@@ -195,11 +195,11 @@ TEST(RtuOverTcpEngine, ATimedOutRequestRenewsTheConnectionSoItsLateAnswerPassesF
 TEST(RtuOverTcpEngine, PlanRefusesPipelining) {
     Plan plan = rtu_plan(502);
     plan.depth = 2;
-    const auto problems = validate_plan(plan);
-    ASSERT_EQ(problems.size(), 1u);
-    EXPECT_NE(problems[0].find("RTU over TCP"), std::string::npos) << problems[0];
+    const Error problem = validate_plan(plan);
+    ASSERT_EQ(problem.code(), ErrorCode::InvalidInput);
+    EXPECT_NE(problem.message().find("RTU over TCP"), std::string::npos) << problem;
     plan.depth = 1;
-    EXPECT_TRUE(validate_plan(plan).empty());
+    EXPECT_TRUE(validate_plan(plan).ok());
 }
 
 }  // namespace

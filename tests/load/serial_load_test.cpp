@@ -111,7 +111,7 @@ class SerialLoadTest : public ::testing::Test {
         auto runner = std::make_unique<SerialRunner>(
             load::SerialRunSetup{&plan_, &options_, schedule_.get(), &timeline_, nullptr, start_ns_,
                                  start_ns_, start_ns_ + length_ns, nullptr});
-        EXPECT_EQ(runner->open(), "");
+        EXPECT_EQ(runner->open(), Error::none());
         runner->run();
         EXPECT_EQ(runner->open_connections(), 0u);
         done_ = true;
@@ -152,7 +152,7 @@ TEST_F(SerialLoadTest, ClosedLoopSendsTheCountAndAccountsEveryByte) {
     plan_.transactions = 30;
     serve(answer_reads);
     const auto r = run();
-    EXPECT_EQ(r->fatal_error, "");
+    EXPECT_EQ(r->fatal_error, Error::none());
     ASSERT_EQ(requests_.size(), 30u);
     EXPECT_EQ(r->counters.transactions_sent, 30u);
     EXPECT_EQ(r->counters.ok(), 30u);
@@ -283,7 +283,7 @@ TEST_F(SerialLoadTest, StopEndsTheRunAfterTheTransactionOnTheLine) {
         return Reply{read_answer(request)};
     });
     const auto r = run();
-    EXPECT_EQ(r->fatal_error, "");
+    EXPECT_EQ(r->fatal_error, Error::none());
     EXPECT_LT(r->finished_ns, start_ns_ + 60 * net::kNsPerSec);  // not the run's end
     EXPECT_EQ(requests_.size(), 3u);
     EXPECT_EQ(r->counters.transactions_sent, 3u);
@@ -299,7 +299,7 @@ TEST_F(SerialLoadTest, ALineThatGoesAwayEndsTheRunWithItsError) {
         return r;
     });
     const auto r = run();
-    EXPECT_NE(r->fatal_error.find(plan_.serial.device), std::string::npos) << r->fatal_error;
+    EXPECT_NE(r->fatal_error.text().find(plan_.serial.device), std::string::npos) << r->fatal_error;
     EXPECT_LT(r->finished_ns, start_ns_ + 60 * net::kNsPerSec);  // not the run's end
     EXPECT_EQ(r->counters.ok(), 2u);
     EXPECT_EQ(r->counters.count(Outcome::Timeout), 1u);

@@ -37,7 +37,7 @@ class SerialMasterTest : public ::testing::Test {
         ::close(slave);
         net::SerialSettings line;
         line.parity = net::Parity::None;
-        ASSERT_EQ(master_.open(name, line, codec::Framing::Rtu), "");
+        ASSERT_EQ(master_.open(name, line, codec::Framing::Rtu), Error::none());
         master_.turnaround_ns = 1'000'000;
     }
     void TearDown() override {

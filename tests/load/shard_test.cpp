@@ -27,10 +27,11 @@ Plan open_plan() {
 std::vector<Plan> shards_of(const Plan& p, std::uint32_t n) {
     std::vector<Plan> out;
     for (std::uint32_t i = 0; i < n; ++i) {
-        ShardedPlan s = shard_plan(p, i, n);
-        EXPECT_EQ(s.error, "") << "shard " << i;
-        EXPECT_TRUE(validate_plan(s.plan).empty()) << "shard " << i;
-        out.push_back(std::move(s.plan));
+        Result<Plan> s = shard_plan(p, i, n);
+        EXPECT_TRUE(s.ok()) << s.error() << " shard " << i;
+        if (!s.ok()) continue;
+        EXPECT_TRUE(validate_plan(*s).ok()) << "shard " << i;
+        out.push_back(std::move(s).value());
     }
     return out;
 }
@@ -95,11 +96,11 @@ TEST(Shard, SumsOverShardsAreTheWholePlanForEveryCountAndStage) {
 TEST(Shard, ShardsDrawApartButOneShardIsTheWholePlan) {
     Plan p = open_plan();
     p.operations[0].address_mode = AddressMode::Sequential;
-    const ShardedPlan one = shard_plan(p, 0, 1);
-    ASSERT_EQ(one.error, "");
-    EXPECT_EQ(one.plan.seed, p.seed);
-    EXPECT_EQ(one.plan.connections, p.connections);
-    EXPECT_EQ(one.plan.operations[0].start_offset, 0u);
+    const Result<Plan> one = shard_plan(p, 0, 1);
+    ASSERT_TRUE(one.ok()) << one.error();
+    EXPECT_EQ(one->seed, p.seed);
+    EXPECT_EQ(one->connections, p.connections);
+    EXPECT_EQ(one->operations[0].start_offset, 0u);
 
     // Sequential: each shard starts at its own block; together they start spread over the
     // range (10 blocks of 10 addresses over 3 shards: 0, 30, 60).
@@ -121,16 +122,19 @@ TEST(Shard, ShardsDrawApartButOneShardIsTheWholePlan) {
 TEST(Shard, AShardWithNothingToDoIsRefusedSayingWhy) {
     Plan p = open_plan();
     p.connections = 2;
-    EXPECT_EQ(shard_plan(p, 2, 3).error,
+    EXPECT_EQ(shard_plan(p, 2, 3).error().message(),
               "shard 2/3 gets 0 of the plan's 2 connections: every shard needs one (use at most 2 "
               "shards)");
     p.connections = 10;
     p.transactions = 2;
-    EXPECT_EQ(shard_plan(p, 2, 3).error,
+    EXPECT_EQ(shard_plan(p, 2, 3).error().message(),
               "shard 2/3 gets 0 of the plan's 2 transactions: every shard needs one (use at most "
               "2 shards)");
-    EXPECT_EQ(shard_plan(p, 3, 3).error, "shard index 3 is out of range for 3 shards (valid 0..2)");
-    EXPECT_EQ(shard_plan(p, 0, 0).error, "shard count 0 is out of range (valid 1..100000)");
+    EXPECT_EQ(shard_plan(p, 3, 3).error().message(),
+              "shard index 3 is out of range for 3 shards (valid 0..2)");
+    EXPECT_EQ(shard_plan(p, 0, 0).error().message(),
+              "shard count 0 is out of range (valid 1..100000)");
+    EXPECT_EQ(shard_plan(p, 0, 0).error().code(), ErrorCode::InvalidInput);
 }
 
 }  // namespace

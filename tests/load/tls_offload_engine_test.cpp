@@ -107,7 +107,7 @@ TEST_F(TlsOffloadEngine, EveryConnectionReachesAHandOffThatAgreesWithItsPeer) {
         plan.transactions = 2000;
         plan.duration = 20s;  // ended by the transaction count long before
         const LoadResult r = run_load(plan);
-        ASSERT_TRUE(r.ok) << r.error;
+        ASSERT_TRUE(r.ok()) << r.error;
         EXPECT_EQ(r.run.counters.ok(), 2000u);
         EXPECT_EQ(r.run.connections.tls_handshakes, 4u);
         // The fake refused every hand-off: nothing was offloaded, nothing broke.

@@ -53,7 +53,7 @@ TEST(HostileTargets, GarbageAnswersAreFramingErrorsNotClosedConnections) {
         HostileTarget target(mode);
         ASSERT_TRUE(target.ok());
         const LoadResult r = run_load(plan_for(target.port()));
-        ASSERT_TRUE(r.ok) << r.error;
+        ASSERT_TRUE(r.ok()) << r.error;
         const auto& c = r.run.counters;
         EXPECT_GT(c.count(Outcome::FramingError), 0u);
         EXPECT_EQ(c.count(Outcome::ConnectionClosed), 0u);
@@ -68,7 +68,7 @@ TEST(HostileTargets, GarbageAnswersAreFramingErrorsNotClosedConnections) {
 TEST(HostileTargets, SilentTargetTimesOutEveryTransaction) {
     HostileTarget target(HostileTarget::Mode::Silent);
     const LoadResult r = run_load(plan_for(target.port()));
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.count(Outcome::Timeout), 0u);
     EXPECT_EQ(r.run.counters.ok(), 0u);
     expect_accounted(r);
@@ -77,7 +77,7 @@ TEST(HostileTargets, SilentTargetTimesOutEveryTransaction) {
 TEST(HostileTargets, WrongIdsAreStrayAndTheirTransactionsTimeOut) {
     HostileTarget target(HostileTarget::Mode::WrongId);
     const LoadResult r = run_load(plan_for(target.port()));
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.count(Outcome::UnknownId), 0u);
     EXPECT_GT(r.run.counters.count(Outcome::Timeout), 0u);
     EXPECT_EQ(r.run.counters.ok(), 0u);
@@ -87,7 +87,7 @@ TEST(HostileTargets, WrongIdsAreStrayAndTheirTransactionsTimeOut) {
 TEST(HostileTargets, DuplicatesAreCountedApartFromTransactions) {
     HostileTarget target(HostileTarget::Mode::Duplicate);
     const LoadResult r = run_load(plan_for(target.port()));
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.ok(), 0u);
     EXPECT_GT(r.run.counters.count(Outcome::DuplicateId), 0u);
     EXPECT_EQ(r.run.counters.errors(), 0u);
@@ -97,7 +97,7 @@ TEST(HostileTargets, DuplicatesAreCountedApartFromTransactions) {
 TEST(HostileTargets, CloseAfterEachAnswerReconnectsAndAccountsEverything) {
     HostileTarget target(HostileTarget::Mode::CloseAfterAnswer);
     const LoadResult r = run_load(plan_for(target.port()));
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.ok(), 0u);
     EXPECT_GT(r.run.connections.reconnects, 0u);
     EXPECT_GT(r.run.connections.closed_by_peer, 0u);
@@ -116,7 +116,7 @@ TEST(HostileTargets, TargetKilledMidRunIsANoteAndLostAtTheEnd) {
     });
     const LoadResult r = run_load(plan);
     killer.join();
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.ok(), 0u);
     EXPECT_TRUE(r.target_lost_at_end);
     EXPECT_TRUE(has_note(r, "target lost at")) << testing::PrintToString(r.run.metadata.notes);
@@ -138,7 +138,7 @@ TEST(HostileTargets, TargetThatComesBackIsANoteWithBothTimes) {
     const LoadResult r = run_load(plan);
     killer.join();
     ASSERT_TRUE(target->ok()) << "the port was taken meanwhile";
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_FALSE(r.target_lost_at_end);
     EXPECT_TRUE(has_note(r, ", back at")) << testing::PrintToString(r.run.metadata.notes);
     EXPECT_GT(r.run.connections.reconnects, 0u);
@@ -157,7 +157,7 @@ TEST(HostileTargets, AStageWithNoConnectionsIsNoOutage) {
     again.target_connections = 2;
     plan.stages = {up, none, again};
     const LoadResult r = run_load(plan);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     EXPECT_GT(r.run.counters.ok(), 0u);
     EXPECT_FALSE(has_note(r, "target lost")) << testing::PrintToString(r.run.metadata.notes);
     EXPECT_FALSE(r.target_lost_at_end);
@@ -173,11 +173,13 @@ TEST(HostileTargets, NoConnectionDuringAShortRunIsAnError) {
     plan.connect_timeout = 3s;
     const auto t0 = std::chrono::steady_clock::now();
     const LoadResult r = run_load(plan);
-    EXPECT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("cannot connect to 127.0.0.1:" + std::to_string(silent.port())),
-              std::string::npos)
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(
+        r.error.message().find("cannot connect to 127.0.0.1:" + std::to_string(silent.port())),
+        std::string::npos)
         << r.error;
-    EXPECT_NE(r.error.find("no connection was established"), std::string::npos) << r.error;
+    EXPECT_NE(r.error.message().find("no connection was established"), std::string::npos)
+        << r.error;
     EXPECT_LT(std::chrono::steady_clock::now() - t0, 3s);
 }
 

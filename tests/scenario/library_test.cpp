@@ -54,7 +54,7 @@ TEST(ScenarioLibrary, EveryFileLoadsAndRunsForASecond) {
         ASSERT_TRUE(problems.ok()) << problems.text();
         EXPECT_EQ(s.total_duration(), 1s);
         const load::LoadResult r = run_scenario(s);
-        ASSERT_TRUE(r.ok) << r.error;
+        ASSERT_TRUE(r.ok()) << r.error;
         EXPECT_GT(r.run.counters.ok(), 0U);
         EXPECT_EQ(r.run.counters.count(stats::Outcome::ValueMismatch), 0U);
         EXPECT_EQ(r.run.counters.count(stats::Outcome::Exception), 0U);

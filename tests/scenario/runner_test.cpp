@@ -29,8 +29,8 @@ operations: [{function: 3}]
     EXPECT_EQ(plan.stages[1].name, "stage 2");
     EXPECT_EQ(plan.stages[1].target_connections, 3U);
     EXPECT_EQ(plan.stages[1].ramp, load::Ramp::Constant);
-    EXPECT_TRUE(load::validate_plan(plan).empty() ||
-                load::validate_plan(plan).front().find("port") != std::string::npos);
+    EXPECT_TRUE(load::validate_plan(plan).ok() ||
+                load::validate_plan(plan).message().find("port") != std::string::npos);
 }
 
 TEST(RunScenario, StagedClosedLoopRunHasPerStageResults) {
@@ -51,7 +51,7 @@ thresholds:
 )",
                             "staged.yaml");
     const load::LoadResult r = run_scenario(s);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 2U);
     EXPECT_EQ(r.run.stages[0].name, "ramp");
     EXPECT_EQ(r.run.stages[1].index, 2U);
@@ -83,7 +83,7 @@ operations: [{function: 3, address: 0-99, quantity: 5}]
 )",
                             "zero.yaml");
     const load::LoadResult r = run_scenario(s);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 3U);
     EXPECT_GT(r.run.stages[0].counters.ok(), 0U);
     // Nothing is sent in a stage without connections; the surplus drained, never errored.
@@ -109,7 +109,7 @@ operations: [{function: 3, quantity: 2}]
 )",
                             "ramp.yaml");
     const load::LoadResult r = run_scenario(s);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 2U);
     // A linear ramp 200 -> 1800 over 1 s sends its mean, 1000; the hold sends 1800.
     EXPECT_NEAR(static_cast<double>(r.run.stages[0].counters.transactions_sent), 1000, 100);
@@ -144,7 +144,7 @@ thresholds:
 )",
                             "short.yaml");
     const load::LoadResult r = run_scenario(s);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_FALSE(r.run.shortfalls.empty());
     ASSERT_EQ(r.run.thresholds.size(), 2U);
     EXPECT_TRUE(r.run.thresholds[0].passed);
@@ -173,7 +173,7 @@ thresholds:
 )",
                             "expect.yaml");
     const load::LoadResult r = run_scenario(s);
-    ASSERT_TRUE(r.ok) << r.error;
+    ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.operations.size(), 2U);
     EXPECT_GT(r.run.operations[0].counters.ok(), 0U);
     EXPECT_EQ(r.run.operations[0].counters.count(stats::Outcome::ValueMismatch), 0U);
@@ -204,7 +204,7 @@ TEST(RunScenario, UnreachableTargetIsAnError) {
         "down.yaml");
     const load::LoadResult r = run_scenario(s);
     EXPECT_EQ(r.run.counters.ok(), 0U);
-    EXPECT_FALSE(r.ok && r.run.counters.ok() > 0);
+    EXPECT_FALSE(r.ok() && r.run.counters.ok() > 0);
 }
 
 }  // namespace
