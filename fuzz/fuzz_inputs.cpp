@@ -30,13 +30,14 @@ bool same(const DeviceModel& a, const DeviceModel& b) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     if (size == 0) return 0;
     const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
-    DeviceModel model, again;
-    std::string error;
-    const bool ok = data[0] & 1 ? mbstorm::netfuzz::parse_map(text, model, error)
-                                : mbstorm::netfuzz::model_from_json(text, model, error);
-    if (!ok) return 0;
+    const mbstorm::Result<DeviceModel> parsed =
+        data[0] & 1 ? mbstorm::netfuzz::parse_map(text) : mbstorm::netfuzz::model_from_json(text);
+    if (!parsed.ok()) return 0;
+    const DeviceModel& model = *parsed;
     const std::string json = mbstorm::netfuzz::model_to_json(model);
-    if (!mbstorm::netfuzz::model_from_json(json, again, error) || !same(model, again)) std::abort();
+    mbstorm::Result<DeviceModel> read_back = mbstorm::netfuzz::model_from_json(json);
+    if (!read_back.ok() || !same(model, *read_back)) std::abort();
+    DeviceModel& again = *read_back;
     again.source = model.source;
     again.partial = model.partial;
     if (mbstorm::netfuzz::model_to_json(again) != json) std::abort();

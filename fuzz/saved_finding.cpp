@@ -47,8 +47,7 @@ const std::string& scratch_dir() {
 // Saves `f` into the scratch folder; returns its finding.json.
 std::string save(const Finding& f) {
     const std::string& dir = scratch_dir();
-    std::string error;
-    check(mbstorm::netfuzz::save_finding(f, dir, error));
+    check(mbstorm::netfuzz::save_finding(f, dir).ok());
     std::ifstream in(dir + "/finding.json");
     std::stringstream text;
     text << in.rdbuf();
@@ -65,18 +64,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         ::close(fd);
         return 0;
     }
-    Finding finding;
-    std::string error;
-    const bool ok =
-        mbstorm::netfuzz::load_finding("/proc/self/fd/" + std::to_string(fd), finding, error);
+    const mbstorm::Result<Finding> loaded =
+        mbstorm::netfuzz::load_finding("/proc/self/fd/" + std::to_string(fd));
     ::close(fd);
-    if (!ok) {
-        check(!error.empty());  // a refusal says why
+    if (!loaded.ok()) {
+        check(!loaded.error().message().empty());  // a refusal says why
         return 0;
     }
+    const Finding& finding = *loaded;
     const std::string saved = save(finding);
-    Finding again;
-    check(mbstorm::netfuzz::load_finding(scratch_dir(), again, error) && same(finding, again));
-    check(save(again) == saved);
+    const mbstorm::Result<Finding> again = mbstorm::netfuzz::load_finding(scratch_dir());
+    check(again.ok() && same(finding, *again));
+    check(save(*again) == saved);
     return 0;
 }

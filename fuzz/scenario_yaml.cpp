@@ -1,5 +1,5 @@
 // libFuzzer harness: scenario YAML (the user's file, and the thresholds `merge` reads back) ->
-// a validated Scenario, or a ScenarioError naming the position. A scenario it accepts prints
+// a validated Scenario, or an Error naming the position. A scenario it accepts prints
 // (run --print-scenario) as YAML that parses back to the same scenario, compared member by
 // member: the load plan, the stages, thresholds, read-back checks and the embedded slave (not
 // only the printed text, which a printer that drops a field would still reproduce). Any other
@@ -46,21 +46,17 @@ const char* first_difference(const Scenario& a, const Scenario& b) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace mbstorm::scenario;
     const std::string_view text(reinterpret_cast<const char*>(data), size);
-    Scenario s;
-    try {
-        s = parse_scenario(text);
-    } catch (const ScenarioError&) {
-        return 0;
-    }
+    const auto parsed = parse_scenario(text);
+    if (!parsed.ok()) return 0;
+    const Scenario& s = *parsed;
     const std::string printed = format_scenario(s);
-    Scenario again;
-    try {
-        again = parse_scenario(printed);
-    } catch (const ScenarioError& e) {
-        std::fprintf(stderr, "printed scenario does not read back: %s\n%s", e.what(),
-                     printed.c_str());
+    const auto reread = parse_scenario(printed);
+    if (!reread.ok()) {
+        std::fprintf(stderr, "printed scenario does not read back: %s\n%s",
+                     reread.error().text().c_str(), printed.c_str());
         std::abort();  // what it printed, it must read back
     }
+    const Scenario& again = *reread;
     if (const char* what = first_difference(s, again)) {
         std::fprintf(stderr, "printed and read back, the scenario's %s changed:\n%s", what,
                      printed.c_str());

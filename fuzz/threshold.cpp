@@ -25,15 +25,13 @@ bool same(const ThresholdSpec& a, const ThresholdSpec& b) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string_view text(reinterpret_cast<const char*>(data), size);
-    ThresholdSpec spec;
-    std::string error;
-    if (!mbstorm::scenario::parse_threshold(text, spec, error)) {
-        if (error.empty()) std::abort();  // a refusal always says why
+    const auto spec = mbstorm::scenario::parse_threshold(text);
+    if (!spec.ok()) {
+        if (spec.error().message().empty()) std::abort();  // a refusal always says why
         return 0;
     }
-    if (std::isnan(spec.limit) || std::isnan(spec.percentile)) std::abort();
-    ThresholdSpec again;
-    if (!mbstorm::scenario::parse_threshold(spec.text, again, error) || !same(spec, again))
-        std::abort();
+    if (std::isnan(spec->limit) || std::isnan(spec->percentile)) std::abort();
+    const auto again = mbstorm::scenario::parse_threshold(spec->text);
+    if (!again.ok() || !same(*spec, *again)) std::abort();
     return 0;
 }

@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "cli/run_cli.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -26,12 +27,18 @@ inline const char* signal_name(int signal_number) {
     return signal_number == 2 ? "SIGINT" : signal_number == 15 ? "SIGTERM" : "a signal";
 }
 
-// Says "mbstorm <command>: <message>" on stderr and returns kExitUsage: how every subcommand
-// refuses bad input.
-inline int usage_error(std::string_view command, std::string_view message) {
-    fmt::print(stderr, "mbstorm {}: {}\n", command, message);
-    return kExitUsage;
-}
+// The one place an Error becomes an exit code (issue #30). Every kind is something the user
+// gives or controls (a flag, a file, a target, this machine), so each exits as bad input does;
+// thresholds and findings (kExitFailed) and signals are results, not Errors.
+int exit_code_for(const Error& error);
+
+// Says "mbstorm <command>: <error's text>" on stderr, one such line per line of the text, and
+// returns its exit code: how every subcommand stops on an Error.
+int fail(std::string_view command, const Error& error);
+
+// A plain refusal of the command line (a flag, a combination of flags): fail() with an
+// InvalidInput error, so "mbstorm <command>: <message>" and kExitUsage.
+int usage_error(std::string_view command, std::string_view message);
 
 using Action = std::function<int()>;
 

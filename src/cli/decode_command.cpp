@@ -90,26 +90,25 @@ Direction likely_direction(codec::Bytes pdu, const DecodeOptions& o) {
 std::string describe_framed(codec::Bytes pdu, const DecodeOptions& o, const std::string& what,
                             const std::vector<FieldRow>& head, const std::vector<FieldRow>& tail,
                             std::vector<Decoded>& out) {
-    auto table = [&](Direction d, std::string& err) {
+    auto table = [&](Direction d) {
         Decoded dec;
         dec.rows = head;
-        bool ok = describe_pdu(pdu, d, dec.rows, err);
+        Error fault = describe_pdu(pdu, d, dec.rows);
         dec.rows.insert(dec.rows.end(), tail.begin(), tail.end());
         dec.title = fmt::format("{} {}", what, direction_name(d));
-        return std::pair{ok, std::move(dec)};
+        return std::pair{std::move(fault), std::move(dec)};
     };
     bool any = false;
     for (Direction d : directions(o)) {
-        std::string err;
-        auto [ok, dec] = table(d, err);
-        if (!ok) continue;
+        auto [fault, dec] = table(d);
+        if (!fault.ok()) continue;
         out.push_back(std::move(dec));
         any = true;
     }
     if (any) return {};
-    std::string err;
-    out.push_back(table(likely_direction(pdu, o), err).second);
-    return err;
+    auto [fault, dec] = table(likely_direction(pdu, o));
+    out.push_back(std::move(dec));
+    return fault.message();
 }
 
 // True when a PDU the bytes end inside has nothing wrong with it so far: it decodes, or fails

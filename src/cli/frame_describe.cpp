@@ -421,11 +421,8 @@ std::string pdu_fault(Bytes pdu, Direction dir, codec::CodecError error,
 
 }  // namespace
 
-bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::string& error) {
-    if (pdu.empty()) {
-        error = "empty PDU: no function code";
-        return false;
-    }
+Error describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows) {
+    if (pdu.empty()) return Error(ErrorCode::InvalidInput, "empty PDU: no function code");
     const std::size_t first = rows.size();
     RowWriter w(pdu, rows);
     if (dir == Direction::Request) {
@@ -437,14 +434,15 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
             w.field("Function code", 1, codec::function_label(raw.function));
             describe_request_fields(raw, w);
             std::string fault = pdu_fault(pdu, Direction::Request, status.error, rows, first);
-            error = fmt::format("not a valid request: {} (a server answers exception {:02X} {})",
-                                fault, static_cast<int>(status.exception),
-                                codec::exception_name(status.exception));
-            return false;
+            return Error(ErrorCode::InvalidInput,
+                         fmt::format("not a valid request: {} (a server answers exception {:02X} "
+                                     "{})",
+                                     fault, static_cast<int>(status.exception),
+                                     codec::exception_name(status.exception)));
         }
         w.field("Function code", 1, codec::function_label(req.function));
         describe_request_fields(req, w);
-        return true;
+        return Error::none();
     }
     codec::Response rsp;
     auto err = codec::decode_response(pdu, rsp);
@@ -461,9 +459,9 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
             w.field("Function code", 1, codec::function_label(raw.function));
             describe_response_fields(raw, w);
         }
-        error = fmt::format("not a valid response: {}",
-                            pdu_fault(pdu, Direction::Response, err, rows, first));
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("not a valid response: {}",
+                                 pdu_fault(pdu, Direction::Response, err, rows, first)));
     }
     if (rsp.exception != codec::ExceptionCode::None) {
         w.field("Function code", 1,
@@ -471,11 +469,11 @@ bool describe_pdu(Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::st
                             codec::function_label(rsp.function)));
         w.u8("Exception code", std::string(codec::exception_name(rsp.exception)));
         w.rest("Unparsed bytes");
-        return true;
+        return Error::none();
     }
     w.field("Function code", 1, codec::function_label(rsp.function));
     describe_response_fields(rsp, w);
-    return true;
+    return Error::none();
 }
 
 std::string request_fault(Bytes pdu) {

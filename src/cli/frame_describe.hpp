@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "codec/bytes.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -17,9 +18,9 @@ struct FieldRow {
 
 enum class Direction { Request, Response };
 
-// Rows for a PDU (function code first). Returns false with `error` set when the PDU does not
-// decode in that direction.
-bool describe_pdu(codec::Bytes pdu, Direction dir, std::vector<FieldRow>& rows, std::string& error);
+// Rows for a PDU (function code first), appended to `rows` (with the bad field marked when
+// the PDU does not decode in that direction: an InvalidInput error then says why).
+Error describe_pdu(codec::Bytes pdu, Direction dir, std::vector<FieldRow>& rows);
 
 // What is wrong with a request PDU, as one phrase naming the field, its value and the valid
 // range ("quantity 200: valid 1..125 for 0x03 read_holding_registers"); "" when it is valid.

@@ -71,11 +71,8 @@ struct FuzzOptions {
 };
 
 // "all", or A-B (decimal or 0x hex, inclusive) for --state-range.
-bool parse_state_range(const std::string& text, netfuzz::StateRange& out, std::string& error) {
-    if (text == "all") {
-        out = netfuzz::StateRange{0, 0x10000};
-        return true;
-    }
+Result<netfuzz::StateRange> parse_state_range(const std::string& text) {
+    if (text == "all") return netfuzz::StateRange{0, 0x10000};
     const auto dash = text.find('-');
     auto number = [](const std::string& s, unsigned long& v) {
         try {
@@ -89,14 +86,13 @@ bool parse_state_range(const std::string& text, netfuzz::StateRange& out, std::s
     unsigned long a = 0, b = 0;
     if (dash == std::string::npos || !number(text.substr(0, dash), a) ||
         !number(text.substr(dash + 1), b) || b < a || b - a < 255) {
-        error = fmt::format(
-            "--state-range '{}': expected 'all' or FIRST-LAST (protocol addresses 0..65535, "
-            "at least 256 of them, e.g. 0x6000-0x6FFF)",
-            text);
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("--state-range '{}': expected 'all' or FIRST-LAST (protocol "
+                                 "addresses 0..65535, at least 256 of them, e.g. 0x6000-0x6FFF)",
+                                 text));
     }
-    out = netfuzz::StateRange{static_cast<std::uint16_t>(a), static_cast<std::uint32_t>(b - a + 1)};
-    return true;
+    return netfuzz::StateRange{static_cast<std::uint16_t>(a),
+                               static_cast<std::uint32_t>(b - a + 1)};
 }
 
 // "0x05 0x06 0x08 ...": the codes the codec says change a device, all of which the fuzzer sends.
@@ -118,11 +114,14 @@ bool write_output(const std::string& path, const std::string& text) {
 // --coverage-report: the functions the target listed whose entry no case reached.
 bool write_coverage_report(const std::string& path, const netfuzz::FunctionListFile& functions,
                            const netfuzz::CoverageMap& map) {
-    std::string list, report, error;
-    if (!functions.read(list, error) || !netfuzz::coverage_report(list, map, report, error)) {
-        fmt::print(stderr, "mbstorm fuzz: --coverage-report: {}\n", error);
+    Result<std::string> list = functions.read();
+    Result<std::string> made = list.ok() ? netfuzz::coverage_report(*list, map) : list;
+    if (!made.ok()) {
+        // Reported, not fatal: the campaign's own results are written all the same.
+        fmt::print(stderr, "mbstorm fuzz: --coverage-report: {}\n", made.error().text());
         return false;
     }
+    const std::string& report = *made;
     fmt::print(stderr, "mbstorm fuzz: --coverage-report {}: {}", path == "-" ? "(stdout)" : path,
                report.substr(0, report.find('\n') + 1));
     return write_output(path, report);
@@ -130,38 +129,31 @@ bool write_coverage_report(const std::string& path, const netfuzz::FunctionListF
 
 // --target-cmd and --coverage: mbstorm starts (and restarts) the target, handing it the map
 // and, for --coverage-report, the file it lists its functions in (`functions`).
-bool set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c,
-                           std::unique_ptr<netfuzz::FunctionListFile>& functions,
-                           std::string& error) {
-    if (!o.target_cmd.empty() && !o.restart_cmd.empty()) {
-        error = "--target-cmd starts and restarts the target: --restart-cmd is not needed";
-        return false;
-    }
-    if (o.coverage && o.target_cmd.empty()) {
-        error = "--coverage needs --target-cmd (mbstorm hands the target its coverage map)";
-        return false;
-    }
-    if (!o.corpus_dir.empty() && !o.coverage) {
-        error = "--corpus keeps a coverage corpus: it needs --coverage";
-        return false;
-    }
-    if (!o.coverage_report.empty() && !o.coverage) {
-        error = "--coverage-report lists the functions no case reached: it needs --coverage";
-        return false;
-    }
+Error set_up_target_command(const FuzzOptions& o, netfuzz::CampaignOptions& c,
+                            std::unique_ptr<netfuzz::FunctionListFile>& functions) {
+    auto refused = [](const char* why) { return Error(ErrorCode::InvalidInput, why); };
+    if (!o.target_cmd.empty() && !o.restart_cmd.empty())
+        return refused("--target-cmd starts and restarts the target: --restart-cmd is not needed");
+    if (o.coverage && o.target_cmd.empty())
+        return refused("--coverage needs --target-cmd (mbstorm hands the target its coverage map)");
+    if (!o.corpus_dir.empty() && !o.coverage)
+        return refused("--corpus keeps a coverage corpus: it needs --coverage");
+    if (!o.coverage_report.empty() && !o.coverage)
+        return refused(
+            "--coverage-report lists the functions no case reached: it needs --coverage");
     c.corpus_dir = o.corpus_dir;
-    if (o.target_cmd.empty()) return true;
+    if (o.target_cmd.empty()) return Error::none();
     c.restart_cmd = o.target_cmd;
     c.start_target = true;
-    if (!o.coverage) return true;
+    if (!o.coverage) return Error::none();
     c.coverage = std::make_shared<netfuzz::CoverageMap>();
-    if (!c.coverage->create(o.coverage_map_size, error)) return false;
+    if (Error e = c.coverage->create(o.coverage_map_size); !e.ok()) return e;
     c.coverage->export_environment();
-    if (o.coverage_report.empty()) return true;
+    if (o.coverage_report.empty()) return Error::none();
     functions = std::make_unique<netfuzz::FunctionListFile>();
-    if (!functions->create(error)) return false;
+    if (Error e = functions->create(); !e.ok()) return e;
     functions->export_environment();
-    return true;
+    return Error::none();
 }
 
 // --wait-for-target: a target started just before mbstorm (a CI service, a container) may not
@@ -183,25 +175,30 @@ int fuzz_exit_code(const netfuzz::CampaignResult& r) {
 }
 
 // What the user hands the campaign besides flags: the state range, a device map or model,
-// a dictionary. False with `error` naming the bad one.
-bool read_fuzz_inputs(const FuzzOptions& o, netfuzz::CampaignOptions& c, std::string& error) {
-    if (!parse_state_range(o.state_range, c.state, error)) return false;
+// a dictionary. An Error naming the bad one.
+Error read_fuzz_inputs(const FuzzOptions& o, netfuzz::CampaignOptions& c) {
+    Result<netfuzz::StateRange> state = parse_state_range(o.state_range);
+    if (!state.ok()) return std::move(state).error();
+    c.state = *state;
     c.state_given = o.state_given;
-    if (!o.map.empty() + !o.model.empty() + o.no_model > 1) {
-        error = "--map, --device-model and --no-model exclude each other";
-        return false;
+    if (!o.map.empty() + !o.model.empty() + o.no_model > 1)
+        return Error(ErrorCode::InvalidInput,
+                     "--map, --device-model and --no-model exclude each other");
+    if (!o.map.empty() || !o.model.empty()) {
+        Result<netfuzz::DeviceModel> model =
+            o.map.empty() ? netfuzz::load_model(o.model) : netfuzz::parse_map(o.map);
+        if (!model.ok()) return std::move(model).error();
+        c.model = std::move(model).value();
     }
-    if (!o.map.empty() && !netfuzz::parse_map(o.map, c.model, error)) return false;
-    if (!o.model.empty() && !netfuzz::load_model(o.model, c.model, error)) return false;
     c.learn_model = !o.no_model;
     if (!o.dict.empty()) {
-        netfuzz::Dictionary d;
-        if (!netfuzz::load_dictionary(o.dict, d, error)) return false;
-        c.dict_words = std::move(d.words);
-        c.dict_tokens = std::move(d.tokens);
+        Result<netfuzz::Dictionary> d = netfuzz::load_dictionary(o.dict);
+        if (!d.ok()) return std::move(d).error();
+        c.dict_words = std::move(d->words);
+        c.dict_tokens = std::move(d->tokens);
     }
     c.max_connections = o.max_connections;
-    return true;
+    return Error::none();
 }
 
 // Report paths are checked before the run: a summary that cannot be written must not cost a
@@ -226,15 +223,19 @@ std::string check_fuzz_outputs(const FuzzOptions& o) {
 
 int run_fuzz(const FuzzOptions& o) {
     netfuzz::CampaignOptions c;
-    std::string error;
-    c.connector = make_fuzz_connector(o.target, o.allow_remote, o.transport, error);
-    if (!c.connector) return usage_error("fuzz", error);
+    Result<std::shared_ptr<netfuzz::Connector>> connector =
+        make_fuzz_connector(o.target, o.allow_remote, o.transport);
+    if (!connector.ok()) return fail("fuzz", connector.error());
+    c.connector = std::move(connector).value();
     if (o.duration_ns == 0 && o.cases == 0)
         return usage_error("fuzz", "bound the run with --seconds DURATION or --cases N");
-    if (!read_fuzz_inputs(o, c, error)) return usage_error("fuzz", error);
+    if (Error e = read_fuzz_inputs(o, c); !e.ok()) return fail("fuzz", e);
     netfuzz::Baseline baseline;
-    if (!o.baseline.empty() && !netfuzz::load_baseline(o.baseline, baseline, error))
-        return usage_error("fuzz", error);
+    if (!o.baseline.empty()) {
+        Result<netfuzz::Baseline> loaded = netfuzz::load_baseline(o.baseline);
+        if (!loaded.ok()) return fail("fuzz", loaded.error());
+        baseline = std::move(loaded).value();
+    }
     if (std::string e = check_fuzz_outputs(o); !e.empty()) return usage_error("fuzz", e);
     const bool on_stdout = o.json == "-" || o.junit == "-" || o.sarif == "-" || o.html == "-" ||
                            o.coverage_report == "-";
@@ -257,7 +258,7 @@ int run_fuzz(const FuzzOptions& o) {
     c.restart_cmd = o.restart_cmd;
     c.restart_wait_ms = static_cast<int>(o.restart_wait_ns / 1'000'000);
     std::unique_ptr<netfuzz::FunctionListFile> functions;
-    if (!set_up_target_command(o, c, functions, error)) return usage_error("fuzz", error);
+    if (Error e = set_up_target_command(o, c, functions); !e.ok()) return fail("fuzz", e);
     c.out_dir = o.out_dir;
     c.stop = &g_stop;
     std::signal(SIGINT, on_fuzz_stop_signal);
@@ -292,9 +293,11 @@ int run_fuzz(const FuzzOptions& o) {
     if (const int sig = g_stop_signal.load(); sig != 0 && r.stop_reason == "interrupted")
         r.stop_reason = fmt::format("interrupted by {}", signal_name(sig));
     if (!r.started) {
-        fmt::print(stderr, "mbstorm fuzz: {}: {}{}\n", c.target_text, r.error,
-                   connector_failure(*c.connector));
-        return kExitUsage;
+        Error error = std::move(r.error);
+        error.prefixed(c.target_text);
+        // What the connector knows (a TLS handshake's refusal) ends the message.
+        return fail("fuzz", Error(error.code(), error.message() + connector_failure(*c.connector),
+                                  error.place()));
     }
     if (!o.baseline.empty()) netfuzz::apply_baseline(baseline, r);
     const netfuzz::RunInfo info{c.target_text, o.seed, o.naive};

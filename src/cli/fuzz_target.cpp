@@ -11,51 +11,53 @@
 
 namespace mbstorm::cli {
 
-bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
-                         std::string& error, std::uint16_t default_port) {
-    if (!net::parse_endpoint(text, out, &error, default_port)) return false;
+Result<net::Endpoint> resolve_fuzz_target(const std::string& text, bool allow_remote,
+                                          std::uint16_t default_port) {
+    net::Endpoint out;
+    if (std::string error; !net::parse_endpoint(text, out, &error, default_port))
+        return Error(ErrorCode::InvalidInput, std::move(error));
     // The rule run and write apply to writes: 127.0.0.0/8, ::1 and ::ffff:127.0.0.0/104.
     const bool loopback = load::is_loopback_address(load::numeric_address(out));
     if (!loopback && !allow_remote) {
-        error = "target " + out.to_string() +
-                " is not a loopback address; fuzzing writes to the device and may change its "
-                "outputs: pass --allow-remote if you mean it";
-        return false;
+        return Error(ErrorCode::Refused,
+                     "target " + out.to_string() +
+                         " is not a loopback address; fuzzing writes to the device and may "
+                         "change its outputs: pass --allow-remote if you mean it");
     }
-    return true;
+    return out;
 }
 
-std::shared_ptr<netfuzz::Connector> make_fuzz_connector(const std::string& target,
-                                                        bool allow_remote,
-                                                        const TransportOptions& transport,
-                                                        std::string& error) {
+Result<std::shared_ptr<netfuzz::Connector>> make_fuzz_connector(const std::string& target,
+                                                                bool allow_remote,
+                                                                const TransportOptions& transport) {
+    using Made = Result<std::shared_ptr<netfuzz::Connector>>;
     // Each transport adds its own case here as it reaches fuzz and replay.
     switch (transport.kind()) {
         case TransportKind::Tcp: {
-            net::Endpoint endpoint;
-            if (!resolve_fuzz_target(target, allow_remote, endpoint, error)) return nullptr;
-            return std::make_shared<netfuzz::TcpConnector>(endpoint);
+            Result<net::Endpoint> endpoint = resolve_fuzz_target(target, allow_remote);
+            if (!endpoint.ok()) return std::move(endpoint).error();
+            return Made(std::make_shared<netfuzz::TcpConnector>(*endpoint));
         }
         case TransportKind::Tls: {
-            net::Endpoint endpoint;
-            if (!resolve_fuzz_target(target, allow_remote, endpoint, error, 802)) return nullptr;
+            Result<net::Endpoint> endpoint = resolve_fuzz_target(target, allow_remote, 802);
+            if (!endpoint.ok()) return std::move(endpoint).error();
             std::shared_ptr<net::TlsContext> ctx;
-            if (error = client_tls(transport, ctx); !error.empty()) return nullptr;
-            return std::make_shared<netfuzz::TlsConnector>(endpoint, std::move(ctx),
-                                                           transport.tls_resume);
+            if (std::string error = client_tls(transport, ctx); !error.empty())
+                return Error(ErrorCode::InvalidInput, std::move(error));
+            return Made(std::make_shared<netfuzz::TlsConnector>(*endpoint, std::move(ctx),
+                                                                transport.tls_resume));
         }
         case TransportKind::RtuOverTcp: {
-            net::Endpoint endpoint;
-            if (!resolve_fuzz_target(target, allow_remote, endpoint, error)) return nullptr;
-            return std::make_shared<netfuzz::TcpConnector>(endpoint, codec::Framing::Rtu);
+            Result<net::Endpoint> endpoint = resolve_fuzz_target(target, allow_remote);
+            if (!endpoint.ok()) return std::move(endpoint).error();
+            return Made(std::make_shared<netfuzz::TcpConnector>(*endpoint, codec::Framing::Rtu));
         }
         case TransportKind::Serial:
             // A tty is local by nature; --target is not used.
-            return std::make_shared<netfuzz::SerialConnector>(
-                transport.serial_device, serial_settings(transport), transport.framing_kind());
+            return Made(std::make_shared<netfuzz::SerialConnector>(
+                transport.serial_device, serial_settings(transport), transport.framing_kind()));
     }
-    error = "this transport cannot be fuzzed yet";
-    return nullptr;
+    return Error(ErrorCode::Unsupported, "this transport cannot be fuzzed yet");
 }
 
 std::string connector_failure(const netfuzz::Connector& connector) {

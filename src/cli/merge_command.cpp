@@ -26,10 +26,9 @@ struct MergeOptions {
 };
 
 // The runs' own threshold expressions ("p99 < 5ms", "read: p99 < 5ms") as specs.
-bool thresholds_from_runs(const std::vector<std::string>& expressions, const stats::RunResult& run,
-                          scenario::Scenario& s, std::string& error) {
+Error thresholds_from_runs(const std::vector<std::string>& expressions, const stats::RunResult& run,
+                           scenario::Scenario& s) {
     for (const auto& e : expressions) {
-        scenario::ThresholdSpec spec;
         std::string text = e;
         std::string operation;
         if (const auto colon = e.find(": "); colon != std::string::npos) {
@@ -40,14 +39,13 @@ bool thresholds_from_runs(const std::vector<std::string>& expressions, const sta
                 }
             }
         }
-        if (!scenario::parse_threshold(text, spec, error)) {
-            error = fmt::format("threshold '{}' of the runs: {}", e, error);
-            return false;
-        }
-        spec.operation = operation;
-        s.thresholds.push_back(std::move(spec));
+        Result<scenario::ThresholdSpec> spec = scenario::parse_threshold(text);
+        if (!spec.ok())
+            return std::move(spec).error().prefixed(fmt::format("threshold '{}' of the runs", e));
+        spec->operation = operation;
+        s.thresholds.push_back(std::move(spec).value());
     }
-    return true;
+    return Error::none();
 }
 
 int merge(const MergeOptions& o) {
@@ -68,13 +66,12 @@ int merge(const MergeOptions& o) {
 
     scenario::Scenario s;
     if (!o.scenario_file.empty()) {
-        try {
-            s = scenario::load_scenario_file(o.scenario_file);
-        } catch (const scenario::ScenarioError& e) {
-            return usage_error("merge", e.what());
-        }
-    } else if (!thresholds_from_runs(merged.threshold_expressions, merged.run, s, error)) {
-        return usage_error("merge", error);
+        Result<scenario::Scenario> loaded = scenario::load_scenario_file(o.scenario_file);
+        if (!loaded.ok()) return fail("merge", loaded.error());
+        s = std::move(loaded).value();
+    } else if (Error e = thresholds_from_runs(merged.threshold_expressions, merged.run, s);
+               !e.ok()) {
+        return fail("merge", e);
     }
     scenario::evaluate_thresholds(s, merged.run);
 

@@ -29,19 +29,13 @@ struct ReplayOptions {
 };
 
 int run_replay(const ReplayOptions& o) {
-    std::string error;
-    const std::shared_ptr<netfuzz::Connector> connector =
-        make_fuzz_connector(o.target, o.allow_remote, o.transport, error);
-    if (!connector) {
-        fmt::print(stderr, "mbstorm replay: {}\n", error);
-        return kExitUsage;
-    }
-    netfuzz::Connector& target = *connector;
-    netfuzz::Finding f;
-    if (!netfuzz::load_finding(o.finding, f, error)) {
-        fmt::print(stderr, "mbstorm replay: {}\n", error);
-        return kExitUsage;
-    }
+    const Result<std::shared_ptr<netfuzz::Connector>> connector =
+        make_fuzz_connector(o.target, o.allow_remote, o.transport);
+    if (!connector.ok()) return fail("replay", connector.error());
+    netfuzz::Connector& target = **connector;
+    Result<netfuzz::Finding> loaded = netfuzz::load_finding(o.finding);
+    if (!loaded.ok()) return fail("replay", loaded.error());
+    netfuzz::Finding f = std::move(loaded).value();
     // The case's bytes are framed as the transport it was found over framed them.
     if (f.profile.framing != target.framing() || f.profile.serial_line != target.serial_line()) {
         auto over = [](codec::Framing framing, bool serial) {
@@ -52,12 +46,11 @@ int run_replay(const ReplayOptions& o) {
                                           codec::framing_name(framing))
                             : std::string("RTU over TCP (--transport rtu-over-tcp)");
         };
-        fmt::print(stderr,
-                   "mbstorm replay: the finding was found over {}; replay it over the same, not "
-                   "over {}\n",
-                   over(f.profile.framing, f.profile.serial_line),
-                   over(target.framing(), target.serial_line()));
-        return kExitUsage;
+        return usage_error(
+            "replay", fmt::format("the finding was found over {}; replay it over the same, not "
+                                  "over {}",
+                                  over(f.profile.framing, f.profile.serial_line),
+                                  over(target.framing(), target.serial_line())));
     }
     fmt::print(stderr, "mbstorm replay: WARNING: writes may be sent to {}\n", target.describe());
     fmt::print("finding: {} ({})\n", f.verdict.summary, f.key());
@@ -78,8 +71,7 @@ int run_replay(const ReplayOptions& o) {
     unsigned reproduced = 0;
     const netfuzz::Case& replayed = o.original ? f.original_case : f.fuzz_case;
     if (replayed.steps.empty()) {
-        fmt::print(stderr, "mbstorm replay: the finding holds no original case\n");
-        return kExitUsage;
+        return usage_error("replay", "the finding holds no original case");
     }
     for (unsigned i = 0; i < std::max(1u, o.runs); ++i) {
         if (can_watch && !watch.armed()) {
@@ -97,9 +89,10 @@ int run_replay(const ReplayOptions& o) {
         if (e.down_before) {
             // A crash from an earlier run: give the target time to come back.
             if (!netfuzz::wait_for_target(target, f.profile, "", 10000, ex.timeout_ms)) {
-                fmt::print(stderr, "mbstorm replay: {} does not accept connections{}\n",
-                           target.describe(), connector_failure(target));
-                return kExitUsage;
+                return fail("replay",
+                            Error(ErrorCode::Network,
+                                  fmt::format("{} does not accept connections{}", target.describe(),
+                                              connector_failure(target))));
             }
             e = netfuzz::execute_case(replayed, target, f.profile, ex);
         }

@@ -105,11 +105,10 @@ void linger_for_a_scrape(const net::HttpServer& metrics, const std::atomic<std::
 
 Error add_threshold_flags(const std::vector<std::string>& texts, scenario::Scenario& s) {
     for (const std::string& text : texts) {
-        scenario::ThresholdSpec spec;
-        std::string error;
-        if (!scenario::parse_threshold(text, spec, error))
-            return Error(ErrorCode::InvalidInput, fmt::format("--threshold '{}': {}", text, error));
-        s.thresholds.push_back(std::move(spec));
+        Result<scenario::ThresholdSpec> spec = scenario::parse_threshold(text);
+        if (!spec.ok())
+            return std::move(spec).error().prefixed(fmt::format("--threshold '{}'", text));
+        s.thresholds.push_back(std::move(spec).value());
     }
     return {};
 }
@@ -310,7 +309,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     const load::Plan::Shard shard = request.shard;
     if (shard.count != 0) {
         const Result<load::Plan> part = scenario::engine_plan(s, shard);
-        if (!part.ok()) return usage_error("run", part.error().text());
+        if (!part.ok()) return fail("run", part.error());
         fmt::print(stderr, "mbstorm run: {}\n", describe_shard(*part));
     }
     if (request.start_at) announce_start(*request.start_at);
@@ -353,16 +352,10 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
 }
 
 int run_scenario_file(const ScenarioRunRequest& request) {
-    scenario::Scenario s;
-    try {
-        s = scenario::load_scenario_file(request.file);
-    } catch (const scenario::ScenarioError& e) {
-        return usage_error("run", e.what());
-    }
-    if (const auto problems = scenario::apply_overrides(s, request.overrides); !problems.empty()) {
-        for (const auto& p : problems) fmt::print(stderr, "mbstorm run: {}\n", p);
-        return kExitUsage;
-    }
+    Result<scenario::Scenario> loaded = scenario::load_scenario_file(request.file);
+    if (!loaded.ok()) return fail("run", loaded.error());
+    scenario::Scenario s = std::move(loaded).value();
+    if (Error e = scenario::apply_overrides(s, request.overrides); !e.ok()) return fail("run", e);
     if (const Error e = add_threshold_flags(request.thresholds, s); !e.ok())
         return usage_error("run", e.text());
     if (request.print) {

@@ -62,30 +62,30 @@ bool from_sarif(const json& j, Baseline& out, std::string& error) {
 
 }  // namespace
 
-bool load_baseline(const std::string& path, Baseline& out, std::string& error) {
-    out = Baseline{path, {}};
+Result<Baseline> load_baseline(const std::string& path) {
+    Baseline out{path, {}};
     std::ifstream in(path);
-    if (!in) {
-        error = fmt::format("cannot read --baseline {}", path);
-        return false;
-    }
+    if (!in) return Error(open_failure(path), fmt::format("cannot read --baseline {}", path));
     std::stringstream text;
     text << in.rdbuf();
     const json j = json::parse(text.str(), nullptr, false);
     if (j.is_discarded() || !j.is_object()) {
-        error = fmt::format(
-            "--baseline {}: not a JSON object (give an earlier run's --json or "
-            "--sarif file)",
-            path);
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("--baseline {}: not a JSON object (give an earlier run's --json "
+                                 "or --sarif file)",
+                                 path));
     }
-    if (j.contains("findings")) return from_summary(j, out, error);
-    if (j.contains("runs")) return from_sarif(j, out, error);
-    error = fmt::format(
-        "--baseline {}: neither a fuzz --json summary (\"findings\") nor a SARIF "
-        "log (\"runs\")",
-        path);
-    return false;
+    if (!j.contains("findings") && !j.contains("runs")) {
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("--baseline {}: neither a fuzz --json summary (\"findings\") "
+                                 "nor a SARIF log (\"runs\")",
+                                 path));
+    }
+    std::string error;
+    const bool read =
+        j.contains("findings") ? from_summary(j, out, error) : from_sarif(j, out, error);
+    if (!read) return Error(ErrorCode::InvalidInput, std::move(error));
+    return out;
 }
 
 void apply_baseline(const Baseline& b, CampaignResult& r) {

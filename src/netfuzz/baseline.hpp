@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "netfuzz/campaign.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -17,9 +18,9 @@ struct Baseline {
 };
 
 // Reads `path`: an object with "findings" (fuzz --json; each finding's "root_cause") or a
-// SARIF log (each result's partialFingerprints.mbstormKey). False with `error` naming the
-// file and what is wrong.
-bool load_baseline(const std::string& path, Baseline& out, std::string& error);
+// SARIF log (each result's partialFingerprints.mbstormKey). An Error naming the file and what
+// is wrong (NotFound when there is no such file).
+Result<Baseline> load_baseline(const std::string& path);
 
 // Marks each finding known or new and records the baseline's keys no finding had.
 void apply_baseline(const Baseline& b, CampaignResult& r);

@@ -884,11 +884,10 @@ void Campaign::keep(Finding f) {
     if (!options_.out_dir.empty()) {
         const std::string dir = fmt::format("{}/{:03}-{}-{}", options_.out_dir, f.id,
                                             oracle_name(f.oracle()), slug(f.verdict.rule));
-        std::string err;
-        if (save_finding(f, dir, err))
+        if (const Error e = save_finding(f, dir); e.ok())
             f.folder = dir;
         else
-            fmt::print(stderr, "mbstorm fuzz: {}\n", err);
+            fmt::print(stderr, "mbstorm fuzz: {}\n", e.text());
     }
     by_key_[f.key()] = result_.findings.size();
     learn_costly(f);
@@ -1396,18 +1395,22 @@ void Campaign::finish() {
 void Campaign::save_to_corpus(const Case& entry) {
     if (options_.corpus_dir.empty() || corpus_write_failed_) return;
     if (resumed_.erase(steps_text(entry))) return;
-    std::string error;
-    if (!save_corpus_entry(options_.corpus_dir, next_corpus_file_++, entry, error)) {
+    if (const Error e = save_corpus_entry(options_.corpus_dir, next_corpus_file_++, entry);
+        !e.ok()) {
         corpus_write_failed_ = true;
-        result_.corpus_error = error;
+        result_.corpus_error = e.text();
     }
 }
 
 // --corpus DIR with entries from an earlier run: they run first.
 bool Campaign::resume_corpus() {
     if (!options_.coverage || options_.corpus_dir.empty()) return true;
-    std::vector<Case> saved;
-    if (!load_corpus(options_.corpus_dir, saved, result_.error)) return false;
+    Result<std::vector<Case>> loaded = load_corpus(options_.corpus_dir);
+    if (!loaded.ok()) {
+        result_.error = std::move(loaded).error();
+        return false;
+    }
+    std::vector<Case> saved = std::move(loaded).value();
     next_corpus_file_ = saved.size();
     for (const Case& c : saved)
         resumed_.insert(steps_text(split_frames(c, options_.connector->framing())));
@@ -1433,8 +1436,9 @@ bool Campaign::start_target() {
     }
     care_.restart().stop();
     result_.error =
-        fmt::format("--target-cmd did not bring up a target that answers at {} within {} ms",
-                    options_.connector->describe(), options_.restart_wait_ms);
+        Error(ErrorCode::Network,
+              fmt::format("--target-cmd did not bring up a target that answers at {} within {} ms",
+                          options_.connector->describe(), options_.restart_wait_ms));
     return false;
 }
 
@@ -1448,9 +1452,9 @@ CampaignResult Campaign::run() {
         deadline_ = start_ + static_cast<std::int64_t>(options_.max_seconds * 1e9);
     care_.set_deadline(deadline_);
     if (options_.start_target && !start_target()) return result_;
-    if (!discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile,
-                         result_.error))
-        return result_;
+    result_.error =
+        discover_target(*options_.connector, options_.unit, options_.timeout_ms, result_.profile);
+    if (!result_.error.ok()) return result_;
     result_.started = true;
     result_.coverage = options_.coverage != nullptr;
     exec_.timeout_ms = options_.timeout_ms;

@@ -79,7 +79,7 @@ struct Progress {
 
 struct CampaignResult {
     bool started = false;  // false: discovery failed (see error)
-    std::string error;
+    Error error;           // why the campaign did not start (Error::none() when it did)
     TargetProfile profile;
     DeviceModel model;  // what was known of the device's map (learned or given)
     double learn_seconds = 0;

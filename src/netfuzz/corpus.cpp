@@ -32,48 +32,40 @@ Case case_from(const json& j) {
 
 }  // namespace
 
-bool save_corpus_entry(const std::string& dir, std::size_t index, const Case& c,
-                       std::string& error) {
+Error save_corpus_entry(const std::string& dir, std::size_t index, const Case& c) {
     std::error_code ec;
     fs::create_directories(dir, ec);
-    if (ec) {
-        error = fmt::format("cannot create {}: {}", dir, ec.message());
-        return false;
-    }
+    if (ec) return Error(ErrorCode::Io, fmt::format("cannot create {}: {}", dir, ec.message()));
     const json j = {
         {"class", class_name(c.cls)}, {"function", c.function}, {"steps", steps_to_json(c)}};
     const std::string path = fmt::format("{}/{:06}.json", dir, index);
     std::ofstream out(path);
     out << j.dump(1) << "\n";
-    if (!out) {
-        error = fmt::format("cannot write {}", path);
-        return false;
-    }
-    return true;
+    if (!out) return Error(ErrorCode::Io, fmt::format("cannot write {}", path));
+    return Error::none();
 }
 
-bool load_corpus(const std::string& dir, std::vector<Case>& out, std::string& error) {
+Result<std::vector<Case>> load_corpus(const std::string& dir) {
+    std::vector<Case> out;
     std::error_code ec;
-    if (!fs::exists(dir, ec)) return true;
+    if (!fs::exists(dir, ec)) return out;
     std::vector<fs::path> files;
     for (const auto& e : fs::directory_iterator(dir, ec))
         if (e.path().extension() == ".json") files.push_back(e.path());
-    if (ec) {
-        error = fmt::format("cannot read {}: {}", dir, ec.message());
-        return false;
-    }
+    if (ec) return Error(ErrorCode::Io, fmt::format("cannot read {}: {}", dir, ec.message()));
     std::sort(files.begin(), files.end());
     for (const fs::path& p : files) {
+        // The JSON reader throws (nlohmann's, and case_from's refusals): caught here, per file.
         try {
             if (fs::file_size(p) > kMaxEntryBytes) throw std::runtime_error("too large");
             std::ifstream in(p);
             out.push_back(case_from(json::parse(in)));
         } catch (const std::exception& e) {
-            error = fmt::format("{}: not a corpus entry: {}", p.string(), e.what());
-            return false;
+            return Error(ErrorCode::InvalidInput, fmt::format("not a corpus entry: {}", e.what()),
+                         p.string());
         }
     }
-    return true;
+    return out;
 }
 
 }  // namespace mbstorm::netfuzz

@@ -8,14 +8,14 @@
 #include <vector>
 
 #include "netfuzz/case.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::netfuzz {
 
-// Writes DIR/NNNNNN.json (creating DIR). False with `error` on failure.
-bool save_corpus_entry(const std::string& dir, std::size_t index, const Case& c,
-                       std::string& error);
+// Writes DIR/NNNNNN.json (creating DIR); an Io error when it cannot.
+Error save_corpus_entry(const std::string& dir, std::size_t index, const Case& c);
 // Every *.json in DIR, in name order (none when DIR does not exist). A file that is not a
-// corpus entry is an error naming it: a corpus is not silently cut short.
-bool load_corpus(const std::string& dir, std::vector<Case>& out, std::string& error);
+// corpus entry is an InvalidInput error placed at its path: a corpus is not silently cut short.
+Result<std::vector<Case>> load_corpus(const std::string& dir);
 
 }  // namespace mbstorm::netfuzz

@@ -54,24 +54,26 @@ CoverageMap::~CoverageMap() {
     if (map_) ::shmdt(map_);
 }
 
-bool CoverageMap::create(std::size_t map_size, std::string& error) {
+Error CoverageMap::create(std::size_t map_size) {
     if (map_size < kMinMap || map_size > kMaxMap || (map_size & (map_size - 1))) {
-        error = fmt::format("coverage map size {} is not a power of two from {} to {}", map_size,
-                            kMinMap, kMaxMap);
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("coverage map size {} is not a power of two from {} to {}",
+                                 map_size, kMinMap, kMaxMap));
     }
     id_ = ::shmget(IPC_PRIVATE, map_size + sizeof(CmpLog), IPC_CREAT | IPC_EXCL | 0600);
     if (id_ < 0) {
-        error = fmt::format("cannot create the coverage map: shmget: {}", std::strerror(errno));
-        return false;
+        return Error(
+            ErrorCode::Unsupported,
+            fmt::format("cannot create the coverage map: shmget: {}", std::strerror(errno)));
     }
     void* at = ::shmat(id_, nullptr, 0);
     // Marked for removal now: it goes when the last process detaches, however mbstorm ends.
     ::shmctl(id_, IPC_RMID, nullptr);
     if (at == reinterpret_cast<void*>(-1)) {
-        error = fmt::format("cannot attach the coverage map: shmat: {}", std::strerror(errno));
         id_ = -1;
-        return false;
+        return Error(
+            ErrorCode::Unsupported,
+            fmt::format("cannot attach the coverage map: shmat: {}", std::strerror(errno)));
     }
     map_ = static_cast<std::uint8_t*>(at);
     map_size_ = map_size;
@@ -82,7 +84,7 @@ bool CoverageMap::create(std::size_t map_size, std::string& error) {
     unstable_count_ = 0;
     words_known_.assign(65536 / 8 + 256 / 8, 0);
     clear();
-    return true;
+    return Error::none();
 }
 
 void CoverageMap::export_environment() const {

@@ -20,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "util/error.hpp"
+
 namespace mbstorm::netfuzz {
 
 struct Comparison {
@@ -52,8 +54,9 @@ class CoverageMap {
 
     // Creates and attaches the segment (`map_size` a power of two, 64 B .. 16 MiB). It is
     // marked for removal at once (Linux lets the target attach it still), so no segment
-    // outlives mbstorm however it ends. False with `error` set.
-    bool create(std::size_t map_size, std::string& error);
+    // outlives mbstorm however it ends. InvalidInput for a bad size, Unsupported when this
+    // machine gives no shared memory.
+    Error create(std::size_t map_size);
     // Puts __AFL_SHM_ID and AFL_MAP_SIZE in this process's environment, for the target command.
     void export_environment() const;
 

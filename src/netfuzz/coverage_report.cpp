@@ -64,8 +64,8 @@ SourceLocation parse_location(std::string_view function, std::string_view text) 
 
 }  // namespace
 
-bool parse_function_entries(std::string_view text, std::vector<FunctionEntry>& out,
-                            std::string& error) {
+Result<std::vector<FunctionEntry>> parse_function_entries(std::string_view text) {
+    std::vector<FunctionEntry> out;
     std::set<std::pair<std::string, std::uint64_t>> seen;
     std::string module;
     std::size_t number = 0;
@@ -77,28 +77,27 @@ bool parse_function_entries(std::string_view text, std::vector<FunctionEntry>& o
         }
         FunctionEntry e{module, 0, 0};
         if (module.empty() || !parse_function_line(line, e.offset, e.guard)) {
-            error = fmt::format(
-                "line {} of the target's function list is not '{}PATH' or "
-                "'0xOFFSET GUARD' after one: '{}'",
-                number, kModulePrefix, line);
-            return false;
+            return Error(ErrorCode::InvalidInput,
+                         fmt::format("line {} of the target's function list is not '{}PATH' or "
+                                     "'0xOFFSET GUARD' after one: '{}'",
+                                     number, kModulePrefix, line));
         }
         if (seen.emplace(module, e.offset).second) out.push_back(std::move(e));
     }
-    return true;
+    return out;
 }
 
-bool parse_addr2line(std::string_view text, std::size_t addresses, std::vector<SourceLocation>& out,
-                     std::string& error) {
+Result<std::vector<SourceLocation>> parse_addr2line(std::string_view text, std::size_t addresses) {
     const std::vector<std::string_view> lines = lines_of(text);
     if (lines.size() != 2 * addresses) {
-        error = fmt::format("addr2line answered {} line(s) for {} address(es), not two each",
-                            lines.size(), addresses);
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("addr2line answered {} line(s) for {} address(es), not two each",
+                                 lines.size(), addresses));
     }
+    std::vector<SourceLocation> out;
     for (std::size_t i = 0; i < addresses; ++i)
         out.push_back(parse_location(lines[2 * i], lines[2 * i + 1]));
-    return true;
+    return out;
 }
 
 namespace {
@@ -120,15 +119,15 @@ int memory_file(const std::string& text) {
 }
 
 // Runs `argv` (found on PATH) with `input` as its stdin; its stdout is `output`. Its stderr
-// stays mbstorm's. False with `error` unless it ran and exited 0.
-bool run_filter(const std::vector<std::string>& argv, const std::string& input, std::string& output,
-                std::string& error) {
+// stays mbstorm's. An Error unless it ran and exited 0.
+Error run_filter(const std::vector<std::string>& argv, const std::string& input,
+                 std::string& output) {
     const int in = memory_file(input);
     int out[2];
     if (in < 0 || ::pipe2(out, O_CLOEXEC) != 0) {
-        error = fmt::format("cannot run {}: {}", argv[0], std::strerror(errno));
+        Error error(ErrorCode::Io, fmt::format("cannot run {}: {}", argv[0], std::strerror(errno)));
         if (in >= 0) ::close(in);
-        return false;
+        return error;
     }
     posix_spawn_file_actions_t actions;
     ::posix_spawn_file_actions_init(&actions);
@@ -145,8 +144,8 @@ bool run_filter(const std::vector<std::string>& argv, const std::string& input, 
     ::close(out[1]);
     if (spawned != 0) {
         ::close(out[0]);
-        error = fmt::format("cannot run {}: {}", argv[0], std::strerror(spawned));
-        return false;
+        return Error(spawned == ENOENT ? ErrorCode::NotFound : ErrorCode::Io,
+                     fmt::format("cannot run {}: {}", argv[0], std::strerror(spawned)));
     }
     char buffer[65536];
     for (ssize_t n; (n = ::read(out[0], buffer, sizeof buffer)) != 0;) {
@@ -159,11 +158,12 @@ bool run_filter(const std::vector<std::string>& argv, const std::string& input, 
     int status = 0;
     while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return true;
-    error = WIFEXITED(status)
-                ? fmt::format("{} failed (exit {})", fmt::join(argv, " "), WEXITSTATUS(status))
-                : fmt::format("{} was killed (signal {})", fmt::join(argv, " "), WTERMSIG(status));
-    return false;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return Error::none();
+    return Error(
+        ErrorCode::Io,
+        WIFEXITED(status)
+            ? fmt::format("{} failed (exit {})", fmt::join(argv, " "), WEXITSTATUS(status))
+            : fmt::format("{} was killed (signal {})", fmt::join(argv, " "), WTERMSIG(status)));
 }
 
 // Where a function is: FILE:LINE, or MODULE+0xOFFSET without debug info.
@@ -174,15 +174,15 @@ std::string location_text(const UnreachedFunction& f) {
 
 }  // namespace
 
-bool symbolise(const std::string& module, const std::vector<std::uint64_t>& offsets,
-               std::vector<SourceLocation>& out, std::string& error) {
+Result<std::vector<SourceLocation>> symbolise(const std::string& module,
+                                              const std::vector<std::uint64_t>& offsets) {
     std::string addresses;
     for (const std::uint64_t o : offsets) addresses += fmt::format("0x{:x}\n", o);
     std::string answer;
     // binutils' addr2line: present wherever g++ is (llvm-symbolizer would need LLVM).
-    if (!run_filter({"addr2line", "-f", "-C", "-e", module}, addresses, answer, error))
-        return false;
-    return parse_addr2line(answer, offsets.size(), out, error);
+    if (Error e = run_filter({"addr2line", "-f", "-C", "-e", module}, addresses, answer); !e.ok())
+        return e;
+    return parse_addr2line(answer, offsets.size());
 }
 
 std::string format_coverage_report(std::vector<UnreachedFunction> unreached, std::size_t total) {
@@ -202,16 +202,16 @@ std::string format_coverage_report(std::vector<UnreachedFunction> unreached, std
     return s;
 }
 
-bool coverage_report(std::string_view list_text, const CoverageMap& map, std::string& report,
-                     std::string& error) {
-    std::vector<FunctionEntry> entries;
-    if (!parse_function_entries(list_text, entries, error)) return false;
+Result<std::string> coverage_report(std::string_view list_text, const CoverageMap& map) {
+    Result<std::vector<FunctionEntry>> parsed = parse_function_entries(list_text);
+    if (!parsed.ok()) return std::move(parsed).error();
+    const std::vector<FunctionEntry>& entries = *parsed;
     if (entries.empty()) {
-        error =
-            "the target was built without pc-table: it listed no functions (build it with "
-            "clang -fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table and mbstorm's "
-            "runtime, coverage/mbstorm_coverage.c; AFL++'s compilers list none)";
-        return false;
+        return Error(ErrorCode::Unsupported,
+                     "the target was built without pc-table: it listed no functions (build it "
+                     "with clang -fsanitize-coverage=trace-pc-guard,trace-cmp,pc-table and "
+                     "mbstorm's runtime, coverage/mbstorm_coverage.c; AFL++'s compilers list "
+                     "none)");
     }
     std::map<std::string, std::vector<const FunctionEntry*>> unreached_by_module;
     for (const FunctionEntry& e : entries)
@@ -220,12 +220,11 @@ bool coverage_report(std::string_view list_text, const CoverageMap& map, std::st
     for (const auto& [module, list] : unreached_by_module) {
         std::vector<std::uint64_t> offsets;
         for (const FunctionEntry* e : list) offsets.push_back(e->offset);
-        std::vector<SourceLocation> where;
-        if (!symbolise(module, offsets, where, error)) return false;
-        for (std::size_t i = 0; i < list.size(); ++i) unreached.push_back({*list[i], where[i]});
+        Result<std::vector<SourceLocation>> where = symbolise(module, offsets);
+        if (!where.ok()) return std::move(where).error();
+        for (std::size_t i = 0; i < list.size(); ++i) unreached.push_back({*list[i], (*where)[i]});
     }
-    report = format_coverage_report(std::move(unreached), entries.size());
-    return true;
+    return format_coverage_report(std::move(unreached), entries.size());
 }
 
 FunctionListFile::~FunctionListFile() {
@@ -233,37 +232,33 @@ FunctionListFile::~FunctionListFile() {
     if (!dir_.empty()) std::filesystem::remove_all(dir_, ignored);
 }
 
-bool FunctionListFile::create(std::string& error) {
+Error FunctionListFile::create() {
     const char* tmp = std::getenv("TMPDIR");
     std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/mbstorm-functions-XXXXXX";
     if (!::mkdtemp(pattern.data())) {
-        error = fmt::format("cannot create a folder for the target's function list ({}): {}",
-                            pattern, std::strerror(errno));
-        return false;
+        return Error(ErrorCode::Io,
+                     fmt::format("cannot create a folder for the target's function list ({}): {}",
+                                 pattern, std::strerror(errno)));
     }
     dir_ = pattern;
     path_ = dir_ + "/functions.txt";
-    if (!std::ofstream(path_)) {
-        error = fmt::format("cannot create {}", path_);
-        return false;
-    }
-    return true;
+    if (!std::ofstream(path_)) return Error(ErrorCode::Io, fmt::format("cannot create {}", path_));
+    return Error::none();
 }
 
 void FunctionListFile::export_environment() const {
     ::setenv(kFunctionListVariable, path_.c_str(), 1);
 }
 
-bool FunctionListFile::read(std::string& text, std::string& error) const {
+Result<std::string> FunctionListFile::read() const {
     std::ifstream in(path_, std::ios::binary);
     if (!in) {
-        error = fmt::format("cannot read the target's function list {}", path_);
-        return false;
+        return Error(ErrorCode::Io,
+                     fmt::format("cannot read the target's function list {}", path_));
     }
     std::ostringstream all;
     all << in.rdbuf();
-    text = all.str();
-    return true;
+    return all.str();
 }
 
 }  // namespace mbstorm::netfuzz

@@ -23,10 +23,9 @@ struct FunctionEntry {
 };
 
 // Reads the runtime's list: "module PATH" lines, each followed by "0xOFFSET GUARD" lines. A
-// restarted target appends the same lines again: each function is kept once. False with
-// `error` (naming the line) when a line is neither.
-bool parse_function_entries(std::string_view text, std::vector<FunctionEntry>& out,
-                            std::string& error);
+// restarted target appends the same lines again: each function is kept once. An InvalidInput
+// error (naming the line) when a line is neither.
+Result<std::vector<FunctionEntry>> parse_function_entries(std::string_view text);
 
 struct SourceLocation {
     std::string function;  // "??" when the module has no symbol for it
@@ -35,14 +34,13 @@ struct SourceLocation {
 };
 
 // addr2line -f -C output: two lines per address, the function, then FILE:LINE ("??:0" or
-// "??:?" unknown; possibly followed by " (discriminator N)"). False with `error` unless it
+// "??:?" unknown; possibly followed by " (discriminator N)"). An InvalidInput error unless it
 // holds exactly `addresses` pairs.
-bool parse_addr2line(std::string_view text, std::size_t addresses, std::vector<SourceLocation>& out,
-                     std::string& error);
+Result<std::vector<SourceLocation>> parse_addr2line(std::string_view text, std::size_t addresses);
 
-// Names `offsets` of `module` with one addr2line run.
-bool symbolise(const std::string& module, const std::vector<std::uint64_t>& offsets,
-               std::vector<SourceLocation>& out, std::string& error);
+// Names `offsets` of `module` with one addr2line run (NotFound: no addr2line on PATH).
+Result<std::vector<SourceLocation>> symbolise(const std::string& module,
+                                              const std::vector<std::uint64_t>& offsets);
 
 struct UnreachedFunction {
     FunctionEntry entry;
@@ -53,10 +51,9 @@ struct UnreachedFunction {
 // reached (MODULE+0xOFFSET without debug info), sorted by file and line.
 std::string format_coverage_report(std::vector<UnreachedFunction> unreached, std::size_t total);
 
-// The report for the list the target wrote (`list_text`) and what `map` saw reached. False
-// with `error` when the list is empty (a target built without pc-table) or symbolising fails.
-bool coverage_report(std::string_view list_text, const CoverageMap& map, std::string& report,
-                     std::string& error);
+// The report for the list the target wrote (`list_text`) and what `map` saw reached. An Error
+// when the list is empty (Unsupported: a target built without pc-table) or symbolising fails.
+Result<std::string> coverage_report(std::string_view list_text, const CoverageMap& map);
 
 // The file the target's runtime writes its list to: created empty in a new temporary folder,
 // named in this process's environment (kFunctionListVariable) for the target command, removed
@@ -68,9 +65,9 @@ class FunctionListFile {
     FunctionListFile& operator=(const FunctionListFile&) = delete;
     ~FunctionListFile();
 
-    bool create(std::string& error);
+    Error create();
     void export_environment() const;
-    bool read(std::string& text, std::string& error) const;
+    Result<std::string> read() const;
     const std::string& path() const noexcept { return path_; }
 
   private:

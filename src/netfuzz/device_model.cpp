@@ -155,8 +155,8 @@ void normalise(std::vector<AddressRange>& ranges) {
     ranges = std::move(out);
 }
 
-bool parse_map(const std::string& text, DeviceModel& out, std::string& error) {
-    out = DeviceModel{};
+Result<DeviceModel> parse_map(const std::string& text) {
+    DeviceModel out;
     out.source = "--map";
     std::stringstream in(text);
     std::string entry;
@@ -164,30 +164,30 @@ bool parse_map(const std::string& text, DeviceModel& out, std::string& error) {
         const auto eq = entry.find('=');
         Table t{};
         if (eq == std::string::npos || !table_from_name(entry.substr(0, eq), t)) {
-            error = fmt::format(
-                "--map entry '{}': expected TABLE=FIRST-LAST, TABLE one of coils, discrete, "
-                "input, holding (e.g. holding=1000-1099,coils=200-263)",
-                entry);
-            return false;
+            return Error(ErrorCode::InvalidInput,
+                         fmt::format("--map entry '{}': expected TABLE=FIRST-LAST, TABLE one of "
+                                     "coils, discrete, input, holding (e.g. "
+                                     "holding=1000-1099,coils=200-263)",
+                                     entry));
         }
         // The project's address rule: protocol addresses, or reference numbers of the table
         // (holding=40001-40100) as a vendor's manual lists them.
         codec::AddressRange parsed;
         if (std::string why = codec::parse_address_range(entry.substr(eq + 1), t, parsed);
             !why.empty() || parsed.last < parsed.first) {
-            error = fmt::format("--map entry '{}': {}", entry,
-                                why.empty() ? "FIRST must not be above LAST" : why);
-            return false;
+            return Error(ErrorCode::InvalidInput,
+                         fmt::format("--map entry '{}': {}", entry,
+                                     why.empty() ? "FIRST must not be above LAST" : why));
         }
         const AddressRange r{parsed.first, parsed.last};
         out.table(t).ranges.push_back(r);
     }
     for (TableModel& t : out.tables) normalise(t.ranges);
     if (out.empty()) {
-        error = "--map: no table given (e.g. holding=1000-1099,coils=200-263)";
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     "--map: no table given (e.g. holding=1000-1099,coils=200-263)");
     }
-    return true;
+    return out;
 }
 
 std::string model_to_json(const DeviceModel& m) {
@@ -242,9 +242,10 @@ bool ranges_from_json(const nlohmann::json& list, const std::string& table,
     normalise(out);
     return true;
 }
-}  // namespace
 
-bool model_from_json(const std::string& text, DeviceModel& out, std::string& error) {
+// The model in `text`; false with `error`. nlohmann's exceptions and whole_number's stay
+// inside: model_from_json returns the Error.
+bool read_model(const std::string& text, DeviceModel& out, std::string& error) {
     using nlohmann::json;
     out = DeviceModel{};
     const json j = json::parse(text, nullptr, false);
@@ -289,20 +290,25 @@ bool model_from_json(const std::string& text, DeviceModel& out, std::string& err
     return true;
 }
 
-bool load_model(const std::string& path, DeviceModel& out, std::string& error) {
+}  // namespace
+
+Result<DeviceModel> model_from_json(const std::string& text) {
+    DeviceModel model;
+    if (std::string error; !read_model(text, model, error))
+        return Error(ErrorCode::InvalidInput, std::move(error));
+    return model;
+}
+
+Result<DeviceModel> load_model(const std::string& path) {
     std::ifstream in(path);
-    if (!in) {
-        error = fmt::format("--device-model {}: cannot read it", path);
-        return false;
-    }
+    if (!in)
+        return Error(open_failure(path), fmt::format("--device-model {}: cannot read it", path));
     std::stringstream text;
     text << in.rdbuf();
-    if (!model_from_json(text.str(), out, error)) {
-        error = fmt::format("--device-model {}: {}", path, error);
-        return false;
-    }
-    out.source = path;
-    return true;
+    Result<DeviceModel> model = model_from_json(text.str());
+    if (!model.ok()) return std::move(model).error().prefixed("--device-model " + path);
+    model->source = path;
+    return model;
 }
 
 std::string format_model(const DeviceModel& m) {

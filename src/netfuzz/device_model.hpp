@@ -16,6 +16,7 @@
 #include "codec/table.hpp"
 #include "netfuzz/link.hpp"
 #include "netfuzz/oracle.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -78,13 +79,14 @@ void normalise(std::vector<AddressRange>& ranges);
 
 // --map: comma-separated TABLE=FIRST-LAST or TABLE=ADDRESS entries (a table may repeat), TABLE
 // one of coils, discrete-inputs (discrete), input-registers (input), holding-registers
-// (holding); decimal or 0x hex protocol addresses. False with `error` on a bad entry.
-bool parse_map(const std::string& text, DeviceModel& out, std::string& error);
+// (holding); decimal or 0x hex protocol addresses. An InvalidInput error on a bad entry.
+Result<DeviceModel> parse_map(const std::string& text);
 
-// The model as JSON (an object; see docs/fuzz.md) and back.
+// The model as JSON (an object; see docs/fuzz.md) and back (InvalidInput when it is not one).
 std::string model_to_json(const DeviceModel& m);
-bool model_from_json(const std::string& text, DeviceModel& out, std::string& error);
-bool load_model(const std::string& path, DeviceModel& out, std::string& error);
+Result<DeviceModel> model_from_json(const std::string& text);
+// --device-model FILE: NotFound when there is no such file.
+Result<DeviceModel> load_model(const std::string& path);
 
 // Lines for the summary: one per table, then units and pauses.
 std::string format_model(const DeviceModel& m);

@@ -76,16 +76,17 @@ std::vector<std::uint8_t> unquote(const std::string& s, std::string& why) {
 
 }  // namespace
 
-bool parse_dictionary(const std::string& text, const std::string& name, Dictionary& out,
-                      std::string& error) {
+Result<Dictionary> parse_dictionary(const std::string& text, const std::string& name) {
+    Dictionary out;
     std::istringstream in(text);
     std::string line;
     for (std::size_t n = 1; std::getline(in, line); ++n) {
         const std::string t = trim(line);
         if (t.empty() || t[0] == '#') continue;
+        const std::string place = fmt::format("{}:{}", name, n);
         if (out.words.size() + out.tokens.size() >= kMaxEntries) {
-            error = fmt::format("{}:{}: more than {} entries", name, n, kMaxEntries);
-            return false;
+            return Error(ErrorCode::InvalidInput, fmt::format("more than {} entries", kMaxEntries),
+                         place);
         }
         std::uint16_t w = 0;
         if (parse_word(t, w)) {
@@ -94,37 +95,27 @@ bool parse_dictionary(const std::string& text, const std::string& name, Dictiona
         }
         const auto q = t.find('"');
         std::string value = q == std::string::npos ? t : t.substr(q);
-        if (q != std::string::npos && q > 0 && trim(t.substr(0, q)).back() != '=') {
-            error = fmt::format("{}:{}: expected name=\"value\"", name, n);
-            return false;
-        }
+        if (q != std::string::npos && q > 0 && trim(t.substr(0, q)).back() != '=')
+            return Error(ErrorCode::InvalidInput, "expected name=\"value\"", place);
         std::string why;
         const auto bytes = unquote(value, why);
-        if (!why.empty()) {
-            error = fmt::format("{}:{}: {}", name, n, why);
-            return false;
-        }
+        if (!why.empty()) return Error(ErrorCode::InvalidInput, why, place);
         if (bytes.size() == 2)
             out.words.push_back(static_cast<std::uint16_t>(bytes[0] << 8 | bytes[1]));
         else
             out.tokens.push_back(bytes);
     }
-    return true;
+    return out;
 }
 
-bool load_dictionary(const std::string& path, Dictionary& out, std::string& error) {
+Result<Dictionary> load_dictionary(const std::string& path) {
     std::ifstream f(path, std::ios::binary);
-    if (!f) {
-        error = fmt::format("cannot read --dict {}", path);
-        return false;
-    }
+    if (!f) return Error(open_failure(path), fmt::format("cannot read --dict {}", path));
     std::ostringstream all;
     all << f.rdbuf();
-    if (all.str().size() > 16u << 20) {
-        error = fmt::format("--dict {}: larger than 16 MiB", path);
-        return false;
-    }
-    return parse_dictionary(all.str(), path, out, error);
+    if (all.str().size() > 16u << 20)
+        return Error(ErrorCode::InvalidInput, fmt::format("--dict {}: larger than 16 MiB", path));
+    return parse_dictionary(all.str(), path);
 }
 
 }  // namespace mbstorm::netfuzz

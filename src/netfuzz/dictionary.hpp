@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "util/error.hpp"
+
 namespace mbstorm::netfuzz {
 
 struct Dictionary {
@@ -16,9 +18,9 @@ struct Dictionary {
     std::vector<std::vector<std::uint8_t>> tokens;
 };
 
-// False with `error` ("FILE:LINE: what is wrong") on the first bad line.
-bool parse_dictionary(const std::string& text, const std::string& name, Dictionary& out,
-                      std::string& error);
-bool load_dictionary(const std::string& path, Dictionary& out, std::string& error);
+// An InvalidInput error placed at "FILE:LINE" on the first bad line.
+Result<Dictionary> parse_dictionary(const std::string& text, const std::string& name);
+// --dict FILE: NotFound when there is no such file.
+Result<Dictionary> load_dictionary(const std::string& path);
 
 }  // namespace mbstorm::netfuzz

@@ -54,8 +54,9 @@ std::string no_usable_answer(std::uint8_t unit, const std::vector<Pdu>& probes,
 
 // The first read the target answers normally, else the first it answers with 02 (a device
 // whose map does not start at 0 answers every canonical read so: 02, its address check, will do
-// until the model gives a read inside the map). False with `error`: none, or no connection.
-bool choose_probe(Connector& target, int timeout_ms, TargetProfile& profile, std::string& error) {
+// until the model gives a read inside the map). A Network error: no connection; InvalidInput:
+// the target answers, but none of the probes usably (the user picked the wrong unit or device).
+Error choose_probe(Connector& target, int timeout_ms, TargetProfile& profile) {
     using codec::FunctionCode;
     std::vector<Pdu> probes;
     for (FunctionCode fc : {FunctionCode::ReadHoldingRegisters, FunctionCode::ReadInputRegisters,
@@ -71,10 +72,10 @@ bool choose_probe(Connector& target, int timeout_ms, TargetProfile& profile, std
     if (!connected) {
         // Once more, for the reason (refused, unreachable, timed out): the user has to act on it.
         int why = 0;
-        error = target.open(timeout_ms, why) ? std::string("cannot connect to the target")
+        return Error(ErrorCode::Network, target.open(timeout_ms, why)
+                                             ? std::string("cannot connect to the target")
                                              : fmt::format("cannot connect to the target: {}",
-                                                           why ? std::strerror(why) : "timed out");
-        return false;
+                                                           why ? std::strerror(why) : "timed out"));
     }
     for (std::size_t i = 0; i < probes.size() && profile.probe_pdu.empty(); ++i)
         if (!answers[i].empty() && answers[i][0] == probes[i][0]) profile.probe_pdu = probes[i];
@@ -82,8 +83,9 @@ bool choose_probe(Connector& target, int timeout_ms, TargetProfile& profile, std
         if (answers[i].size() == 2 && answers[i][0] == (probes[i][0] | codec::kExceptionBit) &&
             answers[i][1] == static_cast<std::uint8_t>(codec::ExceptionCode::IllegalDataAddress))
             profile.probe_pdu = probes[i];
-    if (profile.probe_pdu.empty()) error = no_usable_answer(profile.unit, probes, answers);
-    return !profile.probe_pdu.empty();
+    if (profile.probe_pdu.empty())
+        return Error(ErrorCode::InvalidInput, no_usable_answer(profile.unit, probes, answers));
+    return Error::none();
 }
 
 // Requests pipelined behind the exception when asking whether the target drops them: all of
@@ -241,20 +243,20 @@ const std::vector<Pdu>& canonical_requests() {
     return canonical;
 }
 
-bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
-                     std::string& error) {
+Error discover_target(Connector& target, std::uint8_t unit, int timeout_ms,
+                      TargetProfile& profile) {
     profile = TargetProfile{};
     profile.unit = unit;
     profile.framing = target.framing();
     profile.serial_line = target.serial_line();
-    if (!choose_probe(target, timeout_ms, profile, error)) return false;
+    if (Error e = choose_probe(target, timeout_ms, profile); !e.ok()) return e;
     // RTU and ASCII send one request at a time: nothing is pipelined to be dropped.
     if (profile.framing == codec::Framing::Mbap)
         profile.drops_after_exception = drops_after_exception(target, profile, timeout_ms);
     std::vector<Pdu> pdus;
     const std::vector<Pdu> answers = ask_every_function(target, profile, timeout_ms, pdus);
     learn_functions(pdus, answers, profile);
-    return true;
+    return Error::none();
 }
 
 bool wait_for_target_with(RestartCommand& command, Connector& target, const TargetProfile& profile,
@@ -268,9 +270,9 @@ bool wait_for_target_with(RestartCommand& command, Connector& target, const Targ
         // run in the foreground) is waited for, not started again.
         command_running = was_running = command.running();
         if (!command_running) {
-            std::string error;
-            command_running = command.start(restart_cmd, error);
-            if (!command_running) fmt::print(stderr, "mbstorm fuzz: {}\n", error);
+            const Error started = command.start(restart_cmd);
+            command_running = started.ok();
+            if (!command_running) fmt::print(stderr, "mbstorm fuzz: {}\n", started.text());
         }
         // The wait counts from when the command returns (a `systemctl restart` may take its
         // time); one that does not return (the target in the foreground) gets a minute more.
@@ -285,8 +287,7 @@ bool wait_for_target_with(RestartCommand& command, Connector& target, const Targ
         if (command_running && command.returned()) {
             command_running = false;
             deadline = net::now_ns() + wait_ns;
-            std::string error;
-            if (foreground && command.start(restart_cmd, error)) {
+            if (foreground && command.start(restart_cmd).ok()) {
                 command_running = true;
                 deadline += kRestartCommandGraceNs;
             }

@@ -22,9 +22,8 @@ std::vector<std::uint8_t> canonical_request(const codec::FunctionInfo& info);
 const std::vector<std::vector<std::uint8_t>>& canonical_requests();
 
 // Learns the probe request, the function codes the target does not support and its vendor
-// extensions. False with `error` when the target does not answer at all.
-bool discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile,
-                     std::string& error);
+// extensions. An Error when the target cannot be reached or answers no probe usably.
+Error discover_target(Connector& target, std::uint8_t unit, int timeout_ms, TargetProfile& profile);
 
 // Waits (connects retried with backoff) until the target answers the probe, starting
 // `restart_cmd` first when given. False when it does not come back within `wait_ms` of the

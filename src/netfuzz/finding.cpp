@@ -181,30 +181,24 @@ std::string traffic_text(const Finding& f) {
     return traffic.str();
 }
 
-bool write_text(const std::string& dir, const std::string& name, const std::string& text,
-                std::string& error) {
+Error write_text(const std::string& dir, const std::string& name, const std::string& text) {
     std::ofstream o(dir + "/" + name, std::ios::trunc);
     o << text;
-    if (!o) {
-        error = fmt::format("cannot write {}/{}", dir, name);
-        return false;
-    }
-    return true;
+    if (!o) return Error(ErrorCode::Io, fmt::format("cannot write {}/{}", dir, name));
+    return Error::none();
 }
 
 }  // namespace
 
-bool save_finding(const Finding& f, const std::string& dir, std::string& error) {
+Error save_finding(const Finding& f, const std::string& dir) {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
-    if (ec) {
-        error = fmt::format("cannot create {}: {}", dir, ec.message());
-        return false;
-    }
-    return write_text(dir, "finding.json", finding_json(f).dump(2) + "\n", error) &&
-           write_text(dir, "summary.txt",
-                      f.verdict.summary + "\n" + (f.note.empty() ? "" : f.note + "\n"), error) &&
-           write_text(dir, "traffic.txt", traffic_text(f), error);
+    if (ec) return Error(ErrorCode::Io, fmt::format("cannot create {}: {}", dir, ec.message()));
+    if (Error e = write_text(dir, "finding.json", finding_json(f).dump(2) + "\n"); !e.ok())
+        return e;
+    const std::string summary = f.verdict.summary + "\n" + (f.note.empty() ? "" : f.note + "\n");
+    if (Error e = write_text(dir, "summary.txt", summary); !e.ok()) return e;
+    return write_text(dir, "traffic.txt", traffic_text(f));
 }
 
 namespace {
@@ -284,17 +278,15 @@ void load_profile(const json& p, TargetProfile& out) {
 
 }  // namespace
 
-bool load_finding(const std::string& path, Finding& out, std::string& error) {
+Result<Finding> load_finding(const std::string& path) {
     std::string file = path;
     if (std::filesystem::is_directory(path)) file = path + "/finding.json";
     std::ifstream in(file);
-    if (!in) {
-        error = fmt::format("cannot read {}", file);
-        return false;
-    }
+    if (!in) return Error(open_failure(file), fmt::format("cannot read {}", file));
+    // The JSON reader throws (nlohmann's, and the loaders' refusals above): caught here.
+    Finding out;
     try {
         const json j = json::parse(in);
-        out = Finding{};
         out.folder = path;
         out.id = static_cast<std::size_t>(whole_number(j, "id", 0, 0, 1'000'000'000));
         load_verdict(j, out);
@@ -307,10 +299,9 @@ bool load_finding(const std::string& path, Finding& out, std::string& error) {
         if (j.contains("original_case"))
             steps_from_json(j.at("original_case").at("steps"), out.original_case, kMaxLoadedSteps);
     } catch (const std::exception& e) {
-        error = fmt::format("{}: not a finding: {}", file, e.what());
-        return false;
+        return Error(ErrorCode::InvalidInput, fmt::format("not a finding: {}", e.what()), file);
     }
-    return true;
+    return out;
 }
 
 }  // namespace mbstorm::netfuzz

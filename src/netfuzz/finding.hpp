@@ -10,6 +10,7 @@
 #include "netfuzz/case.hpp"
 #include "netfuzz/executor.hpp"
 #include "netfuzz/oracle.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::netfuzz {
 
@@ -66,10 +67,11 @@ struct Finding {
     int function() const noexcept { return verdict.culprit_fc; }
 };
 
-// Writes `dir`/finding.json, summary.txt and traffic.txt. False with `error` on failure.
-bool save_finding(const Finding& f, const std::string& dir, std::string& error);
-// Accepts the folder or the finding.json path.
-bool load_finding(const std::string& path, Finding& out, std::string& error);
+// Writes `dir`/finding.json, summary.txt and traffic.txt; an Io error when it cannot.
+Error save_finding(const Finding& f, const std::string& dir);
+// Accepts the folder or the finding.json path. NotFound when there is no such file; a file
+// that is not a finding is an InvalidInput error placed at its path.
+Result<Finding> load_finding(const std::string& path);
 
 std::string to_hex(const std::vector<std::uint8_t>& bytes);
 bool from_hex(const std::string& text, std::vector<std::uint8_t>& out);

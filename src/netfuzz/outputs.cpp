@@ -113,7 +113,7 @@ std::string format_fuzz_json(const CampaignResult& r, const RunInfo& info) {
         {"seed", info.seed},
         {"generator", info.naive ? "naive" : "structured"},
         {"started", r.started},
-        {"error", r.error},
+        {"error", r.error.text()},
         {"cases", r.cases},
         {"seconds", r.seconds},
         {"cases_per_second", r.seconds > 0 ? static_cast<double>(r.cases) / r.seconds : 0.0},
@@ -190,7 +190,7 @@ std::string format_fuzz_junit(const CampaignResult& r, const RunInfo& info) {
         x += fmt::format(
             "    <testcase classname=\"mbstorm.fuzz\" name=\"target\">\n      <error "
             "message=\"{}\"/>\n    </testcase>\n",
-            xml_escape(r.started ? r.stop_reason : r.error));
+            xml_escape(r.started ? r.stop_reason : r.error.text()));
     }
     x += "  </testsuite>\n</testsuites>\n";
     return x;

@@ -32,30 +32,28 @@ void reap_left_running() {
 
 }  // namespace
 
-bool RestartCommand::start(const std::string& command, std::string& error) {
+Error RestartCommand::start(const std::string& command) {
     reap_left_running();
-    if (own_group_) return start_owned(command, error);
+    if (own_group_) return start_owned(command);
     const char* argv[] = {"sh", "-c", command.c_str(), nullptr};
     const int rc =
         ::posix_spawn(&pid_, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ);
     if (rc != 0) {
         pid_ = -1;
-        error = std::string("cannot run --restart-cmd: ") + std::strerror(rc);
-        return false;
+        return Error(ErrorCode::Io, std::string("cannot run --restart-cmd: ") + std::strerror(rc));
     }
-    return true;
+    return Error::none();
 }
 
 // The target of --target-cmd: a process group of its own (stop() ends all of it), killed
 // with mbstorm however mbstorm ends, its stdout on mbstorm's stderr (stdout may carry a
 // report).
-bool RestartCommand::start_owned(const std::string& command, std::string& error) {
+Error RestartCommand::start_owned(const std::string& command) {
     const pid_t parent = ::getpid();
     pid_ = ::fork();
-    if (pid_ < 0) {
-        error = std::string("cannot run --target-cmd: ") + std::strerror(errno);
-        return false;
-    }
+    if (pid_ < 0)
+        return Error(ErrorCode::Io,
+                     std::string("cannot run --target-cmd: ") + std::strerror(errno));
     if (pid_ == 0) {
         ::setpgid(0, 0);
         ::prctl(PR_SET_PDEATHSIG, SIGKILL);
@@ -64,7 +62,7 @@ bool RestartCommand::start_owned(const std::string& command, std::string& error)
         ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
-    return true;
+    return Error::none();
 }
 
 bool RestartCommand::returned() {

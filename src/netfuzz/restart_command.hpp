@@ -7,6 +7,8 @@
 
 #include <string>
 
+#include "util/error.hpp"
+
 namespace mbstorm::netfuzz {
 
 class RestartCommand {
@@ -17,8 +19,8 @@ class RestartCommand {
     // Ends a command still running and everything it started in its process group: SIGTERM,
     // then SIGKILL after a second.
     void stop();
-    // Starts the command; false with `error` when it cannot be started at all.
-    bool start(const std::string& command, std::string& error);
+    // Starts the command; an Io error when it cannot be started at all.
+    Error start(const std::string& command);
     // True once the command has returned (it is reaped then).
     bool returned();
     // Started and not yet returned: starting another copy now would race it.
@@ -28,7 +30,7 @@ class RestartCommand {
     ~RestartCommand();
 
   private:
-    bool start_owned(const std::string& command, std::string& error);
+    Error start_owned(const std::string& command);
     pid_t pid_ = -1;
     bool own_group_ = false;
 };

@@ -327,10 +327,9 @@ std::vector<ThresholdSpec> parse_operation_thresholds(const YamlReader& r, const
     }
     std::vector<ThresholdSpec> out;
     for (const auto& t : n) {
-        ThresholdSpec spec;
-        std::string error;
-        if (!parse_threshold(r.scalar(t, "threshold"), spec, error)) r.fail(t, error);
-        out.push_back(std::move(spec));
+        Result<ThresholdSpec> spec = parse_threshold(r.scalar(t, "threshold"));
+        if (!spec.ok()) r.fail(t, spec.error().message());
+        out.push_back(std::move(spec).value());
     }
     return out;
 }

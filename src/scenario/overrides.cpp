@@ -1,5 +1,6 @@
 // Command-line overrides and the whole-scenario checks run after them.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,16 +11,20 @@
 
 namespace mbstorm::scenario {
 
-std::vector<std::string> validate_scenario(const Scenario& s) {
+namespace {
+
+std::vector<std::string> problems_of(const Scenario& s) {
     std::vector<std::string> problems;
     load::Plan check = engine_plan(s);
     if (s.target.empty()) {
         check.host = "127.0.0.1";
         check.port = 1;  // the embedded slave's port is not known yet
     } else {
-        std::string error;
-        if (!parse_target(s.target, check.host, check.port, error)) {
-            problems.push_back("target: " + error);
+        if (const Result<Target> target = parse_target(s.target); target.ok()) {
+            check.host = target->host;
+            check.port = target->port;
+        } else {
+            problems.push_back("target: " + target.error().message());
         }
     }
     if (const Error e = load::validate_plan(check); !e.ok()) problems.push_back(e.message());
@@ -39,15 +44,24 @@ std::vector<std::string> validate_scenario(const Scenario& s) {
     return problems;
 }
 
-std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
+// Every problem, one per line; none: Error::none().
+Error as_error(const std::vector<std::string>& problems) {
+    if (problems.empty()) return Error::none();
+    return Error(ErrorCode::InvalidInput, fmt::format("{}", fmt::join(problems, "\n")));
+}
+
+}  // namespace
+
+Error validate_scenario(const Scenario& s) {
+    return as_error(problems_of(s));
+}
+
+Error apply_overrides(Scenario& s, const Overrides& o) {
     load::Plan& p = s.plan;
     std::vector<std::string> problems;
     if (o.target) {
-        std::string host, error;
-        std::uint16_t port = 0;
-        if (!parse_target(*o.target, host, port, error)) {
-            problems.push_back("--target " + error);
-            return problems;
+        if (const Result<Target> target = parse_target(*o.target); !target.ok()) {
+            return Error(ErrorCode::InvalidInput, "--target " + target.error().message());
         }
         s.target = *o.target;
     }
@@ -93,8 +107,8 @@ std::vector<std::string> apply_overrides(Scenario& s, const Overrides& o) {
     if (o.seed) p.seed = *o.seed;
     if (o.slave_threads) s.slave_threads = *o.slave_threads;
     if (o.allow_writes) p.allow_writes = true;
-    for (auto& problem : validate_scenario(s)) problems.push_back(std::move(problem));
-    return problems;
+    for (auto& problem : problems_of(s)) problems.push_back(std::move(problem));
+    return as_error(problems);
 }
 
 Scenario scenario_from_plan(const load::Plan& plan, const std::string& target) {

@@ -13,6 +13,7 @@
 #include "scenario/operation_yaml.hpp"
 #include "scenario/scenario.hpp"
 #include "scenario/yaml_reader.hpp"
+#include "yaml/positioned_error.hpp"
 
 namespace mbstorm::scenario {
 namespace {
@@ -56,9 +57,8 @@ StageSpec parse_stage(const YamlReader& r, const YAML::Node& n, std::size_t inde
 }
 
 void check_target(const YamlReader& r, const YAML::Node& n, const std::string& text) {
-    std::string host, error;
-    std::uint16_t port = 0;
-    if (!parse_target(text, host, port, error)) r.fail(n, "target: " + error);
+    if (const Result<Target> target = parse_target(text); !target.ok())
+        r.fail(n, "target: " + target.error().message());
 }
 
 }  // namespace
@@ -70,27 +70,25 @@ load::Duration Scenario::total_duration() const noexcept {
     return total;
 }
 
-bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
-                  std::string& error) {
+Result<Target> parse_target(const std::string& text) {
     const std::string forms =
         "HOST, HOST:PORT, [IPv6]:PORT or an IPv6 address; port 502 if omitted";
+    Target target;
     std::uint16_t p = 502;
     std::string why;
-    const bool split = net::split_host_port(text, host, p, &why);
-    if (!split && why.rfind("bad port", 0) != 0) {
-        error = fmt::format("{} ({})", why, forms);
-        return false;
-    }
+    const bool split = net::split_host_port(text, target.host, p, &why);
+    if (!split && why.rfind("bad port", 0) != 0)
+        return Error(ErrorCode::InvalidInput, fmt::format("{} ({})", why, forms));
     if (!split || p == 0) {
-        error = fmt::format("'{}': the port must be 1..65535 ({})", text, forms);
-        return false;
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("'{}': the port must be 1..65535 ({})", text, forms));
     }
-    if (host.empty()) {
-        error = fmt::format("'{}': the host is empty ({})", text, forms);
-        return false;
+    if (target.host.empty()) {
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("'{}': the host is empty ({})", text, forms));
     }
-    port = p;
-    return true;
+    target.port = p;
+    return target;
 }
 
 namespace {
@@ -261,8 +259,6 @@ void parse_thresholds(const YamlReader& r, const TopLevelNodes& k, const Operati
                                kMaxThresholds));
         }
         for (const auto& t : k.thresholds.node) {
-            ThresholdSpec spec;
-            std::string error;
             NodeSlot expr;
             std::string op_name;
             if (!t.IsMap()) {
@@ -284,9 +280,10 @@ void parse_thresholds(const YamlReader& r, const TopLevelNodes& k, const Operati
                                                 op_name, fmt::join(names.all(), ", ")));
                 }
             }
-            if (!parse_threshold(r.scalar(expr, "threshold"), spec, error)) r.fail(expr, error);
-            spec.operation = op_name;
-            s.thresholds.push_back(std::move(spec));
+            Result<ThresholdSpec> spec = parse_threshold(r.scalar(expr, "threshold"));
+            if (!spec.ok()) r.fail(expr, spec.error().message());
+            spec->operation = op_name;
+            s.thresholds.push_back(std::move(spec).value());
         }
     }
 }
@@ -379,18 +376,15 @@ void parse_embedded_slave(const YamlReader& r, const TopLevelNodes& k, std::stri
                    "slave: only used with the embedded slave; remove `target` or "
                    "`slave`");
         }
-        try {
-            s.slave = slave::parse_device_node(k.slave, source);
-        } catch (const slave::DeviceYamlError& e) {
-            throw ScenarioError(e.what(), e.line(), e.column());
-        }
+        // A DeviceYamlError, placed in this file, passes to parse_scenario's edge.
+        s.slave = slave::parse_device_node(k.slave, source);
         s.slave_given = true;
     }
 }
 
-}  // namespace
-
-Scenario parse_scenario(std::string_view text, std::string_view source) {
+// Throws the readers' yaml::PositionedError (a ScenarioError, or a DeviceYamlError from the
+// embedded slave's section); parse_scenario turns it into an Error.
+Scenario parse_or_throw(std::string_view text, std::string_view source) {
     const YamlReader r{std::string(source)};
     YAML::Node root;
     try {
@@ -427,25 +421,48 @@ Scenario parse_scenario(std::string_view text, std::string_view source) {
     }
 
     // Anything the engine would still refuse (a backstop: the checks above come first).
-    if (auto problems = validate_scenario(s); !problems.empty()) {
-        r.fail(root, problems.front());
-    }
+    if (const Error problems = validate_scenario(s); !problems.ok())
+        r.fail(root, problems.message().substr(0, problems.message().find('\n')));  // the first
     return s;
 }
 
-Scenario load_scenario_file(const std::string& path) {
+// The reader's message is "<place>: <message>" (yaml::Reader::fail): split it back, so the
+// text users see stays the same and the place is the Error's.
+Error positioned(const yaml::PositionedError& e, std::string_view source) {
+    std::string place(source);
+    if (e.line() > 0) place += fmt::format(":{}:{}", e.line(), e.column());
+    const std::string_view text = e.what();
+    if (text.size() > place.size() + 2 && text.starts_with(place) &&
+        text.substr(place.size(), 2) == ": ") {
+        return Error(ErrorCode::InvalidInput, std::string(text.substr(place.size() + 2)), place);
+    }
+    return Error(ErrorCode::InvalidInput, std::string(text));
+}
+
+}  // namespace
+
+Result<Scenario> parse_scenario(std::string_view text, std::string_view source) {
+    try {
+        return parse_or_throw(text, source);
+    } catch (const yaml::PositionedError& e) {  // this layer's edge: no exception leaves it
+        return positioned(e, source);
+    }
+}
+
+Result<Scenario> load_scenario_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw ScenarioError(path + ": cannot open the scenario file", 0, 0);
+    if (!in) return Error(open_failure(path), "cannot open the scenario file", path);
     // Read at most one chunk past the cap: a huge file is refused without being loaded.
     std::string text;
     char chunk[64 * 1024];
     while (text.size() <= kMaxScenarioBytes && in.read(chunk, sizeof chunk).gcount() > 0)
         text.append(chunk, static_cast<std::size_t>(in.gcount()));
     if (text.size() > kMaxScenarioBytes) {
-        throw ScenarioError(fmt::format("{}:1:1: the scenario file is larger than {} MiB (a "
-                                        "scenario is a few kilobytes; is this the right file?)",
-                                        path, kMaxScenarioBytes >> 20),
-                            1, 1);
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("the scenario file is larger than {} MiB (a scenario is a few "
+                                 "kilobytes; is this the right file?)",
+                                 kMaxScenarioBytes >> 20),
+                     path + ":1:1");
     }
     return parse_scenario(text, path);
 }

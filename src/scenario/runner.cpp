@@ -130,11 +130,13 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
                         embedded->endpoint(), embedded->threads(),
                         embedded->threads() == 1 ? "" : "s"));
     } else {
-        std::string error;
-        if (!parse_target(s.target, plan.host, plan.port, error)) {
-            out.error = Error(ErrorCode::InvalidInput, "target: " + error);
+        const Result<Target> target = parse_target(s.target);
+        if (!target.ok()) {
+            out.error = Error(ErrorCode::InvalidInput, "target: " + target.error().message());
             return out;
         }
+        plan.host = target->host;
+        plan.port = target->port;
     }
 
     load::EngineOptions eo;

@@ -29,7 +29,7 @@ struct RunHooks {
 };
 
 // The engine's plan for the scenario (its stages included; host and port as in the file),
-// or a shard's part of it (load/shard.hpp; the error says why a shard has no part).
+// or a shard's part of it (load/shard.hpp; an InvalidInput error says why a shard has none).
 load::Plan engine_plan(const Scenario& scenario);
 Result<load::Plan> engine_plan(const Scenario& scenario, load::Plan::Shard shard);
 

@@ -1,14 +1,14 @@
 // A scenario: a load test described once in YAML (scenarios/README.md documents every key).
 // Parsing resolves it to plain data: the engine's load::Plan, the staged schedule, the
 // thresholds, the read-back checks and the embedded slave's settings. Every problem found in
-// a file is a ScenarioError whose message starts with "<file>:<line>:<column>: ".
+// a file is an Error whose place is "<file>:<line>:<column>" (so its text() starts with it);
+// the YAML readers' exceptions stay inside the layer (yaml_reader.hpp).
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -17,14 +17,9 @@
 #include "scenario/expect.hpp"
 #include "scenario/threshold.hpp"
 #include "slave/device_yaml.hpp"
-#include "yaml/positioned_error.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::scenario {
-
-class ScenarioError : public yaml::PositionedError {
-  public:
-    using PositionedError::PositionedError;
-};
 
 // One stage of a staged run. `rate` / `connections` are the values reached at the end of the
 // stage; a linear stage ramps to them from the previous stage's end (the first stage from the
@@ -74,10 +69,12 @@ struct Scenario {
     load::Duration total_duration() const noexcept;
 };
 
-// Parses scenario text. Throws ScenarioError (unknown keys, wrong types, out-of-range values,
-// each with the position and the valid range). The result passes validate_scenario().
-Scenario parse_scenario(std::string_view text, std::string_view source = "<scenario>");
-Scenario load_scenario_file(const std::string& path);
+// Parses scenario text. An InvalidInput error for unknown keys, wrong types, out-of-range
+// values, each placed at "<source>:<line>:<column>" and naming the valid range. The scenario
+// passes validate_scenario().
+Result<Scenario> parse_scenario(std::string_view text, std::string_view source = "<scenario>");
+// The file parsed; NotFound or Io (placed at the path) when it cannot be read.
+Result<Scenario> load_scenario_file(const std::string& path);
 
 // Values given on the command line; each set one replaces the file's value.
 struct Overrides {
@@ -99,18 +96,24 @@ struct Overrides {
     bool allow_writes = false;
 };
 
-// Applies the overrides and re-checks the result: returns the problems (empty when usable).
-std::vector<std::string> apply_overrides(Scenario& scenario, const Overrides& overrides);
+// Applies the overrides and re-checks the result: Error::none() when usable, else an
+// InvalidInput error listing every problem, one per line.
+Error apply_overrides(Scenario& scenario, const Overrides& overrides);
 
-// Whole-scenario checks that span keys (the plan, stages against the model). Empty when usable.
-std::vector<std::string> validate_scenario(const Scenario& scenario);
+// Whole-scenario checks that span keys (the plan, stages against the model), as
+// apply_overrides reports them.
+Error validate_scenario(const Scenario& scenario);
 
 // Builds the scenario a flag-only `mbstorm run` amounts to (for --print-scenario).
 Scenario scenario_from_plan(const load::Plan& plan, const std::string& target);
 
+struct Target {
+    std::string host;
+    std::uint16_t port = 502;
+};
+
 // Parses a target (net::split_host_port's syntax; port 502 when omitted) into host and port;
-// false with a message naming the accepted forms.
-bool parse_target(const std::string& text, std::string& host, std::uint16_t& port,
-                  std::string& error);
+// an InvalidInput error naming the accepted forms.
+Result<Target> parse_target(const std::string& text);
 
 }  // namespace mbstorm::scenario

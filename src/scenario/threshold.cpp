@@ -179,9 +179,7 @@ bool compare(double observed, Comparison c, double limit) {
     return false;
 }
 
-}  // namespace
-
-bool parse_threshold(std::string_view text, ThresholdSpec& out, std::string& error) {
+bool parse_expression(std::string_view text, ThresholdSpec& out, std::string& error) {
     const std::string_view t = trim(text);
     const std::size_t op_pos = t.find_first_of("<>=!");
     if (op_pos == std::string_view::npos) {
@@ -222,6 +220,15 @@ bool parse_threshold(std::string_view text, ThresholdSpec& out, std::string& err
     if (!parse_metric(metric, out, error) || !parse_limit(value, out, error)) return false;
     out.text = fmt::format("{} {} {}", metric, comparison_text(out.comparison), value);
     return true;
+}
+
+}  // namespace
+
+Result<ThresholdSpec> parse_threshold(std::string_view text) {
+    ThresholdSpec spec;
+    if (std::string error; !parse_expression(text, spec, error))
+        return Error(ErrorCode::InvalidInput, std::move(error));
+    return spec;
 }
 
 std::string format_metric_value(Metric metric, double value) {

@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "stats/run_result.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::scenario {
 
@@ -41,8 +42,8 @@ struct ThresholdSpec {
     bool operator==(const ThresholdSpec&) const = default;
 };
 
-// Parses an expression; on failure returns false with a message naming the accepted forms.
-bool parse_threshold(std::string_view text, ThresholdSpec& out, std::string& error);
+// Parses an expression; an InvalidInput error naming the accepted forms.
+Result<ThresholdSpec> parse_threshold(std::string_view text);
 
 // Evaluates against the run (the operation is looked up by name in run.operations).
 stats::ThresholdResult evaluate_threshold(const ThresholdSpec& spec, const stats::RunResult& run);

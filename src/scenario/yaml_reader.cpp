@@ -8,7 +8,6 @@
 #include <cmath>
 #include <set>
 
-#include "scenario/scenario.hpp"
 #include "stats/duration_text.hpp"
 
 namespace mbstorm::scenario {

@@ -1,5 +1,6 @@
 // The scenario parser's YAML reader: the shared one (yaml/reader.hpp) throwing ScenarioError,
-// with durations added. Not on any hot path.
+// with durations added. Not on any hot path. The exception stays inside the scenario layer:
+// parse_scenario catches it and returns an Error (scenario.hpp).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -9,9 +10,16 @@
 #include <string_view>
 
 #include "load/plan.hpp"
+#include "yaml/positioned_error.hpp"
 #include "yaml/reader.hpp"
 
 namespace mbstorm::scenario {
+
+// What the reader throws from deep inside a document; never leaves the scenario layer.
+class ScenarioError : public yaml::PositionedError {
+  public:
+    using PositionedError::PositionedError;
+};
 
 // A node that may not have been given. (A default YAML::Node is a defined null node, and
 // assigning to a YAML::Node that already refers to a document node rewrites that node, so

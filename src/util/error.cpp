@@ -1,6 +1,8 @@
 #include "util/error.hpp"
 
+#include <filesystem>
 #include <ostream>
+#include <system_error>
 
 namespace mbstorm {
 
@@ -24,6 +26,11 @@ std::string_view error_code_name(ErrorCode code) noexcept {
             return "interrupted";
     }
     return "unknown";
+}
+
+ErrorCode open_failure(const std::string& path) {
+    std::error_code ec;
+    return std::filesystem::exists(path, ec) ? ErrorCode::Io : ErrorCode::NotFound;
 }
 
 std::string Error::text() const {

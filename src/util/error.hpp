@@ -32,6 +32,10 @@ enum class ErrorCode : std::uint8_t {
 // "invalid input", "not found", ... (for logs and tests).
 std::string_view error_code_name(ErrorCode code) noexcept;
 
+// Why a file the user named could not be opened: NotFound when `path` is not there, else Io
+// (permissions, a folder, a read error), so every reader answers "not there" the same way.
+ErrorCode open_failure(const std::string& path);
+
 class [[nodiscard]] Error {
   public:
     Error() = default;  // success

@@ -22,9 +22,8 @@ constexpr std::array<std::uint8_t, 15> kWriteFileRecord = {
 
 TEST(FrameDescribe, WriteFileRecordResponseEchoesTheRequestRowForRow) {
     std::vector<FieldRow> request, response;
-    std::string error;
-    ASSERT_TRUE(describe_pdu(kWriteFileRecord, Direction::Request, request, error)) << error;
-    ASSERT_TRUE(describe_pdu(kWriteFileRecord, Direction::Response, response, error)) << error;
+    ASSERT_TRUE(describe_pdu(kWriteFileRecord, Direction::Request, request).ok());
+    ASSERT_TRUE(describe_pdu(kWriteFileRecord, Direction::Response, response).ok());
     EXPECT_EQ(field_names(request), field_names(response));
     const std::string table = render_rows(request);
     for (const char* row :
@@ -40,8 +39,8 @@ TEST(FrameDescribe, ReadFileRecordRequestHasNoDataRows) {
     constexpr std::array<std::uint8_t, 16> pdu = {0x14, 0x0E, 0x06, 0x00, 0x04, 0x00, 0x01, 0x00,
                                                   0x02, 0x06, 0x00, 0x03, 0x00, 0x09, 0x00, 0x02};
     std::vector<FieldRow> rows;
-    std::string error;
-    ASSERT_TRUE(describe_pdu(pdu, Direction::Request, rows, error)) << error;
+    const Error error = describe_pdu(pdu, Direction::Request, rows);
+    ASSERT_TRUE(error.ok()) << error.text();
     const std::string table = render_rows(rows);
     EXPECT_NE(table.find("Sub-req 2 record length"), std::string::npos) << table;
     EXPECT_EQ(table.find("data"), std::string::npos) << table;

@@ -15,6 +15,9 @@
 #include "netfuzz/wire.hpp"
 
 using namespace mbstorm::netfuzz;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
 
 namespace {
 
@@ -70,8 +73,7 @@ TEST(CoverageMap, HitCountsGoInAflsBuckets) {
 
 TEST(CoverageMap, ACaseIsNewWhenItSetsABucketBitNoneSetBefore) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(1 << 16, error)) << error;
+    ASSERT_TRUE(m.create(1 << 16).ok());
     TargetSide t(m);
     ASSERT_NE(t.map, nullptr);
     t.map[10] = 1;
@@ -100,8 +102,7 @@ TEST(CoverageMap, ACaseIsNewWhenItSetsABucketBitNoneSetBefore) {
 // case new from then on, so that a run repeats with its seed; cells that held stay new.
 TEST(CoverageMap, CellsThatChangeBetweenRunsOfOneCaseMakeNoCaseNew) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(1 << 16, error)) << error;
+    ASSERT_TRUE(m.create(1 << 16).ok());
     TargetSide t(m);
     ASSERT_NE(t.map, nullptr);
     t.map[10] = 1;  // the input's edge
@@ -140,8 +141,7 @@ TEST(CoverageMap, CellsThatChangeBetweenRunsOfOneCaseMakeNoCaseNew) {
 
 TEST(CoverageMap, ComparisonsPastTheMapAreReadInOrder) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(1 << 12, error)) << error;
+    ASSERT_TRUE(m.create(1 << 12).ok());
     TargetSide t(m);
     ASSERT_NE(t.map, nullptr);
     std::uint8_t* log = t.map + m.map_size();
@@ -174,9 +174,9 @@ TEST(CoverageMap, ComparisonsPastTheMapAreReadInOrder) {
 
 TEST(CoverageMap, RefusesASizeThatIsNotAPowerOfTwo) {
     CoverageMap m;
-    std::string error;
-    EXPECT_FALSE(m.create(1000, error));
-    EXPECT_NE(error.find("power of two"), std::string::npos) << error;
+    const Error error = m.create(1000);
+    EXPECT_EQ(error.code(), ErrorCode::InvalidInput);
+    EXPECT_NE(error.message().find("power of two"), std::string::npos) << error.text();
 }
 
 // Input-to-state: a corpus entry's failed comparisons turn into the cases that pass them, one
@@ -285,11 +285,11 @@ TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
     c.function = 6;
     c.steps.push_back(Step{Op::Send, 1, 250, 0, frame_pdu({0x06, 0x00, 0x10, 0x00, 0x07}, 9, 1)});
     c.steps.push_back(Step{Op::ShutdownWrite, 1, 0, 0, {}});
-    std::string error;
-    ASSERT_TRUE(save_corpus_entry(dir, 0, c, error)) << error;
-    ASSERT_TRUE(save_corpus_entry(dir, 1, c, error)) << error;
-    std::vector<Case> back;
-    ASSERT_TRUE(load_corpus(dir, back, error)) << error;
+    ASSERT_TRUE(save_corpus_entry(dir, 0, c).ok());
+    ASSERT_TRUE(save_corpus_entry(dir, 1, c).ok());
+    Result<std::vector<Case>> loaded = load_corpus(dir);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().text();
+    std::vector<Case> back = *loaded;
     ASSERT_EQ(back.size(), 2u);
     EXPECT_EQ(back[1].cls, c.cls);
     EXPECT_EQ(back[1].function, 6);
@@ -304,22 +304,21 @@ TEST(CoverageCorpus, SavedEntriesLoadBackAndBadFilesAreNamed) {
           R"({"class": "coverage-mutation", "steps": [{"op": "send", "hex": "0G"}]})",
           R"({"class": "no-such-class", "steps": [{"op": "send", "hex": "00"}]})", "[1, 2"}) {
         std::ofstream(dir + "/000002.json") << bad;
-        back.clear();
-        error.clear();
-        EXPECT_FALSE(load_corpus(dir, back, error)) << bad;
-        EXPECT_NE(error.find("000002.json"), std::string::npos) << error;
+        const Error error = load_corpus(dir).error();
+        EXPECT_EQ(error.code(), ErrorCode::InvalidInput) << bad;
+        // The place is the entry's path: the user finds the file the text names.
+        EXPECT_EQ(error.place(), dir + "/000002.json") << error.text();
     }
     std::filesystem::remove_all(dir);
-    back.clear();
-    EXPECT_TRUE(load_corpus(dir, back, error));  // no folder yet: an empty corpus
-    EXPECT_TRUE(back.empty());
+    loaded = load_corpus(dir);
+    ASSERT_TRUE(loaded.ok());  // no folder yet: an empty corpus
+    EXPECT_TRUE(loaded->empty());
 }
 
 // Each case's rarest edge: of the cells it hit, the one the fewest collected cases hit.
 TEST(CoverageMap, ACaseNamesTheRarestEdgeItHit) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(65536, error)) << error;
+    ASSERT_TRUE(m.create(65536).ok());
     TargetSide target(m);
     ASSERT_NE(target.map, nullptr);
     for (int i = 0; i < 5; ++i) {  // five cases through cell 100 only
@@ -341,8 +340,7 @@ TEST(CoverageMap, ACaseNamesTheRarestEdgeItHit) {
 // rarest, half are uniform), the one whose edge fifty cases reached about once in four.
 TEST(CoverageCorpus, EntriesOfRareEdgesAreMutatedMoreOften) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(65536, error)) << error;
+    ASSERT_TRUE(m.create(65536).ok());
     TargetSide target(m);
     ASSERT_NE(target.map, nullptr);
     auto run_case = [&](std::size_t cell) {

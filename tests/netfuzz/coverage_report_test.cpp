@@ -13,6 +13,9 @@
 #include "netfuzz/coverage_report.hpp"
 
 using namespace mbstorm::netfuzz;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
 
 namespace {
 
@@ -32,9 +35,9 @@ TEST(CoverageReport, FunctionListKeepsEachFunctionOnceWithItsModule) {
     const std::string text =
         "module /srv/plc\n0x1a2b 17\n0x2000 40\nmodule /usr/lib/libx.so\n0x10 3\n"
         "module /srv/plc\n0x1a2b 17\n0x2000 40\n";
-    std::vector<FunctionEntry> entries;
-    std::string error;
-    ASSERT_TRUE(parse_function_entries(text, entries, error)) << error;
+    Result<std::vector<FunctionEntry>> parsed = parse_function_entries(text);
+    ASSERT_TRUE(parsed.ok()) << parsed.error().text();
+    std::vector<FunctionEntry> entries = *parsed;
     ASSERT_EQ(entries.size(), 3u);
     EXPECT_EQ(entries[0].module, "/srv/plc");
     EXPECT_EQ(entries[0].offset, 0x1a2bu);
@@ -43,21 +46,19 @@ TEST(CoverageReport, FunctionListKeepsEachFunctionOnceWithItsModule) {
     EXPECT_EQ(entries[2].offset, 0x10u);
     EXPECT_EQ(entries[2].guard, 3u);
 
-    entries.clear();
-    EXPECT_TRUE(parse_function_entries("", entries, error));
-    EXPECT_TRUE(entries.empty());
+    parsed = parse_function_entries("");
+    ASSERT_TRUE(parsed.ok());
+    EXPECT_TRUE(parsed->empty());
 }
 
 TEST(CoverageReport, FunctionListRefusesALineNamed) {
-    std::vector<FunctionEntry> entries;
     std::string error;
     for (const char* bad : {"0x10 3\n",                      // before any module
                             "module /a\n0x10\n",             // no guard
                             "module /a\n16 3\n",             // offset not hex
                             "module /a\n0x10 three\n",       // guard not a number
                             "module /a\n0x10 3 extra\n"}) {  // more than two fields
-        error.clear();
-        EXPECT_FALSE(parse_function_entries(bad, entries, error)) << bad;
+        error = parse_function_entries(bad).error().message();
         EXPECT_TRUE(contains(error, "line ")) << error;
     }
     EXPECT_TRUE(contains(error, "line 2")) << error;
@@ -69,9 +70,9 @@ TEST(CoverageReport, Addr2lineAnswersAreReadInPairs) {
         "parse(char const*)\n/src/parse.cpp:7 (discriminator 3)\n"
         "??\n??:0\n"
         "stripped\n??:?\n";
-    std::vector<SourceLocation> where;
-    std::string error;
-    ASSERT_TRUE(parse_addr2line(answer, 4, where, error)) << error;
+    Result<std::vector<SourceLocation>> parsed = parse_addr2line(answer, 4);
+    ASSERT_TRUE(parsed.ok()) << parsed.error().text();
+    const std::vector<SourceLocation>& where = *parsed;
     ASSERT_EQ(where.size(), 4u);
     EXPECT_EQ(where[0].function, "handle_request");
     EXPECT_EQ(where[0].file, "/src/server.c");
@@ -84,8 +85,7 @@ TEST(CoverageReport, Addr2lineAnswersAreReadInPairs) {
     EXPECT_EQ(where[3].function, "stripped");
     EXPECT_EQ(where[3].line, 0u);
 
-    where.clear();
-    EXPECT_FALSE(parse_addr2line("main\n/src/a.c:1\n", 2, where, error));
+    const std::string error = parse_addr2line("main\n/src/a.c:1\n", 2).error().message();
     EXPECT_TRUE(contains(error, "2 line(s) for 2 address(es)")) << error;
 }
 
@@ -107,10 +107,10 @@ TEST(CoverageReport, ReportCountsAndSortsByFileAndLine) {
 
 TEST(CoverageReport, ATargetWithoutPcTableIsNamedNotReported) {
     CoverageMap map;
-    std::string report, error;
-    EXPECT_FALSE(coverage_report("", map, report, error));
-    EXPECT_TRUE(contains(error, "built without pc-table")) << error;
-    EXPECT_TRUE(report.empty());
+    const Result<std::string> report = coverage_report("", map);
+    EXPECT_EQ(report.error().code(), ErrorCode::Unsupported);
+    EXPECT_TRUE(contains(report.error().message(), "built without pc-table"))
+        << report.error().text();
 }
 
 TEST(CoverageReport, Addr2lineNamesAFunctionOfThisBinary) {
@@ -118,24 +118,22 @@ TEST(CoverageReport, Addr2lineNamesAFunctionOfThisBinary) {
     ASSERT_NE(::dladdr(reinterpret_cast<void*>(&mbstorm_test_symbol_to_find), &info), 0);
     const auto offset = reinterpret_cast<std::uintptr_t>(&mbstorm_test_symbol_to_find) -
                         reinterpret_cast<std::uintptr_t>(info.dli_fbase);
-    std::vector<SourceLocation> where;
-    std::string error;
     // Not /proc/self/exe: that would be addr2line's own.
     const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-    ASSERT_TRUE(symbolise(self, {offset}, where, error)) << error;
-    ASSERT_EQ(where.size(), 1u);
-    EXPECT_EQ(where[0].function, "mbstorm_test_symbol_to_find");
+    const Result<std::vector<SourceLocation>> where = symbolise(self, {offset});
+    ASSERT_TRUE(where.ok()) << where.error().text();
+    ASSERT_EQ(where->size(), 1u);
+    EXPECT_EQ((*where)[0].function, "mbstorm_test_symbol_to_find");
 
-    EXPECT_FALSE(symbolise("/nonexistent/module", {offset}, where, error));
-    EXPECT_TRUE(contains(error, "addr2line")) << error;
+    const Error error = symbolise("/nonexistent/module", {offset}).error();
+    EXPECT_TRUE(contains(error.message(), "addr2line")) << error.text();
 }
 
 // A function counts as reached when its entry's cell was hit at any time: in a case, or
 // between cases (the target's start-up, discovery), which clear() keeps before zeroing.
 TEST(CoverageReport, ReachedKeepsEveryHitAcrossClears) {
     CoverageMap m;
-    std::string error;
-    ASSERT_TRUE(m.create(1 << 12, error)) << error;
+    ASSERT_TRUE(m.create(1 << 12).ok());
     void* at = ::shmat(m.id(), nullptr, 0);
     ASSERT_NE(at, reinterpret_cast<void*>(-1));
     auto* target = static_cast<std::uint8_t*>(at);
@@ -154,16 +152,16 @@ TEST(CoverageReport, ReachedKeepsEveryHitAcrossClears) {
 }
 
 TEST(CoverageReport, FunctionListFileIsNamedInTheEnvironmentAndRemoved) {
-    std::string path, error;
+    std::string path;
     {
         FunctionListFile file;
-        ASSERT_TRUE(file.create(error)) << error;
+        ASSERT_TRUE(file.create().ok());
         file.export_environment();
         path = file.path();
         EXPECT_EQ(std::string(std::getenv(kFunctionListVariable)), path);
-        std::string text;
-        ASSERT_TRUE(file.read(text, error)) << error;
-        EXPECT_TRUE(text.empty());
+        const Result<std::string> text = file.read();
+        ASSERT_TRUE(text.ok()) << text.error().text();
+        EXPECT_TRUE(text->empty());
     }
     EXPECT_EQ(::access(path.c_str(), F_OK), -1);
     ::unsetenv(kFunctionListVariable);

@@ -20,6 +20,9 @@ namespace {
 
 using mbstorm::codec::Table;
 using namespace mbstorm::netfuzz;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
 
 std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list) {
     std::vector<AddressRange> out;
@@ -29,33 +32,32 @@ std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list
 }
 
 TEST(DeviceModelMap, ParsesTablesRangesAndSingleAddresses) {
-    DeviceModel m;
-    std::string error;
-    ASSERT_TRUE(
-        parse_map("holding=1000-1039,holding=1060-1099,coils=0x00C8-263,input=3000", m, error))
-        << error;
+    const Result<DeviceModel> parsed =
+        parse_map("holding=1000-1039,holding=1060-1099,coils=0x00C8-263,input=3000");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().text();
+    const DeviceModel& m = *parsed;
     EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{1000, 1039}, {1060, 1099}}));
     EXPECT_EQ(m.table(Table::Coils).ranges, ranges({{200, 263}}));
     EXPECT_EQ(m.table(Table::InputRegisters).ranges, ranges({{3000, 3000}}));
     EXPECT_TRUE(m.table(Table::DiscreteInputs).ranges.empty());
     // Reference numbers, as a vendor's manual lists them (the project's address rule).
-    DeviceModel refs;
-    ASSERT_TRUE(parse_map("holding=40001-40010", refs, error)) << error;
-    EXPECT_EQ(refs.table(Table::HoldingRegisters).ranges, ranges({{0, 9}}));
+    const Result<DeviceModel> refs = parse_map("holding=40001-40010");
+    ASSERT_TRUE(refs.ok()) << refs.error().text();
+    EXPECT_EQ(refs->table(Table::HoldingRegisters).ranges, ranges({{0, 9}}));
     EXPECT_EQ(m.table(Table::HoldingRegisters).entries(), 80u);
     EXPECT_TRUE(m.table(Table::HoldingRegisters).contains(1039));
     EXPECT_FALSE(m.table(Table::HoldingRegisters).contains(1040));
 }
 
 TEST(DeviceModelMap, AdjacentRangesMergeAndBadEntriesAreRefused) {
-    DeviceModel m;
-    std::string error;
-    ASSERT_TRUE(parse_map("holding=10-19,holding=20-29,holding=5-12", m, error)) << error;
-    EXPECT_EQ(m.table(Table::HoldingRegisters).ranges, ranges({{5, 29}}));
+    const Result<DeviceModel> m = parse_map("holding=10-19,holding=20-29,holding=5-12");
+    ASSERT_TRUE(m.ok()) << m.error().text();
+    EXPECT_EQ(m->table(Table::HoldingRegisters).ranges, ranges({{5, 29}}));
     for (const char* bad :
          {"", "registers=1-2", "holding=5-1", "holding=1-70000", "holding", "coils=x"}) {
-        EXPECT_FALSE(parse_map(bad, m, error)) << bad;
-        EXPECT_NE(error.find("--map"), std::string::npos) << error;
+        const Error error = parse_map(bad).error();
+        EXPECT_EQ(error.code(), ErrorCode::InvalidInput) << bad;
+        EXPECT_NE(error.message().find("--map"), std::string::npos) << error.text();
     }
 }
 
@@ -71,9 +73,9 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     m.exception_pause_ms[3] = 100;
     m.partial = true;
     m.table(Table::HoldingRegisters).found_during_run = ranges({{1060, 1099}});
-    DeviceModel back;
-    std::string error;
-    ASSERT_TRUE(model_from_json(model_to_json(m), back, error)) << error;
+    const Result<DeviceModel> read = model_from_json(model_to_json(m));
+    ASSERT_TRUE(read.ok()) << read.error().text();
+    const DeviceModel& back = *read;
     EXPECT_EQ(back.table(Table::HoldingRegisters).ranges, m.table(Table::HoldingRegisters).ranges);
     EXPECT_EQ(back.table(Table::HoldingRegisters).max_quantity, 40);
     EXPECT_EQ(back.table(Table::HoldingRegisters).writes, WritesStick::Yes);
@@ -83,17 +85,14 @@ TEST(DeviceModelJson, RoundTripsEverythingItSays) {
     EXPECT_TRUE(back.pauses_after_exceptions());
     EXPECT_TRUE(back.partial);
     EXPECT_EQ(back.table(Table::HoldingRegisters).found_during_run, ranges({{1060, 1099}}));
-    EXPECT_FALSE(
-        model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}", back, error));
-    EXPECT_FALSE(model_from_json("[]", back, error));
+    EXPECT_FALSE(model_from_json("{\"tables\": {\"holding\": {\"ranges\": [[5, 1]]}}}").ok());
+    EXPECT_FALSE(model_from_json("[]").ok());
 }
 
 // A model.json is a file the user may edit or bring from elsewhere: numbers that do not fit
 // their field (found by fuzz/fuzz_inputs.cpp: 3e28 as an address was undefined behaviour)
 // are refused with the field named, never converted.
 TEST(DeviceModelJson, RefusesNumbersThatDoNotFitTheirField) {
-    DeviceModel back;
-    std::string error;
     for (const char* bad : {
              R"({"tables": {"holding": {"ranges": [[3e28, 4e28]]}}})",
              R"({"tables": {"holding": {"ranges": [[-1, 5]]}}})",
@@ -104,9 +103,9 @@ TEST(DeviceModelJson, RefusesNumbersThatDoNotFitTheirField) {
              R"({"tables": {}, "units": [1.5]})",
              R"({"tables": {}, "exception_pause_ms": {"01": -3}})",
          }) {
-        error.clear();
-        EXPECT_FALSE(model_from_json(bad, back, error)) << bad;
-        EXPECT_NE(error.find("whole number"), std::string::npos) << bad << ": " << error;
+        const Error error = model_from_json(bad).error();
+        EXPECT_NE(error.message().find("whole number"), std::string::npos)
+            << bad << ": " << error.text();
     }
 }
 
@@ -122,10 +121,9 @@ struct SparseDevice {
         const std::string line = process->wait_for_line("PORT ");
         if (line.empty()) return false;
         mbstorm::net::Endpoint ep;
-        std::string error;
         if (!mbstorm::net::parse_endpoint("127.0.0.1:" + line.substr(5), ep)) return false;
         connector = std::make_unique<TcpConnector>(ep);
-        return discover_target(*connector, 1, 1000, profile, error);
+        return discover_target(*connector, 1, 1000, profile).ok();
     }
 };
 
@@ -186,9 +184,10 @@ TEST(DeathWatch, AllSentinelsDroppingIsADeathEvenWhenTheTargetIsBackAtOnce) {
 }
 
 TEST(GeneratorAimed, CasesLandInsideTheMapAndOnEveryEdge) {
-    DeviceModel m;
-    std::string error;
-    ASSERT_TRUE(parse_map("holding=1000-1039,holding=1060-1099,coils=200-263", m, error));
+    const Result<DeviceModel> parsed =
+        parse_map("holding=1000-1039,holding=1060-1099,coils=200-263");
+    ASSERT_TRUE(parsed.ok());
+    const DeviceModel& m = *parsed;
     GeneratorOptions o;
     o.seed = 3;
     Generator g(o);

@@ -62,8 +62,8 @@ TargetProfile discover(ThreadSlave& slave) {
     EXPECT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
     TcpConnector connector(e);
     TargetProfile profile;
-    std::string error;
-    EXPECT_TRUE(discover_target(connector, 1, 300, profile, error)) << error;
+    const Error error = discover_target(connector, 1, 300, profile);
+    EXPECT_TRUE(error.ok()) << error.text();
     return profile;
 }
 

@@ -453,10 +453,10 @@ TEST(Finding, SaveLoadRoundTrip) {
     f.trace = {TraceEvent{5, 0, TraceKind::Send, {1, 2, 3}, ""}};
     const auto dir =
         (std::filesystem::temp_directory_path() / "mbstorm-finding-roundtrip").string();
-    std::string err;
-    ASSERT_TRUE(save_finding(f, dir, err)) << err;
-    Finding g;
-    ASSERT_TRUE(load_finding(dir, g, err)) << err;
+    ASSERT_TRUE(save_finding(f, dir).ok());
+    const Result<Finding> loaded = load_finding(dir);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().text();
+    const Finding& g = *loaded;
     EXPECT_EQ(g.oracle(), Oracle::Hang);
     EXPECT_EQ(g.key(), "hang:no-answer/fc03-valid");
     EXPECT_EQ(g.function(), 0x03);

@@ -84,8 +84,12 @@ struct Device {
     bool parsed = net::parse_endpoint(slave.endpoint(), endpoint, nullptr, 502);
     TcpConnector connector{endpoint};
     TargetProfile profile;
-    std::string error;
-    bool discovered() { return parsed && discover_target(connector, 1, 1000, profile, error); }
+    Error error;
+    bool discovered() {
+        if (!parsed) return false;
+        error = discover_target(connector, 1, 1000, profile);
+        return error.ok();
+    }
     // One turn of refinement: 512 reads per table.
     bool refine(DeviceModel& m, RefineCursor& cursor, LearnStats& st) {
         return refine_device_model(connector, profile, LearnOptions{}, m, cursor, 2048, st);
@@ -94,7 +98,7 @@ struct Device {
 
 TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst) {
     Device d;
-    ASSERT_TRUE(d.discovered()) << d.error;
+    ASSERT_TRUE(d.discovered()) << d.error.text();
     LearnStats learned;
     DeviceModel m = learn_device_model(d.connector, d.profile, LearnOptions{}, &learned);
     ASSERT_EQ(m.table(codec::Table::HoldingRegisters).ranges, ranges({{0, 9}, {5000, 5000}}));
@@ -129,7 +133,7 @@ TEST(MapRefine, RangesTheSweepSteppedOverAreFoundExactlyAndTheMiddleOfAGapFirst)
 // too, and completes the map exactly (a range spanning gaps is asked out to its edges).
 TEST(MapRefine, APartialModelIsCompleted) {
     Device d;
-    ASSERT_TRUE(d.discovered()) << d.error;
+    ASSERT_TRUE(d.discovered()) << d.error.text();
     DeviceModel m;
     m.partial = true;
     RefineCursor cursor;

@@ -118,32 +118,31 @@ TEST(RootCause, SameFaultComparesOracleAndRuleStem) {
 }
 
 TEST(Dictionary, AflEntriesWordsAndTokens) {
-    Dictionary d;
-    std::string error;
-    ASSERT_TRUE(
-        parse_dictionary("# comment\n"
-                         "setpoint=\"\\x10\\x00\"\n"
-                         "  0x2001\n"
-                         "40\n"
-                         "\"\\x03\\x00\\x00\\x00\\x0A\"\n"
-                         "quote=\"a\\\"\"\n"
-                         "\n",
-                         "my.dict", d, error))
-        << error;
+    const Result<Dictionary> parsed = parse_dictionary(
+        "# comment\n"
+        "setpoint=\"\\x10\\x00\"\n"
+        "  0x2001\n"
+        "40\n"
+        "\"\\x03\\x00\\x00\\x00\\x0A\"\n"
+        "quote=\"a\\\"\"\n"
+        "\n",
+        "my.dict");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().text();
+    const Dictionary& d = *parsed;
     EXPECT_EQ(d.words, (std::vector<std::uint16_t>{0x1000, 0x2001, 40, 0x6122}));
     ASSERT_EQ(d.tokens.size(), 1u);
     EXPECT_EQ(d.tokens[0], (std::vector<std::uint8_t>{3, 0, 0, 0, 10}));
 }
 
 TEST(Dictionary, BadLinesNameFileAndLine) {
-    Dictionary d;
-    std::string error;
-    EXPECT_FALSE(parse_dictionary("0x10\nname=\"\\q\"\n", "x.dict", d, error));
-    EXPECT_NE(error.find("x.dict:2:"), std::string::npos) << error;
-    EXPECT_FALSE(parse_dictionary("70000\n", "x.dict", d, error));
-    EXPECT_NE(error.find("x.dict:1:"), std::string::npos) << error;
-    EXPECT_FALSE(parse_dictionary("\"\"\n", "x.dict", d, error));
-    EXPECT_NE(error.find("empty"), std::string::npos) << error;
+    Error error = parse_dictionary("0x10\nname=\"\\q\"\n", "x.dict").error();
+    EXPECT_EQ(error.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(error.place(), "x.dict:2") << error.text();
+    EXPECT_EQ(error.text().rfind("x.dict:2: ", 0), 0u) << error.text();
+    error = parse_dictionary("70000\n", "x.dict").error();
+    EXPECT_EQ(error.place(), "x.dict:1") << error.text();
+    error = parse_dictionary("\"\"\n", "x.dict").error();
+    EXPECT_NE(error.message().find("empty"), std::string::npos) << error.text();
 }
 
 }  // namespace

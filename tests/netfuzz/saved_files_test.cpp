@@ -11,6 +11,9 @@
 #include "netfuzz/finding.hpp"
 
 using namespace mbstorm::netfuzz;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
 
 namespace {
 
@@ -27,18 +30,15 @@ TEST(SavedFinding, EveryNumberMustFitItsField) {
     const std::string path = (std::filesystem::temp_directory_path() /
                               ("mbstorm-finding-" + std::to_string(::getpid()) + ".json"))
                                  .string();
-    auto load = [&](const nlohmann::json& j, std::string& error) {
+    auto load = [&](const nlohmann::json& j) {
         std::ofstream(path) << j.dump();
-        Finding f;
-        error.clear();
-        return load_finding(path, f, error);
+        return load_finding(path).error();
     };
-    std::string error;
-    ASSERT_TRUE(load(good, error)) << error;
+    ASSERT_TRUE(load(good).ok()) << load(good).text();
     // A finding whose fault has no function code is saved with -1: that loads.
     nlohmann::json no_function = good;
     no_function["function"] = -1;
-    EXPECT_TRUE(load(no_function, error)) << error;
+    EXPECT_TRUE(load(no_function).ok()) << load(no_function).text();
     struct Bad {
         nlohmann::json::json_pointer where;
         nlohmann::json value;
@@ -59,8 +59,11 @@ TEST(SavedFinding, EveryNumberMustFitItsField) {
     for (const Bad& b : bad) {
         nlohmann::json j = good;
         j[b.where] = b.value;
-        EXPECT_FALSE(load(j, error)) << b.where.to_string();
-        EXPECT_NE(error.find(b.field), std::string::npos) << b.where.to_string() << ": " << error;
+        const Error error = load(j);
+        EXPECT_EQ(error.code(), ErrorCode::InvalidInput) << b.where.to_string();
+        EXPECT_EQ(error.place(), path) << error.text();
+        EXPECT_NE(error.message().find(b.field), std::string::npos)
+            << b.where.to_string() << ": " << error.text();
     }
     std::filesystem::remove(path);
 }
@@ -83,10 +86,10 @@ TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
     const auto dir = (std::filesystem::temp_directory_path() /
                       ("mbstorm-finding-profile-" + std::to_string(::getpid())))
                          .string();
-    std::string error;
-    ASSERT_TRUE(save_finding(f, dir, error)) << error;
-    Finding g;
-    ASSERT_TRUE(load_finding(dir, g, error)) << error;
+    ASSERT_TRUE(save_finding(f, dir).ok());
+    const Result<Finding> loaded = load_finding(dir);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().text();
+    const Finding& g = *loaded;
     EXPECT_TRUE(g.profile.drops_after_exception);
     EXPECT_TRUE(g.profile.refuses_length_mismatch);
     EXPECT_TRUE(g.profile.one_connection);
@@ -94,4 +97,11 @@ TEST(SavedFinding, TheProfileTheVerdictDependsOnComesBack) {
     EXPECT_EQ(g.profile.marker_address, 1000);
     EXPECT_EQ(g.profile.unmapped[3], (std::vector<std::uint16_t>{999, 1040}));
     std::filesystem::remove_all(dir);
+}
+
+// replay and the fuzz harness tell a finding that is not there from one that is not a finding.
+TEST(SavedFinding, AMissingFindingIsNotFound) {
+    const Error error = load_finding("/nonexistent/mbstorm-finding").error();
+    EXPECT_EQ(error.code(), ErrorCode::NotFound) << error.text();
+    EXPECT_EQ(error.text(), "cannot read /nonexistent/mbstorm-finding");
 }

@@ -35,8 +35,7 @@ struct SlowSplitServer {
         net::Endpoint ep;
         if (line.empty() || !net::parse_endpoint("127.0.0.1:" + line.substr(5), ep)) return false;
         connector = std::make_unique<TcpConnector>(ep);
-        std::string error;
-        return discover_target(*connector, 1, 1000, profile, error);
+        return discover_target(*connector, 1, 1000, profile).ok();
     }
 
     Execution run(std::uint32_t cut, std::uint32_t gap_us, int settle_ms = 0) {

@@ -255,8 +255,8 @@ TEST_F(TlsLinkTest, PlaintextBesideOrInsteadOfTheSessionIsRefused) {
 TEST_F(TlsLinkTest, DiscoveryAndACaseRunOverTheSession) {
     auto c = connector("operator");
     TargetProfile profile;
-    std::string error;
-    ASSERT_TRUE(discover_target(*c, 1, 2000, profile, error)) << error << c->last_failure();
+    const Error error = discover_target(*c, 1, 2000, profile);
+    ASSERT_TRUE(error.ok()) << error.text() << c->last_failure();
     EXPECT_FALSE(profile.probe_pdu.empty());
     Case one;
     one.cls = MutationClass::ValidLimits;
@@ -269,8 +269,8 @@ TEST_F(TlsLinkTest, DiscoveryAndACaseRunOverTheSession) {
 TEST_F(TlsLinkTest, PlaintextCasesFindNothingOnAServerThatRefusesThem) {
     auto c = connector("operator");
     TargetProfile profile;
-    std::string error;
-    ASSERT_TRUE(discover_target(*c, 1, 2000, profile, error)) << error;
+    const Error error = discover_target(*c, 1, 2000, profile);
+    ASSERT_TRUE(error.ok()) << error.text();
     const std::vector<Case> cases = cross_transport_cases(*c, profile);
     ASSERT_EQ(cases.size(), 7u);
     for (const Case& k : cases) {
@@ -297,7 +297,8 @@ TEST_F(TlsLinkTest, TlsCasesFindNothingOnAPlainServer) {
     ASSERT_TRUE(net::parse_endpoint(at, e, &error, 502));
     TcpConnector plain(e);
     TargetProfile profile;
-    ASSERT_TRUE(discover_target(plain, 1, 2000, profile, error)) << error;
+    const Error discovered = discover_target(plain, 1, 2000, profile);
+    ASSERT_TRUE(discovered.ok()) << discovered.text();
     const std::vector<Case> cases = cross_transport_cases(plain, profile);
     ASSERT_EQ(cases.size(), 4u);
     for (const Case& k : cases) {
@@ -342,9 +343,10 @@ TEST_F(TlsLinkTest, ATlsPortThatAnswersPlaintextIsAFindingThatReplays) {
     f.profile = profile;
     f.trace = x.trace;
     const std::string dir = *dir_ + "/finding";
-    ASSERT_TRUE(save_finding(f, dir, error)) << error;
-    Finding loaded;
-    ASSERT_TRUE(load_finding(dir, loaded, error)) << error;
+    ASSERT_TRUE(save_finding(f, dir).ok());
+    const Result<Finding> read = load_finding(dir);
+    ASSERT_TRUE(read.ok()) << read.error().text();
+    const Finding& loaded = *read;
     EXPECT_EQ(loaded.fuzz_case.cls, MutationClass::PlaintextToTls);
     const Execution again = execute_case(loaded.fuzz_case, posing, loaded.profile, ExecOptions{});
     EXPECT_TRUE(same_fault(again.verdict, f.verdict)) << again.verdict.summary;

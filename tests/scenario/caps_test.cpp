@@ -8,6 +8,7 @@
 #include <string>
 
 #include "../support/run_mbstorm.hpp"
+#include "must_parse.hpp"
 #include "scenario/operation_names.hpp"
 #include "scenario/scenario.hpp"
 
@@ -47,7 +48,7 @@ TEST(OperationNames, EachDefaultNameHasItsOwnSuffixes) {
 }
 
 TEST(ScenarioCaps, UnnamedOperationsUpToTheCapGetSuffixes) {
-    const Scenario s = parse_scenario(many_unnamed_operations(kMaxOperations), "many.yaml");
+    const Scenario s = must_parse(many_unnamed_operations(kMaxOperations), "many.yaml");
     ASSERT_EQ(s.plan.operations.size(), kMaxOperations);
     EXPECT_EQ(s.plan.operations[1].name, "read_holding_registers_2");
     EXPECT_EQ(s.plan.operations.back().name,
@@ -55,33 +56,24 @@ TEST(ScenarioCaps, UnnamedOperationsUpToTheCapGetSuffixes) {
 }
 
 TEST(ScenarioCaps, TooManyOperationsNamesTheFirstOnePastTheCap) {
-    try {
-        parse_scenario(many_unnamed_operations(kMaxOperations + 5), "many.yaml");
-        FAIL() << "accepted";
-    } catch (const ScenarioError& e) {
-        EXPECT_THAT(e.what(), HasSubstr("too many operations: 1005 (at most 1000)"));
-        EXPECT_EQ(e.line(), static_cast<int>(kMaxOperations) + 2);  // after "operations:"
-        EXPECT_EQ(e.column(), 5);
-    }
+    const Error e =
+        parse_scenario(many_unnamed_operations(kMaxOperations + 5), "many.yaml").error();
+    ASSERT_FALSE(e.ok()) << "accepted";
+    EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+    EXPECT_THAT(e.message(), HasSubstr("too many operations: 1005 (at most 1000)"));
+    // The line after "operations:" and the first, column 5.
+    EXPECT_EQ(e.place(), "many.yaml:" + std::to_string(kMaxOperations + 2) + ":5");
 }
 
 TEST(ScenarioCaps, TooManyStagesAndThresholds) {
     std::string stages = "operations: [{function: read_holding_registers}]\nstages:\n";
     for (std::size_t i = 0; i <= kMaxStages; ++i) stages += "  - {duration: 1s, rate: 10}\n";
-    EXPECT_THROW(
-        {
-            try {
-                parse_scenario(stages, "s.yaml");
-            } catch (const ScenarioError& e) {
-                EXPECT_THAT(e.what(), HasSubstr("too many stages"));
-                EXPECT_GT(e.line(), 0);
-                throw;
-            }
-        },
-        ScenarioError);
+    const Error too_many_stages = parse_scenario(stages, "s.yaml").error();
+    EXPECT_THAT(too_many_stages.text(), HasSubstr("too many stages"));
+    EXPECT_THAT(too_many_stages.place(), testing::StartsWith("s.yaml:"));
     std::string thresholds = "operations: [{function: read_holding_registers}]\nthresholds:\n";
     for (std::size_t i = 0; i <= kMaxThresholds; ++i) thresholds += "  - p99 < 5ms\n";
-    EXPECT_THROW(parse_scenario(thresholds, "t.yaml"), ScenarioError);
+    EXPECT_FALSE(parse_scenario(thresholds, "t.yaml").ok());
 }
 
 TEST(ScenarioCaps, AFileLargerThanTheCapIsRefusedWithExitTwo) {
@@ -94,13 +86,11 @@ TEST(ScenarioCaps, AFileLargerThanTheCapIsRefusedWithExitTwo) {
             out << block;
         out << "\"\noperations: [{function: read_holding_registers}]\n";
     }
-    try {
-        load_scenario_file(path.string());
-        FAIL() << "accepted";
-    } catch (const ScenarioError& e) {
-        EXPECT_THAT(e.what(), HasSubstr(path.string() + ":1:1: the scenario file is larger than "
-                                                        "4 MiB"));
-    }
+    const Error e = load_scenario_file(path.string()).error();
+    EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(e.place(), path.string() + ":1:1");
+    EXPECT_THAT(e.text(), HasSubstr(path.string() + ":1:1: the scenario file is larger than "
+                                                    "4 MiB"));
     const auto r = test::run_mbstorm("run " + path.string() + " -q", 60);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_THAT(r.output, HasSubstr(path.string() + ":1:1:"));

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "../support/run_mbstorm.hpp"
+#include "must_parse.hpp"
 #include "scenario/scenario.hpp"
 #include "slave/device_yaml_print.hpp"
 
@@ -111,7 +112,7 @@ TEST(CliScenario, PrintScenarioShowsSlaveDefaultsAndRoundTrips) {
     }
 
     const std::string path = write_temp("quickstart-printed.yaml", r.output);
-    const mbstorm::scenario::Scenario parsed = mbstorm::scenario::load_scenario_file(path);
+    const mbstorm::scenario::Scenario parsed = mbstorm::scenario::must_load(path);
     EXPECT_EQ(mbstorm::slave::format_device_yaml(parsed.slave),
               mbstorm::slave::format_device_yaml(mbstorm::slave::DeviceDescription{}));
     EXPECT_EQ(parsed.name, "quickstart");

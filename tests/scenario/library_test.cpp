@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "must_parse.hpp"
 #include "scenario/runner.hpp"
 #include "scenario/scenario.hpp"
 
@@ -37,7 +38,7 @@ TEST(ScenarioLibrary, EveryFileLoadsAndRunsForASecond) {
     for (const auto& file : library_files()) {
         SCOPED_TRACE(file);
         Scenario s;
-        ASSERT_NO_THROW(s = load_scenario_file(file));
+        ASSERT_NO_THROW(s = must_load(file));
         EXPECT_TRUE(s.target.empty()) << "library scenarios run against the embedded slave";
         Overrides o;
         o.duration = 1s;
@@ -49,8 +50,8 @@ TEST(ScenarioLibrary, EveryFileLoadsAndRunsForASecond) {
         // many-connections.yaml asks for 10k connections: more file descriptors than a test
         // machine allows (the embedded slave doubles them), so it runs with 200 here.
         if (s.plan.connections > 200) o.connections = 200;
-        const auto problems = apply_overrides(s, o);
-        ASSERT_TRUE(problems.empty()) << problems.front();
+        const Error problems = apply_overrides(s, o);
+        ASSERT_TRUE(problems.ok()) << problems.text();
         EXPECT_EQ(s.total_duration(), 1s);
         const load::LoadResult r = run_scenario(s);
         ASSERT_TRUE(r.ok()) << r.error;

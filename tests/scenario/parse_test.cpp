@@ -4,6 +4,7 @@
 
 #include <filesystem>
 
+#include "must_parse.hpp"
 #include "scenario/print.hpp"
 #include "scenario/scenario.hpp"
 #include "slave/device_yaml_print.hpp"
@@ -76,7 +77,7 @@ thresholds:
 )";
 
 TEST(ScenarioParse, EveryKeyLandsInThePlan) {
-    const Scenario s = parse_scenario(kFull, "full.yaml");
+    const Scenario s = must_parse(kFull, "full.yaml");
     const load::Plan& p = s.plan;
     EXPECT_EQ(s.name, "full");
     EXPECT_EQ(s.description, "every key");
@@ -154,7 +155,7 @@ TEST(ScenarioParse, EveryKeyLandsInThePlan) {
 }
 
 TEST(ScenarioParse, DefaultsForAMinimalFile) {
-    const Scenario s = parse_scenario("operations:\n  - function: 4\n", "dir/min.yaml");
+    const Scenario s = must_parse("operations:\n  - function: 4\n", "dir/min.yaml");
     EXPECT_EQ(s.name, "min");
     EXPECT_TRUE(s.target.empty());
     EXPECT_EQ(s.plan.connections, kDefaultConnections);
@@ -169,7 +170,7 @@ TEST(ScenarioParse, DefaultsForAMinimalFile) {
 }
 
 TEST(ScenarioParse, RateAloneMeansOpenLoopAndDefaultNamesStayUnique) {
-    const Scenario s = parse_scenario(
+    const Scenario s = must_parse(
         "rate: 100\ntarget: '[::1]:1502'\noperations:\n  - {function: 3}\n  - {function: 3}\n",
         "x.yaml");
     EXPECT_EQ(s.plan.model, load::LoadModel::OpenLoop);
@@ -180,7 +181,7 @@ TEST(ScenarioParse, RateAloneMeansOpenLoopAndDefaultNamesStayUnique) {
 
 TEST(ScenarioParse, ZeroDurationIsFineWithATransactionCount) {
     const Scenario s =
-        parse_scenario("duration: 0\ntransactions: 500\noperations: [{function: 3}]\n", "t.yaml");
+        must_parse("duration: 0\ntransactions: 500\noperations: [{function: 3}]\n", "t.yaml");
     EXPECT_EQ(s.plan.transactions, 500U);
     EXPECT_EQ(s.plan.duration, 0s);
 }
@@ -189,7 +190,7 @@ TEST(ScenarioParse, ZeroDurationIsFineWithATransactionCount) {
 // a default in its place) prints its own output identically, yet the plan read back differs.
 // The scenario_yaml fuzz harness checks the same on every scenario it finds.
 void expect_reads_back_member_by_member(const Scenario& s) {
-    const Scenario again = parse_scenario(format_scenario(s), s.source);
+    const Scenario again = must_parse(format_scenario(s), s.source);
     EXPECT_EQ(again.name, s.name);
     EXPECT_EQ(again.description, s.description);
     EXPECT_EQ(again.target, s.target);
@@ -205,14 +206,14 @@ void expect_reads_back_member_by_member(const Scenario& s) {
 TEST(ScenarioPrint, ReadsBackToTheSamePlanMemberByMember) {
     {
         SCOPED_TRACE("full.yaml");
-        expect_reads_back_member_by_member(parse_scenario(kFull, "full.yaml"));
+        expect_reads_back_member_by_member(must_parse(kFull, "full.yaml"));
     }
     const std::filesystem::path folder = std::filesystem::path(MBSTORM_SOURCE_DIR) / "scenarios";
     std::size_t files = 0;
     for (const auto& entry : std::filesystem::directory_iterator(folder)) {
         if (entry.path().extension() != ".yaml") continue;
         SCOPED_TRACE(entry.path().string());
-        expect_reads_back_member_by_member(load_scenario_file(entry.path().string()));
+        expect_reads_back_member_by_member(must_load(entry.path().string()));
         ++files;
     }
     EXPECT_GE(files, 7u);
@@ -223,14 +224,14 @@ TEST(ScenarioPrint, ReadsBackToTheSamePlanMemberByMember) {
 // its thresholds in another order, and with a longer list under the operation than the cap
 // allows (the file was accepted, its printed form refused).
 TEST(ScenarioPrint, ThresholdsReadBackWhereTheyWereWritten) {
-    const Scenario s = parse_scenario(R"(
+    const Scenario s = must_parse(R"(
 operations:
   - {name: r, function: 3, thresholds: ["p99 < 5ms"]}
 thresholds:
   - error_rate < 0.1%
   - {operation: r, check: "p99.9 <= 20ms"}
 )",
-                                      "t.yaml");
+                                  "t.yaml");
     ASSERT_EQ(s.thresholds.size(), 3u);
     EXPECT_TRUE(s.thresholds[0].in_operation);
     EXPECT_FALSE(s.thresholds[2].in_operation);
@@ -238,7 +239,7 @@ thresholds:
     const std::string printed = format_scenario(s);
     EXPECT_NE(printed.find(R"({operation: r, check: "p99.9 <= 20ms"})"), std::string::npos)
         << printed;
-    const Scenario again = parse_scenario(printed, "t.yaml");
+    const Scenario again = must_parse(printed, "t.yaml");
     EXPECT_TRUE(again.thresholds == s.thresholds);
 }
 
@@ -250,17 +251,17 @@ TEST(ScenarioPrint, ThresholdsWithinTheCapsPrintWithinTheCaps) {
     text += "thresholds:\n";
     for (int i = 1; i <= 500; ++i)
         text += "  - {operation: r, check: \"p50 < " + std::to_string(i) + "ms\"}\n";
-    const Scenario s = parse_scenario(text, "cap.yaml");
+    const Scenario s = must_parse(text, "cap.yaml");
     ASSERT_EQ(s.thresholds.size(), 1100u);
     Scenario again;
-    ASSERT_NO_THROW(again = parse_scenario(format_scenario(s), "cap.yaml"));
+    ASSERT_NO_THROW(again = must_parse(format_scenario(s), "cap.yaml"));
     EXPECT_TRUE(again.thresholds == s.thresholds);
 }
 
 TEST(ScenarioPrint, ReadsBackToTheSameScenario) {
-    const Scenario s = parse_scenario(kFull, "full.yaml");
+    const Scenario s = must_parse(kFull, "full.yaml");
     const std::string printed = format_scenario(s);
-    const Scenario again = parse_scenario(printed, "printed.yaml");
+    const Scenario again = must_parse(printed, "printed.yaml");
     // The first line names the source file; everything after it must be identical.
     const auto body = [](const std::string& text) { return text.substr(text.find('\n')); };
     EXPECT_EQ(body(format_scenario(again)), body(printed));
@@ -274,7 +275,7 @@ TEST(ScenarioPrint, ReadsBackToTheSameScenario) {
 
 TEST(ScenarioPrint, MinimalFileShowsEveryDefault) {
     const std::string printed =
-        format_scenario(parse_scenario("operations: [{function: 6}]\n", "m.yaml"));
+        format_scenario(must_parse("operations: [{function: 6}]\n", "m.yaml"));
     for (const char* key :
          {"threads: 0", "connections: 16", "depth: 16", "model: closed", "duration: 10s",
           "transactions: 0", "warmup: 0s", "timeout: 1s", "connect_timeout: 3s",
@@ -286,7 +287,7 @@ TEST(ScenarioPrint, MinimalFileShowsEveryDefault) {
 
 // The embedded slave is printed resolved (every device key, defaults included), not as written.
 TEST(ScenarioPrint, SlaveIsPrintedResolvedAndReadsBack) {
-    const Scenario s = parse_scenario(R"(
+    const Scenario s = must_parse(R"(
 operations: [{function: 3}]
 slave:
   units: [1, "3-5"]
@@ -302,7 +303,7 @@ slave:
     delay: {fixed_ms: 0.5}
     exception: {rate: 0.5, code: 6}
 )",
-                                      "slave.yaml");
+                                  "slave.yaml");
     const std::string printed = format_scenario(s);
     for (const char* key :
          {"units: [1, 3-5]", "unknown_unit: gateway_target_failed", "diagnostics: true",
@@ -311,7 +312,7 @@ slave:
           "mode: interval", "wave: square", "vendor_name: \"mbstorm\""}) {
         EXPECT_NE(printed.find(key), std::string::npos) << key << " missing in\n" << printed;
     }
-    const Scenario again = parse_scenario(printed, "printed.yaml");
+    const Scenario again = must_parse(printed, "printed.yaml");
     EXPECT_EQ(slave::format_device_yaml(again.slave), slave::format_device_yaml(s.slave));
     ASSERT_EQ(again.slave.init.size(), 2U);
     EXPECT_EQ(again.slave.init[0].words, s.slave.init[0].words);  // float32 as its two words
@@ -322,8 +323,8 @@ slave:
 
 TEST(ScenarioPrint, NoSlaveKeyPrintsTheDefaultSlaveButATargetPrintsNone) {
     const std::string printed =
-        format_scenario(parse_scenario("operations: [{function: 3}]\n", "plain.yaml"));
-    const Scenario again = parse_scenario(printed, "printed.yaml");
+        format_scenario(must_parse("operations: [{function: 3}]\n", "plain.yaml"));
+    const Scenario again = must_parse(printed, "printed.yaml");
     EXPECT_EQ(slave::format_device_yaml(again.slave),
               slave::format_device_yaml(slave::DeviceDescription{}));
     for (const char* key : {"slave:", "units: shared", "holding_registers: 65536", "init: []",
@@ -332,19 +333,19 @@ TEST(ScenarioPrint, NoSlaveKeyPrintsTheDefaultSlaveButATargetPrintsNone) {
     }
 
     const std::string with_target = format_scenario(
-        parse_scenario("target: 127.0.0.1:502\noperations: [{function: 3}]\n", "t.yaml"));
+        must_parse("target: 127.0.0.1:502\noperations: [{function: 3}]\n", "t.yaml"));
     EXPECT_EQ(with_target.find("slave"), std::string::npos) << with_target;
 }
 
 TEST(ScenarioOverrides, FlagsReplaceFileValues) {
-    Scenario s = parse_scenario(kFull, "full.yaml");
+    Scenario s = must_parse(kFull, "full.yaml");
     Overrides o;
     o.target = "127.0.0.1:1502";
     o.connections = 2;
     o.depth = 1;
     o.duration = 300ms;  // stages are scaled to fit
     o.threads = 1;
-    ASSERT_TRUE(apply_overrides(s, o).empty());
+    ASSERT_TRUE(apply_overrides(s, o).ok());
     EXPECT_EQ(s.target, "127.0.0.1:1502");
     EXPECT_EQ(s.plan.connections, 2U);
     EXPECT_FALSE(s.stages[1].connections.has_value());
@@ -356,29 +357,30 @@ TEST(ScenarioOverrides, FlagsReplaceFileValues) {
 }
 
 TEST(ScenarioOverrides, RateSwitchesToOpenLoopAndBadValuesAreReported) {
-    Scenario s = parse_scenario("operations: [{function: 3}]\n", "o.yaml");
+    Scenario s = must_parse("operations: [{function: 3}]\n", "o.yaml");
     Overrides o;
     o.rate = 500;
-    ASSERT_TRUE(apply_overrides(s, o).empty());
+    ASSERT_TRUE(apply_overrides(s, o).ok());
     EXPECT_EQ(s.plan.model, load::LoadModel::OpenLoop);
 
     Overrides bad_target;
     bad_target.target = "nowhere:";
-    auto problems = apply_overrides(s, bad_target);
-    ASSERT_EQ(problems.size(), 1U);
-    EXPECT_NE(problems[0].find("port 502 if omitted"), std::string::npos);
+    Error problems = apply_overrides(s, bad_target);
+    EXPECT_EQ(problems.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(problems.message().find('\n'), std::string::npos) << "one problem";
+    EXPECT_NE(problems.message().find("port 502 if omitted"), std::string::npos);
 
     Overrides zero;
     zero.duration = 0s;
     problems = apply_overrides(s, zero);
-    ASSERT_FALSE(problems.empty());
-    EXPECT_NE(problems[0].find("duration"), std::string::npos) << problems[0];
+    ASSERT_FALSE(problems.ok());
+    EXPECT_NE(problems.message().find("duration"), std::string::npos) << problems.text();
 
     Scenario staged =
-        parse_scenario("stages: [{duration: 5s}]\noperations: [{function: 3}]\n", "s.yaml");
+        must_parse("stages: [{duration: 5s}]\noperations: [{function: 3}]\n", "s.yaml");
     problems = apply_overrides(staged, zero);
-    ASSERT_FALSE(problems.empty());
-    EXPECT_NE(problems[0].find("cannot scale the stages"), std::string::npos);
+    ASSERT_FALSE(problems.ok());
+    EXPECT_NE(problems.message().find("cannot scale the stages"), std::string::npos);
 }
 
 TEST(ScenarioFromPlan, PrintsAFlagOnlyRun) {
@@ -389,7 +391,7 @@ TEST(ScenarioFromPlan, PrintsAFlagOnlyRun) {
     const std::string printed = format_scenario(scenario_from_plan(plan, "127.0.0.1:502"));
     EXPECT_NE(printed.find("target: 127.0.0.1:502"), std::string::npos) << printed;
     EXPECT_NE(printed.find("connections: 3"), std::string::npos);
-    EXPECT_NO_THROW((void)parse_scenario(printed, "flags.yaml")) << printed;
+    EXPECT_NO_THROW((void)must_parse(printed, "flags.yaml")) << printed;
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // Every run here is bounded (well under 2 s of traffic) and loopback only.
 #include <gtest/gtest.h>
 
+#include "must_parse.hpp"
 #include "scenario/runner.hpp"
 #include "scenario/scenario.hpp"
 
@@ -11,14 +12,14 @@ namespace {
 using namespace std::chrono_literals;
 
 TEST(EnginePlan, CarriesTheStagesToTheEngine) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 rate: 100
 stages:
   - {name: up, duration: 2s, rate: 1100}
   - {duration: 1500ms, connections: 3, ramp: constant}
 operations: [{function: 3}]
 )",
-                                "s.yaml");
+                            "s.yaml");
     const load::Plan plan = engine_plan(s);
     ASSERT_EQ(plan.stages.size(), 2U);
     EXPECT_EQ(plan.stages[0].name, "up");
@@ -33,7 +34,7 @@ operations: [{function: 3}]
 }
 
 TEST(RunScenario, StagedClosedLoopRunHasPerStageResults) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 connections: 1
 depth: 2
 slave_threads: 1
@@ -48,7 +49,7 @@ thresholds:
   - transactions > 0
   - {operation: r, check: "max < 10s"}
 )",
-                                "staged.yaml");
+                            "staged.yaml");
     const load::LoadResult r = run_scenario(s);
     ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 2U);
@@ -69,7 +70,7 @@ thresholds:
 }
 
 TEST(RunScenario, ConnectionsCloseAtZeroAndOpenAgainWithoutErrors) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 connections: 3
 depth: 4
 slave_threads: 1
@@ -80,7 +81,7 @@ stages:
   - {name: two, duration: 300ms, connections: 2, ramp: constant}
 operations: [{function: 3, address: 0-99, quantity: 5}]
 )",
-                                "zero.yaml");
+                            "zero.yaml");
     const load::LoadResult r = run_scenario(s);
     ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 3U);
@@ -95,7 +96,7 @@ operations: [{function: 3, address: 0-99, quantity: 5}]
 }
 
 TEST(RunScenario, OpenLoopRampFollowsTheScheduledRate) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 rate: 200
 connections: 4
 depth: 8
@@ -106,7 +107,7 @@ stages:
   - {name: hold, duration: 1s}
 operations: [{function: 3, quantity: 2}]
 )",
-                                "ramp.yaml");
+                            "ramp.yaml");
     const load::LoadResult r = run_scenario(s);
     ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.stages.size(), 2U);
@@ -130,7 +131,7 @@ operations: [{function: 3, quantity: 2}]
 // Connections opened at 4/s cannot reach 6 in 400 ms: every threshold may pass on the load
 // that was there, but the load the scenario describes never was, and the run fails.
 TEST(RunScenario, ThresholdsFailWhenThePlanWasNotCarriedOut) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 connections: 6
 connect_rate: 4
 depth: 1
@@ -141,7 +142,7 @@ operations: [{function: 3}]
 thresholds:
   - error_rate == 0
 )",
-                                "short.yaml");
+                            "short.yaml");
     const load::LoadResult r = run_scenario(s);
     ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_FALSE(r.run.shortfalls.empty());
@@ -155,7 +156,7 @@ thresholds:
 }
 
 TEST(RunScenario, ExpectCountsMismatchesAgainstTheEmbeddedSlave) {
-    Scenario s = parse_scenario(R"(
+    Scenario s = must_parse(R"(
 connections: 2
 depth: 2
 slave_threads: 1
@@ -170,7 +171,7 @@ thresholds:
   - {operation: good, check: mismatches == 0}
   - {operation: bad, check: mismatches == 0}
 )",
-                                "expect.yaml");
+                            "expect.yaml");
     const load::LoadResult r = run_scenario(s);
     ASSERT_TRUE(r.ok()) << r.error;
     ASSERT_EQ(r.run.operations.size(), 2U);
@@ -184,7 +185,7 @@ thresholds:
 }
 
 TEST(RunScenario, StopFlagEndsAStagedRunEarly) {
-    Scenario s = parse_scenario(
+    Scenario s = must_parse(
         "stages: [{duration: 30s}]\nslave_threads: 1\nthreads: 1\nconnections: 1\n"
         "operations: [{function: 3}]\n",
         "stop.yaml");
@@ -197,7 +198,7 @@ TEST(RunScenario, StopFlagEndsAStagedRunEarly) {
 
 TEST(RunScenario, UnreachableTargetIsAnError) {
     // Port 1 on loopback: nothing listens there.
-    Scenario s = parse_scenario(
+    Scenario s = must_parse(
         "target: 127.0.0.1:1\nconnect_timeout: 500ms\nduration: 1s\nconnections: 1\n"
         "operations: [{function: 3}]\n",
         "down.yaml");

@@ -9,10 +9,9 @@ namespace mbstorm::scenario {
 namespace {
 
 ThresholdSpec parse(const char* text) {
-    ThresholdSpec spec;
-    std::string error;
-    EXPECT_TRUE(parse_threshold(text, spec, error)) << text << ": " << error;
-    return spec;
+    Result<ThresholdSpec> spec = parse_threshold(text);
+    EXPECT_TRUE(spec.ok()) << text << ": " << spec.error().text();
+    return spec.ok() ? std::move(spec).value() : ThresholdSpec{};
 }
 
 stats::RunResult sample_run() {
@@ -46,6 +45,14 @@ TEST(Threshold, ParsesTheDocumentedForms) {
     EXPECT_EQ(parse("errors == 0").comparison, Comparison::Equal);
     EXPECT_EQ(parse("p99 < 5ms").text, "p99 < 5ms");
     EXPECT_EQ(parse("p99<5ms").text, "p99 < 5ms");
+}
+
+TEST(Threshold, ARefusalIsInvalidInputNamingTheForms) {
+    const Error e = parse_threshold("p99 5ms").error();
+    EXPECT_EQ(e.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(e.place(), "");  // the caller knows where it was written (a file, --threshold)
+    EXPECT_NE(e.message().find("has no comparison"), std::string::npos) << e.text();
+    EXPECT_NE(e.message().find("<, <=, >, >=, ==, !="), std::string::npos) << e.text();
 }
 
 TEST(Threshold, EvaluatesOverallAndPerOperation) {

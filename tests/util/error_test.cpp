@@ -44,6 +44,11 @@ Result<int> half(int n) {
     return n / 2;
 }
 
+TEST(Error, AFileThatIsNotThereIsNotFoundAnyOtherOpenFailureIo) {
+    EXPECT_EQ(open_failure("/nonexistent/mbstorm/none.yaml"), ErrorCode::NotFound);
+    EXPECT_EQ(open_failure("/"), ErrorCode::Io);  // there, but a folder: not readable as a file
+}
+
 TEST(Result, HoldsAValueOrAnErrorNeverBoth) {
     const Result<int> good = half(8);
     ASSERT_TRUE(good.ok());
