@@ -109,9 +109,9 @@ std::string write_function_codes() {
 }
 
 bool write_output(const std::string& path, const std::string& text) {
-    std::string error;
-    if (report::write_text_file(path, text, error)) return true;
-    fmt::print(stderr, "mbstorm fuzz: {}\n", error);
+    const Error error = report::write_text_file(path, text);
+    if (error.ok()) return true;
+    fmt::print(stderr, "mbstorm fuzz: {}\n", error.text());
     return false;
 }
 
@@ -213,8 +213,9 @@ std::string check_fuzz_outputs(const FuzzOptions& o) {
                                      {"--sarif", o.sarif},
                                      {"--html", o.html},
                                      {"--coverage-report", o.coverage_report}}) {
-        if (!path.empty() && path != "-" && !report::check_writable(path, error))
-            return fmt::format("cannot write {} {}", flag, error);
+        if (!path.empty() && path != "-")
+            if (Error bad = report::check_writable(path); !bad.ok())
+                return fmt::format("cannot write {} {}", flag, bad.text());
     }
     const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-") +
                           (o.coverage_report == "-");

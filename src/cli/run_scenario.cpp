@@ -146,9 +146,9 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
         {"--html", &request.outputs.html},         {"--hlog", &request.outputs.hlog},
         {"--timeline", &request.outputs.timeline}, {"--junit", &request.junit}};
     for (const auto& [flag, path] : outputs) {
-        std::string error;
-        if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return usage_error("run", fmt::format("cannot write {} {}", flag, error));
+        if (!path->empty() && *path != "-")
+            if (Error bad = report::check_writable(*path); !bad.ok())
+                return usage_error("run", fmt::format("cannot write {} {}", flag, bad.text()));
     }
     if (request.outputs.hlog == "-")
         return usage_error("run", "--hlog needs a file (it is written as the run goes)");
@@ -164,17 +164,16 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     const std::string run_id = new_run_id();
     report::HlogWriter hlog;
     if (!request.outputs.hlog.empty()) {
-        std::string error;
         const std::string identity =
             report::hlog_identity_text({request.outputs.test_id, run_id, shard.index, shard.count});
-        if (!hlog.open(request.outputs.hlog, identity, error))
-            return usage_error("run", fmt::format("cannot write --hlog {}", error));
+        if (Error bad = hlog.open(request.outputs.hlog, identity); !bad.ok())
+            return usage_error("run", fmt::format("cannot write --hlog {}", bad.text()));
     }
     report::TimelineWriter timeline;
     if (!request.outputs.timeline.empty()) {
-        std::string error;
-        if (!timeline.open(request.outputs.timeline, request.outputs.test_id, run_id, error))
-            return usage_error("run", fmt::format("cannot write --timeline {}", error));
+        if (Error bad = timeline.open(request.outputs.timeline, request.outputs.test_id, run_id);
+            !bad.ok())
+            return usage_error("run", fmt::format("cannot write --timeline {}", bad.text()));
     }
     load::LiveMetrics live(request.outputs.test_id,
                            shard.count != 0 ? fmt::format("{}", shard.index) : std::string());
@@ -215,7 +214,6 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                    static_cast<double>(late) / 1e9);
     bool stream_failed = false;
     if (hlog.is_open()) {
-        std::string error;
         // A run that never started still leaves a valid (empty) log.
         const auto start = result.run.metadata.start_time;
         if (!hlog.started())
@@ -230,19 +228,18 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
                 stage.latency);
             hlog.end_interval();
         }
-        if (!hlog.close(error)) {
+        if (Error bad = hlog.close(); !bad.ok()) {
             fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", request.outputs.hlog,
-                       error);
+                       bad.text());
             stream_failed = true;
         } else {
             fmt::print(stderr, "wrote HdrHistogram interval log {}\n", request.outputs.hlog);
         }
     }
     if (timeline.is_open()) {
-        std::string error;
-        if (!timeline.close(error)) {
+        if (Error bad = timeline.close(); !bad.ok()) {
             fmt::print(stderr, "mbstorm run: cannot write --timeline {}: {}\n",
-                       request.outputs.timeline, error);
+                       request.outputs.timeline, bad.text());
             stream_failed = true;
         } else {
             fmt::print(stderr, "wrote timeline {}\n", request.outputs.timeline);

@@ -1,5 +1,7 @@
 #include "util/error.hpp"
 
+#include <cstring>
+
 namespace mbstorm {
 
 std::string_view error_code_name(ErrorCode code) noexcept {
@@ -32,6 +34,13 @@ std::string Error::text() const {
 Error& Error::prefixed(std::string_view prefix) {
     message_.insert(0, std::string(prefix) + ": ");
     return *this;
+}
+
+Error from_errno(ErrorCode code, int err, std::string_view what) {
+    std::string message(what);
+    if (!message.empty()) message += ": ";
+    message += std::strerror(err);
+    return Error(code, std::move(message));
 }
 
 }  // namespace mbstorm

@@ -59,6 +59,10 @@ class [[nodiscard]] Error {
     std::string place_;
 };
 
+// A failed system call: "<what>: <strerror(err)>" (the message alone when `what` is empty),
+// e.g. from_errno(ErrorCode::Io, errno, path) gives "out.json: No such file or directory".
+Error from_errno(ErrorCode code, int err, std::string_view what);
+
 // A value or the Error that stopped it; never both. std::expected is not in clang 14's library.
 template <class T>
 class [[nodiscard]] Result {
