@@ -13,7 +13,12 @@ namespace mbstorm::cli {
 
 bool resolve_fuzz_target(const std::string& text, bool allow_remote, net::Endpoint& out,
                          std::string& error, std::uint16_t default_port) {
-    if (!net::parse_endpoint(text, out, &error, default_port)) return false;
+    Result<net::Endpoint> endpoint = net::parse_endpoint(text, default_port);
+    if (!endpoint.ok()) {
+        error = endpoint.error().text();
+        return false;
+    }
+    out = *endpoint;
     // The rule run and write apply to writes: 127.0.0.0/8, ::1 and ::ffff:127.0.0.0/104.
     const bool loopback = load::is_loopback_address(load::numeric_address(out));
     if (!loopback && !allow_remote) {

@@ -35,7 +35,7 @@ std::string SerialMaster::open(const std::string& device, const net::SerialSetti
                                codec::Framing framing) {
     framing_ = framing;
     reader_ = codec::SerialFrameReader(framing, codec::SerialFrameReader::Reads::Responses);
-    return port_.open(device, settings);
+    return port_.open(device, settings).text();
 }
 
 std::string SerialMaster::describe() const {
