@@ -207,7 +207,6 @@ bool read_fuzz_inputs(const FuzzOptions& o, netfuzz::CampaignOptions& c, std::st
 // Report paths are checked before the run: a summary that cannot be written must not cost a
 // whole campaign first. "" or the problem.
 std::string check_fuzz_outputs(const FuzzOptions& o) {
-    std::string error;
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
                                      {"--junit", o.junit},
                                      {"--sarif", o.sarif},

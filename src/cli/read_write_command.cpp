@@ -462,7 +462,6 @@ int run_io(const IoOptions& o) {
 
     const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     if (o.transport.kind() == TransportKind::Serial) return run_serial_io(o, p, pdu, enc.size);
-    std::string error;
     if (o.target.empty()) return usage("--target is required (or --serial DEVICE)");
     const bool tls_port = o.transport.kind() == TransportKind::Tls;
     Result<net::Endpoint> target = net::parse_endpoint(o.target, tls_port ? 802 : 502);
