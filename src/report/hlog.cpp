@@ -229,13 +229,13 @@ HlogReader::HlogReader(std::istream& in) : in_(in) {}
 
 bool HlogReader::next(HlogInterval& out) {
     std::string why;
-    while (error_.empty()) {
+    while (error_.ok()) {
         line_offset_ = static_cast<std::uint64_t>(in_.tellg());
         if (!std::getline(in_, line_)) return false;
         ++line_number_;
         bool is_interval = false;
         if (!parse_hlog_line(line_, header_, out, is_interval, why))
-            error_ = fmt::format("line {}: {}", line_number_, why);
+            error_ = Error(ErrorCode::InvalidInput, fmt::format("line {}: {}", line_number_, why));
         else if (is_interval)
             return true;
     }
@@ -243,7 +243,7 @@ bool HlogReader::next(HlogInterval& out) {
 }
 
 bool HlogReader::read_header() {
-    while (error_.empty()) {
+    while (error_.ok()) {
         const auto at = in_.tellg();
         if (!std::getline(in_, line_)) return true;
         if (!line_.empty() && line_.front() != '#' && line_.front() != '"' &&
@@ -257,7 +257,7 @@ bool HlogReader::read_header() {
         bool is_interval = false;
         std::string why;
         if (!parse_hlog_line(line_, header_, unused, is_interval, why))
-            error_ = fmt::format("line {}: {}", line_number_, why);
+            error_ = Error(ErrorCode::InvalidInput, fmt::format("line {}: {}", line_number_, why));
     }
     return false;
 }
@@ -273,7 +273,7 @@ Result<Hlog> parse_hlog(std::string_view text) {
     HlogReader reader(in);
     HlogInterval interval;
     while (reader.next(interval)) reader.header().intervals.push_back(interval);
-    if (!reader.error().empty()) return Error(ErrorCode::InvalidInput, reader.error());
+    if (!reader.error().ok()) return reader.error();
     return std::move(reader.header());
 }
 

@@ -103,13 +103,15 @@ class HlogReader {
     std::uint64_t line_offset() const noexcept { return line_offset_; }
     std::size_t line_number() const noexcept { return line_number_; }
     Hlog& header() noexcept { return header_; }
-    const std::string& error() const noexcept { return error_; }
+    // Why next() or read_header() stopped early: InvalidInput naming the line ("line 7: ..."),
+    // or success at the end of the log.
+    const Error& error() const noexcept { return error_; }
 
   private:
     std::istream& in_;
     Hlog header_;
     std::string line_;
-    std::string error_;
+    Error error_;
     std::uint64_t line_offset_ = 0;
     std::size_t line_number_ = 0;
 };

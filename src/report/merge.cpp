@@ -198,9 +198,9 @@ class IntervalLines {
         if (!open(error)) return false;
         bool stopped = false;
         while (!stopped && reader_->next(scratch)) stopped = !use(scratch, reader_->line_offset());
-        if (!stopped && !reader_->error().empty())
-            error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
-        const bool read = !stopped && reader_->error().empty();
+        if (!stopped && !reader_->error().ok())
+            error = fmt::format("{}: {}", run_->hlog_path, reader_->error().text());
+        const bool read = !stopped && reader_->error().ok();
         close();  // reopened by at(): a test of 1000 shards may not hold 1000 files open
         return read;
     }
@@ -210,7 +210,7 @@ class IntervalLines {
         if (!reader_ && !open(error)) return nullptr;
         if (reader_->read_at(position, scratch)) return &scratch;
         error = fmt::format("{}: changed while being merged ({})", run_->hlog_path,
-                            reader_->error().empty() ? "a line is gone" : reader_->error());
+                            reader_->error().ok() ? "a line is gone" : reader_->error().text());
         return nullptr;
     }
     void close() {
@@ -477,7 +477,7 @@ Error read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& 
             in.seekg(0);
             HlogReader reader(in);
             if (!reader.read_header()) {
-                return unmergeable(fmt::format("{}: {}", path, reader.error()));
+                return unmergeable(fmt::format("{}: {}", path, reader.error().text()));
             }
             logs.emplace_back(path, std::move(reader.header()));
         } else {

@@ -118,6 +118,20 @@ TEST(Hlog, ReaderNamesTheBadLine) {
     EXPECT_EQ(missing.error().text(), "/nonexistent/x.hlog: No such file or directory");
 }
 
+// The streaming reader says why it stopped: success at the end of the log, else the bad line.
+TEST(Hlog, StreamingReaderStopsAtTheBadLineSayingWhich) {
+    std::istringstream good("#[StartTime: 5 (x)]\n");
+    HlogReader complete(good);
+    HlogInterval interval;
+    EXPECT_FALSE(complete.next(interval));
+    EXPECT_TRUE(complete.error().ok());
+    std::istringstream bad("#[StartTime: 5 (x)]\n0.0,x,2.0,HISTFAAA\n");
+    HlogReader broken(bad);
+    EXPECT_FALSE(broken.next(interval));
+    EXPECT_EQ(broken.error().code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(broken.error().text(), "line 2: start, length and max must be numbers");
+}
+
 TEST(Hlog, AbsoluteTimesFollowHdrHistogramsRule) {
     // No base time: timestamps far before the start time are relative to it.
     // An empty histogram as HdrHistogram's Java library encodes it.
