@@ -37,16 +37,16 @@ void same_histogram(const Histogram& a, const Histogram& b) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string_view text(reinterpret_cast<const char*>(data), size);
-    mbstorm::report::Hlog log;
-    std::string error;
-    if (!mbstorm::report::parse_hlog(text, log, error)) {
-        check(!error.empty());  // a refusal always says why
+    const mbstorm::Result<mbstorm::report::Hlog> log = mbstorm::report::parse_hlog(text);
+    if (!log.ok()) {
+        check(!log.error().message().empty());  // a refusal always says why
         return 0;
     }
-    for (const auto& interval : log.intervals) {
+    for (const auto& interval : log->intervals) {
         Histogram again;
         check(mbstorm::stats::decode_hdr_compressed_base64(
-            mbstorm::stats::encode_hdr_compressed_base64(interval.histogram), again, error));
+                  mbstorm::stats::encode_hdr_compressed_base64(interval.histogram), again)
+                  .ok());
         same_histogram(interval.histogram, again);
     }
     return 0;

@@ -47,16 +47,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const std::string path = "/proc/self/fd/" + std::to_string(fd);
     ShardRun run, again;
-    std::string error;
-    if (!mbstorm::report::read_shard_summary(path, run, error)) {
-        check(error.find(path) != std::string::npos);  // the refusal names the file
+    if (const mbstorm::Error error = mbstorm::report::read_shard_summary(path, run); !error.ok()) {
+        check(error.text().find(path) != std::string::npos);  // the refusal names the file
         ::close(fd);
         return 0;
     }
     const std::size_t ops = run.summary.operations.size(), stages = run.summary.stages.size();
     check(run.op_min_ns.size() == ops && run.op_max_ns.size() == ops);
     check(run.stage_min_ns.size() == stages && run.stage_max_ns.size() == stages);
-    check(mbstorm::report::read_shard_summary(path, again, error) && same(run, again));
+    check(mbstorm::report::read_shard_summary(path, again).ok() && same(run, again));
     ::close(fd);
     return 0;
 }

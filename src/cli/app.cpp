@@ -151,10 +151,9 @@ int run_cli(int argc, char** argv) {
     // Probed only when asked: the io_uring probe opens rings and sockets.
     app.set_version_flag("--version", [] {
         // What `--backend auto` picks (run needs provided-buffer rings, serve does not).
-        net::BackendDecision run, serve;
-        std::string unused;
-        net::choose_backend(net::BackendChoice::Auto, true, run, unused);
-        net::choose_backend(net::BackendChoice::Auto, false, serve, unused);
+        // Auto never fails: it falls back to epoll.
+        const net::BackendDecision run = *net::choose_backend(net::BackendChoice::Auto, true);
+        const net::BackendDecision serve = *net::choose_backend(net::BackendChoice::Auto, false);
         return version_text(build_info(), net::features(), run, serve);
     });
     Action action;

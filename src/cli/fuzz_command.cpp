@@ -105,9 +105,9 @@ std::string write_function_codes() {
 }
 
 bool write_output(const std::string& path, const std::string& text) {
-    std::string error;
-    if (report::write_text_file(path, text, error)) return true;
-    fmt::print(stderr, "mbstorm fuzz: {}\n", error);
+    const Error error = report::write_text_file(path, text);
+    if (error.ok()) return true;
+    fmt::print(stderr, "mbstorm fuzz: {}\n", error.text());
     return false;
 }
 
@@ -204,14 +204,14 @@ Error read_fuzz_inputs(const FuzzOptions& o, netfuzz::CampaignOptions& c) {
 // Report paths are checked before the run: a summary that cannot be written must not cost a
 // whole campaign first. "" or the problem.
 std::string check_fuzz_outputs(const FuzzOptions& o) {
-    std::string error;
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--json", o.json},
                                      {"--junit", o.junit},
                                      {"--sarif", o.sarif},
                                      {"--html", o.html},
                                      {"--coverage-report", o.coverage_report}}) {
-        if (!path.empty() && path != "-" && !report::check_writable(path, error))
-            return fmt::format("cannot write {} {}", flag, error);
+        if (!path.empty() && path != "-")
+            if (Error bad = report::check_writable(path); !bad.ok())
+                return fmt::format("cannot write {} {}", flag, bad.text());
     }
     const int on_stdout = (o.json == "-") + (o.junit == "-") + (o.sarif == "-") + (o.html == "-") +
                           (o.coverage_report == "-");

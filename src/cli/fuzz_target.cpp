@@ -13,9 +13,9 @@ namespace mbstorm::cli {
 
 Result<net::Endpoint> resolve_fuzz_target(const std::string& text, bool allow_remote,
                                           std::uint16_t default_port) {
-    net::Endpoint out;
-    if (std::string error; !net::parse_endpoint(text, out, &error, default_port))
-        return Error(ErrorCode::InvalidInput, std::move(error));
+    Result<net::Endpoint> endpoint = net::parse_endpoint(text, default_port);
+    if (!endpoint.ok()) return std::move(endpoint).error();
+    const net::Endpoint out = *endpoint;
     // The rule run and write apply to writes: 127.0.0.0/8, ::1 and ::ffff:127.0.0.0/104.
     const bool loopback = load::is_loopback_address(load::numeric_address(out));
     if (!loopback && !allow_remote) {

@@ -53,15 +53,17 @@ int merge(const MergeOptions& o) {
         return usage_error("merge", conflict.text());
     for (const std::string* path :
          {&o.outputs.json, &o.outputs.hdr, &o.outputs.html, &o.outputs.junit}) {
-        std::string error;
-        if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return usage_error("merge", "cannot write " + error);
+        if (!path->empty() && *path != "-")
+            if (Error bad = report::check_writable(*path); !bad.ok())
+                return usage_error("merge", "cannot write " + bad.text());
     }
     std::vector<report::ShardRun> shards;
+    if (Error bad = report::read_shards(o.files, shards); !bad.ok())
+        return usage_error("merge", bad.text());
+    Result<report::MergeOutcome> outcome = report::merge_shards(std::move(shards), o.expect);
+    if (!outcome.ok()) return usage_error("merge", outcome.error().text());
+    report::MergeOutcome& merged = *outcome;
     std::string error;
-    if (!report::read_shards(o.files, shards, error)) return usage_error("merge", error);
-    report::MergeOutcome merged = report::merge_shards(std::move(shards), o.expect);
-    if (!merged.ok) return usage_error("merge", merged.error);
     for (const auto& w : merged.warnings) fmt::print(stderr, "mbstorm merge: warning: {}\n", w);
 
     scenario::Scenario s;

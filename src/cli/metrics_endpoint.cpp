@@ -12,15 +12,14 @@ namespace mbstorm::cli {
 
 bool start_metrics_endpoint(net::HttpServer& http, const std::string& listen,
                             std::string_view command, std::function<std::string()> exposition) {
-    std::string error;
     auto handler = [exposition = std::move(exposition)](std::string_view path) {
         if (path != "/metrics")
             return net::HttpReply{404, "text/plain; charset=utf-8", "metrics are at /metrics\n"};
         return net::HttpReply{200, std::string(report::kPrometheusContentType), exposition()};
     };
-    if (!http.start(listen, std::move(handler), error)) {
+    if (const Error error = http.start(listen, std::move(handler)); !error.ok()) {
         fmt::print(stderr, "mbstorm {}: cannot serve --metrics-listen {}: {}\n", command, listen,
-                   error);
+                   error.text());
         return false;
     }
     fmt::print(stderr, "mbstorm {}: metrics on http://{}/metrics\n", command, http.address());

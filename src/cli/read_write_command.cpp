@@ -462,11 +462,12 @@ int run_io(const IoOptions& o) {
 
     const int timeout_ms = static_cast<int>(std::max<std::uint64_t>(o.timeout_ns / 1'000'000, 1));
     if (o.transport.kind() == TransportKind::Serial) return run_serial_io(o, p, pdu, enc.size);
-    std::string error;
     if (o.target.empty()) return usage("--target is required (or --serial DEVICE)");
     const bool tls_port = o.transport.kind() == TransportKind::Tls;
-    if (!net::parse_endpoint(o.target, p.target, &error, tls_port ? 802 : 502))
-        return usage(fmt::format("--target '{}': {}", o.target, error));
+    Result<net::Endpoint> target = net::parse_endpoint(o.target, tls_port ? 802 : 502);
+    if (!target.ok())
+        return usage(fmt::format("--target '{}': {}", o.target, target.error().text()));
+    p.target = *target;
     p.peer = p.target.to_string();
     if (o.write) {
         load::Operation op;

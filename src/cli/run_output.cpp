@@ -75,9 +75,8 @@ int report_run(load::LoadResult& result, const OutputFiles& files) {
     // some 2 KB per timeline interval.
     auto write = [&code](const std::string& path, const auto& make_content, const char* what) {
         if (path.empty()) return;
-        std::string error;
-        if (!report::write_text_file(path, make_content(), error)) {
-            fmt::print(stderr, "mbstorm run: cannot write {} {}: {}\n", what, path, error);
+        if (Error bad = report::write_text_file(path, make_content()); !bad.ok()) {
+            fmt::print(stderr, "mbstorm run: cannot write {} {}: {}\n", what, path, bad.text());
             code = kExitUsage;
         } else {
             fmt::print(stderr, "wrote {} {}\n", what, path == "-" ? "to stdout" : path);

@@ -144,9 +144,9 @@ Error check_outputs(const ScenarioRunRequest& request) {
         {"--html", &request.outputs.html},         {"--hlog", &request.outputs.hlog},
         {"--timeline", &request.outputs.timeline}, {"--junit", &request.junit}};
     for (const auto& [flag, path] : outputs) {
-        std::string error;
-        if (!path->empty() && *path != "-" && !report::check_writable(*path, error))
-            return Error(ErrorCode::Io, fmt::format("cannot write {} {}", flag, error));
+        if (path->empty() || *path == "-") continue;
+        if (Error bad = report::check_writable(*path); !bad.ok())
+            return Error(bad.code(), fmt::format("cannot write {} {}", flag, bad.text()));
     }
     if (request.outputs.hlog == "-")
         return Error(ErrorCode::InvalidInput,
@@ -162,16 +162,15 @@ class RunStreams {
   public:
     Error open(const ScenarioRunRequest& request, const std::string& run_id) {
         const OutputFiles& outputs = request.outputs;
-        std::string error;
         if (!outputs.hlog.empty()) {
             const std::string identity = report::hlog_identity_text(
                 {outputs.test_id, run_id, request.shard.index, request.shard.count});
-            if (!hlog_.open(outputs.hlog, identity, error))
-                return Error(ErrorCode::Io, fmt::format("cannot write --hlog {}", error));
+            if (Error bad = hlog_.open(outputs.hlog, identity); !bad.ok())
+                return Error(bad.code(), fmt::format("cannot write --hlog {}", bad.text()));
         }
-        if (!outputs.timeline.empty() &&
-            !timeline_.open(outputs.timeline, outputs.test_id, run_id, error))
-            return Error(ErrorCode::Io, fmt::format("cannot write --timeline {}", error));
+        if (outputs.timeline.empty()) return {};
+        if (Error bad = timeline_.open(outputs.timeline, outputs.test_id, run_id); !bad.ok())
+            return Error(bad.code(), fmt::format("cannot write --timeline {}", bad.text()));
         return {};
     }
 
@@ -189,20 +188,18 @@ class RunStreams {
         bool written = true;
         if (hlog_.is_open()) {
             add_stage_histograms(run);
-            std::string error;
-            if (!hlog_.close(error)) {
+            if (Error bad = hlog_.close(); !bad.ok()) {
                 fmt::print(stderr, "mbstorm run: cannot write --hlog {}: {}\n", outputs.hlog,
-                           error);
+                           bad.text());
                 written = false;
             } else {
                 fmt::print(stderr, "wrote HdrHistogram interval log {}\n", outputs.hlog);
             }
         }
         if (timeline_.is_open()) {
-            std::string error;
-            if (!timeline_.close(error)) {
+            if (Error bad = timeline_.close(); !bad.ok()) {
                 fmt::print(stderr, "mbstorm run: cannot write --timeline {}: {}\n",
-                           outputs.timeline, error);
+                           outputs.timeline, bad.text());
                 written = false;
             } else {
                 fmt::print(stderr, "wrote timeline {}\n", outputs.timeline);
@@ -305,7 +302,7 @@ void note_run(const ScenarioRunRequest& request, const std::string& run_id, stat
 }  // namespace
 
 int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest& request) {
-    if (Error e = check_outputs(request); !e.ok()) return usage_error("run", e.text());
+    if (Error e = check_outputs(request); !e.ok()) return fail("run", e);
     const load::Plan::Shard shard = request.shard;
     if (shard.count != 0) {
         const Result<load::Plan> part = scenario::engine_plan(s, shard);
@@ -315,7 +312,7 @@ int run_resolved_scenario(const scenario::Scenario& s, const ScenarioRunRequest&
     if (request.start_at) announce_start(*request.start_at);
     const std::string run_id = new_run_id();
     RunStreams streams;
-    if (Error e = streams.open(request, run_id); !e.ok()) return usage_error("run", e.text());
+    if (Error e = streams.open(request, run_id); !e.ok()) return fail("run", e);
     load::LiveMetrics live(request.outputs.test_id,
                            shard.count != 0 ? fmt::format("{}", shard.index) : std::string());
     net::HttpServer metrics;

@@ -56,12 +56,15 @@ int run_serial_serve(const ServeOptions& o, std::unique_ptr<slave::UnitModels> u
     sc.simulated = o.config.simulated;
     sc.faults = o.config.faults;
     server::SerialServer srv(std::move(sc));
-    if (std::string e = srv.open(); !e.empty()) return usage_error("serve", e);
+    if (Error error = srv.open(); !error.ok()) return usage_error("serve", error.text());
     fmt::print("mbstorm serve: serving on {} (serial); Ctrl-C stops\n", srv.describe());
     if (o.config.faults.any()) fmt::print("mbstorm serve: fault injection is ON\n");
     std::fflush(stdout);
-    return server::run_serial_until_signal(srv, o.stats, static_cast<double>(o.duration_ns) / 1e9,
-                                           stdout);
+    const Error failure = server::run_serial_until_signal(
+        srv, o.stats, static_cast<double>(o.duration_ns) / 1e9, stdout);
+    if (failure.ok()) return kExitOk;
+    fmt::print(stderr, "mbstorm serve: {}\n", failure.text());
+    return kExitFailed;
 }
 
 int run_serve(ServeOptions& o) {
@@ -70,13 +73,13 @@ int run_serve(ServeOptions& o) {
     auto& c = o.config;
     if (o.transport.kind() == TransportKind::RtuOverTcp) c.framing = codec::Framing::Rtu;
     if (o.transport.kind() == TransportKind::Tls) {
-        std::string error;
-        c.tls = net::TlsContext::create(
-            net::TlsSide::Server, {o.transport.tls_cert, o.transport.tls_key, o.transport.tls_ca},
-            error);
-        if (!c.tls) return usage_error("serve", error);
+        Result<std::shared_ptr<net::TlsContext>> context = net::TlsContext::create(
+            net::TlsSide::Server, {o.transport.tls_cert, o.transport.tls_key, o.transport.tls_ca});
+        if (!context.ok()) return usage_error("serve", context.error().text());
+        c.tls = std::move(context).value();
         for (const std::string& rule : o.transport.tls_roles)
-            if (!c.tls_roles.add_rule(rule, error)) return usage_error("serve", error);
+            if (Error bad = c.tls_roles.add_rule(rule); !bad.ok())
+                return usage_error("serve", bad.text());
         c.default_port = 802;
     } else if (!o.transport.tls_roles.empty()) {
         return usage_error("serve", "--tls-role needs --transport tls");
@@ -84,11 +87,9 @@ int run_serve(ServeOptions& o) {
     std::optional<slave::DeviceDescription> device;
     std::unique_ptr<slave::UnitModels> units;
     if (!o.device_file.empty()) {
-        try {
-            device = slave::load_device_file(o.device_file);
-        } catch (const std::exception& e) {
-            return usage_error("serve", e.what());
-        }
+        Result<slave::DeviceDescription> loaded = slave::load_device_file(o.device_file);
+        if (!loaded.ok()) return usage_error("serve", loaded.error().text());
+        device = std::move(loaded).value();
         c.faults = device->faults;
         // The device's role rules join --tls-role's (a role named in both may use either list).
         if (o.transport.kind() == TransportKind::Tls)
@@ -122,7 +123,8 @@ int run_serve(ServeOptions& o) {
     if (o.drop_rate) f.drop_rate = o.drop_rate;
     if (o.no_answer_rate) f.no_answer_rate = o.no_answer_rate;
     if (o.seed) f.seed = o.seed;
-    if (auto problem = slave::validate(f); !problem.empty()) return usage_error("serve", problem);
+    if (Error problem = slave::validate(f); !problem.ok())
+        return usage_error("serve", problem.text());
 
     c.full_policy = o.full_policy == "refuse" ? server::FullPolicy::Refuse
                                               : server::FullPolicy::EvictOldestIdle;
@@ -138,8 +140,7 @@ int run_serve(ServeOptions& o) {
     net::parse_backend_choice(o.backend, c.backend_choice);  // checked by CLI11
     server::block_stop_signals();
     server::Server srv(c);
-    std::string error;
-    if (!srv.start(&error)) return usage_error("serve", error);
+    if (Error error = srv.start(); !error.ok()) return usage_error("serve", error.text());
     // The endpoint first, then the transport: scripts take the word after "listening on".
     fmt::print("mbstorm serve: listening on {} ({}, {} thread{}, {}); Ctrl-C stops\n",
                srv.endpoint(), transport_name(o.transport.kind()), srv.threads(),
@@ -158,7 +159,8 @@ int run_serve(ServeOptions& o) {
     server::RunOptions run;
     run.print_stats = o.stats;
     run.max_seconds = static_cast<double>(o.duration_ns) / 1e9;
-    return server::run_until_signal(srv, run);
+    server::run_until_signal(srv, run);
+    return kExitOk;
 }
 
 }  // namespace

@@ -97,9 +97,11 @@ void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide sid
 std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out) {
     out.reset();
     if (o.kind() != TransportKind::Tls) return {};
-    std::string error;
-    out = net::TlsContext::create(net::TlsSide::Client, {o.tls_cert, o.tls_key, o.tls_ca}, error);
-    return error;
+    Result<std::shared_ptr<net::TlsContext>> context =
+        net::TlsContext::create(net::TlsSide::Client, {o.tls_cert, o.tls_key, o.tls_ca});
+    if (!context.ok()) return context.error().text();
+    out = std::move(context).value();
+    return {};
 }
 
 std::string check_transport(const TransportOptions& o, std::string_view command) {

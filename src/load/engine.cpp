@@ -297,9 +297,9 @@ void note_outages(const OutageWatch& outages, std::int64_t measure_start_ns, Loa
 // The plan's source addresses, each checked to be of the target's family and local.
 Error resolve_sources(const Plan& plan, const net::Endpoint& target,
                       std::vector<net::Endpoint>& sources) {
-    std::string error;
-    if (!net::parse_source_addresses(plan.source_addresses, sources, error))
-        return Error(ErrorCode::InvalidInput, "source_addr: " + error);
+    Result<std::vector<net::Endpoint>> parsed = net::parse_source_addresses(plan.source_addresses);
+    if (!parsed.ok()) return Error(parsed.error().code(), "source_addr: " + parsed.error().text());
+    sources = std::move(parsed).value();
     for (const net::Endpoint& source : sources) {
         if (source.family() != target.family()) {
             return Error(
@@ -308,8 +308,8 @@ Error resolve_sources(const Plan& plan, const net::Endpoint& target,
                             numeric_address(source), source.family() == AF_INET ? "IPv4" : "IPv6",
                             target.to_string(), target.family() == AF_INET ? "IPv4" : "IPv6"));
         }
-        if (std::string why = net::check_source_is_local(source); !why.empty())
-            return Error(ErrorCode::InvalidInput, "source_addr: " + why);
+        if (Error why = net::check_source_is_local(source); !why.ok())
+            return Error(why.code(), "source_addr: " + why.text());
     }
     return {};
 }
@@ -411,16 +411,18 @@ struct RunSetup {
 Error prepare_run(const Plan& plan, const EngineOptions& options, const StageSchedule& schedule,
                   RunSetup& setup) {
     const std::string target = endpoint_text(plan.host, plan.port);
-    std::string resolve_error;
-    if (!net::parse_endpoint(target, setup.endpoint, &resolve_error, plan.port))
-        return Error(ErrorCode::Network,
-                     fmt::format("cannot resolve {}: {}", target, resolve_error));
+    Result<net::Endpoint> endpoint = net::parse_endpoint(target, plan.port);
+    if (!endpoint.ok())
+        return Error(endpoint.error().code(),
+                     fmt::format("cannot resolve {}: {}", target, endpoint.error().text()));
+    setup.endpoint = *endpoint;
     setup.verdict = check_write_safety(plan, numeric_address(setup.endpoint));
     if (!setup.verdict.allowed()) return setup.verdict.refusal;
     if (Error why = resolve_sources(plan, setup.endpoint, setup.sources); !why.ok()) return why;
     setup.capacity = schedule.peak_connections();
-    if (std::string error; !net::choose_backend(options.backend, true, setup.backend, error))
-        return Error(ErrorCode::Unsupported, std::move(error));
+    Result<net::BackendDecision> backend = net::choose_backend(options.backend, true);
+    if (!backend.ok()) return backend.error();
+    setup.backend = *backend;
     // The kernel's TLS (where there is one) needs descriptors setsockopt can reach.
     setup.direct = setup.backend.backend == net::Backend::IoUring &&
                    options.use_direct_descriptors && net::features().direct_descriptors &&

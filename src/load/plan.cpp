@@ -163,10 +163,11 @@ std::vector<std::string> plan_problems(const Plan& plan) {
 
     if (plan.host.empty()) fail("target: host is empty");
     if (plan.port == 0) fail("target: port 0 is out of range (valid 1..65535)");
-    if (std::vector<net::Endpoint> sources; !plan.source_addresses.empty()) {
-        std::string error;
-        if (!net::parse_source_addresses(plan.source_addresses, sources, error))
-            fail("source_addr: " + error);
+    if (!plan.source_addresses.empty()) {
+        if (Result<std::vector<net::Endpoint>> sources =
+                net::parse_source_addresses(plan.source_addresses);
+            !sources.ok())
+            fail("source_addr: " + sources.error().text());
     }
 
     if (plan.operations.empty()) fail("operations: none given (give at least one)");

@@ -35,9 +35,7 @@ Error SerialMaster::open(const std::string& device, const net::SerialSettings& s
                          codec::Framing framing) {
     framing_ = framing;
     reader_ = codec::SerialFrameReader(framing, codec::SerialFrameReader::Reads::Responses);
-    if (std::string why = port_.open(device, settings); !why.empty())
-        return Error(ErrorCode::Io, std::move(why));
-    return {};
+    return port_.open(device, settings);
 }
 
 std::string SerialMaster::describe() const {

@@ -54,23 +54,22 @@ std::string io_uring_unusable(bool need_buf_ring) {
 
 }  // namespace
 
-bool choose_backend(BackendChoice choice, bool need_buf_ring, BackendDecision& decision,
-                    std::string& error) {
-    decision = BackendDecision{};
+Result<BackendDecision> choose_backend(BackendChoice choice, bool need_buf_ring) {
+    BackendDecision decision;
     switch (choice) {
         case BackendChoice::Epoll:
             decision.backend = Backend::Epoll;
-            return true;
+            return decision;
         case BackendChoice::IoUring:
-            error = io_uring_unusable(need_buf_ring);
-            if (!error.empty()) error = "--backend io_uring: " + error;
-            return error.empty();
+            if (std::string why = io_uring_unusable(need_buf_ring); !why.empty())
+                return Error(ErrorCode::Unsupported, "--backend io_uring: " + why);
+            return decision;
         case BackendChoice::Auto:
             decision.why = io_uring_unusable(need_buf_ring);
             decision.backend = decision.why.empty() ? Backend::IoUring : Backend::Epoll;
-            return true;
+            return decision;
     }
-    return false;
+    return Error(ErrorCode::InvalidInput, "unknown backend choice");
 }
 
 }  // namespace mbstorm::net

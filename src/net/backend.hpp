@@ -6,6 +6,8 @@
 #include <string>
 #include <string_view>
 
+#include "util/error.hpp"
+
 namespace mbstorm::net {
 
 enum class Backend : std::uint8_t { IoUring, Epoll };
@@ -16,13 +18,12 @@ std::string_view backend_name(Backend backend) noexcept;
 bool parse_backend_choice(std::string_view text, BackendChoice& choice) noexcept;
 
 // What a run or a server uses: io_uring when chosen or when `auto` finds it usable (with
-// provided-buffer rings when `need_buf_ring`), else epoll. Fails (false, `error` says why)
+// provided-buffer rings when `need_buf_ring`), else epoll. Fails (Unsupported, saying why)
 // only when io_uring was asked for and cannot be had. `why` says why auto fell back.
 struct BackendDecision {
     Backend backend = Backend::IoUring;
     std::string why;  // empty when io_uring runs or epoll was asked for
 };
-bool choose_backend(BackendChoice choice, bool need_buf_ring, BackendDecision& decision,
-                    std::string& error);
+Result<BackendDecision> choose_backend(BackendChoice choice, bool need_buf_ring);
 
 }  // namespace mbstorm::net

@@ -48,12 +48,22 @@ bool probe_multishot_recv(io_uring* ring, std::uint16_t group) {
     return ok;
 }
 
+// A listener on an ephemeral loopback port, `ep` set to its address; not valid when the
+// process cannot listen.
+UniqueFd loopback_listener(Endpoint& ep) {
+    Result<Endpoint> loopback = parse_endpoint("127.0.0.1:0");
+    if (!loopback.ok()) return UniqueFd();
+    ep = *loopback;
+    Result<UniqueFd> listener = listen_socket(ep, ListenOptions{16, false, true});
+    if (!listener.ok()) return UniqueFd();
+    ep.set_port(local_port(listener->get()));
+    return std::move(listener).value();
+}
+
 bool probe_multishot_accept(io_uring* ring) {
     Endpoint ep;
-    if (!parse_endpoint("127.0.0.1:0", ep)) return false;
-    UniqueFd listener(listen_socket(ep, ListenOptions{16, false, true}));
+    const UniqueFd listener = loopback_listener(ep);
     if (!listener.valid()) return false;
-    ep.set_port(local_port(listener.get()));
     io_uring_sqe* sqe = io_uring_get_sqe(ring);
     io_uring_prep_multishot_accept(sqe, listener.get(), nullptr, nullptr, SOCK_CLOEXEC);
     io_uring_submit(ring);
@@ -72,10 +82,8 @@ bool probe_multishot_accept(io_uring* ring) {
 bool probe_direct_descriptors(io_uring* ring) {
     if (register_socket_table(ring, 4) != 0) return false;
     Endpoint ep;
-    if (!parse_endpoint("127.0.0.1:0", ep)) return false;
-    UniqueFd listener(listen_socket(ep, ListenOptions{16, false, true}));
+    const UniqueFd listener = loopback_listener(ep);
     if (!listener.valid()) return false;
-    ep.set_port(local_port(listener.get()));
     io_uring_sqe* sqe = io_uring_get_sqe(ring);
     io_uring_prep_accept_direct(sqe, listener.get(), nullptr, nullptr, 0, kAnySlot);
     io_uring_submit(ring);

@@ -204,31 +204,27 @@ bool parse_http_request_line(std::string_view head, std::string& method, std::st
     return true;
 }
 
-bool HttpServer::start(std::string_view listen, Handler handler, std::string& error) {
-    Endpoint endpoint;
-    if (!parse_endpoint(listen, endpoint, &error, 0)) return false;
+Error HttpServer::start(std::string_view listen, Handler handler) {
+    Result<Endpoint> endpoint = parse_endpoint(listen, 0);
+    if (!endpoint.ok()) return endpoint.error();
     ListenOptions options;
     options.backlog = 16;
     options.reuse_port = false;
     options.nonblocking = true;
-    const int fd = listen_socket(endpoint, options);
-    if (fd < 0) {
-        error = std::strerror(-fd);
-        return false;
-    }
-    listener_.reset(fd);
-    endpoint.set_port(local_port(fd));
-    address_ = endpoint.to_string();
+    Result<UniqueFd> listener = listen_socket(*endpoint, options);
+    if (!listener.ok()) return listener.error();
+    listener_ = std::move(listener).value();
+    endpoint->set_port(local_port(listener_.get()));
+    address_ = endpoint->to_string();
     const int wake = ::eventfd(0, EFD_CLOEXEC);
     if (wake < 0) {
-        error = std::strerror(errno);
         listener_.reset();
-        return false;
+        return from_errno(ErrorCode::Io, errno, "");
     }
     wake_.reset(wake);
     handler_ = std::move(handler);
     thread_ = std::thread([this] { serve(); });
-    return true;
+    return Error::none();
 }
 
 void HttpServer::stop() noexcept {

@@ -32,8 +32,9 @@ class HttpServer {
     HttpServer& operator=(const HttpServer&) = delete;
     ~HttpServer() { stop(); }
 
-    // listen: HOST:PORT (port 0: any free port). False with `error` when it cannot listen.
-    bool start(std::string_view listen, Handler handler, std::string& error);
+    // listen: HOST:PORT (port 0: any free port). An error when it cannot listen: InvalidInput
+    // for bad text, Network (the system's reason alone) when the listen fails.
+    Error start(std::string_view listen, Handler handler);
     // Closes every client connection and the listener; returns at once, whatever the clients
     // are doing.
     void stop() noexcept;

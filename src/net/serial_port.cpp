@@ -76,19 +76,19 @@ std::string describe(const SerialSettings& s) {
     return fmt::format("{} {}{}{}", s.baud, s.data_bits, parity, s.stop_bits);
 }
 
-std::string SerialPort::open(const std::string& device, const SerialSettings& settings) {
+Error SerialPort::open(const std::string& device, const SerialSettings& settings) {
     speed_t speed{};
     if (!speed_constant(settings.baud, speed))
-        return fmt::format(
-            "{} baud is not a speed the tty interface offers (e.g. 9600, 19200, "
-            "38400, 57600, 115200)",
-            settings.baud);
+        return Error(ErrorCode::InvalidInput,
+                     fmt::format("{} baud is not a speed the tty interface offers (e.g. 9600, "
+                                 "19200, 38400, 57600, 115200)",
+                                 settings.baud));
     int fd = ::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) return fmt::format("cannot open {}: {}", device, std::strerror(errno));
+    if (fd < 0) return from_errno(ErrorCode::Io, errno, "cannot open " + device);
     UniqueFd owned(fd);
     termios t{};
     if (::tcgetattr(fd, &t) != 0)
-        return fmt::format("{} is not a terminal: {}", device, std::strerror(errno));
+        return from_errno(ErrorCode::InvalidInput, errno, device + " is not a terminal");
     ::cfmakeraw(&t);
     t.c_cflag &= ~static_cast<tcflag_t>(CSIZE | PARENB | PARODD | CSTOPB | CRTSCTS);
     t.c_cflag |= CLOCAL | CREAD | (settings.data_bits == 7 ? CS7 : CS8);
@@ -103,15 +103,15 @@ std::string SerialPort::open(const std::string& device, const SerialSettings& se
     // A pseudo-terminal keeps no parity bit, and glibc's tcsetattr then reports EINVAL after
     // the settings were applied: a pty's raw mode is all a test line needs.
     if (::tcsetattr(fd, TCSANOW, &t) != 0 && !(errno == EINVAL && is_pseudo_terminal(device)))
-        return fmt::format("cannot set {} to {}: {}", device, describe(settings),
-                           std::strerror(errno));
+        return from_errno(ErrorCode::Io, errno,
+                          fmt::format("cannot set {} to {}", device, describe(settings)));
     ::tcflush(fd, TCIOFLUSH);
     fd_ = std::move(owned);
     settings_ = settings;
     device_ = device;
     busy_until_ns_ = 0;
     last_rx_ns_ = 0;
-    return {};
+    return Error::none();
 }
 
 ssize_t SerialPort::read_some(std::uint8_t* data, std::size_t size) noexcept {

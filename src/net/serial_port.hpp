@@ -12,6 +12,7 @@
 #include <string>
 
 #include "net/socket.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::net {
 
@@ -45,8 +46,9 @@ std::string describe(const SerialSettings& s);
 class SerialPort {
   public:
     // Opens `device` non-blocking, raw (no echo, no line discipline, no flow control) with the
-    // settings. "" on success, else why not.
-    std::string open(const std::string& device, const SerialSettings& settings);
+    // settings. An error saying why not: Io when the device cannot be opened or set,
+    // InvalidInput for a speed the tty interface lacks or a device that is not a terminal.
+    Error open(const std::string& device, const SerialSettings& settings);
     bool is_open() const noexcept { return fd_.get() >= 0; }
     int fd() const noexcept { return fd_.get(); }
     const SerialSettings& settings() const noexcept { return settings_; }

@@ -52,10 +52,6 @@ std::string Endpoint::to_string() const {
 
 namespace {
 
-void set_error(std::string* error, std::string text) {
-    if (error) *error = std::move(text);
-}
-
 bool parse_port(std::string_view text, std::uint16_t& port) {
     unsigned value = 0;
     auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
@@ -65,7 +61,7 @@ bool parse_port(std::string_view text, std::uint16_t& port) {
     return true;
 }
 
-bool resolve_host(const std::string& host, std::uint16_t port, Endpoint& out, std::string* error) {
+Error resolve_host(const std::string& host, std::uint16_t port, Endpoint& out) {
     out = Endpoint{};
     if (host.empty() || host == "*") {
         auto* in = reinterpret_cast<sockaddr_in*>(&out.addr);
@@ -73,89 +69,81 @@ bool resolve_host(const std::string& host, std::uint16_t port, Endpoint& out, st
         in->sin_addr.s_addr = htonl(INADDR_ANY);
         out.len = sizeof(sockaddr_in);
         out.set_port(port);
-        return true;
+        return Error::none();
     }
     auto* in = reinterpret_cast<sockaddr_in*>(&out.addr);
     if (inet_pton(AF_INET, host.c_str(), &in->sin_addr) == 1) {
         in->sin_family = AF_INET;
         out.len = sizeof(sockaddr_in);
         out.set_port(port);
-        return true;
+        return Error::none();
     }
     auto* in6 = reinterpret_cast<sockaddr_in6*>(&out.addr);
     if (inet_pton(AF_INET6, host.c_str(), &in6->sin6_addr) == 1) {
         in6->sin6_family = AF_INET6;
         out.len = sizeof(sockaddr_in6);
         out.set_port(port);
-        return true;
+        return Error::none();
     }
     addrinfo hints{};
     hints.ai_family = AF_UNSPEC;
     hints.ai_socktype = SOCK_STREAM;
     addrinfo* result = nullptr;
     int rc = getaddrinfo(host.c_str(), nullptr, &hints, &result);
-    if (rc != 0 || !result) {
-        set_error(error, "cannot resolve host '" + host + "': " + gai_strerror(rc));
-        return false;
-    }
+    if (rc != 0 || !result)
+        return Error(ErrorCode::Network, "cannot resolve host '" + host + "': " + gai_strerror(rc));
     std::memcpy(&out.addr, result->ai_addr, result->ai_addrlen);
     out.len = static_cast<socklen_t>(result->ai_addrlen);
     out.set_port(port);
     freeaddrinfo(result);
-    return true;
+    return Error::none();
 }
 
 }  // namespace
 
-bool split_host_port(std::string_view text, std::string& host, std::uint16_t& port,
-                     std::string* error) {
+Error split_host_port(std::string_view text, std::string& host, std::uint16_t& port) {
+    auto bad_port = [text] {
+        return Error(ErrorCode::InvalidInput, "bad port in '" + std::string(text) + "' (0..65535)");
+    };
     if (!text.empty() && text.front() == '[') {
         const auto close = text.find(']');
-        if (close == std::string_view::npos) {
-            set_error(error, "missing ']' in '" + std::string(text) + "'");
-            return false;
-        }
+        if (close == std::string_view::npos)
+            return Error(ErrorCode::InvalidInput, "missing ']' in '" + std::string(text) + "'");
         const auto rest = text.substr(close + 1);
-        if (!rest.empty() && (rest.front() != ':' || !parse_port(rest.substr(1), port))) {
-            set_error(error, "bad port in '" + std::string(text) + "' (0..65535)");
-            return false;
-        }
+        if (!rest.empty() && (rest.front() != ':' || !parse_port(rest.substr(1), port)))
+            return bad_port();
         host = std::string(text.substr(1, close - 1));
-        return true;
+        return Error::none();
     }
     const auto colon = text.find(':');
     if (colon != std::string_view::npos && text.rfind(':') == colon) {
-        if (!parse_port(text.substr(colon + 1), port)) {
-            set_error(error, "bad port in '" + std::string(text) + "' (0..65535)");
-            return false;
-        }
+        if (!parse_port(text.substr(colon + 1), port)) return bad_port();
         host = std::string(text.substr(0, colon));
-        return true;
+        return Error::none();
     }
     host = std::string(text);  // no port, or a bare IPv6 literal
-    return true;
+    return Error::none();
 }
 
-bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error,
-                    std::uint16_t default_port) {
+Result<Endpoint> parse_endpoint(std::string_view text, std::uint16_t default_port) {
     std::string host;
     std::uint16_t port = default_port;
-    if (!split_host_port(text, host, port, error)) return false;
-    return resolve_host(host, port, out, error);
+    if (Error bad = split_host_port(text, host, port); !bad.ok()) return bad;
+    Endpoint out;
+    if (Error bad = resolve_host(host, port, out); !bad.ok()) return bad;
+    return out;
 }
 
-int listen_socket(const Endpoint& ep, const ListenOptions& options) noexcept {
+Result<UniqueFd> listen_socket(const Endpoint& ep, const ListenOptions& options) {
     int type = SOCK_STREAM | SOCK_CLOEXEC | (options.nonblocking ? SOCK_NONBLOCK : 0);
-    int fd = ::socket(ep.family(), type, 0);
-    if (fd < 0) return -errno;
+    UniqueFd fd(::socket(ep.family(), type, 0));
+    if (!fd.valid()) return from_errno(ErrorCode::Network, errno, "");
     int one = 1;
-    if (setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
-        (options.reuse_port && setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &one, sizeof one) != 0) ||
-        ::bind(fd, ep.sa(), ep.len) != 0 || ::listen(fd, options.backlog) != 0) {
-        int e = errno;
-        ::close(fd);
-        return -e;
-    }
+    if (setsockopt(fd.get(), SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) != 0 ||
+        (options.reuse_port &&
+         setsockopt(fd.get(), SOL_SOCKET, SO_REUSEPORT, &one, sizeof one) != 0) ||
+        ::bind(fd.get(), ep.sa(), ep.len) != 0 || ::listen(fd.get(), options.backlog) != 0)
+        return from_errno(ErrorCode::Network, errno, "");
     return fd;
 }
 

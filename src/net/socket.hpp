@@ -1,5 +1,7 @@
 // Socket helpers: endpoints ("host:port", "[::1]:5020"), listeners, non-blocking connects,
-// socket options and the open-files limit. Functions return -errno on failure.
+// socket options and the open-files limit. Endpoints and listeners fail with an Error; the
+// per-connection calls (connects, options) return -errno, the datum their callers count and
+// classify failures by.
 #pragma once
 
 #include <netinet/in.h>
@@ -8,6 +10,8 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+
+#include "util/error.hpp"
 
 namespace mbstorm::net {
 
@@ -25,14 +29,13 @@ struct Endpoint {
 // The one target syntax of every subcommand: "host", "host:port", "[v6addr]", "[v6addr]:port"
 // or a bare IPv6 literal ("::1", "fe80::1"; no port then). Splits without resolving; `port` is
 // left as given (the caller's default) when the text has none. Port 0 is accepted here (a
-// listener's "any port"); callers that connect refuse it. False with `error` set on bad text.
-bool split_host_port(std::string_view text, std::string& host, std::uint16_t& port,
-                     std::string* error = nullptr);
+// listener's "any port"); callers that connect refuse it. InvalidInput on bad text.
+Error split_host_port(std::string_view text, std::string& host, std::uint16_t& port);
 
 // split_host_port, then the host resolved (a name with getaddrinfo, first result; an empty
-// host or "*" is every address). When the text has no port, `default_port` is used.
-bool parse_endpoint(std::string_view text, Endpoint& out, std::string* error = nullptr,
-                    std::uint16_t default_port = 502);
+// host or "*" is every address). When the text has no port, `default_port` is used. A name
+// that does not resolve is a Network error ("cannot resolve host 'x': ...").
+Result<Endpoint> parse_endpoint(std::string_view text, std::uint16_t default_port = 502);
 
 // RAII file descriptor.
 class UniqueFd {
@@ -67,8 +70,10 @@ struct ListenOptions {
     bool nonblocking = true;
 };
 
-// socket + SO_REUSEADDR (+SO_REUSEPORT) + bind + listen. fd or -errno.
-int listen_socket(const Endpoint& ep, const ListenOptions& options = {}) noexcept;
+// socket + SO_REUSEADDR (+SO_REUSEPORT) + bind + listen. The listener, or a Network error
+// whose message is the system's reason alone ("Address already in use"): the caller says what
+// it was listening for.
+Result<UniqueFd> listen_socket(const Endpoint& ep, const ListenOptions& options = {});
 
 // Non-blocking socket + connect; EINPROGRESS counts as success. fd or -errno.
 int connect_nonblocking(const Endpoint& ep) noexcept;

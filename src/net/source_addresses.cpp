@@ -50,93 +50,95 @@ std::uint8_t* address_bytes(Endpoint& ep, std::size_t& size) {
     return reinterpret_cast<std::uint8_t*>(&reinterpret_cast<sockaddr_in6*>(&ep.addr)->sin6_addr);
 }
 
-// Appends first..last; false with `error` when the range is backwards or too wide.
-bool expand_range(Endpoint first, Endpoint last, std::string_view entry, std::vector<Endpoint>& out,
-                  std::string& error) {
+// A list entry that cannot be used as a source address.
+Error bad_list(std::string why) {
+    return Error(ErrorCode::InvalidInput, std::move(why));
+}
+
+// Appends first..last; an error when the range is backwards or too wide.
+Error expand_range(Endpoint first, Endpoint last, std::string_view entry,
+                   std::vector<Endpoint>& out) {
     std::size_t size = 0;
     std::uint8_t* a = address_bytes(first, size);
     const std::uint8_t* b = address_bytes(last, size);
     // Ranges step the last 16 bits; everything before must be the same.
     if (std::memcmp(a, b, size - 2) != 0) {
-        error = "source address range '" + std::string(entry) +
-                "' spans more than 65536 addresses (only the last 16 bits may differ)";
-        return false;
+        return bad_list("source address range '" + std::string(entry) +
+                        "' spans more than 65536 addresses (only the last 16 bits may differ)");
     }
     const unsigned low = (unsigned{a[size - 2]} << 8) | a[size - 1];
     const unsigned high = (unsigned{b[size - 2]} << 8) | b[size - 1];
     if (high < low) {
-        error = "source address range '" + std::string(entry) + "' ends before it starts";
-        return false;
+        return bad_list("source address range '" + std::string(entry) + "' ends before it starts");
     }
     if (out.size() + (high - low + 1) > kMaxSourceAddresses) {
-        error = "more than " + std::to_string(kMaxSourceAddresses) + " source addresses";
-        return false;
+        return bad_list("more than " + std::to_string(kMaxSourceAddresses) + " source addresses");
     }
     for (unsigned v = low; v <= high; ++v) {
         a[size - 2] = static_cast<std::uint8_t>(v >> 8);
         a[size - 1] = static_cast<std::uint8_t>(v);
         out.push_back(first);
     }
-    return true;
+    return Error::none();
 }
 
 }  // namespace
 
-bool parse_source_addresses(std::string_view text, std::vector<Endpoint>& out, std::string& error) {
-    out.clear();
-    if (trim(text).empty()) return true;
+Result<std::vector<Endpoint>> parse_source_addresses(std::string_view text) {
+    std::vector<Endpoint> out;
+    if (trim(text).empty()) return out;
     while (true) {
         const auto comma = text.find(',');
         const std::string_view entry = trim(text.substr(0, comma));
         if (entry.empty()) {
-            error = "empty entry in the source address list '" + std::string(text) + "'; " +
-                    std::string(kForms);
-            return false;
+            return bad_list("empty entry in the source address list '" + std::string(text) + "'; " +
+                            std::string(kForms));
         }
         const auto dash = entry.find('-');
         Endpoint first, last;
         if (dash == std::string_view::npos) {
             if (!parse_address(entry, first)) {
-                error = "'" + std::string(entry) + "' is not a numeric IPv4 or IPv6 address; " +
-                        std::string(kForms);
-                return false;
+                return bad_list("'" + std::string(entry) +
+                                "' is not a numeric IPv4 or IPv6 address; " + std::string(kForms));
             }
             if (out.size() >= kMaxSourceAddresses) {
-                error = "more than " + std::to_string(kMaxSourceAddresses) + " source addresses";
-                return false;
+                return bad_list("more than " + std::to_string(kMaxSourceAddresses) +
+                                " source addresses");
             }
             out.push_back(first);
         } else {
             const std::string_view from = trim(entry.substr(0, dash));
             const std::string_view to = trim(entry.substr(dash + 1));
             if (!parse_address(from, first) || !parse_address(to, last)) {
-                error = "'" + std::string(entry) + "' is not a range FIRST-LAST of numeric " +
-                        "addresses; " + std::string(kForms);
-                return false;
+                return bad_list("'" + std::string(entry) +
+                                "' is not a range FIRST-LAST of numeric " + "addresses; " +
+                                std::string(kForms));
             }
             if (first.family() != last.family()) {
-                error = "source address range '" + std::string(entry) + "' mixes IPv4 and IPv6";
-                return false;
+                return bad_list("source address range '" + std::string(entry) +
+                                "' mixes IPv4 and IPv6");
             }
-            if (!expand_range(first, last, entry, out, error)) return false;
+            if (Error bad = expand_range(first, last, entry, out); !bad.ok()) return bad;
         }
-        if (comma == std::string_view::npos) return true;
+        if (comma == std::string_view::npos) return out;
         text = text.substr(comma + 1);
     }
 }
 
-std::string check_source_is_local(const Endpoint& source) {
+Error check_source_is_local(const Endpoint& source) {
     UniqueFd fd(::socket(source.family(), SOCK_STREAM | SOCK_CLOEXEC, 0));
     std::string address = source.to_string();
     address = address.substr(0, address.rfind(':'));  // no port
-    if (!fd.valid()) return "cannot test source address " + address + ": " + std::strerror(errno);
+    if (!fd.valid())
+        return from_errno(ErrorCode::Network, errno, "cannot test source address " + address);
     const int one = 1;
     ::setsockopt(fd.get(), SOL_IP, IP_BIND_ADDRESS_NO_PORT, &one, sizeof one);
-    if (::bind(fd.get(), source.sa(), source.len) == 0) return {};
+    if (::bind(fd.get(), source.sa(), source.len) == 0) return Error::none();
     const int e = errno;
     if (e == EADDRNOTAVAIL)
-        return "source address " + address + " is not an address of this machine";
-    return "cannot bind to source address " + address + ": " + std::strerror(e);
+        return Error(ErrorCode::NotFound,
+                     "source address " + address + " is not an address of this machine");
+    return from_errno(ErrorCode::Network, e, "cannot bind to source address " + address);
 }
 
 }  // namespace mbstorm::net

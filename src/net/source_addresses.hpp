@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "net/socket.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::net {
 
@@ -17,10 +18,11 @@ namespace mbstorm::net {
 inline constexpr std::size_t kMaxSourceAddresses = 65536;
 
 // Parses the list into endpoints (port 0), in the order given. Empty text gives an empty list.
-// False with `error` naming the offending entry and the accepted forms.
-bool parse_source_addresses(std::string_view text, std::vector<Endpoint>& out, std::string& error);
+// InvalidInput naming the offending entry and the accepted forms.
+Result<std::vector<Endpoint>> parse_source_addresses(std::string_view text);
 
-// Empty when a socket can bind to `source` on this machine; else why not ("127.0.0.1 ...").
-std::string check_source_is_local(const Endpoint& source);
+// Success when a socket can bind to `source` on this machine; else why not: NotFound when it
+// is not an address of this machine, Network when the bind fails otherwise.
+Error check_source_is_local(const Endpoint& source);
 
 }  // namespace mbstorm::net

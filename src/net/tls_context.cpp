@@ -28,6 +28,11 @@ int verify_with_role(int preverify_ok, X509_STORE_CTX* store) {
     return 1;
 }
 
+// A certificate, key or CA file that cannot be used as given.
+Error unusable(std::string why) {
+    return Error(ErrorCode::InvalidInput, std::move(why));
+}
+
 }  // namespace
 
 std::string tls_last_error() {
@@ -66,38 +71,29 @@ std::string tls_certificate_role(X509* cert) {
     return out;
 }
 
-std::shared_ptr<TlsContext> TlsContext::create(TlsSide side, const TlsFiles& files,
-                                               std::string& error) {
+Result<std::shared_ptr<TlsContext>> TlsContext::create(TlsSide side, const TlsFiles& files) {
     const bool server = side == TlsSide::Server;
     SSL_CTX* ctx = SSL_CTX_new(server ? TLS_server_method() : TLS_client_method());
-    if (ctx == nullptr) {
-        error = tls_last_error();
-        return nullptr;
-    }
+    if (ctx == nullptr) return Error(ErrorCode::Unsupported, tls_last_error());
     std::shared_ptr<TlsContext> out(new TlsContext(ctx, side));
     SSL_CTX_set_min_proto_version(ctx, TLS1_2_VERSION);
     SSL_CTX_set_max_proto_version(ctx, TLS1_3_VERSION);
     if (files.cert.empty() || files.key.empty() || files.ca.empty()) {
-        error = "TLS needs --tls-cert, --tls-key and --tls-ca (mutual authentication)";
-        return nullptr;
+        return unusable("TLS needs --tls-cert, --tls-key and --tls-ca (mutual authentication)");
     }
     if (SSL_CTX_use_certificate_chain_file(ctx, files.cert.c_str()) != 1) {
-        error = "cannot use certificate " + files.cert + ": " + tls_last_error();
-        return nullptr;
+        return unusable("cannot use certificate " + files.cert + ": " + tls_last_error());
     }
     if (SSL_CTX_use_PrivateKey_file(ctx, files.key.c_str(), SSL_FILETYPE_PEM) != 1) {
-        error = "cannot use key " + files.key + " with certificate " + files.cert + ": " +
-                tls_last_error();
-        return nullptr;
+        return unusable("cannot use key " + files.key + " with certificate " + files.cert + ": " +
+                        tls_last_error());
     }
     if (SSL_CTX_check_private_key(ctx) != 1) {
-        error = "key " + files.key + " does not match certificate " + files.cert;
         ERR_clear_error();
-        return nullptr;
+        return unusable("key " + files.key + " does not match certificate " + files.cert);
     }
     if (SSL_CTX_load_verify_locations(ctx, files.ca.c_str(), nullptr) != 1) {
-        error = "cannot use CA file " + files.ca + ": " + tls_last_error();
-        return nullptr;
+        return unusable("cannot use CA file " + files.ca + ": " + tls_last_error());
     }
     if (server) {
         SSL_CTX_set_verify(ctx, SSL_VERIFY_PEER | SSL_VERIFY_FAIL_IF_NO_PEER_CERT,

@@ -6,6 +6,8 @@
 #include <memory>
 #include <string>
 
+#include "util/error.hpp"
+
 using SSL_CTX = struct ssl_ctx_st;
 using SSL = struct ssl_st;
 using X509 = struct x509_st;
@@ -24,9 +26,8 @@ class TlsContext {
   public:
     // Loads the files and sets verification: a server refuses a client without a certificate
     // that chains to `ca` and carries a role; a client verifies the server against `ca`.
-    // nullptr with `error` set when a file cannot be used.
-    static std::shared_ptr<TlsContext> create(TlsSide side, const TlsFiles& files,
-                                              std::string& error);
+    // InvalidInput saying which when a file is missing or cannot be used.
+    static Result<std::shared_ptr<TlsContext>> create(TlsSide side, const TlsFiles& files);
     ~TlsContext();
     TlsContext(const TlsContext&) = delete;
     TlsContext& operator=(const TlsContext&) = delete;

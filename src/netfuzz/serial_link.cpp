@@ -30,7 +30,7 @@ std::unique_ptr<Link> SerialConnector::open(int timeout_ms, int& error) {
     error = 0;
     if (!port_) {
         auto port = std::make_shared<net::SerialPort>();
-        if (!port->open(device_, settings_).empty()) {
+        if (!port->open(device_, settings_).ok()) {
             error = errno ? errno : ENODEV;
             return nullptr;
         }

@@ -11,38 +11,26 @@
 
 namespace mbstorm::report {
 
-bool write_text_file(const std::string& path, std::string_view content, std::string& error) {
+Error write_text_file(const std::string& path, std::string_view content) {
     if (path == "-") {
         if (std::fwrite(content.data(), 1, content.size(), stdout) != content.size() ||
-            std::fflush(stdout) != 0) {
-            error = std::string("standard output: ") + std::strerror(errno);
-            return false;
-        }
-        return true;
+            std::fflush(stdout) != 0)
+            return from_errno(ErrorCode::Io, errno, "standard output");
+        return Error::none();
     }
     std::FILE* f = std::fopen(path.c_str(), "wb");
-    if (f == nullptr) {
-        error = path + ": " + std::strerror(errno);
-        return false;
-    }
+    if (f == nullptr) return from_errno(ErrorCode::Io, errno, path);
     const bool written = std::fwrite(content.data(), 1, content.size(), f) == content.size();
     const int write_errno = errno;
     const bool closed = std::fclose(f) == 0;
-    if (!written || !closed) {
-        error = path + ": " + std::strerror(written ? errno : write_errno);
-        return false;
-    }
-    return true;
+    if (!written || !closed) return from_errno(ErrorCode::Io, written ? errno : write_errno, path);
+    return Error::none();
 }
 
-bool check_writable(const std::string& path, std::string& error) {
-    auto fail = [&](int code) {
-        error = path + ": " + std::strerror(code);
-        return false;
-    };
+Error check_writable(const std::string& path) {
     const bool existed = ::access(path.c_str(), F_OK) == 0;
     const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY, 0666);
-    if (fd < 0) return fail(errno);
+    if (fd < 0) return from_errno(ErrorCode::Io, errno, path);
     int problem = 0;
     struct stat st {};
     if (::fstat(fd, &st) != 0) {
@@ -56,19 +44,17 @@ bool check_writable(const std::string& path, std::string& error) {
     }
     ::close(fd);
     if (!existed) ::unlink(path.c_str());
-    return problem == 0 || fail(problem);
+    if (problem != 0) return from_errno(ErrorCode::Io, problem, path);
+    return Error::none();
 }
 
-bool close_streamed_file(std::FILE*& file, bool write_failed, std::string& error) {
-    if (file == nullptr) return true;
+Error close_streamed_file(std::FILE*& file, bool write_failed) {
+    if (file == nullptr) return Error::none();
     const int saved = errno;
     const bool closed = std::fclose(file) == 0;
     file = nullptr;
-    if (write_failed || !closed) {
-        error = std::strerror(closed ? saved : errno);
-        return false;
-    }
-    return true;
+    if (write_failed || !closed) return from_errno(ErrorCode::Io, closed ? saved : errno, "");
+    return Error::none();
 }
 
 }  // namespace mbstorm::report

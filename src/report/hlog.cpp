@@ -110,14 +110,11 @@ HlogWriter::~HlogWriter() {
     if (file_ != nullptr) std::fclose(file_);
 }
 
-bool HlogWriter::open(const std::string& path, std::string comment, std::string& error) {
+Error HlogWriter::open(const std::string& path, std::string comment) {
     file_ = std::fopen(path.c_str(), "w");
-    if (file_ == nullptr) {
-        error = path + ": " + std::strerror(errno);
-        return false;
-    }
+    if (file_ == nullptr) return from_errno(ErrorCode::Io, errno, path);
     comment_ = std::move(comment);
-    return true;
+    return Error::none();
 }
 
 void HlogWriter::start(std::chrono::system_clock::time_point start_time) {
@@ -153,10 +150,10 @@ void HlogWriter::end_interval() {
     if (file_ != nullptr && std::fflush(file_) != 0) failed_ = true;
 }
 
-bool HlogWriter::close(std::string& error) {
-    if (file_ == nullptr) return true;
+Error HlogWriter::close() {
+    if (file_ == nullptr) return Error::none();
     if (!started_) start(std::chrono::system_clock::now());
-    return close_streamed_file(file_, failed_, error);
+    return close_streamed_file(file_, failed_);
 }
 
 double Hlog::absolute_start_s(const HlogInterval& interval) const {
@@ -218,7 +215,10 @@ bool parse_hlog_line(std::string_view line, Hlog& header, HlogInterval& interval
         !parse_double(fields[2], interval.max_ms))
         return refuse_line(why, "start, length and max must be numbers");
     if (interval.length_s < 0) return refuse_line(why, "negative interval length");
-    if (!stats::decode_hdr_compressed_base64(fields[3], interval.histogram, why)) return false;
+    if (Error bad = stats::decode_hdr_compressed_base64(fields[3], interval.histogram); !bad.ok()) {
+        why = bad.message();
+        return false;
+    }
     is_interval = true;
     return true;
 }
@@ -229,13 +229,13 @@ HlogReader::HlogReader(std::istream& in) : in_(in) {}
 
 bool HlogReader::next(HlogInterval& out) {
     std::string why;
-    while (error_.empty()) {
+    while (error_.ok()) {
         line_offset_ = static_cast<std::uint64_t>(in_.tellg());
         if (!std::getline(in_, line_)) return false;
         ++line_number_;
         bool is_interval = false;
         if (!parse_hlog_line(line_, header_, out, is_interval, why))
-            error_ = fmt::format("line {}: {}", line_number_, why);
+            error_ = Error(ErrorCode::InvalidInput, fmt::format("line {}: {}", line_number_, why));
         else if (is_interval)
             return true;
     }
@@ -243,7 +243,7 @@ bool HlogReader::next(HlogInterval& out) {
 }
 
 bool HlogReader::read_header() {
-    while (error_.empty()) {
+    while (error_.ok()) {
         const auto at = in_.tellg();
         if (!std::getline(in_, line_)) return true;
         if (!line_.empty() && line_.front() != '#' && line_.front() != '"' &&
@@ -257,7 +257,7 @@ bool HlogReader::read_header() {
         bool is_interval = false;
         std::string why;
         if (!parse_hlog_line(line_, header_, unused, is_interval, why))
-            error_ = fmt::format("line {}: {}", line_number_, why);
+            error_ = Error(ErrorCode::InvalidInput, fmt::format("line {}: {}", line_number_, why));
     }
     return false;
 }
@@ -268,29 +268,23 @@ bool HlogReader::read_at(std::uint64_t offset, HlogInterval& out) {
     return next(out);
 }
 
-bool parse_hlog(std::string_view text, Hlog& out, std::string& error) {
+Result<Hlog> parse_hlog(std::string_view text) {
     std::istringstream in{std::string(text)};
     HlogReader reader(in);
     HlogInterval interval;
     while (reader.next(interval)) reader.header().intervals.push_back(interval);
-    out = std::move(reader.header());
-    error = reader.error();
-    return error.empty();
+    if (!reader.error().ok()) return reader.error();
+    return std::move(reader.header());
 }
 
-bool read_hlog(const std::string& path, Hlog& out, std::string& error) {
+Result<Hlog> read_hlog(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        error = path + ": " + std::strerror(errno);
-        return false;
-    }
+    if (!in) return from_errno(ErrorCode::Io, errno, path);
     std::ostringstream text;
     text << in.rdbuf();
-    if (!parse_hlog(text.str(), out, error)) {
-        error = path + ": " + error;
-        return false;
-    }
-    return true;
+    Result<Hlog> log = parse_hlog(text.str());
+    if (!log.ok()) return std::move(log).error().prefixed(path);
+    return log;
 }
 
 }  // namespace mbstorm::report

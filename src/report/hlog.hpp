@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "stats/histogram.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::report {
 
@@ -41,8 +42,9 @@ class HlogWriter {
     HlogWriter& operator=(const HlogWriter&) = delete;
     ~HlogWriter();
 
-    // Creates (truncates) path; comment: the first line's text, e.g. the run's identity.
-    bool open(const std::string& path, std::string comment, std::string& error);
+    // Creates (truncates) path; comment: the first line's text, e.g. the run's identity. An Io
+    // error "<path>: <reason>" when it cannot.
+    Error open(const std::string& path, std::string comment);
     // The header: written once, before the first interval (or at close when none came).
     void start(std::chrono::system_clock::time_point start_time);
     // One line; tag empty for the untagged (all operations) line.
@@ -50,8 +52,8 @@ class HlogWriter {
                         const stats::Histogram& histogram);
     // Ends the interval's lines: flushed to the file.
     void end_interval();
-    // Flushes and closes; false (error set) when any write failed.
-    bool close(std::string& error);
+    // Flushes and closes; an Io error (the reason, no path) when any write failed.
+    Error close();
 
     bool is_open() const noexcept { return file_ != nullptr; }
     bool started() const noexcept { return started_; }
@@ -101,20 +103,23 @@ class HlogReader {
     std::uint64_t line_offset() const noexcept { return line_offset_; }
     std::size_t line_number() const noexcept { return line_number_; }
     Hlog& header() noexcept { return header_; }
-    const std::string& error() const noexcept { return error_; }
+    // Why next() or read_header() stopped early: InvalidInput naming the line ("line 7: ..."),
+    // or success at the end of the log.
+    const Error& error() const noexcept { return error_; }
 
   private:
     std::istream& in_;
     Hlog header_;
     std::string line_;
-    std::string error_;
+    Error error_;
     std::uint64_t line_offset_ = 0;
     std::size_t line_number_ = 0;
 };
 
-// Parses a log (as read_hlog does a file). Errors name the line: "line 7: ...".
-bool parse_hlog(std::string_view text, Hlog& out, std::string& error);
-bool read_hlog(const std::string& path, Hlog& out, std::string& error);
+// Parses a log (as read_hlog does a file). InvalidInput errors name the line: "line 7: ...";
+// read_hlog's name the file too ("run.hlog: line 7: ..."), or are Io when it cannot be read.
+Result<Hlog> parse_hlog(std::string_view text);
+Result<Hlog> read_hlog(const std::string& path);
 
 // Which run wrote a log: its first line's text (HlogWriter::open's comment).
 struct HlogIdentity {

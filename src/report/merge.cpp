@@ -198,9 +198,9 @@ class IntervalLines {
         if (!open(error)) return false;
         bool stopped = false;
         while (!stopped && reader_->next(scratch)) stopped = !use(scratch, reader_->line_offset());
-        if (!stopped && !reader_->error().empty())
-            error = fmt::format("{}: {}", run_->hlog_path, reader_->error());
-        const bool read = !stopped && reader_->error().empty();
+        if (!stopped && !reader_->error().ok())
+            error = fmt::format("{}: {}", run_->hlog_path, reader_->error().text());
+        const bool read = !stopped && reader_->error().ok();
         close();  // reopened by at(): a test of 1000 shards may not hold 1000 files open
         return read;
     }
@@ -210,7 +210,7 @@ class IntervalLines {
         if (!reader_ && !open(error)) return nullptr;
         if (reader_->read_at(position, scratch)) return &scratch;
         error = fmt::format("{}: changed while being merged ({})", run_->hlog_path,
-                            reader_->error().empty() ? "a line is gone" : reader_->error());
+                            reader_->error().ok() ? "a line is gone" : reader_->error().text());
         return nullptr;
     }
     void close() {
@@ -433,14 +433,16 @@ void read_stages(const json& doc, ShardRun& out) {
     }
 }
 
+// Files or runs merge cannot take, and why.
+Error unmergeable(std::string why) {
+    return Error(ErrorCode::InvalidInput, std::move(why));
+}
+
 }  // namespace
 
-bool read_shard_summary(const std::string& path, ShardRun& out, std::string& error) {
+Error read_shard_summary(const std::string& path, ShardRun& out) {
     std::ifstream in(path);
-    if (!in) {
-        error = fmt::format("{}: cannot open", path);
-        return false;
-    }
+    if (!in) return Error(ErrorCode::Io, fmt::format("{}: cannot open", path));
     try {
         const json doc = json::parse(in);
         out.json_path = path;
@@ -452,44 +454,37 @@ bool read_shard_summary(const std::string& path, ShardRun& out, std::string& err
         read_shortfalls_and_thresholds(doc, out);
         read_stages(doc, out);
     } catch (const std::exception& e) {
-        error =
-            fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what());
-        return false;
+        return unmergeable(
+            fmt::format("{}: not a run's JSON summary mbstorm merge can read: {}", path, e.what()));
     }
-    return true;
+    return Error::none();
 }
 
-bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out,
-                 std::string& error) {
+Error read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out) {
     std::vector<ShardRun> runs;
     std::vector<std::pair<std::string, Hlog>> logs;
     for (const auto& path : files) {
         std::ifstream in(path);
-        if (!in) {
-            error = fmt::format("{}: cannot open", path);
-            return false;
-        }
+        if (!in) return Error(ErrorCode::Io, fmt::format("{}: cannot open", path));
         char first = 0;
         in >> first;
         if (first == '{') {
             ShardRun run;
-            if (!read_shard_summary(path, run, error)) return false;
+            if (Error bad = read_shard_summary(path, run); !bad.ok()) return bad;
             runs.push_back(std::move(run));
         } else if (first == '#' || first == '"' || first == 'T' || std::isdigit(first)) {
             // The header only (it names the run): the intervals are streamed when merged.
             in.seekg(0);
             HlogReader reader(in);
             if (!reader.read_header()) {
-                error = fmt::format("{}: {}", path, reader.error());
-                return false;
+                return unmergeable(fmt::format("{}: {}", path, reader.error().text()));
             }
             logs.emplace_back(path, std::move(reader.header()));
         } else {
-            error = fmt::format(
-                "{}: neither a JSON summary (run --json) nor an interval log "
-                "(run --hlog)",
-                path);
-            return false;
+            return unmergeable(
+                fmt::format("{}: neither a JSON summary (run --json) nor an interval log "
+                            "(run --hlog)",
+                            path));
         }
     }
     std::set<std::size_t> used;
@@ -504,39 +499,35 @@ bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& o
             break;
         }
         if (run.hlog_path.empty()) {
-            error = fmt::format(
-                "{}: no interval log of this run given (run {}: pass the file "
-                "its --hlog wrote too)",
-                run.json_path, run.summary.metadata.run_id);
-            return false;
+            return unmergeable(
+                fmt::format("{}: no interval log of this run given (run {}: pass the file "
+                            "its --hlog wrote too)",
+                            run.json_path, run.summary.metadata.run_id));
         }
         HlogIdentity id;
         find_hlog_identity(run.log, id);
         const int log_index = id.shard_count > 0 ? static_cast<int>(id.shard_index) : -1;
         if (static_cast<int>(id.shard_count) != run.shard_count ||
             (run.shard_count > 0 && log_index != run.shard_index)) {
-            error = fmt::format("{}: its interval log {} says {}, the JSON {} (edited files?)",
-                                run.json_path, run.hlog_path,
-                                shard_text(log_index, static_cast<int>(id.shard_count)),
-                                shard_text(run.shard_index, run.shard_count));
-            return false;
+            return unmergeable(fmt::format(
+                "{}: its interval log {} says {}, the JSON {} (edited files?)", run.json_path,
+                run.hlog_path, shard_text(log_index, static_cast<int>(id.shard_count)),
+                shard_text(run.shard_index, run.shard_count)));
         }
     }
     for (std::size_t i = 0; i < logs.size(); ++i) {
         if (used.count(i) != 0) continue;
         const std::string id = log_run_id(logs[i].second);
-        error = id.empty() ? fmt::format(
-                                 "{}: not written by mbstorm run --hlog (no run id in "
-                                 "its first line)",
-                                 logs[i].first)
-                           : fmt::format(
-                                 "{}: the interval log of run {}, whose JSON summary is "
-                                 "not given (or is given once for two logs)",
-                                 logs[i].first, id);
-        return false;
+        return unmergeable(
+            id.empty() ? fmt::format("{}: not written by mbstorm run --hlog (no run id in "
+                                     "its first line)",
+                                     logs[i].first)
+                       : fmt::format("{}: the interval log of run {}, whose JSON summary is "
+                                     "not given (or is given once for two logs)",
+                                     logs[i].first, id));
     }
     out = std::move(runs);
-    return true;
+    return Error::none();
 }
 
 namespace {
@@ -880,12 +871,9 @@ std::pair<double, double> span_of(const std::vector<ShardRun>& shards) {
 
 }  // namespace
 
-MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
+Result<MergeOutcome> merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs) {
     MergeOutcome r;
-    auto refuse = [&r](std::string why) {
-        r.error = std::move(why);
-        return r;
-    };
+    auto refuse = [](std::string why) { return unmergeable(std::move(why)); };
     if (shards.empty()) return refuse("no runs to merge");
     if (std::string why = identity_refusal(shards); !why.empty()) return refuse(why);
     if (std::string why = completeness_refusal(shards, expect_runs); !why.empty())
@@ -943,7 +931,6 @@ MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_run
         format_utc(out.metadata.start_time + std::chrono::nanoseconds(out.metadata.warmup_ns))));
     settle_stage_table(shards, stages_merge, without_stage_lines, r);
     r.threshold_expressions = shards.front().threshold_expressions;
-    r.ok = true;
     return r;
 }
 

@@ -18,6 +18,7 @@
 
 #include "report/hlog.hpp"
 #include "stats/run_result.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::report {
 
@@ -44,17 +45,18 @@ struct ShardRun {
     bool log_from_file = false;
 };
 
-// Reads a run's JSON summary (not its log). False with error naming the file on failure.
-bool read_shard_summary(const std::string& path, ShardRun& out, std::string& error);
+// Reads a run's JSON summary (not its log) into out. An error naming the file on failure: Io
+// when it cannot be opened, InvalidInput when it is not a summary merge can read.
+Error read_shard_summary(const std::string& path, ShardRun& out);
 
 // Sorts files into JSON summaries and interval logs by content, reads them and pairs each
-// summary with the log of the same run id.
-bool read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out,
-                 std::string& error);
+// summary with the log of the same run id. Errors as read_shard_summary's (InvalidInput also
+// for files that do not pair up).
+Error read_shards(const std::vector<std::string>& files, std::vector<ShardRun>& out);
 
+// The merged run. merge_shards refuses runs that are not one whole test with an InvalidInput
+// error saying why.
 struct MergeOutcome {
-    bool ok = false;
-    std::string error;  // why the runs were refused
     stats::RunResult run;
     // Threshold expressions the runs carried (identical in every run, else refused), e.g.
     // "p99 < 5ms" or "read: p99 < 5ms"; "plan carried out" is left out (re-derived).
@@ -63,6 +65,6 @@ struct MergeOutcome {
 };
 
 // expect_runs: 0 unless the user said how many runs make the test.
-MergeOutcome merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs = 0);
+Result<MergeOutcome> merge_shards(std::vector<ShardRun> shards, std::uint32_t expect_runs = 0);
 
 }  // namespace mbstorm::report

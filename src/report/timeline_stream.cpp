@@ -25,16 +25,12 @@ TimelineWriter::~TimelineWriter() {
     if (file_ != nullptr) std::fclose(file_);
 }
 
-bool TimelineWriter::open(const std::string& path, std::string test_id, std::string run_id,
-                          std::string& error) {
+Error TimelineWriter::open(const std::string& path, std::string test_id, std::string run_id) {
     file_ = std::fopen(path.c_str(), "w");
-    if (file_ == nullptr) {
-        error = path + ": " + std::strerror(errno);
-        return false;
-    }
+    if (file_ == nullptr) return from_errno(ErrorCode::Io, errno, path);
     test_id_ = std::move(test_id);
     run_id_ = std::move(run_id);
-    return true;
+    return Error::none();
 }
 
 void TimelineWriter::write(const stats::IntervalSummary& interval,
@@ -44,8 +40,8 @@ void TimelineWriter::write(const stats::IntervalSummary& interval,
     if (std::fputs(line.c_str(), file_) < 0 || std::fflush(file_) != 0) failed_ = true;
 }
 
-bool TimelineWriter::close(std::string& error) {
-    return close_streamed_file(file_, failed_, error);
+Error TimelineWriter::close() {
+    return close_streamed_file(file_, failed_);
 }
 
 }  // namespace mbstorm::report

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "stats/interval_recorder.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::report {
 
@@ -24,13 +25,13 @@ class TimelineWriter {
     TimelineWriter& operator=(const TimelineWriter&) = delete;
     ~TimelineWriter();
 
-    // Creates (truncates) path.
-    bool open(const std::string& path, std::string test_id, std::string run_id, std::string& error);
+    // Creates (truncates) path; an Io error "<path>: <reason>" when it cannot.
+    Error open(const std::string& path, std::string test_id, std::string run_id);
     // Writes and flushes one interval's line.
     void write(const stats::IntervalSummary& interval,
                std::chrono::system_clock::time_point measure_start);
-    // False (error set) when any write failed.
-    bool close(std::string& error);
+    // An Io error (the reason, no path) when any write failed.
+    Error close();
     bool is_open() const noexcept { return file_ != nullptr; }
 
   private:

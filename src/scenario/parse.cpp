@@ -75,10 +75,10 @@ Result<Target> parse_target(const std::string& text) {
         "HOST, HOST:PORT, [IPv6]:PORT or an IPv6 address; port 502 if omitted";
     Target target;
     std::uint16_t p = 502;
-    std::string why;
-    const bool split = net::split_host_port(text, target.host, p, &why);
-    if (!split && why.rfind("bad port", 0) != 0)
-        return Error(ErrorCode::InvalidInput, fmt::format("{} ({})", why, forms));
+    const Error split_error = net::split_host_port(text, target.host, p);
+    const bool split = split_error.ok();
+    if (!split && split_error.message().rfind("bad port", 0) != 0)
+        return Error(ErrorCode::InvalidInput, fmt::format("{} ({})", split_error.text(), forms));
     if (!split || p == 0) {
         return Error(ErrorCode::InvalidInput,
                      fmt::format("'{}': the port must be 1..65535 ({})", text, forms));
@@ -134,10 +134,8 @@ TopLevelNodes read_top_level(const YamlReader& r, const YAML::Node& root, Scenar
                     r.fail(v, "transport: '" + t + "' is not one of tcp, rtu-over-tcp");
             } else if (key == "source_addr") {
                 p.source_addresses = r.scalar(v, "source_addr");
-                std::vector<net::Endpoint> sources;
-                std::string error;
-                if (!net::parse_source_addresses(p.source_addresses, sources, error))
-                    r.fail(v, "source_addr: " + error);
+                if (auto sources = net::parse_source_addresses(p.source_addresses); !sources.ok())
+                    r.fail(v, "source_addr: " + sources.error().text());
             } else if (key == "slave")
                 k.slave = v;
             else if (key == "slave_threads")

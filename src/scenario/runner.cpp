@@ -87,10 +87,12 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
     // One event source for the engine and the embedded slave, chosen (and said) once.
     net::BackendDecision backend;
     if (plan.serial.device.empty()) {
-        if (std::string error; !net::choose_backend(hooks.backend, true, backend, error)) {
-            out.error = Error(ErrorCode::Unsupported, std::move(error));
+        Result<net::BackendDecision> chosen = net::choose_backend(hooks.backend, true);
+        if (!chosen.ok()) {
+            out.error = chosen.error();
             return out;
         }
+        backend = *chosen;
         say(backend.why.empty() ? fmt::format("backend: {}", net::backend_name(backend.backend))
                                 : fmt::format("backend: epoll; {}", backend.why));
     }
@@ -117,10 +119,9 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         sc.simulated = s.slave.simulated;
         sc.backend_choice = chosen;
         embedded = std::make_unique<server::Server>(sc);
-        std::string error;
-        if (!embedded->start(&error)) {
-            out.error =
-                Error(ErrorCode::Network, "cannot start the embedded reference slave: " + error);
+        if (Error error = embedded->start(); !error.ok()) {
+            out.error = Error(error.code(),
+                              "cannot start the embedded reference slave: " + error.text());
             return out;
         }
         plan.host = "127.0.0.1";

@@ -18,7 +18,7 @@ void block_stop_signals() noexcept {
     pthread_sigmask(SIG_BLOCK, &set, nullptr);
 }
 
-int run_until_signal(Server& server, const RunOptions& options) {
+void run_until_signal(Server& server, const RunOptions& options) {
     block_stop_signals();
     sigset_t set;
     sigemptyset(&set);
@@ -59,7 +59,6 @@ int run_until_signal(Server& server, const RunOptions& options) {
         options.out, "%s",
         format_summary(server.stats(), static_cast<double>(net::now_ns() - start) / 1e9).c_str());
     std::fflush(options.out);
-    return 0;
 }
 
 }  // namespace mbstorm::server

@@ -16,8 +16,8 @@ struct RunOptions {
 };
 
 // Blocks SIGINT/SIGTERM in the caller (do it before start() so that workers inherit the mask),
-// then waits. Returns the exit code (0).
+// then waits. Nothing fails here: a server that started serves until it is stopped.
 void block_stop_signals() noexcept;
-int run_until_signal(Server& server, const RunOptions& options);
+void run_until_signal(Server& server, const RunOptions& options);
 
 }  // namespace mbstorm::server

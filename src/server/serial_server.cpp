@@ -38,8 +38,9 @@ SerialServer::SerialServer(SerialServerConfig config)
     : config_(std::move(config)),
       faults_(config_.faults, 0, static_cast<std::uint64_t>(net::now_ns())) {}
 
-std::string SerialServer::open() {
-    if (config_.units == nullptr) return "the serial server needs its unit models";
+Error SerialServer::open() {
+    if (config_.units == nullptr)
+        return Error(ErrorCode::InvalidInput, "the serial server needs its unit models");
     return port_.open(config_.device, config_.line);
 }
 
@@ -58,7 +59,7 @@ SerialServerStats SerialServer::stats() const noexcept {
             get(c.fault_delayed), get(c.fault_silent)};
 }
 
-std::string SerialServer::run(const std::atomic<bool>& stop) {
+Error SerialServer::run(const std::atomic<bool>& stop) {
     const bool rtu = config_.framing == codec::Framing::Rtu;
     const std::int64_t char_gap = net::intercharacter_timeout_ns(config_.line);
     const std::int64_t silence =
@@ -86,8 +87,7 @@ std::string SerialServer::run(const std::atomic<bool>& stop) {
                     std::this_thread::sleep_for(std::chrono::milliseconds(20));
                     continue;
                 }
-                return fmt::format("reading {}: {}", config_.device,
-                                   std::strerror(static_cast<int>(-n)));
+                return from_errno(ErrorCode::Io, static_cast<int>(-n), "reading " + config_.device);
             }
             if (n == 0) continue;
             const bool gap = rtu && waiting && port_.last_byte_received_ns() - previous > char_gap;
@@ -109,7 +109,7 @@ std::string SerialServer::run(const std::atomic<bool>& stop) {
             serve_frame(frame.address, frame.pdu);
         }
     }
-    return {};
+    return Error::none();
 }
 
 void SerialServer::serve_frame(std::uint8_t address, codec::Bytes pdu) {
@@ -177,11 +177,11 @@ std::string format_serial_stats(const SerialServerStats& s) {
 
 }  // namespace
 
-int run_serial_until_signal(SerialServer& server, bool print_stats, double max_seconds,
-                            std::FILE* out) {
+Error run_serial_until_signal(SerialServer& server, bool print_stats, double max_seconds,
+                              std::FILE* out) {
     block_stop_signals();
     std::atomic<bool> stop{false}, finished{false};
-    std::string failure;
+    Error failure;
     std::thread worker([&] {
         failure = server.run(stop);
         finished = true;
@@ -216,11 +216,7 @@ int run_serial_until_signal(SerialServer& server, bool print_stats, double max_s
     worker.join();
     std::fprintf(out, "serial: %s\n", format_serial_stats(server.stats()).c_str());
     std::fflush(out);
-    if (!failure.empty()) {
-        std::fprintf(stderr, "mbstorm serve: %s\n", failure.c_str());
-        return 1;
-    }
-    return 0;
+    return failure;
 }
 
 }  // namespace mbstorm::server

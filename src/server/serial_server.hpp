@@ -57,11 +57,12 @@ struct SerialServerStats {
 class SerialServer {
   public:
     explicit SerialServer(SerialServerConfig config);
-    // Opens the tty; "" on success, else why not.
-    std::string open();
-    // Serves until `stop` is set (checked at least every 100 ms). "" or the I/O error that
-    // ended it.
-    std::string run(const std::atomic<bool>& stop);
+    // Opens the tty; else why not (net::SerialPort::open's errors; InvalidInput without
+    // unit models).
+    Error open();
+    // Serves until `stop` is set (checked at least every 100 ms). Success, or the Io error
+    // that ended it.
+    Error run(const std::atomic<bool>& stop);
     SerialServerStats stats() const noexcept;
     std::string describe() const;
 
@@ -79,8 +80,9 @@ class SerialServer {
 };
 
 // `serve --serial`'s life: serves on a thread until SIGINT/SIGTERM (or `max_seconds`),
-// printing a statistics line every second when asked, then a summary. The exit code.
-int run_serial_until_signal(SerialServer& server, bool print_stats, double max_seconds,
-                            std::FILE* out);
+// printing a statistics line every second when asked, then a summary. The I/O error that
+// ended it early, if one did.
+Error run_serial_until_signal(SerialServer& server, bool print_stats, double max_seconds,
+                              std::FILE* out);
 
 }  // namespace mbstorm::server

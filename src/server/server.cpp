@@ -24,24 +24,21 @@ Server::~Server() {
     stop();
 }
 
-bool Server::start(std::string* error) {
-    auto fail = [&](std::string text) {
-        if (error) *error = std::move(text);
+Error Server::start() {
+    auto fail = [&](Error error) {
         stop();
-        return false;
+        return error;
     };
-    if (running_) return true;
-    net::BackendDecision backend;
-    if (std::string e; !net::choose_backend(config_.backend_choice, false, backend, e))
-        return fail(e);
-    config_.backend = backend.backend;
-    backend_why_ = backend.why;
+    if (running_) return Error::none();
+    const Result<net::BackendDecision> backend = net::choose_backend(config_.backend_choice, false);
+    if (!backend.ok()) return fail(backend.error());
+    config_.backend = backend->backend;
+    backend_why_ = backend->why;
     const bool uring = config_.backend == net::Backend::IoUring;
-    if (std::string v = slave::validate(config_.faults); !v.empty()) return fail(v);
-    net::Endpoint ep;
-    std::string parse_error;
-    if (!net::parse_endpoint(config_.listen, ep, &parse_error, config_.default_port))
-        return fail(parse_error);
+    if (Error invalid = slave::validate(config_.faults); !invalid.ok()) return fail(invalid);
+    const Result<net::Endpoint> listen = net::parse_endpoint(config_.listen, config_.default_port);
+    if (!listen.ok()) return fail(listen.error());
+    net::Endpoint ep = *listen;
     unsigned n = config_.threads ? config_.threads : std::thread::hardware_concurrency();
     if (n == 0) n = 1;
     if (uring && config_.use_direct_descriptors && net::features().direct_descriptors)
@@ -65,8 +62,10 @@ bool Server::start(std::string* error) {
     }
     const std::uint64_t stall_origin = static_cast<std::uint64_t>(net::now_ns());
     for (unsigned i = 0; i < n; ++i) {
-        int fd = net::listen_socket(ep);
-        if (fd < 0) return fail("cannot listen on " + ep.to_string() + ": " + strerror(-fd));
+        Result<net::UniqueFd> listener = net::listen_socket(ep);
+        if (!listener.ok())
+            return fail(std::move(listener).error().prefixed("cannot listen on " + ep.to_string()));
+        const int fd = listener->release();  // the worker owns it
         // Accepted sockets inherit these: direct ones cannot be given them afterwards.
         net::set_nodelay(fd);
         if (config_.socket_send_buffer > 0)
@@ -89,7 +88,9 @@ bool Server::start(std::string* error) {
     for (auto& w : workers_) threads_.emplace_back([wp = w.get()] { wp->run(); });
     running_ = true;
     if (!config_.simulated.empty()) {
-        if (!config_.units) return fail("simulated inputs need the device's unit models");
+        if (!config_.units)
+            return fail(
+                Error(ErrorCode::InvalidInput, "simulated inputs need the device's unit models"));
         simulator_ = std::make_unique<slave::Simulator>(config_.simulated, *config_.units);
         simulator_stop_ = false;
         simulator_thread_ = std::thread([this] {
@@ -105,10 +106,11 @@ bool Server::start(std::string* error) {
     for (auto& w : workers_) {
         while (w->init_status() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
         if (w->init_status() < 0)
-            return fail(fmt::format("cannot set up {}: {}", net::backend_name(config_.backend),
-                                    strerror(-w->init_status())));
+            return fail(
+                from_errno(ErrorCode::Unsupported, -w->init_status(),
+                           fmt::format("cannot set up {}", net::backend_name(config_.backend))));
     }
-    return true;
+    return Error::none();
 }
 
 void Server::fit_connection_limit_to_descriptors(unsigned threads) {

@@ -12,6 +12,7 @@
 
 #include "server/config.hpp"
 #include "server/stats.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::server {
 
@@ -24,8 +25,10 @@ class Server {
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
 
-    // Binds, starts the threads and returns once every ring is serving. False with `error`.
-    bool start(std::string* error = nullptr);
+    // Binds, starts the threads and returns once every ring is serving. Else why not:
+    // InvalidInput (the listen address, fault settings), Network (the listen itself),
+    // Unsupported (the backend asked for, a ring that cannot be set up).
+    Error start();
     // Asks every thread to stop, waits for them. Idempotent.
     void stop() noexcept;
     bool running() const noexcept { return running_; }

@@ -3,19 +3,16 @@
 
 namespace mbstorm::server {
 
-bool TlsRoles::add_rule(std::string_view text, std::string& error) {
+Error TlsRoles::add_rule(std::string_view text) {
     const std::size_t eq = text.find('=');
-    if (eq == std::string_view::npos || eq == 0 || eq + 1 == text.size()) {
-        error = "a role rule is ROLE=FC,FC-FC,... (for example Operator=1-6,15,16)";
-        return false;
-    }
+    if (eq == std::string_view::npos || eq == 0 || eq + 1 == text.size())
+        return Error(ErrorCode::InvalidInput,
+                     "a role rule is ROLE=FC,FC-FC,... (for example Operator=1-6,15,16)");
     FunctionSet set;
-    if (std::string why = codec::parse_function_set(text.substr(eq + 1), set); !why.empty()) {
-        error = "role rule '" + std::string(text) + "': " + why;
-        return false;
-    }
+    if (std::string why = codec::parse_function_set(text.substr(eq + 1), set); !why.empty())
+        return Error(ErrorCode::InvalidInput, "role rule '" + std::string(text) + "': " + why);
     allow(std::string(text.substr(0, eq)), set);
-    return true;
+    return Error::none();
 }
 
 void TlsRoles::allow(std::string role, const FunctionSet& functions) {

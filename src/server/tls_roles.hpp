@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "codec/function_set.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::server {
 
@@ -22,8 +23,8 @@ using FunctionSet = codec::FunctionSet;
 // request outside its role's set is answered with exception 01 (Illegal Function).
 class TlsRoles {
   public:
-    // Adds "ROLE=FC,FC-FC,..." (decimal or 0x hex codes). False with `error` when malformed.
-    bool add_rule(std::string_view text, std::string& error);
+    // Adds "ROLE=FC,FC-FC,..." (decimal or 0x hex codes). InvalidInput when malformed.
+    Error add_rule(std::string_view text);
     // Adds one role's set (device descriptions).
     void allow(std::string role, const FunctionSet& functions);
     bool empty() const noexcept { return roles_.empty(); }

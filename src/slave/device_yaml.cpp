@@ -593,7 +593,7 @@ void parse_faults(const Parser& p, const YAML::Node& n, FaultConfig& f) {
             }
             return true;
         });
-    if (const std::string problem = validate(f); !problem.empty()) p.fail(n, problem);
+    if (const Error problem = validate(f); !problem.ok()) p.fail(n, problem.message());
 }
 
 // `tls_roles: {Operator: "1-6,15,16", Viewer: [1, 2, 3, 4]}`: a list per role, read by the
@@ -735,20 +735,25 @@ std::span<const IdentificationKey> identification_keys() noexcept {
     return kKeys;
 }
 
-DeviceDescription parse_device_yaml(std::string_view text, std::string_view source) {
-    const Parser p(source);
-    YAML::Node root;
+Result<DeviceDescription> parse_device_yaml(std::string_view text, std::string_view source) {
+    // The slave layer's edge: yaml-cpp's exceptions and the reader's DeviceYamlError stop here.
     try {
-        root = YAML::Load(std::string(text));
-    } catch (const YAML::Exception& e) {
-        p.fail(e.mark, e.msg);
+        const Parser p(source);
+        YAML::Node root;
+        try {
+            root = YAML::Load(std::string(text));
+        } catch (const YAML::Exception& e) {
+            p.fail(e.mark, e.msg);
+        }
+        return parse_device_node(root, source);
+    } catch (const DeviceYamlError& e) {
+        return Error(ErrorCode::InvalidInput, e.what());
     }
-    return parse_device_node(root, source);
 }
 
-DeviceDescription load_device_file(const std::string& path) {
+Result<DeviceDescription> load_device_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw DeviceYamlError(path + ": cannot open the device file", 0, 0);
+    if (!in) return Error(ErrorCode::Io, path + ": cannot open the device file");
     // Every table written out value by value is about 2 MB of YAML: a file far larger is not a
     // device description, and is not read into memory whole.
     constexpr std::size_t kMaxBytes = 16u << 20;
@@ -757,7 +762,8 @@ DeviceDescription load_device_file(const std::string& path) {
     while (text.size() <= kMaxBytes && in.read(chunk, sizeof chunk).gcount() > 0)
         text.append(chunk, static_cast<std::size_t>(in.gcount()));
     if (text.size() > kMaxBytes)
-        throw DeviceYamlError(path + ": larger than 16 MiB: not a device description", 0, 0);
+        return Error(ErrorCode::InvalidInput,
+                     path + ": larger than 16 MiB: not a device description");
     return parse_device_yaml(text, path);
 }
 

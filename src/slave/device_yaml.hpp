@@ -1,7 +1,8 @@
 // Device description from YAML: table sizes, shared or per-unit models, initial data, counters,
 // simulated inputs, identification and fault settings. Every key is documented in
-// scenarios/devices/README.md. Not on the hot path: errors are thrown as DeviceYamlError whose
-// message starts with "<source>:<line>:<column>: ".
+// scenarios/devices/README.md. Not on the hot path. The loaders return an Error whose message
+// starts with "<source>:<line>:<column>: "; only parse_device_node, for YAML parsers that embed
+// a device, throws (DeviceYamlError), inside its caller's own exception-based parsing.
 #pragma once
 
 #include <cstdint>
@@ -16,6 +17,7 @@
 #include "slave/data_model.hpp"
 #include "slave/faults.hpp"
 #include "slave/simulator.hpp"
+#include "util/error.hpp"
 #include "yaml/positioned_error.hpp"
 
 namespace YAML {
@@ -72,9 +74,14 @@ struct IdentificationKey {
 };
 std::span<const IdentificationKey> identification_keys() noexcept;
 
-DeviceDescription parse_device_yaml(std::string_view text, std::string_view source = "<device>");
-DeviceDescription load_device_file(const std::string& path);
-// For documents that embed a device description (e.g. a scenario's `slave:` section).
+// InvalidInput naming the place ("dev.yaml:3:5: unknown key ...") when the text is not a
+// device description; load_device_file's is Io when the file cannot be read.
+Result<DeviceDescription> parse_device_yaml(std::string_view text,
+                                            std::string_view source = "<device>");
+Result<DeviceDescription> load_device_file(const std::string& path);
+// For documents that embed a device description (e.g. a scenario's `slave:` section): throws
+// DeviceYamlError (with its line and column), which the embedding parser turns into its own
+// error, as scenario parsing does at its edge.
 DeviceDescription parse_device_node(const YAML::Node& node, std::string_view source);
 
 // Builds the models and applies initial data and read counters.

@@ -60,27 +60,31 @@ bool FaultConfig::any() const noexcept {
            drop_rate > 0.0 || no_answer_rate > 0.0;
 }
 
-std::string validate(const FaultConfig& c) {
-    if (!valid_rate(c.exception_rate)) return "exception rate must be between 0 and 1";
-    if (!valid_rate(c.drop_rate)) return "drop rate must be between 0 and 1";
-    if (!valid_rate(c.no_answer_rate)) return "no-answer rate must be between 0 and 1";
+Error validate(const FaultConfig& c) {
+    if (!valid_rate(c.exception_rate))
+        return Error(ErrorCode::InvalidInput, "exception rate must be between 0 and 1");
+    if (!valid_rate(c.drop_rate))
+        return Error(ErrorCode::InvalidInput, "drop rate must be between 0 and 1");
+    if (!valid_rate(c.no_answer_rate))
+        return Error(ErrorCode::InvalidInput, "no-answer rate must be between 0 and 1");
     if (c.exception_rate + c.drop_rate + c.no_answer_rate > 1.0 + 1e-12) {
-        return "exception, drop and no-answer rates must add up to at most 1";
+        return Error(ErrorCode::InvalidInput,
+                     "exception, drop and no-answer rates must add up to at most 1");
     }
     if (c.exception_rate > 0.0 && (static_cast<unsigned>(c.exception_code) == 0 ||
                                    static_cast<unsigned>(c.exception_code) > 0x7F)) {
-        return "injected exception code must be between 1 and 127";
+        return Error(ErrorCode::InvalidInput, "injected exception code must be between 1 and 127");
     }
     if (c.delay.kind == DelayConfig::Kind::Uniform && c.delay.min_ns > c.delay.max_ns) {
-        return "uniform delay needs min <= max";
+        return Error(ErrorCode::InvalidInput, "uniform delay needs min <= max");
     }
     if (c.stall.period_ns != 0 && c.stall.duration_ns > c.stall.period_ns) {
-        return "stall duration must not exceed its period";
+        return Error(ErrorCode::InvalidInput, "stall duration must not exceed its period");
     }
     if (c.stall.period_ns == 0 && c.stall.duration_ns != 0) {
-        return "a stall duration needs a period";
+        return Error(ErrorCode::InvalidInput, "a stall duration needs a period");
     }
-    return {};
+    return Error::none();
 }
 
 FaultInjector::FaultInjector(const FaultConfig& config, std::uint64_t stream,

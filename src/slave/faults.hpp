@@ -7,6 +7,7 @@
 #include <string>
 
 #include "codec/exception_code.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::slave {
 
@@ -43,8 +44,8 @@ struct FaultConfig {
     bool operator==(const FaultConfig&) const = default;
 };
 
-// Empty when `config` is usable, otherwise one sentence saying what is wrong.
-std::string validate(const FaultConfig& config);
+// Success when `config` is usable, otherwise InvalidInput, one sentence saying what is wrong.
+Error validate(const FaultConfig& config);
 
 struct FaultDecision {
     enum class Action : std::uint8_t { Answer, Exception, Drop, NoAnswer };

@@ -21,6 +21,10 @@ constexpr int kSevenBitBytes = 8;
 // rather than inflated without bound.
 constexpr std::size_t kMaxPayloadBytes = 1u << 20;
 
+Error bad_histogram(std::string message) {
+    return Error(ErrorCode::InvalidInput, std::move(message));
+}
+
 void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
     for (int shift = 24; shift >= 0; shift -= 8)
         out.push_back(static_cast<std::uint8_t>(v >> shift));
@@ -129,15 +133,14 @@ std::string encode_hdr_compressed_base64(const Histogram& histogram) {
     return base64_encode(out.data(), out.size());
 }
 
-bool decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out, std::string& error) {
+Error decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out) {
     if (size < kV2HeaderSize) {
-        error = "histogram encoding shorter than its header";
-        return false;
+        return bad_histogram("histogram encoding shorter than its header");
     }
     const std::uint32_t cookie = get_u32(data);
     if ((cookie & kCookieBaseMask) != kHdrV2EncodingCookie) {
-        error = "not an HdrHistogram V2 encoding (cookie " + std::to_string(cookie) + ")";
-        return false;
+        return bad_histogram("not an HdrHistogram V2 encoding (cookie " + std::to_string(cookie) +
+                             ")");
     }
     const std::uint32_t payload = get_u32(data + 4);
     const std::uint32_t normalizing_offset = get_u32(data + 8);
@@ -146,21 +149,20 @@ bool decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out, s
     const std::uint64_t highest = get_u64(data + 24);
     const double ratio = std::bit_cast<double>(get_u64(data + 32));
     if (payload > size - kV2HeaderSize) {
-        error = "histogram encoding truncated (payload longer than the data)";
-        return false;
+        return bad_histogram("histogram encoding truncated (payload longer than the data)");
     }
     if (digits != static_cast<std::uint32_t>(Histogram::kSignificantDigits) || lowest != 1 ||
         normalizing_offset != 0 || ratio != 1.0) {
-        error = "histogram settings differ: " + std::to_string(digits) +
-                " significant digits, lowest discernible value " + std::to_string(lowest) +
-                (normalizing_offset != 0 ? ", shifted counts" : "") +
-                (ratio != 1.0 ? ", a double histogram" : "") +
-                " (mbstorm records 3 significant digits, lowest 1 ns, integer values)";
-        return false;
+        return bad_histogram(
+            "histogram settings differ: " + std::to_string(digits) +
+            " significant digits, lowest discernible value " + std::to_string(lowest) +
+            (normalizing_offset != 0 ? ", shifted counts" : "") +
+            (ratio != 1.0 ? ", a double histogram" : "") +
+            " (mbstorm records 3 significant digits, lowest 1 ns, integer values)");
     }
     if (highest < 2 || highest > (std::uint64_t{1} << 62)) {
-        error = "histogram highest trackable value " + std::to_string(highest) + " out of range";
-        return false;
+        return bad_histogram("histogram highest trackable value " + std::to_string(highest) +
+                             " out of range");
     }
     Histogram decoded(highest);
     const std::uint8_t* p = data + kV2HeaderSize;
@@ -170,48 +172,41 @@ bool decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out, s
         std::int64_t word = 0;
         const std::size_t used = get_word(p, end, word);
         if (used == 0) {
-            error = "histogram counts truncated mid-word";
-            return false;
+            return bad_histogram("histogram counts truncated mid-word");
         }
         p += used;
         if (word < 0) {
             const std::uint64_t zeros = static_cast<std::uint64_t>(-(word + 1)) + 1;
             if (zeros > decoded.counts_length() - index) {
-                error = "histogram counts run past its highest trackable value";
-                return false;
+                return bad_histogram("histogram counts run past its highest trackable value");
             }
             index += static_cast<std::size_t>(zeros);
             continue;
         }
         if (index >= decoded.counts_length()) {
-            error = "histogram counts run past its highest trackable value";
-            return false;
+            return bad_histogram("histogram counts run past its highest trackable value");
         }
         decoded.add_at_index(index++, static_cast<std::uint64_t>(word));
     }
     out = std::move(decoded);
-    return true;
+    return Error::none();
 }
 
-bool decode_hdr_compressed_base64(std::string_view text, Histogram& out, std::string& error) {
+Error decode_hdr_compressed_base64(std::string_view text, Histogram& out) {
     std::vector<std::uint8_t> raw;
     if (!base64_decode(text, raw)) {
-        error = "histogram is not valid base64";
-        return false;
+        return bad_histogram("histogram is not valid base64");
     }
     if (raw.size() < 8 || (get_u32(raw.data()) & kCookieBaseMask) != kHdrV2CompressedCookie) {
-        error = "not a compressed HdrHistogram V2 encoding";
-        return false;
+        return bad_histogram("not a compressed HdrHistogram V2 encoding");
     }
     const std::uint32_t compressed = get_u32(raw.data() + 4);
     if (compressed > raw.size() - 8) {
-        error = "compressed histogram truncated";
-        return false;
+        return bad_histogram("compressed histogram truncated");
     }
     z_stream zs{};
     if (inflateInit(&zs) != Z_OK) {
-        error = "zlib could not start";
-        return false;
+        return Error(ErrorCode::Io, "zlib could not start");
     }
     std::vector<std::uint8_t> plain(kV2HeaderSize + 4096);
     zs.next_in = raw.data() + 8;
@@ -230,10 +225,10 @@ bool decode_hdr_compressed_base64(std::string_view text, Histogram& out, std::st
     }
     inflateEnd(&zs);
     if (rc != Z_STREAM_END) {
-        error = rc == Z_OK ? "compressed histogram too large" : "compressed histogram is corrupt";
-        return false;
+        return bad_histogram(rc == Z_OK ? "compressed histogram too large"
+                                        : "compressed histogram is corrupt");
     }
-    return decode_hdr_v2(plain.data(), produced, out, error);
+    return decode_hdr_v2(plain.data(), produced, out);
 }
 
 std::string base64_encode(const std::uint8_t* data, std::size_t size) {

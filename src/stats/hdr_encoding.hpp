@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "stats/histogram.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::stats {
 
@@ -27,11 +28,11 @@ std::vector<std::uint8_t> encode_hdr_v2(const Histogram& histogram);
 // The compressed wrapper around encode_hdr_v2, base64: the last field of a log line.
 std::string encode_hdr_compressed_base64(const Histogram& histogram);
 
-// Decodes into out (replaced). On failure returns false and sets error (e.g. "not base64",
-// "histogram settings differ: 2 significant digits, lowest 1000 (mbstorm: 3 digits, lowest
-// 1 ns)").
-bool decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out, std::string& error);
-bool decode_hdr_compressed_base64(std::string_view text, Histogram& out, std::string& error);
+// Decodes into out (replaced; a caller reading a long log reuses one histogram). On failure,
+// an InvalidInput error (e.g. "histogram is not valid base64", "histogram settings differ: 2
+// significant digits, lowest 1000 (mbstorm: 3 digits, lowest 1 ns)") and out unchanged.
+Error decode_hdr_v2(const std::uint8_t* data, std::size_t size, Histogram& out);
+Error decode_hdr_compressed_base64(std::string_view text, Histogram& out);
 
 std::string base64_encode(const std::uint8_t* data, std::size_t size);
 // False on a character outside the standard alphabet or a bad length or padding.

@@ -1,5 +1,6 @@
 #include "util/error.hpp"
 
+#include <cstring>
 #include <filesystem>
 #include <ostream>
 #include <system_error>
@@ -45,6 +46,13 @@ Error& Error::prefixed(std::string_view prefix) {
 
 std::ostream& operator<<(std::ostream& out, const Error& error) {
     return out << error.text();
+}
+
+Error from_errno(ErrorCode code, int err, std::string_view what) {
+    std::string message(what);
+    if (!message.empty()) message += ": ";
+    message += std::strerror(err);
+    return Error(code, std::move(message));
 }
 
 }  // namespace mbstorm

@@ -66,6 +66,9 @@ class [[nodiscard]] Error {
 
 // Its text(), for logs and test messages.
 std::ostream& operator<<(std::ostream& out, const Error& error);
+// A failed system call: "<what>: <strerror(err)>" (the message alone when `what` is empty),
+// e.g. from_errno(ErrorCode::Io, errno, path) gives "out.json: No such file or directory".
+Error from_errno(ErrorCode code, int err, std::string_view what);
 
 // A value or the Error that stopped it; never both. std::expected is not in clang 14's library.
 template <class T>

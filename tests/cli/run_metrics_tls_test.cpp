@@ -76,10 +76,9 @@ class RunMetricsTls : public test::TlsCertsTest {
         config.tls = context(net::TlsSide::Server, "server");
         if (!config.tls) return false;
         slave_ = std::make_unique<server::Server>(config);
-        std::string error;
-        const bool started = slave_->start(&error);
-        EXPECT_TRUE(started) << error;
-        return started;
+        const Error error = slave_->start();
+        EXPECT_TRUE(error.ok()) << error.text();
+        return error.ok();
     }
     // The endpoint `run --metrics-listen 127.0.0.1:0` starts for `live`.
     static bool start_endpoint(net::HttpServer& http, load::LiveMetrics& live) {

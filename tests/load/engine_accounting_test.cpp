@@ -145,8 +145,8 @@ TEST(EngineAccounting, TransactionLimitCountsOnlyMeasuredSends) {
     config.listen = "127.0.0.1:0";
     config.threads = 1;
     server::Server server(config);
-    std::string error;
-    ASSERT_TRUE(server.start(&error)) << error;
+    const Error error = server.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     Plan plan = one_connection_plan(server.port());
     plan.depth = 4;
     plan.duration = 0s;

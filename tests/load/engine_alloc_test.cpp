@@ -33,7 +33,7 @@ struct ChildServer {
             config.listen = "127.0.0.1:0";
             config.threads = 1;
             server::Server s(config);
-            std::uint16_t p = s.start() ? s.port() : 0;
+            std::uint16_t p = s.start().ok() ? s.port() : 0;
             if (::write(port_pipe[1], &p, sizeof(p)) != sizeof(p)) ::_exit(1);
             char c;
             // Returns when the parent closes its end (or dies); bounded by the parent's test.

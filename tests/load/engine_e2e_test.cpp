@@ -35,8 +35,8 @@ std::unique_ptr<server::Server> start_server(const slave::FaultConfig& faults = 
     config.threads = threads;
     config.faults = faults;
     auto s = std::make_unique<server::Server>(config);
-    std::string error;
-    EXPECT_TRUE(s->start(&error)) << error;
+    const Error error = s->start();
+    EXPECT_TRUE(error.ok()) << error.text();
     return s;
 }
 
@@ -442,7 +442,7 @@ TEST(EngineSourceAddresses, AConnectionWhosePortTheTargetHoldsTakesASpareOne) {
         config.listen = "127.0.0.13:" + std::to_string(range.low + held);
         config.threads = 1;
         server = std::make_unique<server::Server>(config);
-        if (!server->start()) server.reset();
+        if (!server->start().ok()) server.reset();
     }
     ASSERT_TRUE(server) << "no free port near the bottom of the range on 127.0.0.13";
     --held;

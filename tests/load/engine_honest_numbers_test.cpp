@@ -30,8 +30,8 @@ std::unique_ptr<server::Server> start_honest_slave(const slave::FaultConfig& fau
     config.threads = 1;
     config.faults = faults;
     auto s = std::make_unique<server::Server>(config);
-    std::string error;
-    EXPECT_TRUE(s->start(&error)) << error;
+    const Error error = s->start();
+    EXPECT_TRUE(error.ok()) << error.text();
     return s;
 }
 

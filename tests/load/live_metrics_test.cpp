@@ -47,8 +47,8 @@ TEST(LiveMetrics, EndsEqualToTheReportAndOnlyGrowsMeanwhile) {
     config.only_unit = 7;
     config.foreign_unit = server::ForeignUnitPolicy::GatewayException;
     server::Server slave(config);
-    std::string error;
-    ASSERT_TRUE(slave.start(&error)) << error;
+    const Error error = slave.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     const Plan plan = two_operation_plan(slave.port());
 
     LiveMetrics live("soak-1");

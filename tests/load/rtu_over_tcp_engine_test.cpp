@@ -50,8 +50,8 @@ TEST(RtuOverTcpEngine, AgainstTheRtuSlaveEveryAnswerIsMatchedAndChecked) {
     config.threads = 1;
     config.framing = codec::Framing::Rtu;
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     Plan plan = rtu_plan(srv.port());
     plan.connections = 4;
     plan.transactions = 2000;
@@ -71,8 +71,8 @@ TEST(RtuOverTcpEngine, MbapEngineAgainstAnRtuSlaveGetsNoAnswers) {
     config.threads = 1;
     config.framing = codec::Framing::Rtu;
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     Plan plan = rtu_plan(srv.port());
     plan.framing = codec::Framing::Mbap;
     plan.transactions = 20;
@@ -88,12 +88,11 @@ class ScriptedRtuPeer {
   public:
     using Answer = std::function<void(int n, const std::uint8_t* request, int fd)>;
     explicit ScriptedRtuPeer(Answer answer) : answer_(std::move(answer)) {
-        net::Endpoint ep;
-        net::parse_endpoint("127.0.0.1:0", ep);
+        const net::Endpoint ep = *net::parse_endpoint("127.0.0.1:0");
         net::ListenOptions lo;
         lo.nonblocking = true;
         lo.reuse_port = false;
-        listener_.reset(net::listen_socket(ep, lo));
+        listener_ = net::listen_socket(ep, lo).value();
         sockaddr_storage a{};
         socklen_t len = sizeof a;
         ::getsockname(listener_.get(), reinterpret_cast<sockaddr*>(&a), &len);

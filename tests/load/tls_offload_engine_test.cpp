@@ -85,8 +85,8 @@ TEST_F(TlsOffloadEngine, EveryConnectionReachesAHandOffThatAgreesWithItsPeer) {
         config.tls = context(net::TlsSide::Server, "server");
         ASSERT_TRUE(config.tls);
         server::Server srv(config);
-        std::string error;
-        ASSERT_TRUE(srv.start(&error)) << error;
+        const Error error = srv.start();
+        ASSERT_TRUE(error.ok()) << error.text();
         server_port = srv.port();
 
         Plan plan;

@@ -118,10 +118,8 @@ TEST_P(EventLoopTest, ASendCompletesWithTheBytesThePeerReads) {
 }
 
 TEST_P(EventLoopTest, AMultishotAcceptReportsEveryConnection) {
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("127.0.0.1:0", ep));
-    UniqueFd listener(listen_socket(ep, ListenOptions{16, false, true}));
-    ASSERT_TRUE(listener.valid());
+    Endpoint ep = *parse_endpoint("127.0.0.1:0");
+    UniqueFd listener = listen_socket(ep, ListenOptions{16, false, true}).value();
     ep.set_port(local_port(listener.get()));
     ASSERT_TRUE(loop.accept(listener.get(), 5, true));
     UniqueFd a(connect_blocking(ep)), b(connect_blocking(ep));
@@ -135,10 +133,9 @@ TEST_P(EventLoopTest, AMultishotAcceptReportsEveryConnection) {
 }
 
 TEST_P(EventLoopTest, ARefusedConnectEndsWithItsErrorAndCancelsItsTimeout) {
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("127.0.0.1:0", ep));
+    Endpoint ep = *parse_endpoint("127.0.0.1:0");
     {
-        UniqueFd closed(listen_socket(ep, ListenOptions{16, false, true}));
+        UniqueFd closed = listen_socket(ep, ListenOptions{16, false, true}).value();
         ep.set_port(local_port(closed.get()));
     }  // nothing listens there now
     const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
@@ -154,9 +151,8 @@ TEST_P(EventLoopTest, ARefusedConnectEndsWithItsErrorAndCancelsItsTimeout) {
 
 TEST_P(EventLoopTest, AConnectNobodyAnswersEndsAtItsTimeout) {
     // A listener whose accept queue is full drops the SYNs of further connects.
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("127.0.0.1:0", ep));
-    UniqueFd listener(listen_socket(ep, ListenOptions{0, false, true}));
+    Endpoint ep = *parse_endpoint("127.0.0.1:0");
+    UniqueFd listener = listen_socket(ep, ListenOptions{0, false, true}).value();
     ep.set_port(local_port(listener.get()));
     std::vector<UniqueFd> fillers;
     for (int i = 0; i < 4; ++i) fillers.emplace_back(connect_nonblocking(ep));
@@ -220,9 +216,9 @@ INSTANTIATE_TEST_SUITE_P(Backends, EventLoopTest, ::testing::ValuesIn(backends_h
                          backend_label);
 
 TEST(Backend, AutoFallsBackToEpollOnlyWhenIoUringIsRefusedAndSaysWhy) {
-    BackendDecision decision;
-    std::string error;
-    ASSERT_TRUE(choose_backend(BackendChoice::Auto, true, decision, error));
+    Result<BackendDecision> chosen = choose_backend(BackendChoice::Auto, true);
+    ASSERT_TRUE(chosen.ok());
+    BackendDecision decision = *chosen;
     if (features().ring && features().buf_ring) {
         EXPECT_EQ(decision.backend, Backend::IoUring);
         EXPECT_TRUE(decision.why.empty());
@@ -230,18 +226,20 @@ TEST(Backend, AutoFallsBackToEpollOnlyWhenIoUringIsRefusedAndSaysWhy) {
         EXPECT_EQ(decision.backend, Backend::Epoll);
         EXPECT_NE(decision.why.find("io_uring"), std::string::npos) << decision.why;
     }
-    ASSERT_TRUE(choose_backend(BackendChoice::Epoll, true, decision, error));
+    chosen = choose_backend(BackendChoice::Epoll, true);
+    ASSERT_TRUE(chosen.ok());
+    decision = *chosen;
     EXPECT_EQ(decision.backend, Backend::Epoll);
     EXPECT_TRUE(decision.why.empty());
 }
 
 TEST(Backend, AskingForIoUringWhereItIsRefusedFailsNamingTheCause) {
-    BackendDecision decision;
-    std::string error;
-    const bool ok = choose_backend(BackendChoice::IoUring, false, decision, error);
-    EXPECT_EQ(ok, features().ring);
+    const Result<BackendDecision> chosen = choose_backend(BackendChoice::IoUring, false);
+    EXPECT_EQ(chosen.ok(), features().ring);
     if (!features().ring) {
-        EXPECT_NE(error.find("io_uring_setup refused"), std::string::npos) << error;
+        EXPECT_EQ(chosen.error().code(), ErrorCode::Unsupported);
+        EXPECT_NE(chosen.error().text().find("io_uring_setup refused"), std::string::npos)
+            << chosen.error().text();
     }
 }
 

@@ -20,9 +20,9 @@ namespace {
 
 // Sends `request`, returns everything the server answered until it closed.
 std::string round_trip(const std::string& address, const std::string& request) {
-    Endpoint endpoint;
-    if (!parse_endpoint(address, endpoint)) return "bad address";
-    UniqueFd fd(connect_blocking(endpoint));
+    const Result<Endpoint> endpoint = parse_endpoint(address);
+    if (!endpoint.ok()) return "bad address";
+    UniqueFd fd(connect_blocking(*endpoint));
     if (!fd.valid()) return "no connection";
     timeval tv{5, 0};  // bounded: a hung server fails the test instead of blocking it
     ::setsockopt(fd.get(), SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
@@ -43,16 +43,12 @@ std::string round_trip(const std::string& address, const std::string& request) {
 class HttpServerTest : public ::testing::Test {
   protected:
     void SetUp() override {
-        std::string error;
-        ASSERT_TRUE(server_.start(
-            "127.0.0.1:0",
-            [this](std::string_view path) {
-                ++calls_;
-                if (path == "/metrics") return HttpReply{200, "text/plain", "m 1\n"};
-                return HttpReply{404, "text/plain", "no\n"};
-            },
-            error))
-            << error;
+        const Error error = server_.start("127.0.0.1:0", [this](std::string_view path) {
+            ++calls_;
+            if (path == "/metrics") return HttpReply{200, "text/plain", "m 1\n"};
+            return HttpReply{404, "text/plain", "no\n"};
+        });
+        ASSERT_TRUE(error.ok()) << error.text();
     }
     HttpServer server_;
     std::atomic<int> calls_{0};
@@ -97,9 +93,9 @@ TEST_F(HttpServerTest, RefusesWhatIsNotAGetAndKeepsServing) {
 }
 
 UniqueFd connect_to(const std::string& address) {
-    Endpoint endpoint;
-    if (!parse_endpoint(address, endpoint)) return UniqueFd();
-    return UniqueFd(connect_blocking(endpoint));
+    const Result<Endpoint> endpoint = parse_endpoint(address);
+    if (!endpoint.ok()) return UniqueFd();
+    return UniqueFd(connect_blocking(*endpoint));
 }
 
 // Whether the server has closed `fd` (an end of file within 5 s), sending nothing more.
@@ -161,9 +157,7 @@ TEST_F(HttpServerTest, ACrowdOfSilentSocketsDoesNotKeepAScrapeOut) {
 // dripped. Now it closes every client and returns at once.
 TEST(HttpServer, StopClosesEveryClientAndReturnsWhileTheyDrip) {
     HttpServer server;
-    std::string error;
-    ASSERT_TRUE(server.start(
-        "127.0.0.1:0", [](std::string_view) { return HttpReply{}; }, error));
+    ASSERT_TRUE(server.start("127.0.0.1:0", [](std::string_view) { return HttpReply{}; }).ok());
     Dripper drip(server.address(), 200);
     const UniqueFd silent = connect_to(server.address());
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
@@ -174,12 +168,12 @@ TEST(HttpServer, StopClosesEveryClientAndReturnsWhileTheyDrip) {
 
 TEST(HttpServer, RefusesAnAddressInUseAndStopsPromptly) {
     HttpServer first, second;
-    std::string error;
-    ASSERT_TRUE(first.start(
-        "127.0.0.1:0", [](std::string_view) { return HttpReply{}; }, error));
-    EXPECT_FALSE(second.start(
-        first.address(), [](std::string_view) { return HttpReply{}; }, error));
-    EXPECT_FALSE(error.empty());
+    ASSERT_TRUE(first.start("127.0.0.1:0", [](std::string_view) { return HttpReply{}; }).ok());
+    const Error error = second.start(first.address(), [](std::string_view) { return HttpReply{}; });
+    EXPECT_EQ(error.code(), ErrorCode::Network);
+    EXPECT_EQ(error.text(), "Address already in use");
+    EXPECT_EQ(second.start("127.0.0.1:x", [](std::string_view) { return HttpReply{}; }).code(),
+              ErrorCode::InvalidInput);
     first.stop();
     EXPECT_FALSE(first.running());
 }

@@ -13,6 +13,19 @@
 #include "net/user_data.hpp"
 
 using namespace mbstorm::net;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
+
+namespace {
+
+// The listener, or an invalid descriptor where the address cannot be listened on (no IPv6).
+UniqueFd listen_or_invalid(const Endpoint& ep) {
+    Result<UniqueFd> listener = listen_socket(ep);
+    return listener.ok() ? std::move(listener).value() : UniqueFd();
+}
+
+}  // namespace
 
 TEST(UserData, RoundTrips) {
     auto v = encode_user_data(3, 123456, 0xABCDEF);
@@ -25,20 +38,24 @@ TEST(UserData, RoundTrips) {
 }
 
 TEST(Endpoint, ParsesIpv4Ipv6AndDefaults) {
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("127.0.0.1:5020", ep));
-    EXPECT_EQ(ep.family(), AF_INET);
-    EXPECT_EQ(ep.port(), 5020);
-    EXPECT_EQ(ep.to_string(), "127.0.0.1:5020");
-    ASSERT_TRUE(parse_endpoint("[::1]:5020", ep));
-    EXPECT_EQ(ep.family(), AF_INET6);
-    EXPECT_EQ(ep.to_string(), "[::1]:5020");
-    ASSERT_TRUE(parse_endpoint("::1", ep, nullptr, 502));
-    EXPECT_EQ(ep.port(), 502);
-    ASSERT_TRUE(parse_endpoint("10.0.0.1", ep, nullptr, 1502));
-    EXPECT_EQ(ep.port(), 1502);
-    ASSERT_TRUE(parse_endpoint("localhost:7", ep));
-    EXPECT_EQ(ep.port(), 7);
+    Result<Endpoint> ep = parse_endpoint("127.0.0.1:5020");
+    ASSERT_TRUE(ep.ok());
+    EXPECT_EQ(ep->family(), AF_INET);
+    EXPECT_EQ(ep->port(), 5020);
+    EXPECT_EQ(ep->to_string(), "127.0.0.1:5020");
+    ep = parse_endpoint("[::1]:5020");
+    ASSERT_TRUE(ep.ok());
+    EXPECT_EQ(ep->family(), AF_INET6);
+    EXPECT_EQ(ep->to_string(), "[::1]:5020");
+    ep = parse_endpoint("::1", 502);
+    ASSERT_TRUE(ep.ok());
+    EXPECT_EQ(ep->port(), 502);
+    ep = parse_endpoint("10.0.0.1", 1502);
+    ASSERT_TRUE(ep.ok());
+    EXPECT_EQ(ep->port(), 1502);
+    ep = parse_endpoint("localhost:7");
+    ASSERT_TRUE(ep.ok()) << ep.error().text();
+    EXPECT_EQ(ep->port(), 7);
 }
 
 TEST(Endpoint, OneTargetSyntaxSplitsWithoutResolving) {
@@ -53,39 +70,56 @@ TEST(Endpoint, OneTargetSyntaxSplitsWithoutResolving) {
           Case{"::1", "::1", 502}, Case{"2001:db8::7", "2001:db8::7", 502}}) {
         std::string host;
         std::uint16_t port = 502;
-        ASSERT_TRUE(split_host_port(c.text, host, port)) << c.text;
+        ASSERT_TRUE(split_host_port(c.text, host, port).ok()) << c.text;
         EXPECT_EQ(host, c.host) << c.text;
         EXPECT_EQ(port, c.port) << c.text;
     }
-    std::string host, err;
+    std::string host;
     std::uint16_t port = 502;
-    EXPECT_FALSE(split_host_port("host:", host, port, &err));
-    EXPECT_FALSE(split_host_port("host:70000", host, port, &err));
-    EXPECT_NE(err.find("0..65535"), std::string::npos) << err;
-    EXPECT_FALSE(split_host_port("[::1]502", host, port, &err));
+    EXPECT_EQ(split_host_port("host:", host, port).code(), ErrorCode::InvalidInput);
+    const Error too_big = split_host_port("host:70000", host, port);
+    EXPECT_EQ(too_big.code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(too_big.text(), "bad port in 'host:70000' (0..65535)");
+    EXPECT_EQ(split_host_port("[::1]502", host, port).code(), ErrorCode::InvalidInput);
 }
 
-TEST(Endpoint, RejectsBadText) {
-    Endpoint ep;
-    std::string err;
-    EXPECT_FALSE(parse_endpoint("127.0.0.1:99999", ep, &err));
-    EXPECT_FALSE(err.empty());
-    EXPECT_FALSE(parse_endpoint("[::1:5020", ep, &err));
-    EXPECT_FALSE(parse_endpoint("[::1]x", ep, &err));
-    EXPECT_FALSE(parse_endpoint("127.0.0.1:", ep, &err));
-    EXPECT_FALSE(parse_endpoint("no.such.host.invalid:1", ep, &err));
+// Bad text is the user's input to fix; a name that does not resolve is the network's answer.
+TEST(Endpoint, RejectsBadTextAsInvalidInputAndUnknownNamesAsNetwork) {
+    for (const char* bad : {"127.0.0.1:99999", "[::1:5020", "[::1]x", "127.0.0.1:"}) {
+        const Result<Endpoint> ep = parse_endpoint(bad);
+        EXPECT_EQ(ep.error().code(), ErrorCode::InvalidInput) << bad;
+        EXPECT_FALSE(ep.error().message().empty()) << bad;
+    }
+    const Result<Endpoint> unknown = parse_endpoint("no.such.host.invalid:1");
+    EXPECT_EQ(unknown.error().code(), ErrorCode::Network);
+    EXPECT_EQ(unknown.error().message().rfind("cannot resolve host 'no.such.host.invalid': ", 0),
+              0u)
+        << unknown.error().text();
+}
+
+// A port another socket holds (without SO_REUSEPORT on both) cannot be listened on: a Network
+// error whose message is the system's reason alone, for the caller to say what it listened for.
+TEST(Socket, ListeningOnATakenPortIsANetworkError) {
+    Endpoint ep = *parse_endpoint("127.0.0.1:0");
+    const ListenOptions exclusive{16, false, true};
+    Result<UniqueFd> first = listen_socket(ep, exclusive);
+    ASSERT_TRUE(first.ok()) << first.error().text();
+    ep.set_port(local_port(first->get()));
+    const Result<UniqueFd> second = listen_socket(ep, exclusive);
+    ASSERT_FALSE(second.ok());
+    EXPECT_EQ(second.error().code(), ErrorCode::Network);
+    EXPECT_EQ(second.error().text(), "Address already in use");
 }
 
 TEST(Socket, ListenEphemeralAndConnect) {
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("127.0.0.1:0", ep));
-    UniqueFd l(listen_socket(ep));
+    Endpoint ep = *parse_endpoint("127.0.0.1:0");
+    UniqueFd l = listen_or_invalid(ep);
     ASSERT_TRUE(l.valid());
     std::uint16_t port = local_port(l.get());
     ASSERT_NE(port, 0);
     ep.set_port(port);
     // SO_REUSEPORT: a second listener on the same port works.
-    UniqueFd l2(listen_socket(ep));
+    UniqueFd l2 = listen_or_invalid(ep);
     EXPECT_TRUE(l2.valid());
     UniqueFd c(connect_nonblocking(ep));
     ASSERT_TRUE(c.valid());
@@ -95,9 +129,8 @@ TEST(Socket, ListenEphemeralAndConnect) {
 }
 
 TEST(Socket, Ipv6Loopback) {
-    Endpoint ep;
-    ASSERT_TRUE(parse_endpoint("[::1]:0", ep));
-    UniqueFd l(listen_socket(ep));
+    Endpoint ep = *parse_endpoint("[::1]:0");
+    UniqueFd l = listen_or_invalid(ep);
     if (!l.valid()) GTEST_SKIP() << "no IPv6 loopback";
     ep.set_port(local_port(l.get()));
     UniqueFd c(connect_blocking(ep));
@@ -108,9 +141,8 @@ TEST(Socket, Ipv6Loopback) {
 // program has not read yet, read from the kernel's socket diagnostics, for IPv4 and IPv6.
 TEST(PeerQueue, CountsTheBytesThePeersProgramHasNotRead) {
     for (const char* where : {"127.0.0.1:0", "[::1]:0"}) {
-        Endpoint ep;
-        ASSERT_TRUE(parse_endpoint(where, ep));
-        UniqueFd l(listen_socket(ep));
+        Endpoint ep = *parse_endpoint(where);
+        UniqueFd l = listen_or_invalid(ep);
         if (!l.valid()) continue;  // no IPv6 loopback here
         ep.set_port(local_port(l.get()));
         UniqueFd c(connect_blocking(ep));

@@ -7,6 +7,9 @@
 #include "net/source_addresses.hpp"
 
 using namespace mbstorm::net;
+using mbstorm::Error;
+using mbstorm::ErrorCode;
+using mbstorm::Result;
 
 namespace {
 
@@ -17,27 +20,29 @@ std::vector<std::string> texts(const std::vector<Endpoint>& list) {
 }
 
 std::string parse_error(std::string_view text) {
-    std::vector<Endpoint> list;
-    std::string error;
-    EXPECT_FALSE(parse_source_addresses(text, list, error)) << text;
-    return error;
+    const Result<std::vector<Endpoint>> list = parse_source_addresses(text);
+    EXPECT_EQ(list.error().code(), ErrorCode::InvalidInput) << text;
+    return list.error().text();
+}
+
+std::vector<Endpoint> parsed(std::string_view text) {
+    Result<std::vector<Endpoint>> list = parse_source_addresses(text);
+    EXPECT_TRUE(list.ok()) << list.error().text();
+    return list.ok() ? std::move(list).value() : std::vector<Endpoint>{};
 }
 
 }  // namespace
 
 TEST(SourceAddresses, ListsAndRangesInTheOrderGiven) {
-    std::vector<Endpoint> list;
-    std::string error;
-    ASSERT_TRUE(parse_source_addresses("127.0.0.5, 127.0.0.1-127.0.0.3,::1", list, error)) << error;
+    std::vector<Endpoint> list = parsed("127.0.0.5, 127.0.0.1-127.0.0.3,::1");
     EXPECT_EQ(texts(list), (std::vector<std::string>{"127.0.0.5:0", "127.0.0.1:0", "127.0.0.2:0",
                                                      "127.0.0.3:0", "[::1]:0"}));
-    ASSERT_TRUE(parse_source_addresses("127.0.0.254-127.0.1.1", list, error)) << error;
-    EXPECT_EQ(list.size(), 4u);
+    list = parsed("127.0.0.254-127.0.1.1");
+    ASSERT_EQ(list.size(), 4u);
     EXPECT_EQ(list.back().to_string(), "127.0.1.1:0");
-    ASSERT_TRUE(parse_source_addresses("[fd00::1]-[fd00::3]", list, error)) << error;
+    list = parsed("[fd00::1]-[fd00::3]");
     EXPECT_EQ(texts(list), (std::vector<std::string>{"[fd00::1]:0", "[fd00::2]:0", "[fd00::3]:0"}));
-    ASSERT_TRUE(parse_source_addresses("", list, error));
-    EXPECT_TRUE(list.empty());
+    EXPECT_TRUE(parsed("").empty());
 }
 
 TEST(SourceAddresses, BadTextIsRefusedNamingTheEntry) {
@@ -52,10 +57,10 @@ TEST(SourceAddresses, BadTextIsRefusedNamingTheEntry) {
 }
 
 TEST(SourceAddresses, LoopbackIsLocalAndATestNetAddressIsNot) {
-    std::vector<Endpoint> list;
-    std::string error;
-    ASSERT_TRUE(parse_source_addresses("127.0.0.3,192.0.2.77", list, error));
-    EXPECT_EQ(check_source_is_local(list[0]), "");
-    EXPECT_EQ(check_source_is_local(list[1]),
-              "source address 192.0.2.77 is not an address of this machine");
+    const std::vector<Endpoint> list = parsed("127.0.0.3,192.0.2.77");
+    ASSERT_EQ(list.size(), 2u);
+    EXPECT_TRUE(check_source_is_local(list[0]).ok());
+    const Error foreign = check_source_is_local(list[1]);
+    EXPECT_EQ(foreign.code(), ErrorCode::NotFound);
+    EXPECT_EQ(foreign.text(), "source address 192.0.2.77 is not an address of this machine");
 }

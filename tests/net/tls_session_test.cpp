@@ -77,16 +77,17 @@ TEST_F(TlsSessionTest, ASavedSessionIsResumed) {
 }
 
 TEST_F(TlsSessionTest, MissingFilesAreNamed) {
-    std::string error;
-    EXPECT_FALSE(TlsContext::create(TlsSide::Server,
-                                    {file("nope.pem"), file("server.key"), file("ca.pem")}, error));
+    auto refusal = [](const TlsFiles& files) {
+        const Result<std::shared_ptr<TlsContext>> context =
+            TlsContext::create(TlsSide::Server, files);
+        EXPECT_EQ(context.error().code(), ErrorCode::InvalidInput);
+        return context.error().text();
+    };
+    std::string error = refusal({file("nope.pem"), file("server.key"), file("ca.pem")});
     EXPECT_NE(error.find("nope.pem"), std::string::npos) << error;
-    error.clear();
-    EXPECT_FALSE(TlsContext::create(TlsSide::Client, {"", "", ""}, error));
+    error = refusal({"", "", ""});
     EXPECT_NE(error.find("--tls-cert"), std::string::npos) << error;
-    error.clear();
-    EXPECT_FALSE(TlsContext::create(
-        TlsSide::Server, {file("server.pem"), file("operator.key"), file("ca.pem")}, error));
+    error = refusal({file("server.pem"), file("operator.key"), file("ca.pem")});
     EXPECT_NE(error.find("operator.key with certificate"), std::string::npos) << error;
 }
 

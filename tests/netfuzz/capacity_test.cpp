@@ -41,8 +41,7 @@ ThreadSlave::Consume slave_answering(std::function<bool(int fd)> answers) {
 }
 
 CapacityResult check(ThreadSlave& slave, std::uint32_t connections) {
-    net::Endpoint e;
-    EXPECT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    net::Endpoint e = *net::parse_endpoint(slave.endpoint(), 502);
     TcpConnector connector(e);
     TargetProfile profile;
     profile.probe_pdu = kProbe;

@@ -120,9 +120,9 @@ struct SparseDevice {
             "--restart-delay-ms", "20", "--exit-after-s", "120"});
         const std::string line = process->wait_for_line("PORT ");
         if (line.empty()) return false;
-        mbstorm::net::Endpoint ep;
-        if (!mbstorm::net::parse_endpoint("127.0.0.1:" + line.substr(5), ep)) return false;
-        connector = std::make_unique<TcpConnector>(ep);
+        const auto ep = mbstorm::net::parse_endpoint("127.0.0.1:" + line.substr(5));
+        if (!ep.ok()) return false;
+        connector = std::make_unique<TcpConnector>(*ep);
         return discover_target(*connector, 1, 1000, profile).ok();
     }
 };

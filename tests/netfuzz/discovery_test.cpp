@@ -58,8 +58,7 @@ ThreadSlave::Consume slave_that(AfterException after) {
 }
 
 TargetProfile discover(ThreadSlave& slave) {
-    net::Endpoint e;
-    EXPECT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    net::Endpoint e = *net::parse_endpoint(slave.endpoint(), 502);
     TcpConnector connector(e);
     TargetProfile profile;
     const Error error = discover_target(connector, 1, 300, profile);

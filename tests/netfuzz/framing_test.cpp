@@ -204,8 +204,7 @@ class RtuSlave : public ThreadSlave {
 };
 
 Execution run_bad_crc_case(RtuSlave& slave) {
-    net::Endpoint e;
-    EXPECT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    net::Endpoint e = *net::parse_endpoint(slave.endpoint(), 502);
     TcpConnector connector(e, codec::Framing::Rtu);
     TargetProfile profile;
     profile.framing = codec::Framing::Rtu;
@@ -239,8 +238,7 @@ TEST(ExecutorFraming, AnAnswerBeforeItsDrippedRequestWasWholeIsTheStreamLost) {
             buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(whole));
         }
     });
-    net::Endpoint e;
-    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    net::Endpoint e = *net::parse_endpoint(slave.endpoint(), 502);
     TcpConnector connector(e);
     TargetProfile profile;
     profile.probe_pdu = kRead;
@@ -275,8 +273,7 @@ TEST(ExecutorFraming, AWholeServerHangThroughAnotherProtocolIdIsTheHandlersItRea
             buf.erase(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(whole));
         }
     });
-    net::Endpoint e;
-    ASSERT_TRUE(net::parse_endpoint(slave.endpoint(), e, nullptr, 502));
+    net::Endpoint e = *net::parse_endpoint(slave.endpoint(), 502);
     TcpConnector connector(e);
     Bytes f = frame_pdu({0x14, 0x07, 0x06, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01}, 9, 1);
     f[3] = 0x01;  // protocol id 0001

@@ -80,9 +80,9 @@ std::vector<AddressRange> ranges(std::initializer_list<std::pair<int, int>> list
 // The scripted device on a loopback port, discovered.
 struct Device {
     ThreadSlave slave{serve};
-    net::Endpoint endpoint;
-    bool parsed = net::parse_endpoint(slave.endpoint(), endpoint, nullptr, 502);
-    TcpConnector connector{endpoint};
+    Result<net::Endpoint> endpoint = net::parse_endpoint(slave.endpoint(), 502);
+    bool parsed = endpoint.ok();
+    TcpConnector connector{parsed ? *endpoint : net::Endpoint{}};
     TargetProfile profile;
     Error error;
     bool discovered() {

@@ -32,9 +32,10 @@ struct SlowSplitServer {
             std::vector<std::string>{mbstorm::test::tool_path("broken_server_split_close"),
                                      "--port", "0", "--exit-after-s", "60"});
         const std::string line = process->wait_for_line("PORT ");
-        net::Endpoint ep;
-        if (line.empty() || !net::parse_endpoint("127.0.0.1:" + line.substr(5), ep)) return false;
-        connector = std::make_unique<TcpConnector>(ep);
+        if (line.empty()) return false;
+        const Result<net::Endpoint> ep = net::parse_endpoint("127.0.0.1:" + line.substr(5));
+        if (!ep.ok()) return false;
+        connector = std::make_unique<TcpConnector>(*ep);
         return discover_target(*connector, 1, 1000, profile).ok();
     }
 

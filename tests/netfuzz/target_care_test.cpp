@@ -44,8 +44,7 @@ struct Cared {
     int downs = 0;
     std::optional<TargetCare> care;
     explicit Cared(const std::string& endpoint, bool death_watch = true) {
-        net::Endpoint e;
-        EXPECT_TRUE(net::parse_endpoint(endpoint, e, nullptr, 502));
+        net::Endpoint e = *net::parse_endpoint(endpoint, 502);
         options.connector = std::make_shared<TcpConnector>(e);
         options.timeout_ms = 300;
         options.restart_wait_ms = 400;

@@ -52,16 +52,19 @@ class TlsLinkTest : public ::testing::Test {
 
     static std::string file(const std::string& name) { return *dir_ + "/" + name; }
     static net::Endpoint endpoint() {
-        net::Endpoint e;
-        std::string error;
-        EXPECT_TRUE(net::parse_endpoint(*target_, e, &error, 802)) << error;
-        return e;
+        Result<net::Endpoint> e = net::parse_endpoint(*target_, 802);
+        EXPECT_TRUE(e.ok()) << e.error().text();
+        return e.ok() ? *e : net::Endpoint{};
+    }
+    // `who`'s client context trusting the CA (nullptr, the test failed, when it cannot be made).
+    static std::shared_ptr<net::TlsContext> client_context(const std::string& who) {
+        Result<std::shared_ptr<net::TlsContext>> ctx = net::TlsContext::create(
+            net::TlsSide::Client, {file(who + ".pem"), file(who + ".key"), file("ca.pem")});
+        EXPECT_TRUE(ctx.ok()) << ctx.error().text();
+        return ctx.ok() ? std::move(ctx).value() : nullptr;
     }
     static std::shared_ptr<TlsConnector> connector(const std::string& who, bool resume = false) {
-        std::string error;
-        auto ctx = net::TlsContext::create(
-            net::TlsSide::Client, {file(who + ".pem"), file(who + ".key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
+        auto ctx = client_context(who);
         return std::make_shared<TlsConnector>(endpoint(), ctx, resume);
     }
     // Reads until `want` bytes came, the stream ended or 3 s passed; `chunk` bytes per recv.
@@ -190,13 +193,9 @@ TEST_F(TlsLinkTest, SilentPeerFailsTheHandshakeAtTheTimeout) {
     ASSERT_EQ(::listen(listener, 4), 0);
     socklen_t len = sizeof a;
     ::getsockname(listener, reinterpret_cast<sockaddr*>(&a), &len);
-    net::Endpoint silent;
-    std::string why;
-    ASSERT_TRUE(
-        net::parse_endpoint("127.0.0.1:" + std::to_string(ntohs(a.sin_port)), silent, &why, 802));
-    std::string error;
-    auto ctx = net::TlsContext::create(
-        net::TlsSide::Client, {file("operator.pem"), file("operator.key"), file("ca.pem")}, error);
+    const net::Endpoint silent =
+        *net::parse_endpoint("127.0.0.1:" + std::to_string(ntohs(a.sin_port)), 802);
+    auto ctx = client_context("operator");
     TlsConnector c(silent, ctx, false);
     const auto t0 = std::chrono::steady_clock::now();
     int code = 0;
@@ -292,9 +291,8 @@ TEST_F(TlsLinkTest, TlsCasesFindNothingOnAPlainServer) {
     std::unique_ptr<test::Target> plain_server;
     const std::string at = test::start_reference_slave(plain_server);
     ASSERT_FALSE(at.empty());
-    net::Endpoint e;
+    net::Endpoint e = *net::parse_endpoint(at, 502);
     std::string error;
-    ASSERT_TRUE(net::parse_endpoint(at, e, &error, 502));
     TcpConnector plain(e);
     TargetProfile profile;
     const Error discovered = discover_target(plain, 1, 2000, profile);
@@ -320,12 +318,10 @@ TEST_F(TlsLinkTest, ATlsPortThatAnswersPlaintextIsAFindingThatReplays) {
          std::string(MBSTORM_SOURCE_DIR) + "/tests/scripts/tls_plaintext_too_server.py", *dir_});
     const std::string line = broken.wait_for_line("PORT ");
     ASSERT_FALSE(line.empty());
-    net::Endpoint e;
+    net::Endpoint e = *net::parse_endpoint("127.0.0.1:" + line.substr(5), 802);
     std::string error;
-    ASSERT_TRUE(net::parse_endpoint("127.0.0.1:" + line.substr(5), e, &error, 802));
-    auto ctx = net::TlsContext::create(
-        net::TlsSide::Client, {file("operator.pem"), file("operator.key"), file("ca.pem")}, error);
-    ASSERT_TRUE(ctx) << error;
+    auto ctx = client_context("operator");
+    ASSERT_TRUE(ctx);
     TlsConnector posing(e, ctx, false);
     TargetProfile profile;
     profile.probe_pdu = {0x03, 0x00, 0x00, 0x00, 0x01};

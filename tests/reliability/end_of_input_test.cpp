@@ -19,8 +19,8 @@ namespace {
 
 std::unique_ptr<server::Server> start(server::ServerConfig config) {
     auto s = std::make_unique<server::Server>(std::move(config));
-    std::string error;
-    EXPECT_TRUE(s->start(&error)) << error;
+    const Error error = s->start();
+    EXPECT_TRUE(error.ok()) << error.text();
     return s;
 }
 

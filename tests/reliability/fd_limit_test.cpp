@@ -61,8 +61,8 @@ void run_past_the_descriptor_limit(server::FullPolicy policy) {
     config.full_policy = policy;        // the default limit, 16384, is far above the 48
     config.use_direct_descriptors = false;  // descriptors, as on a kernel without direct ones
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     EXPECT_THAT(srv.warning(), testing::HasSubstr("connection limit lowered from 16384 to"));
     const std::uint32_t effective = srv.config().max_connections;
     ASSERT_LT(effective, 48u);
@@ -110,8 +110,8 @@ TEST(FdLimit, AmpleLimitChangesNothing) {
     auto config = test::test_config();
     config.max_connections = 4;
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     EXPECT_EQ(srv.config().max_connections, 4u);
     EXPECT_EQ(srv.warning(), "");
 }

@@ -65,8 +65,8 @@ class MergeBounds : public testing::Test {
         fs::remove_all(dir_);
         fs::create_directories(dir_);
         server::Server slave(test::test_config());
-        std::string error;
-        ASSERT_TRUE(slave.start(&error)) << error;
+        const Error error = slave.start();
+        ASSERT_TRUE(error.ok()) << error.text();
         for (int i = 0; i < 2; ++i) {
             const std::string shard = dir_ / ("s" + std::to_string(i));
             const auto r = test::run_mbstorm(

@@ -51,8 +51,8 @@ TEST(Hlog, IdentityLineNamesTestRunAndShardAndReadsBack) {
 TEST(Hlog, WriterWritesHdrHistogramsHeaderAndEveryLineIsFlushedAtOnce) {
     const std::string path = temp_path("hlog_writer");
     HlogWriter writer;
-    std::string error;
-    ASSERT_TRUE(writer.open(path, "mbstorm interval log: test t, run 01", error)) << error;
+    const Error opened = writer.open(path, "mbstorm interval log: test t, run 01");
+    ASSERT_TRUE(opened.ok()) << opened.text();
     // 2026-11-24T08:00:00.250Z
     const auto start =
         std::chrono::system_clock::time_point(std::chrono::milliseconds(1795507200250));
@@ -85,10 +85,12 @@ TEST(Hlog, WriterWritesHdrHistogramsHeaderAndEveryLineIsFlushedAtOnce) {
     EXPECT_EQ(line.rfind("0.000,1.000,1.500,HISTFAAA", 0), 0u) << line;
     std::getline(lines, line);
     EXPECT_EQ(line.rfind("Tag=read,0.000,1.000,0.002,HISTFAAA", 0), 0u) << line;
-    ASSERT_TRUE(writer.close(error)) << error;
+    const Error closed = writer.close();
+    ASSERT_TRUE(closed.ok()) << closed.text();
 
-    Hlog log;
-    ASSERT_TRUE(read_hlog(path, log, error)) << error;
+    const Result<Hlog> read_back = read_hlog(path);
+    ASSERT_TRUE(read_back.ok()) << read_back.error().text();
+    const Hlog& log = *read_back;
     std::remove(path.c_str());
     EXPECT_TRUE(log.has_start_time);
     EXPECT_DOUBLE_EQ(log.start_time_s, 1795507200.250);
@@ -101,26 +103,43 @@ TEST(Hlog, WriterWritesHdrHistogramsHeaderAndEveryLineIsFlushedAtOnce) {
 }
 
 TEST(Hlog, ReaderNamesTheBadLine) {
-    Hlog log;
-    std::string error;
-    EXPECT_FALSE(parse_hlog("#[StartTime: 5 (x)]\n0.0,1.0,2.0\n", log, error));
-    EXPECT_EQ(error, "line 2: an interval line has four fields: start,length,max,histogram");
-    EXPECT_FALSE(parse_hlog("0.0,x,2.0,HISTFAAA\n", log, error));
-    EXPECT_EQ(error, "line 1: start, length and max must be numbers");
-    EXPECT_FALSE(parse_hlog("\n\n0.0,1.0,2.0,AAAA\n", log, error));
-    EXPECT_EQ(error, "line 3: not a compressed HdrHistogram V2 encoding");
-    EXPECT_FALSE(read_hlog("/nonexistent/x.hlog", log, error));
-    EXPECT_NE(error.find("/nonexistent/x.hlog"), std::string::npos);
+    auto refusal = [](std::string_view text) {
+        const Result<Hlog> log = parse_hlog(text);
+        EXPECT_EQ(log.error().code(), ErrorCode::InvalidInput);
+        return log.error().text();
+    };
+    EXPECT_EQ(refusal("#[StartTime: 5 (x)]\n0.0,1.0,2.0\n"),
+              "line 2: an interval line has four fields: start,length,max,histogram");
+    EXPECT_EQ(refusal("0.0,x,2.0,HISTFAAA\n"), "line 1: start, length and max must be numbers");
+    EXPECT_EQ(refusal("\n\n0.0,1.0,2.0,AAAA\n"),
+              "line 3: not a compressed HdrHistogram V2 encoding");
+    const Result<Hlog> missing = read_hlog("/nonexistent/x.hlog");
+    EXPECT_EQ(missing.error().code(), ErrorCode::Io);
+    EXPECT_EQ(missing.error().text(), "/nonexistent/x.hlog: No such file or directory");
+}
+
+// The streaming reader says why it stopped: success at the end of the log, else the bad line.
+TEST(Hlog, StreamingReaderStopsAtTheBadLineSayingWhich) {
+    std::istringstream good("#[StartTime: 5 (x)]\n");
+    HlogReader complete(good);
+    HlogInterval interval;
+    EXPECT_FALSE(complete.next(interval));
+    EXPECT_TRUE(complete.error().ok());
+    std::istringstream bad("#[StartTime: 5 (x)]\n0.0,x,2.0,HISTFAAA\n");
+    HlogReader broken(bad);
+    EXPECT_FALSE(broken.next(interval));
+    EXPECT_EQ(broken.error().code(), ErrorCode::InvalidInput);
+    EXPECT_EQ(broken.error().text(), "line 2: start, length and max must be numbers");
 }
 
 TEST(Hlog, AbsoluteTimesFollowHdrHistogramsRule) {
     // No base time: timestamps far before the start time are relative to it.
-    Hlog log;
-    std::string error;
     // An empty histogram as HdrHistogram's Java library encodes it.
     const std::string line =
         "2.000,1.000,0.000,HISTFAAAACF4nJNpmSzMwMDAyAABzFAayGd2M9ixgMH+A1QEAFKmBEw=\n";
-    ASSERT_TRUE(parse_hlog("#[StartTime: 1000000000.000 (x)]\n" + line, log, error)) << error;
+    const Result<Hlog> parsed = parse_hlog("#[StartTime: 1000000000.000 (x)]\n" + line);
+    ASSERT_TRUE(parsed.ok()) << parsed.error().text();
+    const Hlog& log = *parsed;
     ASSERT_EQ(log.intervals.size(), 1u);
     EXPECT_DOUBLE_EQ(log.absolute_start_s(log.intervals[0]), 1000000002.0);
 }

@@ -105,10 +105,10 @@ TEST(Merge, CountsAddAndPercentilesAreThoseOfOneHistogramFedEveryValue) {
     shards.push_back(make_shard("a", 1000.0, 3, rng, all, all_read));
     shards.push_back(make_shard("b", 1000.0, 3, rng, all, all_read));
     shards.push_back(make_shard("c", 1000.0, 3, rng, all, all_read));
-    const MergeOutcome merged = merge_shards(shards);
-    ASSERT_TRUE(merged.ok) << merged.error;
-    EXPECT_TRUE(merged.warnings.empty());
-    const auto& run = merged.run;
+    const Result<MergeOutcome> merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok()) << merged.error().text();
+    EXPECT_TRUE(merged->warnings.empty());
+    const auto& run = merged->run;
     EXPECT_EQ(run.metadata.merged_runs, 3u);
     EXPECT_EQ(run.metadata.connections, 12u);
     EXPECT_EQ(run.counters.ok(), 9000u);
@@ -141,9 +141,9 @@ TEST(Merge, TlsCountersAddUpAndTheLongestHandshakeIsTheLongestOfAll) {
         c.tls_offloaded = 3;
         c.tls_offload_errors = 1;
     }
-    const MergeOutcome merged = merge_shards(shards);
-    ASSERT_TRUE(merged.ok) << merged.error;
-    const auto& c = merged.run.connections;
+    const Result<MergeOutcome> merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok()) << merged.error().text();
+    const auto& c = merged->run.connections;
     EXPECT_EQ(c.tls_handshakes, 8u);
     EXPECT_EQ(c.tls_resumed, 4u);
     EXPECT_EQ(c.tls_handshake_ns_total, 8'000'000u);
@@ -160,9 +160,9 @@ TEST(Merge, TimelineLinesUpOnWallClockTime) {
     shards.push_back(make_shard("late", 1002.2, 2, rng, all, all_read));  // 2.2 s after "early"
     shards.back().summary.metadata.requested_duration_ns = 3 * kSecond;  // the same plan, cut short
     shards.push_back(make_shard("early", 1000.0, 3, rng, all, all_read));
-    const MergeOutcome merged = merge_shards(shards);
-    ASSERT_TRUE(merged.ok) << merged.error;
-    const auto& tl = merged.run.timeline;
+    const Result<MergeOutcome> merged = merge_shards(shards);
+    ASSERT_TRUE(merged.ok()) << merged.error().text();
+    const auto& tl = merged->run.timeline;
     // early: 0, 1, 2; late's intervals start at 2.2 and 3.2: their middles fall in 2 and 3.
     ASSERT_EQ(tl.size(), 4u);
     EXPECT_EQ(tl[0].transactions, 1000u);
@@ -171,9 +171,9 @@ TEST(Merge, TimelineLinesUpOnWallClockTime) {
     EXPECT_EQ(tl[2].latency_count, 2000u);
     EXPECT_EQ(tl[3].transactions, 1000u);
     // From the first start to the last end: 4.2 s.
-    EXPECT_NEAR(static_cast<double>(merged.run.metadata.measured_duration_ns), 4.2e9, 1e3);
-    EXPECT_EQ(tl[3].duration_ns, merged.run.metadata.measured_duration_ns - 3 * kSecond);
-    expect_same_histogram(merged.run.latency, all);
+    EXPECT_NEAR(static_cast<double>(merged->run.metadata.measured_duration_ns), 4.2e9, 1e3);
+    EXPECT_EQ(tl[3].duration_ns, merged->run.metadata.measured_duration_ns - 3 * kSecond);
+    expect_same_histogram(merged->run.latency, all);
 }
 
 TEST(Merge, RefusesWhatIsNotOneWholeTest) {
@@ -186,9 +186,9 @@ TEST(Merge, RefusesWhatIsNotOneWholeTest) {
         return v;
     };
     auto refused = [](std::vector<ShardRun> v, std::uint32_t expect = 0) {
-        const MergeOutcome r = merge_shards(std::move(v), expect);
-        EXPECT_FALSE(r.ok);
-        return r.error;
+        const Result<MergeOutcome> r = merge_shards(std::move(v), expect);
+        EXPECT_FALSE(r.ok());
+        return r.error().text();
     };
     auto v = two();
     v[1].summary.metadata.run_id = "a";
@@ -222,7 +222,7 @@ TEST(Merge, RefusesWhatIsNotOneWholeTest) {
 
     v = two();
     EXPECT_EQ(refused(v, 3), "2 runs given, --expect says the test has 3: missing runs");
-    EXPECT_TRUE(merge_shards(two(), 2).ok);
+    EXPECT_TRUE(merge_shards(two(), 2).ok());
 
     // Numbered shards: every index once.
     v = two();
@@ -287,33 +287,33 @@ TEST(Merge, StagesAddUpStageByStageFromTheLogsStageLines) {
         v.push_back(make_shard(id, 1000.0, 3, rng, all, all_read));
         add_stages(v.back(), rng, by_stage);
     }
-    const MergeOutcome r = merge_shards(v);
-    ASSERT_TRUE(r.ok) << r.error;
-    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
-    ASSERT_EQ(r.run.stages.size(), 2u);
-    const auto& peak = r.run.stages[1];
+    const Result<MergeOutcome> r = merge_shards(v);
+    ASSERT_TRUE(r.ok()) << r.error().text();
+    EXPECT_TRUE(r->warnings.empty()) << r->warnings.front();
+    ASSERT_EQ(r->run.stages.size(), 2u);
+    const auto& peak = r->run.stages[1];
     EXPECT_EQ(peak.name, "peak");
     EXPECT_EQ(peak.counters.ok(), 2000u);
     EXPECT_EQ(peak.rate_to, 400.0);  // each shard's share, added
     EXPECT_EQ(peak.connections_to, 8u);
     EXPECT_EQ(peak.start_offset_ns, kSecond);
-    expect_same_histogram(r.run.stages[0].latency, by_stage[0]);
+    expect_same_histogram(r->run.stages[0].latency, by_stage[0]);
     expect_same_histogram(peak.latency, by_stage[1]);
     // The stage lines are not latencies of the whole run (no "log holds more" warning above)
     // nor of an operation.
-    EXPECT_EQ(r.run.latency.total_count(), 6000u);
-    expect_same_histogram(r.run.latency, all);
+    EXPECT_EQ(r->run.latency.total_count(), 6000u);
+    expect_same_histogram(r->run.latency, all);
 
     // A run whose log has no stage lines (an older mbstorm): no table, and a warning.
     std::erase_if(v[1].log.intervals,
                   [](const HlogInterval& line) { return stage_of_hlog_tag(line.tag) != 0; });
-    const MergeOutcome older = merge_shards(v);
-    ASSERT_TRUE(older.ok);
-    EXPECT_TRUE(older.run.stages.empty());
-    ASSERT_EQ(older.warnings.size(), 1u);
-    EXPECT_NE(older.warnings[0].find("no per-stage table: the interval log of b.json"),
+    const Result<MergeOutcome> older = merge_shards(v);
+    ASSERT_TRUE(older.ok());
+    EXPECT_TRUE(older->run.stages.empty());
+    ASSERT_EQ(older->warnings.size(), 1u);
+    EXPECT_NE(older->warnings[0].find("no per-stage table: the interval log of b.json"),
               std::string::npos)
-        << older.warnings[0];
+        << older->warnings[0];
 }
 
 TEST(Merge, StageTagsRoundTrip) {
@@ -333,16 +333,16 @@ TEST(Merge, WarnsWhenTheRunsDidNotRunAtTheSameTime) {
     std::vector<ShardRun> v;
     v.push_back(make_shard("first", 1000.0, 2, rng, all, all_read));
     v.push_back(make_shard("second", 1002.5, 2, rng, all, all_read));
-    const MergeOutcome apart = merge_shards(v);
-    ASSERT_TRUE(apart.ok) << apart.error;
-    ASSERT_EQ(apart.warnings.size(), 1u);
-    EXPECT_EQ(apart.warnings[0],
+    const Result<MergeOutcome> apart = merge_shards(v);
+    ASSERT_TRUE(apart.ok()) << apart.error().text();
+    ASSERT_EQ(apart->warnings.size(), 1u);
+    EXPECT_EQ(apart->warnings[0],
               "the runs did not all run at the same time: 4.5 s from the first start to the last "
               "end, 0.0 s with every run going, 0.5 s with none; the duration and throughput "
               "count that whole span (start the runs of one test together: run --start-at)");
     // Started together: nothing to say.
     v[1] = make_shard("second", 1000.0, 2, rng, all, all_read);
-    EXPECT_TRUE(merge_shards(v).warnings.empty());
+    EXPECT_TRUE(merge_shards(v)->warnings.empty());
 }
 
 TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {
@@ -351,10 +351,10 @@ TEST(Merge, WarnsWhenALogHoldsFewerLatenciesThanItsSummary) {
     std::vector<ShardRun> v;
     v.push_back(make_shard("a", 1000.0, 2, rng, all, all_read));
     v[0].log.intervals.resize(3);  // as if killed after its first interval
-    const MergeOutcome r = merge_shards(v);
-    ASSERT_TRUE(r.ok);
-    ASSERT_EQ(r.warnings.size(), 1u);
-    EXPECT_NE(r.warnings[0].find("its interval log holds 1000 latencies, its JSON 2000"),
+    const Result<MergeOutcome> r = merge_shards(v);
+    ASSERT_TRUE(r.ok());
+    ASSERT_EQ(r->warnings.size(), 1u);
+    EXPECT_NE(r->warnings[0].find("its interval log holds 1000 latencies, its JSON 2000"),
               std::string::npos);
 }
 
@@ -368,22 +368,22 @@ TEST(Merge, RefusesACountThatIsNotAWholeNumberThatFits) {
     const std::string path = (std::filesystem::temp_directory_path() /
                               ("merge-count-" + std::to_string(::getpid()) + ".json"))
                                  .string();
-    auto read_with = [&](const nlohmann::json& count, std::string& error) {
+    auto read_with = [&](const nlohmann::json& count) {
         nlohmann::json doc = real;
         doc["operations"][0]["outcomes"]["exception"] = count;
         std::ofstream(path) << doc.dump();
         ShardRun run;
-        const bool ok = read_shard_summary(path, run, error);
+        Error error = read_shard_summary(path, run);
         std::remove(path.c_str());
-        return ok;
+        return error;
     };
-    std::string error;
-    EXPECT_TRUE(read_with(7, error)) << error;
+    const Error good = read_with(7);
+    EXPECT_TRUE(good.ok()) << good.text();
     for (const nlohmann::json& bad :
          {nlohmann::json(3.3e26), nlohmann::json(-1), nlohmann::json(1.5)}) {
-        error.clear();
-        EXPECT_FALSE(read_with(bad, error)) << bad.dump();
-        EXPECT_NE(error.find("is not a whole number"), std::string::npos) << error;
+        const Error error = read_with(bad);
+        EXPECT_EQ(error.code(), ErrorCode::InvalidInput) << bad.dump();
+        EXPECT_NE(error.message().find("is not a whole number"), std::string::npos) << error.text();
     }
 }
 
@@ -403,7 +403,7 @@ int merge_limited(const std::vector<ShardRun>& runs, decltype(RLIMIT_AS) resourc
         const rlimit limit{value, value};
         ::setrlimit(resource, &limit);
         try {
-            ::_exit(merge_shards(runs).ok ? kMergedExit : kRefusedExit);
+            ::_exit(merge_shards(runs).ok() ? kMergedExit : kRefusedExit);
         } catch (const std::bad_alloc&) {
             ::_exit(kOutOfMemoryExit);
         }
@@ -437,18 +437,18 @@ TEST(Merge, RunsADayApartMergeInBoundedMemory) {
     if (!kAddressSanitizer) {
         ASSERT_EQ(merge_within(v, 1024), kMergedExit);
     }
-    const MergeOutcome r = merge_shards(v);
-    ASSERT_TRUE(r.ok) << r.error;
-    ASSERT_EQ(r.warnings.size(), 1u);
-    EXPECT_NE(r.warnings[0].find("did not all run at the same time"), std::string::npos);
-    ASSERT_EQ(r.run.timeline.size(), 86'402u);
+    const Result<MergeOutcome> r = merge_shards(v);
+    ASSERT_TRUE(r.ok()) << r.error().text();
+    ASSERT_EQ(r->warnings.size(), 1u);
+    EXPECT_NE(r->warnings[0].find("did not all run at the same time"), std::string::npos);
+    ASSERT_EQ(r->run.timeline.size(), 86'402u);
     std::size_t with_latencies = 0;
-    for (const auto& iv : r.run.timeline) with_latencies += iv.latency_count != 0 ? 1 : 0;
+    for (const auto& iv : r->run.timeline) with_latencies += iv.latency_count != 0 ? 1 : 0;
     EXPECT_EQ(with_latencies, 4u);
-    EXPECT_EQ(r.run.timeline[86'400].latency_count, 1000u);
-    EXPECT_EQ(r.run.timeline[86'400].transactions, 1000u);
-    EXPECT_EQ(r.run.timeline[5].transactions, 0u);
-    EXPECT_EQ(r.run.latency.total_count(), 4000u);
+    EXPECT_EQ(r->run.timeline[86'400].latency_count, 1000u);
+    EXPECT_EQ(r->run.timeline[86'400].transactions, 1000u);
+    EXPECT_EQ(r->run.timeline[5].transactions, 0u);
+    EXPECT_EQ(r->run.latency.total_count(), 4000u);
 }
 
 // A span no timeline should hold (a start time edited a year on, an interval of 1 µs) is
@@ -458,13 +458,14 @@ TEST(Merge, RefusesASpanOfMoreIntervalsThanATimelineHolds) {
     if (!kAddressSanitizer) {
         ASSERT_EQ(merge_within(year, 1024), kRefusedExit);
     }
-    const MergeOutcome r = merge_shards(year);
-    ASSERT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("more than the 1000000 a merged timeline holds"), std::string::npos)
-        << r.error;
+    const Result<MergeOutcome> r = merge_shards(year);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().text().find("more than the 1000000 a merged timeline holds"),
+              std::string::npos)
+        << r.error().text();
     auto micro = two_runs(1000.0);
     for (auto& s : micro) s.summary.timeline_interval_ns = 1000;
-    EXPECT_FALSE(merge_shards(micro).ok);
+    EXPECT_FALSE(merge_shards(micro).ok());
 }
 
 // A log line far outside its run (an edited start: 1e6 s in a 2 s run) made the timeline a
@@ -475,19 +476,20 @@ TEST(Merge, RefusesALineOutsideItsRunsOwnDuration) {
     if (!kAddressSanitizer) {
         ASSERT_EQ(merge_within(v, 1024), kRefusedExit);
     }
-    MergeOutcome r = merge_shards(v);
-    ASSERT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("b.hlog: a line of 1.000 s starting at 1000000.000 s, outside the "
-                           "run's own 2.000 s"),
-              std::string::npos)
-        << r.error;
+    Result<MergeOutcome> r = merge_shards(v);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(
+        r.error().text().find("b.hlog: a line of 1.000 s starting at 1000000.000 s, outside the "
+                              "run's own 2.000 s"),
+        std::string::npos)
+        << r.error().text();
     v = two_runs(1000.0);
     v[0].summary.timeline[1].start_offset_ns = 1'000'000 * kSecond;
     r = merge_shards(v);
-    ASSERT_FALSE(r.ok);
-    EXPECT_NE(r.error.find("a.json: timeline interval 1 starts at 1000000.000 s"),
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.error().text().find("a.json: timeline interval 1 starts at 1000000.000 s"),
               std::string::npos)
-        << r.error;
+        << r.error().text();
 }
 
 // mbstorm merge streams each log from its file (read_shards): the result is the one the
@@ -499,26 +501,26 @@ TEST(Merge, LogsStreamedFromTheirFilesMergeAsTheirDecodedLines) {
     for (auto& s : streamed) {
         s.hlog_path = (dir / ("merge-stream-" + std::to_string(::getpid()) + s.hlog_path)).string();
         HlogWriter writer;
-        std::string error;
-        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x").ok());
         writer.start(std::chrono::system_clock::time_point{});
         for (const auto& line : s.log.intervals)
             writer.write_interval(line.tag, line.start_s, line.length_s, line.histogram);
-        ASSERT_TRUE(writer.close(error)) << error;
+        const Error closed = writer.close();
+        ASSERT_TRUE(closed.ok()) << closed.text();
         s.log.intervals.clear();
         s.log_from_file = true;
     }
-    const MergeOutcome a = merge_shards(in_memory), b = merge_shards(streamed);
+    const Result<MergeOutcome> a = merge_shards(in_memory), b = merge_shards(streamed);
     for (const auto& s : streamed) std::remove(s.hlog_path.c_str());
-    ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
-    expect_same_histogram(b.run.latency, a.run.latency);
-    expect_same_histogram(b.run.operations[1].latency, a.run.operations[1].latency);
-    ASSERT_EQ(b.run.timeline.size(), 3u);
+    ASSERT_TRUE(a.ok() && b.ok()) << a.error().text() << b.error().text();
+    expect_same_histogram(b->run.latency, a->run.latency);
+    expect_same_histogram(b->run.operations[1].latency, a->run.operations[1].latency);
+    ASSERT_EQ(b->run.timeline.size(), 3u);
     for (std::size_t k = 0; k < 3; ++k) {
-        EXPECT_EQ(b.run.timeline[k].p99_ns, a.run.timeline[k].p99_ns);
-        EXPECT_EQ(b.run.timeline[k].latency_count, 2000u);
+        EXPECT_EQ(b->run.timeline[k].p99_ns, a->run.timeline[k].p99_ns);
+        EXPECT_EQ(b->run.timeline[k].latency_count, 2000u);
     }
-    EXPECT_EQ(b.warnings, a.warnings);
+    EXPECT_EQ(b->warnings, a->warnings);
 }
 
 // Past 64 runs the logs are not all held open while their lines are read again in time order
@@ -536,25 +538,25 @@ TEST(Merge, ManyStreamedLogsMergeAsTheirDecodedLines) {
                        ("merge-many-" + std::to_string(::getpid()) + s.hlog_path))
                           .string();
         HlogWriter writer;
-        std::string error;
-        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x").ok());
         writer.start(std::chrono::system_clock::time_point{});
         for (const auto& line : s.log.intervals)
             writer.write_interval(line.tag, line.start_s, line.length_s, line.histogram);
-        ASSERT_TRUE(writer.close(error)) << error;
+        const Error closed = writer.close();
+        ASSERT_TRUE(closed.ok()) << closed.text();
         s.log.intervals.clear();
         s.log_from_file = true;
     }
     const int with_32_descriptors = merge_limited(streamed, RLIMIT_NOFILE, 32);
-    const MergeOutcome a = merge_shards(in_memory), b = merge_shards(streamed);
+    const Result<MergeOutcome> a = merge_shards(in_memory), b = merge_shards(streamed);
     for (const auto& s : streamed) std::remove(s.hlog_path.c_str());
     EXPECT_EQ(with_32_descriptors, kMergedExit);
-    ASSERT_TRUE(a.ok && b.ok) << a.error << b.error;
-    expect_same_histogram(b.run.latency, all);
-    ASSERT_EQ(b.run.timeline.size(), 2u);
-    EXPECT_EQ(b.run.timeline[1].latency_count, 70'000u);
-    EXPECT_EQ(b.run.timeline[1].p99_ns, a.run.timeline[1].p99_ns);
-    EXPECT_EQ(b.warnings, a.warnings);
+    ASSERT_TRUE(a.ok() && b.ok()) << a.error().text() << b.error().text();
+    expect_same_histogram(b->run.latency, all);
+    ASSERT_EQ(b->run.timeline.size(), 2u);
+    EXPECT_EQ(b->run.timeline[1].latency_count, 70'000u);
+    EXPECT_EQ(b->run.timeline[1].p99_ns, a->run.timeline[1].p99_ns);
+    EXPECT_EQ(b->warnings, a->warnings);
 }
 
 // Issue #31: merge decoded every line of every log before adding any (a 270 KB histogram per
@@ -576,8 +578,7 @@ TEST(Merge, LongLogsMergeStreamedInBoundedMemory) {
                           .string();
         s.log_from_file = true;
         HlogWriter writer;
-        std::string error;
-        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x", error));
+        ASSERT_TRUE(writer.open(s.hlog_path, "mbstorm interval log: test t, run x").ok());
         writer.start(std::chrono::system_clock::time_point{});
         stats::Histogram all, read;
         for (int k = 0; k < kIntervals; ++k) {
@@ -597,7 +598,8 @@ TEST(Merge, LongLogsMergeStreamedInBoundedMemory) {
             iv.transactions = kPerInterval;
             s.summary.timeline.push_back(iv);
         }
-        ASSERT_TRUE(writer.close(error)) << error;
+        const Error closed = writer.close();
+        ASSERT_TRUE(closed.ok()) << closed.text();
         runs.push_back(std::move(s));
     }
     auto remove_logs = [&runs] {
@@ -608,14 +610,14 @@ TEST(Merge, LongLogsMergeStreamedInBoundedMemory) {
         remove_logs();
         FAIL() << "the merge did not fit in 512 MB";
     }
-    const MergeOutcome r = merge_shards(runs);
+    const Result<MergeOutcome> r = merge_shards(runs);
     remove_logs();
-    ASSERT_TRUE(r.ok) << r.error;
-    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
-    EXPECT_EQ(r.run.latency.total_count(), 2 * kIntervals * kPerInterval);
-    EXPECT_EQ(r.run.operations[0].latency.total_count(), 2 * kIntervals * kPerInterval);
-    ASSERT_EQ(r.run.timeline.size(), static_cast<std::size_t>(kIntervals));
-    EXPECT_EQ(r.run.timeline[kIntervals - 1].latency_count, 2 * kPerInterval);
+    ASSERT_TRUE(r.ok()) << r.error().text();
+    EXPECT_TRUE(r->warnings.empty()) << r->warnings.front();
+    EXPECT_EQ(r->run.latency.total_count(), 2 * kIntervals * kPerInterval);
+    EXPECT_EQ(r->run.operations[0].latency.total_count(), 2 * kIntervals * kPerInterval);
+    ASSERT_EQ(r->run.timeline.size(), static_cast<std::size_t>(kIntervals));
+    EXPECT_EQ(r->run.timeline[kIntervals - 1].latency_count, 2 * kPerInterval);
 }
 
 // Numbers a run never writes (found by editing one field of a real summary): each refused
@@ -631,10 +633,9 @@ TEST(Merge, RefusesTimesIntervalsAndShardCountsNoRunWrites) {
         doc[field] = value;
         std::ofstream(path) << doc.dump();
         ShardRun run;
-        std::string error;
-        const bool ok = read_shard_summary(path, run, error);
+        const Error error = read_shard_summary(path, run);
         std::remove(path.c_str());
-        return ok ? std::string("read") : error;
+        return error.ok() ? std::string("read") : error.message();
     };
     using ptr = nlohmann::json::json_pointer;
     EXPECT_EQ(error_with(ptr("/timeline/interval_s"), 1.0), "read");

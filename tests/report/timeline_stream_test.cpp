@@ -64,8 +64,8 @@ TEST(TimelineStream, OneLineOfJsonPerIntervalWithTheTimelinesKeys) {
 TEST(TimelineStream, EachIntervalIsOnDiskOnceWritten) {
     const std::string path = ::testing::TempDir() + "timeline_stream_test.jsonl";
     TimelineWriter writer;
-    std::string error;
-    ASSERT_TRUE(writer.open(path, "t", "r", error)) << error;
+    const Error opened = writer.open(path, "t", "r");
+    ASSERT_TRUE(opened.ok()) << opened.text();
     const auto start = std::chrono::system_clock::now();
     writer.write(interval(0), start);
     // Flushed: another reader sees the line while the writer is still open.
@@ -74,15 +74,16 @@ TEST(TimelineStream, EachIntervalIsOnDiskOnceWritten) {
     writer.write(interval(1), start);
     const std::string both = read_file(path);
     EXPECT_EQ(std::count(both.begin(), both.end(), '\n'), 2);
-    ASSERT_TRUE(writer.close(error)) << error;
+    const Error closed = writer.close();
+    ASSERT_TRUE(closed.ok()) << closed.text();
     std::remove(path.c_str());
 }
 
 TEST(TimelineStream, AnUnwritablePathIsAnError) {
     TimelineWriter writer;
-    std::string error;
-    EXPECT_FALSE(writer.open("/nonexistent-dir/x.jsonl", "", "", error));
-    EXPECT_NE(error.find("/nonexistent-dir/x.jsonl"), std::string::npos);
+    const Error error = writer.open("/nonexistent-dir/x.jsonl", "", "");
+    EXPECT_EQ(error.code(), ErrorCode::Io);
+    EXPECT_EQ(error.text(), "/nonexistent-dir/x.jsonl: No such file or directory");
 }
 
 }  // namespace

@@ -98,8 +98,8 @@ TEST(AcceptFdExhaustion, PausesAcceptingWithoutSpinningAndRecovers) {
     config.max_connections = 0;             // else start() raises the open-files limit again
     config.use_direct_descriptors = false;  // sockets as descriptors: they run out here
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     ASSERT_TRUE(served.connect(srv));
     ASSERT_TRUE(answers(served, 1));
 

@@ -52,8 +52,8 @@ class Client {
         connect(srv);
     }
     explicit Client(DeferConnect, const std::string& host = "127.0.0.1") {
-        net::parse_endpoint(host.find(':') != std::string::npos ? "[" + host + "]:0" : host + ":0",
-                            ep_);
+        ep_ = *net::parse_endpoint(host.find(':') != std::string::npos ? "[" + host + "]:0"
+                                                                       : host + ":0");
         fd_ = ::socket(ep_.family(), SOCK_STREAM | SOCK_CLOEXEC, 0);
     }
     // False (and the socket closed) when the connection fails.

@@ -22,7 +22,7 @@ std::uint16_t first_register(const std::vector<std::uint8_t>& rsp) {
 }  // namespace
 
 TEST(ServerDevice, PerUnitModelsAreSeparateAndUnknownUnitsGetGatewayException) {
-    auto device = slave::parse_device_yaml(R"(
+    const slave::DeviceDescription device = *slave::parse_device_yaml(R"(
 units: [1, 2]
 init:
   - {table: holding_registers, address: 0, values: [111], units: [1]}
@@ -32,8 +32,8 @@ init:
     auto config = test::test_config();
     config.units = &units;
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     Client c(srv);
     ASSERT_TRUE(c.send_all(read_holding(1, 1, 0, 1)));
     auto r1 = c.recv_n(test::read_holding_response_size(1));
@@ -51,7 +51,7 @@ init:
 }
 
 TEST(ServerDevice, SimulatedInputsChangeWhileServing) {
-    auto device = slave::parse_device_yaml(R"(
+    const slave::DeviceDescription device = *slave::parse_device_yaml(R"(
 simulate:
   - {table: holding_registers, address: 5, wave: ramp, period_ms: 400, amplitude: 1000, offset: 0}
 )");
@@ -61,8 +61,8 @@ simulate:
     config.simulated = device.simulated;
     config.simulate_interval_ms = 5;
     server::Server srv(config);
-    std::string error;
-    ASSERT_TRUE(srv.start(&error)) << error;
+    const Error error = srv.start();
+    ASSERT_TRUE(error.ok()) << error.text();
     Client c(srv);
     std::uint16_t first = 0;
     bool changed = false;

@@ -48,7 +48,7 @@ TEST(BlockPool, TrimGivesBackOnlyWhatNoGetNeededSinceTheLastTrim) {
 TEST(OutputMemory, BlocksACrowdOfSlowReadersNeededAreGivenBackAfterTheyLeave) {
     auto config = test::test_config();
     server::Server srv(config);
-    ASSERT_TRUE(srv.start());
+    ASSERT_TRUE(srv.start().ok());
     const std::size_t kept = config.prealloc_output_blocks + 64;
     // 60 clients that never read, each asking for about 3 MB of answers: the server queues
     // up to its backpressure cap (64 KiB) on each, in blocks, beyond what the sockets hold.

@@ -30,8 +30,8 @@ std::unique_ptr<server::Server> start_rtu() {
     server::ServerConfig config = test::test_config();
     config.framing = codec::Framing::Rtu;
     auto s = std::make_unique<server::Server>(std::move(config));
-    std::string error;
-    EXPECT_TRUE(s->start(&error)) << error;
+    const Error error = s->start();
+    EXPECT_TRUE(error.ok()) << error.text();
     return s;
 }
 

@@ -77,13 +77,14 @@ class SerialServerTest : public ::testing::Test {
         c.only_unit = 1;
         c.faults = faults;
         server_ = std::make_unique<server::SerialServer>(c);
-        ASSERT_EQ(server_->open(), "");
+        const Error opened = server_->open();
+        ASSERT_TRUE(opened.ok()) << opened.text();
         thread_ = std::thread([this] { error_ = server_->run(stop_); });
     }
     void TearDown() override {
         stop_ = true;
         if (thread_.joinable()) thread_.join();
-        EXPECT_EQ(error_, "");
+        EXPECT_TRUE(error_.ok()) << error_.text();
     }
     // The server counts an answer once it is written, so the master may read it first: wait
     // for the count to catch up before judging the counters.
@@ -100,7 +101,7 @@ class SerialServerTest : public ::testing::Test {
     std::unique_ptr<server::SerialServer> server_;
     std::atomic<bool> stop_{false};
     std::thread thread_;
-    std::string error_;
+    Error error_;
 };
 
 // The line's timing, pinned to the specification's numbers (Modbus over Serial Line v1.02,

@@ -20,8 +20,8 @@ namespace {
 
 std::unique_ptr<server::Server> start(server::ServerConfig config) {
     auto s = std::make_unique<server::Server>(std::move(config));
-    std::string error;
-    EXPECT_TRUE(s->start(&error)) << error;
+    const Error error = s->start();
+    EXPECT_TRUE(error.ok()) << error.text();
     return s;
 }
 
@@ -542,10 +542,8 @@ TEST(Server, TinyBufferRingSurvivesExhaustion) {
 }
 
 TEST(Server, Ipv6Loopback) {
-    net::Endpoint ep;
-    net::parse_endpoint("[::1]:0", ep);
-    net::UniqueFd probe(net::listen_socket(ep));
-    if (!probe.valid()) GTEST_SKIP() << "no IPv6 loopback";
+    const Result<net::UniqueFd> probe = net::listen_socket(*net::parse_endpoint("[::1]:0"));
+    if (!probe.ok()) GTEST_SKIP() << "no IPv6 loopback";
     auto config = test::test_config();
     config.listen = "[::1]:0";
     auto srv = start(config);

@@ -17,10 +17,9 @@ TEST(TlsRoles, NoRulesAllowEveryRoleEverything) {
 
 TEST(TlsRoles, RulesListCodesAndRangesPerRole) {
     TlsRoles roles;
-    std::string error;
-    ASSERT_TRUE(roles.add_rule("Operator=1-6,15,0x10", error)) << error;
-    ASSERT_TRUE(roles.add_rule("Viewer=3", error)) << error;
-    ASSERT_TRUE(roles.add_rule("Viewer=4", error)) << error;  // a role's rules add up
+    ASSERT_TRUE(roles.add_rule("Operator=1-6,15,0x10").ok());
+    ASSERT_TRUE(roles.add_rule("Viewer=3").ok());
+    ASSERT_TRUE(roles.add_rule("Viewer=4").ok());  // a role's rules add up
     const FunctionSet* op = roles.allowed_for("Operator");
     ASSERT_NE(op, nullptr);
     for (unsigned fc : {1u, 2u, 3u, 4u, 5u, 6u, 15u, 16u}) EXPECT_TRUE(op->test(fc)) << fc;
@@ -38,9 +37,9 @@ TEST(TlsRoles, MalformedRulesAreRefusedWithAReason) {
     for (const char* bad : {"Operator", "=3", "Operator=", "Operator=0", "Operator=256",
                             "Operator=6-3", "Operator=3,,4", "Operator=x"}) {
         TlsRoles roles;
-        std::string error;
-        EXPECT_FALSE(roles.add_rule(bad, error)) << bad;
-        EXPECT_FALSE(error.empty()) << bad;
+        const Error error = roles.add_rule(bad);
+        EXPECT_EQ(error.code(), ErrorCode::InvalidInput) << bad;
+        EXPECT_FALSE(error.message().empty()) << bad;
     }
 }
 

@@ -13,7 +13,7 @@ using namespace mbstorm;
 TEST(ZeroAlloc, SteadyStatePipelinedLoadAllocatesNothing) {
     auto config = test::test_config();
     server::Server srv(config);
-    ASSERT_TRUE(srv.start());
+    ASSERT_TRUE(srv.start().ok());
     constexpr int kDepth = 64;
     constexpr int kConns = 4;
     std::vector<test::Client> clients;

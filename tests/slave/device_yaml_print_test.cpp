@@ -11,12 +11,7 @@ namespace mbstorm::slave::test {
 namespace {
 
 std::string error_of_delay(const std::string& delay) {
-    try {
-        parse_device_yaml("faults: {delay: " + delay + "}\n", "dev.yaml");
-    } catch (const DeviceYamlError& e) {
-        return e.what();
-    }
-    return "";
+    return parse_device_yaml("faults: {delay: " + delay + "}\n", "dev.yaml").error().text();
 }
 
 // Field-by-field comparison, so a failure names the field that did not survive.
@@ -98,15 +93,14 @@ void expect_same(const DeviceDescription& a, const DeviceDescription& b) {
 // Parses `yaml`, prints it, parses the print and checks both descriptions match; printing the
 // second one must also give the same text. Returns the printed text.
 std::string round_trip(const std::string& yaml) {
-    const DeviceDescription first = parse_device_yaml(yaml, "first.yaml");
+    const DeviceDescription first = *parse_device_yaml(yaml, "first.yaml");
     const std::string printed = format_device_yaml(first);
-    DeviceDescription second;
-    try {
-        second = parse_device_yaml(printed, "printed.yaml");
-    } catch (const DeviceYamlError& e) {
-        ADD_FAILURE() << e.what() << "\n" << printed;
+    const Result<DeviceDescription> read_back = parse_device_yaml(printed, "printed.yaml");
+    if (!read_back.ok()) {
+        ADD_FAILURE() << read_back.error().text() << "\n" << printed;
         return printed;
     }
+    const DeviceDescription& second = *read_back;
     SCOPED_TRACE(printed);
     expect_same(first, second);
     EXPECT_EQ(format_device_yaml(second), printed);
@@ -184,10 +178,10 @@ TEST(DeviceYamlPrint, EveryKeyRoundTrips) {
 
 TEST(DeviceYamlPrint, ExampleFileRoundTrips) {
     const DeviceDescription first =
-        load_device_file(MBSTORM_SOURCE_DIR "/scenarios/devices/example-device.yaml");
+        *load_device_file(MBSTORM_SOURCE_DIR "/scenarios/devices/example-device.yaml");
     const std::string printed = format_device_yaml(first);
     SCOPED_TRACE(printed);
-    expect_same(first, parse_device_yaml(printed, "printed.yaml"));
+    expect_same(first, *parse_device_yaml(printed, "printed.yaml"));
 }
 
 TEST(DeviceYamlPrint, EachDelayKindRoundTrips) {
@@ -257,7 +251,7 @@ TEST(DeviceYamlPrint, DefaultDeviceShowsEveryDefault) {
 }
 
 TEST(DeviceYamlPrint, DelayNoneIsAcceptedAndMeansNoDelay) {
-    const DeviceDescription d = parse_device_yaml("faults: {delay: none}\n");
+    const DeviceDescription d = *parse_device_yaml("faults: {delay: none}\n");
     EXPECT_EQ(d.faults.delay.kind, DelayConfig::Kind::None);
     EXPECT_FALSE(d.faults.any());
     EXPECT_NE(error_of_delay("fixed").find("faults.delay must be a mapping"), std::string::npos);

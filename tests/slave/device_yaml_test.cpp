@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include <yaml-cpp/yaml.h>
+
 #include "slave/device_yaml.hpp"
 #include "slave_test_support.hpp"
 
@@ -14,24 +16,23 @@ namespace {
 
 // Runs the parser and returns the error message ("" when it parsed).
 std::string error_of(const std::string& yaml) {
-    try {
-        parse_device_yaml(yaml, "dev.yaml");
-    } catch (const DeviceYamlError& e) {
-        return e.what();
+    const Result<DeviceDescription> d = parse_device_yaml(yaml, "dev.yaml");
+    if (!d.ok()) {
+        EXPECT_EQ(d.error().code(), ErrorCode::InvalidInput);
     }
-    return "";
+    return d.error().text();
 }
 
 TEST(DeviceYaml, EmptyDocumentIsTheDefaultDevice) {
-    const DeviceDescription d = parse_device_yaml("", "empty.yaml");
+    const DeviceDescription d = *parse_device_yaml("", "empty.yaml");
     EXPECT_TRUE(d.shared);
     EXPECT_EQ(d.model.sizes.holding_registers, 65536u);
     EXPECT_FALSE(d.faults.any());
 }
 
 TEST(DeviceYaml, ExampleFileLoadsAndBuilds) {
-    const DeviceDescription d = load_device_file(std::string(MBSTORM_SOURCE_DIR) +
-                                                 "/scenarios/devices/example-device.yaml");
+    const DeviceDescription d = *load_device_file(std::string(MBSTORM_SOURCE_DIR) +
+                                                  "/scenarios/devices/example-device.yaml");
     EXPECT_FALSE(d.shared);
     EXPECT_EQ(d.units, (std::vector<std::uint8_t>{1, 2, 10, 11, 12}));
     EXPECT_EQ(d.model.sizes.coils, 10000u);
@@ -69,8 +70,8 @@ TEST(DeviceYaml, RandomInitIsDeterministicAndInRange) {
     const char* yaml =
         "init: [{table: input_registers, address: 0, count: 500, random: {min: 10, max: 20, seed: "
         "5}}]";
-    const UnitModels a = build_units(parse_device_yaml(yaml));
-    const UnitModels b = build_units(parse_device_yaml(yaml));
+    const UnitModels a = build_units(*parse_device_yaml(yaml));
+    const UnitModels b = build_units(*parse_device_yaml(yaml));
     bool saw_min = false, saw_max = false;
     for (std::uint16_t i = 0; i < 500; ++i) {
         const auto v = a.model_at(0).input_registers().get(i);
@@ -85,15 +86,15 @@ TEST(DeviceYaml, RandomInitIsDeterministicAndInRange) {
 
 TEST(DeviceYaml, Int16AndHexValues) {
     const UnitModels u =
-        build_units(parse_device_yaml("init:\n  - {table: holding_registers, address: 0, type: "
-                                      "int16, values: [-1, -32768, 0x10]}\n"));
+        build_units(*parse_device_yaml("init:\n  - {table: holding_registers, address: 0, type: "
+                                       "int16, values: [-1, -32768, 0x10]}\n"));
     EXPECT_EQ(u.model_at(0).holding_registers().get(0), 0xFFFF);
     EXPECT_EQ(u.model_at(0).holding_registers().get(1), 0x8000);
     EXPECT_EQ(u.model_at(0).holding_registers().get(2), 0x0010);
 }
 
 TEST(DeviceYaml, FaultSettings) {
-    const DeviceDescription d = parse_device_yaml(R"(
+    const DeviceDescription d = *parse_device_yaml(R"(
 faults:
   delay: {exponential_mean_ms: 2.5}
   exception: {rate: 0.25, code: 6}
@@ -104,12 +105,12 @@ faults:
     EXPECT_EQ(d.faults.delay.mean_ns, 2'500'000u);
     EXPECT_EQ(d.faults.exception_code, codec::ExceptionCode::ServerDeviceBusy);
     EXPECT_DOUBLE_EQ(d.faults.drop_rate, 0.1);
-    EXPECT_EQ(parse_device_yaml("faults: {delay: {fixed_ms: 5}}").faults.delay.fixed_ns,
+    EXPECT_EQ(parse_device_yaml("faults: {delay: {fixed_ms: 5}}")->faults.delay.fixed_ns,
               5'000'000u);
 }
 
 TEST(DeviceYaml, TlsRolesListFunctionCodesPerRoleLikeTheTlsRoleFlag) {
-    const DeviceDescription d = parse_device_yaml(R"(
+    const DeviceDescription d = *parse_device_yaml(R"(
 tls_roles:
   Operator: "1-6,15,16"
   Viewer: [1, 2, 0x03, "4"]
@@ -119,7 +120,7 @@ tls_roles:
     EXPECT_EQ(codec::format_function_set(d.tls_roles[0].second), "1-6,15-16");
     EXPECT_EQ(d.tls_roles[1].first, "Viewer");
     EXPECT_EQ(codec::format_function_set(d.tls_roles[1].second), "1-4");
-    EXPECT_TRUE(parse_device_yaml("").tls_roles.empty());
+    EXPECT_TRUE(parse_device_yaml("")->tls_roles.empty());
     std::string e = error_of("tls_roles:\n  Operator: \"1-6,300\"\n");
     EXPECT_NE(e.find("dev.yaml:2:13: tls_roles.Operator: bad function code or range '300'"),
               std::string::npos)
@@ -143,7 +144,7 @@ TEST(DeviceYaml, DuplicateKeysAreRejectedAndUnknownKeysListTheValidOnes) {
 }
 
 TEST(DeviceYaml, IntegersMayBeBinary) {
-    EXPECT_EQ(parse_device_yaml("exception_status: 0b1010").model.exception_status, 10);
+    EXPECT_EQ(parse_device_yaml("exception_status: 0b1010")->model.exception_status, 10);
 }
 
 TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
@@ -158,8 +159,11 @@ TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
     e = error_of("tables: {coils: 10\n");
     EXPECT_EQ(e.rfind("dev.yaml:", 0), 0u) << e;
     EXPECT_NE(e.find(":2:"), std::string::npos) << e;
+    e = error_of("units: shared\nfoo: 1\n");
+    EXPECT_EQ(e.rfind("dev.yaml:2:1: ", 0), 0u) << e;
+    // Embedded in another document, the device's error keeps its line and column.
     try {
-        parse_device_yaml("units: shared\nfoo: 1\n", "x.yaml");
+        parse_device_node(YAML::Load("units: shared\nfoo: 1\n"), "x.yaml");
         FAIL();
     } catch (const DeviceYamlError& err) {
         EXPECT_EQ(err.line(), 2);
@@ -169,7 +173,7 @@ TEST(DeviceYaml, ErrorsCarryLineAndColumn) {
 
 // Device files follow the address rule of every subcommand (codec/address.hpp).
 TEST(DeviceYaml, AddressesFollowTheOneRule) {
-    const DeviceDescription d = parse_device_yaml(
+    const DeviceDescription d = *parse_device_yaml(
         "init:\n"
         "  - {table: holding_registers, address: 40101, value: 1}\n"
         "  - {table: holding_registers, address: 0x9C41, value: 2}\n"
@@ -230,12 +234,9 @@ TEST(DeviceYaml, RangeAndConsistencyErrors) {
 }
 
 TEST(DeviceYaml, MissingFileIsAClearError) {
-    try {
-        load_device_file("/nonexistent/device.yaml");
-        FAIL();
-    } catch (const DeviceYamlError& e) {
-        EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
-    }
+    const Result<DeviceDescription> d = load_device_file("/nonexistent/device.yaml");
+    EXPECT_EQ(d.error().code(), ErrorCode::Io);
+    EXPECT_EQ(d.error().text(), "/nonexistent/device.yaml: cannot open the device file");
 }
 
 // YAML aliases repeat an init entry for a few bytes each: a 1.4 KB file of 20 aliased entries
@@ -261,7 +262,7 @@ TEST(DeviceYaml, InitWorkIsBoundedWhateverTheAliases) {
         repeated += std::string("  - {table: ") + t +
                     ", address: 0, value: 1, count: 65536, units: [1-247, 1-247, 1-247]}\n";
     EXPECT_EQ(error_of(repeated), "");
-    const DeviceDescription d = parse_device_yaml(repeated, "dev.yaml");
+    const DeviceDescription d = *parse_device_yaml(repeated, "dev.yaml");
     ASSERT_EQ(d.init.size(), 4u);
     EXPECT_EQ(d.init[0].units.size(), 247u);
 }
@@ -273,17 +274,14 @@ TEST(DeviceYaml, AFileLargerThan16MiBIsNotReadWhole) {
         const std::string comment = "# " + std::string(1022, 'x') + "\n";
         for (int i = 0; i < 17 * 1024; ++i) out << comment;
     }
-    try {
-        load_device_file(path);
-        FAIL();
-    } catch (const DeviceYamlError& e) {
-        EXPECT_NE(std::string(e.what()).find("larger than 16 MiB"), std::string::npos) << e.what();
-    }
+    const Result<DeviceDescription> d = load_device_file(path);
+    EXPECT_EQ(d.error().code(), ErrorCode::InvalidInput);
+    EXPECT_NE(d.error().text().find("larger than 16 MiB"), std::string::npos) << d.error().text();
     std::remove(path.c_str());
 }
 
 TEST(DeviceYaml, PolicySettingsReachTheUnits) {
-    const UnitModels u = build_units(parse_device_yaml(
+    const UnitModels u = build_units(*parse_device_yaml(
         "units: [1, 5]\nunknown_unit: ignore\nbroadcast_unit_zero: yes\ndiagnostics: false\n"));
     EXPECT_EQ(u.unknown_unit_policy, UnknownUnitPolicy::Ignore);
     EXPECT_TRUE(u.broadcast_unit_zero);

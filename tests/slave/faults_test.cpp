@@ -13,7 +13,7 @@ using Action = FaultDecision::Action;
 TEST(Faults, OffByDefault) {
     FaultConfig c;
     EXPECT_FALSE(c.any());
-    EXPECT_EQ(validate(c), "");
+    EXPECT_TRUE(validate(c).ok());
     FaultInjector inj(c);
     EXPECT_FALSE(inj.enabled());
     for (int i = 0; i < 1000; ++i) {
@@ -27,26 +27,26 @@ TEST(Faults, OffByDefault) {
 TEST(Faults, ValidationNamesTheProblem) {
     FaultConfig c;
     c.exception_rate = 1.5;
-    EXPECT_NE(validate(c).find("exception rate"), std::string::npos);
+    EXPECT_NE(validate(c).message().find("exception rate"), std::string::npos);
     c = {};
     c.drop_rate = 0.6;
     c.no_answer_rate = 0.6;
-    EXPECT_NE(validate(c).find("add up"), std::string::npos);
+    EXPECT_NE(validate(c).message().find("add up"), std::string::npos);
     c = {};
     c.delay.kind = DelayConfig::Kind::Uniform;
     c.delay.min_ns = 10;
     c.delay.max_ns = 5;
-    EXPECT_NE(validate(c).find("min <= max"), std::string::npos);
+    EXPECT_NE(validate(c).message().find("min <= max"), std::string::npos);
     c = {};
     c.stall = {2'000, 1'000};
-    EXPECT_NE(validate(c).find("stall"), std::string::npos);
+    EXPECT_NE(validate(c).message().find("stall"), std::string::npos);
     c = {};
     c.exception_rate = 0.1;
     c.exception_code = codec::ExceptionCode::None;
-    EXPECT_NE(validate(c).find("code"), std::string::npos);
+    EXPECT_NE(validate(c).message().find("code"), std::string::npos);
     c = {};
     c.drop_rate = std::nan("");
-    EXPECT_NE(validate(c), "");
+    EXPECT_EQ(validate(c).code(), ErrorCode::InvalidInput);
 }
 
 TEST(Faults, RatesMatchForAFixedSeed) {
@@ -56,7 +56,7 @@ TEST(Faults, RatesMatchForAFixedSeed) {
     c.exception_rate = 0.10;
     c.exception_code = codec::ExceptionCode::ServerDeviceBusy;
     c.seed = 12345;
-    ASSERT_EQ(validate(c), "");
+    ASSERT_TRUE(validate(c).ok());
     FaultInjector inj(c, 0);
     constexpr int kDraws = 200'000;
     int drops = 0, silent = 0, exceptions = 0, answers = 0;

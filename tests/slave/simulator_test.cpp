@@ -82,7 +82,7 @@ TEST(Simulator, EncodeValueRoundsClampsAndSplitsFloats) {
 }
 
 TEST(Simulator, UpdateWritesRegistersBitsAndCounters) {
-    const DeviceDescription d = parse_device_yaml(R"(
+    const DeviceDescription d = *parse_device_yaml(R"(
 simulate:
   - {table: input_registers, address: 10, wave: sine, period_ms: 1000, amplitude: 100, offset: 500}
   - {table: holding_registers, address: 20, wave: ramp, period_ms: 1000, amplitude: 1000, type: float32}
@@ -109,7 +109,7 @@ counters:
 }
 
 TEST(Simulator, PerUnitTargets) {
-    const DeviceDescription d = parse_device_yaml(R"(
+    const DeviceDescription d = *parse_device_yaml(R"(
 units: [1, 2]
 simulate:
   - {table: input_registers, address: 0, wave: square, period_ms: 1000, amplitude: 9, units: [2]}

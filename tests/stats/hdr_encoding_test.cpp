@@ -53,9 +53,9 @@ TEST(HdrEncoding, RoundTripKeepsEveryCount) {
     }
     h.record_n(1ULL << 40, 1ULL << 50);  // a count needing the 9-byte form's neighbours
     Histogram back(1000);
-    std::string error;
-    ASSERT_TRUE(decode_hdr_compressed_base64(encode_hdr_compressed_base64(h), back, error))
-        << error;
+    const mbstorm::Error error =
+        decode_hdr_compressed_base64(encode_hdr_compressed_base64(h), back);
+    ASSERT_TRUE(error.ok()) << error.text();
     expect_same_decoded_counts(h, back);
     EXPECT_EQ(back.highest_trackable(), h.highest_trackable());
     // Decoded extremes are bucket edges, as in HdrHistogram; percentiles land in the same buckets.
@@ -71,8 +71,7 @@ TEST(HdrEncoding, EmptyHistogramRoundTrips) {
     Histogram h;
     Histogram back;
     back.record(7);
-    std::string error;
-    ASSERT_TRUE(decode_hdr_compressed_base64(encode_hdr_compressed_base64(h), back, error));
+    ASSERT_TRUE(decode_hdr_compressed_base64(encode_hdr_compressed_base64(h), back).ok());
     EXPECT_TRUE(back.empty());
 }
 
@@ -83,8 +82,8 @@ TEST(HdrEncoding, DecodesWhatHdrHistogramJavaWrote) {
     const std::string java =
         "HISTFAAAACx4nJNpmSzMwMDAwwABzFCaEch0M9ixgMH+A1SEiYFlt/ENlvcvGZkAlu8IAg==";
     Histogram h;
-    std::string error;
-    ASSERT_TRUE(decode_hdr_compressed_base64(java, h, error)) << error;
+    const mbstorm::Error error = decode_hdr_compressed_base64(java, h);
+    ASSERT_TRUE(error.ok()) << error.text();
     Histogram expected;
     expected.record(1);
     expected.record_n(3, 2);
@@ -101,38 +100,48 @@ TEST(HdrEncoding, RefusesOtherSettingsAndDamage) {
     h.record(42);
     std::vector<std::uint8_t> bytes = encode_hdr_v2(h);
     Histogram out;
-    std::string error;
+    mbstorm::Error error;
 
     std::vector<std::uint8_t> two_digits = bytes;
     two_digits[15] = 2;
-    EXPECT_FALSE(decode_hdr_v2(two_digits.data(), two_digits.size(), out, error));
-    EXPECT_NE(error.find("histogram settings differ: 2 significant digits"), std::string::npos)
-        << error;
+    error = decode_hdr_v2(two_digits.data(), two_digits.size(), out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_NE(error.message().find("histogram settings differ: 2 significant digits"),
+              std::string::npos)
+        << error.text();
 
     std::vector<std::uint8_t> coarse = bytes;
     coarse[23] = 100;  // lowest discernible value 100
-    EXPECT_FALSE(decode_hdr_v2(coarse.data(), coarse.size(), out, error));
-    EXPECT_NE(error.find("lowest discernible value 100"), std::string::npos) << error;
+    error = decode_hdr_v2(coarse.data(), coarse.size(), out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_NE(error.message().find("lowest discernible value 100"), std::string::npos)
+        << error.text();
 
-    EXPECT_FALSE(decode_hdr_v2(bytes.data(), bytes.size() - 1, out, error));
-    EXPECT_NE(error.find("truncated"), std::string::npos) << error;
+    error = decode_hdr_v2(bytes.data(), bytes.size() - 1, out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_NE(error.message().find("truncated"), std::string::npos) << error.text();
 
     std::vector<std::uint8_t> huge_run = bytes;
     huge_run.resize(40);
     huge_run[7] = 9;
     for (int i = 0; i < 8; ++i) huge_run.push_back(0xff);
     huge_run.push_back(0xff);  // ZigZag of INT64_MIN-ish: a run no histogram has
-    EXPECT_FALSE(decode_hdr_v2(huge_run.data(), huge_run.size(), out, error));
-    EXPECT_NE(error.find("past its highest trackable value"), std::string::npos) << error;
+    error = decode_hdr_v2(huge_run.data(), huge_run.size(), out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_NE(error.message().find("past its highest trackable value"), std::string::npos)
+        << error.text();
 
-    EXPECT_FALSE(decode_hdr_compressed_base64("HISTFAAA!!!!", out, error));
-    EXPECT_EQ(error, "histogram is not valid base64");
-    EXPECT_FALSE(decode_hdr_compressed_base64("AAAAAAAAAAAA", out, error));
-    EXPECT_EQ(error, "not a compressed HdrHistogram V2 encoding");
+    error = decode_hdr_compressed_base64("HISTFAAA!!!!", out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_EQ(error.message(), "histogram is not valid base64");
+    error = decode_hdr_compressed_base64("AAAAAAAAAAAA", out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_EQ(error.message(), "not a compressed HdrHistogram V2 encoding");
     // A valid wrapper around bytes that are not zlib.
     const std::uint8_t fake[] = {0x1c, 0x84, 0x93, 0x14, 0, 0, 0, 4, 1, 2, 3, 4};
-    EXPECT_FALSE(decode_hdr_compressed_base64(base64_encode(fake, sizeof fake), out, error));
-    EXPECT_EQ(error, "compressed histogram is corrupt");
+    error = decode_hdr_compressed_base64(base64_encode(fake, sizeof fake), out);
+    EXPECT_EQ(error.code(), mbstorm::ErrorCode::InvalidInput);
+    EXPECT_EQ(error.message(), "compressed histogram is corrupt");
 }
 
 TEST(Base64, MatchesTheStandardAlphabetAndPadding) {

@@ -47,11 +47,12 @@ class TlsCertsTest : public ::testing::Test {
     // (TLS1_2_VERSION, ...) caps the protocol, 0 leaves OpenSSL's range.
     static std::shared_ptr<net::TlsContext> context(net::TlsSide side, const std::string& who,
                                                     int max_version = 0) {
-        std::string error;
-        auto ctx = net::TlsContext::create(
-            side, {file(who + ".pem"), file(who + ".key"), file("ca.pem")}, error);
-        EXPECT_TRUE(ctx) << error;
-        if (ctx && max_version != 0) SSL_CTX_set_max_proto_version(ctx->get(), max_version);
+        Result<std::shared_ptr<net::TlsContext>> made =
+            net::TlsContext::create(side, {file(who + ".pem"), file(who + ".key"), file("ca.pem")});
+        EXPECT_TRUE(made.ok()) << made.error().text();
+        if (!made.ok()) return nullptr;
+        std::shared_ptr<net::TlsContext> ctx = std::move(made).value();
+        if (max_version != 0) SSL_CTX_set_max_proto_version(ctx->get(), max_version);
         return ctx;
     }
 

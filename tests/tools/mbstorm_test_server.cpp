@@ -52,9 +52,8 @@ int main(int argc, char** argv) {
     }
     server::block_stop_signals();
     server::Server srv(config);
-    std::string error;
-    if (!srv.start(&error)) {
-        std::fprintf(stderr, "mbstorm_test_server: %s\n", error.c_str());
+    if (const Error error = srv.start(); !error.ok()) {
+        std::fprintf(stderr, "mbstorm_test_server: %s\n", error.text().c_str());
         return 1;
     }
     std::fprintf(stderr, "%s\n%s\n", net::describe(net::features()).c_str(),
@@ -62,5 +61,6 @@ int main(int argc, char** argv) {
     if (!srv.warning().empty()) std::fprintf(stderr, "warning: %s\n", srv.warning().c_str());
     std::printf("PORT %u\n", srv.port());
     std::fflush(stdout);
-    return server::run_until_signal(srv, run);
+    server::run_until_signal(srv, run);
+    return 0;
 }

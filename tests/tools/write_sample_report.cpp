@@ -25,9 +25,10 @@ int main(int argc, char** argv) {
         {"report.txt", mbstorm::report::format_console_report(result)},
     };
     for (const auto& [name, content] : files) {
-        std::string error;
-        if (!mbstorm::report::write_text_file(dir + "/" + name, content, error)) {
-            std::fprintf(stderr, "write_sample_report: %s\n", error.c_str());
+        if (const mbstorm::Error error =
+                mbstorm::report::write_text_file(dir + "/" + name, content);
+            !error.ok()) {
+            std::fprintf(stderr, "write_sample_report: %s\n", error.text().c_str());
             return 1;
         }
         std::printf("%s/%s\n", dir.c_str(), name);

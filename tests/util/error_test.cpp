@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <memory>
 #include <string>
 
@@ -37,6 +38,13 @@ TEST(Error, EveryCodeHasItsOwnName) {
         for (std::size_t j = i + 1; j < std::size(codes); ++j)
             EXPECT_NE(error_code_name(codes[i]), error_code_name(codes[j]));
     EXPECT_EQ(error_code_name(ErrorCode::NotFound), "not found");
+}
+
+TEST(Error, FromErrnoNamesWhatFailedAndTheSystemsReason) {
+    const Error e = from_errno(ErrorCode::Io, ENOENT, "out.json");
+    EXPECT_EQ(e.code(), ErrorCode::Io);
+    EXPECT_EQ(e.message(), "out.json: No such file or directory");
+    EXPECT_EQ(from_errno(ErrorCode::Network, ECONNREFUSED, "").message(), "Connection refused");
 }
 
 Result<int> half(int n) {
