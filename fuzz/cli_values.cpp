@@ -73,7 +73,7 @@ void typed(std::string_view text, std::uint8_t pick) {
         at = comma + 1;
     }
     std::vector<std::uint16_t> regs;
-    if (!cli::registers_from_text(texts, type, order, regs).empty() || regs.empty()) return;
+    if (!cli::registers_from_text(texts, type, order, regs).ok() || regs.empty()) return;
     const auto values = cli::values_from_registers(regs, 0, type, order);
     if (type == cli::ValueType::Bits) {  // printed as binary digits, which write does not take
         check(values.size() == regs.size());
@@ -82,7 +82,7 @@ void typed(std::string_view text, std::uint8_t pick) {
         return;
     }
     std::vector<std::uint16_t> again;
-    check(cli::registers_from_text(texts_of(values), type, order, again).empty());
+    check(cli::registers_from_text(texts_of(values), type, order, again).ok());
     check(texts_of(cli::values_from_registers(again, 0, type, order)) == texts_of(values));
     // Integers are exact; a float's NaN payload and a string's NULs may not come back.
     if (type < cli::ValueType::F32) check(again == regs);

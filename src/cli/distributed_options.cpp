@@ -106,7 +106,10 @@ std::string parse_rfc3339(std::string_view text, Clock::time_point& out) {
 
 }  // namespace
 
-std::string resolve_shard(const std::string& flag, const char* env_index, const char* env_count,
+namespace {
+
+// resolve_shard's work: "" or what is wrong.
+std::string shard_problem(const std::string& flag, const char* env_index, const char* env_count,
                           load::Plan::Shard& out) {
     out = {};
     std::uint32_t index = 0, count = 0;
@@ -138,7 +141,8 @@ std::string resolve_shard(const std::string& flag, const char* env_index, const 
     return {};
 }
 
-std::string parse_start_at(std::string_view text, Clock::time_point now, Clock::time_point& out) {
+// parse_start_at's work: "" or what is wrong.
+std::string start_at_problem(std::string_view text, Clock::time_point now, Clock::time_point& out) {
     const bool epoch_form = !text.empty() && text.find('-') == std::string_view::npos &&
                             text.find(':') == std::string_view::npos;
     if (epoch_form) {
@@ -162,6 +166,21 @@ std::string parse_start_at(std::string_view text, Clock::time_point now, Clock::
             text, hours, out > now ? "ahead" : "ago", kMaxStartAtDistance.count());
     }
     return {};
+}
+
+}  // namespace
+
+Error resolve_shard(const std::string& flag, const char* env_index, const char* env_count,
+                    load::Plan::Shard& out) {
+    std::string why = shard_problem(flag, env_index, env_count, out);
+    if (why.empty()) return {};
+    return Error(ErrorCode::InvalidInput, std::move(why));
+}
+
+Error parse_start_at(std::string_view text, Clock::time_point now, Clock::time_point& out) {
+    std::string why = start_at_problem(text, now, out);
+    if (why.empty()) return {};
+    return Error(ErrorCode::InvalidInput, std::move(why));
 }
 
 }  // namespace mbstorm::cli

@@ -426,8 +426,8 @@ void add_fuzz_command(CLI::App& app, Action& action) {
     cmd->callback([o, cmd, &action] {
         o->state_given = cmd->count("--state-range") > 0;
         action = [o] {
-            if (std::string e = check_transport(o->transport, "fuzz"); !e.empty())
-                return usage_error("fuzz", e);
+            if (const Error e = check_transport(o->transport, "fuzz"); !e.ok())
+                return fail("fuzz", e);
             if (o->target.empty() && o->transport.kind() != TransportKind::Serial)
                 return usage_error("fuzz", "--target is required");
             return run_fuzz(*o);

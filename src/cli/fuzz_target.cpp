@@ -42,8 +42,7 @@ Result<std::shared_ptr<netfuzz::Connector>> make_fuzz_connector(const std::strin
             Result<net::Endpoint> endpoint = resolve_fuzz_target(target, allow_remote, 802);
             if (!endpoint.ok()) return std::move(endpoint).error();
             std::shared_ptr<net::TlsContext> ctx;
-            if (std::string error = client_tls(transport, ctx); !error.empty())
-                return Error(ErrorCode::InvalidInput, std::move(error));
+            if (Error error = client_tls(transport, ctx); !error.ok()) return error;
             return Made(std::make_shared<netfuzz::TlsConnector>(*endpoint, std::move(ctx),
                                                                 transport.tls_resume));
         }

@@ -195,9 +195,9 @@ std::string build_request(const IoOptions& o, IoPlan& p) {
                 return fmt::format("value '{}': a coil takes 1/0, on/off or true/false", v);
             p.registers.push_back(bit ? 1 : 0);
         }
-    } else if (auto error = registers_from_text(o.values, p.type, p.order, p.registers);
-               !error.empty()) {
-        return error;
+    } else if (const Error error = registers_from_text(o.values, p.type, p.order, p.registers);
+               !error.ok()) {
+        return error.text();
     }
     if (p.registers.size() > 0xFFFF) return "too many values";
     p.items = static_cast<std::uint16_t>(p.registers.size());
@@ -450,7 +450,7 @@ int run_serial_io(const IoOptions& o, IoPlan& p,
 int run_io(const IoOptions& o) {
     const char* name = o.write ? "write" : "read";
     auto usage = [name](std::string_view message) { return usage_error(name, message); };
-    if (std::string e = check_transport(o.transport, name); !e.empty()) return usage(e);
+    if (const Error e = check_transport(o.transport, name); !e.ok()) return fail(name, e);
     IoPlan p;
     if (auto error = build_request(o, p); !error.empty()) return usage(error);
     p.request.payload = codec::Bytes(p.payload.data(), p.payload.size());
@@ -477,7 +477,7 @@ int run_io(const IoOptions& o) {
         if (!verdict.allowed()) return usage(verdict.refusal.text());
     }
     std::shared_ptr<net::TlsContext> tls;
-    if (std::string e = client_tls(o.transport, tls); !e.empty()) return usage(e);
+    if (const Error e = client_tls(o.transport, tls); !e.ok()) return fail(name, e);
     ModbusClient client(o.transport.framing_kind());
     if (auto why = client.connect(p.target, timeout_ms, tls); !why.empty())
         return usage(fmt::format("cannot connect to {}: {}", p.target.to_string(), why));

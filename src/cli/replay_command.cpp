@@ -143,8 +143,8 @@ void add_replay_command(CLI::App& app, Action& action) {
     add_transport_options(cmd, o->transport, TransportSide::Client);
     cmd->callback([o, &action] {
         action = [o] {
-            if (std::string e = check_transport(o->transport, "replay"); !e.empty())
-                return usage_error("replay", e);
+            if (const Error e = check_transport(o->transport, "replay"); !e.ok())
+                return fail("replay", e);
             if (o->target.empty() && o->transport.kind() != TransportKind::Serial)
                 return usage_error("replay", "--target is required");
             return run_replay(*o);

@@ -68,17 +68,17 @@ struct RunOptions {
     bool depth_given = false;  // --depth on the command line (not its default)
 };
 
-// --shard (or the environment), --start-at and --backend into the request; "" or the usage
+// --shard (or the environment), --start-at and --backend into the request, or the usage
 // error.
-std::string distributed_options(const RunOptions& o, ScenarioRunRequest& request) {
+Error distributed_options(const RunOptions& o, ScenarioRunRequest& request) {
     net::parse_backend_choice(o.backend, request.backend);  // checked by CLI11
-    if (auto e = resolve_shard(o.shard, std::getenv(kShardIndexEnv), std::getenv(kShardCountEnv),
-                               request.shard);
-        !e.empty())
+    if (Error e = resolve_shard(o.shard, std::getenv(kShardIndexEnv), std::getenv(kShardCountEnv),
+                                request.shard);
+        !e.ok())
         return e;
     if (o.start_at.empty()) return {};
     std::chrono::system_clock::time_point at;
-    if (auto e = parse_start_at(o.start_at, std::chrono::system_clock::now(), at); !e.empty())
+    if (Error e = parse_start_at(o.start_at, std::chrono::system_clock::now(), at); !e.ok())
         return e;
     request.start_at = at;
     return {};
@@ -181,7 +181,7 @@ int run_load_test(RunOptions& o) {
     // A flag-only run is a one-operation scenario: the runner starts the embedded slave when
     // there is no target, and reports the same way.
     scenario::Scenario s = scenario::scenario_from_plan(plan, o.target);
-    if (auto e = client_tls(o.transport, s.plan.tls); !e.empty()) return usage_error("run", e);
+    if (Error e = client_tls(o.transport, s.plan.tls); !e.ok()) return fail("run", e);
     if (s.plan.tls && o.target.empty())
         return usage_error("run",
                            "--transport tls needs --target (the embedded slave is plain TCP)");
@@ -207,7 +207,7 @@ int run_load_test(RunOptions& o) {
     request.junit = o.junit;
     request.quiet = o.quiet;
     request.outputs = o.outputs;
-    if (auto e = distributed_options(o, request); !e.empty()) return usage_error("run", e);
+    if (const Error e = distributed_options(o, request); !e.ok()) return fail("run", e);
     return run_resolved_scenario(s, request);
 }
 
@@ -222,7 +222,7 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
                 fmt::format("{} cannot be used with a scenario file (set it in the file)", flag));
     }
     ScenarioRunRequest r;
-    if (auto e = client_tls(o.transport, r.tls); !e.empty()) return usage_error("run", e);
+    if (Error e = client_tls(o.transport, r.tls); !e.ok()) return fail("run", e);
     if (o.transport.kind() == TransportKind::Serial) {
         if (cmd.count("--target") != 0)
             return usage_error("run", "--target and --serial exclude each other");
@@ -243,7 +243,7 @@ int run_with_scenario(const RunOptions& o, const CLI::App& cmd) {
     r.fail_on_plan_shortfall = o.fail_on_plan_shortfall;
     r.quiet = o.quiet;
     r.outputs = o.outputs;
-    if (auto e = distributed_options(o, r); !e.empty()) return usage_error("run", e);
+    if (const Error e = distributed_options(o, r); !e.ok()) return fail("run", e);
     auto& ov = r.overrides;
     const auto& p = o.plan;
     auto given = [&cmd](const char* flag) { return cmd.count(flag) != 0; };
@@ -404,10 +404,9 @@ void add_run_command(CLI::App& app, Action& action) {
         action = [o, cmd] {
             OutputFiles outputs = o->outputs;
             outputs.junit = o->junit;
-            if (const Error e = stdout_conflict(outputs); !e.ok())
-                return usage_error("run", e.text());
-            if (std::string e = check_transport(o->transport, "run"); !e.empty())
-                return usage_error("run", e);
+            if (const Error e = stdout_conflict(outputs); !e.ok()) return fail("run", e);
+            if (const Error e = check_transport(o->transport, "run"); !e.ok())
+                return fail("run", e);
             o->depth_given = cmd->count("--depth") != 0;
             return o->scenario_file.empty() ? run_load_test(*o) : run_with_scenario(*o, *cmd);
         };

@@ -68,8 +68,7 @@ int run_serial_serve(const ServeOptions& o, std::unique_ptr<slave::UnitModels> u
 }
 
 int run_serve(ServeOptions& o) {
-    if (std::string e = check_transport(o.transport, "serve"); !e.empty())
-        return usage_error("serve", e);
+    if (const Error e = check_transport(o.transport, "serve"); !e.ok()) return fail("serve", e);
     auto& c = o.config;
     if (o.transport.kind() == TransportKind::RtuOverTcp) c.framing = codec::Framing::Rtu;
     if (o.transport.kind() == TransportKind::Tls) {

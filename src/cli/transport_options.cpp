@@ -94,17 +94,20 @@ void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide sid
                         "get exception 01 (default: every role may use every function)");
 }
 
-std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out) {
+Error client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out) {
     out.reset();
     if (o.kind() != TransportKind::Tls) return {};
     Result<std::shared_ptr<net::TlsContext>> context =
         net::TlsContext::create(net::TlsSide::Client, {o.tls_cert, o.tls_key, o.tls_ca});
-    if (!context.ok()) return context.error().text();
+    if (!context.ok()) return std::move(context).error();
     out = std::move(context).value();
     return {};
 }
 
-std::string check_transport(const TransportOptions& o, std::string_view command) {
+namespace {
+
+// check_transport's work: "" or why not.
+std::string transport_problem(const TransportOptions& o, std::string_view command) {
     const TransportKind kind = o.kind();
     if (kind == TransportKind::Serial && o.transport != "tcp")
         return "--serial and --transport exclude each other (a serial line is its own transport)";
@@ -132,6 +135,14 @@ std::string check_transport(const TransportOptions& o, std::string_view command)
                            ? std::string("serial")
                            : fmt::format("transport {}", transport_name(kind)),
                        command);
+}
+
+}  // namespace
+
+Error check_transport(const TransportOptions& o, std::string_view command) {
+    std::string why = transport_problem(o, command);
+    if (why.empty()) return {};
+    return Error(ErrorCode::InvalidInput, std::move(why));
 }
 
 }  // namespace mbstorm::cli

@@ -15,6 +15,7 @@
 #include "codec/framing.hpp"
 #include "net/serial_port.hpp"
 #include "net/tls_context.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -54,14 +55,14 @@ struct TransportOptions {
 // Registers the flags on `cmd` into `o`.
 void add_transport_options(CLI::App* cmd, TransportOptions& o, TransportSide side);
 
-// Empty when `command` can use the chosen transport, else why not (for usage_error).
-std::string check_transport(const TransportOptions& o, std::string_view command);
+// None when `command` can use the chosen transport, else why not (InvalidInput).
+Error check_transport(const TransportOptions& o, std::string_view command);
 
 std::string_view transport_name(TransportKind kind) noexcept;
 
 // --transport tls on a client: the TLS context from the certificate options into `out` (left
-// empty for other transports). Empty, or why the files cannot be used.
-std::string client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out);
+// empty for other transports), or why the files cannot be used.
+Error client_tls(const TransportOptions& o, std::shared_ptr<net::TlsContext>& out);
 // The --serial line settings as the serial port takes them.
 net::SerialSettings serial_settings(const TransportOptions& o) noexcept;
 

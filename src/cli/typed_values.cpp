@@ -185,8 +185,11 @@ std::vector<TypedValue> values_from_registers(std::span<const std::uint16_t> reg
     return out;
 }
 
-std::string registers_from_text(const std::vector<std::string>& texts, ValueType type,
-                                codec::WordOrder order, std::vector<std::uint16_t>& out) {
+namespace {
+
+// registers_from_text's work: "" or what is wrong with which value.
+std::string registers_problem(const std::vector<std::string>& texts, ValueType type,
+                              codec::WordOrder order, std::vector<std::uint16_t>& out) {
     auto swap = [&](std::uint16_t w) {
         return swaps_bytes(order) ? static_cast<std::uint16_t>((w >> 8) | (w << 8)) : w;
     };
@@ -259,6 +262,15 @@ std::string registers_from_text(const std::vector<std::string>& texts, ValueType
         }
     }
     return {};
+}
+
+}  // namespace
+
+Error registers_from_text(const std::vector<std::string>& texts, ValueType type,
+                          codec::WordOrder order, std::vector<std::uint16_t>& out) {
+    std::string why = registers_problem(texts, type, order, out);
+    if (why.empty()) return {};
+    return Error(ErrorCode::InvalidInput, std::move(why));
 }
 
 }  // namespace mbstorm::cli

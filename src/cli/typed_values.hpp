@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "codec/values.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::cli {
 
@@ -38,9 +39,9 @@ std::vector<TypedValue> values_from_registers(std::span<const std::uint16_t> reg
                                               std::uint16_t first_address, ValueType type,
                                               codec::WordOrder order);
 
-// Text -> registers for a write; "" on success, else what is wrong with which value.
-std::string registers_from_text(const std::vector<std::string>& texts, ValueType type,
-                                codec::WordOrder order, std::vector<std::uint16_t>& out);
+// Text -> registers for a write, or what is wrong with which value (InvalidInput).
+Error registers_from_text(const std::vector<std::string>& texts, ValueType type,
+                          codec::WordOrder order, std::vector<std::uint16_t>& out);
 
 // "1", "0", "on", "off", "true", "false" -> a bit; false when it is none of those.
 bool parse_bit(std::string_view text, bool& out) noexcept;

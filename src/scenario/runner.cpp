@@ -120,8 +120,8 @@ load::LoadResult run_scenario(const Scenario& s, const RunHooks& hooks) {
         sc.backend_choice = chosen;
         embedded = std::make_unique<server::Server>(sc);
         if (Error error = embedded->start(); !error.ok()) {
-            out.error = Error(error.code(),
-                              "cannot start the embedded reference slave: " + error.text());
+            out.error =
+                Error(error.code(), "cannot start the embedded reference slave: " + error.text());
             return out;
         }
         plan.host = "127.0.0.1";
