@@ -135,29 +135,25 @@ bool Worker::setup_io() noexcept {
     if (ktls_) multishot_ = false;
     net::RingOptions options;
     options.entries = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections + 16), 64, 4096);
-    if (const int rc = loop_.init(setup_.backend, options); rc < 0) {
-        fatal_error = Error(ErrorCode::Unsupported,
-                            fmt::format("{} setup failed: {}", net::backend_name(setup_.backend),
-                                        std::system_category().message(-rc)));
+    if (Error e = loop_.init(setup_.backend, options); !e.ok()) {
+        fatal_error = std::move(
+            e.prefixed(fmt::format("{} setup failed", net::backend_name(setup_.backend))));
         return false;
     }
     loop_.set_direct(direct_);
     if (direct_) {
-        if (const int rc = net::register_socket_table(loop_.ring(), setup_.connections); rc < 0) {
-            fatal_error =
-                Error(ErrorCode::Refused,
-                      fmt::format("io_uring socket table of {} slots failed: {} (a ring's table is "
-                                  "capped at the open-files limit; more threads spread the "
-                                  "connections over more rings)",
-                                  setup_.connections, std::system_category().message(-rc)));
+        if (Error e = net::register_socket_table(loop_.ring(), setup_.connections); !e.ok()) {
+            fatal_error = Error(
+                e.code(), fmt::format("io_uring socket table of {} slots failed: {} (a ring's "
+                                      "table is capped at the open-files limit; more threads "
+                                      "spread the connections over more rings)",
+                                      setup_.connections, e.message()));
             return false;
         }
     }
     const unsigned count = std::clamp<unsigned>(std::bit_ceil(2 * setup_.connections), 64, 1024);
-    if (const int rc = loop_.init_buffers(kBufferGroup, count, 16384); rc < 0) {
-        fatal_error = Error(
-            ErrorCode::Unsupported,
-            fmt::format("receive buffer setup failed: {}", std::system_category().message(-rc)));
+    if (Error e = loop_.init_buffers(kBufferGroup, count, 16384); !e.ok()) {
+        fatal_error = std::move(e.prefixed("receive buffer setup failed"));
         return false;
     }
     return true;

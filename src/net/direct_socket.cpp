@@ -5,8 +5,10 @@
 
 namespace mbstorm::net {
 
-int register_socket_table(io_uring* ring, unsigned slots) noexcept {
-    return io_uring_register_files_sparse(ring, slots);
+Error register_socket_table(io_uring* ring, unsigned slots) noexcept {
+    const int rc = io_uring_register_files_sparse(ring, slots);
+    if (rc >= 0) return {};
+    return from_errno(ErrorCode::Refused, -rc, "");
 }
 
 int install_in_slot(io_uring* ring, unsigned slot, int fd) noexcept {

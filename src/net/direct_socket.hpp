@@ -8,14 +8,17 @@
 
 #include <cstdint>
 
+#include "util/error.hpp"
+
 namespace mbstorm::net {
 
 // The file_index for "any free slot" in io_uring_prep_accept_direct: liburing 2.3 stores the
 // index plus one, so IORING_FILE_INDEX_ALLOC itself would wrap to "no slot" (a plain accept).
 inline constexpr unsigned kAnySlot = IORING_FILE_INDEX_ALLOC - 1;
 
-// Registers an empty table of `slots` on the ring: 0 or -errno (-EMFILE above RLIMIT_NOFILE).
-int register_socket_table(io_uring* ring, unsigned slots) noexcept;
+// Registers an empty table of `slots` on the ring, or a Refused error with the system's reason
+// ("Too many open files" above RLIMIT_NOFILE; the caller adds what it was registering).
+Error register_socket_table(io_uring* ring, unsigned slots) noexcept;
 
 // Moves the plain descriptor `fd` into `slot` (replacing what was there) and closes `fd`,
 // whatever the outcome: 0 or -errno. A socket made with ::socket() can get its options and

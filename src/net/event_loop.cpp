@@ -9,14 +9,18 @@
 
 namespace mbstorm::net {
 
-int EventLoop::init(Backend backend, const RingOptions& options) noexcept {
+Error EventLoop::init(Backend backend, const RingOptions& options) noexcept {
     backend_ = backend;
-    return uses_io_uring() ? ring_.init(options) : epoll_.init();
+    const int rc = uses_io_uring() ? ring_.init(options) : epoll_.init();
+    if (rc >= 0) return {};
+    return from_errno(ErrorCode::Unsupported, -rc, "");
 }
 
-int EventLoop::init_buffers(std::uint16_t group, unsigned count, unsigned size) noexcept {
-    return uses_io_uring() ? buf_ring_.init(ring_.get(), group, count, size)
-                           : epoll_.init_buffers(count, size);
+Error EventLoop::init_buffers(std::uint16_t group, unsigned count, unsigned size) noexcept {
+    const int rc = uses_io_uring() ? buf_ring_.init(ring_.get(), group, count, size)
+                                   : epoll_.init_buffers(count, size);
+    if (rc >= 0) return {};
+    return from_errno(ErrorCode::Unsupported, -rc, "");
 }
 
 bool EventLoop::has_buffers() const noexcept {

@@ -12,20 +12,23 @@
 #include "net/buf_ring.hpp"
 #include "net/epoll_reactor.hpp"
 #include "net/ring.hpp"
+#include "util/error.hpp"
 
 namespace mbstorm::net {
 
 class EventLoop {
   public:
-    // 0 or -errno. With epoll, `options` is unused.
-    int init(Backend backend, const RingOptions& options) noexcept;
+    // Sets the backend up; an Unsupported error says the system's reason (the caller adds what
+    // it was setting up). With epoll, `options` is unused.
+    Error init(Backend backend, const RingOptions& options) noexcept;
     Backend backend() const noexcept { return backend_; }
     bool uses_io_uring() const noexcept { return backend_ == Backend::IoUring; }
     // io_uring only: for registering tables and probing (nullptr with epoll).
     io_uring* ring() noexcept { return uses_io_uring() ? ring_.get() : nullptr; }
 
-    // Provided buffers for recv(): a buffer ring with io_uring, a pool with epoll. 0 or -errno.
-    int init_buffers(std::uint16_t group, unsigned count, unsigned size) noexcept;
+    // Provided buffers for recv(): a buffer ring with io_uring, a pool with epoll; an
+    // Unsupported error with the system's reason.
+    Error init_buffers(std::uint16_t group, unsigned count, unsigned size) noexcept;
     bool has_buffers() const noexcept;
     std::uint8_t* buffer(std::uint16_t id) noexcept {
         return uses_io_uring() ? buf_ring_.buffer(id) : epoll_.buffer(id);

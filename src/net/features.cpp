@@ -80,7 +80,7 @@ bool probe_multishot_accept(io_uring* ring) {
 // Accepts one connection into a slot the kernel allocates, then shuts it down and closes the
 // slot the way the workers do.
 bool probe_direct_descriptors(io_uring* ring) {
-    if (register_socket_table(ring, 4) != 0) return false;
+    if (!register_socket_table(ring, 4).ok()) return false;
     Endpoint ep;
     const UniqueFd listener = loopback_listener(ep);
     if (!listener.valid()) return false;

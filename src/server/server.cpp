@@ -105,10 +105,12 @@ Error Server::start() {
     }
     for (auto& w : workers_) {
         while (w->init_status() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-        if (w->init_status() < 0)
+        if (w->init_status() < 0) {
+            const Error& why = w->setup_error();
             return fail(
-                from_errno(ErrorCode::Unsupported, -w->init_status(),
-                           fmt::format("cannot set up {}", net::backend_name(config_.backend))));
+                Error(why.code(), fmt::format("cannot set up {}: {}",
+                                              net::backend_name(config_.backend), why.message())));
+        }
     }
     return Error::none();
 }

@@ -63,16 +63,16 @@ void Worker::request_stop() noexcept {
     }
 }
 
-int Worker::setup() noexcept {
-    if (stop_fd_ < 0) return -EMFILE;
+Error Worker::setup() noexcept {
+    if (stop_fd_ < 0) return from_errno(ErrorCode::Unsupported, EMFILE, "");
     const net::Features& f = net::features();
     net::RingOptions ro;
     ro.entries = config_.ring_entries;
-    if (int rc = loop_.init(config_.backend, ro); rc != 0) return rc;
+    if (Error e = loop_.init(config_.backend, ro); !e.ok()) return e;
     // epoll emulates buffer rings and multishot operations whatever the kernel has.
     const bool uring = loop_.uses_io_uring();
     use_buf_ring_ = config_.use_buf_ring && (f.buf_ring || !uring) &&
-                    loop_.init_buffers(kBufGroup, config_.buf_ring_count, config_.buf_size) == 0;
+                    loop_.init_buffers(kBufGroup, config_.buf_ring_count, config_.buf_size).ok();
     multishot_recv_ = use_buf_ring_ && config_.use_multishot_recv && (f.multishot_recv || !uring);
     multishot_accept_ = config_.use_multishot_accept && (f.multishot_accept || !uring);
     // The kernel's TLS needs a socket setsockopt can reach (not a direct descriptor) and a
@@ -80,7 +80,7 @@ int Worker::setup() noexcept {
     ktls_ = config_.tls && net::kernel_tls().available;
     if (ktls_) multishot_recv_ = false;
     direct_ = uring && !ktls_ && table_slots_ > 0 &&
-              net::register_socket_table(loop_.ring(), table_slots_) == 0;
+              net::register_socket_table(loop_.ring(), table_slots_).ok();
     loop_.set_direct(direct_);
     try {
         std::size_t expect = config_.max_connections ? config_.max_connections : 1024;
@@ -98,7 +98,7 @@ int Worker::setup() noexcept {
             stash_size_.assign(config_.buf_ring_count, 0);
         }
     } catch (...) {
-        return -ENOMEM;
+        return from_errno(ErrorCode::Unsupported, ENOMEM, "");
     }
     accept_pause_ns_ = kAcceptPauseMinNs;
     arm_accept();
@@ -107,13 +107,13 @@ int Worker::setup() noexcept {
                    config_.full_policy == FullPolicy::EvictOldestIdle && mail_fd_ >= 0;
     if (cross_evict_) arm_mail();
     loop_.submit();
-    return 0;
+    return {};
 }
 
 void Worker::run() noexcept {
-    int rc = setup();
-    init_status_.store(rc == 0 ? 1 : rc, std::memory_order_release);
-    if (rc != 0) return;
+    setup_error_ = setup();
+    init_status_.store(setup_error_.ok() ? 1 : -1, std::memory_order_release);
+    if (!setup_error_.ok()) return;
     loop();
     shutdown_all();
 }

@@ -29,9 +29,11 @@ class Worker {
     Worker(const Worker&) = delete;
     Worker& operator=(const Worker&) = delete;
 
-    // Thread body. Sets init_status() to 1 once serving or to -errno when setup failed.
+    // Thread body. Sets init_status() to 1 once serving or to -1 when setup failed, and then
+    // setup_error() says why (read it after init_status() is -1).
     void run() noexcept;
     int init_status() const noexcept { return init_status_.load(std::memory_order_acquire); }
+    const Error& setup_error() const noexcept { return setup_error_; }
     void request_stop() noexcept;  // any thread
     const ServerCounters& counters() const noexcept { return counters_; }
     unsigned index() const noexcept { return index_; }
@@ -65,7 +67,7 @@ class Worker {
         SocketClose
     };
 
-    int setup() noexcept;
+    Error setup() noexcept;
     void loop() noexcept;
     void shutdown_all() noexcept;
     void on_cqe(const net::Completion& cqe) noexcept;
@@ -217,7 +219,8 @@ class Worker {
         // their per-function request counts and diagnostics (flush_reads()).
         std::uint64_t reads_by_function[2] = {0, 0};
     };
-    FrameTally tally_;  // flush_tally()
+    FrameTally tally_;   // flush_tally()
+    Error setup_error_;  // written before init_status_ is set to -1
     std::atomic<int> init_status_{0};
 };
 

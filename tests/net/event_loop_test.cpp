@@ -29,8 +29,8 @@ std::vector<Backend> backends_here() {
 class EventLoopTest : public ::testing::TestWithParam<Backend> {
   protected:
     void SetUp() override {
-        ASSERT_EQ(loop.init(GetParam(), RingOptions{}), 0);
-        ASSERT_EQ(loop.init_buffers(3, 4, 8), 0);  // four 8-byte buffers
+        ASSERT_TRUE(loop.init(GetParam(), RingOptions{}).ok());
+        ASSERT_TRUE(loop.init_buffers(3, 4, 8).ok());  // four 8-byte buffers
     }
 
     // Waits up to a second for `count` completions in all.
